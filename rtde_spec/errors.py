@@ -1,0 +1,87 @@
+"""One error hierarchy, so callers catch `RtdeSpecError` and never a library's internals.
+
+Every error carries where it happened (package, field, byte offset) and what was
+expected versus found, so a message can say what, where and why.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+
+class RtdeSpecError(Exception):
+    """Root of every error this package raises on purpose."""
+
+    def __init__(
+        self,
+        reason: str,
+        *,
+        package: str | None = None,
+        field: str | None = None,
+        offset: int | None = None,
+        expected: Any = None,
+        actual: Any = None,
+    ) -> None:
+        self.reason = reason
+        self.package = package
+        self.field = field
+        self.offset = offset
+        self.expected = expected
+        self.actual = actual
+        super().__init__(self._render())
+
+    def _render(self) -> str:
+        where = []
+        if self.package is not None:
+            where.append(f"package {self.package}")
+        if self.field is not None:
+            where.append(f"field {self.field}")
+        if self.offset is not None:
+            where.append(f"byte offset {self.offset}")
+        text = f"{', '.join(where)}: {self.reason}" if where else self.reason
+        if self.expected is not None or self.actual is not None:
+            text += f" (expected {self.expected}, got {self.actual})"
+        return text
+
+
+class DecodeError(RtdeSpecError):
+    """Bytes that do not decode: truncated, corrupt, unknown or out of layout."""
+
+
+class EncodeError(RtdeSpecError):
+    """A value that cannot be put on the wire: out of range, wrong type, not ASCII."""
+
+
+class ProtocolError(RtdeSpecError):
+    """A well-formed package that breaks the protocol's rules (sequence, ids, limits)."""
+
+
+class RecipeError(RtdeSpecError):
+    """A recipe that cannot be used: unknown names, bad direction, bad file."""
+
+
+@dataclass(frozen=True)
+class SpecIssue:
+    """One problem found in a spec file: which file, where in it, and why."""
+
+    file: str
+    path: str
+    reason: str
+    line: int | None = None
+
+    def __str__(self) -> str:
+        at = f"{self.file}:{self.line}" if self.line else self.file
+        return f"{at}: {self.path or '<root>'}: {self.reason}"
+
+
+class SpecError(RtdeSpecError):
+    """The YAML spec is invalid; holds every issue found, not just the first."""
+
+    def __init__(self, issues: list[SpecIssue]) -> None:
+        self.issues = list(issues)
+        summary = "\n".join(f"  {issue}" for issue in self.issues)
+        super().__init__(f"{len(self.issues)} spec problem(s):\n{summary}")
+
+    def _render(self) -> str:  # the reason already holds the full list
+        return self.reason

@@ -1,0 +1,253 @@
+"""The meta-model: pydantic classes one YAML file of spec/ must validate against.
+
+Unknown keys are errors (extra="forbid"), so a typo in the spec cannot silently
+drop a fact. Checks that need more than one file live in spec_lint.
+"""
+
+from __future__ import annotations
+
+import re
+from typing import Annotated, Literal
+
+from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field
+
+from .versions import Version
+
+_IDENT = r"^[A-Za-z_][A-Za-z0-9_]*$"
+
+
+def _check_version(value: object) -> object:
+    if not isinstance(value, str):
+        raise ValueError(
+            f"bad version string {value!r}: write MAJOR.MINOR.BUGFIX, e.g. 3.3.0 "
+            "(YAML reads 3.3 as a number)"
+        )
+    Version.parse(value)
+    return value
+
+
+VersionStr = Annotated[str, BeforeValidator(_check_version)]
+Ident = Annotated[str, Field(pattern=_IDENT)]
+
+
+def _check_field_name(value: str) -> str:
+    if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*(\{X\})?[A-Za-z0-9_]*", value):
+        raise ValueError(f"bad field name {value!r}: letters, digits, _ and at most one {{X}}")
+    return value
+
+
+FieldName = Annotated[str, AfterValidator(_check_field_name)]
+
+
+class StrictModel(BaseModel):
+    model_config = ConfigDict(extra="forbid", frozen=True)
+
+
+# --- spec/common -----------------------------------------------------------
+
+
+class Primitive(StrictModel):
+    name: Ident
+    size: Annotated[int, Field(ge=1, le=8)]
+    struct: Annotated[str, Field(pattern=r"^[?bBhHiIqQfd]$")]
+    kind: Literal["int", "float", "bool"]
+    signed: bool | None = None
+    doc: str | None = None
+
+    @property
+    def bounds(self) -> tuple[int, int] | None:
+        """Inclusive integer range, derived from size and signedness."""
+        if self.kind != "int":
+            return None
+        bits = self.size * 8
+        if self.signed:
+            return (-(1 << (bits - 1)), (1 << (bits - 1)) - 1)
+        return (0, (1 << bits) - 1)
+
+
+class PrimitivesFile(StrictModel):
+    primitives: list[Primitive]
+
+
+class ProductLine(StrictModel):
+    id: Annotated[str, Field(pattern=r"^[a-z0-9-]+$")]
+    name: str
+    majors: list[int]
+    first_version: VersionStr
+    inherits: str | None = None
+    rtde_max_frequency: Annotated[int, Field(ge=1)]
+    doc: str | None = None
+
+
+class ProductLinesFile(StrictModel):
+    product_lines: list[ProductLine]
+
+
+# --- spec/rtde/types.yaml --------------------------------------------------
+
+
+class WireType(StrictModel):
+    name: Annotated[str, Field(pattern=r"^[A-Z][A-Z0-9_]*$")]
+    element: str | None = None
+    count: Annotated[int, Field(ge=1)] = 1
+    variable: bool = False
+    doc: str | None = None
+
+
+class SetupAnswer(StrictModel):
+    name: Annotated[str, Field(pattern=r"^[A-Z][A-Z0-9_]*$")]
+    doc: str | None = None
+
+
+class TypesFile(StrictModel):
+    doc_ref: str | None = None
+    types: list[WireType]
+    setup_answers: list[SetupAnswer] = []
+
+
+# --- spec/rtde/fields.yaml -------------------------------------------------
+
+Since = dict[str, VersionStr]
+IndexRange = tuple[Annotated[int, Field(ge=0)], Annotated[int, Field(ge=0)]]
+Source = Literal["cb3-guide", "e-series-guide", "third-party", "user"]
+
+
+class RangeSpec(StrictModel):
+    index: IndexRange
+    since: Since | None = None
+    reserved: str | None = None
+
+
+class FieldSpec(StrictModel):
+    name: FieldName
+    type: str
+    doc: str | None = None
+    unit: str | None = None
+    enum: str | None = None
+    bits: str | None = None
+    since: Since | None = None
+    index: IndexRange | None = None
+    ranges: list[RangeSpec] | None = None
+    reserved: str | None = None
+    deprecated: str | None = None
+    doc_ref: str | None = None
+    sources: list[Source] = []
+
+    @property
+    def is_family(self) -> bool:
+        return self.index is not None
+
+    def concrete(self) -> list[tuple[str, int | None]]:
+        """(name, index) of every concrete field this entry declares."""
+        if self.index is None:
+            return [(self.name, None)]
+        low, high = self.index
+        return [(self.name.replace("{X}", str(i)), i) for i in range(low, high + 1)]
+
+    def range_for(self, index: int | None) -> RangeSpec | None:
+        """The `ranges` entry that covers a family index, if any."""
+        for entry in self.ranges or []:
+            if index is not None and entry.index[0] <= index <= entry.index[1]:
+                return entry
+        return None
+
+
+class FieldsFile(StrictModel):
+    doc_ref: str | None = None
+    inputs: list[FieldSpec] = []
+    outputs: list[FieldSpec] = []
+
+
+# --- spec/rtde/enums.yaml --------------------------------------------------
+
+
+class EnumValue(StrictModel):
+    name: Annotated[str, Field(pattern=r"^[A-Z][A-Za-z0-9_]*$")]
+    value: int
+    doc: str | None = None
+
+
+class EnumSpec(StrictModel):
+    name: Annotated[str, Field(pattern=r"^[A-Z][A-Za-z0-9]*$")]
+    doc: str | None = None
+    doc_ref: str | None = None
+    values: list[EnumValue]
+
+
+class BitSpec(StrictModel):
+    name: Annotated[str, Field(pattern=r"^[A-Z][A-Z0-9_]*$")]
+    bit: Annotated[int, Field(ge=0, le=63)]
+    doc: str | None = None
+
+
+class BitfieldSpec(StrictModel):
+    name: Annotated[str, Field(pattern=r"^[A-Z][A-Za-z0-9]*$")]
+    doc: str | None = None
+    doc_ref: str | None = None
+    bits: list[BitSpec]
+
+
+class EnumsFile(StrictModel):
+    enums: list[EnumSpec] = []
+    bitfields: list[BitfieldSpec] = []
+
+
+# --- spec/rtde/packages.yaml -----------------------------------------------
+
+
+class PackageField(StrictModel):
+    name: Ident
+    type: str
+    doc: str | None = None
+    unit: str | None = None
+    enum: str | None = None
+    length: Literal["rest", "uint8"] | None = None
+    format: Literal["csv"] | None = None
+
+
+class PackageTypeSpec(StrictModel):
+    code: Annotated[str, Field(min_length=1, max_length=1)]
+    name: str
+
+
+class MessageSpec(StrictModel):
+    name: Ident
+    type: Annotated[str, Field(min_length=1, max_length=1)]
+    sender: str | list[str]
+    protocols: list[int]
+    doc: str | None = None
+    fields: list[PackageField]
+
+    @property
+    def senders(self) -> tuple[str, ...]:
+        return (self.sender,) if isinstance(self.sender, str) else tuple(self.sender)
+
+
+class Limits(StrictModel):
+    setup_names_max_bytes: int
+    input_recipes_max: int
+    package_max_bytes: int
+
+
+class PackagesFile(StrictModel):
+    port: int
+    doc_ref: str | None = None
+    limits: Limits
+    header: list[PackageField]
+    senders: dict[str, str]
+    package_types: list[PackageTypeSpec]
+    messages: list[MessageSpec]
+
+
+# --- the whole spec --------------------------------------------------------
+
+
+class Spec(StrictModel):
+    """Every file of spec/, validated and linted; the input of every emitter."""
+
+    primitives: PrimitivesFile
+    product_lines: ProductLinesFile
+    types: TypesFile
+    fields: FieldsFile
+    enums: EnumsFile
+    packages: PackagesFile
