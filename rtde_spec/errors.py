@@ -45,11 +45,11 @@ class RtdeSpecError(Exception):
         return text
 
 
-class DecodeError(RtdeSpecError):
+class DecodeError(RtdeSpecError, ValueError):
     """Bytes that do not decode: truncated, corrupt, unknown or out of layout."""
 
 
-class EncodeError(RtdeSpecError):
+class EncodeError(RtdeSpecError, ValueError):
     """A value that cannot be put on the wire: out of range, wrong type, not ASCII."""
 
 
@@ -57,7 +57,7 @@ class ProtocolError(RtdeSpecError):
     """A well-formed package that breaks the protocol's rules (sequence, ids, limits)."""
 
 
-class RecipeError(RtdeSpecError):
+class RecipeError(RtdeSpecError, ValueError):
     """A recipe that cannot be used: unknown names, bad direction, bad file."""
 
 

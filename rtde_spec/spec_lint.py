@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-from .spec_schema import FieldSpec, FieldsFile, Since, Spec
+from .spec_schema import FieldsFile, FieldSpec, Since, Spec
 from .versions import Version
 
 Loc = tuple[str | int, ...]
@@ -31,8 +31,9 @@ def _since(since: Since | None, spec: Spec, loc: Loc) -> Found:
             continue
         version = Version.parse(text)
         if version.major not in line.majors:
-            yield (*loc, line_id), (
-                f"version {text} is not on line {line_id} (majors {line.majors})"
+            yield (
+                (*loc, line_id),
+                (f"version {text} is not on line {line_id} (majors {line.majors})"),
             )
 
 
@@ -75,7 +76,10 @@ def _field(entry: FieldSpec, spec: Spec, loc: Loc) -> Found:
         if a > b:
             yield (*rloc, "index"), f"range [{a}, {b}] is empty"
         if a < low or b > high:
-            yield (*rloc, "index"), f"range [{a}, {b}] lies outside the field's index [{low}, {high}]"
+            yield (
+                (*rloc, "index"),
+                f"range [{a}, {b}] lies outside the field's index [{low}, {high}]",
+            )
         for c, d, j in spans:
             if a <= d and c <= b:
                 yield (*rloc, "index"), f"range [{a}, {b}] overlaps range {j} [{c}, {d}]"
@@ -181,8 +185,10 @@ def _lint_packages(spec: Spec) -> Iterator[tuple[str, Loc, str]]:
             for proto in msg.protocols:
                 key = (msg.type, sender, proto)
                 if key in claimed:
-                    yield "packages", (*loc, "protocols"), (
-                        f"{msg.type!r} from {sender} in protocol {proto} is also {claimed[key]}"
+                    yield (
+                        "packages",
+                        (*loc, "protocols"),
+                        (f"{msg.type!r} from {sender} in protocol {proto} is also {claimed[key]}"),
                     )
                 claimed[key] = msg.name
         for j, fld in enumerate(msg.fields):

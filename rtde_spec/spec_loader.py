@@ -152,8 +152,11 @@ def load_spec(root: Path | str | None = None) -> Spec:
     return spec
 
 
-def load_fields_file(path: Path | str, spec: Spec) -> FieldsFile:
-    """Load a user's extra fields file (same shape as spec/rtde/fields.yaml) against `spec`."""
+def load_fields_file(path: Path | str, spec: Spec, against: FieldsFile | None = None) -> FieldsFile:
+    """Load a user's extra fields file (the shape of spec/rtde/fields.yaml).
+
+    Names in `against` (the fields already known) count as duplicates.
+    """
     issues: list[SpecIssue] = []
     source = _open(Path(path), str(path), issues)
     if source is None:
@@ -161,7 +164,7 @@ def load_fields_file(path: Path | str, spec: Spec) -> FieldsFile:
     extra = _validate(source, FieldsFile, issues)
     if issues:
         raise SpecError(issues)
-    found = [source.issue(loc, reason) for loc, reason in lint_fields_file(extra, spec)]
+    found = [source.issue(loc, reason) for loc, reason in lint_fields_file(extra, spec, against)]
     if found:
         raise SpecError(found)
     return extra

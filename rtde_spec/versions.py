@@ -12,7 +12,7 @@ _VERSION_RE = re.compile(r"^(\d+)\.(\d+)(?:\.(\d+))?(?:\.(\d+))?$")
 class Version:
     """A dotted version; a missing bugfix counts as 0 and the build number is ignored."""
 
-    __slots__ = ("build", "bugfix", "major", "minor")
+    __slots__ = ("bugfix", "build", "major", "minor")
 
     def __init__(self, major: int, minor: int = 0, bugfix: int = 0, build: int | None = None):
         self.major, self.minor, self.bugfix, self.build = major, minor, bugfix, build

@@ -1,0 +1,174 @@
+"""Emit the RTDE package layer: construct structs and pydantic models, one per message.
+
+A message is one layout of one package type for a set of protocol versions and
+senders (e.g. the text message of protocol 1 differs by sender).
+"""
+
+from __future__ import annotations
+
+from rtde_spec.spec_schema import MessageSpec, PackageField, Primitive, Spec
+
+from .emit_types import scalar_annotation
+from .render import PY_HEADER, camel, docstring, upper
+
+#: construct's name for each struct format character of spec/common/primitives.yaml
+CONSTRUCT_BY_STRUCT = {
+    "?": "Flag",
+    "B": "Int8ub",
+    "b": "Int8sb",
+    "H": "Int16ub",
+    "h": "Int16sb",
+    "I": "Int32ub",
+    "i": "Int32sb",
+    "Q": "Int64ub",
+    "q": "Int64sb",
+    "f": "Float32b",
+    "d": "Float64b",
+}
+
+
+def _prims(spec: Spec) -> dict[str, Primitive]:
+    return {p.name: p for p in spec.primitives.primitives}
+
+
+def _construct(fld: PackageField, prims: dict[str, Primitive]) -> str:
+    if fld.type == "bytes":
+        return "GreedyBytes"
+    if fld.type == "string":
+        if fld.length == "uint8":
+            return f'PascalString({CONSTRUCT_BY_STRUCT[prims["uint8"].struct]}, "ascii")'
+        return "csv_string()" if fld.format == "csv" else 'GreedyString("ascii")'
+    return CONSTRUCT_BY_STRUCT[prims[fld.type].struct]
+
+
+def _annotation(fld: PackageField, prims: dict[str, Primitive]) -> str:
+    if fld.type == "bytes":
+        return "bytes"
+    if fld.type == "string":
+        if fld.format == "csv":
+            return "list[CsvItem]"
+        return "ShortAsciiStr" if fld.length == "uint8" else "AsciiStr"
+    prim = prims[fld.type]
+    return scalar_annotation(prim.kind, prim.bounds)
+
+
+def _layout(fld: PackageField, prims: dict[str, Primitive]) -> str:
+    text = fld.type == "string"
+    if fld.length == "rest":
+        return f"FieldLayout({fld.name!r}, 'rest', 0, {text})"
+    if fld.length == "uint8":
+        return f"FieldLayout({fld.name!r}, 'prefixed', {prims['uint8'].size}, {text})"
+    return f"FieldLayout({fld.name!r}, 'fixed', {prims[fld.type].size})"
+
+
+def emit_rtde_structs(spec: Spec) -> str:
+    prims = _prims(spec)
+    pk = spec.packages
+    out = [
+        PY_HEADER,
+        '"""construct structs of every RTDE package body, plus whole-package structs.\n\n'
+        "`<NAME>` parses the body (after the header); `<NAME>_PACKAGE` a whole package.\n"
+        '"""\n\n',
+        "from construct import (\n",
+    ]
+    used = {"Struct"}
+    bodies: list[str] = []
+    for msg in pk.messages:
+        parts = [f'    "{fld.name}" / {_construct(fld, prims)},\n' for fld in msg.fields]
+        for part in parts:
+            used.update(n for n in CONSTRUCT_BY_STRUCT.values() if n in part)
+            used.update(n for n in ("GreedyBytes", "GreedyString", "PascalString") if n in part)
+        body = f"\n{upper(msg.name)} = Struct(\n{''.join(parts)})\n"
+        body += docstring(msg.doc or msg.name, indent="")
+        bodies.append(body)
+    header = [f'    "{h.name}" / {CONSTRUCT_BY_STRUCT[prims[h.type].struct]},\n' for h in pk.header]
+    used.update(CONSTRUCT_BY_STRUCT[prims[h.type].struct] for h in pk.header)
+    out += [f"    {name},\n" for name in sorted(used)]
+    out.append(")\n\nfrom rtde_spec.construct_ext import csv_string, package_struct\n")
+    out.append(f"\nHEADER = Struct(\n{''.join(header)})\n")
+    out.append('"""Header of every package: size counts the whole package."""\n')
+    out += bodies
+    size_c = CONSTRUCT_BY_STRUCT[prims[pk.header[0].type].struct]
+    type_c = CONSTRUCT_BY_STRUCT[prims[pk.header[1].type].struct]
+    out.append("\n")
+    for msg in pk.messages:
+        out.append(
+            f"{upper(msg.name)}_PACKAGE = package_struct("
+            f"{size_c}, {type_c}, {ord(msg.type)}, {upper(msg.name)})\n"
+        )
+    return "".join(out)
+
+
+def _model_doc(msg: MessageSpec, spec: Spec) -> str:
+    names = {p.code: p.name for p in spec.packages.package_types}
+    senders = " and ".join(msg.senders)
+    protos = ", ".join(map(str, msg.protocols))
+    text = msg.doc or ""
+    return f"{text}\n\n{names[msg.type]} ({msg.type!r}) from {senders}; protocol {protos}."
+
+
+def _model(msg: MessageSpec, spec: Spec, prims: dict[str, Primitive]) -> str:
+    names = {p.code: p.name for p in spec.packages.package_types}
+    out = [f"\n\nclass {camel(msg.name)}(RtdeMessage):\n", docstring(_model_doc(msg, spec)), "\n"]
+    out.append(f"    NAME: ClassVar[str] = {msg.name!r}\n")
+    out.append(f"    PACKAGE_TYPE: ClassVar[int] = {ord(msg.type)}  # {msg.type!r}\n")
+    out.append(f"    PACKAGE_NAME: ClassVar[str] = {names[msg.type]!r}\n")
+    out.append(f"    SENDERS: ClassVar[tuple[str, ...]] = {tuple(msg.senders)!r}\n")
+    out.append(f"    PROTOCOLS: ClassVar[tuple[int, ...]] = {tuple(msg.protocols)!r}\n")
+    out.append(f"    STRUCT: ClassVar[Construct] = structs.{upper(msg.name)}\n")
+    enums = {f.name: f.enum for f in msg.fields if f.enum}
+    out.append(f"    ENUMS: ClassVar[dict[str, str]] = {enums!r}\n")
+    layout = "".join(f"        {_layout(f, prims)},\n" for f in msg.fields)
+    out.append(f"    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (\n{layout}    )\n")
+    if msg.fields:
+        out.append("\n")
+    for fld in msg.fields:
+        desc = fld.doc or ""
+        if fld.enum:
+            desc = f"{desc} (values: {fld.enum})".strip()
+        if fld.unit:
+            desc = f"{desc} [{fld.unit}]".strip()
+        ann = _annotation(fld, prims)
+        out.append(f"    {fld.name}: Annotated[{ann}, Field(description={desc!r})]\n")
+    return "".join(out)
+
+
+def emit_rtde_models(spec: Spec) -> str:
+    prims = _prims(spec)
+    pk = spec.packages
+    header_format = ">" + "".join(prims[h.type].struct for h in pk.header)
+    out = [
+        PY_HEADER,
+        '"""pydantic models of every RTDE package layout, and the codec\'s lookup tables."""\n\n',
+        "from typing import Annotated, ClassVar\n\n",
+        "from construct import Construct\n",
+        "from pydantic import Field\n\n",
+        "from rtde_spec._generated import rtde_structs as structs\n",
+        "from rtde_spec.message_base import FieldLayout, RtdeMessage\n",
+        "{model_types_import}",
+        f"PORT = {pk.port}\n",
+        f"HEADER_FORMAT = {header_format!r}\n",
+        '"""struct format of the header (size, type)."""\n',
+        f"HEADER_SIZE = {sum(prims[h.type].size for h in pk.header)}\n",
+        f"LIMITS: dict[str, int] = {pk.limits.model_dump()!r}\n",
+        "PACKAGE_TYPES: dict[int, str] = {\n",
+    ]
+    out += [f"    {ord(p.code)}: {p.name!r},  # {p.code!r}\n" for p in pk.package_types]
+    out.append("}\n")
+    out.append(f"SENDERS: tuple[str, ...] = {tuple(pk.senders)!r}\n")
+    protocols = sorted({p for m in pk.messages for p in m.protocols})
+    out.append(f"PROTOCOLS: tuple[int, ...] = {tuple(protocols)!r}\n")
+    models = [_model(msg, spec, prims) for msg in pk.messages]
+    used = [n for n in ("AsciiStr", "CsvItem", "ShortAsciiStr") if any(n in m for m in models)]
+    imports = f"from rtde_spec.model_types import {', '.join(used)}\n\n" if used else "\n"
+    out = [part.replace("{model_types_import}", imports) for part in out]
+    out += models
+    out.append("\n\nMESSAGES: tuple[type[RtdeMessage], ...] = (\n")
+    out += [f"    {camel(m.name)},\n" for m in pk.messages]
+    out.append(")\n\nBY_KEY: dict[tuple[int, str, int], type[RtdeMessage]] = {\n")
+    for msg in pk.messages:
+        for sender in msg.senders:
+            for proto in msg.protocols:
+                out.append(f"    ({ord(msg.type)}, {sender!r}, {proto}): {camel(msg.name)},\n")
+    out.append("}\n")
+    return "".join(out)

@@ -1,0 +1,39 @@
+"""Run every emitter over one spec: relative output path -> file text."""
+
+from __future__ import annotations
+
+from rtde_spec.catalogue import Catalogue
+from rtde_spec.spec_schema import Spec
+
+from .emit_data import emit_spec_data
+from .emit_docs import (
+    emit_enums_doc,
+    emit_fields_doc,
+    emit_index_doc,
+    emit_packages_doc,
+    emit_types_doc,
+)
+from .emit_enums import emit_enums
+from .emit_rtde import emit_rtde_models, emit_rtde_structs
+from .emit_types import emit_types
+from .render import PY_HEADER
+
+GEN = "rtde_spec/_generated"
+
+
+def generate(spec: Spec) -> dict[str, str]:
+    catalogue = Catalogue(spec)
+    return {
+        f"{GEN}/__init__.py": PY_HEADER
+        + '"""Code generated from spec/; import through rtde_spec."""\n',
+        f"{GEN}/spec_data.py": emit_spec_data(spec),
+        f"{GEN}/enums.py": emit_enums(spec),
+        f"{GEN}/rtde_types.py": emit_types(catalogue),
+        f"{GEN}/rtde_structs.py": emit_rtde_structs(spec),
+        f"{GEN}/rtde_models.py": emit_rtde_models(spec),
+        "docs/reference/README.md": emit_index_doc(spec, catalogue),
+        "docs/reference/rtde-fields.md": emit_fields_doc(spec, catalogue),
+        "docs/reference/rtde-packages.md": emit_packages_doc(spec),
+        "docs/reference/rtde-enums.md": emit_enums_doc(spec),
+        "docs/reference/rtde-types.md": emit_types_doc(spec, catalogue),
+    }

@@ -1,0 +1,207 @@
+"""The field catalogue: every concrete RTDE field with its type, size and availability.
+
+Built from the generated spec data (no YAML is read at import). Register families
+are expanded to concrete names, and `since` is resolved per product line, so
+every question about "does this name exist on this controller" is answered here.
+"""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from functools import cache
+from pathlib import Path
+from typing import Literal
+
+from .errors import RecipeError
+from .spec_schema import FieldsFile, FieldSpec, ProductLine, Spec
+from .versions import Version
+
+Direction = Literal["input", "output"]
+DIRECTIONS: tuple[Direction, ...] = ("input", "output")
+EXTRA_FIELDS_ENV = "RTDE_SPEC_EXTRA_FIELDS"
+
+
+@dataclass(frozen=True)
+class WireTypeInfo:
+    """An RTDE data type with everything a codec needs, derived from the spec."""
+
+    name: str
+    size: int | None  # None for STRING
+    count: int
+    element: str | None
+    struct: str  # struct format for one value, e.g. "6d"; "" for STRING
+    kind: str  # int | float | bool | str
+    bounds: tuple[int, int] | None
+
+
+@dataclass(frozen=True)
+class FieldInfo:
+    """One concrete field (register families expanded)."""
+
+    name: str
+    direction: Direction
+    wire: WireTypeInfo
+    doc: str | None
+    unit: str | None
+    enum: str | None
+    bits: str | None
+    deprecated: str | None
+    reserved: str | None
+    sources: tuple[str, ...]
+    family: str | None
+    index: int | None
+    since: dict[str, Version] = field(default_factory=dict)  # product line id -> first version
+
+    @property
+    def type(self) -> str:
+        return self.wire.name
+
+    @property
+    def size(self) -> int:
+        return self.wire.size or 0
+
+
+class Catalogue:
+    """Fields, types and product lines of one spec (plus any extra fields files)."""
+
+    def __init__(self, spec: Spec, extra: Iterable[FieldsFile] = ()) -> None:
+        self.spec = spec
+        self.extra = tuple(extra)
+        self.lines: dict[str, ProductLine] = {p.id: p for p in spec.product_lines.product_lines}
+        self.wire_types = _wire_types(spec)
+        self._fields: dict[Direction, dict[str, FieldInfo]] = {d: {} for d in DIRECTIONS}
+        for fields_file in (spec.fields, *self.extra):
+            for direction, entries in (
+                ("input", fields_file.inputs),
+                ("output", fields_file.outputs),
+            ):
+                for entry in entries:
+                    for info in self._expand(entry, direction):
+                        self._fields[direction][info.name] = info
+
+    # --- construction ---------------------------------------------------------
+
+    @classmethod
+    @cache
+    def builtin(cls) -> Catalogue:
+        """The catalogue compiled into this package (spec/ at codegen time)."""
+        from ._generated.spec_data import SPEC
+
+        return cls(Spec.model_validate(SPEC))
+
+    @classmethod
+    def default(cls) -> Catalogue:
+        """The built-in catalogue plus the files named in $RTDE_SPEC_EXTRA_FIELDS."""
+        paths = [p for p in os.environ.get(EXTRA_FIELDS_ENV, "").split(os.pathsep) if p]
+        return cls.builtin().with_extra(*paths) if paths else cls.builtin()
+
+    def with_extra(self, *paths: str | Path) -> Catalogue:
+        """A new catalogue with the fields of extra YAML files (the shape of fields.yaml)."""
+        from .spec_loader import load_fields_file
+
+        extra = list(self.extra)
+        for path in paths:
+            merged = FieldsFile(
+                inputs=[f for e in extra for f in e.inputs] + list(self.spec.fields.inputs),
+                outputs=[f for e in extra for f in e.outputs] + list(self.spec.fields.outputs),
+            )
+            extra.append(load_fields_file(path, self.spec, against=merged))
+        return Catalogue(self.spec, extra)
+
+    def _expand(self, entry: FieldSpec, direction: Direction) -> list[FieldInfo]:
+        wire = self.wire_types[entry.type]
+        out = []
+        for name, index in entry.concrete():
+            rng = entry.range_for(index)
+            since_map = rng.since if rng is not None and rng.since is not None else entry.since
+            reserved = rng.reserved if rng is not None and rng.reserved else entry.reserved
+            out.append(
+                FieldInfo(
+                    name=name,
+                    direction=direction,
+                    wire=wire,
+                    doc=(entry.doc or "").replace("{X}", str(index)) or None,
+                    unit=entry.unit,
+                    enum=entry.enum,
+                    bits=entry.bits,
+                    deprecated=entry.deprecated,
+                    reserved=reserved,
+                    sources=tuple(entry.sources),
+                    family=entry.name if entry.is_family else None,
+                    index=index,
+                    since=self._resolve_since(since_map),
+                )
+            )
+        return out
+
+    def _resolve_since(self, since: dict[str, str] | None) -> dict[str, Version]:
+        resolved: dict[str, Version] = {}
+        for line in self.lines.values():
+            if since is None:
+                resolved[line.id] = Version.parse(line.first_version)
+            elif line.id in since:
+                resolved[line.id] = Version.parse(since[line.id])
+            elif line.inherits is not None and line.inherits in since:
+                resolved[line.id] = Version.parse(line.first_version)
+        return resolved
+
+    # --- questions ------------------------------------------------------------
+
+    def line_of(self, version: str | Version) -> ProductLine:
+        """The product line a controller version belongs to."""
+        try:
+            parsed = Version.parse(version)
+        except ValueError as exc:
+            raise RecipeError(str(exc), field="controller version") from None
+        for line in self.lines.values():
+            if parsed.major in line.majors:
+                return line
+        known = ", ".join(f"{p.id} ({'/'.join(map(str, p.majors))}.x)" for p in self.lines.values())
+        raise RecipeError(
+            f"controller version {parsed} belongs to no known product line (known: {known})",
+            field="controller version",
+        )
+
+    def fields(
+        self, direction: Direction | None = None, controller: str | Version | None = None
+    ) -> list[FieldInfo]:
+        """Fields in spec order, optionally of one direction and available on a controller."""
+        directions = DIRECTIONS if direction is None else (direction,)
+        out = [info for d in directions for info in self._fields[d].values()]
+        if controller is not None:
+            out = [info for info in out if self.available(info, controller)]
+        return out
+
+    def get(self, name: str, direction: Direction) -> FieldInfo | None:
+        return self._fields[direction].get(name)
+
+    def names(self, direction: Direction) -> list[str]:
+        return list(self._fields[direction])
+
+    def available(self, info: FieldInfo, controller: str | Version) -> bool:
+        """Whether a controller of this version knows the field."""
+        version = Version.parse(controller)
+        first = info.since.get(self.line_of(version).id)
+        return first is not None and version >= first
+
+    def since_text(self, info: FieldInfo) -> str:
+        """ "cb3 3.4.0, e-series 5.0.0, polyscope-x 10.0.0" — or "not available"."""
+        parts = [f"{line} {ver}" for line, ver in info.since.items()]
+        return ", ".join(parts) if parts else "not available"
+
+
+def _wire_types(spec: Spec) -> dict[str, WireTypeInfo]:
+    prims = {p.name: p for p in spec.primitives.primitives}
+    out = {}
+    for wire in spec.types.types:
+        if wire.variable or wire.element is None:
+            out[wire.name] = WireTypeInfo(wire.name, None, 1, None, "", "str", None)
+            continue
+        prim = prims[wire.element]
+        struct = prim.struct if wire.count == 1 else f"{wire.count}{prim.struct}"
+        out[wire.name] = WireTypeInfo(
+            wire.name, prim.size * wire.count, wire.count, prim.name, struct, prim.kind, prim.bounds
+        )
+    return out

@@ -1,0 +1,1 @@
+"""The rtde-spec command line: one module per subcommand."""

@@ -1,0 +1,55 @@
+"""rtde-spec fields: the field catalogue, optionally for one controller version."""
+
+from __future__ import annotations
+
+import argparse
+
+from ..catalogue import Catalogue, FieldInfo
+from .render import print_json, table
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("fields", help="list RTDE fields (register families expanded)")
+    p.add_argument("--controller", metavar="VERSION", help="only fields available on this version")
+    p.add_argument("--direction", choices=("input", "output"))
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(run=run)
+
+
+def field_record(info: FieldInfo, catalogue: Catalogue) -> dict[str, object]:
+    return {
+        "name": info.name,
+        "type": info.type,
+        "direction": info.direction,
+        "size": info.size,
+        "since": {line: str(v) for line, v in info.since.items()},
+        "unit": info.unit,
+        "enum": info.enum,
+        "bits": info.bits,
+        "family": info.family,
+        "index": info.index,
+        "reserved": info.reserved,
+        "deprecated": info.deprecated,
+        "sources": list(info.sources),
+        "doc": info.doc,
+    }
+
+
+def run(args: argparse.Namespace) -> int:
+    from .main import catalogue_for
+
+    catalogue = catalogue_for(args)
+    if args.controller:
+        catalogue.line_of(args.controller)  # reject unknown lines with a clear error
+    infos = catalogue.fields(args.direction, args.controller)
+    if args.json:
+        print_json([field_record(i, catalogue) for i in infos])
+        return 0
+    rows = [
+        [i.name, i.direction, i.type, i.size, catalogue.since_text(i), i.unit or "", i.doc or ""]
+        for i in infos
+    ]
+    print(table(["name", "direction", "type", "bytes", "since", "unit", "doc"], rows))
+    where = f" on {args.controller}" if args.controller else ""
+    print(f"\n{len(infos)} fields{where}")
+    return 0

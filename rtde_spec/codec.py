@@ -1,0 +1,261 @@
+"""bytes <-> RTDE package models, for every package type, protocol version and sender.
+
+Decoding first walks the spec's layout over the bytes, so truncation, bad length
+prefixes and non-ASCII text are reported with field and byte offset; only then
+does the construct struct parse. Nothing below raises anything but RtdeSpecError.
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Iterator
+from typing import Any, Literal
+
+from construct import ConstructError
+from pydantic import ValidationError
+
+from ._generated import rtde_models as gen
+from .errors import DecodeError, EncodeError
+from .framing import PackageFramer
+from .message_base import RtdeMessage
+from .validation_errors import encode_error
+
+Sender = Literal["controller", "client"]
+_HEADER = struct.Struct(gen.HEADER_FORMAT)
+_BY_NAME: dict[str, type[RtdeMessage]] = {cls.NAME: cls for cls in gen.MESSAGES}
+
+
+def _type_text(code: int) -> str:
+    char = chr(code) if 32 <= code < 127 else "?"
+    return f"{code} ({char!r})"
+
+
+def message_class(package_type: int, sender: str, protocol_version: int) -> type[RtdeMessage]:
+    """The model of a package type as sent by `sender` in a protocol version."""
+    if sender not in gen.SENDERS:
+        raise DecodeError(f"unknown sender {sender!r}", expected=" or ".join(gen.SENDERS))
+    if protocol_version not in gen.PROTOCOLS:
+        raise DecodeError(
+            f"unknown protocol version {protocol_version}",
+            expected=" or ".join(map(str, gen.PROTOCOLS)),
+        )
+    cls = gen.BY_KEY.get((package_type, sender, protocol_version))
+    if cls is not None:
+        return cls
+    if package_type not in gen.PACKAGE_TYPES:
+        known = ", ".join(_type_text(c) for c in gen.PACKAGE_TYPES)
+        raise DecodeError(
+            f"unknown package type {_type_text(package_type)}",
+            field="type",
+            offset=2,
+            expected=known,
+            actual=package_type,
+        )
+    raise DecodeError(
+        f"{gen.PACKAGE_TYPES[package_type]} is never sent by the {sender} "
+        f"in protocol {protocol_version}",
+        field="type",
+        offset=2,
+    )
+
+
+def message_by_name(name: str) -> type[RtdeMessage]:
+    """A package model by its spec name, e.g. "setup_outputs_v2"."""
+    try:
+        return _BY_NAME[name]
+    except KeyError:
+        raise EncodeError(f"unknown package {name!r}", expected=", ".join(_BY_NAME)) from None
+
+
+def _check_layout(cls: type[RtdeMessage], body: bytes, strict: bool) -> None:
+    """Walk the spec layout over the body; raise DecodeError where it does not fit."""
+    pos = 0
+    for lay in cls.LAYOUT:
+        at = gen.HEADER_SIZE + pos
+        left = len(body) - pos
+        if lay.kind in ("fixed", "prefixed") and left < lay.size:
+            what = "length prefix" if lay.kind == "prefixed" else "field"
+            raise DecodeError(
+                f"package ends inside the {what}",
+                package=cls.NAME,
+                field=lay.name,
+                offset=at,
+                expected=f"{lay.size} bytes",
+                actual=f"{left} bytes",
+            )
+        if lay.kind == "fixed":
+            pos += lay.size
+            continue
+        if lay.kind == "prefixed":
+            length = int.from_bytes(body[pos : pos + lay.size], "big")
+            start = pos + lay.size
+            if len(body) - start < length:
+                raise DecodeError(
+                    f"length prefix says {length} bytes but the package ends first",
+                    package=cls.NAME,
+                    field=lay.name,
+                    offset=at,
+                    expected=f"{length} bytes",
+                    actual=f"{len(body) - start} bytes",
+                )
+            end = start + length
+        else:
+            start, end = pos, len(body)
+        if lay.text:
+            for i in range(start, end):
+                if body[i] > 0x7F:
+                    raise DecodeError(
+                        "text is not ASCII",
+                        package=cls.NAME,
+                        field=lay.name,
+                        offset=gen.HEADER_SIZE + i,
+                        expected="bytes 0x00..0x7f",
+                        actual=f"0x{body[i]:02x}",
+                    )
+        pos = end
+    if strict and pos < len(body):
+        raise DecodeError(
+            f"{len(body) - pos} bytes after the last field",
+            package=cls.NAME,
+            offset=gen.HEADER_SIZE + pos,
+            expected=f"package size {gen.HEADER_SIZE + pos}",
+            actual=f"package size {gen.HEADER_SIZE + len(body)}",
+        )
+
+
+def decode_body(cls: type[RtdeMessage], body: bytes, *, strict: bool = True) -> RtdeMessage:
+    """The model of one package body (the bytes after the header)."""
+    _check_layout(cls, body, strict)
+    try:
+        parsed = cls.STRUCT.parse(body)
+        values = {lay.name: parsed[lay.name] for lay in cls.LAYOUT}
+        return cls.model_validate(values)
+    except (ConstructError, ValidationError, EncodeError, UnicodeDecodeError) as exc:
+        # unreachable when the layout walk above is right; never leak internals
+        raise DecodeError(f"does not decode: {exc}", package=cls.NAME) from None
+
+
+def read_header(data: bytes, *, offset: int = 0) -> tuple[int, int]:
+    """(size, type) of the package at the start of `data`, checked against its length."""
+    if len(data) < gen.HEADER_SIZE:
+        raise DecodeError(
+            "too short for the package header",
+            field="size" if len(data) < 2 else "type",
+            offset=offset + len(data),
+            expected=f"{gen.HEADER_SIZE} bytes",
+            actual=f"{len(data)} bytes",
+        )
+    size, ptype = _HEADER.unpack_from(data)
+    if size < gen.HEADER_SIZE:
+        raise DecodeError(
+            "package size is smaller than the header",
+            field="size",
+            offset=offset,
+            expected=f">= {gen.HEADER_SIZE}",
+            actual=size,
+        )
+    if size > len(data):
+        raise DecodeError(
+            "package is truncated: its size field runs past the data",
+            field="size",
+            offset=offset + len(data),
+            expected=f"{size} bytes",
+            actual=f"{len(data)} bytes",
+        )
+    return size, ptype
+
+
+def decode(
+    data: bytes | bytearray | memoryview,
+    *,
+    protocol_version: int = 2,
+    sender: Sender = "controller",
+    strict: bool = True,
+) -> RtdeMessage:
+    """Decode exactly one package (header included).
+
+    `sender` is who sent it ("controller" or "client"): the same type letter has
+    different layouts in each direction. With strict=False, bytes after the last
+    field and after the package are ignored instead of raising.
+    """
+    buf = bytes(data)
+    size, ptype = read_header(buf)
+    if strict and size < len(buf):
+        raise DecodeError(
+            f"{len(buf) - size} bytes after the package; use decode_stream for several",
+            offset=size,
+            expected=f"{size} bytes",
+            actual=f"{len(buf)} bytes",
+        )
+    cls = message_class(ptype, sender, protocol_version)
+    return decode_body(cls, buf[gen.HEADER_SIZE : size], strict=strict)
+
+
+def decode_stream(
+    data: bytes | bytearray | memoryview,
+    *,
+    protocol_version: int = 2,
+    sender: Sender = "controller",
+    strict: bool = True,
+) -> Iterator[tuple[int, RtdeMessage]]:
+    """(offset, model) for every package of a buffer of concatenated packages.
+
+    A protocol-version request from the client switches the version used for the
+    packages after it (the stream alone cannot tell whether it was accepted).
+    """
+    framer = PackageFramer()
+    version = protocol_version
+    for offset, package in framer.feed(data):
+        try:
+            message = decode(package, protocol_version=version, sender=sender, strict=strict)
+        except DecodeError as exc:
+            raise _shifted(exc, offset) from None
+        if (
+            isinstance(message, gen.RequestProtocolVersion)
+            and message.protocol_version in gen.PROTOCOLS
+        ):
+            version = message.protocol_version
+        yield offset, message
+    framer.close()
+
+
+def _shifted(exc: DecodeError, offset: int) -> DecodeError:
+    """The same error with its byte offset counted from the start of the stream."""
+    return DecodeError(
+        exc.reason,
+        package=exc.package,
+        field=exc.field,
+        offset=None if exc.offset is None else exc.offset + offset,
+        expected=exc.expected,
+        actual=exc.actual,
+    )
+
+
+def encode(message: RtdeMessage) -> bytes:
+    """The whole package of a model, header included."""
+    cls = type(message)
+    values: dict[str, Any] = {lay.name: getattr(message, lay.name) for lay in cls.LAYOUT}
+    try:
+        # models built with model_construct skip validation; check again here
+        cls.model_validate(values)
+        body = cls.STRUCT.build(values)
+    except ValidationError as exc:
+        raise encode_error(exc, cls.NAME) from None
+    except (ConstructError, UnicodeEncodeError, TypeError, ValueError) as exc:
+        raise EncodeError(f"cannot be built: {exc}", package=cls.NAME) from None
+    size = gen.HEADER_SIZE + len(body)
+    limit = gen.LIMITS["package_max_bytes"]
+    if size > limit:
+        raise EncodeError(
+            "package too large for the size field",
+            package=cls.NAME,
+            field="size",
+            expected=f"<= {limit} bytes",
+            actual=f"{size} bytes",
+        )
+    return _HEADER.pack(size, cls.PACKAGE_TYPE) + body
+
+
+def build(name: str, **fields: Any) -> bytes:
+    """Encode a package from its spec name and field values, e.g. build("start")."""
+    return encode(message_by_name(name)(**fields))

@@ -1,0 +1,85 @@
+"""Cut a TCP byte stream into whole RTDE packages, whatever the read boundaries."""
+
+from __future__ import annotations
+
+import struct
+
+from ._generated.rtde_models import HEADER_FORMAT, HEADER_SIZE
+from .errors import DecodeError
+
+_HEADER = struct.Struct(HEADER_FORMAT)
+_SIZE_BYTES = struct.calcsize(HEADER_FORMAT[:2])  # the size field leads the header
+
+
+class PackageFramer:
+    """Feed it bytes as they arrive; it returns each complete package once.
+
+    A size below the header size cannot be resynchronised from, so it raises
+    DecodeError with the stream offset, and keeps raising on later feeds.
+    """
+
+    def __init__(self) -> None:
+        self._buf = bytearray()
+        self._start = 0  # index in _buf of the first unconsumed byte
+        self._offset = 0  # stream offset of _buf[_start]
+        self._broken: DecodeError | None = None
+
+    @property
+    def offset(self) -> int:
+        """Stream offset of the next package's first byte."""
+        return self._offset
+
+    @property
+    def pending(self) -> int:
+        """Bytes held that do not yet make a whole package."""
+        return len(self._buf) - self._start
+
+    def feed(self, data: bytes | bytearray | memoryview) -> list[tuple[int, bytes]]:
+        """Add bytes; return (stream offset, package bytes) for every package completed."""
+        if self._broken is not None:
+            raise self._broken
+        self._buf += data
+        out: list[tuple[int, bytes]] = []
+        buf, start = self._buf, self._start
+        while len(buf) - start >= _SIZE_BYTES:
+            size = int.from_bytes(buf[start : start + _SIZE_BYTES], "big")
+            if size < HEADER_SIZE:
+                self._broken = DecodeError(
+                    "package size is smaller than the header; the stream cannot be framed",
+                    field="size",
+                    offset=self._offset,
+                    expected=f">= {HEADER_SIZE}",
+                    actual=size,
+                )
+                raise self._broken
+            if len(buf) - start < size:
+                break
+            out.append((self._offset, bytes(buf[start : start + size])))
+            start += size
+            self._offset += size
+        if start:
+            del buf[:start]
+        self._start = 0
+        return out
+
+    def close(self) -> None:
+        """Raise DecodeError if the stream ended inside a package."""
+        if self.pending:
+            need = None
+            if self.pending >= _SIZE_BYTES:
+                need = int.from_bytes(self._buf[self._start : self._start + _SIZE_BYTES], "big")
+            raise DecodeError(
+                "the data ends inside a package (truncated)",
+                field="size" if need is not None else None,
+                offset=self._offset,
+                expected=f"{need} bytes" if need is not None else f">= {HEADER_SIZE} bytes",
+                actual=f"{self.pending} bytes",
+            )
+
+
+def split_packages(data: bytes) -> list[tuple[int, bytes]]:
+    """Every package of a complete buffer; DecodeError if it ends mid-package."""
+    framer = PackageFramer()
+    out = framer.feed(data)
+    framer.close()
+    return out
