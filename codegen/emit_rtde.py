@@ -46,7 +46,7 @@ def _annotation(fld: PackageField, prims: dict[str, Primitive]) -> str:
         return "bytes"
     if fld.type == "string":
         if fld.format == "csv":
-            return "list[CsvItem]"
+            return "Annotated[list[CsvItem], Field(min_length=1)]"
         return "ShortAsciiStr" if fld.length == "uint8" else "AsciiStr"
     prim = prims[fld.type]
     return scalar_annotation(prim.kind, prim.bounds)

@@ -18,7 +18,6 @@ from ._generated import rtde_models as gen
 from .errors import DecodeError, EncodeError
 from .framing import PackageFramer
 from .message_base import RtdeMessage
-from .validation_errors import encode_error
 
 Sender = Literal["controller", "client"]
 _HEADER = struct.Struct(gen.HEADER_FORMAT)
@@ -129,7 +128,7 @@ def decode_body(cls: type[RtdeMessage], body: bytes, *, strict: bool = True) -> 
     try:
         parsed = cls.STRUCT.parse(body)
         values = {lay.name: parsed[lay.name] for lay in cls.LAYOUT}
-        return cls.model_validate(values)
+        return cls(**values)
     except (ConstructError, ValidationError, EncodeError, UnicodeDecodeError) as exc:
         # unreachable when the layout walk above is right; never leak internals
         raise DecodeError(f"does not decode: {exc}", package=cls.NAME) from None
@@ -235,12 +234,10 @@ def encode(message: RtdeMessage) -> bytes:
     """The whole package of a model, header included."""
     cls = type(message)
     values: dict[str, Any] = {lay.name: getattr(message, lay.name) for lay in cls.LAYOUT}
+    # models built with model_construct skip validation; check again here
+    cls(**values)
     try:
-        # models built with model_construct skip validation; check again here
-        cls.model_validate(values)
         body = cls.STRUCT.build(values)
-    except ValidationError as exc:
-        raise encode_error(exc, cls.NAME) from None
     except (ConstructError, UnicodeEncodeError, TypeError, ValueError) as exc:
         raise EncodeError(f"cannot be built: {exc}", package=cls.NAME) from None
     size = gen.HEADER_SIZE + len(body)

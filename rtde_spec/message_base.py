@@ -46,7 +46,7 @@ class RtdeMessage(BaseModel):
         try:
             super().__init__(**data)
         except ValidationError as exc:
-            raise encode_error(exc, type(self).NAME) from None
+            raise encode_error(exc, type(self).NAME, type(self)) from None
 
     def to_bytes(self) -> bytes:
         """The whole package, header included."""

@@ -81,7 +81,7 @@ class RecipeCodec:
                 actual=len(types),
             )
         items = []
-        for name, type_name in zip(names, types):
+        for name, type_name in zip(names, types, strict=True):
             wire = cat.wire_types.get(type_name)
             if wire is None:
                 raise RecipeError(f"type {type_name!r} has no data layout", field=name)
@@ -142,27 +142,39 @@ def _checked(item: RecipeItem, value: Any) -> Any:
     if wire.kind == "bool":
         if not isinstance(value, (bool, int)):
             raise EncodeError(
-                "not a bool", package="data_package", field=item.name, expected="bool",
+                "not a bool",
+                package="data_package",
+                field=item.name,
+                expected="bool",
                 actual=repr(value),
             )
         return bool(value)
     if wire.kind == "int":
         if isinstance(value, bool) or not isinstance(value, int):
             raise EncodeError(
-                "not an integer", package="data_package", field=item.name,
-                expected=wire.name, actual=repr(value),
+                "not an integer",
+                package="data_package",
+                field=item.name,
+                expected=wire.name,
+                actual=repr(value),
             )
         assert wire.bounds is not None
         low, high = wire.bounds
         if not low <= value <= high:
             raise EncodeError(
-                f"out of range for {wire.name}", package="data_package", field=item.name,
-                expected=f"{low}..{high}", actual=value,
+                f"out of range for {wire.name}",
+                package="data_package",
+                field=item.name,
+                expected=f"{low}..{high}",
+                actual=value,
             )
         return value
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         raise EncodeError(
-            "not a number", package="data_package", field=item.name, expected=wire.name,
+            "not a number",
+            package="data_package",
+            field=item.name,
+            expected=wire.name,
             actual=repr(value),
         )
     return float(value)

@@ -45,16 +45,17 @@ def _field(entry: FieldSpec, spec: Spec, loc: Loc) -> Found:
     wire = types.get(entry.type)
     if wire is None:
         yield (*loc, "type"), f"unknown type {entry.type!r} (known: {', '.join(types)})"
-    integer = bool(wire and wire.element and primitives[wire.element].kind == "int")
+    prim = primitives.get(wire.element or "") if wire else None
+    integer = prim is not None and prim.kind == "int"
     if entry.enum is not None:
         if entry.enum not in enums:
             yield (*loc, "enum"), f"unknown enum {entry.enum!r}"
-        elif wire and not integer:
+        elif prim and not integer:
             yield (*loc, "enum"), f"enum {entry.enum!r} on non-integer type {entry.type}"
     if entry.bits is not None:
         if entry.bits not in bitfields:
             yield (*loc, "bits"), f"unknown bitfield {entry.bits!r}"
-        elif wire and not integer:
+        elif prim and not integer:
             yield (*loc, "bits"), f"bitfield {entry.bits!r} on non-integer type {entry.type}"
     yield from _since(entry.since, spec, (*loc, "since"))
     has_placeholder = "{X}" in entry.name

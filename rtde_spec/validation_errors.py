@@ -2,10 +2,9 @@
 
 from __future__ import annotations
 
-from pydantic import ValidationError
+from pydantic import BaseModel, ValidationError
 
 from .errors import EncodeError
-
 
 _BOUND_WORDS = {"ge": ">=", "gt": ">", "le": "<=", "lt": "<"}
 
@@ -21,14 +20,28 @@ def _expected(ctx: dict[str, object]) -> str | None:
     return ", ".join(parts) or None
 
 
-def encode_error(exc: ValidationError, package: str) -> EncodeError:
+def _declared_bounds(model: type[BaseModel] | None, field: str | None) -> str | None:
+    """'0..255' from the field's own ge/le, however nested its Annotated metadata is."""
+    if model is None or field not in model.model_fields:
+        return None
+    low = high = None
+    for item in model.model_fields[field].metadata:
+        for meta in getattr(item, "metadata", [item]):
+            low = getattr(meta, "ge", low)
+            high = getattr(meta, "le", high)
+    return f"{low}..{high}" if low is not None and high is not None else None
+
+
+def encode_error(
+    exc: ValidationError, package: str, model: type[BaseModel] | None = None
+) -> EncodeError:
     """The first problem as the headline; every other one listed in the reason."""
     errors = exc.errors(include_url=False)
     first = errors[0]
     field = ".".join(str(p) for p in first["loc"]) or None
     reason = str(first["msg"])
     ctx = first.get("ctx") or {}
-    expected = _expected(ctx)
+    expected = _declared_bounds(model, field) or _expected(ctx)
     if len(errors) > 1:
         rest = "; ".join(f"{'.'.join(str(p) for p in e['loc'])}: {e['msg']}" for e in errors[1:])
         reason += f" (and {len(errors) - 1} more: {rest})"

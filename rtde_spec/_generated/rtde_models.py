@@ -221,7 +221,7 @@ class SetupOutputsV1(RtdeMessage):
         FieldLayout('variable_names', 'rest', 0, True),
     )
 
-    variable_names: Annotated[list[CsvItem], Field(description='')]
+    variable_names: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='')]
 
 
 class SetupOutputsV1Reply(RtdeMessage):
@@ -241,7 +241,7 @@ class SetupOutputsV1Reply(RtdeMessage):
         FieldLayout('variable_types', 'rest', 0, True),
     )
 
-    variable_types: Annotated[list[CsvItem], Field(description='')]
+    variable_types: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='')]
 
 
 class SetupOutputsV2(RtdeMessage):
@@ -263,7 +263,7 @@ class SetupOutputsV2(RtdeMessage):
     )
 
     output_frequency: Annotated[float, Field(description='[Hz]')]
-    variable_names: Annotated[list[CsvItem], Field(description='')]
+    variable_names: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='')]
 
 
 class SetupOutputsV2Reply(RtdeMessage):
@@ -285,7 +285,7 @@ class SetupOutputsV2Reply(RtdeMessage):
     )
 
     output_recipe_id: Annotated[Annotated[int, Field(ge=0, le=255)], Field(description='')]
-    variable_types: Annotated[list[CsvItem], Field(description='')]
+    variable_types: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='')]
 
 
 class SetupInputs(RtdeMessage):
@@ -305,7 +305,7 @@ class SetupInputs(RtdeMessage):
         FieldLayout('variable_names', 'rest', 0, True),
     )
 
-    variable_names: Annotated[list[CsvItem], Field(description='')]
+    variable_names: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='')]
 
 
 class SetupInputsReply(RtdeMessage):
@@ -327,7 +327,7 @@ class SetupInputsReply(RtdeMessage):
     )
 
     input_recipe_id: Annotated[Annotated[int, Field(ge=0, le=255)], Field(description='')]
-    variable_types: Annotated[list[CsvItem], Field(description='')]
+    variable_types: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='')]
 
 
 class Start(RtdeMessage):

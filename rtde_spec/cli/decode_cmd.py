@@ -15,8 +15,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("decode", help="decode RTDE packages from hex or a file")
     p.add_argument("data", metavar="HEX_OR_FILE", help="hex string, file (binary or hex), or -")
     p.add_argument("--protocol-version", type=int, choices=gen.PROTOCOLS, default=2)
-    p.add_argument("--from", dest="sender", choices=gen.SENDERS, default="controller",
-                   help="who sent the bytes (default: controller)")
+    p.add_argument(
+        "--from",
+        dest="sender",
+        choices=gen.SENDERS,
+        default="controller",
+        help="who sent the bytes (default: controller)",
+    )
     p.add_argument("--json", action="store_true", help="JSON keyed by the spec's field names")
     p.add_argument("--lenient", action="store_true", help="ignore bytes after the last field")
     p.set_defaults(run=run)
@@ -50,7 +55,10 @@ def run(args: argparse.Namespace) -> int:
     data = read_input(args.data)
     packages = list(
         decode_stream(
-            data, protocol_version=args.protocol_version, sender=args.sender, strict=not args.lenient
+            data,
+            protocol_version=args.protocol_version,
+            sender=args.sender,
+            strict=not args.lenient,
         )
     )
     if args.json:

@@ -57,9 +57,7 @@ def run(args: argparse.Namespace) -> int:
             fields.pop("payload")
         else:
             fields = msg.fields()
-        details = ", ".join(
-            f"{k}={describe(v, msg.ENUMS.get(k))}" for k, v in fields.items()
-        )
+        details = ", ".join(f"{k}={describe(v, msg.ENUMS.get(k))}" for k, v in fields.items())
         if decoded.note:
             details += f"  [{decoded.note}]"
         rows.append([sender, chr(msg.PACKAGE_TYPE), msg.NAME, len(package), details])

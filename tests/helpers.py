@@ -1,0 +1,51 @@
+"""Helpers shared by the tests: the golden vectors and one check for every package."""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from rtde_spec._generated import rtde_models as gen
+from rtde_spec._generated import rtde_structs
+from rtde_spec.codec import decode, encode, message_by_name
+from rtde_spec.message_base import RtdeMessage
+
+DATA = Path(__file__).parent / "data"
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def golden() -> list[dict[str, Any]]:
+    return yaml.safe_load((DATA / "rtde_golden.yaml").read_text())
+
+
+def expected_values(package: str, fields: dict[str, Any]) -> dict[str, Any]:
+    """Golden field values as the model holds them (bytes fields are hex in YAML)."""
+    cls = message_by_name(package)
+    out = {}
+    for lay in cls.LAYOUT:
+        value = fields[lay.name]
+        out[lay.name] = bytes.fromhex(value) if lay.kind == "rest" and not lay.text else value
+    return out
+
+
+def assert_package(data: bytes, message: RtdeMessage, sender: str, protocol: int) -> None:
+    """decode, encode and size agree for one package: the construct-tests idiom.
+
+    Checks the codec both ways, the generated body struct (parse, build, and
+    sizeof where the layout is fixed) and the generated whole-package struct.
+    """
+    cls = type(message)
+    assert decode(data, sender=sender, protocol_version=protocol) == message  # type: ignore[arg-type]
+    assert encode(message) == data
+    body = data[gen.HEADER_SIZE :]
+    values = message.fields()
+    assert cls.STRUCT.build(values) == body
+    parsed = cls.STRUCT.parse(body)
+    assert {k: parsed[k] for k in values} == values
+    if all(lay.kind == "fixed" for lay in cls.LAYOUT):
+        assert cls.STRUCT.sizeof() == len(body)
+    whole = getattr(rtde_structs, f"{cls.NAME.upper()}_PACKAGE")
+    assert whole.build({"body": values}) == data
+    assert whole.parse(data).size == len(data)

@@ -1,0 +1,96 @@
+"""The rtde-spec command line, run as a user runs it (a real subprocess)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+from .helpers import golden
+
+
+def cli(*args: str, stdin: bytes | None = None) -> subprocess.CompletedProcess[str]:
+    exe = shutil.which("rtde-spec")
+    cmd = [exe] if exe else [sys.executable, "-m", "rtde_spec.cli"]
+    return subprocess.run(
+        [*cmd, *args],
+        capture_output=True,
+        text=True,
+        input=None if stdin is None else stdin.decode("latin-1"),
+    )
+
+
+def test_decode_protocol_version_reply() -> None:
+    result = cli("decode", "00045601", "--from", "controller")
+    assert result.returncode == 0
+    assert "request_protocol_version_reply" in result.stdout
+    assert "accepted" in result.stdout and "True" in result.stdout
+
+
+def test_decode_json_keys_are_spec_field_names() -> None:
+    result = cli("decode", "00045601", "--from", "controller", "--json")
+    assert json.loads(result.stdout)["accepted"] is True
+    result = cli("decode", "0013 76 00000005 0000000c 00000002 00002a3b", "--json")
+    record = json.loads(result.stdout)
+    assert (record["major"], record["minor"], record["bugfix"], record["build"]) == (
+        5,
+        12,
+        2,
+        10811,
+    )
+
+
+def test_decode_several_packages_from_a_binary_file(tmp_path: Path) -> None:
+    cases = [c for c in golden() if c["sender"] == "client" and c["protocol"] == 2]
+    path = tmp_path / "client.bin"
+    path.write_bytes(b"".join(bytes.fromhex(c["hex"].replace(" ", "")) for c in cases))
+    result = cli("decode", str(path), "--from", "client", "--json")
+    assert result.returncode == 0, result.stderr
+    records = json.loads(result.stdout)
+    assert [r["package"] for r in records] == [c["package"] for c in cases]
+
+
+def test_decode_protocol_1_layout() -> None:
+    result = cli("decode", "0007 4d 01 626164", "--protocol-version", "1", "--json")
+    assert json.loads(result.stdout)["message"] == "bad"
+
+
+def test_decode_errors_exit_non_zero_with_error_line() -> None:
+    for bad in ("0002", "000956", "zz", "0004ff01"):
+        result = cli("decode", bad)
+        assert result.returncode != 0, bad
+        assert result.stderr.startswith("error: "), result.stderr
+        assert "Traceback" not in result.stderr
+
+
+def test_fields_json_lists_expanded_registers() -> None:
+    result = cli("fields", "--json")
+    fields = json.loads(result.stdout)
+    assert all({"name", "type"} <= set(f) for f in fields)
+    names = {(f["direction"], f["name"]) for f in fields}
+    assert ("output", "output_int_register_47") in names
+    assert ("input", "input_bit_register_127") in names
+
+
+def test_fields_for_a_controller_and_direction() -> None:
+    old = {f["name"] for f in json.loads(cli("fields", "--controller", "3.15.8", "--json").stdout)}
+    new = {f["name"] for f in json.loads(cli("fields", "--controller", "5.26.0", "--json").stdout)}
+    assert "target_gravity" in new and "target_gravity" not in old
+    ins = json.loads(cli("fields", "--direction", "input", "--json").stdout)
+    assert {f["direction"] for f in ins} == {"input"}
+    table = cli("fields", "--controller", "10.11.0")
+    assert table.returncode == 0 and "actual_current_as_torque" in table.stdout
+
+
+def test_fields_bad_controller() -> None:
+    result = cli("fields", "--controller", "4.0.0")
+    assert result.returncode == 1 and "no known product line" in result.stderr
+
+
+def test_demo_decodes_the_embedded_session() -> None:
+    result = cli("demo")
+    assert result.returncode == 0, result.stderr
+    assert "data_package" in result.stdout and "actual_q=" in result.stdout
+    assert "5.12.2" in result.stdout
