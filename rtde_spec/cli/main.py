@@ -13,9 +13,9 @@ from types import ModuleType
 
 from ..catalogue import Catalogue
 from ..errors import RtdeSpecError
-from . import decode_cmd, demo_cmd, fields_cmd
+from . import decode_cmd, demo_cmd, fields_cmd, validate_cmd
 
-COMMANDS: tuple[ModuleType, ...] = (demo_cmd, decode_cmd, fields_cmd)
+COMMANDS: tuple[ModuleType, ...] = (demo_cmd, decode_cmd, fields_cmd, validate_cmd)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,140 @@
+"""rtde-spec validate RECIPE...: check recipes offline against the spec.
+
+Exit 0 when valid (warnings allowed), 1 when invalid, 2 on usage errors
+(unreadable or malformed recipe files, unknown controller lines).
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from ..errors import RecipeError, RtdeSpecError
+from ..recipe import Recipe
+from ..recipe_files import FORMATS, load_recipes
+from ..recipe_validation import RecipeReport, ValidationReport, validate_recipes
+from .render import print_json, table
+
+USAGE_ERROR = 2
+FILE_SUFFIXES = (".xml", ".yaml", ".yml", ".json", ".txt", ".csv")
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("validate", help="validate recipes offline for a controller version")
+    p.add_argument(
+        "recipes",
+        nargs="+",
+        metavar="RECIPE",
+        help="a recipe file (XML, YAML, JSON, one name per line) or a comma list",
+    )
+    p.add_argument("--controller", metavar="VERSION", help="e.g. 3.15.8, 5.12.2, 10.11.0")
+    p.add_argument("--frequency", type=float, metavar="HZ", help="output frequency")
+    p.add_argument(
+        "--direction",
+        choices=("input", "output"),
+        help="default: the file's, else inferred from the names",
+    )
+    p.add_argument("--format", choices=FORMATS, help="recipe file format (default: detect)")
+    p.add_argument("--json", action="store_true")
+    p.set_defaults(run=run)
+
+
+def collect(args: argparse.Namespace) -> list[Recipe]:
+    recipes: list[Recipe] = []
+    for arg in args.recipes:
+        path = Path(arg)
+        if path.exists():
+            recipes += load_recipes(arg, args.format)
+        elif path.suffix.lower() in FILE_SUFFIXES or "/" in arg:
+            raise RecipeError("recipe file not found", field=arg)
+        else:
+            recipes.append(Recipe.parse(arg).with_(source="argument"))
+    return recipes
+
+
+def report_json(report: ValidationReport) -> dict[str, object]:
+    def one(r: RecipeReport) -> dict[str, object]:
+        return {
+            "key": r.recipe.key,
+            "source": r.recipe.source,
+            "direction": r.direction,
+            "valid": r.valid,
+            "answer": r.answer,
+            "payload_bytes": r.payload_bytes,
+            "rate_divisor": r.rate_divisor,
+            "effective_frequency": r.effective_frequency,
+            "fields": [vars(row) for row in r.rows],
+            "problems": [vars(p) for p in r.problems],
+        }
+
+    return {
+        "valid": report.valid,
+        "controller": report.controller,
+        "line": report.line,
+        "recipes": [one(r) for r in report.recipes],
+        "problems": [vars(p) for p in report.problems],
+    }
+
+
+def print_report(report: ValidationReport) -> None:
+    target = (
+        f"controller {report.controller} ({report.line})"
+        if report.controller
+        else ("no controller version given: availability by version not checked")
+    )
+    print(f"Validating {len(report.recipes)} recipe(s) for {target}\n")
+    for r in report.recipes:
+        state = "valid" if r.valid else "INVALID"
+        extra = (
+            f", every {r.rate_divisor} cycles = {r.effective_frequency:.4g} Hz"
+            if r.rate_divisor
+            else ""
+        )
+        print(
+            f"{r.label} ({r.direction}, {len(r.rows)} fields, "
+            f"{r.payload_bytes} payload bytes{extra}): {state}"
+        )
+        rows = [[x.name, x.type or "?", x.size or "", x.since, x.status, x.message] for x in r.rows]
+        if rows:
+            print(
+                table(
+                    ["name", "type", "bytes", "available since", "status", "message"],
+                    rows,
+                    max_width=90,
+                )
+            )
+        general = [p for p in r.problems if p.field is None]
+        for p in general:
+            print(f"  {p.severity}: {p.message} [{p.code}]")
+        print()
+    for p in report.problems:
+        print(p)
+    errors = sum(p.severity == "error" for p in report.all_problems)
+    warnings = sum(p.severity == "warning" for p in report.all_problems)
+    print(f"{'valid' if report.valid else 'invalid'}: {errors} error(s), {warnings} warning(s)")
+
+
+def run(args: argparse.Namespace) -> int:
+    from .main import catalogue_for
+
+    try:
+        catalogue = catalogue_for(args)
+        recipes = collect(args)
+        if args.controller:
+            catalogue.line_of(args.controller)
+        report = validate_recipes(
+            recipes,
+            controller=args.controller,
+            frequency=args.frequency,
+            direction=args.direction,
+            catalogue=catalogue,
+        )
+    except RtdeSpecError as exc:
+        print(f"error: {exc}", file=sys.stderr)
+        return USAGE_ERROR
+    if args.json:
+        print_json(report_json(report))
+    else:
+        print_report(report)
+    return 0 if report.valid else 1

@@ -1,0 +1,267 @@
+"""Recipe files: UR's XML configuration, one name per line, comma lists, YAML and JSON.
+
+XML is parsed with defusedxml (no entity expansion, no external entities or DTDs)
+and every file is size-bounded before it is parsed.
+"""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+from typing import Any
+from xml.etree.ElementTree import Element, SubElement, tostring
+
+import defusedxml.ElementTree as SafeET
+import yaml
+from defusedxml import DefusedXmlException
+
+from .errors import RecipeError
+from .recipe import Direction, Recipe
+
+MAX_FILE_BYTES = 1 << 20  # 1 MiB: recipes are names; anything larger is not a recipe
+FORMATS = ("xml", "lines", "csv", "yaml", "json")
+
+
+def detect_format(path: Path, text: str) -> str:
+    """By extension first, then by content."""
+    suffix = path.suffix.lower()
+    by_suffix = {".xml": "xml", ".yaml": "yaml", ".yml": "yaml", ".json": "json", ".csv": "csv"}
+    if suffix in by_suffix:
+        return by_suffix[suffix]
+    stripped = text.lstrip()
+    if stripped.startswith("<"):
+        return "xml"
+    if stripped.startswith(("{", "[")):
+        return "json"
+    if any(line.strip().startswith(("recipes:", "fields:", "- ")) for line in text.splitlines()):
+        return "yaml"
+    first = next((line for line in text.splitlines() if line.strip()), "")
+    return "csv" if "," in first else "lines"
+
+
+def read_text_bounded(path: Path) -> str:
+    try:
+        size = path.stat().st_size
+    except OSError as exc:
+        raise RecipeError(f"cannot read recipe file: {exc.strerror}", field=str(path)) from None
+    if size > MAX_FILE_BYTES:
+        raise RecipeError(
+            "recipe file too large",
+            field=str(path),
+            expected=f"<= {MAX_FILE_BYTES} bytes",
+            actual=f"{size} bytes",
+        )
+    try:
+        return path.read_text(encoding="utf-8")
+    except UnicodeDecodeError as exc:
+        raise RecipeError(f"not UTF-8 text at byte {exc.start}", field=str(path)) from None
+
+
+def load_recipes(path: str | Path, fmt: str | None = None) -> list[Recipe]:
+    """Every recipe of a file (XML files may hold several)."""
+    p = Path(path)
+    text = read_text_bounded(p)
+    kind = fmt or detect_format(p, text)
+    loaders = {
+        "xml": _from_xml,
+        "yaml": _from_yaml,
+        "json": _from_json,
+        "csv": _from_csv,
+        "lines": _from_lines,
+    }
+    if kind not in loaders:
+        raise RecipeError(f"unknown recipe format {kind!r}", expected=", ".join(FORMATS))
+    recipes = loaders[kind](text, str(p))
+    return [r.with_(source=str(p)) for r in recipes]
+
+
+def _from_csv(text: str, where: str) -> list[Recipe]:
+    joined = ",".join(line.strip() for line in text.splitlines() if line.strip())
+    return [Recipe.parse(joined)]
+
+
+def _from_lines(text: str, where: str) -> list[Recipe]:
+    names = [line.split("#", 1)[0].strip() for line in text.splitlines()]
+    return [Recipe(tuple(n for n in names if n))]
+
+
+def _from_xml(text: str, where: str) -> list[Recipe]:
+    try:
+        root = SafeET.fromstring(text, forbid_dtd=True)
+    except DefusedXmlException as exc:
+        raise RecipeError(f"unsafe XML refused: {exc}", field=where) from None
+    except SafeET.ParseError as exc:
+        line, col = exc.position
+        raise RecipeError(
+            f"not well-formed XML at line {line}, column {col}", field=where
+        ) from None
+    if root.tag != "rtde_config":
+        raise RecipeError("XML root must be <rtde_config>", field=where, actual=f"<{root.tag}>")
+    recipes = []
+    for number, element in enumerate(root.findall("recipe"), 1):
+        key = element.get("key")
+        names: list[str] = []
+        declared: dict[str, str] = {}
+        for fld in element.findall("field"):
+            name = fld.get("name")
+            if not name:
+                raise RecipeError(f"<field> without a name in recipe {key or number}", field=where)
+            names.append(name)
+            if fld.get("type"):
+                declared[name] = fld.get("type", "")
+        recipes.append(Recipe(tuple(names), key=key, declared_types=declared))
+    if not recipes:
+        raise RecipeError("no <recipe> elements", field=where)
+    return recipes
+
+
+def _recipe_from_mapping(item: Any, where: str, index: int) -> Recipe:
+    if isinstance(item, list):
+        return Recipe(tuple(str(n) for n in item))
+    if not isinstance(item, dict):
+        raise RecipeError(f"recipe {index} must be a mapping or a list of names", field=where)
+    known = {"key", "direction", "frequency", "controller", "fields", "names"}
+    unknown = sorted(set(item) - known)
+    if unknown:
+        raise RecipeError(
+            f"recipe {index}: unknown key(s) {unknown}",
+            field=where,
+            expected=", ".join(sorted(known)),
+        )
+    raw = item.get("fields", item.get("names"))
+    if not isinstance(raw, list):
+        raise RecipeError(f"recipe {index} needs a list under 'fields'", field=where)
+    names: list[str] = []
+    declared: dict[str, str] = {}
+    for entry in raw:
+        if isinstance(entry, dict):
+            names.append(str(entry.get("name")))
+            if entry.get("type"):
+                declared[names[-1]] = str(entry["type"])
+        else:
+            names.append(str(entry))
+    direction = item.get("direction")
+    if direction not in (None, "input", "output"):
+        raise RecipeError(
+            f"recipe {index}: direction must be input or output", field=where, actual=direction
+        )
+    frequency = item.get("frequency")
+    return Recipe(
+        tuple(names),
+        direction=direction,
+        frequency=float(frequency) if frequency is not None else None,
+        controller=str(item["controller"]) if item.get("controller") is not None else None,
+        key=item.get("key"),
+        declared_types=declared,
+    )
+
+
+def _from_data(data: Any, where: str) -> list[Recipe]:
+    if isinstance(data, dict) and "recipes" in data:
+        items = data["recipes"]
+    elif isinstance(data, list) and data and all(isinstance(x, str) for x in data):
+        items = [data]
+    elif isinstance(data, dict):
+        items = [data]
+    else:
+        items = data
+    if not isinstance(items, list) or not items:
+        raise RecipeError("no recipes found", field=where)
+    return [_recipe_from_mapping(item, where, i) for i, item in enumerate(items)]
+
+
+def _from_yaml(text: str, where: str) -> list[Recipe]:
+    try:
+        return _from_data(yaml.safe_load(text), where)
+    except yaml.YAMLError as exc:
+        raise RecipeError(f"not valid YAML: {exc}", field=where) from None
+
+
+def _from_json(text: str, where: str) -> list[Recipe]:
+    try:
+        return _from_data(json.loads(text), where)
+    except json.JSONDecodeError as exc:
+        raise RecipeError(f"not valid JSON at line {exc.lineno}: {exc.msg}", field=where) from None
+
+
+# --- writing -----------------------------------------------------------------
+
+
+def _as_mapping(recipe: Recipe) -> dict[str, Any]:
+    out: dict[str, Any] = {}
+    for key in ("key", "direction", "frequency", "controller"):
+        value = getattr(recipe, key)
+        if value is not None:
+            out[key] = value
+    out["fields"] = [
+        {"name": n, "type": recipe.declared_types[n]} if n in recipe.declared_types else n
+        for n in recipe.names
+    ]
+    return out
+
+
+def dumps_recipes(recipes: list[Recipe], fmt: str, types: dict[str, str] | None = None) -> str:
+    """Recipes as text of a format; `types` fills XML type attributes (name -> type)."""
+    if fmt == "csv":
+        _single(recipes, fmt)
+        return recipes[0].wire_text + "\n"
+    if fmt == "lines":
+        _single(recipes, fmt)
+        return "".join(f"{n}\n" for n in recipes[0].names)
+    if fmt == "yaml":
+        return yaml.safe_dump({"recipes": [_as_mapping(r) for r in recipes]}, sort_keys=False)
+    if fmt == "json":
+        return json.dumps({"recipes": [_as_mapping(r) for r in recipes]}, indent=2) + "\n"
+    if fmt == "xml":
+        root = Element("rtde_config")
+        for i, recipe in enumerate(recipes):
+            element = SubElement(root, "recipe", key=recipe.key or f"recipe{i + 1}")
+            for name in recipe.names:
+                attrs = {"name": name}
+                kind = recipe.declared_types.get(name) or (types or {}).get(name)
+                if kind:
+                    attrs["type"] = kind
+                SubElement(element, "field", attrs)
+        _indent(root)
+        return '<?xml version="1.0"?>\n' + tostring(root, encoding="unicode") + "\n"
+    raise RecipeError(f"unknown recipe format {fmt!r}", expected=", ".join(FORMATS))
+
+
+def save_recipes(
+    recipes: list[Recipe],
+    path: str | Path,
+    fmt: str | None = None,
+    types: dict[str, str] | None = None,
+) -> None:
+    p = Path(path)
+    kind = fmt or detect_format(p, "")
+    p.write_text(dumps_recipes(recipes, kind, types), encoding="utf-8")
+
+
+def _single(recipes: list[Recipe], fmt: str) -> None:
+    if len(recipes) != 1:
+        raise RecipeError(f"the {fmt} format holds one recipe", actual=f"{len(recipes)} recipes")
+
+
+def _indent(element: Element, level: int = 0) -> None:
+    pad = "\n" + "  " * (level + 1)
+    if len(element):
+        element.text = pad
+        for child in element:
+            _indent(child, level + 1)
+            child.tail = pad
+        element[-1].tail = "\n" + "  " * level
+
+
+def infer_direction(recipe: Recipe, inputs: set[str], outputs: set[str]) -> Direction:
+    """The recipe's own direction; else input when every name is an input (register
+    read-backs are rarely subscribed alone) or input-only names outnumber output-only
+    ones; else output."""
+    if recipe.direction is not None:
+        return recipe.direction
+    names = [n for n in recipe.names if n]
+    if names and all(n in inputs for n in names):
+        return "input"
+    only_in = sum(1 for n in names if n in inputs and n not in outputs)
+    only_out = sum(1 for n in names if n in outputs and n not in inputs)
+    return "input" if only_in > only_out else "output"
