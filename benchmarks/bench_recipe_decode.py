@@ -116,9 +116,7 @@ def main(argv: list[str] | None = None) -> int:
         one = (lambda: rng.random()) if item.wire.kind == "float" else (lambda: rng.randint(0, 100))
         if item.wire.kind == "bool":
             one = lambda: True  # noqa: E731
-        values[item.name] = (
-            one() if item.wire.count == 1 else tuple(one() for _ in range(item.wire.count))
-        )
+        values[item.name] = one() if item.wire.count == 1 else tuple(one() for _ in range(item.wire.count))
     payload = codec.encode(values)
     baseline = baseline_decoder(names, types)
     assert baseline(payload)["actual_q"] == list(codec.decode_record(payload).actual_q)
@@ -147,9 +145,7 @@ def main(argv: list[str] | None = None) -> int:
         )
     )
 
-    print(
-        f"Recipe: {len(names)} fields, {codec.size} payload bytes, {codec.package_size} per package\n"
-    )
+    print(f"Recipe: {len(names)} fields, {codec.size} payload bytes, {codec.package_size} per package\n")
     print(f"{'per-packet decode':45s} {'µs/packet':>10s} {'vs baseline':>12s}")
     for label, ns in rows:
         print(f"{label:45s} {ns / 1000:10.2f} {base_ns / ns:11.2f}x")

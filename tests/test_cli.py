@@ -94,3 +94,51 @@ def test_demo_decodes_the_embedded_session() -> None:
     assert result.returncode == 0, result.stderr
     assert "data_package" in result.stdout and "actual_q=" in result.stdout
     assert "5.12.2" in result.stdout
+
+
+def test_validate_valid_invalid_and_usage_exit_codes(tmp_path: Path) -> None:
+    ok = cli("validate", "timestamp,actual_q", "--controller", "5.12.2", "--frequency", "500")
+    assert ok.returncode == 0, ok.stdout + ok.stderr
+    assert "name" in ok.stdout and "available since" in ok.stdout and "valid" in ok.stdout
+    bad = cli("validate", "timestamp,safety_status", "--controller", "3.9.0")
+    assert bad.returncode == 1
+    assert "available from 3.10.0" in bad.stdout
+    assert cli("validate", "missing.xml").returncode == 2
+    assert cli("validate", "timestamp", "--controller", "4.0.0").returncode == 2
+    assert cli("validate", "timestamp", "--frequency", "fast").returncode == 2
+    assert cli("validate").returncode == 2
+
+
+def test_validate_json_and_xml_file() -> None:
+    from .helpers import DATA
+
+    result = cli("validate", str(DATA / "ur_client_config.xml"), "--controller", "5.12.2", "--json")
+    assert result.returncode == 0, result.stdout
+    report = json.loads(result.stdout)
+    assert report["valid"] is True and report["line"] == "e-series"
+    keys = [r["key"] for r in report["recipes"]]
+    assert keys == ["state", "setp", "watchdog"]
+    assert report["recipes"][0]["answer"] == ["DOUBLE", "VECTOR6D", "INT32", "INT32"]
+    assert any(p["code"] == "reserved" for p in report["recipes"][0]["problems"]) is False
+
+
+def test_validate_direction_flag() -> None:
+    result = cli(
+        "validate", "input_int_register_30", "--direction", "output", "--json", "--controller", "5.12.2"
+    )
+    assert json.loads(result.stdout)["recipes"][0]["direction"] == "output"
+
+
+def test_decode_data_package_with_a_recipe() -> None:
+    from rtde_spec.recipe_codec import RecipeCodec
+
+    names = ["timestamp", "robot_mode", "actual_q"]
+    codec = RecipeCodec.for_names(names, "output")
+    package = codec.encode_package({"timestamp": 2.5, "robot_mode": 7, "actual_q": (1.0,) * 6}, 1)
+    result = cli("decode", package.hex(), "--recipe", ",".join(names), "--json")
+    record = json.loads(result.stdout)
+    assert (record["timestamp"], record["robot_mode"], record["actual_q"]) == (2.5, 7, [1.0] * 6)
+    table = cli("decode", package.hex(), "--recipe", ",".join(names))
+    assert "7 (RUNNING)" in table.stdout
+    short = cli("decode", package[:-8].hex().replace(package[:2].hex(), "0033", 1), "--recipe", ",".join(names))
+    assert short.returncode == 1 and "error: " in short.stderr

@@ -16,9 +16,7 @@ from .helpers import ROOT
 def test_committed_files_match_the_spec() -> None:
     files = generate(load_spec(ROOT / "spec"))
     for rel, text in files.items():
-        assert (ROOT / rel).read_text(encoding="utf-8") == text, (
-            f"{rel} drifted; run python -m codegen"
-        )
+        assert (ROOT / rel).read_text(encoding="utf-8") == text, f"{rel} drifted; run python -m codegen"
 
 
 def test_generation_is_deterministic() -> None:
@@ -31,9 +29,7 @@ def test_generated_files_are_marked() -> None:
 
 
 def _run(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "codegen", *args], cwd=ROOT, capture_output=True, text=True
-    )
+    return subprocess.run([sys.executable, "-m", "codegen", *args], cwd=ROOT, capture_output=True, text=True)
 
 
 def test_check_passes_on_this_tree_and_fails_on_drift(tmp_path: Path) -> None:
@@ -65,9 +61,7 @@ def test_broken_spec_fails_with_file_and_reason(tmp_path: Path) -> None:
     spec = tmp_path / "spec"
     shutil.copytree(ROOT / "spec", spec)
     (spec / "rtde/types.yaml").write_text(
-        (spec / "rtde/types.yaml")
-        .read_text()
-        .replace("element: uint32, count: 6", "element: u32, count: 6")
+        (spec / "rtde/types.yaml").read_text().replace("element: uint32, count: 6", "element: u32, count: 6")
     )
     result = _run("--check", "--spec", str(spec))
     assert result.returncode == 1

@@ -53,9 +53,7 @@ def test_round_trip_bytes_with_nan(cls: type) -> None:
     proto=st.sampled_from(gen.PROTOCOLS),
     strict=st.booleans(),
 )
-def test_random_bytes_raise_only_decode_error(
-    data: bytes, sender: str, proto: int, strict: bool
-) -> None:
+def test_random_bytes_raise_only_decode_error(data: bytes, sender: str, proto: int, strict: bool) -> None:
     try:
         decode(data, sender=sender, protocol_version=proto, strict=strict)  # type: ignore[arg-type]
     except DecodeError as exc:
@@ -108,6 +106,5 @@ def test_framer_is_independent_of_read_boundaries(data: st.DataObject) -> None:
     framer.close()
     assert b"".join(p for _, p in got) == stream
     assert [o for o, _ in got] == [
-        sum(len(bytes.fromhex(c["hex"].replace(" ", ""))) for c in picks[:i])
-        for i in range(len(picks))
+        sum(len(bytes.fromhex(c["hex"].replace(" ", ""))) for c in picks[:i]) for i in range(len(picks))
     ]

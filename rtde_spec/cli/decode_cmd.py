@@ -3,11 +3,16 @@
 from __future__ import annotations
 
 import argparse
+from pathlib import Path
 
 from .._generated import rtde_models as gen
 from ..codec import decode_stream
 from ..describe import describe
+from ..errors import RecipeError
 from ..message_base import RtdeMessage
+from ..recipe import Recipe
+from ..recipe_codec import RecipeCodec
+from ..recipe_files import load_recipes
 from .render import print_json, read_input, table
 
 
@@ -24,34 +29,68 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--json", action="store_true", help="JSON keyed by the spec's field names")
     p.add_argument("--lenient", action="store_true", help="ignore bytes after the last field")
+    p.add_argument(
+        "--recipe",
+        metavar="NAMES_OR_FILE",
+        help="decode data packages with this recipe (comma list or recipe file)",
+    )
     p.set_defaults(run=run)
 
 
-def package_record(offset: int, message: RtdeMessage) -> dict[str, object]:
+def field_values(message: RtdeMessage, codec: RecipeCodec | None) -> dict[str, object]:
+    """The package's fields; a data package's payload decoded when a recipe is given."""
+    fields = message.fields()
+    if codec is not None and isinstance(message, gen.DataPackage):
+        fields.pop("payload")
+        fields.update(codec.decode(message.payload))
+    return fields
+
+
+def package_record(offset: int, message: RtdeMessage, codec: RecipeCodec | None = None) -> dict[str, object]:
     """JSON shape of one package: where, what, then the fields by spec name."""
     record: dict[str, object] = {
         "offset": offset,
         "package": message.NAME,
         "package_type": chr(message.PACKAGE_TYPE),
     }
-    record.update(message.fields())
+    record.update(field_values(message, codec))
     return record
 
 
-def print_packages(packages: list[tuple[int, RtdeMessage]]) -> None:
+def print_packages(packages: list[tuple[int, RtdeMessage]], codec: RecipeCodec | None = None) -> None:
     for offset, message in packages:
         title = f"@{offset}  {message.PACKAGE_NAME} ({chr(message.PACKAGE_TYPE)!r})  {message.NAME}"
-        rows = [
-            [name, describe(value, message.ENUMS.get(name))]
-            for name, value in message.fields().items()
-        ]
+        infos = {}
+        if codec is not None:
+            infos = {i.name: i.info for i in codec.items if i.info is not None}
+        rows = []
+        for name, value in field_values(message, codec).items():
+            info = infos.get(name)
+            enum = message.ENUMS.get(name) or (info.enum if info else None)
+            rows.append([name, describe(value, enum, info.bits if info else None)])
         print(title)
         if rows:
             print(table(["field", "value"], rows, max_width=100))
         print()
 
 
+def recipe_codec(args: argparse.Namespace) -> RecipeCodec | None:
+    if not args.recipe:
+        return None
+    from .main import catalogue_for
+
+    direction = "output" if args.sender == "controller" else "input"
+    if Path(args.recipe).exists():
+        (recipe, *rest) = load_recipes(args.recipe)
+        if rest:
+            raise RecipeError("--recipe file holds several recipes; give one", field=args.recipe)
+    else:
+        recipe = Recipe.parse(args.recipe)
+    return RecipeCodec.for_names(recipe.names, direction, catalogue_for(args))
+
+
 def run(args: argparse.Namespace) -> int:
+    codec = recipe_codec(args)
     data = read_input(args.data)
     packages = list(
         decode_stream(
@@ -62,8 +101,8 @@ def run(args: argparse.Namespace) -> int:
         )
     )
     if args.json:
-        records = [package_record(o, m) for o, m in packages]
+        records = [package_record(o, m, codec) for o, m in packages]
         print_json(records[0] if len(records) == 1 else records)
     else:
-        print_packages(packages)
+        print_packages(packages, codec)
     return 0

@@ -86,11 +86,7 @@ def print_report(report: ValidationReport) -> None:
     print(f"Validating {len(report.recipes)} recipe(s) for {target}\n")
     for r in report.recipes:
         state = "valid" if r.valid else "INVALID"
-        extra = (
-            f", every {r.rate_divisor} cycles = {r.effective_frequency:.4g} Hz"
-            if r.rate_divisor
-            else ""
-        )
+        extra = f", every {r.rate_divisor} cycles = {r.effective_frequency:.4g} Hz" if r.rate_divisor else ""
         print(
             f"{r.label} ({r.direction}, {len(r.rows)} fields, "
             f"{r.payload_bytes} payload bytes{extra}): {state}"

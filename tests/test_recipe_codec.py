@@ -1,0 +1,162 @@
+"""The compiled recipe codec: round trips of random recipes drawn from the spec, range
+errors that name the field, size checks, bulk decode and tables."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from rtde_spec.catalogue import Catalogue
+from rtde_spec.errors import DecodeError, EncodeError, RecipeError
+from rtde_spec.recipe_codec import PAYLOAD_OFFSET, RecipeCodec
+from rtde_spec.tables import to_arrow, to_pandas
+
+from .strategies import wire_value
+
+CAT = Catalogue.builtin()
+
+
+@st.composite
+def recipe_and_values(draw: st.DrawFn, allow_nan: bool = False) -> tuple[RecipeCodec, dict]:
+    direction = draw(st.sampled_from(["input", "output"]))
+    names = CAT.names(direction)
+    chosen = draw(st.lists(st.sampled_from(names), min_size=1, max_size=25, unique=True))
+    codec = RecipeCodec.for_names(chosen, direction, CAT)  # type: ignore[arg-type]
+    values = {item.name: draw(wire_value(item.wire, allow_nan)) for item in codec.items}
+    return codec, values
+
+
+def _same(a: object, b: object) -> bool:
+    if isinstance(a, float) and isinstance(b, float):
+        return a == b or (math.isnan(a) and math.isnan(b))
+    if isinstance(a, (list, tuple)):
+        return all(_same(x, y) for x, y in zip(a, b, strict=True))  # type: ignore[arg-type]
+    return a == b
+
+
+@settings(max_examples=200, deadline=None)
+@given(recipe_and_values())
+def test_round_trip_dict_record_model_package(case: tuple[RecipeCodec, dict]) -> None:
+    codec, values = case
+    payload = codec.encode(values, strict=True)
+    assert len(payload) == codec.size == sum(i.wire.size or 0 for i in codec.items)
+    assert codec.decode(payload) == values
+    record = codec.decode_record(payload)
+    assert record._asdict() == values
+    assert codec.encode(record) == payload
+    model = codec.decode_model(payload)
+    assert codec.encode(model) == payload
+    package = codec.encode_package(values, recipe_id=7)
+    assert int.from_bytes(package[:2], "big") == len(package)
+    assert codec.decode_package(package, recipe_id=7) == record
+
+
+@settings(max_examples=100, deadline=None)
+@given(recipe_and_values(allow_nan=True), st.integers(1, 20))
+def test_bulk_decode_matches_per_packet(case: tuple[RecipeCodec, dict], count: int) -> None:
+    codec, values = case
+    package = codec.encode_package(values, recipe_id=3)
+    arr = codec.decode_many(package * count, recipe_id=3)
+    assert arr.shape == (count,)
+    for item in codec.items:
+        column = arr[item.name]
+        expected = values[item.name]
+        if item.wire.count > 1:
+            assert column.shape == (count, item.wire.count)
+            assert _same(list(column[-1]), list(expected))
+        else:
+            assert _same(column[0].item(), expected)
+
+
+def test_uint8_out_of_range_names_field_and_bounds() -> None:
+    codec = RecipeCodec.for_names(["standard_digital_output_mask", "speed_slider_fraction"], "input")
+    with pytest.raises(EncodeError) as info:
+        codec.encode({"standard_digital_output_mask": 300, "speed_slider_fraction": 0.5})
+    err = info.value
+    assert (err.field, err.expected, err.actual) == ("standard_digital_output_mask", "0..255", "300")
+
+
+def test_vector_element_out_of_range_and_wrong_length() -> None:
+    codec = RecipeCodec.for_names(["joint_mode"], "output")
+    with pytest.raises(EncodeError) as info:
+        codec.encode({"joint_mode": (0, 0, 0, 2**31, 0, 0)})
+    assert info.value.field == "joint_mode[3]"
+    with pytest.raises(EncodeError, match="exactly 6 values"):
+        codec.encode({"joint_mode": (0, 0, 0)})
+
+
+def test_strict_bool_rejects_non_bool() -> None:
+    codec = RecipeCodec.for_names(["input_bit_register_64"], "input")
+    assert codec.encode({"input_bit_register_64": 1}) == b"\x01"
+    with pytest.raises(EncodeError, match="not a bool"):
+        codec.encode({"input_bit_register_64": 1}, strict=True)
+    with pytest.raises(EncodeError):
+        codec.encode({"input_bit_register_64": "yes"})
+
+
+def test_missing_and_extra_values() -> None:
+    codec = RecipeCodec.for_names(["timestamp"], "output")
+    with pytest.raises(EncodeError, match="missing value"):
+        codec.encode({})
+    with pytest.raises(EncodeError, match="not in the recipe: actual_q"):
+        codec.encode({"timestamp": 1.0, "actual_q": (0,) * 6})
+
+
+def test_short_payload_names_the_field_it_cuts() -> None:
+    codec = RecipeCodec.for_names(["timestamp", "actual_q", "robot_mode"], "output")
+    payload = codec.encode({"timestamp": 1.0, "actual_q": (0.0,) * 6, "robot_mode": 7})
+    with pytest.raises(DecodeError) as info:
+        codec.decode(payload[:30])
+    assert (info.value.field, info.value.offset) == ("actual_q", PAYLOAD_OFFSET + 8)
+    with pytest.raises(DecodeError, match="longer"):
+        codec.decode_record(payload + b"\0")
+
+
+def test_package_checks() -> None:
+    codec = RecipeCodec.for_names(["timestamp"], "output")
+    package = codec.encode_package({"timestamp": 2.0}, recipe_id=1)
+    with pytest.raises(DecodeError, match="another recipe"):
+        codec.decode_package(package, recipe_id=2)
+    with pytest.raises(DecodeError, match="not a data package"):
+        codec.decode_package(package[:2] + b"M" + package[3:])
+    bad = package * 3
+    bad = bad[: len(package) + 3] + b"\x09" + bad[len(package) + 4 :]
+    with pytest.raises(DecodeError) as info:
+        codec.decode_many(bad, recipe_id=1)
+    assert info.value.offset == len(package) and "package 1" in str(info.value)
+    with pytest.raises(DecodeError, match="whole number"):
+        codec.decode_many(package + b"\0")
+
+
+def test_recipe_errors() -> None:
+    with pytest.raises(RecipeError, match="unknown output field"):
+        RecipeCodec.for_names(["nope"], "output")
+    with pytest.raises(RecipeError, match="at least one"):
+        RecipeCodec.for_names([], "output")
+    with pytest.raises(RecipeError, match="twice"):
+        RecipeCodec.for_names(["timestamp", "timestamp"], "output")
+    with pytest.raises(RecipeError, match="no data layout"):
+        RecipeCodec.for_types(["x"], ["NOT_FOUND"])
+
+
+def test_tables() -> None:
+    codec = RecipeCodec.for_names(["timestamp", "actual_q", "robot_mode"], "output")
+    rows = [
+        codec.encode_package({"timestamp": float(i), "actual_q": (i,) * 6, "robot_mode": i}, 1)
+        for i in range(5)
+    ]
+    arr = codec.decode_many(b"".join(rows))
+    assert arr.dtype["timestamp"].byteorder == ">"
+    df = to_pandas(arr)
+    assert list(df.columns) == ["recipe_id", "timestamp"] + [f"actual_q_{i}" for i in range(6)] + [
+        "robot_mode"
+    ]
+    assert df["actual_q_5"].tolist() == [0.0, 1.0, 2.0, 3.0, 4.0]
+    table = to_arrow(arr)
+    assert table.column("actual_q").to_pylist()[2] == [2.0] * 6
+    assert table.column("robot_mode").to_pylist() == [0, 1, 2, 3, 4]
+    assert np.array_equal(df["robot_mode"].to_numpy(), np.arange(5))

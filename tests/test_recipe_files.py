@@ -1,0 +1,130 @@
+"""Recipe files in every format: load, save, round trip, and hostile input."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from rtde_spec.errors import RecipeError
+from rtde_spec.recipe import Recipe
+from rtde_spec.recipe_files import FORMATS, dumps_recipes, load_recipes, save_recipes
+
+from .helpers import DATA
+
+
+def test_ur_client_xml() -> None:
+    recipes = load_recipes(DATA / "ur_client_config.xml")
+    assert [r.key for r in recipes] == ["state", "setp", "watchdog"]
+    assert recipes[0].names == ("timestamp", "actual_q", "robot_mode", "output_int_register_0")
+    assert recipes[0].declared_types["actual_q"] == "VECTOR6D"
+    assert recipes[1].names == ("input_double_register_24", "input_double_register_25")
+
+
+def test_comma_list_keeps_order_and_drops_a_trailing_comma() -> None:
+    assert Recipe.parse("timestamp, actual_q,").names == ("timestamp", "actual_q")
+    assert Recipe.parse("a,,b").names == ("a", "", "b")
+
+
+@pytest.mark.parametrize(
+    "fmt,suffix", [("xml", ".xml"), ("yaml", ".yaml"), ("json", ".json"), ("lines", ".txt"), ("csv", ".csv")]
+)
+def test_round_trip(tmp_path: Path, fmt: str, suffix: str) -> None:
+    recipe = Recipe(("timestamp", "actual_q", "robot_mode"), key="state")
+    if fmt in ("yaml", "json"):
+        recipe = recipe.with_(direction="output", frequency=125.0, controller="5.12.2")
+    if fmt == "xml":
+        recipe = recipe.with_(
+            declared_types={"timestamp": "DOUBLE", "actual_q": "VECTOR6D", "robot_mode": "INT32"}
+        )
+    path = tmp_path / f"recipe{suffix}"
+    save_recipes([recipe], path)
+    (back,) = load_recipes(path)
+    assert back.names == recipe.names
+    if fmt in ("yaml", "json", "xml"):
+        assert back.key == "state"
+        assert back.declared_types == recipe.declared_types
+    if fmt in ("yaml", "json"):
+        assert (back.direction, back.frequency, back.controller) == ("output", 125.0, "5.12.2")
+    assert dumps_recipes([back.with_(source=None)], fmt) == dumps_recipes([recipe], fmt)
+
+
+def test_xml_round_trip_of_several_recipes(tmp_path: Path) -> None:
+    original = load_recipes(DATA / "ur_client_config.xml")
+    path = tmp_path / "again.xml"
+    save_recipes(original, path)
+    again = load_recipes(path)
+    assert [(r.key, r.names, r.declared_types) for r in again] == [
+        (r.key, r.names, r.declared_types) for r in original
+    ]
+
+
+def test_xml_types_filled_from_the_spec_on_save() -> None:
+    text = dumps_recipes([Recipe(("timestamp",))], "xml", types={"timestamp": "DOUBLE"})
+    assert '<field name="timestamp" type="DOUBLE" />' in text
+
+
+def test_single_recipe_formats_refuse_several() -> None:
+    with pytest.raises(RecipeError, match="holds one recipe"):
+        dumps_recipes([Recipe(("a",)), Recipe(("b",))], "lines")
+
+
+def test_lines_format_skips_comments_and_blanks(tmp_path: Path) -> None:
+    path = tmp_path / "outputs.txt"
+    path.write_text("# the C++ client's format\ntimestamp\n\nactual_q  # joints\n")
+    assert load_recipes(path)[0].names == ("timestamp", "actual_q")
+
+
+def test_yaml_list_shapes(tmp_path: Path) -> None:
+    path = tmp_path / "r.yaml"
+    path.write_text("- timestamp\n- actual_q\n")
+    assert load_recipes(path)[0].names == ("timestamp", "actual_q")
+    path.write_text("recipes:\n  - fields: [timestamp]\n    colour: red\n")
+    with pytest.raises(RecipeError, match="unknown key"):
+        load_recipes(path)
+
+
+BILLION_LAUGHS = """<?xml version="1.0"?>
+<!DOCTYPE lolz [<!ENTITY lol "lol"><!ENTITY lol2 "&lol;&lol;&lol;&lol;&lol;&lol;">]>
+<rtde_config><recipe key="x"><field name="&lol2;" type="DOUBLE"/></recipe></rtde_config>
+"""
+EXTERNAL = """<?xml version="1.0"?>
+<!DOCTYPE r [<!ENTITY xxe SYSTEM "file:///etc/passwd">]>
+<rtde_config><recipe key="x"><field name="&xxe;"/></recipe></rtde_config>
+"""
+
+
+@pytest.mark.parametrize("text", [BILLION_LAUGHS, EXTERNAL], ids=["entity-expansion", "external"])
+def test_hostile_xml_is_refused(tmp_path: Path, text: str) -> None:
+    path = tmp_path / "evil.xml"
+    path.write_text(text)
+    with pytest.raises(RecipeError, match="unsafe XML refused"):
+        load_recipes(path)
+
+
+def test_oversized_file_is_refused_before_parsing(tmp_path: Path) -> None:
+    path = tmp_path / "huge.xml"
+    path.write_text("<rtde_config>" + " " * (1 << 20) + "</rtde_config>")
+    with pytest.raises(RecipeError, match="too large"):
+        load_recipes(path)
+
+
+def test_malformed_xml_names_the_position(tmp_path: Path) -> None:
+    path = tmp_path / "bad.xml"
+    path.write_text('<rtde_config>\n<recipe key="a">\n<field name="x">\n</rtde_config>\n')
+    with pytest.raises(RecipeError, match="line 4"):
+        load_recipes(path)
+
+
+def test_wrong_root_and_missing_name(tmp_path: Path) -> None:
+    path = tmp_path / "r.xml"
+    path.write_text("<config/>")
+    with pytest.raises(RecipeError, match="rtde_config"):
+        load_recipes(path)
+    path.write_text('<rtde_config><recipe key="a"><field type="DOUBLE"/></recipe></rtde_config>')
+    with pytest.raises(RecipeError, match="without a name"):
+        load_recipes(path)
+
+
+def test_formats_are_all_covered() -> None:
+    assert set(FORMATS) == {"xml", "lines", "csv", "yaml", "json"}

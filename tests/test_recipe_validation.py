@@ -1,0 +1,185 @@
+"""Every offline validation rule, one test each, plus the controller's answer."""
+
+from __future__ import annotations
+
+import pytest
+
+from rtde_spec.recipe import Recipe
+from rtde_spec.recipe_validation import (
+    NOT_FOUND,
+    controller_answer,
+    validate_recipe,
+    validate_recipes,
+)
+
+from .helpers import DATA
+
+
+def codes(report: object) -> dict[str, list[str | None]]:
+    out: dict[str, list[str | None]] = {}
+    for p in report.all_problems if hasattr(report, "all_problems") else report.problems:  # type: ignore[attr-defined]
+        out.setdefault(p.code, []).append(p.field)
+    return out
+
+
+def check(names: str, **kw: object) -> object:
+    return validate_recipes([Recipe.parse(names)], **kw)  # type: ignore[arg-type]
+
+
+def test_a_good_recipe_is_valid() -> None:
+    report = check("timestamp,actual_q,robot_mode", controller="5.12.2", frequency=500)
+    assert report.valid and not report.all_problems  # type: ignore[attr-defined]
+
+
+def test_unknown_name_with_suggestions() -> None:
+    report = check("timestamp,actual_qq", controller="5.12.2")
+    (problem,) = report.all_problems  # type: ignore[attr-defined]
+    assert (problem.code, problem.field, problem.severity) == ("unknown-name", "actual_qq", "error")
+    assert "did you mean actual_q" in problem.message
+
+
+def test_register_index_outside_its_family() -> None:
+    report = check("output_int_register_48", controller="5.12.2")
+    assert "outside output_int_register_{X} (0..47)" in report.all_problems[0].message  # type: ignore[attr-defined]
+
+
+def test_wrong_direction() -> None:
+    report = validate_recipes([Recipe(("timestamp", "speed_slider_mask"), direction="output")])
+    assert codes(report) == {"wrong-direction": ["speed_slider_mask"]}
+    assert "is an input, not an output" in report.all_problems[0].message
+
+
+@pytest.mark.parametrize(
+    "name,version,message",
+    [
+        ("safety_status", "3.9.0", "available from 3.10.0 on CB3"),
+        ("safety_status", "5.3.0", "available from 5.4.0 on e-Series"),
+        ("ft_raw_wrench", "3.15.8", "not available on CB3"),
+        ("actual_current_as_torque", "10.10.0", "available from 10.11.0 on PolyScope X"),
+    ],
+)
+def test_not_available_on_that_version(name: str, version: str, message: str) -> None:
+    report = check(f"timestamp,{name}", controller=version)
+    (problem,) = report.all_problems  # type: ignore[attr-defined]
+    assert problem.code == "not-available" and message in problem.message
+    assert report.recipes[0].answer == ["DOUBLE", NOT_FOUND]  # type: ignore[attr-defined]
+
+
+def test_xml_type_disagreeing_with_the_spec() -> None:
+    recipe = Recipe(("timestamp", "actual_q"), declared_types={"timestamp": "DOUBLE", "actual_q": "VECTOR3D"})
+    report = validate_recipes([recipe], controller="5.12.2")
+    assert codes(report) == {"type-mismatch": ["actual_q"]}
+    assert "says VECTOR3D, the spec says VECTOR6D" in report.all_problems[0].message
+
+
+def test_duplicates() -> None:
+    report = check("timestamp,actual_q,timestamp")
+    assert codes(report) == {"duplicate": ["timestamp"]}
+
+
+def test_empty_output_recipe() -> None:
+    report = validate_recipes([Recipe((), direction="output")])
+    assert codes(report) == {"empty-recipe": [None]}
+    assert "at least one output" in report.all_problems[0].message
+
+
+def test_names_over_2048_bytes() -> None:
+    names = [f"output_double_register_{i}" for i in range(48)] + [
+        f"output_int_register_{i}" for i in range(48)
+    ]
+    names += [f"output_bit_register_{i}" for i in range(64, 128)]
+    report = validate_recipes([Recipe(tuple(names), direction="output")], controller="5.12.2")
+    assert "names-too-long" in codes(report)
+    assert len(",".join(names)) > 2048
+
+
+@pytest.mark.parametrize(
+    "version,freq,ok,divisor",
+    [
+        ("3.15.8", 125, True, 1),
+        ("3.15.8", 126, False, None),
+        ("3.15.8", 50, True, 2),
+        ("5.12.2", 500, True, 1),
+        ("5.12.2", 501, False, None),
+        ("5.12.2", 0.5, False, None),
+        ("5.12.2", 300, True, 1),
+        ("10.11.0", 200, True, 2),
+    ],
+)
+def test_frequency_range_and_effective_rate(version: str, freq: float, ok: bool, divisor: int | None) -> None:
+    report = check("timestamp", controller=version, frequency=freq)
+    assert report.valid is ok  # type: ignore[attr-defined]
+    rec = report.recipes[0]  # type: ignore[attr-defined]
+    assert rec.rate_divisor == divisor
+    if divisor:
+        top = 125 if version.startswith("3.") else 500
+        assert rec.effective_frequency == top / divisor
+    if not ok:
+        assert "frequency-range" in codes(report)
+
+
+def test_data_package_too_large_for_the_size_field() -> None:
+    # within 2048 bytes of names no recipe reaches 64 KiB; past that limit both are reported
+    report = validate_recipe(Recipe(("actual_q",) * 1400, direction="output"))
+    found = codes(report)
+    assert {"package-too-large", "names-too-long", "duplicate"} <= set(found)
+    assert report.payload_bytes == 1400 * 48
+    fits = validate_recipe(Recipe(("actual_q",) * 1300, direction="output"))
+    assert "package-too-large" not in codes(fits)
+
+
+def test_reserved_input_registers_are_warnings() -> None:
+    report = validate_recipes(
+        [
+            Recipe(
+                ("input_int_register_3", "input_bit_registers0_to_31", "input_int_register_24"),
+                direction="input",
+            )
+        ],
+        controller="5.12.2",
+    )
+    assert report.valid
+    assert codes(report) == {"reserved": ["input_int_register_3", "input_bit_registers0_to_31"]}
+
+
+def test_shared_input_across_recipes_is_reported_not_rejected() -> None:
+    report = validate_recipes(
+        [
+            Recipe(("input_int_register_24", "input_double_register_24"), direction="input", key="a"),
+            Recipe(("input_int_register_24",), direction="input", key="b"),
+        ],
+        controller="5.12.2",
+    )
+    assert report.valid
+    (problem,) = report.problems
+    assert (problem.code, problem.severity, problem.field) == (
+        "shared-input",
+        "info",
+        "input_int_register_24",
+    )
+    assert "a, b" in problem.message
+
+
+def test_every_problem_reported_at_once_for_a_file() -> None:
+    from rtde_spec.recipe_files import load_recipes
+
+    report = validate_recipes(load_recipes(DATA / "ur_client_config.xml"), controller="3.8.0")
+    found = codes(report)
+    # registers 24+ arrived in 3.9.0: both input recipes fail on 3.8.0
+    assert found["not-available"] == [
+        "input_double_register_24",
+        "input_double_register_25",
+        "input_int_register_24",
+    ]
+    assert [r.direction for r in report.recipes] == ["output", "input", "input"]
+
+
+def test_controller_answer_is_what_the_emulator_sends() -> None:
+    answer = controller_answer(["timestamp", "nope", "target_gravity"], "output", "5.25.0")
+    assert answer == ["DOUBLE", NOT_FOUND, NOT_FOUND]
+    assert controller_answer(["target_gravity"], "output", "5.26.0") == ["VECTOR3D"]
+
+
+def test_third_party_fields_warn() -> None:
+    report = check("timestamp,control_step", controller="5.12.2")
+    assert report.valid and codes(report) == {"undocumented": ["control_step"]}  # type: ignore[attr-defined]
