@@ -28,9 +28,9 @@ def _since_cell(infos: list[FieldInfo], catalogue: Catalogue) -> str:
 def _meaning(entry: FieldSpec, infos: list[FieldInfo]) -> str:
     text = entry.doc or ""
     if entry.enum:
-        text += f" Values: [{entry.enum}](rtde-enums.md#{entry.enum.lower()})."
+        text += f" Values: [{entry.enum}](enums.md#{entry.enum.lower()})."
     if entry.bits:
-        text += f" Bits: [{entry.bits}](rtde-enums.md#{entry.bits.lower()})."
+        text += f" Bits: [{entry.bits}](enums.md#{entry.bits.lower()})."
     reserved = sorted({(i.index, i.reserved) for i in infos if i.reserved}, key=lambda x: x[0] or 0)
     if reserved and entry.is_family:
         idx = [r[0] for r in reserved]
@@ -125,7 +125,7 @@ def _layout_rows(msg: MessageSpec, spec: Spec) -> list[list[object]]:
     for fld in msg.fields:
         meaning = fld.doc or ""
         if fld.enum:
-            meaning += f" Values: [{fld.enum}](rtde-enums.md#{fld.enum.lower()})."
+            meaning += f" Values: [{fld.enum}](enums.md#{fld.enum.lower()})."
         if fld.unit:
             meaning += f" [{fld.unit}]"
         if fld.length == "rest":
@@ -181,8 +181,8 @@ def emit_enums_doc(spec: Spec) -> str:
         for fld in msg.fields:
             if fld.enum:
                 users.setdefault(fld.enum, []).append(f"`{msg.name}.{fld.name}`")
-    out = MD_HEADER + "\n# RTDE enums and bit layouts\n"
-    for enum in spec.enums.enums:
+    out = MD_HEADER + "\n# Enums and bit layouts\n\nShared by RTDE and the primary/secondary interfaces.\n"
+    for enum in spec.all_enums:
         out += f"\n## {enum.name}\n\n{enum.doc or ''}\n"
         if enum.doc_ref:
             out += f"\nSource: {enum.doc_ref}\n"
@@ -191,7 +191,7 @@ def emit_enums_doc(spec: Spec) -> str:
         out += "\n" + md_table(
             ["Name", "Value", "Meaning"], [[v.name, v.value, v.doc or ""] for v in enum.values]
         )
-    for bitfield in spec.enums.bitfields:
+    for bitfield in spec.all_bitfields:
         out += f"\n## {bitfield.name}\n\n{bitfield.doc or ''}\n"
         if bitfield.name in users:
             out += f"\nUsed by: {', '.join(sorted(set(users[bitfield.name])))}\n"
@@ -241,7 +241,7 @@ def emit_index_doc(spec: Spec, cat: Catalogue) -> str:
         f"- [RTDE packages](rtde-packages.md): {len(spec.packages.package_types)} package types, "
     )
     out += f"{len(spec.packages.messages)} layouts\n"
-    out += f"- [RTDE enums and bit layouts](rtde-enums.md): {len(spec.enums.enums)} enums, "
-    out += f"{len(spec.enums.bitfields)} bit layouts\n"
+    out += f"- [Enums and bit layouts](enums.md): {len(spec.all_enums)} enums, "
+    out += f"{len(spec.all_bitfields)} bit layouts\n"
     out += f"- [RTDE data types](rtde-types.md): {len(spec.types.types)} types\n"
     return out

@@ -21,7 +21,7 @@ def emit_enums(spec: Spec) -> str:
         "from enum import IntEnum, IntFlag\n",
     ]
     docs: dict[str, dict[int, str]] = {}
-    for enum in spec.enums.enums:
+    for enum in spec.all_enums:
         out.append(f"\n\nclass {enum.name}(IntEnum):\n")
         out.append(docstring(_class_doc(enum.doc, enum.doc_ref)))
         out.append("\n")
@@ -30,7 +30,7 @@ def emit_enums(spec: Spec) -> str:
             if value.doc:
                 out.append(docstring(value.doc))
                 docs.setdefault(enum.name, {})[value.value] = value.doc
-    for bitfield in spec.enums.bitfields:
+    for bitfield in spec.all_bitfields:
         out.append(f"\n\nclass {bitfield.name}(IntFlag):\n")
         out.append(docstring(_class_doc(bitfield.doc, bitfield.doc_ref)))
         out.append("\n")
@@ -40,9 +40,9 @@ def emit_enums(spec: Spec) -> str:
                 out.append(docstring(bit.doc))
                 docs.setdefault(bitfield.name, {})[1 << bit.bit] = bit.doc
     out.append("\n\nENUMS: dict[str, type[IntEnum]] = {\n")
-    out += [f"    {e.name!r}: {e.name},\n" for e in spec.enums.enums]
+    out += [f"    {e.name!r}: {e.name},\n" for e in spec.all_enums]
     out.append("}\n\nBITFIELDS: dict[str, type[IntFlag]] = {\n")
-    out += [f"    {b.name!r}: {b.name},\n" for b in spec.enums.bitfields]
+    out += [f"    {b.name!r}: {b.name},\n" for b in spec.all_bitfields]
     out.append("}\n\nVALUE_DOCS: dict[str, dict[int, str]] = {\n")
     for name, values in docs.items():
         out.append(f"    {name!r}: {{\n")

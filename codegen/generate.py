@@ -14,6 +14,7 @@ from .emit_docs import (
     emit_types_doc,
 )
 from .emit_enums import emit_enums
+from .emit_primary import emit_primary_models, emit_primary_structs
 from .emit_rtde import emit_rtde_models, emit_rtde_structs
 from .emit_types import emit_types
 from .render import PY_HEADER
@@ -31,9 +32,11 @@ def generate(spec: Spec) -> dict[str, str]:
         f"{GEN}/rtde_types.py": emit_types(catalogue),
         f"{GEN}/rtde_structs.py": emit_rtde_structs(spec),
         f"{GEN}/rtde_models.py": emit_rtde_models(spec),
+        f"{GEN}/primary_models.py": emit_primary_models(spec),
+        f"{GEN}/primary_structs.py": emit_primary_structs(spec),
         "docs/reference/README.md": emit_index_doc(spec, catalogue),
         "docs/reference/rtde-fields.md": emit_fields_doc(spec, catalogue),
         "docs/reference/rtde-packages.md": emit_packages_doc(spec),
-        "docs/reference/rtde-enums.md": emit_enums_doc(spec),
+        "docs/reference/enums.md": emit_enums_doc(spec),
         "docs/reference/rtde-types.md": emit_types_doc(spec, catalogue),
     }

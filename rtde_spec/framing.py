@@ -14,11 +14,19 @@ _SIZE_BYTES = struct.calcsize(HEADER_FORMAT[:2])  # the size field leads the hea
 class PackageFramer:
     """Feed it bytes as they arrive; it returns each complete package once.
 
-    A size below the header size cannot be resynchronised from, so it raises
-    DecodeError with the stream offset, and keeps raising on later feeds.
+    Works for any protocol whose packages start with a big-endian size that counts
+    the whole package (RTDE: uint16, primary interface: uint32). A size below the
+    header size, or above `max_size`, cannot be resynchronised from: it raises
+    DecodeError with the stream offset, and keeps raising on later feeds. Sizes
+    are checked before anything is buffered for them.
     """
 
-    def __init__(self) -> None:
+    def __init__(
+        self, size_bytes: int = _SIZE_BYTES, header_size: int = HEADER_SIZE, max_size: int | None = None
+    ) -> None:
+        self._size_bytes = size_bytes
+        self._header_size = header_size
+        self._max_size = max_size
         self._buf = bytearray()
         self._start = 0  # index in _buf of the first unconsumed byte
         self._offset = 0  # stream offset of _buf[_start]
@@ -41,14 +49,17 @@ class PackageFramer:
         self._buf += data
         out: list[tuple[int, bytes]] = []
         buf, start = self._buf, self._start
-        while len(buf) - start >= _SIZE_BYTES:
-            size = int.from_bytes(buf[start : start + _SIZE_BYTES], "big")
-            if size < HEADER_SIZE:
+        while len(buf) - start >= self._size_bytes:
+            size = int.from_bytes(buf[start : start + self._size_bytes], "big")
+            if size < self._header_size or (self._max_size is not None and size > self._max_size):
+                low = size < self._header_size
                 self._broken = DecodeError(
-                    "package size is smaller than the header; the stream cannot be framed",
+                    "package size is smaller than the header; the stream cannot be framed"
+                    if low
+                    else "package size is larger than any message; the stream cannot be framed",
                     field="size",
                     offset=self._offset,
-                    expected=f">= {HEADER_SIZE}",
+                    expected=f">= {self._header_size}" if low else f"<= {self._max_size}",
                     actual=size,
                 )
                 raise self._broken
@@ -66,13 +77,13 @@ class PackageFramer:
         """Raise DecodeError if the stream ended inside a package."""
         if self.pending:
             need = None
-            if self.pending >= _SIZE_BYTES:
-                need = int.from_bytes(self._buf[self._start : self._start + _SIZE_BYTES], "big")
+            if self.pending >= self._size_bytes:
+                need = int.from_bytes(self._buf[self._start : self._start + self._size_bytes], "big")
             raise DecodeError(
                 "the data ends inside a package (truncated)",
                 field="size" if need is not None else None,
                 offset=self._offset,
-                expected=f"{need} bytes" if need is not None else f">= {HEADER_SIZE} bytes",
+                expected=f"{need} bytes" if need is not None else f">= {self._header_size} bytes",
                 actual=f"{self.pending} bytes",
             )
 

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-from .spec_schema import FieldsFile, FieldSpec, Since, Spec
+from .spec_schema import CaseSpec, FieldsFile, FieldSpec, LayoutField, Since, Spec
 from .versions import Version
 
 Loc = tuple[str | int, ...]
@@ -39,8 +39,8 @@ def _since(since: Since | None, spec: Spec, loc: Loc) -> Found:
 
 def _field(entry: FieldSpec, spec: Spec, loc: Loc) -> Found:
     types = {t.name: t for t in spec.types.types}
-    enums = {e.name for e in spec.enums.enums}
-    bitfields = {b.name for b in spec.enums.bitfields}
+    enums = {e.name for e in spec.all_enums}
+    bitfields = {b.name for b in spec.all_bitfields}
     primitives = {p.name: p for p in spec.primitives.primitives}
     wire = types.get(entry.type)
     if wire is None:
@@ -142,30 +142,35 @@ def _lint_types_enums(spec: Spec) -> Iterator[tuple[str, Loc, str]]:
             yield "types", ("types", i, "element"), "a variable type has no element"
         elif not wire.variable and wire.element not in prims:
             yield "types", ("types", i, "element"), f"unknown primitive {wire.element!r}"
-    enums, bitfields = spec.enums.enums, spec.enums.bitfields
-    names = [e.name for e in enums] + [b.name for b in bitfields]
-    for (_, i), reason in _duplicates(names, ("",), "enum or bitfield"):
-        assert isinstance(i, int)
-        loc = ("enums", i) if i < len(enums) else ("bitfields", i - len(enums))
-        yield "enums", loc, reason
-    for i, enum in enumerate(enums):
-        where: Loc = ("enums", i, "values")
-        for loc, reason in _duplicates([v.name for v in enum.values], where, "value name"):
-            yield "enums", loc, reason
-        for loc, reason in _duplicates([str(v.value) for v in enum.values], where, "value"):
-            yield "enums", loc, reason
-    for i, bitfield in enumerate(bitfields):
-        where = ("bitfields", i, "bits")
-        for loc, reason in _duplicates([b.name for b in bitfield.bits], where, "bit name"):
-            yield "enums", loc, reason
-        for loc, reason in _duplicates([str(b.bit) for b in bitfield.bits], where, "bit"):
-            yield "enums", loc, reason
+    taken: dict[str, str] = {}
+    for part, file in (("enums", spec.enums), ("primary_enums", spec.primary_enums)):
+        for kind, entries in (("enums", file.enums), ("bitfields", file.bitfields)):
+            for i, entry in enumerate(entries):
+                if entry.name in taken:
+                    yield (
+                        part,
+                        (kind, i, "name"),
+                        (f"duplicate enum or bitfield {entry.name!r} (also in {taken[entry.name]})"),
+                    )
+                taken[entry.name] = part
+        for i, enum in enumerate(file.enums):
+            where: Loc = ("enums", i, "values")
+            for loc, reason in _duplicates([v.name for v in enum.values], where, "value name"):
+                yield part, loc, reason
+            for loc, reason in _duplicates([str(v.value) for v in enum.values], where, "value"):
+                yield part, loc, reason
+        for i, bitfield in enumerate(file.bitfields):
+            where = ("bitfields", i, "bits")
+            for loc, reason in _duplicates([b.name for b in bitfield.bits], where, "bit name"):
+                yield part, loc, reason
+            for loc, reason in _duplicates([str(b.bit) for b in bitfield.bits], where, "bit"):
+                yield part, loc, reason
 
 
 def _lint_packages(spec: Spec) -> Iterator[tuple[str, Loc, str]]:
     pk = spec.packages
     prims = {p.name for p in spec.primitives.primitives}
-    enums = {e.name for e in spec.enums.enums}
+    enums = {e.name for e in spec.all_enums}
     codes = [p.code for p in pk.package_types]
     for loc, reason in _duplicates(codes, ("package_types",), "package type"):
         yield "packages", loc, reason
@@ -209,10 +214,109 @@ def _lint_packages(spec: Spec) -> Iterator[tuple[str, Loc, str]]:
                 yield "packages", (*floc, "enum"), f"unknown enum {fld.enum!r}"
 
 
+def _layout(fields: list[LayoutField], spec: Spec, loc: Loc, groups: dict[str, str]) -> Found:
+    """Kinds, references to earlier fields, and that open-ended fields come last."""
+    prims = {p.name: p for p in spec.primitives.primitives}
+    ints = {n for n, p in prims.items() if p.kind == "int"}
+    enums = {e.name for e in spec.all_enums}
+    seen: list[str] = []
+    for i, fld in enumerate(fields):
+        floc: Loc = (*loc, i)
+        kind = fld.kind
+        if fld.name in seen:
+            yield (*floc, "name"), f"duplicate field name {fld.name!r}"
+        if fld.enum is not None and fld.enum not in enums:
+            yield (*floc, "enum"), f"unknown enum {fld.enum!r}"
+        if kind == "value" and fld.type not in prims:
+            yield (*floc, "type"), f"unknown type {fld.type!r}"
+        if fld.count is not None and kind != "value":
+            yield (*floc, "count"), "count applies to primitive values only"
+        if kind in ("string", "bytes"):
+            if fld.length != "rest" and fld.length not in ints:
+                yield (*floc, "length"), "length must be rest or an integer primitive (a prefix)"
+        elif fld.length is not None:
+            yield (*floc, "length"), "length applies to string and bytes only"
+        if fld.format is not None and kind != "string":
+            yield (*floc, "format"), "format applies to strings only"
+        for ref_key in ("when", "switch"):
+            ref = getattr(fld, ref_key)
+            if ref is not None and ref not in seen:
+                yield (*floc, ref_key), f"{ref_key} refers to {ref!r}, which is not an earlier field"
+        if kind == "switch":
+            if not fld.cases:
+                yield (*floc, "cases"), "a switch needs cases"
+            for value, case in (fld.cases or {}).items():
+                ctype = case.type if isinstance(case, CaseSpec) else case
+                clen = case.length if isinstance(case, CaseSpec) else None
+                if ctype == "string" and clen in ints:
+                    continue
+                if ctype not in prims or clen is not None:
+                    yield (*floc, "cases", value), "case type must be a primitive or a prefixed string"
+        if kind in ("repeat", "optional"):
+            if fld.group is None:
+                yield (*floc, "group"), "a group needs a model name (group)"
+            elif fld.group in groups:
+                yield (*floc, "group"), f"group {fld.group!r} is also defined at {groups[fld.group]}"
+            else:
+                groups[fld.group] = fld.name
+            if kind == "repeat" and fld.when is not None:
+                yield (*floc, "when"), "a group is either repeated or conditional"
+            yield from _layout(fld.fields or [], spec, (*floc, "fields"), groups)
+        elif fld.group is not None or fld.repeat is not None or fld.when is not None:
+            yield (*floc, "fields"), "repeat, when and group need fields"
+        open_ended = fld.length == "rest" or fld.repeat == "until_end" or kind == "values"
+        if open_ended and i != len(fields) - 1:
+            yield (*floc, "name"), "only the last field can run to the end"
+        seen.append(fld.name)
+
+
+def _lint_primary(spec: Spec) -> Found:
+    pf = spec.primary
+    prims = {p.name for p in spec.primitives.primitives}
+    enums = {e.name: e for e in spec.all_enums}
+    for key in ("header", "subpackage_header"):
+        for i, hfield in enumerate(getattr(pf, key)):
+            if hfield.type not in prims:
+                yield (key, i, "type"), f"unknown primitive {hfield.type!r}"
+            if hfield.enum is not None and hfield.enum not in enums:
+                yield (key, i, "enum"), f"unknown enum {hfield.enum!r}"
+    value_enum_spec = enums.get("GlobalVariableType")
+    value_enum = {v.name for v in value_enum_spec.values} if value_enum_spec else set()
+    for i, vt in enumerate(pf.value_types):
+        if vt.name not in value_enum:
+            yield ("value_types", i, "name"), f"{vt.name!r} is not a GlobalVariableType value"
+        for attr in ("element", "length"):
+            value = getattr(vt, attr)
+            if value is not None and value not in prims:
+                yield ("value_types", i, attr), f"unknown primitive {value!r}"
+    for loc, reason in _duplicates([f.name for f in pf.families], ("families",), "family"):
+        yield loc, reason
+    for loc, reason in _duplicates([str(f.type) for f in pf.families], ("families",), "message type"):
+        yield loc, reason
+    groups: dict[str, str] = {}
+    for i, fam in enumerate(pf.families):
+        floc: Loc = ("families", i)
+        if fam.layout == "tagged" and fam.tag not in [p.name for p in fam.prefix]:
+            yield (*floc, "tag"), f"tag {fam.tag!r} is not a prefix field"
+        if fam.layout != "tagged" and (fam.tag or fam.prefix):
+            yield (*floc, "layout"), "tag and prefix belong to tagged families"
+        if fam.layout == "opaque" and fam.members:
+            yield (*floc, "members"), "an opaque family has no members"
+        yield from _layout(fam.prefix, spec, (*floc, "prefix"), groups)
+        where: Loc = (*floc, "members")
+        yield from _duplicates([m.name for m in fam.members], where, "member")
+        yield from _duplicates([str(m.type) for m in fam.members], where, "member type")
+        for j, member in enumerate(fam.members):
+            mloc: Loc = (*where, j)
+            yield from _since(member.since, spec, (*mloc, "since"))
+            yield from _layout(member.fields, spec, (*mloc, "fields"), groups)
+
+
 def lint_spec(spec: Spec) -> list[tuple[str, Loc, str]]:
     """Every cross-entry problem of a schema-valid spec, as (part, location, reason)."""
     found = list(_lint_common(spec))
     found += list(_lint_types_enums(spec))
     found += [("fields", loc, reason) for loc, reason in lint_fields_file(spec.fields, spec)]
     found += list(_lint_packages(spec))
+    found += [("primary", loc, reason) for loc, reason in _lint_primary(spec)]
     return found

@@ -18,6 +18,7 @@ from .spec_schema import (
     EnumsFile,
     FieldsFile,
     PackagesFile,
+    PrimaryFile,
     PrimitivesFile,
     ProductLinesFile,
     Spec,
@@ -32,6 +33,8 @@ SPEC_FILES: dict[str, tuple[str, type[BaseModel]]] = {
     "fields": ("rtde/fields.yaml", FieldsFile),
     "enums": ("rtde/enums.yaml", EnumsFile),
     "packages": ("rtde/packages.yaml", PackagesFile),
+    "primary_enums": ("primary/enums.yaml", EnumsFile),
+    "primary": ("primary/interface.yaml", PrimaryFile),
 }
 
 Loc = tuple[str | int, ...]

@@ -239,6 +239,84 @@ class PackagesFile(StrictModel):
     messages: list[MessageSpec]
 
 
+# --- spec/primary/interface.yaml -------------------------------------------
+
+
+class CaseSpec(StrictModel):
+    type: str
+    length: str | None = None
+
+
+class LayoutField(StrictModel):
+    """One field of a primary-interface layout: a value, a string, or a group."""
+
+    name: Ident
+    type: str | None = None
+    count: Annotated[int, Field(ge=1)] | None = None
+    length: str | None = None
+    format: Literal["lines", "csv"] | None = None
+    repeat: Annotated[int, Field(ge=1)] | Literal["until_end"] | None = None
+    when: str | None = None
+    switch: str | None = None
+    cases: dict[int, str | CaseSpec] | None = None
+    group: Annotated[str, Field(pattern=r"^[A-Z][A-Za-z0-9]*$")] | None = None
+    fields: list[LayoutField] | None = None
+    enum: str | None = None
+    unit: str | None = None
+    doc: str | None = None
+
+    @property
+    def kind(self) -> str:
+        """value | string | bytes | values | repeat | optional | switch."""
+        if self.fields is not None:
+            return "optional" if self.when is not None else "repeat"
+        if self.switch is not None:
+            return "switch"
+        if self.type in ("string", "bytes"):
+            return self.type
+        if self.type == "variable_values":
+            return "values"
+        return "value"
+
+
+class MemberSpec(StrictModel):
+    name: Ident
+    type: int
+    doc: str | None = None
+    doc_ref: str | None = None
+    since: Since | None = None
+    fields: list[LayoutField]
+
+
+class FamilySpec(StrictModel):
+    name: Ident
+    type: int
+    layout: Literal["subpackages", "tagged", "opaque"]
+    tag: str | None = None
+    doc: str | None = None
+    prefix: list[LayoutField] = []
+    members: list[MemberSpec] = []
+
+
+class ValueTypeSpec(StrictModel):
+    name: Annotated[str, Field(pattern=r"^[A-Z][A-Z0-9_]*$")]
+    kind: Literal["none", "string", "scalar", "list", "matrix"]
+    element: str | None = None
+    count: Annotated[int, Field(ge=1)] = 1
+    length: str | None = None
+
+
+class PrimaryFile(StrictModel):
+    doc_ref: str | None = None
+    ports: dict[str, int]
+    max_message_bytes: Annotated[int, Field(ge=16)]
+    header: list[PackageField]
+    subpackage_header: list[PackageField]
+    value_separator: Annotated[int, Field(ge=0, le=255)]
+    value_types: list[ValueTypeSpec]
+    families: list[FamilySpec]
+
+
 # --- the whole spec --------------------------------------------------------
 
 
@@ -251,3 +329,14 @@ class Spec(StrictModel):
     fields: FieldsFile
     enums: EnumsFile
     packages: PackagesFile
+    primary_enums: EnumsFile
+    primary: PrimaryFile
+
+    @property
+    def all_enums(self) -> list[EnumSpec]:
+        """Enums of every file: one namespace, shared by RTDE and the primary interface."""
+        return [*self.enums.enums, *self.primary_enums.enums]
+
+    @property
+    def all_bitfields(self) -> list[BitfieldSpec]:
+        return [*self.enums.bitfields, *self.primary_enums.bitfields]

@@ -201,6 +201,235 @@ class ToolDigitalOutputMode(IntEnum):
     PUSH_PULL = 3
 
 
+class MessageType(IntEnum):
+    """Type of a primary/secondary message.
+
+    Source: Primary/secondary interfaces: Message Types
+    """
+
+    MODBUS_INFO_MESSAGE = 5
+    ROBOT_STATE = 16
+    ROBOT_MESSAGE = 20
+    PROGRAM_STATE_MESSAGE = 25
+
+
+class RobotStateSubPackageType(IntEnum):
+    """Type of a sub-package of the Robot State message."""
+
+    ROBOT_MODE_DATA = 0
+    JOINT_DATA = 1
+    TOOL_DATA = 2
+    MASTERBOARD_DATA = 3
+    CARTESIAN_INFO = 4
+    KINEMATICS_INFO = 5
+    CONFIGURATION_DATA = 6
+    FORCE_MODE_DATA = 7
+    ADDITIONAL_INFO = 8
+    CALIBRATION_DATA = 9
+    SAFETY_DATA = 10
+    TOOL_COMM_INFO = 11
+    TOOL_MODE_INFO = 12
+    SINGULARITY_INFO = 13
+    ACTIVE_PAYLOAD = 14
+    INTERNAL_DATA = 15
+    CUMULATIVE_RUNTIME_DATA = 16
+
+
+class RobotMessageType(IntEnum):
+    """Sub-message type of a Robot Message."""
+
+    TEXT = 0
+    VERSION = 3
+    SAFETY_MODE = 5
+    ERROR_CODE = 6
+    KEY = 7
+    REQUEST_VALUE = 9
+    RUNTIME_EXCEPTION = 10
+    PROGRAM_LABEL_THREADS = 14
+
+
+class ProgramStateMessageType(IntEnum):
+    """Sub-message type of a Program State message."""
+
+    GLOBAL_VARIABLES_SETUP = 0
+    GLOBAL_VARIABLES_UPDATE = 1
+
+
+class ControlMode(IntEnum):
+    """Control mode (robot mode data).
+
+    Source: Primary/secondary interfaces: Control Modes
+    """
+
+    POSITION = 0
+    TEACH = 1
+    FORCE = 2
+    TORQUE = 3
+
+
+class MessageSource(IntEnum):
+    """Source of a Robot Message.
+
+    Source: Primary/secondary interfaces: Message Sources
+    """
+
+    JOINT_0_FPGA = 100
+    JOINT_0_A = 110
+    JOINT_0_B = 120
+    JOINT_1_FPGA = 101
+    JOINT_1_A = 111
+    JOINT_1_B = 121
+    JOINT_2_FPGA = 102
+    JOINT_2_A = 112
+    JOINT_2_B = 122
+    JOINT_3_FPGA = 103
+    JOINT_3_A = 113
+    JOINT_3_B = 123
+    JOINT_4_FPGA = 104
+    JOINT_4_A = 114
+    JOINT_4_B = 124
+    JOINT_5_FPGA = 105
+    JOINT_5_A = 115
+    JOINT_5_B = 125
+    TOOL_FPGA = 106
+    TOOL_A = 116
+    TOOL_B = 126
+    IMMI_FPGA = 107
+    IMMI_A = 117
+    IMMI_B = 127
+    TEACH_PENDANT_A = 108
+    TEACH_PENDANT_B = 118
+    BFB_FPGA = 109
+    BFB_A = 119
+    BFB_B = 129
+    EXTENDER_NEAR_FPGA = 70
+    """ExtenderNear_FPGA"""
+    EXTENDER_NEAR_MCU = 71
+    """ExtenderNear_MCU"""
+    EXTENDER_FAR_FPGA = 72
+    """ExtenderFar_FPGA"""
+    EXTENDER_FAR_MCU = 73
+    """ExtenderFar_MCU"""
+    SCB_FPGA = 40
+    UA = 20
+    UB = 30
+    ROBOTINTERFACE = -2
+    RTMACHINE = -3
+    SIMULATED_ROBOT = -4
+    GUI = -5
+    CONTROLLER = 7
+    RTDE = 8
+
+
+class ReportLevel(IntEnum):
+    """Report level of a Robot Comm message."""
+
+    DEBUG = 0
+    INFO = 1
+    WARNING = 2
+    VIOLATION = 3
+    FAULT = 4
+    CRITICAL_FAULT = 5
+    DEVL_DEBUG = 128
+    DEVL_INFO = 129
+    DEVL_WARNING = 130
+    DEVL_VIOLATION = 131
+    DEVL_FAULT = 132
+    DEVL_CRITICAL_FAULT = 133
+
+
+class ReportDataType(IntEnum):
+    """Type of the report data of Safety Mode and Robot Comm messages."""
+
+    UINT32 = 0
+    """uint32_t"""
+    UINT32_1 = 1
+    """uint32_t"""
+    INT32 = 2
+    """int32_t"""
+    FLOAT = 3
+    """float"""
+    HEX = 4
+    """uint32_t that should be displayed as hex"""
+    STRING = 5
+    """uint16_t length, then the text (Robot Comm only)"""
+
+
+class RequestedType(IntEnum):
+    """Type a Request Value message asks for."""
+
+    BOOLEAN = 0
+    """Simple yes/no"""
+    INTEGER = 1
+    """Integer"""
+    FLOAT = 2
+    """A script float (a double in C++/Java)"""
+    STRING = 3
+    """Text string"""
+    NONE = 8
+    """Popup"""
+
+
+class RobotType(IntEnum):
+    """Robot arm type (configuration data)."""
+
+    UNDEFINED = 0
+    UR5 = 1
+    """Also UR7e"""
+    UR10 = 2
+    """Also UR12e"""
+    UR3 = 3
+    """UR3e"""
+    UR16 = 4
+    """UR16e"""
+    UR18 = 5
+    """UR18"""
+    UR8_LONG = 6
+    """UR8 Long"""
+    UR20 = 7
+    """UR20"""
+    UR30 = 8
+    """UR30"""
+    UR15 = 9
+    """UR15"""
+
+
+class TeachPendantType(IntEnum):
+    """Teach pendant type (additional info).
+
+    Source: Primary/secondary interfaces: TP Types
+    """
+
+    NONE = 0
+    STANDARD = 1
+    THREE_POSITION_ENABLING = 2
+
+
+class GlobalVariableType(IntEnum):
+    """Type byte of a global variable value (Program State update)."""
+
+    NONE = 0
+    """No content"""
+    CONST_STRING = 3
+    """uint16 length, then the text"""
+    VAR_STRING = 4
+    """uint16 length, then the text"""
+    POSE = 12
+    """6 floats: x, y, z, rx, ry, rz"""
+    BOOL = 13
+    """uint8 value"""
+    NUM = 14
+    """float value"""
+    INT = 15
+    """int32 value"""
+    FLOAT = 16
+    """float value"""
+    LIST = 17
+    """uint16 length, then (type, value) per element"""
+    MATRIX = 18
+    """uint16 rows, uint16 columns, then (type, value) per element"""
+
+
 class RobotStatusBits(IntFlag):
     """robot_status_bits, bits 0-3."""
 
@@ -332,6 +561,18 @@ ENUMS: dict[str, type[IntEnum]] = {
     'TextMessageLevel': TextMessageLevel,
     'ToolOutputMode': ToolOutputMode,
     'ToolDigitalOutputMode': ToolDigitalOutputMode,
+    'MessageType': MessageType,
+    'RobotStateSubPackageType': RobotStateSubPackageType,
+    'RobotMessageType': RobotMessageType,
+    'ProgramStateMessageType': ProgramStateMessageType,
+    'ControlMode': ControlMode,
+    'MessageSource': MessageSource,
+    'ReportLevel': ReportLevel,
+    'ReportDataType': ReportDataType,
+    'RequestedType': RequestedType,
+    'RobotType': RobotType,
+    'TeachPendantType': TeachPendantType,
+    'GlobalVariableType': GlobalVariableType,
 }
 
 BITFIELDS: dict[str, type[IntFlag]] = {
@@ -386,6 +627,50 @@ VALUE_DOCS: dict[str, dict[int, str]] = {
     'ToolDigitalOutputMode': {
         1: 'Sinking current (NPN)',
         2: 'Sourcing current (PNP)',
+    },
+    'MessageSource': {
+        70: 'ExtenderNear_FPGA',
+        71: 'ExtenderNear_MCU',
+        72: 'ExtenderFar_FPGA',
+        73: 'ExtenderFar_MCU',
+    },
+    'ReportDataType': {
+        0: 'uint32_t',
+        1: 'uint32_t',
+        2: 'int32_t',
+        3: 'float',
+        4: 'uint32_t that should be displayed as hex',
+        5: 'uint16_t length, then the text (Robot Comm only)',
+    },
+    'RequestedType': {
+        0: 'Simple yes/no',
+        1: 'Integer',
+        2: 'A script float (a double in C++/Java)',
+        3: 'Text string',
+        8: 'Popup',
+    },
+    'RobotType': {
+        1: 'Also UR7e',
+        2: 'Also UR12e',
+        3: 'UR3e',
+        4: 'UR16e',
+        5: 'UR18',
+        6: 'UR8 Long',
+        7: 'UR20',
+        8: 'UR30',
+        9: 'UR15',
+    },
+    'GlobalVariableType': {
+        0: 'No content',
+        3: 'uint16 length, then the text',
+        4: 'uint16 length, then the text',
+        12: '6 floats: x, y, z, rx, ry, rz',
+        13: 'uint8 value',
+        14: 'float value',
+        15: 'int32 value',
+        16: 'float value',
+        17: 'uint16 length, then (type, value) per element',
+        18: 'uint16 rows, uint16 columns, then (type, value) per element',
     },
     'RobotStatusBits': {
         1: 'Is power on',

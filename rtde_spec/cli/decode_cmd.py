@@ -17,8 +17,14 @@ from .render import print_json, read_input, table
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("decode", help="decode RTDE packages from hex or a file")
+    p = sub.add_parser("decode", help="decode RTDE or primary/secondary messages from hex or a file")
     p.add_argument("data", metavar="HEX_OR_FILE", help="hex string, file (binary or hex), or -")
+    p.add_argument(
+        "--protocol",
+        choices=("rtde", "primary"),
+        default="rtde",
+        help="rtde (port 30004, default) or primary (ports 30001/30002/30011/30012)",
+    )
     p.add_argument("--protocol-version", type=int, choices=gen.PROTOCOLS, default=2)
     p.add_argument(
         "--from",
@@ -90,6 +96,10 @@ def recipe_codec(args: argparse.Namespace) -> RecipeCodec | None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if args.protocol == "primary":
+        from .primary_output import run_primary
+
+        return run_primary(read_input(args.data), args.json)
     codec = recipe_codec(args)
     data = read_input(args.data)
     packages = list(

@@ -1,0 +1,203 @@
+"""Emit the primary-interface layer: pydantic models (and their registry) and
+construct structs, one per sub-package / tagged message, from spec/primary/."""
+
+from __future__ import annotations
+
+from rtde_spec.spec_schema import CaseSpec, LayoutField, MemberSpec, Primitive, Spec
+
+from .emit_rtde import CONSTRUCT_BY_STRUCT
+from .emit_types import scalar_annotation
+from .render import PY_HEADER, camel, docstring, upper
+
+
+def _prims(spec: Spec) -> dict[str, Primitive]:
+    return {p.name: p for p in spec.primitives.primitives}
+
+
+def _case_annotation(case: str | CaseSpec, prims: dict[str, Primitive]) -> str:
+    if isinstance(case, CaseSpec):
+        return "str"
+    prim = prims[case]
+    return {"int": "int", "float": "float", "bool": "bool"}[prim.kind]
+
+
+def _annotation(fld: LayoutField, prims: dict[str, Primitive]) -> str:
+    kind = fld.kind
+    if kind == "value":
+        prim = prims[fld.type or ""]
+        one = scalar_annotation(prim.kind, prim.bounds)
+        if fld.count:
+            return f"Annotated[tuple[{one}, ...], Field(min_length={fld.count}, max_length={fld.count})]"
+        return one
+    if kind == "string":
+        return "list[str]" if fld.format else "str"
+    if kind == "bytes":
+        return "bytes"
+    if kind == "values":
+        return "list[VariableValue]"
+    if kind == "switch":
+        options = sorted({_case_annotation(c, prims) for c in (fld.cases or {}).values()})
+        return " | ".join(options)
+    if kind == "optional":
+        return f"{fld.group}"
+    if isinstance(fld.repeat, int):
+        return f"Annotated[tuple[{fld.group}, ...], Field(min_length={fld.repeat}, max_length={fld.repeat})]"
+    return f"list[{fld.group}]"
+
+
+def _describe(fld: LayoutField) -> str:
+    desc = fld.doc or ""
+    if fld.enum:
+        desc = f"{desc} (values: {fld.enum})".strip()
+    if fld.unit:
+        desc = f"{desc} [{fld.unit}]".strip()
+    return desc
+
+
+def _groups(fields: list[LayoutField], out: list[tuple[str, list[LayoutField], str | None]]) -> None:
+    for fld in fields:
+        if fld.fields is not None:
+            _groups(fld.fields, out)  # inner groups first: they are referenced
+            out.append((fld.group or "", fld.fields, fld.doc))
+
+
+def _field_lines(fields: list[LayoutField], prims: dict[str, Primitive], optional: bool,
+                 defaults: dict[str, int] | None = None) -> list[str]:
+    lines = []
+    for fld in fields:
+        ann = _annotation(fld, prims)
+        desc = _describe(fld)
+        if optional:
+            default = (defaults or {}).get(fld.name)
+            lines.append(
+                f"    {fld.name}: Annotated[{ann} | None, Field(description={desc!r})] = "
+                f"{default if default is not None else 'None'}\n"
+            )
+        else:
+            lines.append(f"    {fld.name}: Annotated[{ann}, Field(description={desc!r})]\n")
+    return lines
+
+
+def _member_class(family: str, prefix: list[LayoutField], tag: str | None, member: MemberSpec,
+                  prims: dict[str, Primitive]) -> str:
+    doc = member.doc or member.name.replace("_", " ")
+    doc += f"\n\n{family} sub-type {member.type}."
+    if member.since:
+        doc += " Since " + ", ".join(f"{k} {v}" for k, v in member.since.items()) + "."
+    out = [f"\n\nclass {camel(member.name)}(PrimaryPart):\n", docstring(doc), "\n"]
+    out.append(f"    NAME: ClassVar[str] = {member.name!r}\n")
+    out.append(f"    FAMILY: ClassVar[str] = {family!r}\n")
+    out.append(f"    TYPE: ClassVar[int] = {member.type}\n")
+    enums = {f.name: f.enum for f in [*prefix, *member.fields] if f.enum}
+    out.append(f"    ENUMS: ClassVar[dict[str, str]] = {enums!r}\n\n")
+    defaults = {tag: member.type} if tag else {}
+    out += _field_lines([*prefix, *member.fields], prims, optional=True, defaults=defaults)
+    return "".join(out)
+
+
+def emit_primary_models(spec: Spec) -> str:
+    prims = _prims(spec)
+    pf = spec.primary
+    out = [
+        PY_HEADER,
+        '"""pydantic models of the primary/secondary interface, and the codec\'s lookup tables.\n\n'
+        "Every field of a sub-package or message may be None: older firmware sends fewer\n"
+        "fields (listed in `missing`), newer firmware more (kept in `extra`).\n"
+        '"""\n\n',
+        "from typing import Annotated, ClassVar\n\n",
+        "from pydantic import Field\n\n",
+        "from rtde_spec.primary.base import PrimaryGroup, PrimaryPart\n",
+        "from rtde_spec.primary.values import VariableValue\n\n",
+        f"PORTS: dict[str, int] = {dict(pf.ports)!r}\n",
+        f"MAX_MESSAGE_BYTES = {pf.max_message_bytes}\n",
+        f"FAMILY_TYPES: dict[str, int] = {({f.name: f.type for f in pf.families})!r}\n",
+    ]
+    groups: list[tuple[str, list[LayoutField], str | None]] = []
+    for fam in pf.families:
+        _groups(fam.prefix, groups)
+        for member in fam.members:
+            _groups(member.fields, groups)
+    for name, fields, doc in groups:
+        out.append(f"\n\nclass {name}(PrimaryGroup):\n")
+        out.append(docstring(doc or name))
+        out.append(f"\n    NAME: ClassVar[str] = {name!r}\n")
+        enums = {f.name: f.enum for f in fields if f.enum}
+        out.append(f"    ENUMS: ClassVar[dict[str, str]] = {enums!r}\n\n")
+        out += _field_lines(fields, prims, optional=False)
+    registry = []
+    for fam in pf.families:
+        for member in fam.members:
+            out.append(_member_class(fam.name, fam.prefix, fam.tag, member, prims))
+            registry.append(f"    ({fam.name!r}, {member.type}): {camel(member.name)},\n")
+    out.append("\n\nMEMBERS: dict[tuple[str, int], type[PrimaryPart]] = {\n")
+    out += registry
+    out.append("}\n\nGROUPS: dict[str, type[PrimaryGroup]] = {\n")
+    out += [f"    {name!r}: {name},\n" for name, _, _ in groups]
+    out.append("}\n")
+    if "VariableValue" not in "".join(out[10:]):
+        out = [o.replace("from rtde_spec.primary.values import VariableValue\n", "") for o in out]
+    return "".join(out)
+
+
+# --- construct ---------------------------------------------------------------
+
+
+def _construct(fld: LayoutField, prims: dict[str, Primitive], indent: str) -> str:
+    kind = fld.kind
+    c = CONSTRUCT_BY_STRUCT
+    if kind == "value":
+        one = c[prims[fld.type or ""].struct]
+        return f"Array({fld.count}, {one})" if fld.count else one
+    if kind in ("string", "bytes"):
+        if fld.length == "rest":
+            return 'GreedyString("utf8")' if kind == "string" else "GreedyBytes"
+        prefix = c[prims[fld.length or ""].struct]
+        return f'PascalString({prefix}, "utf8")' if kind == "string" else f"Prefixed({prefix}, GreedyBytes)"
+    if kind == "values":
+        return "GreedyBytes  # typed values: rtde_spec.primary.values"
+    if kind == "switch":
+        cases = []
+        for value, case in (fld.cases or {}).items():
+            if isinstance(case, CaseSpec):
+                cases.append(f'{value}: PascalString({c[prims[case.length or ""].struct]}, "utf8")')
+            else:
+                cases.append(f"{value}: {c[prims[case].struct]}")
+        return f"Switch(this.{fld.switch}, {{{', '.join(cases)}}})"
+    inner = _struct_body(fld.fields or [], prims, indent + "    ")
+    if kind == "optional":
+        return f"If(this.{fld.when}, Struct(\n{inner}{indent}))"
+    if isinstance(fld.repeat, int):
+        return f"Array({fld.repeat}, Struct(\n{inner}{indent}))"
+    return f"GreedyRange(Struct(\n{inner}{indent}))"
+
+
+def _struct_body(fields: list[LayoutField], prims: dict[str, Primitive], indent: str) -> str:
+    return "".join(f'{indent}"{f.name}" / {_construct(f, prims, indent)},\n' for f in fields)
+
+
+def emit_primary_structs(spec: Spec) -> str:
+    prims = _prims(spec)
+    pf = spec.primary
+    header = _struct_body([LayoutField(name=h.name, type=h.type) for h in pf.header], prims, "    ")
+    sub = _struct_body([LayoutField(name=h.name, type=h.type) for h in pf.subpackage_header], prims, "    ")
+    out = [
+        PY_HEADER,
+        '"""construct structs of the primary interface: one per sub-package or tagged message.\n\n'
+        "`<FAMILY>_<MEMBER>` parses the body after the sub-package header (Robot State)\n"
+        "or after the message header (tagged messages, prefix included). A readable\n"
+        "definition: rtde_spec.primary.codec decodes with compiled structs instead.\n"
+        '"""\n\n',
+        "# ruff: noqa: F401\n",
+        "from construct import (\n",
+    ]
+    names = ["Array", "GreedyBytes", "GreedyRange", "GreedyString", "If", "PascalString",
+             "Prefixed", "Struct", "Switch", "this", *sorted(set(CONSTRUCT_BY_STRUCT.values()))]
+    out += [f"    {n},\n" for n in names]
+    out.append(")\n")
+    out.append(f"\nMESSAGE_HEADER = Struct(\n{header})\n")
+    out.append(f"\nSUBPACKAGE_HEADER = Struct(\n{sub})\n")
+    for fam in pf.families:
+        for member in fam.members:
+            body = _struct_body([*fam.prefix, *member.fields], prims, "    ")
+            out.append(f"\n{upper(fam.name)}_{upper(member.name)} = Struct(\n{body})\n")
+    return "".join(out)

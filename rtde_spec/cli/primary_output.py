@@ -1,0 +1,85 @@
+"""Printing decoded primary/secondary messages: a readable tree or JSON by spec names."""
+
+from __future__ import annotations
+
+from typing import Any
+
+from pydantic import BaseModel
+
+from ..describe import describe
+from ..primary.base import PrimaryPart, RobotStateMessage
+from ..primary.codec import PrimaryStreamDecoder
+from .render import print_json
+
+
+def as_json(value: Any) -> Any:
+    """Models as dicts keyed by field name (bookkeeping fields only when set)."""
+    if isinstance(value, PrimaryPart):
+        out = {"package": value.NAME, **{k: as_json(v) for k, v in value.values().items()}}
+        if value.extra:
+            out["extra"] = value.extra.hex()
+        if value.missing:
+            out["missing"] = list(value.missing)
+        return out
+    if isinstance(value, RobotStateMessage):
+        return {"package": value.NAME, "sub_packages": [as_json(s) for s in value.sub_packages]}
+    if isinstance(value, BaseModel):
+        return {
+            "name": getattr(value, "NAME", type(value).__name__),
+            **{k: as_json(getattr(value, k)) for k in type(value).model_fields},
+        }
+    if isinstance(value, (list, tuple)):
+        return [as_json(v) for v in value]
+    if isinstance(value, dict):
+        return {k: as_json(v) for k, v in value.items()}
+    if isinstance(value, bytes):
+        return value.hex()
+    return value
+
+
+def _lines(value: Any, indent: str) -> list[str]:
+    out: list[str] = []
+    enums: dict[str, str] = getattr(type(value), "ENUMS", {})
+    items = (
+        value.values()
+        if isinstance(value, PrimaryPart)
+        else {k: getattr(value, k) for k in type(value).model_fields}
+    )
+    for name, field_value in items.items():
+        if isinstance(field_value, BaseModel):
+            out.append(f"{indent}{name}:")
+            out += _lines(field_value, indent + "  ")
+        elif isinstance(field_value, (list, tuple)) and field_value and isinstance(field_value[0], BaseModel):
+            for i, entry in enumerate(field_value):
+                out.append(f"{indent}{name}[{i}]:")
+                out += _lines(entry, indent + "  ")
+        else:
+            out.append(f"{indent}{name}: {describe(field_value, enums.get(name))}")
+    if isinstance(value, PrimaryPart):
+        if value.missing:
+            out.append(f"{indent}(missing, older firmware: {', '.join(value.missing)})")
+        if value.extra:
+            out.append(f"{indent}(extra {len(value.extra)} bytes, newer firmware: {value.extra.hex()})")
+    return out
+
+
+def run_primary(data: bytes, json: bool) -> int:
+    decoder = PrimaryStreamDecoder()
+    messages = decoder.feed(data)
+    decoder.close()
+    if json:
+        records = [{"offset": offset, **as_json(message)} for offset, message in messages]
+        print_json(records[0] if len(records) == 1 else records)
+        return 0
+    for offset, message in messages:
+        print(f"@{offset}  {message.NAME}")
+        if isinstance(message, RobotStateMessage):
+            for sub in message.sub_packages:
+                print(f"  [{getattr(sub, 'NAME', 'unknown')}]")
+                print("\n".join(_lines(sub, "    ")))
+        else:
+            print("\n".join(_lines(message, "  ")))
+        print()
+    if decoder.version is not None:
+        print(f"controller version (from the version message): {decoder.version}")
+    return 0

@@ -1,0 +1,330 @@
+"""bytes <-> primary/secondary interface messages, built once from the spec.
+
+decode_message takes one whole message (u32 size, u8 type, body); the stream
+decoder frames a byte stream across arbitrary read boundaries and keeps the
+controller version the Version message announces. Unknown message types,
+sub-package types and sub-message types are kept with their bytes.
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+from functools import cache
+from typing import Any
+
+from .._generated import primary_models as gen
+from ..catalogue import Catalogue
+from ..errors import DecodeError, EncodeError
+from ..framing import PackageFramer
+from ..spec_schema import FamilySpec, Spec
+from ..versions import Version
+from .base import (
+    OpaqueMessage,
+    PrimaryModel,
+    PrimaryPart,
+    RobotStateMessage,
+    UnknownMember,
+    UnknownMessage,
+    UnknownSubPackage,
+)
+from .fast_models import build
+from .layout import Layout
+from .values import ValueTable
+
+PrimaryMessage = RobotStateMessage | PrimaryPart | OpaqueMessage | UnknownMessage | UnknownMember
+
+
+@dataclass
+class _Family:
+    spec: FamilySpec
+    prefix: Layout | None
+    members: dict[int, tuple[type[PrimaryPart], Layout]] = field(default_factory=dict)
+
+
+class PrimaryCodec:
+    """Compiled layouts of every message family of a spec."""
+
+    def __init__(self, spec: Spec) -> None:
+        pf = spec.primary
+        prims = {p.name: p for p in spec.primitives.primitives}
+        codes = {e.name: {v.name: v.value for v in e.values} for e in spec.all_enums}
+        self.values = ValueTable(pf.value_types, codes["GlobalVariableType"], prims, pf.value_separator)
+        self.header = struct.Struct(">" + "".join(prims[h.type].struct for h in pf.header))
+        self.sub_header = struct.Struct(">" + "".join(prims[h.type].struct for h in pf.subpackage_header))
+        self.max_size = pf.max_message_bytes
+        self.families: dict[int, _Family] = {}
+        self.by_class: dict[type[PrimaryPart], tuple[_Family, Layout]] = {}
+        for fam in pf.families:
+            prefix = Layout(fam.prefix, prims, self.values) if fam.prefix else None
+            entry = _Family(fam, prefix)
+            for member in fam.members:
+                cls = gen.MEMBERS[(fam.name, member.type)]
+                layout = Layout(member.fields, prims, self.values)
+                entry.members[member.type] = (cls, layout)
+                self.by_class[cls] = (entry, layout)
+            self.families[fam.type] = entry
+
+    # --- decoding -----------------------------------------------------------
+
+    def decode_message(self, data: bytes | bytearray | memoryview, *, strict: bool = True) -> PrimaryMessage:
+        """One whole message; with strict=False bytes after it are ignored."""
+        buf = bytes(data)
+        hsize = self.header.size
+        if len(buf) < hsize:
+            raise DecodeError(
+                "too short for the message header",
+                field="size" if len(buf) < 4 else "type",
+                offset=len(buf),
+                expected=f"{hsize} bytes",
+                actual=f"{len(buf)} bytes",
+            )
+        size, mtype = self.header.unpack_from(buf)
+        if size < hsize:
+            raise DecodeError(
+                "message size is smaller than the header",
+                field="size",
+                offset=0,
+                expected=f">= {hsize}",
+                actual=size,
+            )
+        if size > self.max_size:
+            raise DecodeError(
+                "message size is larger than any message",
+                field="size",
+                offset=0,
+                expected=f"<= {self.max_size}",
+                actual=size,
+            )
+        if size > len(buf):
+            raise DecodeError(
+                "message is truncated: its size field runs past the data",
+                field="size",
+                offset=len(buf),
+                expected=f"{size} bytes",
+                actual=f"{len(buf)} bytes",
+            )
+        if strict and size < len(buf):
+            raise DecodeError(
+                f"{len(buf) - size} bytes after the message; use PrimaryStreamDecoder",
+                offset=size,
+                expected=f"{size} bytes",
+                actual=f"{len(buf)} bytes",
+            )
+        fam = self.families.get(mtype)
+        if fam is None:
+            return UnknownMessage(type=mtype, size=size, raw=buf[:size])
+        layout = fam.spec.layout
+        if layout == "opaque":
+            return OpaqueMessage(family=fam.spec.name, type=mtype, raw=buf[hsize:size])
+        if layout == "subpackages":
+            return self._robot_state(buf, hsize, size)
+        return self._tagged(fam, buf, hsize, size)
+
+    def _robot_state(self, buf: bytes, pos: int, end: int) -> RobotStateMessage:
+        fam = self.families[gen.FAMILY_TYPES["robot_state"]]
+        hsize = self.sub_header.size
+        subs: list[Any] = []
+        while pos < end:
+            if end - pos < hsize:
+                raise DecodeError(
+                    "sub-package header cut off by the end of the message",
+                    package="robot_state",
+                    field="size",
+                    offset=pos,
+                    expected=f"{hsize} bytes",
+                    actual=f"{end - pos} bytes",
+                )
+            sub_size, sub_type = self.sub_header.unpack_from(buf, pos)
+            if sub_size < hsize or sub_size > end - pos:
+                raise DecodeError(
+                    "sub-package size is smaller than its header"
+                    if sub_size < hsize
+                    else "sub-package size runs past the end of the message",
+                    package="robot_state",
+                    field="size",
+                    offset=pos,
+                    expected=f"{hsize}..{end - pos}",
+                    actual=sub_size,
+                )
+            member = fam.members.get(sub_type)
+            if member is None:
+                subs.append(UnknownSubPackage(type=sub_type, size=sub_size, raw=buf[pos : pos + sub_size]))
+            else:
+                cls, layout = member
+                subs.append(self._part(cls, layout, buf, pos + hsize, pos + sub_size, {}))
+            pos += sub_size
+        return build(RobotStateMessage, {"sub_packages": subs})
+
+    def _tagged(self, fam: _Family, buf: bytes, pos: int, end: int) -> PrimaryMessage:
+        assert fam.prefix is not None
+        prefix, missing, pos = fam.prefix.decode(buf, pos, end)
+        if missing:
+            raise DecodeError(
+                f"message ends inside its prefix ({', '.join(missing)} missing)",
+                package=fam.spec.name,
+                field=missing[0],
+                offset=pos,
+            )
+        tag = prefix[fam.spec.tag or ""]
+        member = fam.members.get(tag)
+        if member is None:
+            return UnknownMember(family=fam.spec.name, type=tag, prefix=prefix, raw=buf[pos:end])
+        cls, layout = member
+        return self._part(cls, layout, buf, pos, end, prefix)
+
+    def _part(
+        self, cls: type[PrimaryPart], layout: Layout, buf: bytes, pos: int, end: int, prefix: dict[str, Any]
+    ) -> PrimaryPart:
+        try:
+            values, missing, stop = layout.decode(buf, pos, end)
+        except DecodeError as exc:
+            raise DecodeError(
+                exc.reason,
+                package=cls.NAME,
+                field=exc.field,
+                offset=exc.offset,
+                expected=exc.expected,
+                actual=exc.actual,
+            ) from None
+        values.update(prefix)
+        for name in missing:
+            values[name] = None
+        values["missing"] = tuple(missing)
+        values["extra"] = buf[stop:end]
+        if layout.group_fields:
+            _with_groups(layout, values)
+        return build(cls, values)
+
+    # --- encoding -----------------------------------------------------------
+
+    def encode_part_body(self, part: PrimaryPart) -> bytes:
+        fam, layout = self.by_class[type(part)]
+        dumped = part.model_dump()
+        body = layout.encode(dumped)
+        if fam.prefix is not None:
+            body = fam.prefix.encode(dumped) + body
+        return body + part.extra
+
+    def encode(self, message: PrimaryModel) -> bytes:
+        """A whole message from a model (a tagged member, Robot State, unknown or opaque)."""
+        if isinstance(message, UnknownMessage):
+            return message.raw
+        if isinstance(message, RobotStateMessage):
+            body = b"".join(self._encode_sub(s) for s in message.sub_packages)
+            mtype = gen.FAMILY_TYPES["robot_state"]
+        elif isinstance(message, OpaqueMessage):
+            body, mtype = message.raw, message.type
+        elif isinstance(message, UnknownMember):
+            fam = self.families[gen.FAMILY_TYPES[message.family]]
+            assert fam.prefix is not None
+            body, mtype = fam.prefix.encode(message.prefix) + message.raw, fam.spec.type
+        elif isinstance(message, PrimaryPart) and type(message) in self.by_class:
+            fam, _ = self.by_class[type(message)]
+            if fam.spec.layout == "subpackages":
+                return self.encode(RobotStateMessage(sub_packages=[message]))
+            body, mtype = self.encode_part_body(message), fam.spec.type
+        else:
+            raise EncodeError(f"not a primary-interface message: {type(message).__name__}")
+        return self._frame(self.header, body, mtype, "message")
+
+    def _encode_sub(self, sub: Any) -> bytes:
+        if isinstance(sub, UnknownSubPackage):
+            return sub.raw
+        if (
+            not isinstance(sub, PrimaryPart)
+            or self.by_class.get(type(sub), (None,))[0] is not self.families[gen.FAMILY_TYPES["robot_state"]]
+        ):
+            raise EncodeError(f"not a Robot State sub-package: {type(sub).__name__}", package="robot_state")
+        return self._frame(self.sub_header, self.encode_part_body(sub), sub.TYPE, sub.NAME)
+
+    def _frame(self, header: struct.Struct, body: bytes, mtype: int, name: str) -> bytes:
+        size = header.size + len(body)
+        if size > self.max_size:
+            raise EncodeError(
+                "message too large",
+                package=name,
+                expected=f"<= {self.max_size} bytes",
+                actual=f"{size} bytes",
+            )
+        return header.pack(size, mtype) + body
+
+
+def _with_groups(layout: Layout, values: dict[str, Any]) -> dict[str, Any]:
+    """Nested group dicts of a decoded part turned into their generated models."""
+    for fld in layout.group_fields:
+        if values.get(fld.name) is None:
+            continue
+        inner = layout.groups[fld.name]
+        cls = gen.GROUPS[fld.group or ""]
+        value = values[fld.name]
+        if fld.kind == "optional":
+            values[fld.name] = build(cls, _with_groups(inner, value))
+        else:
+            entries = [build(cls, _with_groups(inner, v)) for v in value]
+            values[fld.name] = tuple(entries) if isinstance(fld.repeat, int) else entries
+    return values
+
+
+@cache
+def default_codec() -> PrimaryCodec:
+    return PrimaryCodec(Catalogue.builtin().spec)
+
+
+def decode_message(data: bytes | bytearray | memoryview, *, strict: bool = True) -> PrimaryMessage:
+    """One whole primary/secondary message (header included)."""
+    return default_codec().decode_message(data, strict=strict)
+
+
+def encode_message(message: PrimaryModel) -> bytes:
+    return default_codec().encode(message)
+
+
+class PrimaryStreamDecoder:
+    """Frames a TCP byte stream into messages and decodes them in order.
+
+    The Version message (the first one on every port) sets `version`, the
+    controller version context for what follows.
+    """
+
+    def __init__(self, codec: PrimaryCodec | None = None) -> None:
+        self.codec = codec or default_codec()
+        self.framer = PackageFramer(
+            size_bytes=4, header_size=self.codec.header.size, max_size=self.codec.max_size
+        )
+        self.version: Version | None = None
+
+    def feed(self, data: bytes | bytearray | memoryview) -> list[tuple[int, PrimaryMessage]]:
+        out = []
+        for offset, raw in self.framer.feed(data):
+            try:
+                message = self.codec.decode_message(raw)
+            except DecodeError as exc:
+                raise DecodeError(
+                    exc.reason,
+                    package=exc.package,
+                    field=exc.field,
+                    offset=None if exc.offset is None else exc.offset + offset,
+                    expected=exc.expected,
+                    actual=exc.actual,
+                ) from None
+            if isinstance(message, gen.VersionMessage) and message.major_version is not None:
+                self.version = Version(
+                    message.major_version,
+                    message.minor_version or 0,
+                    message.bugfix_version or 0,
+                    message.build_number,
+                )
+            out.append((offset, message))
+        return out
+
+    def close(self) -> None:
+        self.framer.close()
+
+
+def decode_stream(data: bytes | bytearray | memoryview) -> Iterator[tuple[int, PrimaryMessage]]:
+    """(offset, message) for every message of a complete buffer."""
+    decoder = PrimaryStreamDecoder()
+    yield from decoder.feed(data)
+    decoder.close()

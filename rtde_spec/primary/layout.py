@@ -1,0 +1,319 @@
+"""Compile a primary-interface layout (spec fields) into a decoder and an encoder.
+
+Runs of fixed-size fields — primitives, arrays, groups repeated a fixed number of
+times — become one struct.Struct plus one generated regrouping function, so a
+Robot State sub-package decodes with one unpack. Strings, switches, conditional
+and open-ended groups are stepped through one by one.
+
+Decoding follows the interface's compatibility rule: a part shorter than its
+layout yields the fields present and the names of those missing; bytes after
+the layout are returned for the caller to keep. Inconsistent data (a length
+prefix past the end) is a DecodeError with the byte offset.
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+from ..errors import DecodeError, EncodeError
+from ..spec_schema import CaseSpec, LayoutField, Primitive
+from .values import ValueTable
+
+Values = dict[str, Any]
+
+
+@dataclass
+class Atom:
+    """The smallest piece a short part is decoded in: a value or a whole fixed group."""
+
+    name: str
+    fmt: str
+    size: int
+    expr: Callable[[int], tuple[str, int]]  # flat index -> (python expression, next index)
+    struct: struct.Struct = field(init=False)
+    regroup: Callable[[tuple[Any, ...]], Any] = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.struct = struct.Struct(">" + self.fmt)
+        source, _ = self.expr(0)
+        self.regroup = eval(f"lambda t: {source}")
+
+
+@dataclass
+class FixedStep:
+    atoms: list[Atom]
+    struct: struct.Struct = field(init=False)
+    regroup: Callable[[tuple[Any, ...]], Values] = field(init=False)
+
+    def __post_init__(self) -> None:
+        self.struct = struct.Struct(">" + "".join(a.fmt for a in self.atoms))
+        parts = []
+        index = 0
+        for atom in self.atoms:
+            source, index = atom.expr(index)
+            parts.append(f"{atom.name!r}: {source}")
+        self.regroup = eval(f"lambda t: {{{', '.join(parts)}}}")
+
+
+class Layout:
+    """Decoder and encoder of one list of layout fields."""
+
+    def __init__(self, fields: list[LayoutField], prims: dict[str, Primitive], values: ValueTable) -> None:
+        self.fields = fields
+        self.prims = prims
+        self.value_table = values
+        self.names = [f.name for f in fields]
+        self.group_fields = [f for f in fields if f.fields is not None]
+        self.steps: list[FixedStep | LayoutField] = []
+        self.groups: dict[str, Layout] = {}
+        run: list[Atom] = []
+        for fld in fields:
+            if fld.fields is not None:
+                self.groups[fld.name] = Layout(fld.fields, prims, values)
+            atom = self._atom(fld)
+            if atom is not None:
+                run.append(atom)
+                continue
+            if run:
+                self.steps.append(FixedStep(run))
+                run = []
+            self.steps.append(fld)
+        if run:
+            self.steps.append(FixedStep(run))
+        fixed = all(isinstance(s, FixedStep) for s in self.steps)
+        self.fixed_size: int | None = sum(s.struct.size for s in self.steps) if fixed else None  # type: ignore[union-attr]
+
+    # --- compilation --------------------------------------------------------
+
+    def _atom(self, fld: LayoutField) -> Atom | None:
+        kind = fld.kind
+        if kind == "value":
+            prim = self.prims[fld.type or ""]
+            count = fld.count or 1
+
+            def value_expr(i: int, count: int = count) -> tuple[str, int]:
+                return (f"t[{i}]" if count == 1 else f"t[{i}:{i + count}]"), i + count
+
+            return Atom(fld.name, prim.struct * count, prim.size * count, value_expr)
+        if kind == "repeat" and isinstance(fld.repeat, int):
+            inner = [self._atom(f) for f in fld.fields or []]
+            if any(a is None for a in inner):
+                return None
+            atoms = [a for a in inner if a is not None]
+            times = fld.repeat
+
+            def group_expr(i: int, atoms: list[Atom] = atoms, times: int = times) -> tuple[str, int]:
+                entries = []
+                for _ in range(times):
+                    parts = []
+                    for atom in atoms:
+                        source, i = atom.expr(i)
+                        parts.append(f"{atom.name!r}: {source}")
+                    entries.append("{" + ", ".join(parts) + "}")
+                return "[" + ", ".join(entries) + "]", i
+
+            fmt = "".join(a.fmt for a in atoms) * times
+            return Atom(fld.name, fmt, sum(a.size for a in atoms) * times, group_expr)
+        return None
+
+    # --- decoding -----------------------------------------------------------
+
+    def decode(self, buf: bytes, pos: int, end: int, where: str = "") -> tuple[Values, list[str], int]:
+        """(values, missing field names, position after the last decoded byte)."""
+        values: Values = {}
+        for index, step in enumerate(self.steps):
+            if isinstance(step, FixedStep):
+                size = step.struct.size
+                if end - pos >= size:
+                    values.update(step.regroup(step.struct.unpack_from(buf, pos)))
+                    pos += size
+                    continue
+                for j, atom in enumerate(step.atoms):
+                    if end - pos < atom.size:
+                        return values, self._missing_from(index, j), pos
+                    values[atom.name] = atom.regroup(atom.struct.unpack_from(buf, pos))
+                    pos += atom.size
+                continue
+            ok, pos = self._decode_field(step, buf, pos, end, values, where)
+            if not ok:
+                return values, self._missing_from(index, 0), pos
+        return values, [], pos
+
+    def _missing_from(self, step_index: int, atom_index: int) -> list[str]:
+        names: list[str] = []
+        for index, step in enumerate(self.steps[step_index:]):
+            if isinstance(step, FixedStep):
+                start = atom_index if index == 0 else 0
+                names += [a.name for a in step.atoms[start:]]
+            else:
+                names.append(step.name)
+        return names
+
+    def _prefixed(
+        self, buf: bytes, pos: int, end: int, prefix_type: str, fld: str
+    ) -> tuple[bytes | None, int]:
+        prim = self.prims[prefix_type]
+        if end - pos < prim.size:
+            return None, pos
+        length = int.from_bytes(buf[pos : pos + prim.size], "big", signed=bool(prim.signed))
+        start = pos + prim.size
+        if length < 0 or end - start < length:
+            raise DecodeError(
+                f"length prefix says {length} bytes but the part ends first",
+                field=fld,
+                offset=pos,
+                expected=f"{length} bytes",
+                actual=f"{end - start} bytes",
+            )
+        return bytes(buf[start : start + length]), start + length
+
+    def _decode_field(
+        self, fld: LayoutField, buf: bytes, pos: int, end: int, values: Values, where: str
+    ) -> tuple[bool, int]:
+        name = f"{where}{fld.name}"
+        kind = fld.kind
+        if kind in ("string", "bytes"):
+            if fld.length == "rest":
+                raw, pos = bytes(buf[pos:end]), end
+            else:
+                raw, pos = self._prefixed(buf, pos, end, fld.length or "", name)
+                if raw is None:
+                    return False, pos
+            values[fld.name] = _text(raw, fld.format) if kind == "string" else raw
+            return True, pos
+        if kind == "values":
+            values[fld.name] = self.value_table.decode_all(buf, pos, end, name)
+            return True, end
+        if kind == "switch":
+            case = (fld.cases or {}).get(values.get(fld.switch or ""))  # type: ignore[arg-type]
+            if case is None:
+                values[fld.name] = None  # an unknown case: the rest stays as extra bytes
+                return True, pos
+            if isinstance(case, CaseSpec):
+                raw, pos = self._prefixed(buf, pos, end, case.length or "", name)
+                if raw is None:
+                    return False, pos
+                values[fld.name] = raw.decode("utf-8", "surrogateescape")
+                return True, pos
+            prim = self.prims[case]
+            if end - pos < prim.size:
+                return False, pos
+            (values[fld.name],) = struct.unpack_from(">" + prim.struct, buf, pos)
+            return True, pos + prim.size
+        inner = self.groups[fld.name]
+        if kind == "optional":
+            if not values.get(fld.when or ""):
+                values[fld.name] = None
+                return True, pos
+            group, missing, new_pos = inner.decode(buf, pos, end, f"{name}.")
+            if missing:
+                return False, pos
+            values[fld.name] = group
+            return True, new_pos
+        entries = []
+        while pos < end:  # repeat until the end of the part
+            group, missing, new_pos = inner.decode(buf, pos, end, f"{name}[{len(entries)}].")
+            if missing:
+                raise DecodeError(
+                    f"entry {len(entries)} is cut off by the end of the part",
+                    field=name,
+                    offset=pos,
+                    expected=f"fields {', '.join(missing)}",
+                )
+            entries.append(group)
+            pos = new_pos
+        values[fld.name] = entries
+        return True, pos
+
+    # --- encoding -----------------------------------------------------------
+
+    def encode(self, values: Mapping[str, Any], where: str = "") -> bytes:
+        """Bytes of the fields present; fields after the first absent one must be absent too."""
+        out = bytearray()
+        absent: str | None = None
+        for fld in self.fields:
+            value = values.get(fld.name)
+            conditional_off = fld.kind == "optional" and not values.get(fld.when or "")
+            unknown_case = (
+                fld.kind == "switch" and (fld.cases or {}).get(values.get(fld.switch or "")) is None
+            )  # type: ignore[arg-type]
+            if value is None and not (conditional_off or unknown_case):
+                absent = absent or fld.name
+                continue
+            if absent is not None and value is not None:
+                raise EncodeError(
+                    f"set, but the earlier field {absent} is absent (fields are a prefix)",
+                    field=f"{where}{fld.name}",
+                )
+            if value is not None:
+                out += self._encode_field(fld, value, values, f"{where}{fld.name}")
+        return bytes(out)
+
+    def _encode_field(self, fld: LayoutField, value: Any, values: Mapping[str, Any], name: str) -> bytes:
+        kind = fld.kind
+        try:
+            if kind == "value":
+                prim = self.prims[fld.type or ""]
+                items = tuple(value) if fld.count else (value,)
+                if fld.count and len(items) != fld.count:
+                    raise EncodeError(f"needs exactly {fld.count} values", field=name, actual=len(items))
+                return struct.pack(">" + prim.struct * len(items), *items)
+            if kind in ("string", "bytes"):
+                raw = _untext(value, fld.format) if kind == "string" else bytes(value)
+                return raw if fld.length == "rest" else self._prefix(fld.length or "", len(raw), name) + raw
+            if kind == "values":
+                return self.value_table.encode_all(list(value), name)
+            if kind == "switch":
+                case = (fld.cases or {})[values[fld.switch or ""]]
+                if isinstance(case, CaseSpec):
+                    raw = str(value).encode("utf-8", "surrogateescape")
+                    return self._prefix(case.length or "", len(raw), name) + raw
+                return struct.pack(">" + self.prims[case].struct, value)
+            inner = self.groups[fld.name]
+            if kind == "optional":
+                return inner.encode(_as_dict(value), f"{name}.")
+            entries = list(value)
+            if isinstance(fld.repeat, int) and len(entries) != fld.repeat:
+                raise EncodeError(f"needs exactly {fld.repeat} entries", field=name, actual=len(entries))
+            return b"".join(inner.encode(_as_dict(e), f"{name}[{i}].") for i, e in enumerate(entries))
+        except struct.error as exc:
+            raise EncodeError(f"cannot be packed: {exc}", field=name, actual=repr(value)) from None
+
+    def _prefix(self, prefix_type: str, length: int, name: str) -> bytes:
+        prim = self.prims[prefix_type]
+        bounds = prim.bounds or (0, 0)
+        if not 0 <= length <= bounds[1]:
+            raise EncodeError(
+                "too long for its length prefix",
+                field=name,
+                expected=f"<= {bounds[1]} bytes",
+                actual=f"{length} bytes",
+            )
+        return length.to_bytes(prim.size, "big")
+
+
+def _text(raw: bytes, fmt: str | None) -> Any:
+    text = raw.decode("utf-8", "surrogateescape")
+    if fmt == "lines":
+        names = text.split("\n")
+        return names[:-1] if names and names[-1] == "" else names
+    if fmt == "csv":
+        return text.split(",")
+    return text
+
+
+def _untext(value: Any, fmt: str | None) -> bytes:
+    if fmt == "lines":
+        text = "".join(f"{n}\n" for n in value)
+    elif fmt == "csv":
+        text = ",".join(value)
+    else:
+        text = str(value)
+    return text.encode("utf-8", "surrogateescape")
+
+
+def _as_dict(value: Any) -> Mapping[str, Any]:
+    return value if isinstance(value, Mapping) else value.model_dump()
