@@ -19,9 +19,9 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from ur5e_robot_state import ur5e_robot_state, ur5e_robot_state_bytes  # noqa: E402
+from ur5e_robot_state import ur5e_robot_state, ur5e_robot_state_bytes
 
-from rtde_spec.primary.codec import decode_message  # noqa: E402
+from rtde_spec.primary.codec import decode_message
 
 TARGET_MEDIAN_US = 200.0
 
@@ -82,8 +82,10 @@ def main(argv: list[str] | None = None) -> int:
     print(f"{'decoder':55s} {'median µs':>10s} {'p90 µs':>8s}")
     print(f"{'baseline: struct per sub-package, tuples, no checks':55s} {b:10.1f} {sorted(base)[13]:8.1f}")
     print(f"{'rtde_spec: decode_message (named, typed, checked)':55s} {o:10.1f} {sorted(ours)[13]:8.1f}")
-    print(f"\nrtde_spec / baseline = {o / b:.1f}x the time; target median <= {TARGET_MEDIAN_US:.0f} µs: "
-          f"{'met' if o <= TARGET_MEDIAN_US else 'MISSED'}")
+    print(
+        f"\nrtde_spec / baseline = {o / b:.1f}x the time; target median <= {TARGET_MEDIAN_US:.0f} µs: "
+        f"{'met' if o <= TARGET_MEDIAN_US else 'MISSED'}"
+    )
     return 0 if o <= TARGET_MEDIAN_US or not args.assert_targets else 1
 
 

@@ -140,5 +140,7 @@ def test_decode_data_package_with_a_recipe() -> None:
     assert (record["timestamp"], record["robot_mode"], record["actual_q"]) == (2.5, 7, [1.0] * 6)
     table = cli("decode", package.hex(), "--recipe", ",".join(names))
     assert "7 (RUNNING)" in table.stdout
-    short = cli("decode", package[:-8].hex().replace(package[:2].hex(), "0033", 1), "--recipe", ",".join(names))
+    short = cli(
+        "decode", package[:-8].hex().replace(package[:2].hex(), "0033", 1), "--recipe", ",".join(names)
+    )
     assert short.returncode == 1 and "error: " in short.stderr
