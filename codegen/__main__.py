@@ -17,9 +17,7 @@ ROOT = Path(__file__).resolve().parent.parent
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m codegen", description=__doc__)
     parser.add_argument("--check", action="store_true", help="exit 1 if generated files drift")
-    parser.add_argument(
-        "--spec", type=Path, default=ROOT / "spec", help="spec root (default: spec/)"
-    )
+    parser.add_argument("--spec", type=Path, default=ROOT / "spec", help="spec root (default: spec/)")
     parser.add_argument("--out", type=Path, default=ROOT, help="repository root to write into")
     args = parser.parse_args(argv)
     try:

@@ -53,9 +53,7 @@ def _fields_section(title: str, direction: str, entries: list[FieldSpec], cat: C
         infos_ok = [i for i in infos if i is not None]
         wire = cat.wire_types[entry.type]
         name = (
-            f"`{entry.name}` (X = {entry.index[0]}..{entry.index[1]})"
-            if entry.index
-            else f"`{entry.name}`"
+            f"`{entry.name}` (X = {entry.index[0]}..{entry.index[1]})" if entry.index else f"`{entry.name}`"
         )
         rows.append(
             [
@@ -72,9 +70,7 @@ def _fields_section(title: str, direction: str, entries: list[FieldSpec], cat: C
             index_lines.append(f"- `{entry.name}`: " + ", ".join(f"`{n}`" for n in names))
     lines = " / ".join(cat.lines)
     out = f"## {title}\n\n"
-    out += md_table(
-        ["Name", "Type", "Bytes", f"Since ({lines})", "Unit", "Meaning", "Listed in"], rows
-    )
+    out += md_table(["Name", "Type", "Bytes", f"Since ({lines})", "Unit", "Meaning", "Listed in"], rows)
     if index_lines:
         out += "\nConcrete names of the register families:\n\n" + "\n".join(index_lines) + "\n"
     return out
@@ -108,9 +104,7 @@ def emit_fields_doc(spec: Spec, cat: Catalogue) -> str:
         lines_rows,
     )
     out += "\n" + _fields_section("Inputs (client → controller)", "input", spec.fields.inputs, cat)
-    out += "\n" + _fields_section(
-        "Outputs (controller → client)", "output", spec.fields.outputs, cat
-    )
+    out += "\n" + _fields_section("Outputs (controller → client)", "output", spec.fields.outputs, cat)
     return out
 
 
@@ -152,15 +146,10 @@ def emit_packages_doc(spec: Spec) -> str:
         f"Port {pk.port}. Big-endian. Every package starts with the header; `size` counts "
         "the whole package, header included.\n\n"
     )
-    out += md_table(
-        ["Type", "Code", "Name"], [[p.code, ord(p.code), p.name] for p in pk.package_types]
-    )
+    out += md_table(["Type", "Code", "Name"], [[p.code, ord(p.code), p.name] for p in pk.package_types])
     out += "\nLimits: " + ", ".join(f"{k} = {v}" for k, v in pk.limits.model_dump().items()) + "\n"
     out += "\nSenders: " + "; ".join(f"**{k}** = {v}" for k, v in pk.senders.items()) + "\n"
-    rows = [
-        [m.name, m.type, " and ".join(m.senders), ", ".join(map(str, m.protocols))]
-        for m in pk.messages
-    ]
+    rows = [[m.name, m.type, " and ".join(m.senders), ", ".join(map(str, m.protocols))] for m in pk.messages]
     out += "\n## Layouts\n\n" + md_table(["Message", "Type", "From", "Protocol"], rows)
     for msg in pk.messages:
         out += f"\n### {msg.name}\n\n"
@@ -231,17 +220,15 @@ def emit_types_doc(spec: Spec, cat: Catalogue) -> str:
 
 
 def emit_index_doc(spec: Spec, cat: Catalogue) -> str:
-    out = (
-        MD_HEADER
-        + "\n# Reference\n\nGenerated from `spec/`; regenerate with `python -m codegen`.\n\n"
-    )
+    out = MD_HEADER + "\n# Reference\n\nGenerated from `spec/`; regenerate with `python -m codegen`.\n\n"
     out += f"- [RTDE fields](rtde-fields.md): {len(cat.fields('input'))} inputs, "
     out += f"{len(cat.fields('output'))} outputs\n"
-    out += (
-        f"- [RTDE packages](rtde-packages.md): {len(spec.packages.package_types)} package types, "
-    )
+    out += f"- [RTDE packages](rtde-packages.md): {len(spec.packages.package_types)} package types, "
     out += f"{len(spec.packages.messages)} layouts\n"
     out += f"- [Enums and bit layouts](enums.md): {len(spec.all_enums)} enums, "
     out += f"{len(spec.all_bitfields)} bit layouts\n"
     out += f"- [RTDE data types](rtde-types.md): {len(spec.types.types)} types\n"
+    members = sum(len(f.members) for f in spec.primary.families)
+    out += f"- [Primary and secondary interfaces](primary.md): {len(spec.primary.families)} message "
+    out += f"families, {members} sub-packages and sub-messages\n"
     return out

@@ -61,8 +61,12 @@ def _groups(fields: list[LayoutField], out: list[tuple[str, list[LayoutField], s
             out.append((fld.group or "", fld.fields, fld.doc))
 
 
-def _field_lines(fields: list[LayoutField], prims: dict[str, Primitive], optional: bool,
-                 defaults: dict[str, int] | None = None) -> list[str]:
+def _field_lines(
+    fields: list[LayoutField],
+    prims: dict[str, Primitive],
+    optional: bool,
+    defaults: dict[str, int] | None = None,
+) -> list[str]:
     lines = []
     for fld in fields:
         ann = _annotation(fld, prims)
@@ -78,8 +82,9 @@ def _field_lines(fields: list[LayoutField], prims: dict[str, Primitive], optiona
     return lines
 
 
-def _member_class(family: str, prefix: list[LayoutField], tag: str | None, member: MemberSpec,
-                  prims: dict[str, Primitive]) -> str:
+def _member_class(
+    family: str, prefix: list[LayoutField], tag: str | None, member: MemberSpec, prims: dict[str, Primitive]
+) -> str:
     doc = member.doc or member.name.replace("_", " ")
     doc += f"\n\n{family} sub-type {member.type}."
     if member.since:
@@ -110,7 +115,7 @@ def emit_primary_models(spec: Spec) -> str:
         "from rtde_spec.primary.values import VariableValue\n\n",
         f"PORTS: dict[str, int] = {dict(pf.ports)!r}\n",
         f"MAX_MESSAGE_BYTES = {pf.max_message_bytes}\n",
-        f"FAMILY_TYPES: dict[str, int] = {({f.name: f.type for f in pf.families})!r}\n",
+        f"FAMILY_TYPES: dict[str, int] = { ({f.name: f.type for f in pf.families})!r}\n",
     ]
     groups: list[tuple[str, list[LayoutField], str | None]] = []
     for fam in pf.families:
@@ -150,7 +155,9 @@ def _construct(fld: LayoutField, prims: dict[str, Primitive], indent: str) -> st
         return f"Array({fld.count}, {one})" if fld.count else one
     if kind in ("string", "bytes"):
         if fld.length == "rest":
-            return 'GreedyString("utf8")' if kind == "string" else "GreedyBytes"
+            if kind == "string":
+                return "lines_string()" if fld.format == "lines" else 'GreedyString("utf8")'
+            return "GreedyBytes"
         prefix = c[prims[fld.length or ""].struct]
         return f'PascalString({prefix}, "utf8")' if kind == "string" else f"Prefixed({prefix}, GreedyBytes)"
     if kind == "values":
@@ -190,10 +197,21 @@ def emit_primary_structs(spec: Spec) -> str:
         "# ruff: noqa: F401\n",
         "from construct import (\n",
     ]
-    names = ["Array", "GreedyBytes", "GreedyRange", "GreedyString", "If", "PascalString",
-             "Prefixed", "Struct", "Switch", "this", *sorted(set(CONSTRUCT_BY_STRUCT.values()))]
+    names = [
+        "Array",
+        "GreedyBytes",
+        "GreedyRange",
+        "GreedyString",
+        "If",
+        "PascalString",
+        "Prefixed",
+        "Struct",
+        "Switch",
+        "this",
+        *sorted(set(CONSTRUCT_BY_STRUCT.values())),
+    ]
     out += [f"    {n},\n" for n in names]
-    out.append(")\n")
+    out.append(")\n\nfrom rtde_spec.construct_ext import lines_string\n")
     out.append(f"\nMESSAGE_HEADER = Struct(\n{header})\n")
     out.append(f"\nSUBPACKAGE_HEADER = Struct(\n{sub})\n")
     for fam in pf.families:

@@ -15,6 +15,7 @@ from .emit_docs import (
 )
 from .emit_enums import emit_enums
 from .emit_primary import emit_primary_models, emit_primary_structs
+from .emit_primary_docs import emit_primary_doc
 from .emit_rtde import emit_rtde_models, emit_rtde_structs
 from .emit_types import emit_types
 from .render import PY_HEADER
@@ -25,8 +26,7 @@ GEN = "rtde_spec/_generated"
 def generate(spec: Spec) -> dict[str, str]:
     catalogue = Catalogue(spec)
     return {
-        f"{GEN}/__init__.py": PY_HEADER
-        + '"""Code generated from spec/; import through rtde_spec."""\n',
+        f"{GEN}/__init__.py": PY_HEADER + '"""Code generated from spec/; import through rtde_spec."""\n',
         f"{GEN}/spec_data.py": emit_spec_data(spec),
         f"{GEN}/enums.py": emit_enums(spec),
         f"{GEN}/rtde_types.py": emit_types(catalogue),
@@ -38,5 +38,6 @@ def generate(spec: Spec) -> dict[str, str]:
         "docs/reference/rtde-fields.md": emit_fields_doc(spec, catalogue),
         "docs/reference/rtde-packages.md": emit_packages_doc(spec),
         "docs/reference/enums.md": emit_enums_doc(spec),
+        "docs/reference/primary.md": emit_primary_doc(spec),
         "docs/reference/rtde-types.md": emit_types_doc(spec, catalogue),
     }

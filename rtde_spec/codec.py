@@ -51,8 +51,7 @@ def message_class(package_type: int, sender: str, protocol_version: int) -> type
             actual=package_type,
         )
     raise DecodeError(
-        f"{gen.PACKAGE_TYPES[package_type]} is never sent by the {sender} "
-        f"in protocol {protocol_version}",
+        f"{gen.PACKAGE_TYPES[package_type]} is never sent by the {sender} in protocol {protocol_version}",
         field="type",
         offset=2,
     )
@@ -209,10 +208,7 @@ def decode_stream(
             message = decode(package, protocol_version=version, sender=sender, strict=strict)
         except DecodeError as exc:
             raise _shifted(exc, offset) from None
-        if (
-            isinstance(message, gen.RequestProtocolVersion)
-            and message.protocol_version in gen.PROTOCOLS
-        ):
+        if isinstance(message, gen.RequestProtocolVersion) and message.protocol_version in gen.PROTOCOLS:
             version = message.protocol_version
         yield offset, message
     framer.close()

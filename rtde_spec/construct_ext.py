@@ -20,14 +20,28 @@ class CsvAdapter(Adapter):  # type: ignore[misc]
         return ",".join(obj)
 
 
+class LinesAdapter(Adapter):  # type: ignore[misc]
+    """Newline-terminated names ("var_1\\nvar_2\\n") on the wire, a list of str in Python."""
+
+    def _decode(self, obj: str, context: Any, path: str) -> list[str]:
+        names = obj.split("\n")
+        return names[:-1] if names and names[-1] == "" else names
+
+    def _encode(self, obj: list[str], context: Any, path: str) -> str:
+        return "".join(f"{name}\n" for name in obj)
+
+
+def lines_string() -> Construct:
+    """Newline-terminated names running to the end of the message."""
+    return LinesAdapter(GreedyString("utf8"))
+
+
 def csv_string() -> Construct:
     """A comma-separated list of names running to the end of the package."""
     return CsvAdapter(GreedyString("ascii"))
 
 
-def package_struct(
-    size_field: Construct, type_field: Construct, code: int, body: Construct
-) -> Construct:
+def package_struct(size_field: Construct, type_field: Construct, code: int, body: Construct) -> Construct:
     """A whole package: size (counting the header), a constant type, then the body.
 
     Building computes the size from the built body; parsing limits the body to it.

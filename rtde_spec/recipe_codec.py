@@ -124,9 +124,7 @@ class RecipeCodec:
             parts.append(f"t[{pos}]" if count == 1 else f"t[{pos}:{pos + count}]")
             pos += count
         args = ", ".join(parts)
-        pairs = ", ".join(
-            f"{item.name!r}: {part}" for item, part in zip(self.items, parts, strict=True)
-        )
+        pairs = ", ".join(f"{item.name!r}: {part}" for item, part in zip(self.items, parts, strict=True))
         scope: dict[str, Any] = {}
         if all(item.wire.count == 1 for item in self.items):
             regroup_src = "lambda t, make: make(t)"
@@ -143,11 +141,7 @@ class RecipeCodec:
         if got == self.size:
             return
         short = got < self.size
-        where = (
-            next((i for i in self.items if i.offset + (i.wire.size or 0) > got), None)
-            if short
-            else None
-        )
+        where = next((i for i in self.items if i.offset + (i.wire.size or 0) > got), None) if short else None
         raise DecodeError(
             "data package payload is shorter than its recipe"
             if short
@@ -214,18 +208,14 @@ class RecipeCodec:
                 actual=rid,
             )
 
-    def decode_package(
-        self, data: bytes | bytearray | memoryview, recipe_id: int | None = None
-    ) -> Any:
+    def decode_package(self, data: bytes | bytearray | memoryview, recipe_id: int | None = None) -> Any:
         """A whole data package (header included) to a record; checks type, size and id."""
         self._package_prefix(data, recipe_id)
         return self.decode_record(data, PAYLOAD_OFFSET)
 
     # --- encoding -----------------------------------------------------------
 
-    def encode(
-        self, values: Mapping[str, Any] | BaseModel | tuple[Any, ...], strict: bool = False
-    ) -> bytes:
+    def encode(self, values: Mapping[str, Any] | BaseModel | tuple[Any, ...], strict: bool = False) -> bytes:
         """The payload from a dict, a record or a model; EncodeError names a bad field.
 
         strict: BOOL takes only bool, integers only int, DOUBLE only int or float;
@@ -299,17 +289,13 @@ class RecipeCodec:
             for item in self.items:
                 code = ">" + item.wire.struct[-1]
                 fields.append(
-                    (item.name, code)
-                    if item.wire.count == 1
-                    else (item.name, code, (item.wire.count,))
+                    (item.name, code) if item.wire.count == 1 else (item.name, code, (item.wire.count,))
                 )
             self._dtype = np.dtype(fields)
             assert self._dtype.itemsize == self.package_size
         return self._dtype
 
-    def decode_many(
-        self, buffer: bytes | bytearray | memoryview, recipe_id: int | None = None
-    ) -> Any:
+    def decode_many(self, buffer: bytes | bytearray | memoryview, recipe_id: int | None = None) -> Any:
         """Many same-recipe data packages back to back -> a numpy structured array.
 
         Zero-copy when the buffer holds only these packages; every package's size,
@@ -347,9 +333,7 @@ def _checked(item: RecipeItem, value: Any, strict: bool, index: int | None) -> A
     field = item.name if index is None else f"{item.name}[{index}]"
 
     def fail(reason: str, expected: Any) -> EncodeError:
-        return EncodeError(
-            reason, package="data_package", field=field, expected=expected, actual=repr(value)
-        )
+        return EncodeError(reason, package="data_package", field=field, expected=expected, actual=repr(value))
 
     if wire.kind == "bool":
         if isinstance(value, bool):

@@ -92,9 +92,7 @@ def _from_xml(text: str, where: str) -> list[Recipe]:
         raise RecipeError(f"unsafe XML refused: {exc}", field=where) from None
     except SafeET.ParseError as exc:
         line, col = exc.position
-        raise RecipeError(
-            f"not well-formed XML at line {line}, column {col}", field=where
-        ) from None
+        raise RecipeError(f"not well-formed XML at line {line}, column {col}", field=where) from None
     if root.tag != "rtde_config":
         raise RecipeError("XML root must be <rtde_config>", field=where, actual=f"<{root.tag}>")
     recipes = []
@@ -142,9 +140,7 @@ def _recipe_from_mapping(item: Any, where: str, index: int) -> Recipe:
             names.append(str(entry))
     direction = item.get("direction")
     if direction not in (None, "input", "output"):
-        raise RecipeError(
-            f"recipe {index}: direction must be input or output", field=where, actual=direction
-        )
+        raise RecipeError(f"recipe {index}: direction must be input or output", field=where, actual=direction)
     frequency = item.get("frequency")
     return Recipe(
         tuple(names),

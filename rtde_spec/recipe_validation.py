@@ -116,9 +116,7 @@ class _Checker:
         return f"; did you mean {', '.join(close)}?" if close else ""
 
     def _family_hint(self, name: str, direction: Direction) -> str:
-        entries = (
-            self.cat.spec.fields.inputs if direction == "input" else self.cat.spec.fields.outputs
-        )
+        entries = self.cat.spec.fields.inputs if direction == "input" else self.cat.spec.fields.outputs
         for extra in self.cat.extra:
             entries = [*entries, *(extra.inputs if direction == "input" else extra.outputs)]
         for entry in entries:
@@ -148,9 +146,7 @@ def _frequency(report: RecipeReport, freq: float, checker: _Checker) -> None:
     if report.direction == "input":
         if report.recipe.frequency is not None:  # the recipe itself says so: a mistake
             report.problems.append(
-                Problem(
-                    "warning", "frequency-on-inputs", "a frequency applies to output recipes only"
-                )
+                Problem("warning", "frequency-on-inputs", "a frequency applies to output recipes only")
             )
         return
     if not (1 <= freq <= top) or math.isnan(freq):
@@ -183,9 +179,7 @@ def _row(
     other: Direction = "input" if direction == "output" else "output"
     info = cat.get(name, direction)
     if not name:
-        problems.append(
-            Problem("error", "empty-name", "an empty name (two commas in a row?)", field=name)
-        )
+        problems.append(Problem("error", "empty-name", "an empty name (two commas in a row?)", field=name))
         return FieldRow(name, None, None, "", "error", "empty name")
     if info is None:
         if cat.get(name, other) is not None:
@@ -235,9 +229,7 @@ def validate_recipe(
     """Check one recipe; controller/frequency/direction override what the recipe says."""
     cat = catalogue or Catalogue.default()
     checker = _checker or _Checker(cat, controller or recipe.controller)
-    dirn = direction or infer_direction(
-        recipe, checker.all_names["input"], checker.all_names["output"]
-    )
+    dirn = direction or infer_direction(recipe, checker.all_names["input"], checker.all_names["output"])
     problems: list[Problem] = []
     rows = [_row(name, dirn, recipe, checker, problems) for name in recipe.names]
     seen: dict[str, int] = {}
@@ -295,9 +287,7 @@ def validate_recipes(
     if len(recipes) > 1:  # name them so problems can say which one
         recipes = [r if r.key else r.with_(key=f"recipe {i + 1}") for i, r in enumerate(recipes)]
     reports = [
-        validate_recipe(
-            r, frequency=frequency, direction=direction, catalogue=cat, _checker=checker
-        )
+        validate_recipe(r, frequency=frequency, direction=direction, catalogue=cat, _checker=checker)
         for r in recipes
     ]
     cross: list[Problem] = []
@@ -322,8 +312,7 @@ def validate_recipes(
             Problem(
                 "error",
                 "too-many-input-recipes",
-                f"{len(inputs)} input recipes; the controller supports "
-                f"{LIMITS['input_recipes_max']}",
+                f"{len(inputs)} input recipes; the controller supports {LIMITS['input_recipes_max']}",
             )
         )
     outputs = [r for r in reports if r.direction == "output"]

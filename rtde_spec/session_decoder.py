@@ -71,8 +71,6 @@ class SessionDecoder:
             out.note = "recipe rejected" if recipe_id == 0 else "reply without a request"
             return
         try:
-            self.recipes[(direction, recipe_id)] = RecipeCodec.for_types(
-                names, types, self.catalogue
-            )
+            self.recipes[(direction, recipe_id)] = RecipeCodec.for_types(names, types, self.catalogue)
         except RecipeError as exc:
             out.note = str(exc)

@@ -19,8 +19,7 @@ _IDENT = r"^[A-Za-z_][A-Za-z0-9_]*$"
 def _check_version(value: object) -> object:
     if not isinstance(value, str):
         raise ValueError(
-            f"bad version string {value!r}: write MAJOR.MINOR.BUGFIX, e.g. 3.3.0 "
-            "(YAML reads 3.3 as a number)"
+            f"bad version string {value!r}: write MAJOR.MINOR.BUGFIX, e.g. 3.3.0 (YAML reads 3.3 as a number)"
         )
     Version.parse(value)
     return value

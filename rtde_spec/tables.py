@@ -17,9 +17,7 @@ def _require(module: str, extra: str) -> Any:
     try:
         return __import__(module)
     except ImportError:
-        raise RtdeSpecError(
-            f"{module} is not installed: pip install 'rtde_spec[{extra}]'"
-        ) from None
+        raise RtdeSpecError(f"{module} is not installed: pip install 'rtde_spec[{extra}]'") from None
 
 
 def _columns(arr: Any, keep_header: bool) -> dict[str, Any]:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import Any, get_args
+
 from pydantic import BaseModel, ValidationError
 
 from .errors import EncodeError
@@ -20,21 +22,29 @@ def _expected(ctx: dict[str, object]) -> str | None:
     return ", ".join(parts) or None
 
 
+def _bounds_in(annotation: Any, metadata: list[Any]) -> tuple[Any, Any]:
+    """ge/le from a field's metadata or anywhere inside its annotation (Optional, Annotated)."""
+    low = high = None
+    stack: list[Any] = [annotation, *metadata]
+    while stack:
+        item = stack.pop()
+        low = getattr(item, "ge", low) if getattr(item, "ge", None) is not None else low
+        high = getattr(item, "le", high) if getattr(item, "le", None) is not None else high
+        stack.extend(getattr(item, "metadata", []) or [])
+        stack.extend(get_args(item))
+    return low, high
+
+
 def _declared_bounds(model: type[BaseModel] | None, field: str | None) -> str | None:
     """'0..255' from the field's own ge/le, however nested its Annotated metadata is."""
     if model is None or field not in model.model_fields:
         return None
-    low = high = None
-    for item in model.model_fields[field].metadata:
-        for meta in getattr(item, "metadata", [item]):
-            low = getattr(meta, "ge", low)
-            high = getattr(meta, "le", high)
+    info = model.model_fields[field]
+    low, high = _bounds_in(info.annotation, list(info.metadata))
     return f"{low}..{high}" if low is not None and high is not None else None
 
 
-def encode_error(
-    exc: ValidationError, package: str, model: type[BaseModel] | None = None
-) -> EncodeError:
+def encode_error(exc: ValidationError, package: str, model: type[BaseModel] | None = None) -> EncodeError:
     """The first problem as the headline; every other one listed in the reason."""
     errors = exc.errors(include_url=False)
     first = errors[0]

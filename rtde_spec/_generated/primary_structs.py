@@ -31,6 +31,8 @@ from construct import (
     Int8ub,
 )
 
+from rtde_spec.construct_ext import lines_string
+
 MESSAGE_HEADER = Struct(
     "size" / Int32ub,
     "type" / Int8ub,
@@ -303,7 +305,7 @@ PROGRAM_STATE_GLOBAL_VARIABLES_SETUP_MESSAGE = Struct(
     "timestamp" / Int64ub,
     "robot_message_type" / Int8ub,
     "start_index" / Int16ub,
-    "variable_names" / GreedyString("utf8"),
+    "variable_names" / lines_string(),
 )
 
 PROGRAM_STATE_GLOBAL_VARIABLES_UPDATE_MESSAGE = Struct(

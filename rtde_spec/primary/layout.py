@@ -176,7 +176,11 @@ class Layout:
         name = f"{where}{fld.name}"
         kind = fld.kind
         if kind in ("string", "bytes"):
-            if fld.length == "rest":
+            if fld.length == "rest" and fld.format == "lines":
+                # names end with a newline; an unterminated tail stays as extra bytes
+                stop = bytes(buf[pos:end]).rfind(b"\n") + 1
+                raw, pos = bytes(buf[pos : pos + stop]), pos + stop
+            elif fld.length == "rest":
                 raw, pos = bytes(buf[pos:end]), end
             else:
                 raw, pos = self._prefixed(buf, pos, end, fld.length or "", name)

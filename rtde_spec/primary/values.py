@@ -27,7 +27,9 @@ class VariableValue(BaseModel):
 
     model_config = ConfigDict(frozen=True)
     type: str
-    value: Any = None
+    value: (
+        bool | int | float | str | tuple[float, ...] | list[VariableValue] | list[list[VariableValue]] | None
+    ) = None
 
 
 class ValueTable:

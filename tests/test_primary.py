@@ -1,0 +1,261 @@
+"""Primary/secondary interface: golden vectors, compatibility rule, round trips, bad input."""
+
+from __future__ import annotations
+
+import struct
+from typing import Any
+
+import pytest
+import yaml
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+from rtde_spec._generated import primary_models as gen
+from rtde_spec._generated import primary_structs
+from rtde_spec.errors import DecodeError, EncodeError
+from rtde_spec.primary.base import (
+    OpaqueMessage,
+    PrimaryPart,
+    RobotStateMessage,
+    UnknownMember,
+    UnknownMessage,
+    UnknownSubPackage,
+)
+from rtde_spec.primary.codec import PrimaryStreamDecoder, decode_message, decode_stream, encode_message
+from rtde_spec.spec_schema import LayoutField
+from rtde_spec.versions import Version
+
+from .helpers import DATA
+from .primary_strategies import MEMBER_KEYS, member_strategy
+from .strategies import SPEC
+
+GOLDEN = yaml.safe_load((DATA / "primary_golden.yaml").read_text())
+
+
+def plain(value: Any) -> Any:
+    """Models, tuples and construct containers as plain dicts and lists; bytes as hex."""
+    if hasattr(value, "model_dump"):
+        value = value.model_dump()
+    if isinstance(value, dict):
+        return {k: plain(v) for k, v in value.items() if not str(k).startswith("_")}
+    if isinstance(value, (list, tuple)):
+        return [plain(v) for v in value]
+    if isinstance(value, bytes):
+        return value.hex()
+    return value
+
+
+def _part(message: Any) -> Any:
+    if isinstance(message, RobotStateMessage):
+        (sub,) = message.sub_packages
+        return sub
+    return message
+
+
+@pytest.mark.parametrize("case", GOLDEN, ids=[c["message"] for c in GOLDEN])
+def test_golden_vector(case: dict[str, Any]) -> None:
+    data = bytes.fromhex(case["hex"])
+    message = decode_message(data)
+    part = _part(message)
+    assert part.NAME == case["message"] or (
+        isinstance(part, OpaqueMessage) and part.family == case["message"]
+    )
+    if isinstance(part, PrimaryPart):
+        assert (part.extra, part.missing) == (b"", ())
+        assert plain(part.values()) == case["fields"]
+        # the unvalidated fast build equals what pydantic validation makes of the same values
+        assert type(part).model_validate(part.model_dump()) == part
+    else:
+        assert plain(part.raw) == case["fields"]["raw"]
+    assert encode_message(message) == data
+
+
+def test_golden_vectors_cover_every_member() -> None:
+    covered = {c["message"] for c in GOLDEN}
+    assert {cls.NAME for cls in gen.MEMBERS.values()} <= covered
+    assert "modbus_info_message" in covered
+
+
+def _construct_view(fields: list[LayoutField], container: Any) -> dict[str, Any]:
+    return {f.name: plain(container[f.name]) for f in fields if f.kind != "values"}
+
+
+@pytest.mark.parametrize("case", GOLDEN, ids=[c["message"] for c in GOLDEN])
+def test_generated_construct_structs_agree(case: dict[str, Any]) -> None:
+    data = bytes.fromhex(case["hex"])
+    fam = next((f for f in SPEC.primary.families if any(m.name == case["message"] for m in f.members)), None)
+    if fam is None:
+        assert case["message"] == "modbus_info_message"
+        return
+    member = next(m for m in fam.members if m.name == case["message"])
+    body = data[10:] if fam.layout == "subpackages" else data[5:]
+    struct_ = getattr(primary_structs, f"{fam.name.upper()}_{member.name.upper()}")
+    parsed = struct_.parse(body)
+    fields = [*fam.prefix, *member.fields]
+    expected = {k: v for k, v in case["fields"].items() if k != "variable_values"}
+    assert _construct_view(fields, parsed) == expected
+
+
+@pytest.mark.parametrize("key", MEMBER_KEYS, ids=[f"{f}-{t}" for f, t in MEMBER_KEYS])
+def test_round_trip_every_model(key: tuple[str, int]) -> None:
+    @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+    @given(member_strategy(*key))
+    def check(part: PrimaryPart) -> None:
+        data = encode_message(part)
+        assert int.from_bytes(data[:4], "big") == len(data)
+        assert _part(decode_message(data)) == part
+
+    check()
+
+
+def _robot_mode_body() -> bytes:
+    case = next(c for c in GOLDEN if c["message"] == "robot_mode_data")
+    return bytes.fromhex(case["hex"])[10:]
+
+
+def _state(*subs: bytes) -> bytes:
+    body = b"".join(subs)
+    return struct.pack(">IB", 5 + len(body), 16) + body
+
+
+def _sub(stype: int, body: bytes) -> bytes:
+    return struct.pack(">IB", 5 + len(body), stype) + body
+
+
+def test_longer_subpackage_keeps_extra_bytes() -> None:
+    data = _state(_sub(0, _robot_mode_body() + b"NEW!"))
+    part = _part(decode_message(data))
+    assert part.extra == b"NEW!" and part.missing == () and part.robot_mode == 7
+    assert encode_message(decode_message(data)) == data
+
+
+def test_shorter_subpackage_lists_missing_fields() -> None:
+    body = _robot_mode_body()[:25]  # timestamp 8, 7 bools, 2 modes, target_speed_fraction 8
+    data = _state(_sub(0, body))
+    part = _part(decode_message(data))
+    assert part.target_speed_fraction == 1.0
+    assert part.missing == ("speed_scaling", "target_speed_fraction_limit", "reserved")
+    assert part.speed_scaling is None
+    assert encode_message(decode_message(data)) == data
+    cut = _state(_sub(0, _robot_mode_body()[:20]))  # inside target_speed_fraction
+    part = _part(decode_message(cut))
+    assert part.missing[0] == "target_speed_fraction" and part.extra == _robot_mode_body()[17:20]
+    assert encode_message(decode_message(cut)) == cut
+
+
+def test_unknown_types_are_kept() -> None:
+    state = _state(_sub(0, _robot_mode_body()), _sub(99, b"future"))
+    message = decode_message(state)
+    unknown = message.sub_packages[1]
+    assert isinstance(unknown, UnknownSubPackage) and (unknown.type, unknown.size) == (99, 11)
+    assert unknown.raw.endswith(b"future")
+    assert encode_message(message) == state
+    other = struct.pack(">IB", 8, 77) + b"abc"
+    got = decode_message(other)
+    assert isinstance(got, UnknownMessage) and (got.type, got.size, got.raw) == (77, 8, other)
+    assert encode_message(got) == other
+    member = struct.pack(">IBQbB", 18, 20, 5, -2, 200) + b"zzz"
+    got = decode_message(member)
+    assert isinstance(got, UnknownMember) and got.type == 200 and got.raw == b"zzz"
+    assert got.prefix == {"timestamp": 5, "source": -2, "robot_message_type": 200}
+    assert encode_message(got) == member
+
+
+@pytest.mark.parametrize(
+    "data,field,offset,reason",
+    [
+        ("0000", "size", 2, "too short"),
+        ("00000003 10", "size", 0, "smaller than the header"),
+        ("00000009 10 0000", "size", 7, "truncated"),
+        ("7fffffff 10", "size", 0, "larger than any message"),
+        ("0000000a 10 00000003 00", "size", 5, "smaller than its header"),
+        ("0000000a 10 00000009 00", "size", 5, "runs past the end"),
+        ("00000008 10 000000", "size", 5, "header cut off"),
+        ("00000008 14 000000", None, None, "ends inside its prefix"),
+    ],
+)
+def test_bad_framing(data: str, field: str | None, offset: int | None, reason: str) -> None:
+    with pytest.raises(DecodeError) as info:
+        decode_message(bytes.fromhex(data.replace(" ", "")))
+    assert reason in str(info.value)
+    if field is not None:
+        assert (info.value.field, info.value.offset) == (field, offset)
+
+
+def test_length_prefix_past_the_end_names_field_and_offset() -> None:
+    body = struct.pack(">QbB", 1, -2, 3) + b"\x09URC"  # project name says 9 bytes, 3 follow
+    data = struct.pack(">IB", 5 + len(body), 20) + body
+    with pytest.raises(DecodeError) as info:
+        decode_message(data)
+    err = info.value
+    assert (err.package, err.field, err.offset) == ("version_message", "project_name", 15)
+
+
+def test_global_variable_errors() -> None:
+    bad_type = struct.pack(">QBH", 1, 1, 0) + b"\x63\n"
+    with pytest.raises(DecodeError, match="unknown global variable type 99"):
+        decode_message(struct.pack(">IB", 5 + len(bad_type), 25) + bad_type)
+    no_sep = struct.pack(">QBH", 1, 1, 0) + b"\x0d\x01"
+    with pytest.raises(DecodeError, match="separator"):
+        decode_message(struct.pack(">IB", 5 + len(no_sep), 25) + no_sep)
+    deep = b"\x11\x00\x01" * 40 + b"\x00"
+    body = struct.pack(">QBH", 1, 1, 0) + deep + b"\n"
+    with pytest.raises(DecodeError, match="nest too deeply"):
+        decode_message(struct.pack(">IB", 5 + len(body), 25) + body)
+
+
+@settings(max_examples=400, deadline=None)
+@given(st.binary(max_size=120), st.sampled_from([5, 16, 20, 25, 99]))
+def test_garbage_raises_only_decode_error(body: bytes, mtype: int) -> None:
+    data = struct.pack(">IB", 5 + len(body), mtype) + body
+    try:
+        message = decode_message(data)
+    except DecodeError as exc:
+        assert str(exc)
+    else:  # what decodes also encodes back to the same bytes
+        assert encode_message(message) == data
+    try:
+        list(decode_stream(body))
+    except DecodeError:
+        pass
+
+
+@settings(max_examples=100, deadline=None)
+@given(st.data())
+def test_stream_independent_of_read_boundaries(data: st.DataObject) -> None:
+    picks = data.draw(st.lists(st.sampled_from(GOLDEN), min_size=1, max_size=8))
+    stream = b"".join(bytes.fromhex(c["hex"]) for c in picks)
+    cuts = sorted(data.draw(st.lists(st.integers(0, len(stream)), max_size=12)))
+    decoder = PrimaryStreamDecoder()
+    got = []
+    prev = 0
+    for cut in [*cuts, len(stream)]:
+        got += decoder.feed(stream[prev:cut])
+        prev = cut
+    decoder.close()
+    assert [encode_message(m) for _, m in got] == [bytes.fromhex(c["hex"]) for c in picks]
+
+
+def test_version_message_sets_the_version_context() -> None:
+    version = next(c for c in GOLDEN if c["message"] == "version_message")
+    decoder = PrimaryStreamDecoder()
+    assert decoder.version is None
+    decoder.feed(bytes.fromhex(version["hex"]))
+    assert decoder.version == Version(5, 15, 0)
+
+
+def test_oversized_size_claim_is_refused_before_buffering() -> None:
+    decoder = PrimaryStreamDecoder()
+    with pytest.raises(DecodeError, match="larger than any message"):
+        decoder.feed(b"\xff\xff\xff\xff\x10")
+    assert decoder.framer.pending <= 5
+
+
+def test_encode_errors() -> None:
+    with pytest.raises(EncodeError) as info:
+        gen.ToolModeInfo(output_mode=300)
+    assert (info.value.field, info.value.expected) == ("output_mode", "0..255")
+    with pytest.raises(EncodeError, match="earlier field"):
+        encode_message(gen.ToolModeInfo(output_mode=1, digital_output_mode_pin1=2))
+    with pytest.raises(EncodeError, match="at least 6 items"):
+        gen.JointData(joints=())
