@@ -144,3 +144,26 @@ def test_decode_data_package_with_a_recipe() -> None:
         "decode", package[:-8].hex().replace(package[:2].hex(), "0033", 1), "--recipe", ",".join(names)
     )
     assert short.returncode == 1 and "error: " in short.stderr
+
+
+def test_decode_primary_messages(tmp_path: Path) -> None:
+    import yaml
+
+    from .helpers import DATA
+
+    golden = yaml.safe_load((DATA / "primary_golden.yaml").read_text())
+    version = next(c for c in golden if c["message"] == "version_message")
+    joints = next(c for c in golden if c["message"] == "joint_data")
+    path = tmp_path / "primary.bin"
+    path.write_bytes(bytes.fromhex(version["hex"]) + bytes.fromhex(joints["hex"]))
+    result = cli("decode", "--protocol", "primary", str(path), "--json")
+    assert result.returncode == 0, result.stderr
+    first, second = json.loads(result.stdout)
+    assert first["package"] == "version_message" and first["project_name"] == "URControl"
+    sub = second["sub_packages"][0]
+    assert sub["package"] == "joint_data" and sub["joints"][5]["joint_mode"] == 253
+    table = cli("decode", "--protocol", "primary", str(path))
+    assert "joint_mode: 253 (RUNNING)" in table.stdout
+    assert "controller version (from the version message): 5.15.0" in table.stdout
+    bad = cli("decode", "--protocol", "primary", "0000000a1000000003")
+    assert bad.returncode == 1 and bad.stderr.startswith("error: ")

@@ -188,7 +188,8 @@ class PrimaryCodec:
                 expected=exc.expected,
                 actual=exc.actual,
             ) from None
-        values.update(prefix)
+        if prefix:
+            values.update(prefix)
         for name in missing:
             values[name] = None
         values["missing"] = tuple(missing)

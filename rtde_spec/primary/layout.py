@@ -83,6 +83,8 @@ class Layout:
             self.steps.append(fld)
         if run:
             self.steps.append(FixedStep(run))
+        only = self.steps[0] if len(self.steps) == 1 else None
+        self._single: FixedStep | None = only if isinstance(only, FixedStep) else None
         fixed = all(isinstance(s, FixedStep) for s in self.steps)
         self.fixed_size: int | None = sum(s.struct.size for s in self.steps) if fixed else None  # type: ignore[union-attr]
 
@@ -123,6 +125,13 @@ class Layout:
 
     def decode(self, buf: bytes, pos: int, end: int, where: str = "") -> tuple[Values, list[str], int]:
         """(values, missing field names, position after the last decoded byte)."""
+        if self._single is not None and end - pos >= self._single.struct.size:
+            # the common case: one fixed run, all there
+            return (
+                self._single.regroup(self._single.struct.unpack_from(buf, pos)),
+                [],
+                pos + self._single.struct.size,
+            )
         values: Values = {}
         for index, step in enumerate(self.steps):
             if isinstance(step, FixedStep):
