@@ -5,13 +5,9 @@ from __future__ import annotations
 
 from rtde_spec.spec_schema import CaseSpec, LayoutField, MemberSpec, Primitive, Spec
 
-from .emit_rtde import CONSTRUCT_BY_STRUCT
+from .emit_rtde import CONSTRUCT_BY_STRUCT, prims_of
 from .emit_types import scalar_annotation
-from .render import PY_HEADER, camel, docstring, upper
-
-
-def _prims(spec: Spec) -> dict[str, Primitive]:
-    return {p.name: p for p in spec.primitives.primitives}
+from .render import PY_HEADER, camel, docstring, field_description, upper
 
 
 def _case_annotation(case: str | CaseSpec, prims: dict[str, Primitive]) -> str:
@@ -45,15 +41,6 @@ def _annotation(fld: LayoutField, prims: dict[str, Primitive]) -> str:
     return f"list[{fld.group}]"
 
 
-def _describe(fld: LayoutField) -> str:
-    desc = fld.doc or ""
-    if fld.enum:
-        desc = f"{desc} (values: {fld.enum})".strip()
-    if fld.unit:
-        desc = f"{desc} [{fld.unit}]".strip()
-    return desc
-
-
 def _groups(fields: list[LayoutField], out: list[tuple[str, list[LayoutField], str | None]]) -> None:
     for fld in fields:
         if fld.fields is not None:
@@ -70,7 +57,7 @@ def _field_lines(
     lines = []
     for fld in fields:
         ann = _annotation(fld, prims)
-        desc = _describe(fld)
+        desc = field_description(fld.doc, fld.enum, fld.unit)
         if optional:
             default = (defaults or {}).get(fld.name)
             lines.append(
@@ -101,7 +88,7 @@ def _member_class(
 
 
 def emit_primary_models(spec: Spec) -> str:
-    prims = _prims(spec)
+    prims = prims_of(spec)
     pf = spec.primary
     out = [
         PY_HEADER,
@@ -183,7 +170,7 @@ def _struct_body(fields: list[LayoutField], prims: dict[str, Primitive], indent:
 
 
 def emit_primary_structs(spec: Spec) -> str:
-    prims = _prims(spec)
+    prims = prims_of(spec)
     pf = spec.primary
     header = _struct_body([LayoutField(name=h.name, type=h.type) for h in pf.header], prims, "    ")
     sub = _struct_body([LayoutField(name=h.name, type=h.type) for h in pf.subpackage_header], prims, "    ")

@@ -9,7 +9,7 @@ from __future__ import annotations
 from rtde_spec.spec_schema import MessageSpec, PackageField, Primitive, Spec
 
 from .emit_types import scalar_annotation
-from .render import PY_HEADER, camel, docstring, upper
+from .render import PY_HEADER, camel, docstring, field_description, upper
 
 #: construct's name for each struct format character of spec/common/primitives.yaml
 CONSTRUCT_BY_STRUCT = {
@@ -27,7 +27,7 @@ CONSTRUCT_BY_STRUCT = {
 }
 
 
-def _prims(spec: Spec) -> dict[str, Primitive]:
+def prims_of(spec: Spec) -> dict[str, Primitive]:
     return {p.name: p for p in spec.primitives.primitives}
 
 
@@ -62,7 +62,7 @@ def _layout(fld: PackageField, prims: dict[str, Primitive]) -> str:
 
 
 def emit_rtde_structs(spec: Spec) -> str:
-    prims = _prims(spec)
+    prims = prims_of(spec)
     pk = spec.packages
     out = [
         PY_HEADER,
@@ -123,18 +123,14 @@ def _model(msg: MessageSpec, spec: Spec, prims: dict[str, Primitive]) -> str:
     if msg.fields:
         out.append("\n")
     for fld in msg.fields:
-        desc = fld.doc or ""
-        if fld.enum:
-            desc = f"{desc} (values: {fld.enum})".strip()
-        if fld.unit:
-            desc = f"{desc} [{fld.unit}]".strip()
+        desc = field_description(fld.doc, fld.enum, fld.unit)
         ann = _annotation(fld, prims)
         out.append(f"    {fld.name}: Annotated[{ann}, Field(description={desc!r})]\n")
     return "".join(out)
 
 
 def emit_rtde_models(spec: Spec) -> str:
-    prims = _prims(spec)
+    prims = prims_of(spec)
     pk = spec.packages
     header_format = ">" + "".join(prims[h.type].struct for h in pk.header)
     out = [

@@ -38,3 +38,13 @@ def md_table(headers: list[str], rows: list[list[object]]) -> str:
     out = ["| " + " | ".join(headers) + " |", "|" + "|".join("---" for _ in headers) + "|"]
     out += ["| " + " | ".join(md_cell(c) for c in row) + " |" for row in rows]
     return "\n".join(out) + "\n"
+
+
+def field_description(doc: str | None, enum: str | None, unit: str | None) -> str:
+    """A model field's description: its doc, enum and unit in one line."""
+    desc = doc or ""
+    if enum:
+        desc = f"{desc} (values: {enum})".strip()
+    if unit:
+        desc = f"{desc} [{unit}]".strip()
+    return desc

@@ -16,7 +16,7 @@ from pydantic import ValidationError
 
 from ._generated import rtde_models as gen
 from .errors import DecodeError, EncodeError
-from .framing import PackageFramer
+from .framing import PackageFramer, check_header
 from .message_base import RtdeMessage
 
 Sender = Literal["controller", "client"]
@@ -133,34 +133,9 @@ def decode_body(cls: type[RtdeMessage], body: bytes, *, strict: bool = True) -> 
         raise DecodeError(f"does not decode: {exc}", package=cls.NAME) from None
 
 
-def read_header(data: bytes, *, offset: int = 0) -> tuple[int, int]:
+def read_header(data: bytes) -> tuple[int, int]:
     """(size, type) of the package at the start of `data`, checked against its length."""
-    if len(data) < gen.HEADER_SIZE:
-        raise DecodeError(
-            "too short for the package header",
-            field="size" if len(data) < 2 else "type",
-            offset=offset + len(data),
-            expected=f"{gen.HEADER_SIZE} bytes",
-            actual=f"{len(data)} bytes",
-        )
-    size, ptype = _HEADER.unpack_from(data)
-    if size < gen.HEADER_SIZE:
-        raise DecodeError(
-            "package size is smaller than the header",
-            field="size",
-            offset=offset,
-            expected=f">= {gen.HEADER_SIZE}",
-            actual=size,
-        )
-    if size > len(data):
-        raise DecodeError(
-            "package is truncated: its size field runs past the data",
-            field="size",
-            offset=offset + len(data),
-            expected=f"{size} bytes",
-            actual=f"{len(data)} bytes",
-        )
-    return size, ptype
+    return check_header(data, _HEADER, what="package")
 
 
 def decode(
@@ -177,14 +152,9 @@ def decode(
     field and after the package are ignored instead of raising.
     """
     buf = bytes(data)
-    size, ptype = read_header(buf)
-    if strict and size < len(buf):
-        raise DecodeError(
-            f"{len(buf) - size} bytes after the package; use decode_stream for several",
-            offset=size,
-            expected=f"{size} bytes",
-            actual=f"{len(buf)} bytes",
-        )
+    size, ptype = check_header(
+        buf, _HEADER, what="package", strict=strict, hint="; use decode_stream for several"
+    )
     cls = message_class(ptype, sender, protocol_version)
     return decode_body(cls, buf[gen.HEADER_SIZE : size], strict=strict)
 

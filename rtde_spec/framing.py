@@ -94,3 +94,62 @@ def split_packages(data: bytes) -> list[tuple[int, bytes]]:
     out = framer.feed(data)
     framer.close()
     return out
+
+
+def check_header(
+    buf: bytes,
+    header: struct.Struct,
+    *,
+    what: str,
+    max_size: int | None = None,
+    strict: bool = False,
+    hint: str = "",
+) -> tuple[int, int]:
+    """(size, type) of the package or message at the start of `buf`, checked against it.
+
+    The size counts the whole package, header included. With strict, bytes after
+    it are an error too (`hint` says what to use for several).
+    """
+    hsize = header.size
+    size_bytes = struct.calcsize(header.format[:2])
+    if len(buf) < hsize:
+        raise DecodeError(
+            f"too short for the {what} header",
+            field="size" if len(buf) < size_bytes else "type",
+            offset=len(buf),
+            expected=f"{hsize} bytes",
+            actual=f"{len(buf)} bytes",
+        )
+    size, kind = header.unpack_from(buf)
+    if size < hsize:
+        raise DecodeError(
+            f"{what} size is smaller than the header",
+            field="size",
+            offset=0,
+            expected=f">= {hsize}",
+            actual=size,
+        )
+    if max_size is not None and size > max_size:
+        raise DecodeError(
+            f"{what} size is larger than any {what}",
+            field="size",
+            offset=0,
+            expected=f"<= {max_size}",
+            actual=size,
+        )
+    if size > len(buf):
+        raise DecodeError(
+            f"{what} is truncated: its size field runs past the data",
+            field="size",
+            offset=len(buf),
+            expected=f"{size} bytes",
+            actual=f"{len(buf)} bytes",
+        )
+    if strict and size < len(buf):
+        raise DecodeError(
+            f"{len(buf) - size} bytes after the {what}{hint}",
+            offset=size,
+            expected=f"{size} bytes",
+            actual=f"{len(buf)} bytes",
+        )
+    return size, kind

@@ -10,7 +10,7 @@ from rtde_spec._generated import primary_models as gen
 from rtde_spec.primary.values import VariableValue
 from rtde_spec.spec_schema import CaseSpec, LayoutField
 
-from .strategies import PRIMS, SPEC
+from .strategies import SPEC, _primitive
 
 text = st.text(alphabet=st.characters(blacklist_categories=["Cs"]), max_size=30)
 line_names = st.lists(
@@ -24,13 +24,7 @@ line_names = st.lists(
 
 
 def _prim(name: str) -> st.SearchStrategy[Any]:
-    prim = PRIMS[name]
-    if prim.kind == "bool":
-        return st.booleans()
-    if prim.kind == "int":
-        low, high = prim.bounds  # type: ignore[misc]
-        return st.integers(low, high)
-    return st.floats(width=prim.size * 8, allow_nan=False)
+    return _primitive(name, allow_nan=False)
 
 
 def _values(depth: int = 0) -> st.SearchStrategy[VariableValue]:

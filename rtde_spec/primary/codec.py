@@ -17,7 +17,7 @@ from typing import Any
 from .._generated import primary_models as gen
 from ..catalogue import Catalogue
 from ..errors import DecodeError, EncodeError
-from ..framing import PackageFramer
+from ..framing import PackageFramer, check_header
 from ..spec_schema import FamilySpec, Spec
 from ..versions import Version
 from .base import (
@@ -72,46 +72,14 @@ class PrimaryCodec:
         """One whole message; with strict=False bytes after it are ignored."""
         buf = bytes(data)
         hsize = self.header.size
-        if len(buf) < hsize:
-            raise DecodeError(
-                "too short for the message header",
-                field="size" if len(buf) < 4 else "type",
-                offset=len(buf),
-                expected=f"{hsize} bytes",
-                actual=f"{len(buf)} bytes",
-            )
-        size, mtype = self.header.unpack_from(buf)
-        if size < hsize:
-            raise DecodeError(
-                "message size is smaller than the header",
-                field="size",
-                offset=0,
-                expected=f">= {hsize}",
-                actual=size,
-            )
-        if size > self.max_size:
-            raise DecodeError(
-                "message size is larger than any message",
-                field="size",
-                offset=0,
-                expected=f"<= {self.max_size}",
-                actual=size,
-            )
-        if size > len(buf):
-            raise DecodeError(
-                "message is truncated: its size field runs past the data",
-                field="size",
-                offset=len(buf),
-                expected=f"{size} bytes",
-                actual=f"{len(buf)} bytes",
-            )
-        if strict and size < len(buf):
-            raise DecodeError(
-                f"{len(buf) - size} bytes after the message; use PrimaryStreamDecoder",
-                offset=size,
-                expected=f"{size} bytes",
-                actual=f"{len(buf)} bytes",
-            )
+        size, mtype = check_header(
+            buf,
+            self.header,
+            what="message",
+            max_size=self.max_size,
+            strict=strict,
+            hint="; use PrimaryStreamDecoder for several",
+        )
         fam = self.families.get(mtype)
         if fam is None:
             return UnknownMessage(type=mtype, size=size, raw=buf[:size])
