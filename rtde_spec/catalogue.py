@@ -73,10 +73,11 @@ class Catalogue:
         self.wire_types = _wire_types(spec)
         self._fields: dict[Direction, dict[str, FieldInfo]] = {d: {} for d in DIRECTIONS}
         for fields_file in (spec.fields, *self.extra):
-            for direction, entries in (
+            pairs: tuple[tuple[Direction, list[FieldSpec]], ...] = (
                 ("input", fields_file.inputs),
                 ("output", fields_file.outputs),
-            ):
+            )
+            for direction, entries in pairs:
                 for entry in entries:
                     for info in self._expand(entry, direction):
                         self._fields[direction][info.name] = info

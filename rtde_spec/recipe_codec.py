@@ -72,7 +72,7 @@ class RecipeCodec:
                 expected=f"<= {LIMITS['package_max_bytes']} bytes",
                 actual=f"{self.package_size} bytes",
             )
-        self.record_type: type[tuple[Any, ...]] = NamedTuple(  # type: ignore[misc]
+        self.record_type: Any = NamedTuple(  # type: ignore[misc]
             "Record", [(i.name, WIRE_TYPES[i.wire.name]) for i in layout]
         )
         self._regroup, self._to_dict = self._compile()
@@ -223,8 +223,13 @@ class RecipeCodec:
         """
         if isinstance(values, BaseModel):
             values = values.model_dump()
-        elif isinstance(values, tuple) and hasattr(values, "_asdict"):
+        elif isinstance(values, tuple):
+            if not hasattr(values, "_asdict"):
+                raise EncodeError(
+                    "a plain tuple has no field names; pass a record, dict or model", package="data_package"
+                )
             values = values._asdict()
+        assert isinstance(values, Mapping)
         flat: list[Any] = []
         for item in self.items:
             if item.name not in values:

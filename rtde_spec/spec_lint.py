@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-from .spec_schema import CaseSpec, FieldsFile, FieldSpec, LayoutField, Since, Spec
+from .spec_schema import BitfieldSpec, CaseSpec, EnumSpec, FieldsFile, FieldSpec, LayoutField, Since, Spec
 from .versions import Version
 
 Loc = tuple[str | int, ...]
@@ -144,8 +144,13 @@ def _lint_types_enums(spec: Spec) -> Iterator[tuple[str, Loc, str]]:
             yield "types", ("types", i, "element"), f"unknown primitive {wire.element!r}"
     taken: dict[str, str] = {}
     for part, file in (("enums", spec.enums), ("primary_enums", spec.primary_enums)):
-        for kind, entries in (("enums", file.enums), ("bitfields", file.bitfields)):
+        named: list[tuple[str, list[EnumSpec] | list[BitfieldSpec]]] = [
+            ("enums", file.enums),
+            ("bitfields", file.bitfields),
+        ]
+        for kind, entries in named:
             for i, entry in enumerate(entries):
+                assert isinstance(entry, (EnumSpec, BitfieldSpec))
                 if entry.name in taken:
                     yield (
                         part,
@@ -172,14 +177,14 @@ def _lint_packages(spec: Spec) -> Iterator[tuple[str, Loc, str]]:
     prims = {p.name for p in spec.primitives.primitives}
     enums = {e.name for e in spec.all_enums}
     codes = [p.code for p in pk.package_types]
-    for loc, reason in _duplicates(codes, ("package_types",), "package type"):
-        yield "packages", loc, reason
+    for dup, reason in _duplicates(codes, ("package_types",), "package type"):
+        yield "packages", dup, reason
     for i, hfield in enumerate(pk.header):
         if hfield.type not in prims:
             yield "packages", ("header", i, "type"), f"unknown primitive {hfield.type!r}"
     names = [m.name for m in pk.messages]
-    for loc, reason in _duplicates(names, ("messages",), "message"):
-        yield "packages", loc, reason
+    for dup, reason in _duplicates(names, ("messages",), "message"):
+        yield "packages", dup, reason
     claimed: dict[tuple[str, str, int], str] = {}
     for i, msg in enumerate(pk.messages):
         loc: Loc = ("messages", i)

@@ -95,7 +95,7 @@ class _Source:
         return SpecIssue(self.label, format_path(loc, self.data), reason, line_of(self.node, loc))
 
 
-def _reason(err: dict[str, Any]) -> str:
+def _reason(err: Any) -> str:
     key = err["loc"][-1] if err["loc"] else ""
     if err["type"] == "extra_forbidden":
         return f"unknown key {key!r}"

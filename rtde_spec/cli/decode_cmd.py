@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from .._generated import rtde_models as gen
+from ..catalogue import Direction
 from ..codec import decode_stream
 from ..describe import describe
 from ..errors import RecipeError
@@ -85,7 +86,7 @@ def recipe_codec(args: argparse.Namespace) -> RecipeCodec | None:
         return None
     from .main import catalogue_for
 
-    direction = "output" if args.sender == "controller" else "input"
+    direction: Direction = "output" if args.sender == "controller" else "input"
     if Path(args.recipe).exists():
         (recipe, *rest) = load_recipes(args.recipe)
         if rest:

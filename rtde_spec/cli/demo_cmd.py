@@ -9,6 +9,7 @@ import argparse
 from importlib import resources
 from pathlib import Path
 
+from ..codec import Sender
 from ..describe import describe
 from ..session_decoder import SessionDecoder
 from .render import parse_hex, table
@@ -23,7 +24,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run)
 
 
-def read_session(text: str) -> list[tuple[str, bytes, str]]:
+def read_session(text: str) -> list[tuple[Sender, bytes, str]]:
     """Lines of 'sender hex  # note' -> (sender, bytes, note)."""
     out = []
     for number, line in enumerate(text.splitlines(), 1):
@@ -33,7 +34,8 @@ def read_session(text: str) -> list[tuple[str, bytes, str]]:
         parts = body.split()
         if len(parts) != 2 or parts[0] not in ("client", "controller"):
             raise ValueError(f"session line {number}: expected 'client|controller HEX'")
-        out.append((parts[0], parse_hex(parts[1]), note.strip()))
+        sender: Sender = "client" if parts[0] == "client" else "controller"
+        out.append((sender, parse_hex(parts[1]), note.strip()))
     return out
 
 

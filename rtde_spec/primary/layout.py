@@ -85,8 +85,9 @@ class Layout:
             self.steps.append(FixedStep(run))
         only = self.steps[0] if len(self.steps) == 1 else None
         self._single: FixedStep | None = only if isinstance(only, FixedStep) else None
-        fixed = all(isinstance(s, FixedStep) for s in self.steps)
-        self.fixed_size: int | None = sum(s.struct.size for s in self.steps) if fixed else None  # type: ignore[union-attr]
+        fixed_steps = [s for s in self.steps if isinstance(s, FixedStep)]
+        fixed = len(fixed_steps) == len(self.steps)
+        self.fixed_size: int | None = sum(s.struct.size for s in fixed_steps) if fixed else None
 
     # --- compilation --------------------------------------------------------
 
@@ -185,6 +186,7 @@ class Layout:
         name = f"{where}{fld.name}"
         kind = fld.kind
         if kind in ("string", "bytes"):
+            raw: bytes | None
             if fld.length == "rest" and fld.format == "lines":
                 # names end with a newline; an unterminated tail stays as extra bytes
                 stop = bytes(buf[pos:end]).rfind(b"\n") + 1
@@ -201,15 +203,15 @@ class Layout:
             values[fld.name] = self.value_table.decode_all(buf, pos, end, name)
             return True, end
         if kind == "switch":
-            case = (fld.cases or {}).get(values.get(fld.switch or ""))  # type: ignore[arg-type]
+            case = _case(fld, values)
             if case is None:
                 values[fld.name] = None  # an unknown case: the rest stays as extra bytes
                 return True, pos
             if isinstance(case, CaseSpec):
-                raw, pos = self._prefixed(buf, pos, end, case.length or "", name)
-                if raw is None:
+                text, pos = self._prefixed(buf, pos, end, case.length or "", name)
+                if text is None:
                     return False, pos
-                values[fld.name] = raw.decode("utf-8", "surrogateescape")
+                values[fld.name] = text.decode("utf-8", "surrogateescape")
                 return True, pos
             prim = self.prims[case]
             if end - pos < prim.size:
@@ -226,7 +228,7 @@ class Layout:
                 return False, pos
             values[fld.name] = group
             return True, new_pos
-        entries = []
+        entries: list[Values] = []
         while pos < end:  # repeat until the end of the part
             group, missing, new_pos = inner.decode(buf, pos, end, f"{name}[{len(entries)}].")
             if missing:
@@ -250,9 +252,7 @@ class Layout:
         for fld in self.fields:
             value = values.get(fld.name)
             conditional_off = fld.kind == "optional" and not values.get(fld.when or "")
-            unknown_case = (
-                fld.kind == "switch" and (fld.cases or {}).get(values.get(fld.switch or "")) is None
-            )  # type: ignore[arg-type]
+            unknown_case = fld.kind == "switch" and _case(fld, values) is None
             if value is None and not (conditional_off or unknown_case):
                 absent = absent or fld.name
                 continue
@@ -306,6 +306,12 @@ class Layout:
                 actual=f"{length} bytes",
             )
         return length.to_bytes(prim.size, "big")
+
+
+def _case(fld: LayoutField, values: Mapping[str, Any]) -> str | CaseSpec | None:
+    """The switch case the already-decoded selector field picks (None: unknown)."""
+    selector = values.get(fld.switch or "")
+    return (fld.cases or {}).get(selector) if isinstance(selector, int) else None
 
 
 def _text(raw: bytes, fmt: str | None) -> Any:

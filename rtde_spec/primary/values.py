@@ -155,24 +155,25 @@ class ValueTable:
             )
         code, vt = entry
         head = bytes([code])
+        value: Any = item.value
         try:
             if vt.kind == "none":
                 return head
             if vt.kind == "scalar":
                 st = self._struct(self.prims[vt.element].struct * vt.count)
-                items = (item.value,) if vt.count == 1 else tuple(item.value)
+                items = (value,) if vt.count == 1 else tuple(value)
                 return head + st.pack(*items)
             prefix = self._prefix(vt.length)
             if vt.kind == "string":
-                data = str(item.value).encode("utf-8", "surrogateescape")
+                data = str(value).encode("utf-8", "surrogateescape")
                 return head + prefix.pack(len(data)) + data
             if vt.kind == "list":
                 return (
                     head
-                    + prefix.pack(len(item.value))
-                    + b"".join(self._encode_one(v, field, depth + 1) for v in item.value)
+                    + prefix.pack(len(value))
+                    + b"".join(self._encode_one(v, field, depth + 1) for v in value)
                 )
-            rows = item.value
+            rows = value
             cols = len(rows[0]) if rows else 0
             if any(len(r) != cols for r in rows):
                 raise EncodeError("matrix rows differ in length", field=field)
@@ -180,5 +181,5 @@ class ValueTable:
             return head + prefix.pack(len(rows)) + prefix.pack(cols) + body
         except (struct.error, TypeError) as exc:
             raise EncodeError(
-                f"{item.type} value cannot be encoded: {exc}", field=field, actual=repr(item.value)
+                f"{item.type} value cannot be encoded: {exc}", field=field, actual=repr(value)
             ) from None
