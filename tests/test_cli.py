@@ -94,6 +94,26 @@ def test_demo_decodes_the_embedded_session() -> None:
     assert result.returncode == 0, result.stderr
     assert "data_package" in result.stdout and "actual_q=" in result.stdout
     assert "5.12.2" in result.stdout
+    assert "3 messages (controller 5.15.0)" in result.stdout  # primary stream in 100-byte reads
+    assert "13 sub-packages" in result.stdout
+    lines = {line.split()[0]: line for line in result.stdout.splitlines() if line[:2] in ("3.", "5.", "10")}
+    assert "INVALID" in lines["3.15.8"] and "ft_raw_wrench" in lines["3.15.8"]
+    assert "valid" in lines["5.12.2"] and "INVALID" not in lines["5.12.2"]
+
+
+def test_benchmark_recipe_is_the_shipped_example() -> None:
+    import importlib.util
+    from importlib import resources
+
+    from .helpers import ROOT
+
+    spec = importlib.util.spec_from_file_location("bench", ROOT / "benchmarks/bench_recipe_decode.py")
+    assert spec is not None and spec.loader is not None
+    bench = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(bench)
+    text = resources.files("rtde_spec.examples").joinpath("ur_rtde_default_outputs.txt").read_text()
+    shipped = [n for n in text.splitlines() if n and not n.startswith("#")]
+    assert bench.UR_RTDE_DEFAULT_OUTPUTS == shipped and len(shipped) == 58
 
 
 def test_validate_valid_invalid_and_usage_exit_codes(tmp_path: Path) -> None:

@@ -9,12 +9,19 @@ import argparse
 from importlib import resources
 from pathlib import Path
 
+from ..catalogue import Catalogue
 from ..codec import Sender
 from ..describe import describe
+from ..primary.base import RobotStateMessage
+from ..primary.codec import PrimaryStreamDecoder
+from ..recipe import Recipe
+from ..recipe_validation import validate_recipes
 from ..session_decoder import SessionDecoder
 from .render import parse_hex, table
 
 EXAMPLE = "rtde_session_v2.txt"
+PRIMARY_EXAMPLE = "primary_stream.hex"
+RECIPE_EXAMPLE = "ur_rtde_default_outputs.txt"
 SHOWCASE_VERSIONS = ("3.15.8", "5.12.2", "10.11.0")
 
 
@@ -79,5 +86,57 @@ def run(args: argparse.Namespace) -> int:
             ]
         )
     print(table(["controller", "line", "inputs", "outputs", "max Hz"], summary))
-    print("\nNext: rtde-spec fields --controller 5.12.2, rtde-spec decode HEX --from controller")
+    _primary_part()
+    _recipe_part(catalogue)
+    print("\nNext: rtde-spec fields --controller 5.12.2, rtde-spec decode HEX --from controller,")
+    print("      rtde-spec decode --protocol primary FILE, rtde-spec validate RECIPE --controller 5.12.2")
     return 0
+
+
+def _example(name: str) -> str:
+    return resources.files("rtde_spec.examples").joinpath(name).read_text("utf-8")
+
+
+def _primary_part() -> None:
+    """Decode the embedded primary-interface stream, in small TCP-like chunks."""
+    text = "".join(line for line in _example(PRIMARY_EXAMPLE).splitlines() if not line.startswith("#"))
+    data = parse_hex(text)
+    decoder = PrimaryStreamDecoder()
+    messages = []
+    for start in range(0, len(data), 100):  # arbitrary read boundaries
+        messages += decoder.feed(data[start : start + 100])
+    decoder.close()
+    print(
+        f"\nPrimary interface: {len(data)} bytes in 100-byte reads -> {len(messages)} messages "
+        f"(controller {decoder.version}):\n"
+    )
+    rows = []
+    for offset, message in messages:
+        if isinstance(message, RobotStateMessage):
+            names = ", ".join(getattr(s, "NAME", "?") for s in message.sub_packages)
+            mode = message["robot_mode_data"]
+            q = [round(j.q_actual, 3) for j in message["joint_data"].joints]
+            detail = f"{len(message.sub_packages)} sub-packages ({names}); robot_mode="
+            detail += f"{describe(mode.robot_mode, 'RobotMode')}, q_actual={q}"
+        else:
+            detail = ", ".join(f"{k}={v!r}" for k, v in message.values().items() if k != "timestamp")
+        rows.append([offset, message.NAME, detail])
+    print(table(["offset", "message", "content"], rows, max_width=150))
+
+
+def _recipe_part(catalogue: Catalogue) -> None:
+    """Validate ur_rtde's default output recipe for three controller lines."""
+    recipe = Recipe(
+        tuple(
+            n.strip() for n in _example(RECIPE_EXAMPLE).splitlines() if n.strip() and not n.startswith("#")
+        ),
+        direction="output",
+    )
+    print(f"\nValidating ur_rtde's default {len(recipe.names)}-field output recipe at 500 Hz:\n")
+    rows = []
+    for version in SHOWCASE_VERSIONS:
+        report = validate_recipes([recipe], controller=version, frequency=500, catalogue=catalogue)
+        errors = [p for p in report.all_problems if p.severity == "error"]
+        first = f"{errors[0].field}: {errors[0].message}" if errors else ""
+        rows.append([version, "valid" if report.valid else "INVALID", len(errors), first])
+    print(table(["controller", "result", "errors", "first error"], rows, max_width=110))
