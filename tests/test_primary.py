@@ -259,3 +259,16 @@ def test_encode_errors() -> None:
         encode_message(gen.ToolModeInfo(output_mode=1, digital_output_mode_pin1=2))
     with pytest.raises(EncodeError, match="at least 6 items"):
         gen.JointData(joints=())
+
+
+@pytest.mark.parametrize("case", GOLDEN, ids=[c["message"] for c in GOLDEN])
+def test_every_truncation_of_a_golden_message_is_a_decode_error(case: dict[str, Any]) -> None:
+    data = bytes.fromhex(case["hex"])
+    for cut in range(len(data)):
+        with pytest.raises(DecodeError) as info:
+            decode_message(data[:cut])
+        assert info.value.offset is not None and info.value.field == "size" or "short" in str(info.value)
+    decoder = PrimaryStreamDecoder()
+    assert decoder.feed(data[:-1]) == []
+    with pytest.raises(DecodeError, match="ends inside a package"):
+        decoder.close()
