@@ -267,7 +267,7 @@ def test_every_truncation_of_a_golden_message_is_a_decode_error(case: dict[str, 
     for cut in range(len(data)):
         with pytest.raises(DecodeError) as info:
             decode_message(data[:cut])
-        assert info.value.offset is not None and info.value.field == "size" or "short" in str(info.value)
+        assert info.value.offset is not None and info.value.field in ("size", "type")
     decoder = PrimaryStreamDecoder()
     assert decoder.feed(data[:-1]) == []
     with pytest.raises(DecodeError, match="ends inside a package"):
