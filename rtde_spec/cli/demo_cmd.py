@@ -12,7 +12,7 @@ from pathlib import Path
 from ..catalogue import Catalogue
 from ..codec import Sender
 from ..describe import describe
-from ..primary.base import RobotStateMessage
+from ..primary.base import PrimaryPart, RobotStateMessage
 from ..primary.codec import PrimaryStreamDecoder
 from ..recipe import Recipe
 from ..recipe_validation import validate_recipes
@@ -118,8 +118,10 @@ def _primary_part() -> None:
             q = [round(j.q_actual, 3) for j in message["joint_data"].joints]
             detail = f"{len(message.sub_packages)} sub-packages ({names}); robot_mode="
             detail += f"{describe(mode.robot_mode, 'RobotMode')}, q_actual={q}"
-        else:
+        elif isinstance(message, PrimaryPart):
             detail = ", ".join(f"{k}={v!r}" for k, v in message.values().items() if k != "timestamp")
+        else:
+            detail = repr(message)
         rows.append([offset, message.NAME, detail])
     print(table(["offset", "message", "content"], rows, max_width=150))
 
