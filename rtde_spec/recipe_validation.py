@@ -281,13 +281,19 @@ def validate_recipes(
 ) -> ValidationReport:
     """Check the recipes of one client together (e.g. all recipes of an XML file)."""
     cat = catalogue or Catalogue.default()
-    versions = {controller} if controller else {r.controller for r in recipes if r.controller}
-    version = controller or (versions.pop() if len(versions) == 1 else None)
-    checker = _Checker(cat, version)
+    # each recipe is checked against --controller, else the version its file names
+    checkers: dict[str | None, _Checker] = {}
+
+    def checker_for(recipe: Recipe) -> _Checker:
+        version = controller or recipe.controller
+        if version not in checkers:
+            checkers[version] = _Checker(cat, version)
+        return checkers[version]
+
     if len(recipes) > 1:  # name them so problems can say which one
         recipes = [r if r.key else r.with_(key=f"recipe {i + 1}") for i, r in enumerate(recipes)]
     reports = [
-        validate_recipe(r, frequency=frequency, direction=direction, catalogue=cat, _checker=checker)
+        validate_recipe(r, frequency=frequency, direction=direction, catalogue=cat, _checker=checker_for(r))
         for r in recipes
     ]
     cross: list[Problem] = []
@@ -325,8 +331,18 @@ def validate_recipes(
                 "(protocol 1) or one per setup; each setup replaces the last",
             )
         )
-    line = checker.line.id if checker.line else None
-    return ValidationReport(version, line, reports, cross)
+    if None in checkers and len(checkers) > 1:
+        cross.append(
+            Problem(
+                "warning",
+                "no-controller",
+                "some recipes name no controller version: their availability is not checked",
+            )
+        )
+    if len(checkers) == 1:
+        only = next(iter(checkers.values()))
+        return ValidationReport(only.controller, only.line.id if only.line else None, reports, cross)
+    return ValidationReport(None, None, reports, cross)
 
 
 def controller_answer(

@@ -183,3 +183,20 @@ def test_controller_answer_is_what_the_emulator_sends() -> None:
 def test_third_party_fields_warn() -> None:
     report = check("timestamp,control_step", controller="5.12.2")
     assert report.valid and codes(report) == {"undocumented": ["control_step"]}  # type: ignore[attr-defined]
+
+
+def test_each_recipe_is_checked_against_its_own_controller() -> None:
+    old = Recipe(("timestamp", "safety_status"), direction="output", controller="3.9.0", key="old")
+    new = Recipe(("timestamp", "safety_status"), direction="output", controller="5.4.0", key="new")
+    report = validate_recipes([old, new])
+    assert [r.valid for r in report.recipes] == [False, True]
+    assert report.controller is None
+    forced = validate_recipes([old, new], controller="5.12.2")
+    assert forced.valid and forced.controller == "5.12.2" and forced.line == "e-series"
+
+
+def test_recipes_without_a_version_among_others_are_flagged() -> None:
+    named = Recipe(("timestamp",), direction="output", controller="5.12.2", key="a")
+    unnamed = Recipe(("timestamp",), direction="output", key="b")
+    report = validate_recipes([named, unnamed])
+    assert "no-controller" in codes(report)

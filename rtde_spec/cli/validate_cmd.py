@@ -78,11 +78,12 @@ def report_json(report: ValidationReport) -> dict[str, object]:
 
 
 def print_report(report: ValidationReport) -> None:
-    target = (
-        f"controller {report.controller} ({report.line})"
-        if report.controller
-        else ("no controller version given: availability by version not checked")
-    )
+    if report.controller:
+        target = f"controller {report.controller} ({report.line})"
+    elif any(r.recipe.controller for r in report.recipes):
+        target = "the controller version each recipe names"
+    else:
+        target = "no controller version given: availability by version not checked"
     print(f"Validating {len(report.recipes)} recipe(s) for {target}\n")
     for r in report.recipes:
         state = "valid" if r.valid else "INVALID"
