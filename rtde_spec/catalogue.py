@@ -95,8 +95,7 @@ class Catalogue:
     @classmethod
     def default(cls) -> Catalogue:
         """The built-in catalogue plus the files named in $RTDE_SPEC_EXTRA_FIELDS."""
-        paths = [p for p in os.environ.get(EXTRA_FIELDS_ENV, "").split(os.pathsep) if p]
-        return cls.builtin().with_extra(*paths) if paths else cls.builtin()
+        return _default_for(os.environ.get(EXTRA_FIELDS_ENV, ""))
 
     def with_extra(self, *paths: str | Path) -> Catalogue:
         """A new catalogue with the fields of extra YAML files (the shape of fields.yaml)."""
@@ -191,6 +190,13 @@ class Catalogue:
         """ "cb3 3.4.0, e-series 5.0.0, polyscope-x 10.0.0" — or "not available"."""
         parts = [f"{line} {ver}" for line, ver in info.since.items()]
         return ", ".join(parts) if parts else "not available"
+
+
+@cache
+def _default_for(env_value: str) -> Catalogue:
+    """One catalogue per value of the environment variable (files are read once)."""
+    paths = [p for p in env_value.split(os.pathsep) if p]
+    return Catalogue.builtin().with_extra(*paths) if paths else Catalogue.builtin()
 
 
 def _wire_types(spec: Spec) -> dict[str, WireTypeInfo]:
