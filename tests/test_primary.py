@@ -272,3 +272,21 @@ def test_every_truncation_of_a_golden_message_is_a_decode_error(case: dict[str, 
     assert decoder.feed(data[:-1]) == []
     with pytest.raises(DecodeError, match="ends inside a package"):
         decoder.close()
+
+
+def test_ur5e_like_robot_state_of_the_benchmark() -> None:
+    import sys
+
+    from .helpers import ROOT
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        from ur5e_robot_state import ur5e_robot_state, ur5e_robot_state_bytes
+    finally:
+        sys.path.pop(0)
+    data = ur5e_robot_state_bytes()
+    message = decode_message(data)
+    assert message == ur5e_robot_state()
+    assert len(message.sub_packages) == 13 and 1300 < len(data) < 1500
+    assert message["joint_data"].joints[5].joint_mode == 253
+    assert encode_message(message) == data
