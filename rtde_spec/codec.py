@@ -177,23 +177,11 @@ def decode_stream(
         try:
             message = decode(package, protocol_version=version, sender=sender, strict=strict)
         except DecodeError as exc:
-            raise _shifted(exc, offset) from None
+            raise exc.relocated(offset) from None
         if isinstance(message, gen.RequestProtocolVersion) and message.protocol_version in gen.PROTOCOLS:
             version = message.protocol_version
         yield offset, message
     framer.close()
-
-
-def _shifted(exc: DecodeError, offset: int) -> DecodeError:
-    """The same error with its byte offset counted from the start of the stream."""
-    return DecodeError(
-        exc.reason,
-        package=exc.package,
-        field=exc.field,
-        offset=None if exc.offset is None else exc.offset + offset,
-        expected=exc.expected,
-        actual=exc.actual,
-    )
 
 
 def encode(message: RtdeMessage) -> bytes:

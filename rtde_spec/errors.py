@@ -31,6 +31,17 @@ class RtdeSpecError(Exception):
         self.actual = actual
         super().__init__(self._render())
 
+    def relocated(self, shift: int = 0, package: str | None = None) -> RtdeSpecError:
+        """The same error seen from further out: offset moved by `shift`, package filled in."""
+        return type(self)(
+            self.reason,
+            package=package or self.package,
+            field=self.field,
+            offset=None if self.offset is None else self.offset + shift,
+            expected=self.expected,
+            actual=self.actual,
+        )
+
     def _render(self) -> str:
         where = []
         if self.package is not None:
@@ -85,3 +96,6 @@ class SpecError(RtdeSpecError):
 
     def _render(self) -> str:  # the reason already holds the full list
         return self.reason
+
+    def relocated(self, shift: int = 0, package: str | None = None) -> RtdeSpecError:
+        return self  # spec problems are located by file and line, not byte offset

@@ -148,14 +148,7 @@ class PrimaryCodec:
         try:
             values, missing, stop = layout.decode(buf, pos, end)
         except DecodeError as exc:
-            raise DecodeError(
-                exc.reason,
-                package=cls.NAME,
-                field=exc.field,
-                offset=exc.offset,
-                expected=exc.expected,
-                actual=exc.actual,
-            ) from None
+            raise exc.relocated(package=cls.NAME) from None
         if prefix:
             values.update(prefix)
         for name in missing:
@@ -270,14 +263,7 @@ class PrimaryStreamDecoder:
             try:
                 message = self.codec.decode_message(raw)
             except DecodeError as exc:
-                raise DecodeError(
-                    exc.reason,
-                    package=exc.package,
-                    field=exc.field,
-                    offset=None if exc.offset is None else exc.offset + offset,
-                    expected=exc.expected,
-                    actual=exc.actual,
-                ) from None
+                raise exc.relocated(offset) from None
             if isinstance(message, gen.VersionMessage) and message.major_version is not None:
                 self.version = Version(
                     message.major_version,
