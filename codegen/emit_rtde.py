@@ -118,6 +118,12 @@ def _model(msg: MessageSpec, spec: Spec, prims: dict[str, Primitive]) -> str:
     out.append(f"    STRUCT: ClassVar[Construct] = structs.{upper(msg.name)}\n")
     enums = {f.name: f.enum for f in msg.fields if f.enum}
     out.append(f"    ENUMS: ClassVar[dict[str, str]] = {enums!r}\n")
+    leading = []
+    for fld in msg.fields:
+        if fld.type not in prims or fld.length is not None:
+            break
+        leading.append(prims[fld.type].struct)
+    out.append(f"    FIXED_FORMAT: ClassVar[str] = {'>' + ''.join(leading)!r}  # leading fixed fields\n")
     layout = "".join(f"        {_layout(f, prims)},\n" for f in msg.fields)
     out.append(f"    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (\n{layout}    )\n")
     if msg.fields:
@@ -146,6 +152,7 @@ def emit_rtde_models(spec: Spec) -> str:
         f"HEADER_FORMAT = {header_format!r}\n",
         '"""struct format of the header (size, type)."""\n',
         f"HEADER_SIZE = {sum(prims[h.type].size for h in pk.header)}\n",
+        f"HEADER_FIELDS: tuple[str, ...] = {tuple(h.name for h in pk.header)!r}\n",
         f"LIMITS: dict[str, int] = {pk.limits.model_dump()!r}\n",
         "PACKAGE_TYPES: dict[int, str] = {\n",
     ]

@@ -40,6 +40,7 @@ class RtdeMessage(BaseModel):
     STRUCT: ClassVar[Construct]
     LAYOUT: ClassVar[tuple[FieldLayout, ...]]
     ENUMS: ClassVar[dict[str, str]]  # field name -> enum name in spec/
+    FIXED_FORMAT: ClassVar[str]  # struct format of the leading fixed-size fields
 
     def __init__(self, **data: object) -> None:
         """Validate like pydantic, but fail with the library's EncodeError."""

@@ -16,13 +16,14 @@ from typing import Any, NamedTuple
 
 from pydantic import BaseModel, create_model
 
-from ._generated.rtde_models import HEADER_FORMAT, LIMITS
+from ._generated.rtde_models import HEADER_FIELDS, HEADER_FORMAT, LIMITS, DataPackage
 from ._generated.rtde_types import WIRE_TYPES
 from .catalogue import Catalogue, Direction, FieldInfo, WireTypeInfo
 from .errors import DecodeError, EncodeError, RecipeError
 
-DATA_PACKAGE_TYPE = ord("U")
-_PREFIX = struct.Struct(HEADER_FORMAT + "B")  # header + recipe id
+DATA_PACKAGE_TYPE = DataPackage.PACKAGE_TYPE
+_PREFIX = struct.Struct(HEADER_FORMAT + DataPackage.FIXED_FORMAT[1:])  # header + recipe id
+_PREFIX_FIELDS = (*HEADER_FIELDS, *(lay.name for lay in DataPackage.LAYOUT if lay.kind == "fixed"))
 PAYLOAD_OFFSET = _PREFIX.size
 
 

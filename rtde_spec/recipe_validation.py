@@ -11,11 +11,12 @@ from __future__ import annotations
 import difflib
 import math
 import re
+import struct
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Literal
 
-from ._generated.rtde_models import HEADER_SIZE, LIMITS
+from ._generated.rtde_models import HEADER_FORMAT, LIMITS, DataPackage
 from .catalogue import Catalogue, FieldInfo
 from .recipe import Direction, Recipe
 from .recipe_files import infer_direction
@@ -23,7 +24,8 @@ from .versions import Version
 
 Severity = Literal["error", "warning", "info"]
 NOT_FOUND = "NOT_FOUND"
-RECIPE_ID_BYTES = 1  # a data package carries the recipe id before the variables
+# a data package: header and recipe id, then the variables
+DATA_PREFIX_BYTES = struct.calcsize(HEADER_FORMAT + DataPackage.FIXED_FORMAT[1:])
 
 
 @dataclass(frozen=True)
@@ -252,7 +254,7 @@ def validate_recipe(
             )
         )
     payload = sum(row.size or 0 for row in rows)
-    package = HEADER_SIZE + RECIPE_ID_BYTES + payload
+    package = DATA_PREFIX_BYTES + payload
     if package > LIMITS["package_max_bytes"]:
         problems.append(
             Problem(

@@ -14,6 +14,7 @@ PORT = 30004
 HEADER_FORMAT = '>HB'
 """struct format of the header (size, type)."""
 HEADER_SIZE = 3
+HEADER_FIELDS: tuple[str, ...] = ('size', 'type')
 LIMITS: dict[str, int] = {'setup_names_max_bytes': 2048, 'input_recipes_max': 255, 'package_max_bytes': 65535}
 PACKAGE_TYPES: dict[int, str] = {
     86: 'RTDE_REQUEST_PROTOCOL_VERSION',  # 'V'
@@ -42,6 +43,7 @@ class RequestProtocolVersion(RtdeMessage):
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.REQUEST_PROTOCOL_VERSION
     ENUMS: ClassVar[dict[str, str]] = {}
+    FIXED_FORMAT: ClassVar[str] = '>H'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
         FieldLayout('protocol_version', 'fixed', 2),
     )
@@ -62,6 +64,7 @@ class RequestProtocolVersionReply(RtdeMessage):
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.REQUEST_PROTOCOL_VERSION_REPLY
     ENUMS: ClassVar[dict[str, str]] = {}
+    FIXED_FORMAT: ClassVar[str] = '>?'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
         FieldLayout('accepted', 'fixed', 1),
     )
@@ -82,6 +85,7 @@ class GetUrcontrolVersion(RtdeMessage):
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.GET_URCONTROL_VERSION
     ENUMS: ClassVar[dict[str, str]] = {}
+    FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
     )
 
@@ -99,6 +103,7 @@ class GetUrcontrolVersionReply(RtdeMessage):
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.GET_URCONTROL_VERSION_REPLY
     ENUMS: ClassVar[dict[str, str]] = {}
+    FIXED_FORMAT: ClassVar[str] = '>IIII'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
         FieldLayout('major', 'fixed', 4),
         FieldLayout('minor', 'fixed', 4),
@@ -125,6 +130,7 @@ class TextMessageV1Controller(RtdeMessage):
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1,)
     STRUCT: ClassVar[Construct] = structs.TEXT_MESSAGE_V1_CONTROLLER
     ENUMS: ClassVar[dict[str, str]] = {'message_type': 'TextMessageLevel'}
+    FIXED_FORMAT: ClassVar[str] = '>B'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
         FieldLayout('message_type', 'fixed', 1),
         FieldLayout('message', 'rest', 0, True),
@@ -147,6 +153,7 @@ class TextMessageV1Client(RtdeMessage):
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1,)
     STRUCT: ClassVar[Construct] = structs.TEXT_MESSAGE_V1_CLIENT
     ENUMS: ClassVar[dict[str, str]] = {'warning_level': 'TextMessageLevel'}
+    FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
         FieldLayout('message', 'prefixed', 1, True),
         FieldLayout('source', 'prefixed', 1, True),
@@ -171,6 +178,7 @@ class TextMessage(RtdeMessage):
     PROTOCOLS: ClassVar[tuple[int, ...]] = (2,)
     STRUCT: ClassVar[Construct] = structs.TEXT_MESSAGE
     ENUMS: ClassVar[dict[str, str]] = {'warning_level': 'TextMessageLevel'}
+    FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
         FieldLayout('message', 'prefixed', 1, True),
         FieldLayout('source', 'prefixed', 1, True),
@@ -195,6 +203,7 @@ class DataPackage(RtdeMessage):
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.DATA_PACKAGE
     ENUMS: ClassVar[dict[str, str]] = {}
+    FIXED_FORMAT: ClassVar[str] = '>B'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
         FieldLayout('recipe_id', 'fixed', 1),
         FieldLayout('payload', 'rest', 0, False),
@@ -217,6 +226,7 @@ class SetupOutputsV1(RtdeMessage):
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1,)
     STRUCT: ClassVar[Construct] = structs.SETUP_OUTPUTS_V1
     ENUMS: ClassVar[dict[str, str]] = {}
+    FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
         FieldLayout('variable_names', 'rest', 0, True),
     )
@@ -237,6 +247,7 @@ class SetupOutputsV1Reply(RtdeMessage):
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1,)
     STRUCT: ClassVar[Construct] = structs.SETUP_OUTPUTS_V1_REPLY
     ENUMS: ClassVar[dict[str, str]] = {}
+    FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
         FieldLayout('variable_types', 'rest', 0, True),
     )
@@ -257,6 +268,7 @@ class SetupOutputsV2(RtdeMessage):
     PROTOCOLS: ClassVar[tuple[int, ...]] = (2,)
     STRUCT: ClassVar[Construct] = structs.SETUP_OUTPUTS_V2
     ENUMS: ClassVar[dict[str, str]] = {}
+    FIXED_FORMAT: ClassVar[str] = '>d'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
         FieldLayout('output_frequency', 'fixed', 8),
         FieldLayout('variable_names', 'rest', 0, True),
@@ -279,6 +291,7 @@ class SetupOutputsV2Reply(RtdeMessage):
     PROTOCOLS: ClassVar[tuple[int, ...]] = (2,)
     STRUCT: ClassVar[Construct] = structs.SETUP_OUTPUTS_V2_REPLY
     ENUMS: ClassVar[dict[str, str]] = {}
+    FIXED_FORMAT: ClassVar[str] = '>B'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
         FieldLayout('output_recipe_id', 'fixed', 1),
         FieldLayout('variable_types', 'rest', 0, True),
@@ -301,6 +314,7 @@ class SetupInputs(RtdeMessage):
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.SETUP_INPUTS
     ENUMS: ClassVar[dict[str, str]] = {}
+    FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
         FieldLayout('variable_names', 'rest', 0, True),
     )
@@ -321,6 +335,7 @@ class SetupInputsReply(RtdeMessage):
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.SETUP_INPUTS_REPLY
     ENUMS: ClassVar[dict[str, str]] = {}
+    FIXED_FORMAT: ClassVar[str] = '>B'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
         FieldLayout('input_recipe_id', 'fixed', 1),
         FieldLayout('variable_types', 'rest', 0, True),
@@ -343,6 +358,7 @@ class Start(RtdeMessage):
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.START
     ENUMS: ClassVar[dict[str, str]] = {}
+    FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
     )
 
@@ -357,6 +373,7 @@ class StartReply(RtdeMessage):
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.START_REPLY
     ENUMS: ClassVar[dict[str, str]] = {}
+    FIXED_FORMAT: ClassVar[str] = '>?'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
         FieldLayout('accepted', 'fixed', 1),
     )
@@ -377,6 +394,7 @@ class Pause(RtdeMessage):
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.PAUSE
     ENUMS: ClassVar[dict[str, str]] = {}
+    FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
     )
 
@@ -394,6 +412,7 @@ class PauseReply(RtdeMessage):
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.PAUSE_REPLY
     ENUMS: ClassVar[dict[str, str]] = {}
+    FIXED_FORMAT: ClassVar[str] = '>?'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
         FieldLayout('accepted', 'fixed', 1),
     )

@@ -253,7 +253,9 @@ class PrimaryStreamDecoder:
     def __init__(self, codec: PrimaryCodec | None = None) -> None:
         self.codec = codec or default_codec()
         self.framer = PackageFramer(
-            size_bytes=4, header_size=self.codec.header.size, max_size=self.codec.max_size
+            size_bytes=struct.calcsize(">" + self.codec.header.format[1]),
+            header_size=self.codec.header.size,
+            max_size=self.codec.max_size,
         )
         self.version: Version | None = None
 
