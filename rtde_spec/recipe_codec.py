@@ -291,7 +291,8 @@ class RecipeCodec:
         if self._dtype is None:
             import numpy as np
 
-            fields: list[tuple[Any, ...]] = [("size", ">u2"), ("type", "u1"), ("recipe_id", "u1")]
+            codes = _PREFIX.format[1:]
+            fields: list[tuple[Any, ...]] = [(n, ">" + c) for n, c in zip(_PREFIX_FIELDS, codes, strict=True)]
             for item in self.items:
                 code = ">" + item.wire.struct[-1]
                 fields.append(
