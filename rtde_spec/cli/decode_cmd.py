@@ -6,6 +6,7 @@ import argparse
 from pathlib import Path
 
 from .._generated import rtde_models as gen
+from .._generated.primary_models import PORTS as _PRIMARY
 from ..catalogue import Direction
 from ..codec import decode_stream
 from ..describe import describe
@@ -16,6 +17,8 @@ from ..recipe_codec import RecipeCodec
 from ..recipe_files import load_recipes
 from .render import print_json, read_input, table
 
+PRIMARY_PORTS = "/".join(str(p) for p in _PRIMARY.values())
+
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("decode", help="decode RTDE or primary/secondary messages from hex or a file")
@@ -24,7 +27,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--protocol",
         choices=("rtde", "primary"),
         default="rtde",
-        help="rtde (port 30004, default) or primary (ports 30001/30002/30011/30012)",
+        help=f"rtde (port {gen.PORT}, default) or primary (ports {PRIMARY_PORTS})",
     )
     p.add_argument("--protocol-version", type=int, choices=gen.PROTOCOLS, default=2)
     p.add_argument(
