@@ -128,3 +128,26 @@ def test_wrong_root_and_missing_name(tmp_path: Path) -> None:
 
 def test_formats_are_all_covered() -> None:
     assert set(FORMATS) == {"xml", "lines", "csv", "yaml", "json"}
+
+
+@pytest.mark.parametrize("fmt", FORMATS)
+def test_random_text_gives_recipes_or_recipe_error(tmp_path: Path, fmt: str) -> None:
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    from rtde_spec.recipe_validation import validate_recipes
+
+    @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @given(st.text(max_size=200))
+    def check(text: str) -> None:
+        path = tmp_path / "r.any"
+        path.write_text(text, encoding="utf-8")
+        try:
+            recipes = load_recipes(path, fmt)
+        except RecipeError as exc:
+            assert str(exc)
+            return
+        report = validate_recipes(recipes)  # whatever loads can be validated without crashing
+        assert isinstance(report.valid, bool)
+
+    check()
