@@ -25,8 +25,14 @@ def _since_cell(infos: list[FieldInfo], catalogue: Catalogue) -> str:
     return "; ".join(parts)
 
 
+def _sentence(text: str | None) -> str:
+    """Prose that ends like a sentence, so appended notes read apart from it."""
+    text = (text or "").strip()
+    return text if not text or text[-1] in ".)]?!" else text + "."
+
+
 def _meaning(entry: FieldSpec, infos: list[FieldInfo]) -> str:
-    text = entry.doc or ""
+    text = _sentence(entry.doc)
     if entry.enum:
         text += f" Values: [{entry.enum}](enums.md#{entry.enum.lower()})."
     if entry.bits:
