@@ -133,11 +133,6 @@ def decode_body(cls: type[RtdeMessage], body: bytes, *, strict: bool = True) -> 
         raise DecodeError(f"does not decode: {exc}", package=cls.NAME) from None
 
 
-def read_header(data: bytes) -> tuple[int, int]:
-    """(size, type) of the package at the start of `data`, checked against its length."""
-    return check_header(data, _HEADER, what="package")
-
-
 def decode(
     data: bytes | bytearray | memoryview,
     *,

@@ -88,14 +88,6 @@ class PackageFramer:
             )
 
 
-def split_packages(data: bytes) -> list[tuple[int, bytes]]:
-    """Every package of a complete buffer; DecodeError if it ends mid-package."""
-    framer = PackageFramer()
-    out = framer.feed(data)
-    framer.close()
-    return out
-
-
 def check_header(
     buf: bytes,
     header: struct.Struct,
