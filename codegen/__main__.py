@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from rtde_spec.errors import SpecError
-from rtde_spec.spec_loader import load_spec
+from rtde_spec.spec.loader import load_spec
 
 from .generate import GEN, generate
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import pprint
 
-from rtde_spec.spec_schema import Spec
+from rtde_spec.spec.schema import Spec
 
 from .render import PY_HEADER
 

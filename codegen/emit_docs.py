@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from itertools import groupby
 
-from rtde_spec.catalogue import Catalogue, FieldInfo
-from rtde_spec.spec_schema import FieldSpec, MessageSpec, Spec
+from rtde_spec.spec.catalogue import Catalogue, FieldInfo
+from rtde_spec.spec.schema import FieldSpec, MessageSpec, Spec
 
 from .render import MD_HEADER, md_table
 

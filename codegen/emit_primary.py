@@ -3,7 +3,7 @@ construct structs, one per sub-package / tagged message, from spec/primary/."""
 
 from __future__ import annotations
 
-from rtde_spec.spec_schema import CaseSpec, LayoutField, MemberSpec, Primitive, Spec
+from rtde_spec.spec.schema import CaseSpec, LayoutField, MemberSpec, Primitive, Spec
 
 from .emit_rtde import CONSTRUCT_BY_STRUCT, prims_of
 from .emit_types import scalar_annotation
@@ -198,7 +198,7 @@ def emit_primary_structs(spec: Spec) -> str:
         *sorted(set(CONSTRUCT_BY_STRUCT.values())),
     ]
     out += [f"    {n},\n" for n in names]
-    out.append(")\n\nfrom rtde_spec.construct_ext import lines_string\n")
+    out.append(")\n\nfrom rtde_spec.wire.construct_ext import lines_string\n")
     out.append(f"\nMESSAGE_HEADER = Struct(\n{header})\n")
     out.append(f"\nSUBPACKAGE_HEADER = Struct(\n{sub})\n")
     for fam in pf.families:

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from rtde_spec.spec_schema import CaseSpec, LayoutField, PackageField, Primitive, Spec
+from rtde_spec.spec.schema import CaseSpec, LayoutField, PackageField, Primitive, Spec
 
 from .render import MD_HEADER, md_table
 

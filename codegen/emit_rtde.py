@@ -6,7 +6,7 @@ senders (e.g. the text message of protocol 1 differs by sender).
 
 from __future__ import annotations
 
-from rtde_spec.spec_schema import MessageSpec, PackageField, Primitive, Spec
+from rtde_spec.spec.schema import MessageSpec, PackageField, Primitive, Spec
 
 from .emit_types import scalar_annotation
 from .render import PY_HEADER, camel, docstring, field_description, upper
@@ -84,7 +84,7 @@ def emit_rtde_structs(spec: Spec) -> str:
     header = [f'    "{h.name}" / {CONSTRUCT_BY_STRUCT[prims[h.type].struct]},\n' for h in pk.header]
     used.update(CONSTRUCT_BY_STRUCT[prims[h.type].struct] for h in pk.header)
     out += [f"    {name},\n" for name in sorted(used)]
-    out.append(")\n\nfrom rtde_spec.construct_ext import csv_string, package_struct\n")
+    out.append(")\n\nfrom rtde_spec.wire.construct_ext import csv_string, package_struct\n")
     out.append(f"\nHEADER = Struct(\n{''.join(header)})\n")
     out.append('"""Header of every package: size counts the whole package."""\n')
     out += bodies
@@ -97,6 +97,12 @@ def emit_rtde_structs(spec: Spec) -> str:
             f"{size_c}, {type_c}, {ord(msg.type)}, {upper(msg.name)})\n"
         )
     return "".join(out)
+
+
+def header_format(spec: Spec) -> str:
+    """struct format of the RTDE header, from the spec's header fields."""
+    prims = prims_of(spec)
+    return ">" + "".join(prims[h.type].struct for h in spec.packages.header)
 
 
 def _model_doc(msg: MessageSpec, spec: Spec) -> str:
@@ -116,6 +122,8 @@ def _model(msg: MessageSpec, spec: Spec, prims: dict[str, Primitive]) -> str:
     out.append(f"    SENDERS: ClassVar[tuple[str, ...]] = {tuple(msg.senders)!r}\n")
     out.append(f"    PROTOCOLS: ClassVar[tuple[int, ...]] = {tuple(msg.protocols)!r}\n")
     out.append(f"    STRUCT: ClassVar[Construct] = structs.{upper(msg.name)}\n")
+    out.append(f"    HEADER_FORMAT: ClassVar[str] = {header_format(spec)!r}\n")
+    out.append(f"    MAX_SIZE: ClassVar[int] = {spec.packages.limits.package_max_bytes}\n")
     enums = {f.name: f.enum for f in msg.fields if f.enum}
     out.append(f"    ENUMS: ClassVar[dict[str, str]] = {enums!r}\n")
     leading = []
@@ -138,7 +146,6 @@ def _model(msg: MessageSpec, spec: Spec, prims: dict[str, Primitive]) -> str:
 def emit_rtde_models(spec: Spec) -> str:
     prims = prims_of(spec)
     pk = spec.packages
-    header_format = ">" + "".join(prims[h.type].struct for h in pk.header)
     out = [
         PY_HEADER,
         '"""pydantic models of every RTDE package layout, and the codec\'s lookup tables."""\n\n',
@@ -146,10 +153,10 @@ def emit_rtde_models(spec: Spec) -> str:
         "from construct import Construct\n",
         "from pydantic import Field\n\n",
         "from rtde_spec._generated import rtde_structs as structs\n",
-        "from rtde_spec.message_base import FieldLayout, RtdeMessage\n",
+        "from rtde_spec.rtde.messages import FieldLayout, RtdeMessage\n",
         "{model_types_import}",
         f"PORT = {pk.port}\n",
-        f"HEADER_FORMAT = {header_format!r}\n",
+        f"HEADER_FORMAT = {header_format(spec)!r}\n",
         '"""struct format of the header (size, type)."""\n',
         f"HEADER_SIZE = {sum(prims[h.type].size for h in pk.header)}\n",
         f"HEADER_FIELDS: tuple[str, ...] = {tuple(h.name for h in pk.header)!r}\n",
@@ -163,7 +170,7 @@ def emit_rtde_models(spec: Spec) -> str:
     out.append(f"PROTOCOLS: tuple[int, ...] = {tuple(protocols)!r}\n")
     models = [_model(msg, spec, prims) for msg in pk.messages]
     used = [n for n in ("AsciiStr", "CsvItem", "ShortAsciiStr") if any(n in m for m in models)]
-    imports = f"from rtde_spec.model_types import {', '.join(used)}\n\n" if used else "\n"
+    imports = f"from rtde_spec.wire.model_types import {', '.join(used)}\n\n" if used else "\n"
     out = [part.replace("{model_types_import}", imports) for part in out]
     out += models
     out.append("\n\nMESSAGES: tuple[type[RtdeMessage], ...] = (\n")

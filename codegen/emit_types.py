@@ -6,7 +6,7 @@ Bounds come from the primitive's size and sign; vectors are tuples of exactly
 
 from __future__ import annotations
 
-from rtde_spec.catalogue import Catalogue
+from rtde_spec.spec.catalogue import Catalogue
 
 from .render import PY_HEADER
 
@@ -25,7 +25,7 @@ def emit_types(catalogue: Catalogue) -> str:
         '"""Python types of the RTDE data types, with the wire\'s bounds."""\n\n',
         "from typing import Annotated, Any\n\n",
         "from pydantic import Field\n\n",
-        "from rtde_spec.model_types import AsciiStr\n\n",
+        "from rtde_spec.wire.model_types import AsciiStr\n\n",
     ]
     names: list[str] = []
     scalar_of: dict[str, str] = {}  # primitive -> name of the scalar type already emitted

@@ -2,8 +2,8 @@
 
 from __future__ import annotations
 
-from rtde_spec.catalogue import Catalogue
-from rtde_spec.spec_schema import Spec
+from rtde_spec.spec.catalogue import Catalogue
+from rtde_spec.spec.schema import Spec
 
 from .emit_data import emit_spec_data
 from .emit_docs import (

@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from rtde_spec._generated import rtde_models as gen
-from rtde_spec.codec import build, decode, encode
+from rtde_spec.rtde.codec import build, decode, encode
 from rtde_spec.errors import DecodeError, EncodeError
 
 

@@ -150,7 +150,7 @@ def test_validate_direction_flag() -> None:
 
 
 def test_decode_data_package_with_a_recipe() -> None:
-    from rtde_spec.recipe_codec import RecipeCodec
+    from rtde_spec.recipes.codec import RecipeCodec
 
     names = ["timestamp", "robot_mode", "actual_q"]
     codec = RecipeCodec.for_names(names, "output")

@@ -8,7 +8,7 @@ import sys
 from pathlib import Path
 
 from codegen.generate import generate
-from rtde_spec.spec_loader import load_spec
+from rtde_spec.spec.loader import load_spec
 
 from .helpers import ROOT
 
@@ -69,7 +69,7 @@ def test_broken_spec_fails_with_file_and_reason(tmp_path: Path) -> None:
 
 
 def test_docs_list_every_field() -> None:
-    from rtde_spec.catalogue import Catalogue
+    from rtde_spec.spec.catalogue import Catalogue
 
     text = (ROOT / "docs/reference/rtde-fields.md").read_text()
     for info in Catalogue.builtin().fields():

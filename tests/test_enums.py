@@ -11,7 +11,7 @@ from rtde_spec._generated.enums import (
     SafetyStatusBits,
     TimeScaleSource,
 )
-from rtde_spec.describe import describe
+from rtde_spec.output.describe import describe
 
 
 def test_values_from_the_guides() -> None:

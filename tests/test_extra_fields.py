@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from rtde_spec.catalogue import Catalogue
+from rtde_spec.spec.catalogue import Catalogue
 from rtde_spec.errors import SpecError
 
 EXTRA = """\

@@ -22,8 +22,8 @@ from rtde_spec.primary.base import (
     UnknownSubPackage,
 )
 from rtde_spec.primary.codec import PrimaryStreamDecoder, decode_message, decode_stream, encode_message
-from rtde_spec.spec_schema import LayoutField
-from rtde_spec.versions import Version
+from rtde_spec.spec.schema import LayoutField
+from rtde_spec.spec.versions import Version
 
 from .helpers import DATA
 from .primary_strategies import MEMBER_KEYS, member_strategy

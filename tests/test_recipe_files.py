@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 
 from rtde_spec.errors import RecipeError
-from rtde_spec.recipe import Recipe
-from rtde_spec.recipe_files import FORMATS, dumps_recipes, load_recipes, save_recipes
+from rtde_spec.recipes.model import Recipe
+from rtde_spec.recipes.files import FORMATS, dumps_recipes, load_recipes, save_recipes
 
 from .helpers import DATA
 
@@ -135,7 +135,7 @@ def test_random_text_gives_recipes_or_recipe_error(tmp_path: Path, fmt: str) -> 
     from hypothesis import HealthCheck, given, settings
     from hypothesis import strategies as st
 
-    from rtde_spec.recipe_validation import validate_recipes
+    from rtde_spec.recipes.validation import validate_recipes
 
     @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
     @given(st.text(max_size=200))

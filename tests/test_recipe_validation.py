@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import pytest
 
-from rtde_spec.recipe import Recipe
-from rtde_spec.recipe_validation import (
+from rtde_spec.recipes.model import Recipe
+from rtde_spec.recipes.validation import (
     NOT_FOUND,
     controller_answer,
     validate_recipe,
@@ -161,7 +161,7 @@ def test_shared_input_across_recipes_is_reported_not_rejected() -> None:
 
 
 def test_every_problem_reported_at_once_for_a_file() -> None:
-    from rtde_spec.recipe_files import load_recipes
+    from rtde_spec.recipes.files import load_recipes
 
     report = validate_recipes(load_recipes(DATA / "ur_client_config.xml"), controller="3.8.0")
     found = codes(report)

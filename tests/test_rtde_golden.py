@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from rtde_spec._generated import rtde_models as gen
-from rtde_spec.codec import decode, message_by_name
+from rtde_spec.rtde.codec import decode, message_by_name
 
 from .helpers import assert_package, expected_values, golden
 

@@ -31,7 +31,7 @@ from construct import (
     Int8ub,
 )
 
-from rtde_spec.construct_ext import lines_string
+from rtde_spec.wire.construct_ext import lines_string
 
 MESSAGE_HEADER = Struct(
     "size" / Int32ub,

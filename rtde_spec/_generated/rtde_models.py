@@ -7,8 +7,8 @@ from construct import Construct
 from pydantic import Field
 
 from rtde_spec._generated import rtde_structs as structs
-from rtde_spec.message_base import FieldLayout, RtdeMessage
-from rtde_spec.model_types import AsciiStr, CsvItem, ShortAsciiStr
+from rtde_spec.rtde.messages import FieldLayout, RtdeMessage
+from rtde_spec.wire.model_types import AsciiStr, CsvItem, ShortAsciiStr
 
 PORT = 30004
 HEADER_FORMAT = '>HB'
@@ -42,6 +42,8 @@ class RequestProtocolVersion(RtdeMessage):
     SENDERS: ClassVar[tuple[str, ...]] = ('client',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.REQUEST_PROTOCOL_VERSION
+    HEADER_FORMAT: ClassVar[str] = '>HB'
+    MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>H'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
@@ -63,6 +65,8 @@ class RequestProtocolVersionReply(RtdeMessage):
     SENDERS: ClassVar[tuple[str, ...]] = ('controller',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.REQUEST_PROTOCOL_VERSION_REPLY
+    HEADER_FORMAT: ClassVar[str] = '>HB'
+    MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>?'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
@@ -84,6 +88,8 @@ class GetUrcontrolVersion(RtdeMessage):
     SENDERS: ClassVar[tuple[str, ...]] = ('client',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.GET_URCONTROL_VERSION
+    HEADER_FORMAT: ClassVar[str] = '>HB'
+    MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
@@ -102,6 +108,8 @@ class GetUrcontrolVersionReply(RtdeMessage):
     SENDERS: ClassVar[tuple[str, ...]] = ('controller',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.GET_URCONTROL_VERSION_REPLY
+    HEADER_FORMAT: ClassVar[str] = '>HB'
+    MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>IIII'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
@@ -129,6 +137,8 @@ class TextMessageV1Controller(RtdeMessage):
     SENDERS: ClassVar[tuple[str, ...]] = ('controller',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1,)
     STRUCT: ClassVar[Construct] = structs.TEXT_MESSAGE_V1_CONTROLLER
+    HEADER_FORMAT: ClassVar[str] = '>HB'
+    MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {'message_type': 'TextMessageLevel'}
     FIXED_FORMAT: ClassVar[str] = '>B'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
@@ -152,6 +162,8 @@ class TextMessageV1Client(RtdeMessage):
     SENDERS: ClassVar[tuple[str, ...]] = ('client',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1,)
     STRUCT: ClassVar[Construct] = structs.TEXT_MESSAGE_V1_CLIENT
+    HEADER_FORMAT: ClassVar[str] = '>HB'
+    MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {'warning_level': 'TextMessageLevel'}
     FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
@@ -177,6 +189,8 @@ class TextMessage(RtdeMessage):
     SENDERS: ClassVar[tuple[str, ...]] = ('controller', 'client')
     PROTOCOLS: ClassVar[tuple[int, ...]] = (2,)
     STRUCT: ClassVar[Construct] = structs.TEXT_MESSAGE
+    HEADER_FORMAT: ClassVar[str] = '>HB'
+    MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {'warning_level': 'TextMessageLevel'}
     FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
@@ -202,6 +216,8 @@ class DataPackage(RtdeMessage):
     SENDERS: ClassVar[tuple[str, ...]] = ('controller', 'client')
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.DATA_PACKAGE
+    HEADER_FORMAT: ClassVar[str] = '>HB'
+    MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>B'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
@@ -225,6 +241,8 @@ class SetupOutputsV1(RtdeMessage):
     SENDERS: ClassVar[tuple[str, ...]] = ('client',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1,)
     STRUCT: ClassVar[Construct] = structs.SETUP_OUTPUTS_V1
+    HEADER_FORMAT: ClassVar[str] = '>HB'
+    MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
@@ -246,6 +264,8 @@ class SetupOutputsV1Reply(RtdeMessage):
     SENDERS: ClassVar[tuple[str, ...]] = ('controller',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1,)
     STRUCT: ClassVar[Construct] = structs.SETUP_OUTPUTS_V1_REPLY
+    HEADER_FORMAT: ClassVar[str] = '>HB'
+    MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
@@ -267,6 +287,8 @@ class SetupOutputsV2(RtdeMessage):
     SENDERS: ClassVar[tuple[str, ...]] = ('client',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (2,)
     STRUCT: ClassVar[Construct] = structs.SETUP_OUTPUTS_V2
+    HEADER_FORMAT: ClassVar[str] = '>HB'
+    MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>d'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
@@ -290,6 +312,8 @@ class SetupOutputsV2Reply(RtdeMessage):
     SENDERS: ClassVar[tuple[str, ...]] = ('controller',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (2,)
     STRUCT: ClassVar[Construct] = structs.SETUP_OUTPUTS_V2_REPLY
+    HEADER_FORMAT: ClassVar[str] = '>HB'
+    MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>B'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
@@ -313,6 +337,8 @@ class SetupInputs(RtdeMessage):
     SENDERS: ClassVar[tuple[str, ...]] = ('client',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.SETUP_INPUTS
+    HEADER_FORMAT: ClassVar[str] = '>HB'
+    MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
@@ -334,6 +360,8 @@ class SetupInputsReply(RtdeMessage):
     SENDERS: ClassVar[tuple[str, ...]] = ('controller',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.SETUP_INPUTS_REPLY
+    HEADER_FORMAT: ClassVar[str] = '>HB'
+    MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>B'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
@@ -357,6 +385,8 @@ class Start(RtdeMessage):
     SENDERS: ClassVar[tuple[str, ...]] = ('client',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.START
+    HEADER_FORMAT: ClassVar[str] = '>HB'
+    MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
@@ -372,6 +402,8 @@ class StartReply(RtdeMessage):
     SENDERS: ClassVar[tuple[str, ...]] = ('controller',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.START_REPLY
+    HEADER_FORMAT: ClassVar[str] = '>HB'
+    MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>?'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
@@ -393,6 +425,8 @@ class Pause(RtdeMessage):
     SENDERS: ClassVar[tuple[str, ...]] = ('client',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.PAUSE
+    HEADER_FORMAT: ClassVar[str] = '>HB'
+    MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
@@ -411,6 +445,8 @@ class PauseReply(RtdeMessage):
     SENDERS: ClassVar[tuple[str, ...]] = ('controller',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
     STRUCT: ClassVar[Construct] = structs.PAUSE_REPLY
+    HEADER_FORMAT: ClassVar[str] = '>HB'
+    MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>?'  # leading fixed fields
     LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (

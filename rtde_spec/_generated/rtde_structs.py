@@ -16,7 +16,7 @@ from construct import (
     Struct,
 )
 
-from rtde_spec.construct_ext import csv_string, package_struct
+from rtde_spec.wire.construct_ext import csv_string, package_struct
 
 HEADER = Struct(
     "size" / Int16ub,

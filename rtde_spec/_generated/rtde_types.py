@@ -5,7 +5,7 @@ from typing import Annotated, Any
 
 from pydantic import Field
 
-from rtde_spec.model_types import AsciiStr
+from rtde_spec.wire.model_types import AsciiStr
 
 BOOL = bool
 UINT8 = Annotated[int, Field(ge=0, le=255)]

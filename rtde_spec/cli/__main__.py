@@ -1,5 +1,5 @@
 import sys
 
-from .main import main
+from rtde_spec.cli.main import main
 
 sys.exit(main())

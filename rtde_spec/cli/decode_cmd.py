@@ -5,17 +5,17 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
-from .._generated import rtde_models as gen
-from .._generated.primary_models import PORTS as _PRIMARY
-from ..catalogue import Direction
-from ..codec import decode_stream
-from ..describe import describe
-from ..errors import RecipeError
-from ..message_base import RtdeMessage
-from ..recipe import Recipe
-from ..recipe_codec import RecipeCodec
-from ..recipe_files import load_recipes
-from .render import print_json, read_input, table
+from rtde_spec._generated import rtde_models as gen
+from rtde_spec._generated.primary_models import PORTS as _PRIMARY
+from rtde_spec.cli.render import print_json, read_input, table
+from rtde_spec.errors import RecipeError
+from rtde_spec.output.describe import describe
+from rtde_spec.recipes.codec import RecipeCodec
+from rtde_spec.recipes.files import load_recipes
+from rtde_spec.recipes.model import Recipe
+from rtde_spec.rtde.codec import decode_stream
+from rtde_spec.rtde.messages import RtdeMessage
+from rtde_spec.spec.catalogue import Direction
 
 PRIMARY_PORTS = "/".join(str(p) for p in _PRIMARY.values())
 
@@ -87,7 +87,7 @@ def print_packages(packages: list[tuple[int, RtdeMessage]], codec: RecipeCodec |
 def recipe_codec(args: argparse.Namespace) -> RecipeCodec | None:
     if not args.recipe:
         return None
-    from .main import catalogue_for
+    from rtde_spec.cli.main import catalogue_for
 
     direction: Direction = "output" if args.sender == "controller" else "input"
     if Path(args.recipe).exists():
@@ -101,7 +101,7 @@ def recipe_codec(args: argparse.Namespace) -> RecipeCodec | None:
 
 def run(args: argparse.Namespace) -> int:
     if args.protocol == "primary":
-        from .primary_output import run_primary
+        from rtde_spec.cli.primary_output import run_primary
 
         return run_primary(read_input(args.data), args.json)
     codec = recipe_codec(args)

@@ -9,15 +9,15 @@ import argparse
 from importlib import resources
 from pathlib import Path
 
-from ..catalogue import Catalogue
-from ..codec import Sender
-from ..describe import describe
-from ..primary.base import PrimaryPart, RobotStateMessage
-from ..primary.codec import PrimaryStreamDecoder
-from ..recipe import Recipe
-from ..recipe_validation import validate_recipes
-from ..session_decoder import SessionDecoder
-from .render import parse_hex, table
+from rtde_spec.cli.render import parse_hex, table
+from rtde_spec.output.describe import describe
+from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
+from rtde_spec.primary.codec import PrimaryStreamDecoder
+from rtde_spec.recipes.model import Recipe
+from rtde_spec.recipes.validation import validate_recipes
+from rtde_spec.rtde.codec import Sender
+from rtde_spec.rtde.session import SessionDecoder
+from rtde_spec.spec.catalogue import Catalogue
 
 EXAMPLE = "rtde_session_v2.txt"
 PRIMARY_EXAMPLE = "primary_stream.hex"
@@ -47,7 +47,7 @@ def read_session(text: str) -> list[tuple[Sender, bytes, str]]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from .main import catalogue_for
+    from rtde_spec.cli.main import catalogue_for
 
     catalogue = catalogue_for(args)
     if args.session:

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import argparse
 
-from ..catalogue import Catalogue, FieldInfo
-from .render import print_json, table
+from rtde_spec.cli.render import print_json, table
+from rtde_spec.spec.catalogue import Catalogue, FieldInfo
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -36,7 +36,7 @@ def field_record(info: FieldInfo, catalogue: Catalogue) -> dict[str, object]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from .main import catalogue_for
+    from rtde_spec.cli.main import catalogue_for
 
     catalogue = catalogue_for(args)
     if args.controller:

@@ -11,9 +11,9 @@ import sys
 from collections.abc import Callable
 from types import ModuleType
 
-from ..catalogue import Catalogue
-from ..errors import RtdeSpecError
-from . import decode_cmd, demo_cmd, fields_cmd, validate_cmd
+from rtde_spec.cli import decode_cmd, demo_cmd, fields_cmd, validate_cmd
+from rtde_spec.errors import RtdeSpecError
+from rtde_spec.spec.catalogue import Catalogue
 
 COMMANDS: tuple[ModuleType, ...] = (demo_cmd, decode_cmd, fields_cmd, validate_cmd)
 

@@ -6,10 +6,10 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from ..describe import describe
-from ..primary.base import PrimaryPart, RobotStateMessage
-from ..primary.codec import PrimaryStreamDecoder
-from .render import print_json
+from rtde_spec.cli.render import print_json
+from rtde_spec.output.describe import describe
+from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
+from rtde_spec.primary.codec import PrimaryStreamDecoder
 
 
 def as_json(value: Any) -> Any:

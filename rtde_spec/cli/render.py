@@ -9,7 +9,7 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import Any
 
-from ..errors import RtdeSpecError
+from rtde_spec.errors import RtdeSpecError
 
 _HEX_RE = re.compile(r"^[0-9a-fA-F]*$")
 

@@ -10,11 +10,11 @@ import argparse
 import sys
 from pathlib import Path
 
-from ..errors import RecipeError, RtdeSpecError
-from ..recipe import Recipe
-from ..recipe_files import FORMATS, load_recipes
-from ..recipe_validation import RecipeReport, ValidationReport, validate_recipes
-from .render import print_json, table
+from rtde_spec.cli.render import print_json, table
+from rtde_spec.errors import RecipeError, RtdeSpecError
+from rtde_spec.recipes.files import FORMATS, load_recipes
+from rtde_spec.recipes.model import Recipe
+from rtde_spec.recipes.validation import RecipeReport, ValidationReport, validate_recipes
 
 USAGE_ERROR = 2
 FILE_SUFFIXES = (".xml", ".yaml", ".yml", ".json", ".txt", ".csv")
@@ -113,7 +113,7 @@ def print_report(report: ValidationReport) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from .main import catalogue_for
+    from rtde_spec.cli.main import catalogue_for
 
     try:
         catalogue = catalogue_for(args)

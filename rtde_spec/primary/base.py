@@ -7,7 +7,7 @@ from typing import Any, ClassVar
 
 from pydantic import BaseModel, ConfigDict, ValidationError
 
-from ..validation_errors import encode_error
+from rtde_spec.wire.pydantic_errors import encode_error
 
 
 class PrimaryModel(BaseModel):

@@ -14,13 +14,9 @@ from dataclasses import dataclass, field
 from functools import cache
 from typing import Any
 
-from .._generated import primary_models as gen
-from ..catalogue import Catalogue
-from ..errors import DecodeError, EncodeError
-from ..framing import PackageFramer, check_header
-from ..spec_schema import FamilySpec, Spec
-from ..versions import Version
-from .base import (
+from rtde_spec._generated import primary_models as gen
+from rtde_spec.errors import DecodeError, EncodeError
+from rtde_spec.primary.base import (
     OpaqueMessage,
     PrimaryModel,
     PrimaryPart,
@@ -29,9 +25,13 @@ from .base import (
     UnknownMessage,
     UnknownSubPackage,
 )
-from .fast_models import build
-from .layout import Layout
-from .values import ValueTable
+from rtde_spec.primary.fast_models import build
+from rtde_spec.primary.layout import Layout
+from rtde_spec.primary.values import ValueTable
+from rtde_spec.spec.catalogue import Catalogue
+from rtde_spec.spec.schema import FamilySpec, Spec
+from rtde_spec.spec.versions import Version
+from rtde_spec.wire.framing import PackageFramer, check_header
 
 PrimaryMessage = RobotStateMessage | PrimaryPart | OpaqueMessage | UnknownMessage | UnknownMember
 

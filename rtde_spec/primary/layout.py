@@ -18,9 +18,9 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from ..errors import DecodeError, EncodeError
-from ..spec_schema import CaseSpec, LayoutField, Primitive
-from .values import ValueTable
+from rtde_spec.errors import DecodeError, EncodeError
+from rtde_spec.primary.values import ValueTable
+from rtde_spec.spec.schema import CaseSpec, LayoutField, Primitive
 
 Values = dict[str, Any]
 

@@ -13,7 +13,7 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict
 
-from ..errors import DecodeError, EncodeError
+from rtde_spec.errors import DecodeError, EncodeError
 
 MAX_DEPTH = 32  # nested lists deeper than this are refused, not recursed into
 

@@ -1,13 +1,21 @@
-"""Base class of the generated package models, and the layout rows the codec walks."""
+"""Base class of the generated package models, and the layout rows the codec walks.
+
+Encoding lives here (not in the codec) so the generated models need nothing that
+imports them back.
+"""
 
 from __future__ import annotations
 
+import struct
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, ClassVar, Literal
+from functools import cache
+from typing import TYPE_CHECKING, Any, ClassVar, Literal
 
+from construct import ConstructError
 from pydantic import BaseModel, ConfigDict, ValidationError
 
-from .validation_errors import encode_error
+from rtde_spec.errors import EncodeError
+from rtde_spec.wire.pydantic_errors import encode_error
 
 if TYPE_CHECKING:
     from construct import Construct
@@ -41,6 +49,8 @@ class RtdeMessage(BaseModel):
     LAYOUT: ClassVar[tuple[FieldLayout, ...]]
     ENUMS: ClassVar[dict[str, str]]  # field name -> enum name in spec/
     FIXED_FORMAT: ClassVar[str]  # struct format of the leading fixed-size fields
+    HEADER_FORMAT: ClassVar[str]  # struct format of the header (size, type)
+    MAX_SIZE: ClassVar[int]  # largest package the size field can count
 
     def __init__(self, **data: object) -> None:
         """Validate like pydantic, but fail with the library's EncodeError."""
@@ -51,10 +61,31 @@ class RtdeMessage(BaseModel):
 
     def to_bytes(self) -> bytes:
         """The whole package, header included."""
-        from .codec import encode
-
-        return encode(self)
+        cls = type(self)
+        values: dict[str, Any] = {lay.name: getattr(self, lay.name) for lay in cls.LAYOUT}
+        # models built with model_construct skip validation; check again here
+        cls(**values)
+        try:
+            body = cls.STRUCT.build(values)
+        except (ConstructError, UnicodeEncodeError, TypeError, ValueError) as exc:
+            raise EncodeError(f"cannot be built: {exc}", package=cls.NAME) from None
+        header = _header(cls.HEADER_FORMAT)
+        size = header.size + len(body)
+        if size > cls.MAX_SIZE:
+            raise EncodeError(
+                "package too large for the size field",
+                package=cls.NAME,
+                field="size",
+                expected=f"<= {cls.MAX_SIZE} bytes",
+                actual=f"{size} bytes",
+            )
+        return header.pack(size, cls.PACKAGE_TYPE) + body
 
     def fields(self) -> dict[str, object]:
         """Field values keyed by the spec's field names, in wire order."""
         return {layout.name: getattr(self, layout.name) for layout in self.LAYOUT}
+
+
+@cache
+def _header(fmt: str) -> struct.Struct:
+    return struct.Struct(fmt)

@@ -14,10 +14,10 @@ from typing import Any, Literal
 from construct import ConstructError
 from pydantic import ValidationError
 
-from ._generated import rtde_models as gen
-from .errors import DecodeError, EncodeError
-from .framing import PackageFramer, check_header
-from .message_base import RtdeMessage
+from rtde_spec._generated import rtde_models as gen
+from rtde_spec.errors import DecodeError, EncodeError
+from rtde_spec.rtde.messages import RtdeMessage
+from rtde_spec.wire.framing import PackageFramer, check_header
 
 Sender = Literal["controller", "client"]
 _HEADER = struct.Struct(gen.HEADER_FORMAT)
@@ -181,25 +181,7 @@ def decode_stream(
 
 def encode(message: RtdeMessage) -> bytes:
     """The whole package of a model, header included."""
-    cls = type(message)
-    values: dict[str, Any] = {lay.name: getattr(message, lay.name) for lay in cls.LAYOUT}
-    # models built with model_construct skip validation; check again here
-    cls(**values)
-    try:
-        body = cls.STRUCT.build(values)
-    except (ConstructError, UnicodeEncodeError, TypeError, ValueError) as exc:
-        raise EncodeError(f"cannot be built: {exc}", package=cls.NAME) from None
-    size = gen.HEADER_SIZE + len(body)
-    limit = gen.LIMITS["package_max_bytes"]
-    if size > limit:
-        raise EncodeError(
-            "package too large for the size field",
-            package=cls.NAME,
-            field="size",
-            expected=f"<= {limit} bytes",
-            actual=f"{size} bytes",
-        )
-    return _HEADER.pack(size, cls.PACKAGE_TYPE) + body
+    return message.to_bytes()
 
 
 def build(name: str, **fields: Any) -> bytes:

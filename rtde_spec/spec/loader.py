@@ -12,9 +12,9 @@ from typing import Any
 import yaml
 from pydantic import BaseModel, ValidationError
 
-from .errors import SpecError, SpecIssue
-from .spec_lint import lint_fields_file, lint_spec
-from .spec_schema import (
+from rtde_spec.errors import SpecError, SpecIssue
+from rtde_spec.spec.lint import lint_fields_file, lint_spec
+from rtde_spec.spec.schema import (
     EnumsFile,
     FieldsFile,
     PackagesFile,

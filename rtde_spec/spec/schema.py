@@ -11,7 +11,7 @@ from typing import Annotated, Literal
 
 from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field
 
-from .versions import Version
+from rtde_spec.spec.versions import Version
 
 _IDENT = r"^[A-Za-z_][A-Za-z0-9_]*$"
 

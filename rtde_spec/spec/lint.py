@@ -7,8 +7,17 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-from .spec_schema import BitfieldSpec, CaseSpec, EnumSpec, FieldsFile, FieldSpec, LayoutField, Since, Spec
-from .versions import Version
+from rtde_spec.spec.schema import (
+    BitfieldSpec,
+    CaseSpec,
+    EnumSpec,
+    FieldsFile,
+    FieldSpec,
+    LayoutField,
+    Since,
+    Spec,
+)
+from rtde_spec.spec.versions import Version
 
 Loc = tuple[str | int, ...]
 Found = Iterator[tuple[Loc, str]]

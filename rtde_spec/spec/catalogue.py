@@ -14,9 +14,9 @@ from functools import cache
 from pathlib import Path
 from typing import Literal
 
-from .errors import RecipeError
-from .spec_schema import FieldsFile, FieldSpec, ProductLine, Spec
-from .versions import Version
+from rtde_spec.errors import RecipeError
+from rtde_spec.spec.schema import FieldsFile, FieldSpec, ProductLine, Spec
+from rtde_spec.spec.versions import Version
 
 Direction = Literal["input", "output"]
 DIRECTIONS: tuple[Direction, ...] = ("input", "output")
@@ -88,7 +88,7 @@ class Catalogue:
     @cache
     def builtin(cls) -> Catalogue:
         """The catalogue compiled into this package (spec/ at codegen time)."""
-        from ._generated.spec_data import SPEC
+        from rtde_spec._generated.spec_data import SPEC
 
         return cls(Spec.model_validate(SPEC))
 
@@ -99,7 +99,7 @@ class Catalogue:
 
     def with_extra(self, *paths: str | Path) -> Catalogue:
         """A new catalogue with the fields of extra YAML files (the shape of fields.yaml)."""
-        from .spec_loader import load_fields_file
+        from rtde_spec.spec.loader import load_fields_file
 
         extra = list(self.extra)
         for path in paths:

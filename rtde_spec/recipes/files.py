@@ -15,8 +15,8 @@ import defusedxml.ElementTree as SafeET
 import yaml
 from defusedxml import DefusedXmlException
 
-from .errors import RecipeError
-from .recipe import Direction, Recipe
+from rtde_spec.errors import RecipeError
+from rtde_spec.recipes.model import Direction, Recipe
 
 MAX_FILE_BYTES = 1 << 20  # 1 MiB: recipes are names; anything larger is not a recipe
 FORMATS = ("xml", "lines", "csv", "yaml", "json")

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from ._generated.enums import BITFIELDS, ENUMS
+from rtde_spec._generated.enums import BITFIELDS, ENUMS
 
 
 def enum_name(enum: str, value: int) -> str | None:

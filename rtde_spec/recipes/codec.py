@@ -16,10 +16,10 @@ from typing import Any, NamedTuple
 
 from pydantic import BaseModel, create_model
 
-from ._generated.rtde_models import HEADER_FIELDS, HEADER_FORMAT, LIMITS, DataPackage
-from ._generated.rtde_types import WIRE_TYPES
-from .catalogue import Catalogue, Direction, FieldInfo, WireTypeInfo
-from .errors import DecodeError, EncodeError, RecipeError
+from rtde_spec._generated.rtde_models import HEADER_FIELDS, HEADER_FORMAT, LIMITS, DataPackage
+from rtde_spec._generated.rtde_types import WIRE_TYPES
+from rtde_spec.errors import DecodeError, EncodeError, RecipeError
+from rtde_spec.spec.catalogue import Catalogue, Direction, FieldInfo, WireTypeInfo
 
 DATA_PACKAGE_TYPE = DataPackage.PACKAGE_TYPE
 _PREFIX = struct.Struct(HEADER_FORMAT + DataPackage.FIXED_FORMAT[1:])  # header + recipe id

@@ -16,11 +16,11 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Literal
 
-from ._generated.rtde_models import HEADER_FORMAT, LIMITS, DataPackage
-from .catalogue import Catalogue, FieldInfo
-from .recipe import Direction, Recipe
-from .recipe_files import infer_direction
-from .versions import Version
+from rtde_spec._generated.rtde_models import HEADER_FORMAT, LIMITS, DataPackage
+from rtde_spec.recipes.files import infer_direction
+from rtde_spec.recipes.model import Direction, Recipe
+from rtde_spec.spec.catalogue import Catalogue, FieldInfo
+from rtde_spec.spec.versions import Version
 
 Severity = Literal["error", "warning", "info"]
 NOT_FOUND = "NOT_FOUND"

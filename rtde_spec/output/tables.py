@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from .errors import RtdeSpecError
+from rtde_spec.errors import RtdeSpecError
 
 HEADER_COLUMNS = ("size", "type")
 

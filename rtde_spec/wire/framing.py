@@ -4,8 +4,8 @@ from __future__ import annotations
 
 import struct
 
-from ._generated.rtde_models import HEADER_FORMAT, HEADER_SIZE
-from .errors import DecodeError
+from rtde_spec._generated.rtde_models import HEADER_FORMAT, HEADER_SIZE
+from rtde_spec.errors import DecodeError
 
 _HEADER = struct.Struct(HEADER_FORMAT)
 _SIZE_BYTES = struct.calcsize(HEADER_FORMAT[:2])  # the size field leads the header

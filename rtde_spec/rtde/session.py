@@ -10,12 +10,12 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any
 
-from ._generated import rtde_models as gen
-from .catalogue import Catalogue
-from .codec import Sender, decode
-from .errors import DecodeError, RecipeError
-from .message_base import RtdeMessage
-from .recipe_codec import RecipeCodec
+from rtde_spec._generated import rtde_models as gen
+from rtde_spec.errors import DecodeError, RecipeError
+from rtde_spec.recipes.codec import RecipeCodec
+from rtde_spec.rtde.codec import Sender, decode
+from rtde_spec.rtde.messages import RtdeMessage
+from rtde_spec.spec.catalogue import Catalogue
 
 
 @dataclass

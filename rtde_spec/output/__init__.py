@@ -1,0 +1,1 @@
+"""What decoded values become: text for people, tables and streaming files for tools."""

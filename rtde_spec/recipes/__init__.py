@@ -1,0 +1,1 @@
+"""Recipes: the model, recipe files, offline validation and the compiled data-package codec."""

@@ -1,0 +1,1 @@
+"""RTDE (port 30004): package models and codec, the session state machine."""

@@ -1,0 +1,1 @@
+"""The spec as data: meta-model (schema), YAML loader, lint, versions, field catalogue."""

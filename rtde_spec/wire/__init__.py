@@ -1,0 +1,1 @@
+"""Wire mechanics shared by both protocols: framing, construct helpers, model types."""
