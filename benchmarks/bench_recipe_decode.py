@@ -19,8 +19,8 @@ import sys
 import time
 from collections.abc import Callable
 
-from rtde_spec.spec.catalogue import Catalogue
 from rtde_spec.recipes.codec import RecipeCodec
+from rtde_spec.spec.catalogue import Catalogue
 
 # ur_rtde 1.6.5 RTDEReceiveInterface(host, 500.0) on a 5.15 controller (observed on the
 # wire; shared/reference/ur_rtde-default-outputs.txt)

@@ -6,8 +6,8 @@ from typing import Any
 
 from hypothesis import strategies as st
 
-from rtde_spec.spec.catalogue import Catalogue, WireTypeInfo
 from rtde_spec.rtde.messages import RtdeMessage
+from rtde_spec.spec.catalogue import Catalogue, WireTypeInfo
 from rtde_spec.spec.schema import PackageField
 
 SPEC = Catalogue.builtin().spec

@@ -5,8 +5,8 @@ from __future__ import annotations
 import pytest
 
 from rtde_spec._generated import rtde_models as gen
-from rtde_spec.rtde.codec import build, decode, encode
 from rtde_spec.errors import DecodeError, EncodeError
+from rtde_spec.rtde.codec import build, decode, encode
 
 
 def h(text: str) -> bytes:

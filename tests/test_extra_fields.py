@@ -10,8 +10,8 @@ from pathlib import Path
 
 import pytest
 
-from rtde_spec.spec.catalogue import Catalogue
 from rtde_spec.errors import SpecError
+from rtde_spec.spec.catalogue import Catalogue
 
 EXTRA = """\
 outputs:

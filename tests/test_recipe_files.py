@@ -7,8 +7,8 @@ from pathlib import Path
 import pytest
 
 from rtde_spec.errors import RecipeError
-from rtde_spec.recipes.model import Recipe
 from rtde_spec.recipes.files import FORMATS, dumps_recipes, load_recipes, save_recipes
+from rtde_spec.recipes.model import Recipe
 
 from .helpers import DATA
 

@@ -7,8 +7,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rtde_spec._generated import rtde_models as gen
-from rtde_spec.rtde.codec import decode, decode_stream, encode
 from rtde_spec.errors import DecodeError
+from rtde_spec.rtde.codec import decode, decode_stream, encode
 from rtde_spec.wire.framing import PackageFramer
 
 from .helpers import golden
