@@ -22,8 +22,10 @@ class RtdeSpecError(Exception):
         offset: int | None = None,
         expected: Any = None,
         actual: Any = None,
+        subject: str | None = None,
     ) -> None:
         self.reason = reason
+        self.subject = subject  # what it is about when not a field: "file x.txt", "controller version"
         self.package = package
         self.field = field
         self.offset = offset
@@ -40,10 +42,18 @@ class RtdeSpecError(Exception):
             offset=None if self.offset is None else self.offset + shift,
             expected=self.expected,
             actual=self.actual,
+            subject=self.subject,
         )
 
+    def in_stream(self, offset: int, number: int) -> RtdeSpecError:
+        """The error of one package of a stream: absolute offset, and which package it is."""
+        moved = self.relocated(offset)
+        moved.reason = f"{moved.reason} [package #{number}, starting at byte {offset}]"
+        moved.args = (moved._render(),)
+        return moved
+
     def _render(self) -> str:
-        where = []
+        where = [] if self.subject is None else [self.subject]
         if self.package is not None:
             where.append(f"package {self.package}")
         if self.field is not None:
@@ -70,6 +80,10 @@ class ProtocolError(RtdeSpecError):
 
 class RecipeError(RtdeSpecError, ValueError):
     """A recipe that cannot be used: unknown names, bad direction, bad file."""
+
+
+class UsageError(RtdeSpecError):
+    """The command line or call asks for something unusable: a missing file, an unknown version."""
 
 
 @dataclass(frozen=True)

@@ -86,7 +86,7 @@ def test_fields_for_a_controller_and_direction() -> None:
 
 def test_fields_bad_controller() -> None:
     result = cli("fields", "--controller", "4.0.0")
-    assert result.returncode == 1 and "no known product line" in result.stderr
+    assert result.returncode == 2 and "no known product line" in result.stderr
 
 
 def test_demo_decodes_the_embedded_session() -> None:

@@ -1,122 +1,218 @@
-"""rtde-spec decode HEX_OR_FILE: one or more concatenated packages as a table or JSON."""
+"""rtde-spec decode HEX_OR_FILE: packages to a table, JSON, JSON Lines, CSV or Parquet, streaming."""
 
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
+import sys
+from collections.abc import Iterator
+from typing import TYPE_CHECKING, Any
 
-from rtde_spec._generated import rtde_models as gen
-from rtde_spec._generated.primary_models import PORTS as _PRIMARY
-from rtde_spec.cli.render import print_json, read_input, table
-from rtde_spec.errors import RecipeError
-from rtde_spec.output.describe import describe
-from rtde_spec.recipes.codec import RecipeCodec
-from rtde_spec.recipes.files import load_recipes
-from rtde_spec.recipes.model import Recipe
-from rtde_spec.rtde.codec import decode_stream
-from rtde_spec.rtde.messages import RtdeMessage
-from rtde_spec.spec.catalogue import Direction
+from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT, RTDE_PROTOCOLS, RTDE_SENDERS
+from rtde_spec.cli.common import existing_file, read_input, reject_capture
+from rtde_spec.errors import RtdeSpecError, UsageError
 
-PRIMARY_PORTS = "/".join(str(p) for p in _PRIMARY.values())
+if TYPE_CHECKING:
+    from rtde_spec.output.writers import Writer
+    from rtde_spec.recipes.codec import RecipeCodec
+    from rtde_spec.rtde.stream import Batch, Package
+
+CHUNK = 1 << 20
+FORMAT_CHOICES = ("table", "jsonl", "json", "csv", "parquet")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("decode", help="decode RTDE or primary/secondary messages from hex or a file")
-    p.add_argument("data", metavar="HEX_OR_FILE", help="hex string, file (binary or hex), or -")
+    ports = "/".join(str(p) for p in PRIMARY_PORTS.values())
+    p = sub.add_parser(
+        "decode",
+        help="decode RTDE or primary/secondary messages from hex or a file",
+        description="Decode packages; output streams, so files of any size decode in constant memory.",
+    )
+    p.add_argument(
+        "data", metavar="HEX_OR_FILE", help="hex string, file (binary or hex text), or - for stdin"
+    )
     p.add_argument(
         "--protocol",
         choices=("rtde", "primary"),
         default="rtde",
-        help=f"rtde (port {gen.PORT}, default) or primary (ports {PRIMARY_PORTS})",
+        help=f"rtde (port {RTDE_PORT}) or primary (ports {ports}) (default: rtde)",
     )
-    p.add_argument("--protocol-version", type=int, choices=gen.PROTOCOLS, default=2)
+    p.add_argument(
+        "--protocol-version",
+        type=int,
+        choices=RTDE_PROTOCOLS,
+        default=None,
+        help="RTDE protocol version of the first package (default: 1 when the input starts with the "
+        f"version request, else {max(RTDE_PROTOCOLS)}; a version exchange in the input switches it)",
+    )
     p.add_argument(
         "--from",
         dest="sender",
-        choices=gen.SENDERS,
+        choices=RTDE_SENDERS,
         default="controller",
         help="who sent the bytes (default: controller)",
     )
-    p.add_argument("--json", action="store_true", help="JSON keyed by the spec's field names")
-    p.add_argument("--lenient", action="store_true", help="ignore bytes after the last field")
+    p.add_argument(
+        "--format",
+        choices=FORMAT_CHOICES,
+        help="output format (default: from the -o suffix, else table)",
+    )
+    p.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout (default: stdout)")
+    p.add_argument("--json", action="store_true", help="the same as --format json (default: off)")
+    p.add_argument(
+        "--lenient", action="store_true", help="ignore bytes after the last field (default: strict)"
+    )
     p.add_argument(
         "--recipe",
         metavar="NAMES_OR_FILE",
-        help="decode data packages with this recipe (comma list or recipe file)",
+        help="decode data packages with this recipe: a comma list or a recipe file (default: none)",
+    )
+    p.add_argument(
+        "--no-progress", action="store_true", help="no progress bar (default: shown on a terminal)"
     )
     p.set_defaults(run=run)
-
-
-def field_values(message: RtdeMessage, codec: RecipeCodec | None) -> dict[str, object]:
-    """The package's fields; a data package's payload decoded when a recipe is given."""
-    fields = message.fields()
-    if codec is not None and isinstance(message, gen.DataPackage):
-        fields.pop("payload")
-        fields.update(codec.decode(message.payload))
-    return fields
-
-
-def package_record(offset: int, message: RtdeMessage, codec: RecipeCodec | None = None) -> dict[str, object]:
-    """JSON shape of one package: where, what, then the fields by spec name."""
-    record: dict[str, object] = {
-        "offset": offset,
-        "package": message.NAME,
-        "package_type": chr(message.PACKAGE_TYPE),
-    }
-    record.update(field_values(message, codec))
-    return record
-
-
-def print_packages(packages: list[tuple[int, RtdeMessage]], codec: RecipeCodec | None = None) -> None:
-    for offset, message in packages:
-        title = f"@{offset}  {message.PACKAGE_NAME} ({chr(message.PACKAGE_TYPE)!r})  {message.NAME}"
-        infos = {}
-        if codec is not None:
-            infos = {i.name: i.info for i in codec.items if i.info is not None}
-        rows = []
-        for name, value in field_values(message, codec).items():
-            info = infos.get(name)
-            enum = message.ENUMS.get(name) or (info.enum if info else None)
-            rows.append([name, describe(value, enum, info.bits if info else None)])
-        print(title)
-        if rows:
-            print(table(["field", "value"], rows, max_width=100))
-        print()
 
 
 def recipe_codec(args: argparse.Namespace) -> RecipeCodec | None:
     if not args.recipe:
         return None
-    from rtde_spec.cli.main import catalogue_for
+    from rtde_spec.cli.common import catalogue_for
+    from rtde_spec.recipes.codec import RecipeCodec
+    from rtde_spec.recipes.files import load_recipes
+    from rtde_spec.recipes.model import Direction, Recipe
 
     direction: Direction = "output" if args.sender == "controller" else "input"
-    if Path(args.recipe).exists():
-        (recipe, *rest) = load_recipes(args.recipe)
+    path = existing_file(args.recipe)
+    if path is not None:
+        (recipe, *rest) = load_recipes(path)
         if rest:
-            raise RecipeError("--recipe file holds several recipes; give one", field=args.recipe)
+            raise UsageError("holds several recipes; give a file with one", subject=f"file {args.recipe}")
     else:
         recipe = Recipe.parse(args.recipe)
     return RecipeCodec.for_names(recipe.names, direction, catalogue_for(args))
 
 
+def chunks(args: argparse.Namespace) -> Iterator[bytes]:
+    """The input in pieces: a binary file is streamed, with a progress bar on a terminal."""
+    path = existing_file(args.data)
+    if path is None or args.data == "-":
+        yield read_input(args.data)
+        return
+    with open(path, "rb") as f:
+        head = f.read(CHUNK)
+        reject_capture(head, args.data)
+        if _is_hex_text(head):
+            yield read_input(args.data)
+            return
+        bar = _progress(path.stat().st_size, args)
+        while head:
+            yield head
+            if bar is not None:
+                bar.update(len(head))
+            head = f.read(CHUNK)
+        if bar is not None:
+            bar.close()
+
+
+def _is_hex_text(head: bytes) -> bool:
+    return bool(head) and all(c in b"0123456789abcdefABCDEF \t\r\n:x" for c in head[:4096])
+
+
+def _progress(total: int, args: argparse.Namespace) -> Any:
+    if args.no_progress or not sys.stderr.isatty() or total < CHUNK:
+        return None
+    try:
+        from tqdm import tqdm
+    except ImportError:
+        return None
+    return tqdm(total=total, unit="B", unit_scale=True, desc="decode", file=sys.stderr, leave=False)
+
+
 def run(args: argparse.Namespace) -> int:
+    from rtde_spec.output.writers import format_for, open_writer
+
+    fmt = "json" if args.json and not args.format else format_for(args.output, args.format)
     if args.protocol == "primary":
         from rtde_spec.cli.primary_output import run_primary
 
-        return run_primary(read_input(args.data), args.json)
+        return run_primary(b"".join(chunks(args)), fmt, args.output)
     codec = recipe_codec(args)
-    data = read_input(args.data)
-    packages = list(
-        decode_stream(
-            data,
-            protocol_version=args.protocol_version,
-            sender=args.sender,
-            strict=not args.lenient,
-        )
-    )
-    if args.json:
-        records = [package_record(o, m, codec) for o, m in packages]
-        print_json(records[0] if len(records) == 1 else records)
-    else:
-        print_packages(packages, codec)
+    writer = open_writer(fmt, args.output)
+    if fmt == "json":
+        writer.single = True  # type: ignore[attr-defined]  # one package prints as one object
+    try:
+        total = decode_into(writer, args, codec, fmt)
+    finally:
+        writer.close()
+    if total == 0:
+        raise RtdeSpecError("no packages in the input")
     return 0
+
+
+def decode_into(writer: Writer, args: argparse.Namespace, codec: RecipeCodec | None, fmt: str) -> int:
+    """Stream every package into the writer; return how many there were."""
+    from rtde_spec.rtde.stream import Package, StreamDecoder
+
+    decoder = StreamDecoder(
+        args.sender,
+        protocol_version=args.protocol_version,
+        codec=codec,
+        strict=not args.lenient,
+        batch=fmt != "table",
+    )
+    skipped: dict[str, int] = {}
+    tabular = fmt in ("csv", "parquet") and codec is not None
+
+    def emit(item: Package | Batch) -> None:
+        if isinstance(item, Package):
+            if tabular and item.values is None:
+                skipped[item.message.NAME] = skipped.get(item.message.NAME, 0) + 1
+                return
+            writer.write(_record(item, codec, fmt, tabular))
+            return
+        columns = {name: item.array[name] for name in codec.names} if codec else {}
+        if not tabular:
+            import numpy as np
+
+            size = len(item.array)
+            offsets = item.offset + np.arange(size, dtype=np.int64) * item.array.dtype.itemsize
+            columns = {"offset": offsets, "recipe_id": item.array["recipe_id"], **columns}
+        writer.write_columns(columns)
+
+    try:
+        for chunk in chunks(args):
+            for item in decoder.feed(chunk):
+                emit(item)
+        for item in decoder.close():
+            emit(item)
+    finally:
+        if skipped:
+            kinds = ", ".join(f"{n} x{c}" for n, c in skipped.items())
+            print(f"note: not in the {fmt} table of data packages: {kinds}", file=sys.stderr)
+    return decoder.packages
+
+
+def _record(item: Package, codec: RecipeCodec | None, fmt: str, tabular: bool) -> dict[str, object]:
+    message = item.message
+    fields = message.fields()
+    if item.values is not None:
+        fields.pop("payload")
+        if tabular:
+            return dict(item.values)
+        fields.update(item.values)
+    if fmt == "table":
+        from rtde_spec.output.describe import describe
+
+        infos = {i.name: i.info for i in codec.items if i.info is not None} if codec else {}
+        described = {}
+        for name, value in fields.items():
+            info = infos.get(name)
+            enum = message.ENUMS.get(name) or (info.enum if info else None)
+            described[name] = describe(value, enum, info.bits if info else None)
+        title = f"{message.PACKAGE_NAME} ({chr(message.PACKAGE_TYPE)!r})  {message.NAME}"
+        return {"offset": item.offset, "package": title, **described}
+    return {
+        "offset": item.offset,
+        "package": message.NAME,
+        "package_type": chr(message.PACKAGE_TYPE),
+        **fields,
+    }

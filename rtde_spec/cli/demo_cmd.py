@@ -8,16 +8,14 @@ from __future__ import annotations
 import argparse
 from importlib import resources
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from rtde_spec.cli.render import parse_hex, table
-from rtde_spec.output.describe import describe
-from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
-from rtde_spec.primary.codec import PrimaryStreamDecoder
-from rtde_spec.recipes.model import Recipe
-from rtde_spec.recipes.validation import validate_recipes
-from rtde_spec.rtde.codec import Sender
-from rtde_spec.rtde.session import SessionDecoder
-from rtde_spec.spec.catalogue import Catalogue
+from rtde_spec.cli.common import catalogue_for, parse_hex
+from rtde_spec.output.text import table
+
+if TYPE_CHECKING:
+    from rtde_spec.rtde.codec import Sender
+    from rtde_spec.spec.catalogue import Catalogue
 
 EXAMPLE = "rtde_session_v2.txt"
 PRIMARY_EXAMPLE = "primary_stream.hex"
@@ -47,7 +45,8 @@ def read_session(text: str) -> list[tuple[Sender, bytes, str]]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rtde_spec.cli.main import catalogue_for
+    from rtde_spec.output.describe import describe
+    from rtde_spec.rtde.session import SessionDecoder
 
     catalogue = catalogue_for(args)
     if args.session:
@@ -99,6 +98,10 @@ def _example(name: str) -> str:
 
 def _primary_part() -> None:
     """Decode the embedded primary-interface stream, in small TCP-like chunks."""
+    from rtde_spec.output.describe import describe
+    from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
+    from rtde_spec.primary.codec import PrimaryStreamDecoder
+
     text = "".join(line for line in _example(PRIMARY_EXAMPLE).splitlines() if not line.startswith("#"))
     data = parse_hex(text)
     decoder = PrimaryStreamDecoder()
@@ -128,6 +131,9 @@ def _primary_part() -> None:
 
 def _recipe_part(catalogue: Catalogue) -> None:
     """Validate ur_rtde's default output recipe for three controller lines."""
+    from rtde_spec.recipes.model import Recipe
+    from rtde_spec.recipes.validation import validate_recipes
+
     recipe = Recipe(
         tuple(
             n.strip() for n in _example(RECIPE_EXAMPLE).splitlines() if n.strip() and not n.startswith("#")

@@ -3,16 +3,25 @@
 from __future__ import annotations
 
 import argparse
+from typing import TYPE_CHECKING
 
-from rtde_spec.cli.render import print_json, table
-from rtde_spec.spec.catalogue import Catalogue, FieldInfo
+from rtde_spec.cli.common import catalogue_for, controller_version
+from rtde_spec.output.text import print_json, table
+
+if TYPE_CHECKING:
+    from rtde_spec.spec.catalogue import Catalogue, FieldInfo
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("fields", help="list RTDE fields (register families expanded)")
-    p.add_argument("--controller", metavar="VERSION", help="only fields available on this version")
-    p.add_argument("--direction", choices=("input", "output"))
-    p.add_argument("--json", action="store_true")
+    p.add_argument(
+        "--controller",
+        metavar="VERSION",
+        type=controller_version,
+        help="only fields available on this controller version (default: every field)",
+    )
+    p.add_argument("--direction", choices=("input", "output"), help="only this direction (default: both)")
+    p.add_argument("--json", action="store_true", help="print JSON (default: a table)")
     p.set_defaults(run=run)
 
 
@@ -36,11 +45,7 @@ def field_record(info: FieldInfo, catalogue: Catalogue) -> dict[str, object]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rtde_spec.cli.main import catalogue_for
-
     catalogue = catalogue_for(args)
-    if args.controller:
-        catalogue.line_of(args.controller)  # reject unknown lines with a clear error
     infos = catalogue.fields(args.direction, args.controller)
     if args.json:
         print_json([field_record(i, catalogue) for i in infos])

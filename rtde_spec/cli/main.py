@@ -1,6 +1,9 @@
 """rtde-spec: decode packages, list fields, validate recipes, run the demo.
 
-Errors print `error: ...` and exit non-zero; --debug shows the traceback.
+Exit codes: 0 success, 1 an error in the data or the result (invalid recipe, bad
+bytes), 2 a usage error (bad option, missing file, unknown controller version).
+Errors print `error: ...`; --debug shows the traceback. Subcommand modules import
+their heavy parts only when they run, so help and start-up stay fast.
 """
 
 from __future__ import annotations
@@ -9,39 +12,35 @@ import argparse
 import os
 import sys
 from collections.abc import Callable
-from types import ModuleType
 
+from rtde_spec import __version__
 from rtde_spec.cli import decode_cmd, demo_cmd, fields_cmd, validate_cmd
-from rtde_spec.errors import RtdeSpecError
-from rtde_spec.spec.catalogue import Catalogue
+from rtde_spec.cli.common import EXIT_ERROR, EXIT_USAGE
+from rtde_spec.errors import RtdeSpecError, UsageError
 
-COMMANDS: tuple[ModuleType, ...] = (demo_cmd, decode_cmd, fields_cmd, validate_cmd)
+COMMANDS = (demo_cmd, decode_cmd, fields_cmd, validate_cmd)
 
 
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="rtde-spec",
-        description="Universal Robots RTDE spec, codec and tools.",
+        description="Universal Robots RTDE and primary/secondary interfaces: spec, codec and tools.",
+        epilog="Exit codes: 0 success, 1 error in the data or result, 2 usage error.",
     )
-    parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+    parser.add_argument("--version", action="version", version=f"rtde-spec {__version__}")
+    parser.add_argument("--debug", action="store_true", help="show tracebacks on errors (default: off)")
     parser.add_argument(
         "--extra-fields",
         action="append",
         default=[],
         metavar="YAML",
-        help="add fields from a YAML file shaped like spec/rtde/fields.yaml (repeatable)",
+        help="add fields from a YAML file shaped like spec/rtde/fields.yaml (repeatable; default: none)",
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     sub.required = True
     for module in COMMANDS:
         module.add_parser(sub)
     return parser
-
-
-def catalogue_for(args: argparse.Namespace) -> Catalogue:
-    """The built-in catalogue plus $RTDE_SPEC_EXTRA_FIELDS and --extra-fields files."""
-    base = Catalogue.default()
-    return base.with_extra(*args.extra_fields) if args.extra_fields else base
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -54,16 +53,19 @@ def main(argv: list[str] | None = None) -> int:
         # the reader (e.g. `head`) closed the pipe: not an error of ours
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0
-    except RtdeSpecError as exc:
+    except KeyboardInterrupt:
+        print("interrupted", file=sys.stderr)
+        return 130
+    except UsageError as exc:
         if args.debug:
             raise
         print(f"error: {exc}", file=sys.stderr)
-        return 1
-    except (OSError, ValueError) as exc:
+        return EXIT_USAGE
+    except (RtdeSpecError, OSError, ValueError) as exc:
         if args.debug:
             raise
         print(f"error: {exc}", file=sys.stderr)
-        return 1
+        return EXIT_ERROR
 
 
 if __name__ == "__main__":

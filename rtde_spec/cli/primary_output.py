@@ -6,8 +6,9 @@ from typing import Any
 
 from pydantic import BaseModel
 
-from rtde_spec.cli.render import print_json
+from rtde_spec.errors import RtdeSpecError
 from rtde_spec.output.describe import describe
+from rtde_spec.output.writers import open_writer
 from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
 from rtde_spec.primary.codec import PrimaryStreamDecoder
 
@@ -63,14 +64,34 @@ def _lines(value: Any, indent: str) -> list[str]:
     return out
 
 
-def run_primary(data: bytes, json: bool) -> int:
+def run_primary(data: bytes, fmt: str, output: str | None) -> int:
+    """Decode a primary/secondary stream; every message before an error is printed first."""
+    if not data:
+        raise RtdeSpecError("no packages in the input")
     decoder = PrimaryStreamDecoder()
-    messages = decoder.feed(data)
-    decoder.close()
-    if json:
-        records = [{"offset": offset, **as_json(message)} for offset, message in messages]
-        print_json(records[0] if len(records) == 1 else records)
-        return 0
+    messages: list[tuple[int, Any]] = []
+    error: RtdeSpecError | None = None
+    try:
+        messages = decoder.feed(data)
+        decoder.close()
+    except RtdeSpecError as exc:
+        error = exc
+        messages = decoder.decoded
+    if fmt != "table":
+        writer = open_writer(fmt, output)
+        if fmt == "json":
+            writer.single = True  # type: ignore[attr-defined]
+        for offset, message in messages:
+            writer.write({"offset": offset, **as_json(message)})
+        writer.close()
+    else:
+        _print_tree(messages, decoder)
+    if error is not None:
+        raise error
+    return 0
+
+
+def _print_tree(messages: list[tuple[int, Any]], decoder: PrimaryStreamDecoder) -> None:
     for offset, message in messages:
         print(f"@{offset}  {message.NAME}")
         if isinstance(message, RobotStateMessage):
@@ -82,4 +103,3 @@ def run_primary(data: bytes, json: bool) -> int:
         print()
     if decoder.version is not None:
         print(f"controller version (from the version message): {decoder.version}")
-    return 0

@@ -9,45 +9,62 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import TYPE_CHECKING
 
-from rtde_spec.cli.render import print_json, table
-from rtde_spec.errors import RecipeError, RtdeSpecError
-from rtde_spec.recipes.files import FORMATS, load_recipes
-from rtde_spec.recipes.model import Recipe
-from rtde_spec.recipes.validation import RecipeReport, ValidationReport, validate_recipes
+from rtde_spec.cli.common import EXIT_USAGE, controller_version, existing_file
+from rtde_spec.errors import RtdeSpecError, UsageError
+from rtde_spec.output.text import print_json, table
+from rtde_spec.recipes.model import FILE_FORMATS, Recipe
 
-USAGE_ERROR = 2
+if TYPE_CHECKING:
+    from rtde_spec.recipes.validation import RecipeReport, ValidationReport
+
 FILE_SUFFIXES = (".xml", ".yaml", ".yml", ".json", ".txt", ".csv")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("validate", help="validate recipes offline for a controller version")
+    p = sub.add_parser(
+        "validate",
+        help="validate recipes offline for a controller version",
+        description="Validate recipes offline. Exit codes: 0 valid (warnings allowed), 1 invalid, "
+        "2 usage error (missing or unreadable file, unknown controller version, bad option).",
+    )
     p.add_argument(
         "recipes",
         nargs="+",
         metavar="RECIPE",
         help="a recipe file (XML, YAML, JSON, one name per line) or a comma list",
     )
-    p.add_argument("--controller", metavar="VERSION", help="e.g. 3.15.8, 5.12.2, 10.11.0")
-    p.add_argument("--frequency", type=float, metavar="HZ", help="output frequency")
+    p.add_argument(
+        "--controller",
+        metavar="VERSION",
+        type=controller_version,
+        help="controller version, e.g. 3.15.8, 5.12.2, 10.11.0 (default: the version a recipe file "
+        "names, else availability by version is not checked)",
+    )
+    p.add_argument(
+        "--frequency", type=float, metavar="HZ", help="output frequency (default: the file's, else none)"
+    )
     p.add_argument(
         "--direction",
         choices=("input", "output"),
         help="default: the file's, else inferred from the names",
     )
-    p.add_argument("--format", choices=FORMATS, help="recipe file format (default: detect)")
-    p.add_argument("--json", action="store_true")
+    p.add_argument("--format", choices=FILE_FORMATS, help="recipe file format (default: detect)")
+    p.add_argument("--json", action="store_true", help="print the report as JSON (default: a table)")
     p.set_defaults(run=run)
 
 
 def collect(args: argparse.Namespace) -> list[Recipe]:
+    from rtde_spec.recipes.files import load_recipes
+
     recipes: list[Recipe] = []
     for arg in args.recipes:
-        path = Path(arg)
-        if path.exists():
-            recipes += load_recipes(arg, args.format)
-        elif path.suffix.lower() in FILE_SUFFIXES or "/" in arg:
-            raise RecipeError("recipe file not found", field=arg)
+        path = existing_file(arg)
+        if path is not None:
+            recipes += load_recipes(path, args.format)
+        elif "," not in arg and (Path(arg[:200]).suffix.lower() in FILE_SUFFIXES or "/" in arg):
+            raise UsageError("recipe file not found", subject=f"file {arg}")
         else:
             recipes.append(Recipe.parse(arg).with_(source="argument"))
     return recipes
@@ -113,7 +130,8 @@ def print_report(report: ValidationReport) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rtde_spec.cli.main import catalogue_for
+    from rtde_spec.cli.common import catalogue_for
+    from rtde_spec.recipes.validation import validate_recipes
 
     try:
         catalogue = catalogue_for(args)
@@ -129,7 +147,7 @@ def run(args: argparse.Namespace) -> int:
         )
     except RtdeSpecError as exc:
         print(f"error: {exc}", file=sys.stderr)
-        return USAGE_ERROR
+        return EXIT_USAGE
     if args.json:
         print_json(report_json(report))
     else:

@@ -258,14 +258,18 @@ class PrimaryStreamDecoder:
             max_size=self.codec.max_size,
         )
         self.version: Version | None = None
+        self.count = 0
+        self.decoded: list[tuple[int, PrimaryMessage]] = []  # of the last feed, up to an error
 
     def feed(self, data: bytes | bytearray | memoryview) -> list[tuple[int, PrimaryMessage]]:
-        out = []
+        out: list[tuple[int, PrimaryMessage]] = []
+        self.decoded = out
         for offset, raw in self.framer.feed(data):
+            self.count += 1
             try:
                 message = self.codec.decode_message(raw)
             except DecodeError as exc:
-                raise exc.relocated(offset) from None
+                raise exc.in_stream(offset, self.count) from None
             if isinstance(message, gen.VersionMessage) and message.major_version is not None:
                 self.version = Version(
                     message.major_version,

@@ -16,10 +16,10 @@ import yaml
 from defusedxml import DefusedXmlException
 
 from rtde_spec.errors import RecipeError
-from rtde_spec.recipes.model import Direction, Recipe
+from rtde_spec.recipes.model import FILE_FORMATS, Direction, Recipe
 
 MAX_FILE_BYTES = 1 << 20  # 1 MiB: recipes are names; anything larger is not a recipe
-FORMATS = ("xml", "lines", "csv", "yaml", "json")
+FORMATS = FILE_FORMATS
 
 
 def detect_format(path: Path, text: str) -> str:
@@ -43,18 +43,18 @@ def read_text_bounded(path: Path) -> str:
     try:
         size = path.stat().st_size
     except OSError as exc:
-        raise RecipeError(f"cannot read recipe file: {exc.strerror}", field=str(path)) from None
+        raise RecipeError(f"cannot read recipe file: {exc.strerror}", subject=f"file {path}") from None
     if size > MAX_FILE_BYTES:
         raise RecipeError(
             "recipe file too large",
-            field=str(path),
+            subject=f"file {path}",
             expected=f"<= {MAX_FILE_BYTES} bytes",
             actual=f"{size} bytes",
         )
     try:
         return path.read_text(encoding="utf-8")
     except UnicodeDecodeError as exc:
-        raise RecipeError(f"not UTF-8 text at byte {exc.start}", field=str(path)) from None
+        raise RecipeError(f"not UTF-8 text at byte {exc.start}", subject=f"file {path}") from None
 
 
 def load_recipes(path: str | Path, fmt: str | None = None) -> list[Recipe]:

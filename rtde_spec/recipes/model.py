@@ -6,6 +6,8 @@ from dataclasses import dataclass, field, replace
 from typing import Literal
 
 Direction = Literal["input", "output"]
+FILE_FORMATS = ("xml", "lines", "csv", "yaml", "json")
+"""Recipe file formats that `recipes.files` reads and writes."""
 
 
 @dataclass(frozen=True)

@@ -17,6 +17,7 @@ from pydantic import ValidationError
 from rtde_spec._generated import rtde_models as gen
 from rtde_spec.errors import DecodeError, EncodeError
 from rtde_spec.rtde.messages import RtdeMessage
+from rtde_spec.rtde.protocol_state import INITIAL_VERSION, ProtocolState
 from rtde_spec.wire.framing import PackageFramer, check_header
 
 Sender = Literal["controller", "client"]
@@ -157,26 +158,46 @@ def decode(
 def decode_stream(
     data: bytes | bytearray | memoryview,
     *,
-    protocol_version: int = 2,
+    protocol_version: int | None = None,
     sender: Sender = "controller",
     strict: bool = True,
 ) -> Iterator[tuple[int, RtdeMessage]]:
-    """(offset, model) for every package of a buffer of concatenated packages.
+    """(offset, model) for every package of a buffer of concatenated packages from one sender.
 
-    A protocol-version request from the client switches the version used for the
-    packages after it (the stream alone cannot tell whether it was accepted).
+    The version follows `ProtocolState`: packages before a version exchange are
+    protocol 1 when the stream starts with that exchange; otherwise (a stream that
+    begins after the handshake) `protocol_version`, by default the newest.
     """
     framer = PackageFramer()
-    version = protocol_version
-    for offset, package in framer.feed(data):
+    packages = framer.feed(data)
+    state = ProtocolState(one_sided=True)
+    state.version = starting_version(packages[0][1] if packages else b"", protocol_version)
+    for offset, package in packages:
         try:
-            message = decode(package, protocol_version=version, sender=sender, strict=strict)
+            message = decode(package, protocol_version=state.version, sender=sender, strict=strict)
         except DecodeError as exc:
             raise exc.relocated(offset) from None
-        if isinstance(message, gen.RequestProtocolVersion) and message.protocol_version in gen.PROTOCOLS:
-            version = message.protocol_version
+        observe(state, message)
         yield offset, message
     framer.close()
+
+
+def starting_version(first_package: bytes, protocol_version: int | None) -> int:
+    """Protocol 1 if the stream opens with the version exchange, else the given or newest version."""
+    if protocol_version is not None:
+        return protocol_version
+    version_type = gen.RequestProtocolVersion.PACKAGE_TYPE
+    if len(first_package) >= gen.HEADER_SIZE and _HEADER.unpack_from(first_package)[1] == version_type:
+        return INITIAL_VERSION
+    return max(gen.PROTOCOLS)
+
+
+def observe(state: ProtocolState, message: RtdeMessage) -> None:
+    """Move the protocol state on a version request or reply."""
+    if isinstance(message, gen.RequestProtocolVersion):
+        state.on_request(message.protocol_version)
+    elif isinstance(message, gen.RequestProtocolVersionReply):
+        state.on_reply(message.accepted)
 
 
 def encode(message: RtdeMessage) -> bytes:

@@ -13,8 +13,9 @@ from typing import Any
 from rtde_spec._generated import rtde_models as gen
 from rtde_spec.errors import DecodeError, RecipeError
 from rtde_spec.recipes.codec import RecipeCodec
-from rtde_spec.rtde.codec import Sender, decode
+from rtde_spec.rtde.codec import Sender, decode, observe
 from rtde_spec.rtde.messages import RtdeMessage
+from rtde_spec.rtde.protocol_state import ProtocolState
 from rtde_spec.spec.catalogue import Catalogue
 
 
@@ -30,21 +31,16 @@ class DecodedPackage:
 class SessionDecoder:
     """Feed whole packages in the order they crossed the wire, with their sender."""
 
-    protocol_version: int = 1
+    state: ProtocolState = field(default_factory=ProtocolState)
     catalogue: Catalogue = field(default_factory=Catalogue.default)
     _pending_names: dict[str, list[str]] = field(default_factory=dict)
-    _requested_version: int | None = None
     recipes: dict[tuple[str, int], RecipeCodec] = field(default_factory=dict)
 
     def feed(self, sender: Sender, package: bytes) -> DecodedPackage:
-        message = decode(package, protocol_version=self.protocol_version, sender=sender)
+        message = decode(package, protocol_version=self.state.version, sender=sender)
         out = DecodedPackage(sender, message)
-        if isinstance(message, gen.RequestProtocolVersion):
-            self._requested_version = message.protocol_version
-        elif isinstance(message, gen.RequestProtocolVersionReply):
-            if message.accepted and self._requested_version in gen.PROTOCOLS:
-                self.protocol_version = self._requested_version
-        elif isinstance(message, (gen.SetupOutputsV1, gen.SetupOutputsV2)):
+        observe(self.state, message)
+        if isinstance(message, (gen.SetupOutputsV1, gen.SetupOutputsV2)):
             self._pending_names["output"] = message.variable_names
         elif isinstance(message, gen.SetupInputs):
             self._pending_names["input"] = message.variable_names
@@ -64,6 +60,10 @@ class SessionDecoder:
                 except DecodeError as exc:
                     out.note = str(exc)
         return out
+
+    @property
+    def protocol_version(self) -> int:
+        return self.state.version
 
     def _learn(self, direction: str, recipe_id: int, types: list[str], out: DecodedPackage) -> None:
         names = self._pending_names.pop(direction, None)

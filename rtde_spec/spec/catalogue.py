@@ -154,14 +154,14 @@ class Catalogue:
         try:
             parsed = Version.parse(version)
         except ValueError as exc:
-            raise RecipeError(str(exc), field="controller version") from None
+            raise RecipeError(str(exc), subject="controller version") from None
         for line in self.lines.values():
             if parsed.major in line.majors:
                 return line
         known = ", ".join(f"{p.id} ({'/'.join(map(str, p.majors))}.x)" for p in self.lines.values())
         raise RecipeError(
             f"controller version {parsed} belongs to no known product line (known: {known})",
-            field="controller version",
+            subject="controller version",
         )
 
     def fields(

@@ -1,0 +1,119 @@
+"""Helpers every subcommand shares: the catalogue, input bytes, argument types, exit codes.
+
+Kept free of heavy imports so `rtde-spec --help` starts fast; what needs the spec
+or pydantic imports it inside the function.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import re
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from rtde_spec.errors import RtdeSpecError, UsageError
+
+if TYPE_CHECKING:
+    from rtde_spec.spec.catalogue import Catalogue
+
+EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
+_HEX_RE = re.compile(r"^[0-9a-fA-F]*$")
+_CAPTURE_MAGIC = {
+    b"\xa1\xb2\xc3\xd4": "pcap",
+    b"\xd4\xc3\xb2\xa1": "pcap",
+    b"\xa1\xb2\x3c\x4d": "pcap (nanosecond)",
+    b"\x4d\x3c\xb2\xa1": "pcap (nanosecond)",
+    b"\x0a\x0d\x0d\x0a": "pcapng",
+}
+
+
+def catalogue_for(args: argparse.Namespace) -> Catalogue:
+    """The built-in catalogue plus $RTDE_SPEC_EXTRA_FIELDS and --extra-fields files."""
+    from rtde_spec.spec.catalogue import Catalogue
+
+    base = Catalogue.default()
+    extra = getattr(args, "extra_fields", None)
+    return base.with_extra(*extra) if extra else base
+
+
+def existing_file(arg: str) -> Path | None:
+    """The path if `arg` names an existing regular file; None if not (a too-long name is not a file).
+
+    A directory is a usage error: it is neither a file nor data.
+    """
+    if arg == "-" or "\x00" in arg:
+        return None
+    path = Path(arg)
+    try:
+        if path.is_file():
+            return path
+        if path.is_dir():
+            raise UsageError("is a directory, not a file", subject=f"file {arg}")
+    except OSError:  # e.g. ENAMETOOLONG for a long hex string: not a file
+        return None
+    return None
+
+
+def controller_version(text: str) -> str:
+    """argparse type of --controller: a version of a known product line, or exit 2."""
+    from rtde_spec.spec.catalogue import Catalogue
+
+    try:
+        Catalogue.builtin().line_of(text)
+    except RtdeSpecError as exc:
+        raise argparse.ArgumentTypeError(exc.reason) from None
+    return text
+
+
+def parse_hex(text: str) -> bytes:
+    """Hex with optional spaces, colons, newlines or a 0x prefix."""
+    cleaned = re.sub(r"[\s:]", "", text)
+    cleaned = cleaned[2:] if cleaned.lower().startswith("0x") else cleaned
+    if not _HEX_RE.match(cleaned):
+        bad = next(i for i, ch in enumerate(cleaned) if ch not in "0123456789abcdefABCDEF")
+        raise RtdeSpecError(f"not hex: character {cleaned[bad]!r} at position {bad}")
+    if len(cleaned) % 2:
+        raise RtdeSpecError(f"not hex: odd number of digits ({len(cleaned)})")
+    return bytes.fromhex(cleaned)
+
+
+def capture_kind(head: bytes) -> str | None:
+    """'pcap' or 'pcapng' when the bytes start like a capture file."""
+    return _CAPTURE_MAGIC.get(bytes(head[:4]))
+
+
+def reject_capture(head: bytes, source: str) -> None:
+    kind = capture_kind(head)
+    if kind is not None:
+        raise UsageError(
+            f"this is a {kind} capture file, not RTDE or primary bytes; "
+            f"decode it with `rtde-spec capture {source} -o OUTDIR`",
+            subject=f"file {source}",
+        )
+
+
+def read_input(arg: str) -> bytes:
+    """HEX_OR_FILE: '-' is stdin, an existing file is read (hex text or binary), else hex."""
+    path = existing_file(arg)
+    if arg == "-":
+        data = sys.stdin.buffer.read()
+    elif path is not None:
+        data = path.read_bytes()
+    else:
+        try:
+            return parse_hex(arg)
+        except RtdeSpecError as exc:
+            if os.sep in arg or Path(arg).suffix:
+                raise UsageError("no such file, and not hex either", subject=f"file {arg[:80]}") from None
+            raise RtdeSpecError(f"{arg[:40]!r} is neither a file nor hex ({exc.reason})") from None
+    reject_capture(data, arg)
+    try:
+        text = data.decode("ascii")
+    except UnicodeDecodeError:
+        return data
+    stripped = re.sub(r"[\s:]", "", text)
+    if stripped and _HEX_RE.match(stripped) and len(stripped) % 2 == 0:
+        return bytes.fromhex(stripped)
+    return data

@@ -1,0 +1,301 @@
+"""Streaming writers: one package (or one batch of data packages) in, bytes out, constant memory.
+
+The decoder, the recorder and the capture decoder all write through these. Rows are
+dicts keyed by the spec's field names; columnar batches are dicts of numpy columns.
+CSV and Parquet flatten vectors to `name_0..name_N`, as UR's own recorder names them;
+JSON keeps them as lists.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import json
+import sys
+from collections.abc import Callable, Mapping
+from pathlib import Path
+from typing import IO, Any
+
+from rtde_spec.errors import UsageError
+from rtde_spec.output.text import safe_text, table
+
+FORMATS = ("table", "jsonl", "json", "csv", "parquet")
+TABULAR = ("csv", "parquet")
+_PARQUET_BATCH_ROWS = 16384
+
+
+def require(module: str, extra: str, what: str) -> Any:
+    """Import an optional dependency, or say which extra brings it."""
+    import importlib
+
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        raise UsageError(
+            f"{what} needs {module.split('.')[0]}, which is not installed: pip install 'rtde_spec[{extra}]'"
+        ) from None
+
+
+def plain(value: Any) -> Any:
+    """A JSON-able value: bytes as hex, tuples as lists, numpy scalars as Python numbers."""
+    if isinstance(value, (bytes, bytearray, memoryview)):
+        return bytes(value).hex()
+    if isinstance(value, (list, tuple)):
+        return [plain(v) for v in value]
+    if isinstance(value, Mapping):
+        return {str(k): plain(v) for k, v in value.items()}
+    if value is None or isinstance(value, (bool, str, float)):
+        return value
+    if isinstance(value, int):
+        return int(value)
+    if hasattr(value, "item"):
+        return value.item()
+    return str(value)
+
+
+def flatten(record: Mapping[str, Any]) -> dict[str, Any]:
+    """Vectors to name_0..name_N, bytes to hex, nested records to JSON text."""
+    out: dict[str, Any] = {}
+    for name, value in record.items():
+        if isinstance(value, (list, tuple)) and all(isinstance(v, (int, float)) for v in value):
+            for i, v in enumerate(value):
+                out[f"{name}_{i}"] = v
+        elif isinstance(value, (list, tuple, Mapping)):
+            out[name] = json.dumps(plain(value))
+        elif isinstance(value, (bytes, bytearray, memoryview)):
+            out[name] = bytes(value).hex()
+        else:
+            out[name] = value
+    return out
+
+
+def flat_columns(columns: Mapping[str, Any]) -> dict[str, Any]:
+    """numpy columns (2-D for vectors) to 1-D columns named name_0..name_N, native byte order."""
+    out: dict[str, Any] = {}
+    for name, column in columns.items():
+        if column.dtype.byteorder not in ("=", "|"):
+            column = column.astype(column.dtype.newbyteorder("="))
+        if column.ndim == 1:
+            out[name] = column
+        else:
+            for i in range(column.shape[1]):
+                out[f"{name}_{i}"] = column[:, i]
+    return out
+
+
+def _dumps() -> Callable[[Any], bytes]:
+    try:
+        import orjson
+
+        return orjson.dumps  # type: ignore[no-any-return]
+    except ImportError:  # the standard library, slower but equal
+        return lambda value: json.dumps(value, separators=(",", ":")).encode()
+
+
+class Writer:
+    """Base: counts rows; subclasses write them."""
+
+    def __init__(self, stream: IO[bytes]) -> None:
+        self.stream = stream
+        self.rows = 0
+
+    def write(self, record: Mapping[str, Any]) -> None:
+        raise NotImplementedError
+
+    def write_columns(self, columns: Mapping[str, Any]) -> None:
+        """A batch of data packages as numpy columns (same names as the rows would have)."""
+        names = list(columns)
+        lists = [columns[n].tolist() for n in names]
+        for values in zip(*lists, strict=True):
+            self.write(dict(zip(names, values, strict=True)))
+
+    def close(self) -> None:
+        self.stream.flush()
+
+
+class TableWriter(Writer):
+    """One small field/value table per package, for reading in a terminal."""
+
+    def write(self, record: Mapping[str, Any]) -> None:
+        fields = dict(record)
+        offset = fields.pop("offset", None)
+        title = " ".join(safe_text(str(fields.pop(k))) for k in ("package", "package_type") if k in fields)
+        head = f"@{offset}  {title}" if offset is not None else title
+        rows = [[name, value] for name, value in fields.items()]
+        text = head + "\n" + (table(["field", "value"], rows, max_width=100) + "\n" if rows else "") + "\n"
+        self.stream.write(text.encode("utf-8", "backslashreplace"))
+        self.rows += 1
+
+
+class JsonLinesWriter(Writer):
+    """One JSON object per line, written as it comes."""
+
+    def __init__(self, stream: IO[bytes]) -> None:
+        super().__init__(stream)
+        self._dumps = _dumps()
+
+    def write(self, record: Mapping[str, Any]) -> None:
+        self.stream.write(self._dumps(plain(record)) + b"\n")
+        self.rows += 1
+
+    def write_columns(self, columns: Mapping[str, Any]) -> None:
+        names = list(columns)
+        lists = [columns[n].tolist() for n in names]  # C-speed conversion, then one dumps per row
+        dumps, write = self._dumps, self.stream.write
+        for values in zip(*lists, strict=True):
+            write(dumps(dict(zip(names, values, strict=True))) + b"\n")
+        self.rows += len(lists[0]) if lists else 0
+
+
+class JsonWriter(JsonLinesWriter):
+    """One JSON array, streamed: '[' first, ',' between, ']' at close.
+
+    With `single`, an input of exactly one package prints as that object alone.
+    """
+
+    single = False
+
+    def __init__(self, stream: IO[bytes]) -> None:
+        super().__init__(stream)
+        self._held: bytes | None = None
+
+    def write(self, record: Mapping[str, Any]) -> None:
+        text = self._dumps(plain(record))
+        if self.rows == 0 and self.single:
+            self._held = text
+        else:
+            if self._held is not None:
+                self.stream.write(b"[\n" + self._held)
+                self._held = None
+            self.stream.write(b",\n" if self.rows else b"[\n")
+            self.stream.write(text)
+        self.rows += 1
+
+    def write_columns(self, columns: Mapping[str, Any]) -> None:
+        Writer.write_columns(self, columns)
+
+    def close(self) -> None:
+        if self._held is not None:
+            self.stream.write(self._held + b"\n")
+        else:
+            self.stream.write(b"\n]\n" if self.rows else b"[]\n")
+        super().close()
+
+
+class CsvWriter(Writer):
+    """CSV with a header from the first row; columnar batches through pyarrow when installed."""
+
+    def __init__(self, stream: IO[bytes]) -> None:
+        super().__init__(stream)
+        self._text = io.TextIOWrapper(stream, encoding="utf-8", newline="", write_through=True)
+        self._csv = csv.writer(self._text)
+        self._header: list[str] | None = None
+
+    def _start(self, names: list[str]) -> None:
+        if self._header is None:
+            self._header = names
+            self._csv.writerow(names)
+        elif names != self._header:
+            raise UsageError(
+                "rows of different shapes cannot share one CSV table "
+                f"(first: {len(self._header)} columns, now {len(names)}); use --format jsonl"
+            )
+
+    def write(self, record: Mapping[str, Any]) -> None:
+        flat = flatten(record)
+        self._start(list(flat))
+        self._csv.writerow(flat.values())
+        self.rows += 1
+
+    def write_columns(self, columns: Mapping[str, Any]) -> None:
+        flat = flat_columns(columns)
+        self._start(list(flat))
+        try:
+            import pyarrow as pa
+            import pyarrow.csv as pacsv
+        except ImportError:
+            lists = [c.tolist() for c in flat.values()]
+            self._csv.writerows(zip(*lists, strict=True))
+        else:
+            options = pacsv.WriteOptions(include_header=False)
+            pacsv.write_csv(pa.table(flat), self.stream, write_options=options)
+        self.rows += len(next(iter(flat.values()))) if flat else 0
+
+    def close(self) -> None:
+        self._text.flush()
+        super().close()
+        self._text.detach()
+
+
+class ParquetWriter(Writer):
+    """Parquet row groups as batches arrive; the schema is the first batch's."""
+
+    def __init__(self, stream: IO[bytes]) -> None:
+        super().__init__(stream)
+        self._pa = require("pyarrow", "parquet", "Parquet output")
+        self._pq = require("pyarrow.parquet", "parquet", "Parquet output")
+        self._writer: Any = None
+        self._pending: list[dict[str, Any]] = []
+
+    def _write_table(self, table_: Any) -> None:
+        if self._writer is None:
+            self._writer = self._pq.ParquetWriter(self.stream, table_.schema)
+        elif table_.schema != self._writer.schema:
+            table_ = table_.select(self._writer.schema.names).cast(self._writer.schema)
+        self._writer.write_table(table_)
+
+    def write(self, record: Mapping[str, Any]) -> None:
+        self._pending.append(flatten(record))
+        self.rows += 1
+        if len(self._pending) >= _PARQUET_BATCH_ROWS:
+            self._flush_rows()
+
+    def _flush_rows(self) -> None:
+        if self._pending:
+            self._write_table(self._pa.Table.from_pylist(self._pending))
+            self._pending = []
+
+    def write_columns(self, columns: Mapping[str, Any]) -> None:
+        self._flush_rows()
+        flat = flat_columns(columns)
+        self._write_table(self._pa.table(flat))
+        self.rows += len(next(iter(flat.values()))) if flat else 0
+
+    def close(self) -> None:
+        self._flush_rows()
+        if self._writer is not None:
+            self._writer.close()
+        elif self.rows == 0:
+            pass
+        super().close()
+
+
+_WRITERS: dict[str, type[Writer]] = {
+    "table": TableWriter,
+    "jsonl": JsonLinesWriter,
+    "json": JsonWriter,
+    "csv": CsvWriter,
+    "parquet": ParquetWriter,
+}
+
+
+def format_for(path: str | None, fmt: str | None) -> str:
+    """The format asked for, else the output file's suffix, else a table."""
+    if fmt:
+        return fmt
+    suffix = Path(path).suffix.lower().lstrip(".") if path else ""
+    return (
+        {"pq": "parquet", "ndjson": "jsonl"}.get(suffix, suffix)
+        if suffix in (*FORMATS, "pq", "ndjson")
+        else "table"
+    )
+
+
+def open_writer(fmt: str, path: str | Path | None = None) -> Writer:
+    """A writer of `fmt` to a file (created) or to stdout."""
+    if fmt not in _WRITERS:
+        raise UsageError(f"unknown output format {fmt!r}", expected=", ".join(FORMATS))
+    if fmt == "parquet" and path is None:
+        raise UsageError("Parquet output needs a file: add -o FILE.parquet")
+    stream: IO[bytes] = open(path, "wb") if path is not None else sys.stdout.buffer
+    return _WRITERS[fmt](stream)
