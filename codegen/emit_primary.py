@@ -146,6 +146,8 @@ def _construct(fld: LayoutField, prims: dict[str, Primitive], indent: str) -> st
                 return "lines_string()" if fld.format == "lines" else 'GreedyString("utf8")'
             return "GreedyBytes"
         prefix = c[prims[fld.length or ""].struct]
+        if kind == "string" and fld.fallback == "rest":
+            return f"prefixed_or_rest({prefix})"
         return f'PascalString({prefix}, "utf8")' if kind == "string" else f"Prefixed({prefix}, GreedyBytes)"
     if kind == "values":
         return "GreedyBytes  # typed values: rtde_spec.primary.values"
@@ -198,7 +200,7 @@ def emit_primary_structs(spec: Spec) -> str:
         *sorted(set(CONSTRUCT_BY_STRUCT.values())),
     ]
     out += [f"    {n},\n" for n in names]
-    out.append(")\n\nfrom rtde_spec.wire.construct_ext import lines_string\n")
+    out.append(")\n\nfrom rtde_spec.wire.construct_ext import lines_string, prefixed_or_rest\n")
     out.append(f"\nMESSAGE_HEADER = Struct(\n{header})\n")
     out.append(f"\nSUBPACKAGE_HEADER = Struct(\n{sub})\n")
     for fam in pf.families:

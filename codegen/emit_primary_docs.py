@@ -45,6 +45,10 @@ def _meaning(fld: LayoutField) -> str:
         text += f" Values: [{fld.enum}](enums.md#{fld.enum.lower()})."
     if fld.unit:
         text += f" [{fld.unit}]"
+    if fld.fallback:
+        text += f" Without a length prefix that fits exactly, the text is the {fld.fallback}."
+    if fld.peers:
+        text += f" Peers: {fld.peers}"
     return text.strip()
 
 

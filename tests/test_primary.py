@@ -67,7 +67,8 @@ def test_golden_vector(case: dict[str, Any]) -> None:
         assert type(part).model_validate(part.model_dump()) == part
     else:
         assert plain(part.raw) == case["fields"]["raw"]
-    assert encode_message(message) == data
+    # every message encodes back to its bytes, except forms the spec reads but does not write
+    assert encode_message(message).hex() == case.get("encodes_as", case["hex"])
 
 
 def test_golden_vectors_cover_every_member() -> None:

@@ -483,6 +483,7 @@ class RobotCommMessage(PrimaryPart):
     robot_message_report_level: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='(values: ReportLevel)')] = None
     data_type: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='(values: ReportDataType)')] = None
     report_data: Annotated[float | int | str | None, Field(description='')] = None
+    report_text: Annotated[str | None, Field(description='Text after the report data; not in the document (empty when absent).')] = None
 
 
 class KeyMessage(PrimaryPart):

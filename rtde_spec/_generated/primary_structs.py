@@ -31,7 +31,7 @@ from construct import (
     Int8ub,
 )
 
-from rtde_spec.wire.construct_ext import lines_string
+from rtde_spec.wire.construct_ext import lines_string, prefixed_or_rest
 
 MESSAGE_HEADER = Struct(
     "size" / Int32ub,
@@ -260,6 +260,7 @@ ROBOT_MESSAGE_ROBOT_COMM_MESSAGE = Struct(
     "robot_message_report_level" / Int32sb,
     "data_type" / Int32ub,
     "report_data" / Switch(this.data_type, {0: Int32ub, 1: Int32ub, 2: Int32sb, 3: Float32b, 4: Int32ub, 5: PascalString(Int16ub, "utf8")}),
+    "report_text" / GreedyString("utf8"),
 )
 
 ROBOT_MESSAGE_KEY_MESSAGE = Struct(
@@ -269,7 +270,7 @@ ROBOT_MESSAGE_KEY_MESSAGE = Struct(
     "robot_message_code" / Int32ub,
     "robot_message_argument" / Int32ub,
     "robot_message_title" / PascalString(Int8ub, "utf8"),
-    "key_text_message" / PascalString(Int16ub, "utf8"),
+    "key_text_message" / prefixed_or_rest(Int16ub),
 )
 
 ROBOT_MESSAGE_REQUEST_VALUE_MESSAGE = Struct(

@@ -1772,21 +1772,36 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                         'doc': 'Primary interface only.',
                                         'fields': [{'name': 'text_message',
                                                     'type': 'string',
-                                                    'length': 'rest'}]},
+                                                    'length': 'rest',
+                                                    'peers': "UR's C++ client library "
+                                                             '(Universal_Robots_Client_Library, '
+                                                             'src/primary/robot_message/text_message.cpp) '
+                                                             'also reads the rest of the message. '
+                                                             'Agreed.'}]},
                                        {'name': 'version_message',
                                         'type': 3,
                                         'doc': 'The first message on primary and secondary '
                                                'interfaces; sent once.',
                                         'fields': [{'name': 'project_name',
                                                     'type': 'string',
-                                                    'length': 'uint8'},
+                                                    'length': 'uint8',
+                                                    'peers': "UR's C++ client library "
+                                                             '(Universal_Robots_Client_Library, '
+                                                             'src/primary/robot_message/version_message.cpp) '
+                                                             'also reads a uint8 length, then the '
+                                                             'name. Agreed.'},
                                                    {'name': 'major_version', 'type': 'uint8'},
                                                    {'name': 'minor_version', 'type': 'uint8'},
                                                    {'name': 'bugfix_version', 'type': 'int32'},
                                                    {'name': 'build_number', 'type': 'int32'},
                                                    {'name': 'build_date',
                                                     'type': 'string',
-                                                    'length': 'rest'}]},
+                                                    'length': 'rest',
+                                                    'peers': "UR's C++ client library "
+                                                             '(Universal_Robots_Client_Library, '
+                                                             'src/primary/robot_message/version_message.cpp) '
+                                                             'also reads the rest of the message. '
+                                                             'Agreed.'}]},
                                        {'name': 'safety_mode_message',
                                         'type': 5,
                                         'doc': 'Primary interface only.',
@@ -1827,7 +1842,24 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                               '3': 'float',
                                                               '4': 'uint32',
                                                               '5': {'type': 'string',
-                                                                    'length': 'uint16'}}}]},
+                                                                    'length': 'uint16'}}},
+                                                   {'name': 'report_text',
+                                                    'type': 'string',
+                                                    'length': 'rest',
+                                                    'peers': 'The document ends the message with '
+                                                             "the report data. UR's C++ client "
+                                                             'library '
+                                                             '(Universal_Robots_Client_Library, '
+                                                             'src/primary/robot_message/error_code_message.cpp) '
+                                                             'reads a 4-byte value and then a text '
+                                                             'to the end of the message, whatever '
+                                                             'the data type. Decision: the '
+                                                             "document's layout, then whatever "
+                                                             'follows as report_text, so both '
+                                                             'decode without error and re-encode '
+                                                             'to the same bytes.',
+                                                    'doc': 'Text after the report data; not in the '
+                                                           'document (empty when absent).'}]},
                                        {'name': 'key_message',
                                         'type': 7,
                                         'doc': 'Primary interface only.',
@@ -1839,7 +1871,21 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                     'length': 'uint8'},
                                                    {'name': 'key_text_message',
                                                     'type': 'string',
-                                                    'length': 'uint16'}]},
+                                                    'length': 'uint16',
+                                                    'fallback': 'rest',
+                                                    'peers': 'The document puts a uint16 length '
+                                                             "before keyTextMessage; UR's own C++ "
+                                                             'client library '
+                                                             '(Universal_Robots_Client_Library, '
+                                                             'src/primary/robot_message/key_message.cpp) '
+                                                             'reads the text as the rest of the '
+                                                             'message with no length, and it runs '
+                                                             'against real robots. Decision: a '
+                                                             'uint16 prefix that counts the '
+                                                             'remaining bytes exactly is taken as '
+                                                             'the length; otherwise the text is '
+                                                             'the rest. Encoding writes the '
+                                                             "document's form."}]},
                                        {'name': 'request_value_message',
                                         'type': 9,
                                         'doc': 'Primary interface only.',
@@ -1849,7 +1895,10 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                     'enum': 'RequestedType'},
                                                    {'name': 'request_text_message',
                                                     'type': 'string',
-                                                    'length': 'rest'}]},
+                                                    'length': 'rest',
+                                                    'peers': 'No public client parses this '
+                                                             "message; the document's layout is "
+                                                             'kept.'}]},
                                        {'name': 'runtime_exception_message',
                                         'type': 10,
                                         'doc': 'Primary interface only.',
@@ -1858,7 +1907,12 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                     'type': 'uint32'},
                                                    {'name': 'runtime_exception_text_message',
                                                     'type': 'string',
-                                                    'length': 'rest'}]},
+                                                    'length': 'rest',
+                                                    'peers': "UR's C++ client library "
+                                                             '(Universal_Robots_Client_Library, '
+                                                             'src/primary/robot_message/runtime_exception_message.cpp) '
+                                                             'also reads the rest of the message. '
+                                                             'Agreed.'}]},
                                        {'name': 'program_threads_message',
                                         'type': 14,
                                         'doc': 'Primary interface only. Running threads with '
@@ -1873,10 +1927,18 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                        'id'},
                                                                {'name': 'label_name',
                                                                 'type': 'string',
-                                                                'length': 'uint8'},
+                                                                'length': 'uint8',
+                                                                'peers': 'No public client parses '
+                                                                         'this message; the '
+                                                                         "document's uint8 length "
+                                                                         'is kept.'},
                                                                {'name': 'thread_name',
                                                                 'type': 'string',
-                                                                'length': 'uint16'}]}]}]},
+                                                                'length': 'uint16',
+                                                                'peers': 'No public client parses '
+                                                                         'this message; the '
+                                                                         "document's uint16 length "
+                                                                         'is kept.'}]}]}]},
                           {'name': 'program_state',
                            'type': 25,
                            'layout': 'tagged',
@@ -1899,6 +1961,10 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                    {'name': 'variable_names',
                                                     'type': 'string',
                                                     'length': 'rest',
+                                                    'peers': "UR's C++ client library "
+                                                             '(program_state_message/global_variables_setup_message.cpp) '
+                                                             'reads the rest of the message as the '
+                                                             'names. Agreed.',
                                                     'format': 'lines'}]},
                                        {'name': 'global_variables_update_message',
                                         'type': 1,

@@ -162,6 +162,13 @@ class Layout:
                 names.append(step.name)
         return names
 
+    def _prefix_fits(self, buf: bytes, pos: int, end: int, prefix_type: str) -> bool:
+        """Whether a length prefix at `pos` counts exactly the bytes up to `end`."""
+        size = self.prims[prefix_type].size
+        if end - pos < size:
+            return end == pos  # nothing at all: the field is missing, as without fallback
+        return int.from_bytes(buf[pos : pos + size], "big") == end - pos - size
+
     def _prefixed(
         self, buf: bytes, pos: int, end: int, prefix_type: str, fld: str
     ) -> tuple[bytes | None, int]:
@@ -193,6 +200,8 @@ class Layout:
                 raw, pos = bytes(buf[pos : pos + stop]), pos + stop
             elif fld.length == "rest":
                 raw, pos = bytes(buf[pos:end]), end
+            elif fld.fallback == "rest" and not self._prefix_fits(buf, pos, end, fld.length or ""):
+                raw, pos = bytes(buf[pos:end]), end  # peers send it without the prefix
             else:
                 raw, pos = self._prefixed(buf, pos, end, fld.length or "", name)
                 if raw is None:

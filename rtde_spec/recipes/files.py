@@ -35,8 +35,13 @@ def detect_format(path: Path, text: str) -> str:
         return "json"
     if any(line.strip().startswith(("recipes:", "fields:", "- ")) for line in text.splitlines()):
         return "yaml"
-    first = next((line for line in text.splitlines() if line.strip()), "")
+    first = next((line for line in _uncommented(text) if line), "")
     return "csv" if "," in first else "lines"
+
+
+def _uncommented(text: str) -> list[str]:
+    """Lines without `#` comments (whole-line and trailing), stripped."""
+    return [line.split("#", 1)[0].strip() for line in text.splitlines()]
 
 
 def read_text_bounded(path: Path) -> str:
@@ -76,25 +81,24 @@ def load_recipes(path: str | Path, fmt: str | None = None) -> list[Recipe]:
 
 
 def _from_csv(text: str, where: str) -> list[Recipe]:
-    joined = ",".join(line.strip() for line in text.splitlines() if line.strip())
+    joined = ",".join(line.rstrip(",") for line in _uncommented(text) if line)
     return [Recipe.parse(joined)]
 
 
 def _from_lines(text: str, where: str) -> list[Recipe]:
-    names = [line.split("#", 1)[0].strip() for line in text.splitlines()]
-    return [Recipe(tuple(n for n in names if n))]
+    return [Recipe(tuple(n for n in _uncommented(text) if n))]
 
 
 def _from_xml(text: str, where: str) -> list[Recipe]:
     try:
         root = SafeET.fromstring(text, forbid_dtd=True)
     except DefusedXmlException as exc:
-        raise RecipeError(f"unsafe XML refused: {exc}", field=where) from None
+        raise RecipeError(f"unsafe XML refused: {exc}", subject=f"file {where}") from None
     except SafeET.ParseError as exc:
         line, col = exc.position
-        raise RecipeError(f"not well-formed XML at line {line}, column {col}", field=where) from None
+        raise RecipeError(f"not well-formed XML at line {line}, column {col}", subject=f"file {where}") from None
     if root.tag != "rtde_config":
-        raise RecipeError("XML root must be <rtde_config>", field=where, actual=f"<{root.tag}>")
+        raise RecipeError("XML root must be <rtde_config>", subject=f"file {where}", actual=f"<{root.tag}>")
     recipes = []
     for number, element in enumerate(root.findall("recipe"), 1):
         key = element.get("key")
@@ -103,13 +107,13 @@ def _from_xml(text: str, where: str) -> list[Recipe]:
         for fld in element.findall("field"):
             name = fld.get("name")
             if not name:
-                raise RecipeError(f"<field> without a name in recipe {key or number}", field=where)
+                raise RecipeError(f"<field> without a name in recipe {key or number}", subject=f"file {where}")
             names.append(name)
             if fld.get("type"):
                 declared[name] = fld.get("type", "")
         recipes.append(Recipe(tuple(names), key=key, declared_types=declared))
     if not recipes:
-        raise RecipeError("no <recipe> elements", field=where)
+        raise RecipeError("no <recipe> elements", subject=f"file {where}")
     return recipes
 
 
@@ -117,18 +121,18 @@ def _recipe_from_mapping(item: Any, where: str, index: int) -> Recipe:
     if isinstance(item, list):
         return Recipe(tuple(str(n) for n in item))
     if not isinstance(item, dict):
-        raise RecipeError(f"recipe {index} must be a mapping or a list of names", field=where)
+        raise RecipeError(f"recipe {index} must be a mapping or a list of names", subject=f"file {where}")
     known = {"key", "direction", "frequency", "controller", "fields", "names"}
     unknown = sorted(set(item) - known)
     if unknown:
         raise RecipeError(
             f"recipe {index}: unknown key(s) {unknown}",
-            field=where,
+            subject=f"file {where}",
             expected=", ".join(sorted(known)),
         )
     raw = item.get("fields", item.get("names"))
     if not isinstance(raw, list):
-        raise RecipeError(f"recipe {index} needs a list under 'fields'", field=where)
+        raise RecipeError(f"recipe {index} needs a list under 'fields'", subject=f"file {where}")
     names: list[str] = []
     declared: dict[str, str] = {}
     for entry in raw:
@@ -140,7 +144,7 @@ def _recipe_from_mapping(item: Any, where: str, index: int) -> Recipe:
             names.append(str(entry))
     direction = item.get("direction")
     if direction not in (None, "input", "output"):
-        raise RecipeError(f"recipe {index}: direction must be input or output", field=where, actual=direction)
+        raise RecipeError(f"recipe {index}: direction must be input or output", subject=f"file {where}", actual=direction)
     frequency = item.get("frequency")
     return Recipe(
         tuple(names),
@@ -162,7 +166,7 @@ def _from_data(data: Any, where: str) -> list[Recipe]:
     else:
         items = data
     if not isinstance(items, list) or not items:
-        raise RecipeError("no recipes found", field=where)
+        raise RecipeError("no recipes found", subject=f"file {where}")
     return [_recipe_from_mapping(item, where, i) for i, item in enumerate(items)]
 
 
@@ -170,14 +174,14 @@ def _from_yaml(text: str, where: str) -> list[Recipe]:
     try:
         return _from_data(yaml.safe_load(text), where)
     except yaml.YAMLError as exc:
-        raise RecipeError(f"not valid YAML: {exc}", field=where) from None
+        raise RecipeError(f"not valid YAML: {exc}", subject=f"file {where}") from None
 
 
 def _from_json(text: str, where: str) -> list[Recipe]:
     try:
         return _from_data(json.loads(text), where)
     except json.JSONDecodeError as exc:
-        raise RecipeError(f"not valid JSON at line {exc.lineno}: {exc.msg}", field=where) from None
+        raise RecipeError(f"not valid JSON at line {exc.lineno}: {exc.msg}", subject=f"file {where}") from None
 
 
 # --- writing -----------------------------------------------------------------

@@ -250,6 +250,8 @@ def _layout(fields: list[LayoutField], spec: Spec, loc: Loc, groups: dict[str, s
                 yield (*floc, "length"), "length must be rest or an integer primitive (a prefix)"
         elif fld.length is not None:
             yield (*floc, "length"), "length applies to string and bytes only"
+        if fld.fallback is not None and (fld.length in (None, "rest") or i != len(fields) - 1):
+            yield (*floc, "fallback"), "fallback applies to the last field, a prefixed string"
         if fld.format is not None and kind != "string":
             yield (*floc, "format"), "format applies to strings only"
         for ref_key in ("when", "switch"):

@@ -253,6 +253,8 @@ class LayoutField(StrictModel):
     type: str | None = None
     count: Annotated[int, Field(ge=1)] | None = None
     length: str | None = None
+    fallback: Literal["rest"] | None = None  # a prefix that does not fit exactly: the string is the rest
+    peers: str | None = None  # how other implementations read it, with sources, and the decision taken
     format: Literal["lines", "csv"] | None = None
     repeat: Annotated[int, Field(ge=1)] | Literal["until_end"] | None = None
     when: str | None = None

@@ -54,3 +54,15 @@ def package_struct(size_field: Construct, type_field: Construct, code: int, body
         "type" / Const(code, type_field),
         "body" / FixedSized(this.size - header_size, body),
     )
+
+
+def prefixed_or_rest(prefix: Construct) -> Construct:
+    """A string with a length prefix that counts the rest exactly; otherwise the rest is the string.
+
+    Some fields are sent both ways by real controllers and peers (spec key `fallback: rest`).
+    Building writes the prefixed form.
+    """
+    from construct import FocusedSeq, PascalString, Select, Terminated
+
+    exact = FocusedSeq("text", "text" / PascalString(prefix, "utf8"), Terminated)
+    return Select(exact, GreedyString("utf8"))
