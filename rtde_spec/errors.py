@@ -86,6 +86,22 @@ class UsageError(RtdeSpecError):
     """The command line or call asks for something unusable: a missing file, an unknown version."""
 
 
+class MissingDependencyError(UsageError, ImportError):
+    """An optional dependency is not installed; the message names the extra that brings it."""
+
+
+def require(module: str, extra: str, what: str) -> Any:
+    """Import an optional dependency, or raise MissingDependencyError naming the extra to install."""
+    import importlib
+
+    try:
+        return importlib.import_module(module)
+    except ImportError:
+        raise MissingDependencyError(
+            f"{what} needs {module.split('.')[0]}, which is not installed: pip install 'rtde_spec[{extra}]'"
+        ) from None
+
+
 @dataclass(frozen=True)
 class SpecIssue:
     """One problem found in a spec file: which file, where in it, and why."""

@@ -3,8 +3,12 @@
 from __future__ import annotations
 
 import re
+import subprocess
+import sys
+import zipfile
 from fnmatch import fnmatch
 from importlib import resources
+from pathlib import Path
 
 import setuptools
 
@@ -32,3 +36,20 @@ def test_examples_are_package_data() -> None:
     assert shipped
     for name in shipped:
         assert any(fnmatch(f"examples/{name}", pattern) for pattern in patterns), name
+
+
+def test_wheel_ships_the_license_without_deprecation_warnings(tmp_path: Path) -> None:
+    result = subprocess.run(
+        [sys.executable, "-m", "pip", "wheel", "--no-deps", "-w", str(tmp_path), str(ROOT)],
+        capture_output=True,
+        text=True,
+    )
+    assert result.returncode == 0, result.stderr
+    assert "deprecated" not in (result.stdout + result.stderr).lower()
+    (wheel,) = tmp_path.glob("rtde_spec-*.whl")
+    with zipfile.ZipFile(wheel) as archive:
+        names = archive.namelist()
+        (metadata,) = [n for n in names if n.endswith(".dist-info/METADATA")]
+        text = archive.read(metadata).decode()
+    assert any(n.endswith("LICENSE") and ".dist-info/" in n for n in names), names
+    assert "License-Expression: MIT" in text

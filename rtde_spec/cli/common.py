@@ -43,7 +43,7 @@ def existing_file(arg: str) -> Path | None:
 
     A directory is a usage error: it is neither a file nor data.
     """
-    if arg == "-" or "\x00" in arg:
+    if not arg or arg == "-" or "\x00" in arg:
         return None
     path = Path(arg)
     try:

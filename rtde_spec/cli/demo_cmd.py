@@ -25,7 +25,9 @@ SHOWCASE_VERSIONS = ("3.15.8", "5.12.2", "10.11.0")
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("demo", help="decode an embedded example session (no robot needed)")
-    p.add_argument("--session", type=Path, help="a session file of your own (same format)")
+    p.add_argument(
+        "--session", type=Path, help="a session file of your own, same format (default: the embedded example)"
+    )
     p.set_defaults(run=run)
 
 

@@ -8,6 +8,7 @@ from pydantic import BaseModel
 
 from rtde_spec.errors import RtdeSpecError
 from rtde_spec.output.describe import describe
+from rtde_spec.output.text import safe_text
 from rtde_spec.output.writers import open_writer
 from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
 from rtde_spec.primary.codec import PrimaryStreamDecoder
@@ -64,6 +65,11 @@ def _lines(value: Any, indent: str) -> list[str]:
     return out
 
 
+def safe_text_lines(lines: list[str]) -> str:
+    """Lines joined for the terminal, wire text escaped line by line."""
+    return "\n".join(safe_text(line) for line in lines)
+
+
 def run_primary(data: bytes, fmt: str, output: str | None) -> int:
     """Decode a primary/secondary stream; every message before an error is printed first."""
     if not data:
@@ -82,7 +88,9 @@ def run_primary(data: bytes, fmt: str, output: str | None) -> int:
         if fmt == "json":
             writer.single = True  # type: ignore[attr-defined]
         for offset, message in messages:
-            writer.write({"offset": offset, **as_json(message)})
+            warnings = decoder.warnings_for(message)
+            extra = {"warnings": warnings} if warnings else {}
+            writer.write({"offset": offset, **as_json(message), **extra})
         writer.close()
     else:
         _print_tree(messages, decoder)
@@ -97,9 +105,11 @@ def _print_tree(messages: list[tuple[int, Any]], decoder: PrimaryStreamDecoder) 
         if isinstance(message, RobotStateMessage):
             for sub in message.sub_packages:
                 print(f"  [{getattr(sub, 'NAME', 'unknown')}]")
-                print("\n".join(_lines(sub, "    ")))
+                print(safe_text_lines(_lines(sub, "    ")))
         else:
-            print("\n".join(_lines(message, "  ")))
+            print(safe_text_lines(_lines(message, "  ")))
+        for warning in decoder.warnings_for(message):
+            print(f"  warning: {warning}")
         print()
     if decoder.version is not None:
         print(f"controller version (from the version message): {decoder.version}")

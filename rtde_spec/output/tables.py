@@ -8,16 +8,9 @@ from __future__ import annotations
 
 from typing import Any
 
-from rtde_spec.errors import RtdeSpecError
+from rtde_spec.errors import require
 
 HEADER_COLUMNS = ("size", "type")
-
-
-def _require(module: str, extra: str) -> Any:
-    try:
-        return __import__(module)
-    except ImportError:
-        raise RtdeSpecError(f"{module} is not installed: pip install 'rtde_spec[{extra}]'") from None
 
 
 def _columns(arr: Any, keep_header: bool) -> dict[str, Any]:
@@ -32,7 +25,7 @@ def _columns(arr: Any, keep_header: bool) -> dict[str, Any]:
 
 def to_pandas(arr: Any, keep_header: bool = False) -> Any:
     """A DataFrame from `RecipeCodec.decode_many`; vectors split into name_0..name_n."""
-    pd = _require("pandas", "pandas")
+    pd = require("pandas", "pandas", "to_pandas")
     flat: dict[str, Any] = {}
     for name, column in _columns(arr, keep_header).items():
         if column.ndim == 1:
@@ -45,7 +38,7 @@ def to_pandas(arr: Any, keep_header: bool = False) -> Any:
 
 def to_arrow(arr: Any, keep_header: bool = False) -> Any:
     """A pyarrow Table from `RecipeCodec.decode_many`; vectors as fixed-size lists."""
-    _require("pyarrow", "arrow")
+    require("pyarrow", "arrow", "to_arrow")
     import pyarrow as pa
 
     columns = {}

@@ -16,24 +16,12 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import IO, Any
 
-from rtde_spec.errors import UsageError
+from rtde_spec.errors import UsageError, require
 from rtde_spec.output.text import safe_text, table
 
 FORMATS = ("table", "jsonl", "json", "csv", "parquet")
 TABULAR = ("csv", "parquet")
 _PARQUET_BATCH_ROWS = 16384
-
-
-def require(module: str, extra: str, what: str) -> Any:
-    """Import an optional dependency, or say which extra brings it."""
-    import importlib
-
-    try:
-        return importlib.import_module(module)
-    except ImportError:
-        raise UsageError(
-            f"{what} needs {module.split('.')[0]}, which is not installed: pip install 'rtde_spec[{extra}]'"
-        ) from None
 
 
 def plain(value: Any) -> Any:

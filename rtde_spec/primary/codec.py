@@ -15,6 +15,7 @@ from functools import cache
 from typing import Any
 
 from rtde_spec._generated import primary_models as gen
+from rtde_spec._generated.constants import PRODUCT_LINES
 from rtde_spec.errors import DecodeError, EncodeError
 from rtde_spec.primary.base import (
     OpaqueMessage,
@@ -278,6 +279,32 @@ class PrimaryStreamDecoder:
                     message.build_number,
                 )
             out.append((offset, message))
+        return out
+
+    def warnings_for(self, message: PrimaryMessage) -> list[str]:
+        """Why this message's values may be wrong: an unknown controller line, or layouts that disagree.
+
+        Shown with each message, so values are never presented as decoded when the
+        spec visibly does not describe the firmware that sent them.
+        """
+        out = []
+        if self.version is not None and not any(
+            self.version.major in majors for majors in PRODUCT_LINES.values()
+        ):
+            lines = ", ".join(f"{name} {'/'.join(map(str, m))}.x" for name, m in PRODUCT_LINES.items())
+            out.append(
+                f"controller {self.version} is outside the spec's product lines ({lines}); "
+                "its layouts are not described, so these values may be wrong"
+            )
+        if isinstance(message, RobotStateMessage):
+            shorter = [s.NAME for s in message.sub_packages if isinstance(s, PrimaryPart) and s.missing]
+            longer = [s.NAME for s in message.sub_packages if isinstance(s, PrimaryPart) and s.extra]
+            if shorter and longer:
+                out.append(
+                    "layouts disagree: some sub-packages are shorter than the spec "
+                    f"({', '.join(shorter)}) and others longer ({', '.join(longer)}); "
+                    "no single firmware sends that, so these values may be wrong"
+                )
         return out
 
     def close(self) -> None:

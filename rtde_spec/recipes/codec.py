@@ -18,7 +18,7 @@ from pydantic import BaseModel, create_model
 
 from rtde_spec._generated.rtde_models import HEADER_FIELDS, HEADER_FORMAT, LIMITS, DataPackage
 from rtde_spec._generated.rtde_types import WIRE_TYPES
-from rtde_spec.errors import DecodeError, EncodeError, RecipeError
+from rtde_spec.errors import DecodeError, EncodeError, RecipeError, require
 from rtde_spec.spec.catalogue import Catalogue, Direction, FieldInfo, WireTypeInfo
 
 DATA_PACKAGE_TYPE = DataPackage.PACKAGE_TYPE
@@ -289,7 +289,7 @@ class RecipeCodec:
     def dtype(self) -> Any:
         """numpy structured dtype of a whole data package (big-endian, vectors as (n,))."""
         if self._dtype is None:
-            import numpy as np
+            np = require("numpy", "numpy", "numpy views of data packages")
 
             codes = _PREFIX.format[1:]
             fields: list[tuple[Any, ...]] = [(n, ">" + c) for n, c in zip(_PREFIX_FIELDS, codes, strict=True)]
@@ -308,8 +308,7 @@ class RecipeCodec:
         Zero-copy when the buffer holds only these packages; every package's size,
         type and recipe id are checked (vectorised), and the first bad one is named.
         """
-        import numpy as np
-
+        np = require("numpy", "numpy", "decode_many")
         if len(buffer) % self.package_size:
             raise DecodeError(
                 "buffer is not a whole number of this recipe's data packages",
@@ -318,9 +317,7 @@ class RecipeCodec:
                 actual=f"{len(buffer)} bytes",
             )
         arr = np.frombuffer(buffer, dtype=self.dtype)
-        bad = (arr["size"] != self.package_size) | (arr["type"] != DATA_PACKAGE_TYPE)
-        if recipe_id is not None:
-            bad |= arr["recipe_id"] != recipe_id
+        bad = self._bad_prefixes(np, arr, recipe_id)
         if bad.any():
             index = int(np.argmax(bad))
             row = arr[index]
@@ -333,6 +330,29 @@ class RecipeCodec:
                 + (f", recipe {recipe_id}" if recipe_id is not None else ""),
             )
         return arr
+
+    def _bad_prefixes(self, np: Any, arr: Any, recipe_id: int | None) -> Any:
+        """Which packages' size, type or recipe id is wrong: one comparison over a strided view."""
+        if _PREFIX_WORD is None or not len(arr):  # a prefix of no machine-word size: field by field
+            bad = (arr["size"] != self.package_size) | (arr["type"] != DATA_PACKAGE_TYPE)
+            return bad | (arr["recipe_id"] != recipe_id) if recipe_id is not None else bad
+        dtype, mask = _PREFIX_WORD
+        words = np.ndarray((len(arr),), dtype=dtype, buffer=arr, strides=(self.package_size,))
+        want = int.from_bytes(_PREFIX.pack(self.package_size, DATA_PACKAGE_TYPE, recipe_id or 0), "big")
+        return words != want if recipe_id is not None else (words & mask) != want
+
+
+def _prefix_word() -> tuple[str, int] | None:
+    """numpy dtype and mask of the whole prefix (size, type, recipe id) read as one integer."""
+    widths = {1: "u1", 2: "u2", 4: "u4", 8: "u8"}
+    if _PREFIX.size not in widths:
+        return None
+    recipe_bits = 8 * struct.calcsize(">" + _PREFIX.format[-1])
+    mask = ((1 << (8 * _PREFIX.size)) - 1) ^ ((1 << recipe_bits) - 1)
+    return ">" + widths[_PREFIX.size], mask
+
+
+_PREFIX_WORD = _prefix_word()
 
 
 def _checked(item: RecipeItem, value: Any, strict: bool, index: int | None) -> Any:

@@ -22,6 +22,11 @@ MAX_FILE_BYTES = 1 << 20  # 1 MiB: recipes are names; anything larger is not a r
 FORMATS = FILE_FORMATS
 
 
+def at(where: str) -> str:
+    """How an error names the recipe file it is about."""
+    return f"file {where}"
+
+
 def detect_format(path: Path, text: str) -> str:
     """By extension first, then by content."""
     suffix = path.suffix.lower()
@@ -93,12 +98,12 @@ def _from_xml(text: str, where: str) -> list[Recipe]:
     try:
         root = SafeET.fromstring(text, forbid_dtd=True)
     except DefusedXmlException as exc:
-        raise RecipeError(f"unsafe XML refused: {exc}", subject=f"file {where}") from None
+        raise RecipeError(f"unsafe XML refused: {exc}", subject=at(where)) from None
     except SafeET.ParseError as exc:
         line, col = exc.position
-        raise RecipeError(f"not well-formed XML at line {line}, column {col}", subject=f"file {where}") from None
+        raise RecipeError(f"not well-formed XML at line {line}, column {col}", subject=at(where)) from None
     if root.tag != "rtde_config":
-        raise RecipeError("XML root must be <rtde_config>", subject=f"file {where}", actual=f"<{root.tag}>")
+        raise RecipeError("XML root must be <rtde_config>", subject=at(where), actual=f"<{root.tag}>")
     recipes = []
     for number, element in enumerate(root.findall("recipe"), 1):
         key = element.get("key")
@@ -107,13 +112,13 @@ def _from_xml(text: str, where: str) -> list[Recipe]:
         for fld in element.findall("field"):
             name = fld.get("name")
             if not name:
-                raise RecipeError(f"<field> without a name in recipe {key or number}", subject=f"file {where}")
+                raise RecipeError(f"<field> without a name in recipe {key or number}", subject=at(where))
             names.append(name)
             if fld.get("type"):
                 declared[name] = fld.get("type", "")
         recipes.append(Recipe(tuple(names), key=key, declared_types=declared))
     if not recipes:
-        raise RecipeError("no <recipe> elements", subject=f"file {where}")
+        raise RecipeError("no <recipe> elements", subject=at(where))
     return recipes
 
 
@@ -121,18 +126,18 @@ def _recipe_from_mapping(item: Any, where: str, index: int) -> Recipe:
     if isinstance(item, list):
         return Recipe(tuple(str(n) for n in item))
     if not isinstance(item, dict):
-        raise RecipeError(f"recipe {index} must be a mapping or a list of names", subject=f"file {where}")
+        raise RecipeError(f"recipe {index} must be a mapping or a list of names", subject=at(where))
     known = {"key", "direction", "frequency", "controller", "fields", "names"}
     unknown = sorted(set(item) - known)
     if unknown:
         raise RecipeError(
             f"recipe {index}: unknown key(s) {unknown}",
-            subject=f"file {where}",
+            subject=at(where),
             expected=", ".join(sorted(known)),
         )
     raw = item.get("fields", item.get("names"))
     if not isinstance(raw, list):
-        raise RecipeError(f"recipe {index} needs a list under 'fields'", subject=f"file {where}")
+        raise RecipeError(f"recipe {index} needs a list under 'fields'", subject=at(where))
     names: list[str] = []
     declared: dict[str, str] = {}
     for entry in raw:
@@ -144,7 +149,9 @@ def _recipe_from_mapping(item: Any, where: str, index: int) -> Recipe:
             names.append(str(entry))
     direction = item.get("direction")
     if direction not in (None, "input", "output"):
-        raise RecipeError(f"recipe {index}: direction must be input or output", subject=f"file {where}", actual=direction)
+        raise RecipeError(
+            f"recipe {index}: direction must be input or output", subject=at(where), actual=direction
+        )
     frequency = item.get("frequency")
     return Recipe(
         tuple(names),
@@ -166,7 +173,7 @@ def _from_data(data: Any, where: str) -> list[Recipe]:
     else:
         items = data
     if not isinstance(items, list) or not items:
-        raise RecipeError("no recipes found", subject=f"file {where}")
+        raise RecipeError("no recipes found", subject=at(where))
     return [_recipe_from_mapping(item, where, i) for i, item in enumerate(items)]
 
 
@@ -174,14 +181,14 @@ def _from_yaml(text: str, where: str) -> list[Recipe]:
     try:
         return _from_data(yaml.safe_load(text), where)
     except yaml.YAMLError as exc:
-        raise RecipeError(f"not valid YAML: {exc}", subject=f"file {where}") from None
+        raise RecipeError(f"not valid YAML: {exc}", subject=at(where)) from None
 
 
 def _from_json(text: str, where: str) -> list[Recipe]:
     try:
         return _from_data(json.loads(text), where)
     except json.JSONDecodeError as exc:
-        raise RecipeError(f"not valid JSON at line {exc.lineno}: {exc.msg}", subject=f"file {where}") from None
+        raise RecipeError(f"not valid JSON at line {exc.lineno}: {exc.msg}", subject=at(where)) from None
 
 
 # --- writing -----------------------------------------------------------------

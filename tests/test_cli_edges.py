@@ -1,0 +1,277 @@
+"""What a new user meets first: long arguments, comments, empty input, terminal safety,
+exit codes, partial output, missing extras, capture files, peers' byte forms."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import struct
+import subprocess
+import sys
+from importlib import resources
+from pathlib import Path
+
+import pytest
+
+from rtde_spec.cli.main import build_parser
+from rtde_spec.primary.codec import PrimaryStreamDecoder, decode_message, encode_message
+from rtde_spec.recipes.codec import RecipeCodec
+from rtde_spec.rtde.codec import build, decode
+
+from .helpers import ROOT
+from .test_cli import cli
+
+OUTPUTS = RecipeCodec.for_names(["timestamp", "actual_q", "robot_mode"], "output")
+
+
+def data_package(timestamp: float, recipe_id: int = 1) -> bytes:
+    # hand-packed: header (size, 'U'), recipe id, DOUBLE, VECTOR6D, INT32
+    payload = struct.pack(">d6di", timestamp, *([0.5] * 6), 7)
+    return struct.pack(">HBB", 4 + len(payload), ord("U"), recipe_id) + payload
+
+
+def ur5e_state_hex() -> str:
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location("ur5e", ROOT / "benchmarks/ur5e_robot_state.py")
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return str(module.ur5e_robot_state_bytes().hex())
+
+
+# 1. arguments of any length
+
+
+def test_a_robot_state_of_1_4_kb_is_accepted_as_hex() -> None:
+    text = ur5e_state_hex()
+    assert len(text) > 2000
+    result = cli("decode", "--protocol", "primary", text, "--json")
+    assert result.returncode == 0, result.stderr
+    record = json.loads(result.stdout)
+    assert record["package"] == "robot_state" and len(record["sub_packages"]) == 13
+
+
+def test_a_2000_character_comma_list_validates_and_decodes() -> None:
+    names = [f"output_double_register_{i}" for i in range(24, 48)]
+    names += [f"output_int_register_{i}" for i in range(24, 48)]
+    names += [f"output_bit_register_{i}" for i in range(64, 128)]
+    text = ",".join(names)
+    assert len(text) >= 2000
+    result = cli("validate", text, "--controller", "5.12.2")
+    assert "File name too long" not in result.stderr
+    assert "setup limit" in result.stdout or "2048" in result.stdout or result.returncode == 0, result.stdout
+    decoded = cli("decode", data_package(1.0).hex(), "--recipe", text)
+    assert "File name too long" not in decoded.stderr
+    assert "payload" in decoded.stderr  # the package is not of that recipe: a decode error, not a path error
+
+
+# 2. recipe files with comments
+
+
+def test_every_shipped_example_recipe_validates(tmp_path: Path) -> None:
+    examples = resources.files("rtde_spec.examples")
+    recipe = examples.joinpath("ur_rtde_default_outputs.txt")
+    result = cli("validate", str(recipe), "--controller", "5.15.0")
+    assert result.returncode == 0, result.stdout
+    assert "unknown" not in result.stdout
+
+
+def test_comments_in_line_and_comma_files(tmp_path: Path) -> None:
+    lines = tmp_path / "lines.txt"
+    lines.write_text("# recipe, for the arm\ntimestamp  # seconds\nactual_q\n\n# end\n")
+    comma = tmp_path / "comma.txt"
+    comma.write_text("# a comment, with a comma\ntimestamp,actual_q # trailing, too\n")
+    for path in (lines, comma):
+        result = cli("validate", str(path), "--controller", "5.12.2", "--json")
+        assert result.returncode == 0, result.stdout
+        report = json.loads(result.stdout)
+        assert [f["name"] for f in report["recipes"][0]["fields"]] == ["timestamp", "actual_q"]
+    package = RecipeCodec.for_names(["timestamp", "actual_q"], "output").encode_package(
+        {"timestamp": 1.0, "actual_q": (0.0,) * 6}, 1
+    )
+    assert cli("decode", package.hex(), "--recipe", str(comma)).returncode == 0
+
+
+# 3. empty input
+
+
+@pytest.mark.parametrize("protocol", ["rtde", "primary"])
+def test_empty_input_says_so(tmp_path: Path, protocol: str) -> None:
+    empty = tmp_path / "empty.bin"
+    empty.write_bytes(b"")
+    for args, stdin in (([""], None), (["-"], b""), ([str(empty)], None)):
+        result = cli("decode", *args, "--protocol", protocol, stdin=stdin)
+        assert result.returncode == 1, (args, result.stdout)
+        assert "no packages in the input" in result.stderr
+
+
+# 4. nothing from the wire reaches the terminal raw
+
+
+def test_control_characters_are_escaped_in_tables() -> None:
+    package = build("text_message", message="\x1b[2J\x07bell\x00nul", source="a\x1bb", warning_level=1)
+    result = cli("decode", package.hex())
+    assert result.returncode == 0, result.stderr
+    assert "\x1b" not in result.stdout and "\x07" not in result.stdout and "\x00" not in result.stdout
+    assert "\\x1b[2J\\x07bell\\x00nul" in result.stdout
+
+
+def test_control_characters_are_escaped_in_primary_trees() -> None:
+    text = b"\x1b]0;owned\x07"
+    body = struct.pack(">QbB", 1, -2, 0) + text
+    message = struct.pack(">IB", 5 + len(body), 20) + body
+    result = cli("decode", "--protocol", "primary", message.hex())
+    assert result.returncode == 0, result.stderr
+    assert "\x1b" not in result.stdout and "\\x1b]0;owned\\x07" in result.stdout
+
+
+# 5. exit codes and help
+
+
+def test_usage_errors_exit_2_everywhere(tmp_path: Path) -> None:
+    assert cli("fields", "--controller", "banana").returncode == 2
+    assert cli("validate", "timestamp", "--controller", "banana").returncode == 2
+    assert cli("decode", "00045601", "--recipe", str(tmp_path)).returncode == 2
+    result = cli("validate", str(tmp_path))
+    assert result.returncode == 2 and "directory" in result.stderr and "Errno" not in result.stderr
+    missing = cli("validate", str(tmp_path / "missing.xml"))
+    assert missing.returncode == 2 and "file" in missing.stderr and "field" not in missing.stderr
+    assert cli("decode", str(tmp_path)).returncode == 2
+
+
+def test_version_and_help_texts() -> None:
+    from rtde_spec import __version__
+
+    result = cli("--version")
+    assert result.returncode == 0 and __version__ in result.stdout
+    assert "0 valid" in cli("validate", "--help").stdout.replace("\n", " ")
+    parser = build_parser()
+    parsers = [parser]
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            parsers += list(action.choices.values())
+    for p in parsers:
+        for action in p._actions:
+            if action.option_strings and not isinstance(
+                action, (argparse._HelpAction, argparse._VersionAction)
+            ):
+                assert action.help and "default" in action.help, (p.prog, action.option_strings)
+
+
+def test_controller_errors_say_controller_version() -> None:
+    result = cli("fields", "--controller", "4.0.0")
+    error = result.stderr.splitlines()[-1]
+    assert "controller version 4.0.0" in error and "field " not in error.replace("rtde-spec fields", "")
+
+
+# 6. partial results and absolute offsets
+
+
+def test_packages_before_a_truncation_are_printed() -> None:
+    stream = build("request_protocol_version", protocol_version=2) + build("start") + build("pause")[:-1]
+    result = cli("decode", stream.hex(), "--from", "client", "--format", "jsonl")
+    assert result.returncode == 1
+    rows = [json.loads(line) for line in result.stdout.splitlines()]
+    assert [r["package"] for r in rows] == ["request_protocol_version", "start"]
+    assert "byte offset 8" in result.stderr and "truncated" in result.stderr
+
+
+def test_recipe_errors_name_the_package_and_its_absolute_offset() -> None:
+    good = data_package(1.0)
+    short = data_package(2.0)[:-4]
+    short = struct.pack(">H", len(short)) + short[2:]
+    stream = good + good + short
+    result = cli("decode", stream.hex(), "--recipe", "timestamp,actual_q,robot_mode", "--format", "jsonl")
+    assert result.returncode == 1
+    assert len(result.stdout.splitlines()) == 2  # the two good packages came out first
+    start = 2 * len(good)
+    assert f"package #3, starting at byte {start}" in result.stderr
+    # the short payload ends inside robot_mode: 4 + 8 + 48 bytes into the package
+    assert f"field robot_mode, byte offset {start + 4 + 56}" in result.stderr
+
+
+# 7. missing optional dependencies
+
+
+def test_decode_many_without_numpy_names_the_extra() -> None:
+    code = (
+        "import sys; sys.modules['numpy'] = None\n"
+        "from rtde_spec.recipes.codec import RecipeCodec\n"
+        "from rtde_spec.errors import MissingDependencyError\n"
+        "codec = RecipeCodec.for_names(['timestamp'], 'output')\n"
+        "try:\n    codec.decode_many(b'')\nexcept MissingDependencyError as exc:\n    print(exc)\n"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    assert "pip install 'rtde_spec[numpy]'" in result.stdout
+
+
+# 8. capture files
+
+
+@pytest.mark.parametrize(("magic", "kind"), [(b"\xd4\xc3\xb2\xa1", "pcap"), (b"\x0a\x0d\x0d\x0a", "pcapng")])
+def test_a_capture_file_is_recognised(tmp_path: Path, magic: bytes, kind: str) -> None:
+    path = tmp_path / f"capture.{kind}"
+    path.write_bytes(magic + bytes(94))
+    result = cli("decode", str(path))
+    assert result.returncode == 2
+    assert f"{kind} capture file" in result.stderr and "expected" not in result.stderr
+
+
+# 9. agreement with real controllers' bytes
+
+
+def version_message(major: int, minor: int) -> bytes:
+    body = struct.pack(">QbB", 0, -2, 3) + struct.pack(">B", 9) + b"URControl"
+    body += struct.pack(">BBii", major, minor, 0, 1) + b"date"
+    return struct.pack(">IB", 5 + len(body), 20) + body
+
+
+def test_a_cb2_era_controller_is_flagged_on_every_message() -> None:
+    decoder = PrimaryStreamDecoder()
+    messages = decoder.feed(version_message(1, 8) + bytes.fromhex(ur5e_state_hex()))
+    assert str(decoder.version).startswith("1.8")
+    for _, message in messages:
+        (warning,) = decoder.warnings_for(message)
+        assert "outside the spec's product lines" in warning
+    modern = PrimaryStreamDecoder()
+    for _, message in modern.feed(version_message(5, 15) + bytes.fromhex(ur5e_state_hex())):
+        assert modern.warnings_for(message) == []
+
+
+def test_layouts_that_disagree_are_flagged() -> None:
+    state = bytes.fromhex(ur5e_state_hex())
+    message = decode_message(state)
+    subs = message.sub_packages
+    shorter = subs[0].model_copy(update={"missing": ("x",)})
+    longer = subs[1].model_copy(update={"extra": b"\x00"})
+    mixed = message.model_copy(update={"sub_packages": [shorter, longer, *subs[2:]]})
+    (warning,) = PrimaryStreamDecoder().warnings_for(mixed)
+    assert "layouts disagree" in warning
+
+
+def test_cli_shows_version_warnings() -> None:
+    stream = version_message(1, 8) + bytes.fromhex(ur5e_state_hex())
+    table = cli("decode", "--protocol", "primary", stream.hex())
+    assert table.returncode == 0 and "warning: controller 1.8" in table.stdout
+    rows = json.loads(cli("decode", "--protocol", "primary", stream.hex(), "--json").stdout)
+    assert all("warnings" in r for r in rows)
+
+
+def test_a_bool_byte_other_than_one_decodes_true_and_reencodes_as_one() -> None:
+    # stated in README ("Decisions"): the guide's BOOL is 0 false, anything else true
+    message = decode(bytes.fromhex("00045602"), sender="controller")
+    assert message.accepted is True  # type: ignore[attr-defined]
+    assert message.to_bytes() == bytes.fromhex("00045601")
+    readme = (ROOT / "README.md").read_text()
+    assert "re-encodes as 1" in readme
+
+
+def test_key_message_without_length_round_trips_in_the_documents_form() -> None:
+    text = b"Protective stop: joint 3"
+    body = struct.pack(">QbB", 0, -2, 7) + struct.pack(">II", 1, 2) + b"\x05Title" + text
+    message = decode_message(struct.pack(">IB", 5 + len(body), 20) + body)
+    assert message.key_text_message == text.decode()  # type: ignore[union-attr]
+    again = decode_message(encode_message(message))
+    assert again == message
