@@ -5,6 +5,7 @@ The command line reads them for its help text without loading pydantic or constr
 
 from __future__ import annotations
 
+from rtde_spec.spec.catalogue import Catalogue
 from rtde_spec.spec.schema import Spec
 
 from .render import PY_HEADER
@@ -13,6 +14,12 @@ from .render import PY_HEADER
 def emit_constants(spec: Spec) -> str:
     pk = spec.packages
     protocols = tuple(sorted({p for m in pk.messages for p in m.protocols}))
+    prims = {p.name: p for p in spec.primitives.primitives}
+    header = ">" + "".join(prims[h.type].struct for h in pk.header)
+    data = next(m for m in pk.messages if m.name == "data_package")
+    fixed = [f for f in data.fields if f.type in prims and f.length is None]
+    prefix_codes = "".join(prims[f.type].struct for f in fixed)
+    prefix_names = (*(h.name for h in pk.header), *(f.name for f in fixed))
     lines = [
         PY_HEADER,
         '"""Plain constants of the spec, importable without pydantic or construct."""\n\n',
@@ -20,9 +27,38 @@ def emit_constants(spec: Spec) -> str:
         f"RTDE_PROTOCOLS: tuple[int, ...] = {protocols!r}\n",
         f"RTDE_SENDERS: tuple[str, ...] = {tuple(pk.senders)!r}\n",
         f"PRIMARY_PORTS: dict[str, int] = {dict(spec.primary.ports)!r}\n",
+        f"RTDE_HEADER_FORMAT = {header!r}\n",
+        f"RTDE_HEADER_FIELDS: tuple[str, ...] = {tuple(h.name for h in pk.header)!r}\n",
+        f"RTDE_LIMITS: dict[str, int] = {pk.limits.model_dump()!r}\n",
+        f"DATA_PACKAGE_TYPE = {ord(data.type)}  # {data.type!r}\n",
+        f"DATA_PACKAGE_PREFIX_FORMAT = {header + prefix_codes!r}\n",
+        '"""struct format of a data package up to its payload: the header, then the recipe id."""\n',
+        f"DATA_PACKAGE_PREFIX_FIELDS: tuple[str, ...] = {prefix_names!r}\n",
         "PRODUCT_LINES: dict[str, tuple[int, ...]] = {\n",
     ]
     for line in spec.product_lines.product_lines:
         lines.append(f"    {line.id!r}: {tuple(line.majors)!r},\n")
     lines.append("}\n")
     return "".join(lines)
+
+
+def emit_catalogue_data(catalogue: Catalogue) -> str:
+    """The field catalogue as plain tuples, so the runtime builds it without pydantic or YAML."""
+    rows = catalogue.table_rows()
+    out = [
+        PY_HEADER,
+        '"""The field catalogue as plain rows (see rtde_spec.spec.catalogue.Catalogue.builtin)."""\n\n',
+        "from typing import Any\n\n",
+        "# (id, name, majors, first_version, inherits, rtde_max_frequency)\n",
+        "LINES: tuple[tuple[Any, ...], ...] = (\n",
+        *(f"    {row!r},\n" for row in rows["LINES"]),
+        ")\n\n# (name, size, count, element, struct, kind, bounds)\n",
+        "WIRE_TYPES: tuple[tuple[Any, ...], ...] = (\n",
+        *(f"    {row!r},\n" for row in rows["WIRE_TYPES"]),
+        ")\n\n# (name, direction, type, doc, unit, enum, bits, deprecated, reserved, sources, family,\n",
+        "#  index, since per product line)\n",
+        "FIELDS: tuple[tuple[Any, ...], ...] = (\n",
+        *(f"    {row!r},\n" for row in rows["FIELDS"]),
+        ")\n",
+    ]
+    return "".join(out)

@@ -3,7 +3,9 @@ construct structs, one per sub-package / tagged message, from spec/primary/."""
 
 from __future__ import annotations
 
-from rtde_spec.spec.schema import CaseSpec, LayoutField, MemberSpec, Primitive, Spec
+from typing import Any
+
+from rtde_spec.spec.schema import CaseSpec, FamilySpec, LayoutField, MemberSpec, Primitive, Spec
 
 from .emit_rtde import CONSTRUCT_BY_STRUCT, prims_of
 from .emit_types import scalar_annotation
@@ -188,11 +190,14 @@ def emit_primary_structs(spec: Spec) -> str:
     ]
     names = [
         "Array",
+        "Const",
+        "FixedSized",
         "GreedyBytes",
         "GreedyRange",
         "GreedyString",
         "If",
         "PascalString",
+        "Peek",
         "Prefixed",
         "Struct",
         "Switch",
@@ -207,4 +212,40 @@ def emit_primary_structs(spec: Spec) -> str:
         for member in fam.members:
             body = _struct_body([*fam.prefix, *member.fields], prims, "    ")
             out.append(f"\n{upper(fam.name)}_{upper(member.name)} = Struct(\n{body})\n")
+    out += [_whole_message(fam, pf.header, pf.subpackage_header, prims) for fam in pf.families]
     return "".join(out)
+
+
+def _whole_message(
+    fam: FamilySpec, header: list[Any], sub_header: list[Any], prims: dict[str, Primitive]
+) -> str:
+    """`<FAMILY>_MESSAGE`: a whole message, header included; members chosen by their type number."""
+    c = CONSTRUCT_BY_STRUCT
+    size_c, type_c = (c[prims[h.type].struct] for h in header)
+    head = f"{sum(prims[h.type].size for h in header)}"
+    name = upper(fam.name)
+    if fam.layout == "opaque":
+        body = "GreedyBytes"
+    elif fam.layout == "subpackages":
+        sub_size_c, sub_type_c = (c[prims[h.type].struct] for h in sub_header)
+        sub_head = sum(prims[h.type].size for h in sub_header)
+        cases = ", ".join(f"{m.type}: {name}_{upper(m.name)}" for m in fam.members)
+        switch = f"Switch(this.type, {{{cases}}}, default=GreedyBytes)"
+        body = (
+            f'GreedyRange(Struct("size" / {sub_size_c}, "type" / {sub_type_c}, '
+            f'"body" / FixedSized(this.size - {sub_head}, {switch})))'
+        )
+    else:
+        prefix = _struct_body(fam.prefix, prims, "            ")
+        cases = ", ".join(f"{m.type}: {name}_{upper(m.name)}" for m in fam.members)
+        body = (
+            f'Struct(\n        "prefix" / Peek(Struct(\n{prefix}        )),\n'
+            f'        "member" / Switch(this.prefix.{fam.tag}, {{{cases}}}, default=GreedyBytes),\n    )'
+        )
+    return (
+        f"\n{name}_MESSAGE = Struct(\n"
+        f'    "size" / {size_c},\n'
+        f'    "type" / Const({fam.type}, {type_c}),\n'
+        f'    "body" / FixedSized(this.size - {head}, {body}),\n'
+        ")\n"
+    )

@@ -5,7 +5,7 @@ from __future__ import annotations
 from rtde_spec.spec.catalogue import Catalogue
 from rtde_spec.spec.schema import Spec
 
-from .emit_constants import emit_constants
+from .emit_constants import emit_catalogue_data, emit_constants
 from .emit_data import emit_spec_data
 from .emit_docs import (
     emit_enums_doc,
@@ -29,6 +29,7 @@ def generate(spec: Spec) -> dict[str, str]:
     return {
         f"{GEN}/__init__.py": PY_HEADER + '"""Code generated from spec/; import through rtde_spec."""\n',
         f"{GEN}/constants.py": emit_constants(spec),
+        f"{GEN}/catalogue_data.py": emit_catalogue_data(catalogue),
         f"{GEN}/spec_data.py": emit_spec_data(spec),
         f"{GEN}/enums.py": emit_enums(spec),
         f"{GEN}/rtde_types.py": emit_types(catalogue),

@@ -5,6 +5,13 @@ RTDE_PORT = 30004
 RTDE_PROTOCOLS: tuple[int, ...] = (1, 2)
 RTDE_SENDERS: tuple[str, ...] = ('controller', 'client')
 PRIMARY_PORTS: dict[str, int] = {'primary': 30001, 'secondary': 30002, 'primary_read_only': 30011, 'secondary_read_only': 30012}
+RTDE_HEADER_FORMAT = '>HB'
+RTDE_HEADER_FIELDS: tuple[str, ...] = ('size', 'type')
+RTDE_LIMITS: dict[str, int] = {'setup_names_max_bytes': 2048, 'input_recipes_max': 255, 'package_max_bytes': 65535}
+DATA_PACKAGE_TYPE = 85  # 'U'
+DATA_PACKAGE_PREFIX_FORMAT = '>HBB'
+"""struct format of a data package up to its payload: the header, then the recipe id."""
+DATA_PACKAGE_PREFIX_FIELDS: tuple[str, ...] = ('size', 'type', 'recipe_id')
 PRODUCT_LINES: dict[str, tuple[int, ...]] = {
     'cb3': (3,),
     'e-series': (5,),

@@ -9,11 +9,14 @@ definition: rtde_spec.primary.codec decodes with compiled structs instead.
 # ruff: noqa: F401
 from construct import (
     Array,
+    Const,
+    FixedSized,
     GreedyBytes,
     GreedyRange,
     GreedyString,
     If,
     PascalString,
+    Peek,
     Prefixed,
     Struct,
     Switch,
@@ -314,4 +317,41 @@ PROGRAM_STATE_GLOBAL_VARIABLES_UPDATE_MESSAGE = Struct(
     "robot_message_type" / Int8ub,
     "start_index" / Int16ub,
     "variable_values" / GreedyBytes  # typed values: rtde_spec.primary.values,
+)
+
+ROBOT_STATE_MESSAGE = Struct(
+    "size" / Int32ub,
+    "type" / Const(16, Int8ub),
+    "body" / FixedSized(this.size - 5, GreedyRange(Struct("size" / Int32ub, "type" / Int8ub, "body" / FixedSized(this.size - 5, Switch(this.type, {0: ROBOT_STATE_ROBOT_MODE_DATA, 1: ROBOT_STATE_JOINT_DATA, 2: ROBOT_STATE_TOOL_DATA, 3: ROBOT_STATE_MASTERBOARD_DATA, 4: ROBOT_STATE_CARTESIAN_INFO, 5: ROBOT_STATE_KINEMATICS_INFO, 6: ROBOT_STATE_CONFIGURATION_DATA, 7: ROBOT_STATE_FORCE_MODE_DATA, 8: ROBOT_STATE_ADDITIONAL_INFO, 9: ROBOT_STATE_CALIBRATION_DATA, 10: ROBOT_STATE_SAFETY_DATA, 11: ROBOT_STATE_TOOL_COMM_INFO, 12: ROBOT_STATE_TOOL_MODE_INFO, 13: ROBOT_STATE_SINGULARITY_INFO, 14: ROBOT_STATE_PAYLOAD_INFO, 15: ROBOT_STATE_INTERNAL_DATA, 16: ROBOT_STATE_CUMULATIVE_RUNTIME_DATA}, default=GreedyBytes))))),
+)
+
+ROBOT_MESSAGE_MESSAGE = Struct(
+    "size" / Int32ub,
+    "type" / Const(20, Int8ub),
+    "body" / FixedSized(this.size - 5, Struct(
+        "prefix" / Peek(Struct(
+            "timestamp" / Int64ub,
+            "source" / Int8sb,
+            "robot_message_type" / Int8ub,
+        )),
+        "member" / Switch(this.prefix.robot_message_type, {0: ROBOT_MESSAGE_TEXT_MESSAGE, 3: ROBOT_MESSAGE_VERSION_MESSAGE, 5: ROBOT_MESSAGE_SAFETY_MODE_MESSAGE, 6: ROBOT_MESSAGE_ROBOT_COMM_MESSAGE, 7: ROBOT_MESSAGE_KEY_MESSAGE, 9: ROBOT_MESSAGE_REQUEST_VALUE_MESSAGE, 10: ROBOT_MESSAGE_RUNTIME_EXCEPTION_MESSAGE, 14: ROBOT_MESSAGE_PROGRAM_THREADS_MESSAGE}, default=GreedyBytes),
+    )),
+)
+
+PROGRAM_STATE_MESSAGE = Struct(
+    "size" / Int32ub,
+    "type" / Const(25, Int8ub),
+    "body" / FixedSized(this.size - 5, Struct(
+        "prefix" / Peek(Struct(
+            "timestamp" / Int64ub,
+            "robot_message_type" / Int8ub,
+        )),
+        "member" / Switch(this.prefix.robot_message_type, {0: PROGRAM_STATE_GLOBAL_VARIABLES_SETUP_MESSAGE, 1: PROGRAM_STATE_GLOBAL_VARIABLES_UPDATE_MESSAGE}, default=GreedyBytes),
+    )),
+)
+
+MODBUS_INFO_MESSAGE_MESSAGE = Struct(
+    "size" / Int32ub,
+    "type" / Const(5, Int8ub),
+    "body" / FixedSized(this.size - 5, GreedyBytes),
 )

@@ -11,30 +11,32 @@ from __future__ import annotations
 import keyword
 import struct
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
-from typing import Any, NamedTuple
+from typing import TYPE_CHECKING, Any
 
-from pydantic import BaseModel, create_model
-
-from rtde_spec._generated.rtde_models import HEADER_FIELDS, HEADER_FORMAT, LIMITS, DataPackage
-from rtde_spec._generated.rtde_types import WIRE_TYPES
-from rtde_spec.errors import DecodeError, EncodeError, RecipeError, require
+from rtde_spec._generated.constants import (
+    DATA_PACKAGE_PREFIX_FIELDS,
+    DATA_PACKAGE_TYPE,
+    RTDE_LIMITS,
+)
+from rtde_spec.errors import DecodeError, RecipeError, require
+from rtde_spec.recipes.encoding import PREFIX, Encoder, RecipeItem
+from rtde_spec.recipes.record import record_class
 from rtde_spec.spec.catalogue import Catalogue, Direction, FieldInfo, WireTypeInfo
 
-DATA_PACKAGE_TYPE = DataPackage.PACKAGE_TYPE
-_PREFIX = struct.Struct(HEADER_FORMAT + DataPackage.FIXED_FORMAT[1:])  # header + recipe id
-_PREFIX_FIELDS = (*HEADER_FIELDS, *(lay.name for lay in DataPackage.LAYOUT if lay.kind == "fixed"))
+if TYPE_CHECKING:
+    from pydantic import BaseModel
+
+_PREFIX = PREFIX  # header + recipe id
+_PREFIX_FIELDS = DATA_PACKAGE_PREFIX_FIELDS
 PAYLOAD_OFFSET = _PREFIX.size
+_new_tuple = tuple.__new__
+_PY = {"int": int, "float": float, "bool": bool, "str": str}
 
 
-@dataclass(frozen=True)
-class RecipeItem:
-    """One variable of a recipe: its name, wire type, and byte offset in the payload."""
-
-    name: str
-    wire: WireTypeInfo
-    offset: int
-    info: FieldInfo | None = None
+def _py_type(wire: WireTypeInfo) -> Any:
+    """The plain Python type of a wire type, for the record's annotations (no bounds)."""
+    one = _PY[wire.kind]
+    return one if wire.count == 1 else tuple.__class_getitem__((one,) * wire.count)
 
 
 def _identifier(name: str) -> str:
@@ -67,16 +69,15 @@ class RecipeCodec:
         self.struct = struct.Struct(fmt)
         self.size = self.struct.size
         self.package_size = PAYLOAD_OFFSET + self.size
-        if self.package_size > LIMITS["package_max_bytes"]:
+        if self.package_size > RTDE_LIMITS["package_max_bytes"]:
             raise RecipeError(
                 "data package too large for the size field",
-                expected=f"<= {LIMITS['package_max_bytes']} bytes",
+                expected=f"<= {RTDE_LIMITS['package_max_bytes']} bytes",
                 actual=f"{self.package_size} bytes",
             )
-        self.record_type: Any = NamedTuple(  # type: ignore[misc]
-            "Record", [(i.name, WIRE_TYPES[i.wire.name]) for i in layout]
-        )
-        self._regroup, self._to_dict = self._compile()
+        self.record_type = record_class([(i.name, i.wire.count, _py_type(i.wire)) for i in layout])
+        self._to_dict = self._compile()
+        self._encoder = Encoder(self.items, self.struct, self.package_size)
         self._model_type: type[BaseModel] | None = None
         self._dtype: Any = None
 
@@ -116,24 +117,16 @@ class RecipeCodec:
             items.append((name, wire, cat.get(name, "output") or cat.get(name, "input")))
         return cls(items)
 
-    def _compile(self) -> tuple[Callable[..., Any], Callable[..., Any]]:
-        """Generate the regrouping functions once, specialised to this layout."""
+    def _compile(self) -> Callable[..., Any]:
+        """Generate the dict-making function once, specialised to this layout."""
         parts = []
         pos = 0
         for item in self.items:
             count = item.wire.count
             parts.append(f"t[{pos}]" if count == 1 else f"t[{pos}:{pos + count}]")
             pos += count
-        args = ", ".join(parts)
         pairs = ", ".join(f"{item.name!r}: {part}" for item, part in zip(self.items, parts, strict=True))
-        scope: dict[str, Any] = {}
-        if all(item.wire.count == 1 for item in self.items):
-            regroup_src = "lambda t, make: make(t)"
-        else:
-            regroup_src = f"lambda t, make: make(({args},))"
-        regroup = eval(regroup_src, scope)
-        to_dict = eval(f"lambda t: {{{pairs}}}", scope)
-        return regroup, to_dict
+        return eval(f"lambda t: {{{pairs}}}", {})  # type: ignore[no-any-return]
 
     # --- decoding -----------------------------------------------------------
 
@@ -161,10 +154,10 @@ class RecipeCodec:
         return self._to_dict(self.struct.unpack_from(payload, offset))  # type: ignore[no-any-return]
 
     def decode_record(self, payload: bytes | bytearray | memoryview, offset: int = 0) -> Any:
-        """A typed NamedTuple record: attribute access by the spec's names, cheapest."""
+        """A record: every value decoded, attribute access by the spec's names; the cheapest form."""
         if len(payload) - offset != self.size:
             self._check(payload, offset)
-        return self._regroup(self.struct.unpack_from(payload, offset), self.record_type._make)
+        return _new_tuple(self.record_type, self.struct.unpack_from(payload, offset))
 
     def decode_model(self, payload: bytes | bytearray | memoryview, offset: int = 0) -> BaseModel:
         """A pydantic model of the recipe.
@@ -222,40 +215,7 @@ class RecipeCodec:
         strict: BOOL takes only bool, integers only int, DOUBLE only int or float;
         otherwise 0/1 pass for BOOL and integral floats for integers.
         """
-        if isinstance(values, BaseModel):
-            values = values.model_dump()
-        elif isinstance(values, tuple):
-            if not hasattr(values, "_asdict"):
-                raise EncodeError(
-                    "a plain tuple has no field names; pass a record, dict or model", package="data_package"
-                )
-            values = values._asdict()
-        assert isinstance(values, Mapping)
-        flat: list[Any] = []
-        for item in self.items:
-            if item.name not in values:
-                raise EncodeError("missing value", package="data_package", field=item.name)
-            value = values[item.name]
-            if item.wire.count > 1:
-                if not isinstance(value, (list, tuple)) or len(value) != item.wire.count:
-                    raise EncodeError(
-                        f"{item.wire.name} needs exactly {item.wire.count} values",
-                        package="data_package",
-                        field=item.name,
-                        expected=f"{item.wire.count} values",
-                        actual=repr(value),
-                    )
-                flat.extend(_checked(item, v, strict, i) for i, v in enumerate(value))
-            else:
-                flat.append(_checked(item, value, strict, None))
-        extra = set(values) - set(self.names)
-        if extra:
-            raise EncodeError(
-                f"not in the recipe: {', '.join(sorted(extra))}",
-                package="data_package",
-                field=sorted(extra)[0],
-            )
-        return self.struct.pack(*flat)
+        return self._encoder.payload(values, strict)
 
     def encode_package(
         self,
@@ -263,17 +223,8 @@ class RecipeCodec:
         recipe_id: int,
         strict: bool = False,
     ) -> bytes:
-        """A whole data package: header, recipe id, payload."""
-        if not 0 <= recipe_id <= 255:
-            raise EncodeError(
-                "recipe id out of range",
-                package="data_package",
-                field="recipe_id",
-                expected="0..255",
-                actual=recipe_id,
-            )
-        payload = self.encode(values, strict)
-        return _PREFIX.pack(self.package_size, DATA_PACKAGE_TYPE, recipe_id) + payload
+        """A whole data package: header, recipe id, payload; one `struct` call on the happy path."""
+        return self._encoder.package(values, recipe_id, strict)
 
     # --- typed views --------------------------------------------------------
 
@@ -281,9 +232,39 @@ class RecipeCodec:
     def model_type(self) -> type[BaseModel]:
         """A pydantic model with one bounded field per variable (built on first use)."""
         if self._model_type is None:
+            from pydantic import create_model
+
+            from rtde_spec._generated.rtde_types import WIRE_TYPES
+
             fields: dict[str, Any] = {i.name: (WIRE_TYPES[i.wire.name], ...) for i in self.items}
             self._model_type = create_model("RecipeRecord", **fields)
         return self._model_type
+
+    @property
+    def construct_struct(self) -> Any:
+        """A construct Struct of a whole data package of this recipe (header, recipe id, fields).
+
+        The readable definition, for parsing captures with construct directly; the
+        codec's own methods are the fast path. Building fills in the size.
+        """
+        from construct import Array, Const, FormatField, Rebuild, Struct
+
+        def field(code: str) -> Any:
+            # construct names the standard 4-byte ints "l"/"L" where struct also takes "i"/"I"
+            return FormatField(_PREFIX.format[0], {"i": "l", "I": "L"}.get(code, code))
+
+        size_c, type_c, id_c = (field(code) for code in _PREFIX.format[1:])
+        fields = []
+        for item in self.items:
+            one = field(item.wire.struct[-1])
+            fields.append(item.name / (one if item.wire.count == 1 else Array(item.wire.count, one)))
+        size = self.package_size
+        return Struct(
+            _PREFIX_FIELDS[0] / Rebuild(size_c, lambda _: size),
+            _PREFIX_FIELDS[1] / Const(DATA_PACKAGE_TYPE, type_c),
+            _PREFIX_FIELDS[2] / id_c,
+            *fields,
+        )
 
     @property
     def dtype(self) -> Any:
@@ -353,33 +334,3 @@ def _prefix_word() -> tuple[str, int] | None:
 
 
 _PREFIX_WORD = _prefix_word()
-
-
-def _checked(item: RecipeItem, value: Any, strict: bool, index: int | None) -> Any:
-    wire = item.wire
-    field = item.name if index is None else f"{item.name}[{index}]"
-
-    def fail(reason: str, expected: Any) -> EncodeError:
-        return EncodeError(reason, package="data_package", field=field, expected=expected, actual=repr(value))
-
-    if wire.kind == "bool":
-        if isinstance(value, bool):
-            return value
-        if not strict and isinstance(value, int) and value in (0, 1):
-            return bool(value)
-        raise fail("not a bool", "True or False" if strict else "a bool, 0 or 1")
-    if wire.kind == "int":
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise fail(f"not an integer for {wire.name}", wire.name)
-        if isinstance(value, float):
-            if strict or not value.is_integer():
-                raise fail(f"not an integer for {wire.name}", wire.name)
-            value = int(value)
-        assert wire.bounds is not None
-        low, high = wire.bounds
-        if not low <= value <= high:
-            raise fail(f"out of range for {wire.name}", f"{low}..{high}")
-        return value
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise fail(f"not a number for {wire.name}", wire.name)
-    return float(value)

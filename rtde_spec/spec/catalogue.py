@@ -12,11 +12,13 @@ from collections.abc import Iterable
 from dataclasses import dataclass, field
 from functools import cache
 from pathlib import Path
-from typing import Literal
+from typing import TYPE_CHECKING, Any, Literal
 
 from rtde_spec.errors import RecipeError
-from rtde_spec.spec.schema import FieldsFile, FieldSpec, ProductLine, Spec
 from rtde_spec.spec.versions import Version
+
+if TYPE_CHECKING:
+    from rtde_spec.spec.schema import FieldsFile, FieldSpec, Spec
 
 Direction = Literal["input", "output"]
 DIRECTIONS: tuple[Direction, ...] = ("input", "output")
@@ -34,6 +36,18 @@ class WireTypeInfo:
     struct: str  # struct format for one value, e.g. "6d"; "" for STRING
     kind: str  # int | float | bool | str
     bounds: tuple[int, int] | None
+
+
+@dataclass(frozen=True)
+class LineInfo:
+    """A product line (CB3, e-Series, PolyScope X) as the catalogue needs it."""
+
+    id: str
+    name: str
+    majors: tuple[int, ...]
+    first_version: str
+    inherits: str | None
+    rtde_max_frequency: int
 
 
 @dataclass(frozen=True)
@@ -64,12 +78,19 @@ class FieldInfo:
 
 
 class Catalogue:
-    """Fields, types and product lines of one spec (plus any extra fields files)."""
+    """Fields, types and product lines of one spec (plus any extra fields files).
+
+    The built-in catalogue is read from compiled tables (`_generated/catalogue_data`)
+    without pydantic; the validated spec behind it is loaded only when asked for.
+    """
 
     def __init__(self, spec: Spec, extra: Iterable[FieldsFile] = ()) -> None:
-        self.spec = spec
+        self._spec: Spec | None = spec
         self.extra = tuple(extra)
-        self.lines: dict[str, ProductLine] = {p.id: p for p in spec.product_lines.product_lines}
+        self.lines = {
+            p.id: LineInfo(p.id, p.name, tuple(p.majors), p.first_version, p.inherits, p.rtde_max_frequency)
+            for p in spec.product_lines.product_lines
+        }
         self.wire_types = _wire_types(spec)
         self._fields: dict[Direction, dict[str, FieldInfo]] = {d: {} for d in DIRECTIONS}
         for fields_file in (spec.fields, *self.extra):
@@ -82,15 +103,75 @@ class Catalogue:
                     for info in self._expand(entry, direction):
                         self._fields[direction][info.name] = info
 
+    @property
+    def spec(self) -> Spec:
+        """The validated meta-model (for the built-in catalogue: validated on first use)."""
+        if self._spec is None:
+            from rtde_spec._generated.spec_data import SPEC
+            from rtde_spec.spec.schema import Spec
+
+            self._spec = Spec.model_validate(SPEC)
+        return self._spec
+
     # --- construction ---------------------------------------------------------
 
     @classmethod
     @cache
     def builtin(cls) -> Catalogue:
         """The catalogue compiled into this package (spec/ at codegen time)."""
-        from rtde_spec._generated.spec_data import SPEC
+        from rtde_spec._generated import catalogue_data as data
 
-        return cls(Spec.model_validate(SPEC))
+        self = cls.__new__(cls)
+        self._spec = None
+        self.extra = ()
+        self.lines = {row[0]: LineInfo(*row) for row in data.LINES}
+        self.wire_types = {row[0]: WireTypeInfo(*row) for row in data.WIRE_TYPES}
+        self._fields = {d: {} for d in DIRECTIONS}
+        for row in data.FIELDS:
+            (
+                name,
+                direction,
+                wire,
+                doc,
+                unit,
+                enum,
+                bits,
+                deprecated,
+                reserved,
+                sources,
+                family,
+                index,
+                since,
+            ) = row
+            info = FieldInfo(
+                name,
+                direction,
+                self.wire_types[wire],
+                doc,
+                unit,
+                enum,
+                bits,
+                deprecated,
+                reserved,
+                sources,
+                family,
+                index,
+                {line: Version.parse(v) for line, v in since.items()},
+            )
+            self._fields[direction][name] = info
+        return self
+
+    def table_rows(self) -> dict[str, list[tuple[Any, ...]]]:
+        """The catalogue as plain rows, which codegen writes to `_generated/catalogue_data`."""
+        lines = [tuple(vars(line).values()) for line in self.lines.values()]
+        wires = [tuple(vars(wire).values()) for wire in self.wire_types.values()]
+        fields = []
+        for info in self.fields():
+            row = list(vars(info).values())
+            row[2] = info.wire.name
+            row[-1] = {line: str(v) for line, v in info.since.items()}
+            fields.append(tuple(row))
+        return {"LINES": lines, "WIRE_TYPES": wires, "FIELDS": fields}
 
     @classmethod
     def default(cls) -> Catalogue:
@@ -100,6 +181,7 @@ class Catalogue:
     def with_extra(self, *paths: str | Path) -> Catalogue:
         """A new catalogue with the fields of extra YAML files (the shape of fields.yaml)."""
         from rtde_spec.spec.loader import load_fields_file
+        from rtde_spec.spec.schema import FieldsFile
 
         extra = list(self.extra)
         for path in paths:
@@ -149,7 +231,7 @@ class Catalogue:
 
     # --- questions ------------------------------------------------------------
 
-    def line_of(self, version: str | Version) -> ProductLine:
+    def line_of(self, version: str | Version) -> LineInfo:
         """The product line a controller version belongs to."""
         try:
             parsed = Version.parse(version)

@@ -1,0 +1,7 @@
+"""The pydantic models of the primary and secondary interfaces: public API, generated from spec/.
+
+Import from here, not from `rtde_spec._generated` (the generator's output, whose
+layout may change).
+"""
+
+from rtde_spec._generated.primary_models import *  # noqa: F403
