@@ -26,7 +26,7 @@ from rtde_spec.primary.base import (
     UnknownMessage,
     UnknownSubPackage,
 )
-from rtde_spec.primary.fast_models import build
+from rtde_spec.primary.fast_models import build, maker
 from rtde_spec.primary.layout import Layout
 from rtde_spec.primary.values import ValueTable
 from rtde_spec.spec.catalogue import Catalogue
@@ -222,10 +222,14 @@ def _with_groups(layout: Layout, values: dict[str, Any]) -> dict[str, Any]:
         inner = layout.groups[fld.name]
         cls = gen.GROUPS[fld.group or ""]
         value = values[fld.name]
+        make = maker(cls)
         if fld.kind == "optional":
-            values[fld.name] = build(cls, _with_groups(inner, value))
+            values[fld.name] = make(_with_groups(inner, value))
+        elif inner.group_fields:
+            entries = [make(_with_groups(inner, v)) for v in value]
+            values[fld.name] = tuple(entries) if isinstance(fld.repeat, int) else entries
         else:
-            entries = [build(cls, _with_groups(inner, v)) for v in value]
+            entries = [make(v) for v in value]
             values[fld.name] = tuple(entries) if isinstance(fld.repeat, int) else entries
     return values
 

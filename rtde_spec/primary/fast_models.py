@@ -10,31 +10,40 @@ fields-set record is shared between instances of a class.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from typing import Any, TypeVar
 
 from pydantic import BaseModel
 
 M = TypeVar("M", bound=BaseModel)
 _setattr = object.__setattr__
-_PLANS: dict[type[BaseModel], tuple[int, dict[str, Any], set[str]]] = {}
+_new = object.__new__
+_MAKERS: dict[type[BaseModel], Callable[[dict[str, Any]], Any]] = {}
 
 
-def _plan(cls: type[BaseModel]) -> tuple[int, dict[str, Any], set[str]]:
+def maker(cls: type[M]) -> Callable[[dict[str, Any]], M]:
+    """A function that builds `cls` from a dict of its values, unvalidated (made once per class)."""
+    found = _MAKERS.get(cls)
+    if found is not None:
+        return found
     assert cls.model_config.get("frozen"), f"{cls.__name__} must be frozen"
     fields = cls.model_fields
+    count = len(fields)
     defaults = {n: i.default for n, i in fields.items() if not i.is_required()}
-    plan = (len(fields), defaults, set(fields))
-    _PLANS[cls] = plan
-    return plan
+    fields_set = set(fields)
+
+    def make(values: dict[str, Any]) -> M:
+        obj = _new(cls)
+        _setattr(obj, "__dict__", values if len(values) == count else {**defaults, **values})
+        _setattr(obj, "__pydantic_fields_set__", fields_set)
+        _setattr(obj, "__pydantic_extra__", None)
+        _setattr(obj, "__pydantic_private__", None)
+        return obj  # type: ignore[no-any-return]
+
+    _MAKERS[cls] = make
+    return make
 
 
 def build(cls: type[M], values: dict[str, Any]) -> M:
     """An instance of `cls` holding `values` (plus defaults), unvalidated."""
-    plan = _PLANS.get(cls) or _plan(cls)
-    full = values if len(values) == plan[0] else {**plan[1], **values}
-    obj = object.__new__(cls)
-    _setattr(obj, "__dict__", full)
-    _setattr(obj, "__pydantic_fields_set__", plan[2])
-    _setattr(obj, "__pydantic_extra__", None)
-    _setattr(obj, "__pydantic_private__", None)
-    return obj
+    return maker(cls)(values)
