@@ -13,7 +13,7 @@ import sys
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).parent))
-from make_primary_golden import CASES  # noqa: E402
+from make_primary_golden import CASES
 
 # sub-package type numbers from the document, in a UR5e's order
 UR5E_ORDER = [
