@@ -16,7 +16,7 @@ if TYPE_CHECKING:
     from rtde_spec.recipes.codec import RecipeCodec
     from rtde_spec.rtde.stream import Batch, Package
 
-CHUNK = 1 << 20
+CHUNK = 2 << 20
 FORMAT_CHOICES = ("table", "jsonl", "json", "csv", "parquet")
 
 
@@ -182,8 +182,7 @@ def decode_into(writer: Writer, args: argparse.Namespace, codec: RecipeCodec | N
         for chunk in chunks(args):
             for item in decoder.feed(chunk):
                 emit(item)
-        for item in decoder.close():
-            emit(item)
+        decoder.close()
     finally:
         if skipped:
             kinds = ", ".join(f"{n} x{c}" for n, c in skipped.items())

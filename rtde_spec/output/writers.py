@@ -57,12 +57,16 @@ def flatten(record: Mapping[str, Any]) -> dict[str, Any]:
     return out
 
 
+def _native(column: Any) -> Any:
+    """The column in native byte order (big-endian wire values would convert one by one)."""
+    return column if column.dtype.isnative else column.astype(column.dtype.newbyteorder("="))
+
+
 def flat_columns(columns: Mapping[str, Any]) -> dict[str, Any]:
     """numpy columns (2-D for vectors) to 1-D columns named name_0..name_N, native byte order."""
     out: dict[str, Any] = {}
     for name, column in columns.items():
-        if column.dtype.byteorder not in ("=", "|"):
-            column = column.astype(column.dtype.newbyteorder("="))
+        column = _native(column)
         if column.ndim == 1:
             out[name] = column
         else:
@@ -128,11 +132,12 @@ class JsonLinesWriter(Writer):
 
     def write_columns(self, columns: Mapping[str, Any]) -> None:
         names = list(columns)
-        lists = [columns[n].tolist() for n in names]  # C-speed conversion, then one dumps per row
-        dumps, write = self._dumps, self.stream.write
-        for values in zip(*lists, strict=True):
-            write(dumps(dict(zip(names, values, strict=True))) + b"\n")
-        self.rows += len(lists[0]) if lists else 0
+        lists = [_native(columns[n]).tolist() for n in names]  # C-speed conversion, native order first
+        dumps = self._dumps
+        lines = [dumps(dict(zip(names, values, strict=True))) for values in zip(*lists, strict=True)]
+        if lines:
+            self.stream.write(b"\n".join(lines) + b"\n")
+        self.rows += len(lines)
 
 
 class JsonWriter(JsonLinesWriter):
@@ -216,45 +221,93 @@ class CsvWriter(Writer):
 
 
 class ParquetWriter(Writer):
-    """Parquet row groups as batches arrive; the schema is the first batch's."""
+    """Parquet, streamed as row groups of about `ROW_GROUP_ROWS`; the schema is the first batch's.
+
+    Dictionary encoding and statistics only where they pay: integer and bool columns
+    (modes, bits, registers) and the timestamp. Float columns of robot data rarely
+    repeat, and dictionary-encoding them costs most of the write time.
+    """
+
+    ROW_GROUP_ROWS = 4096
 
     def __init__(self, stream: IO[bytes]) -> None:
         super().__init__(stream)
         self._pa = require("pyarrow", "parquet", "Parquet output")
         self._pq = require("pyarrow.parquet", "parquet", "Parquet output")
         self._writer: Any = None
-        self._pending: list[dict[str, Any]] = []
+        self._rows: list[dict[str, Any]] = []
+        self._tables: list[Any] = []
+        self._held = 0
+        self._pool: Any = None
+        self._pending: Any = None
 
-    def _write_table(self, table_: Any) -> None:
+    def _open(self, schema: Any) -> None:
+        pa = self._pa
+        discrete = [f.name for f in schema if not pa.types.is_floating(f.type)]
+        stats = [*discrete, *(["timestamp"] if "timestamp" in schema.names else [])]
+        self._writer = self._pq.ParquetWriter(
+            self.stream, schema, use_dictionary=discrete or False, write_statistics=stats or False
+        )
+
+    def _add(self, table_: Any) -> None:
         if self._writer is None:
-            self._writer = self._pq.ParquetWriter(self.stream, table_.schema)
+            self._open(table_.schema)
         elif table_.schema != self._writer.schema:
             table_ = table_.select(self._writer.schema.names).cast(self._writer.schema)
-        self._writer.write_table(table_)
+        self._tables.append(table_)
+        self._held += table_.num_rows
+        if self._held >= self.ROW_GROUP_ROWS:
+            self._write_held()
+
+    def _write_held(self) -> None:
+        """Hand the held rows to the writing thread; at most one row group is in flight.
+
+        pyarrow encodes with the GIL released, so on two cores the next batch decodes
+        while this one is written. Memory stays bounded: one group held, one writing.
+        """
+        if not self._tables:
+            return
+        group = self._pa.concat_tables(self._tables)
+        self._tables, self._held = [], 0
+        self._wait()
+        if self._pool is None:
+            from concurrent.futures import ThreadPoolExecutor
+
+            self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="parquet")
+        self._pending = self._pool.submit(self._writer.write_table, group, row_group_size=group.num_rows)
+
+    def _wait(self) -> None:
+        if self._pending is not None:
+            pending, self._pending = self._pending, None
+            pending.result()  # re-raises a write error here, in the caller's thread
 
     def write(self, record: Mapping[str, Any]) -> None:
-        self._pending.append(flatten(record))
+        self._rows.append(flatten(record))
         self.rows += 1
-        if len(self._pending) >= _PARQUET_BATCH_ROWS:
+        if len(self._rows) >= _PARQUET_BATCH_ROWS:
             self._flush_rows()
 
     def _flush_rows(self) -> None:
-        if self._pending:
-            self._write_table(self._pa.Table.from_pylist(self._pending))
-            self._pending = []
+        if self._rows:
+            self._add(self._pa.Table.from_pylist(self._rows))
+            self._rows = []
 
     def write_columns(self, columns: Mapping[str, Any]) -> None:
         self._flush_rows()
         flat = flat_columns(columns)
-        self._write_table(self._pa.table(flat))
+        self._add(self._pa.table(flat))
         self.rows += len(next(iter(flat.values()))) if flat else 0
 
     def close(self) -> None:
         self._flush_rows()
-        if self._writer is not None:
-            self._writer.close()
-        elif self.rows == 0:
-            pass
+        try:
+            if self._writer is not None:
+                self._write_held()
+                self._wait()
+                self._writer.close()
+        finally:
+            if self._pool is not None:
+                self._pool.shutdown()
         super().close()
 
 

@@ -8,6 +8,7 @@ are absolute in the stream, and every error names the package it is in.
 
 from __future__ import annotations
 
+import struct
 from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import Any
@@ -21,6 +22,7 @@ from rtde_spec.rtde.protocol_state import ProtocolState
 from rtde_spec.wire.framing import PackageFramer
 
 DATA = gen.DataPackage.PACKAGE_TYPE
+_HEADER = struct.Struct(gen.HEADER_FORMAT)
 
 
 @dataclass
@@ -59,45 +61,34 @@ class StreamDecoder:
         self._given_version = protocol_version
         self._started = False
         self._framer = PackageFramer()
-        self._batch = batch and codec is not None and _has_numpy()
-        self._run: list[bytes] = []
-        self._run_offset = 0
+        self._run: tuple[int, bytes] | None = None  # (package size, header bytes) of batched packages
+        if batch and codec is not None and _has_numpy():
+            self._run = (codec.package_size, _HEADER.pack(codec.package_size, DATA))
         self.packages = 0
 
     def feed(self, data: bytes | bytearray | memoryview) -> Iterator[Package | Batch]:
-        for offset, package in self._framer.feed(data):
+        """Items for every package this data completes, in stream order."""
+        for offset, chunk in self._framer.feed(data, self._run):
             if not self._started:
-                self.state.version = starting_version(package, self._given_version)
+                self.state.version = starting_version(chunk, self._given_version)
                 self._started = True
-            if self._batch and self._fits_run(package):
-                if not self._run:
-                    self._run_offset = offset
-                self._run.append(package)
-                continue
-            if self._run:
-                yield self._flush()
-            yield self._one(offset, package)
+            if self._run is not None and len(chunk) >= self._run[0] and chunk.startswith(self._run[1]):
+                yield self._batch_of(offset, chunk)
+            else:
+                yield self._one(offset, chunk)
 
-    def flush(self) -> Iterator[Batch]:
-        """The data packages held back for a batch (call at the end, or before a pause)."""
-        if self._run:
-            yield self._flush()
-
-    def close(self) -> Iterator[Batch]:
-        """Everything held back; then DecodeError if the stream ended inside a package."""
-        yield from self.flush()
+    def close(self) -> None:
+        """DecodeError if the stream ended inside a package."""
         self._framer.close()
 
-    def _fits_run(self, package: bytes) -> bool:
+    def _batch_of(self, offset: int, run: bytes) -> Batch:
         assert self.codec is not None
-        return len(package) == self.codec.package_size and package[2] == DATA
-
-    def _flush(self) -> Batch:
-        assert self.codec is not None
-        run, self._run = self._run, []
-        self.packages += len(run)
-        array = self.codec.decode_many(b"".join(run))  # sizes and types were checked on the way in
-        return Batch(self._run_offset, array)
+        try:
+            array = self.codec.decode_many(run)
+        except DecodeError as exc:
+            raise exc.in_stream(offset, self.packages + 1) from None
+        self.packages += len(array)
+        return Batch(offset, array)
 
     def _one(self, offset: int, package: bytes) -> Package:
         self.packages += 1

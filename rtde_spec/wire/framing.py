@@ -42,14 +42,30 @@ class PackageFramer:
         """Bytes held that do not yet make a whole package."""
         return len(self._buf) - self._start
 
-    def feed(self, data: bytes | bytearray | memoryview) -> list[tuple[int, bytes]]:
-        """Add bytes; return (stream offset, package bytes) for every package completed."""
+    def feed(
+        self, data: bytes | bytearray | memoryview, run: tuple[int, bytes] | None = None
+    ) -> list[tuple[int, bytes]]:
+        """Add bytes; return (stream offset, package bytes) for every package completed.
+
+        With `run` = (package size, leading bytes), back-to-back packages of that size
+        starting with those bytes come out together as one item (several packages'
+        bytes), found with one vectorised comparison: the fast path for data packages.
+        """
         if self._broken is not None:
             raise self._broken
         self._buf += data
         out: list[tuple[int, bytes]] = []
         buf, start = self._buf, self._start
         while len(buf) - start >= self._size_bytes:
+            if run is not None and buf.startswith(run[1], start):
+                count = _run_length(buf, start, run[0], run[1])
+                if count:
+                    end = start + count * run[0]
+                    with memoryview(buf) as view:  # one copy, released before the buffer shrinks
+                        out.append((self._offset, bytes(view[start:end])))
+                    self._offset += end - start
+                    start = end
+                    continue
             size = int.from_bytes(buf[start : start + self._size_bytes], "big")
             if size < self._header_size or (self._max_size is not None and size > self._max_size):
                 low = size < self._header_size
@@ -145,3 +161,16 @@ def check_header(
             actual=f"{len(buf)} bytes",
         )
     return size, kind
+
+
+def _run_length(buf: bytearray, start: int, size: int, lead: bytes) -> int:
+    """How many whole packages of `size` from `start` all begin with `lead` (numpy, one pass)."""
+    import numpy as np
+
+    whole = (len(buf) - start) // size
+    if whole == 0:
+        return 0
+    view = np.frombuffer(buf, dtype=np.uint8, count=whole * size, offset=start).reshape(whole, size)
+    heads = view[:, : len(lead)]
+    bad = (heads != np.frombuffer(lead, dtype=np.uint8)).any(axis=1)
+    return int(np.argmax(bad)) if bad.any() else whole
