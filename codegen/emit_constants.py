@@ -8,6 +8,7 @@ from __future__ import annotations
 from rtde_spec.spec.catalogue import Catalogue
 from rtde_spec.spec.schema import Spec
 
+from .emit_rtde import order_of
 from .render import PY_HEADER
 
 
@@ -15,7 +16,7 @@ def emit_constants(spec: Spec) -> str:
     pk = spec.packages
     protocols = tuple(sorted({p for m in pk.messages for p in m.protocols}))
     prims = {p.name: p for p in spec.primitives.primitives}
-    header = ">" + "".join(prims[h.type].struct for h in pk.header)
+    header = order_of(pk.byte_order) + "".join(prims[h.type].struct for h in pk.header)
     data = next(m for m in pk.messages if m.name == "data_package")
     fixed = [f for f in data.fields if f.type in prims and f.length is None]
     prefix_codes = "".join(prims[f.type].struct for f in fixed)
@@ -30,6 +31,14 @@ def emit_constants(spec: Spec) -> str:
         f"RTDE_HEADER_FORMAT = {header!r}\n",
         f"RTDE_HEADER_FIELDS: tuple[str, ...] = {tuple(h.name for h in pk.header)!r}\n",
         f"RTDE_LIMITS: dict[str, int] = {pk.limits.model_dump()!r}\n",
+        f"RTDE_ANSWERS: dict[str, str] = {pk.answers.model_dump()!r}\n",
+        '"""Words a setup reply puts in its type list instead of a type."""\n',
+        f"RTDE_DIRECTIONS: dict[str, str] = {dict(pk.directions)!r}\n",
+        '"""Sender -> the direction of the recipes its data packages carry."""\n',
+        f"BYTE_ORDER = {order_of(pk.byte_order)!r}\n",
+        '"""struct prefix of the byte order every RTDE field is sent in."""\n',
+        f"PRIMARY_BYTE_ORDER = {order_of(spec.primary.byte_order)!r}\n",
+        '"""struct prefix of the byte order of the primary/secondary interfaces."""\n',
         f"DATA_PACKAGE_TYPE = {ord(data.type)}  # {data.type!r}\n",
         f"DATA_PACKAGE_PREFIX_FORMAT = {header + prefix_codes!r}\n",
         '"""struct format of a data package up to its payload: the header, then the recipe id."""\n',

@@ -102,7 +102,12 @@ def emit_rtde_structs(spec: Spec) -> str:
 def header_format(spec: Spec) -> str:
     """struct format of the RTDE header, from the spec's header fields."""
     prims = prims_of(spec)
-    return ">" + "".join(prims[h.type].struct for h in spec.packages.header)
+    return order_of(spec.packages.byte_order) + "".join(prims[h.type].struct for h in spec.packages.header)
+
+
+def order_of(byte_order: str) -> str:
+    """struct's prefix for a spec's byte order."""
+    return {"big": ">", "little": "<"}[byte_order]
 
 
 def _model_doc(msg: MessageSpec, spec: Spec) -> str:
@@ -131,7 +136,8 @@ def _model(msg: MessageSpec, spec: Spec, prims: dict[str, Primitive]) -> str:
         if fld.type not in prims or fld.length is not None:
             break
         leading.append(prims[fld.type].struct)
-    out.append(f"    FIXED_FORMAT: ClassVar[str] = {'>' + ''.join(leading)!r}  # leading fixed fields\n")
+    fixed = order_of(spec.packages.byte_order) + "".join(leading)
+    out.append(f"    FIXED_FORMAT: ClassVar[str] = {fixed!r}  # leading fixed fields\n")
     layout = "".join(f"        {_layout(f, prims)},\n" for f in msg.fields)
     out.append(f"    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (\n{layout}    )\n")
     if msg.fields:

@@ -15,7 +15,7 @@ HEADER_FORMAT = '>HB'
 """struct format of the header (size, type)."""
 HEADER_SIZE = 3
 HEADER_FIELDS: tuple[str, ...] = ('size', 'type')
-LIMITS: dict[str, int] = {'setup_names_max_bytes': 2048, 'input_recipes_max': 255, 'package_max_bytes': 65535}
+LIMITS: dict[str, int] = {'setup_names_max_bytes': 2048, 'input_recipes_max': 255, 'invalid_recipe_id': 0, 'package_max_bytes': 65535}
 PACKAGE_TYPES: dict[int, str] = {
     86: 'RTDE_REQUEST_PROTOCOL_VERSION',  # 'V'
     118: 'RTDE_GET_URCONTROL_VERSION',  # 'v'

@@ -5,9 +5,15 @@ from __future__ import annotations
 import argparse
 import sys
 from collections.abc import Iterator
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, cast
 
-from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT, RTDE_PROTOCOLS, RTDE_SENDERS
+from rtde_spec._generated.constants import (
+    PRIMARY_PORTS,
+    RTDE_DIRECTIONS,
+    RTDE_PORT,
+    RTDE_PROTOCOLS,
+    RTDE_SENDERS,
+)
 from rtde_spec.cli.common import existing_file, read_input, reject_capture
 from rtde_spec.errors import RtdeSpecError, UsageError
 
@@ -80,7 +86,7 @@ def recipe_codec(args: argparse.Namespace) -> RecipeCodec | None:
     from rtde_spec.recipes.files import load_recipes
     from rtde_spec.recipes.model import Direction, Recipe
 
-    direction: Direction = "output" if args.sender == "controller" else "input"
+    direction = cast(Direction, RTDE_DIRECTIONS[args.sender])
     path = existing_file(args.recipe)
     if path is not None:
         (recipe, *rest) = load_recipes(path)

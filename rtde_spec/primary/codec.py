@@ -15,6 +15,7 @@ from functools import cache
 from typing import Any
 
 from rtde_spec._generated import primary_models as gen
+from rtde_spec._generated.constants import PRIMARY_BYTE_ORDER as ORDER
 from rtde_spec._generated.constants import PRODUCT_LINES
 from rtde_spec.errors import DecodeError, EncodeError
 from rtde_spec.primary.base import (
@@ -52,8 +53,8 @@ class PrimaryCodec:
         prims = {p.name: p for p in spec.primitives.primitives}
         codes = {e.name: {v.name: v.value for v in e.values} for e in spec.all_enums}
         self.values = ValueTable(pf.value_types, codes["GlobalVariableType"], prims, pf.value_separator)
-        self.header = struct.Struct(">" + "".join(prims[h.type].struct for h in pf.header))
-        self.sub_header = struct.Struct(">" + "".join(prims[h.type].struct for h in pf.subpackage_header))
+        self.header = struct.Struct(ORDER + "".join(prims[h.type].struct for h in pf.header))
+        self.sub_header = struct.Struct(ORDER + "".join(prims[h.type].struct for h in pf.subpackage_header))
         self.max_size = pf.max_message_bytes
         self.families: dict[int, _Family] = {}
         self.by_class: dict[type[PrimaryPart], tuple[_Family, Layout]] = {}
@@ -258,7 +259,7 @@ class PrimaryStreamDecoder:
     def __init__(self, codec: PrimaryCodec | None = None) -> None:
         self.codec = codec or default_codec()
         self.framer = PackageFramer(
-            size_bytes=struct.calcsize(">" + self.codec.header.format[1]),
+            size_bytes=struct.calcsize(ORDER + self.codec.header.format[1]),
             header_size=self.codec.header.size,
             max_size=self.codec.max_size,
         )

@@ -18,6 +18,7 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
+from rtde_spec._generated.constants import PRIMARY_BYTE_ORDER as ORDER
 from rtde_spec.errors import DecodeError, EncodeError
 from rtde_spec.primary.values import ValueTable
 from rtde_spec.spec.schema import CaseSpec, LayoutField, Primitive
@@ -37,7 +38,7 @@ class Atom:
     regroup: Callable[[tuple[Any, ...]], Any] = field(init=False)
 
     def __post_init__(self) -> None:
-        self.struct = struct.Struct(">" + self.fmt)
+        self.struct = struct.Struct(ORDER + self.fmt)
         source, _ = self.expr(0)
         self.regroup = eval(f"lambda t: {source}")
 
@@ -49,7 +50,7 @@ class FixedStep:
     regroup: Callable[[tuple[Any, ...]], Values] = field(init=False)
 
     def __post_init__(self) -> None:
-        self.struct = struct.Struct(">" + "".join(a.fmt for a in self.atoms))
+        self.struct = struct.Struct(ORDER + "".join(a.fmt for a in self.atoms))
         parts = []
         index = 0
         for atom in self.atoms:
@@ -225,7 +226,7 @@ class Layout:
             prim = self.prims[case]
             if end - pos < prim.size:
                 return False, pos
-            (values[fld.name],) = struct.unpack_from(">" + prim.struct, buf, pos)
+            (values[fld.name],) = struct.unpack_from(ORDER + prim.struct, buf, pos)
             return True, pos + prim.size
         inner = self.groups[fld.name]
         if kind == "optional":
@@ -282,7 +283,7 @@ class Layout:
                 items = tuple(value) if fld.count else (value,)
                 if fld.count and len(items) != fld.count:
                     raise EncodeError(f"needs exactly {fld.count} values", field=name, actual=len(items))
-                return struct.pack(">" + prim.struct * len(items), *items)
+                return struct.pack(ORDER + prim.struct * len(items), *items)
             if kind in ("string", "bytes"):
                 raw = _untext(value, fld.format) if kind == "string" else bytes(value)
                 return raw if fld.length == "rest" else self._prefix(fld.length or "", len(raw), name) + raw
@@ -293,7 +294,7 @@ class Layout:
                 if isinstance(case, CaseSpec):
                     raw = str(value).encode("utf-8", "surrogateescape")
                     return self._prefix(case.length or "", len(raw), name) + raw
-                return struct.pack(">" + self.prims[case].struct, value)
+                return struct.pack(ORDER + self.prims[case].struct, value)
             inner = self.groups[fld.name]
             if kind == "optional":
                 return inner.encode(_as_dict(value), f"{name}.")

@@ -13,6 +13,7 @@ from typing import Any
 
 from pydantic import BaseModel, ConfigDict
 
+from rtde_spec._generated.constants import PRIMARY_BYTE_ORDER as ORDER
 from rtde_spec.errors import DecodeError, EncodeError
 
 MAX_DEPTH = 32  # nested lists deeper than this are refused, not recursed into
@@ -48,7 +49,7 @@ class ValueTable:
 
     @cache  # noqa: B019 - one table per process
     def _struct(self, fmt: str) -> struct.Struct:
-        return struct.Struct(">" + fmt)
+        return struct.Struct(ORDER + fmt)
 
     def _prefix(self, name: str) -> struct.Struct:
         return self._struct(self.prims[name].struct)

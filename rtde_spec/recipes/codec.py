@@ -14,6 +14,7 @@ from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.constants import (
+    BYTE_ORDER,
     DATA_PACKAGE_PREFIX_FIELDS,
     DATA_PACKAGE_TYPE,
     RTDE_LIMITS,
@@ -53,7 +54,7 @@ class RecipeCodec:
             raise RecipeError("a recipe needs at least one variable")
         layout: list[RecipeItem] = []
         offset = 0
-        fmt = ">"
+        fmt = BYTE_ORDER
         for name, wire, info in items:
             if wire.size is None:
                 raise RecipeError(f"type {wire.name} cannot be in a data package", field=name)
@@ -273,9 +274,11 @@ class RecipeCodec:
             np = require("numpy", "numpy", "numpy views of data packages")
 
             codes = _PREFIX.format[1:]
-            fields: list[tuple[Any, ...]] = [(n, ">" + c) for n, c in zip(_PREFIX_FIELDS, codes, strict=True)]
+            fields: list[tuple[Any, ...]] = [
+                (n, BYTE_ORDER + c) for n, c in zip(_PREFIX_FIELDS, codes, strict=True)
+            ]
             for item in self.items:
-                code = ">" + item.wire.struct[-1]
+                code = BYTE_ORDER + item.wire.struct[-1]
                 fields.append(
                     (item.name, code) if item.wire.count == 1 else (item.name, code, (item.wire.count,))
                 )
@@ -328,9 +331,9 @@ def _prefix_word() -> tuple[str, int] | None:
     widths = {1: "u1", 2: "u2", 4: "u4", 8: "u8"}
     if _PREFIX.size not in widths:
         return None
-    recipe_bits = 8 * struct.calcsize(">" + _PREFIX.format[-1])
+    recipe_bits = 8 * struct.calcsize(BYTE_ORDER + _PREFIX.format[-1])
     mask = ((1 << (8 * _PREFIX.size)) - 1) ^ ((1 << recipe_bits) - 1)
-    return ">" + widths[_PREFIX.size], mask
+    return BYTE_ORDER + widths[_PREFIX.size], mask
 
 
 _PREFIX_WORD = _prefix_word()

@@ -15,7 +15,7 @@ from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
-from rtde_spec._generated.constants import DATA_PACKAGE_PREFIX_FORMAT, DATA_PACKAGE_TYPE
+from rtde_spec._generated.constants import BYTE_ORDER, DATA_PACKAGE_PREFIX_FORMAT, DATA_PACKAGE_TYPE
 from rtde_spec.errors import EncodeError
 from rtde_spec.spec.catalogue import FieldInfo, WireTypeInfo
 
@@ -139,7 +139,7 @@ class Encoder:
 
 
 def _bounds(code: str) -> tuple[int, int]:
-    bits = 8 * struct.calcsize(">" + code)
+    bits = 8 * struct.calcsize(BYTE_ORDER + code)
     return (0, (1 << bits) - 1) if code.isupper() else (-(1 << (bits - 1)), (1 << (bits - 1)) - 1)
 
 

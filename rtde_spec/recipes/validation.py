@@ -16,6 +16,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Literal
 
+from rtde_spec._generated.constants import RTDE_ANSWERS
 from rtde_spec._generated.rtde_models import HEADER_FORMAT, LIMITS, DataPackage
 from rtde_spec.recipes.files import infer_direction
 from rtde_spec.recipes.model import Direction, Recipe
@@ -23,7 +24,7 @@ from rtde_spec.spec.catalogue import Catalogue, FieldInfo
 from rtde_spec.spec.versions import Version
 
 Severity = Literal["error", "warning", "info"]
-NOT_FOUND = "NOT_FOUND"
+NOT_FOUND = RTDE_ANSWERS["not_found"]
 # a data package: header and recipe id, then the variables
 DATA_PREFIX_BYTES = struct.calcsize(HEADER_FORMAT + DataPackage.FIXED_FORMAT[1:])
 

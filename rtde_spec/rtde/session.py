@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from rtde_spec._generated import rtde_models as gen
+from rtde_spec._generated.constants import RTDE_DIRECTIONS
 from rtde_spec.errors import DecodeError, RecipeError
 from rtde_spec.recipes.codec import RecipeCodec
 from rtde_spec.rtde.codec import Sender, decode, observe
@@ -50,7 +51,7 @@ class SessionDecoder:
         elif isinstance(message, gen.SetupInputsReply):
             self._learn("input", message.input_recipe_id, message.variable_types, out)
         elif isinstance(message, gen.DataPackage):
-            direction = "output" if sender == "controller" else "input"
+            direction = RTDE_DIRECTIONS[sender]
             codec = self.recipes.get((direction, message.recipe_id))
             if codec is None:
                 out.note = f"no {direction} recipe {message.recipe_id} was set up"

@@ -191,6 +191,8 @@ def _lint_packages(spec: Spec) -> Iterator[tuple[str, Loc, str]]:
     for i, hfield in enumerate(pk.header):
         if hfield.type not in prims:
             yield "packages", ("header", i, "type"), f"unknown primitive {hfield.type!r}"
+    if set(pk.directions) != set(pk.senders):
+        yield "packages", ("directions",), f"directions must name each sender once: {', '.join(pk.senders)}"
     names = [m.name for m in pk.messages]
     for dup, reason in _duplicates(names, ("messages",), "message"):
         yield "packages", dup, reason

@@ -225,12 +225,21 @@ class MessageSpec(StrictModel):
 class Limits(StrictModel):
     setup_names_max_bytes: int
     input_recipes_max: int
+    invalid_recipe_id: int
     package_max_bytes: int
+
+
+class Answers(StrictModel):
+    not_found: Annotated[str, Field(pattern=r"^[A-Z_]+$")]
+    in_use: Annotated[str, Field(pattern=r"^[A-Z_]+$")]
 
 
 class PackagesFile(StrictModel):
     port: int
     doc_ref: str | None = None
+    byte_order: Literal["big", "little"]
+    answers: Answers
+    directions: dict[str, Literal["input", "output"]]
     limits: Limits
     header: list[PackageField]
     senders: dict[str, str]
@@ -308,6 +317,7 @@ class ValueTypeSpec(StrictModel):
 
 
 class PrimaryFile(StrictModel):
+    byte_order: Literal["big", "little"]
     doc_ref: str | None = None
     ports: dict[str, int]
     max_message_bytes: Annotated[int, Field(ge=16)]
