@@ -1,0 +1,137 @@
+"""The emulator's primary and secondary ports: the Version message, then Robot State at 10 Hz.
+
+The Robot State is built from the same model the RTDE port reads, so a client sees
+the same joint positions and modes on both. Bytes a client sends are taken as
+URScript and kept (read-only ports drop them, as a controller does).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+from typing import TYPE_CHECKING
+
+from rtde_spec._generated.enums import ControlMode, MessageSource, RobotMessageType, RobotMode
+from rtde_spec.primary import models as pm
+from rtde_spec.primary.base import RobotStateMessage
+from rtde_spec.primary.codec import encode_message
+
+if TYPE_CHECKING:
+    from rtde_spec.emulator.model import ControllerModel
+
+log = logging.getLogger("rtde_spec.emulator")
+PROJECT = "URControl"
+BUILD_DATE = "emulated by rtde_spec"
+CARTESIAN = [n for n in pm.CartesianInfo.model_fields if n not in ("extra", "missing")]
+
+
+class PrimaryHub:
+    """Connections of the primary/secondary ports and the scripts they received."""
+
+    def __init__(self, model: ControllerModel) -> None:
+        self.model = model
+        self.connections: set[PrimaryConnection] = set()
+        self.scripts: list[tuple[int, str]] = []  # (port, script text)
+
+    def version_message(self) -> bytes:
+        v = self.model.version
+        return encode_message(
+            pm.VersionMessage(
+                timestamp=self._micros(),
+                source=int(MessageSource.ROBOTINTERFACE),
+                robot_message_type=int(RobotMessageType.VERSION),
+                project_name=PROJECT,
+                major_version=v.major,
+                minor_version=v.minor,
+                bugfix_version=v.bugfix,
+                build_number=v.build or 0,
+                build_date=BUILD_DATE,
+            )
+        )
+
+    def robot_state(self) -> bytes:
+        values = self.model.values
+        q, q_target = values.get("actual_q", (0.0,) * 6), values.get("target_q", (0.0,) * 6)
+        qd = values.get("actual_qd", (0.0,) * 6)
+        current = values.get("actual_current", (0.0,) * 6)
+        voltage = values.get("actual_joint_voltage", (48.0,) * 6)
+        temperature = values.get("joint_temperatures", (30.0,) * 6)
+        modes = values.get("joint_mode", (0,) * 6)
+        joints = tuple(
+            pm.JointState(
+                q_actual=q[i],
+                q_target=q_target[i],
+                qd_actual=qd[i],
+                i_actual=current[i],
+                v_actual=voltage[i],
+                t_motor=temperature[i],
+                reserved=0.0,
+                joint_mode=modes[i],
+            )
+            for i in range(6)
+        )
+        mode = int(values.get("robot_mode", RobotMode.RUNNING))
+        pose = values.get("actual_TCP_pose", (0.0,) * 6)
+        offset = values.get("tcp_offset", (0.0,) * 6)
+        message = RobotStateMessage(
+            sub_packages=[
+                pm.RobotModeData(
+                    timestamp=self._micros(),
+                    is_real_robot_connected=True,
+                    is_real_robot_enabled=True,
+                    is_robot_power_on=mode >= RobotMode.POWER_ON,
+                    is_emergency_stopped=False,
+                    is_protective_stopped=False,
+                    is_program_running=False,
+                    is_program_paused=False,
+                    robot_mode=mode,
+                    control_mode=int(ControlMode.POSITION),
+                    target_speed_fraction=values.get("target_speed_fraction", 1.0),
+                    speed_scaling=values.get("speed_scaling", 1.0),
+                    target_speed_fraction_limit=1.0,
+                    reserved=0,
+                ),
+                pm.JointData(joints=joints),
+                pm.CartesianInfo(**dict(zip(CARTESIAN, (*pose, *offset), strict=True))),
+            ]
+        )
+        return encode_message(message)
+
+    def broadcast_state(self) -> None:
+        if self.connections:
+            data = self.robot_state()
+            for conn in list(self.connections):
+                conn.send(data)
+
+    def _micros(self) -> int:
+        return int(self.model.time * 1_000_000)
+
+
+class PrimaryConnection(asyncio.Protocol):
+    def __init__(self, hub: PrimaryHub, port: int, read_only: bool) -> None:
+        self.hub, self.port, self.read_only = hub, port, read_only
+        self.transport: asyncio.Transport | None = None
+
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        assert isinstance(transport, asyncio.Transport)
+        self.transport = transport
+        self.hub.connections.add(self)
+        transport.write(self.hub.version_message())
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        self.hub.connections.discard(self)
+
+    def data_received(self, data: bytes) -> None:
+        if self.read_only:
+            return  # a read-only port ignores what clients send
+        text = data.decode("utf-8", "replace")
+        self.hub.scripts.append((self.port, text))
+        log.info("URScript on port %d: %s", self.port, text.strip()[:80])
+
+    def send(self, data: bytes) -> None:
+        if self.transport is None or self.transport.is_closing():
+            return
+        if self.transport.get_write_buffer_size() > 1 << 20:
+            self.transport.close()  # a client that stopped reading
+            return
+        self.transport.write(data)

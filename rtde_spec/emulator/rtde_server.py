@@ -1,0 +1,241 @@
+"""The emulator's RTDE port: one connection per client, each with its own recipes.
+
+Follows the guides: protocol 1 until a version request is accepted; NOT_FOUND and
+IN_USE in setup replies; input recipe ids from 1 (0 refuses a recipe); one output
+recipe per client; start refused without an output recipe; pause always accepted;
+outputs every floor(base / frequency) control steps; names limited to the spec's
+setup byte limit. Bad input gets a text message, or that client's disconnect when
+its stream cannot be framed — never an effect on other clients.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import math
+from typing import TYPE_CHECKING, Any
+
+from rtde_spec._generated import rtde_models as gen
+from rtde_spec._generated.constants import RTDE_ANSWERS, RTDE_LIMITS
+from rtde_spec._generated.enums import TextMessageLevel
+from rtde_spec.errors import DecodeError, RtdeSpecError
+from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
+from rtde_spec.rtde.codec import decode, observe
+from rtde_spec.rtde.messages import RtdeMessage
+from rtde_spec.rtde.protocol_state import ProtocolState
+from rtde_spec.wire.framing import PackageFramer
+
+if TYPE_CHECKING:
+    from rtde_spec.emulator.model import ControllerModel
+
+log = logging.getLogger("rtde_spec.emulator")
+NOT_FOUND, IN_USE = RTDE_ANSWERS["not_found"], RTDE_ANSWERS["in_use"]
+INVALID_ID = RTDE_LIMITS["invalid_recipe_id"]
+MAX_NAMES = RTDE_LIMITS["setup_names_max_bytes"]
+MAX_INPUT_RECIPES = RTDE_LIMITS["input_recipes_max"]
+SOURCE = "rtde_spec emulator"
+ERROR, EXCEPTION = TextMessageLevel.ERROR_MESSAGE, TextMessageLevel.EXCEPTION_MESSAGE
+SLOW_CLIENT_BYTES = 4 << 20  # a client this far behind is dropped, as a controller drops it
+
+
+class RtdeHub:
+    """What the RTDE connections share: the model, input ownership, the clients."""
+
+    def __init__(self, model: ControllerModel) -> None:
+        self.model = model
+        self.owners: dict[str, RtdeConnection] = {}
+        self.connections: set[RtdeConnection] = set()
+
+    def send_outputs(self, step: int) -> None:
+        """Every started client whose rate divides this step gets a data package."""
+        for conn in list(self.connections):
+            if conn.started and conn.output is not None and step % conn.divisor == 0:
+                conn.send_output()
+
+
+class RtdeConnection(asyncio.Protocol):
+    def __init__(self, hub: RtdeHub) -> None:
+        self.hub = hub
+        self.state = ProtocolState()
+        self.framer = PackageFramer()
+        self.transport: asyncio.Transport | None = None
+        self.output: RecipeCodec | None = None
+        self.output_names: tuple[str, ...] = ()
+        self.divisor = 1
+        self.inputs: dict[int, RecipeCodec] = {}
+        self.started = False
+        self.sent = 0
+        self.peer = "?"
+
+    # --- asyncio ------------------------------------------------------------
+
+    def connection_made(self, transport: asyncio.BaseTransport) -> None:
+        assert isinstance(transport, asyncio.Transport)
+        self.transport = transport
+        self.peer = str(transport.get_extra_info("peername"))
+        self.hub.connections.add(self)
+        log.info("RTDE client connected: %s", self.peer)
+
+    def connection_lost(self, exc: Exception | None) -> None:
+        self.hub.connections.discard(self)
+        for name, owner in list(self.hub.owners.items()):
+            if owner is self:
+                del self.hub.owners[name]  # its inputs are free for other clients again
+        log.info("RTDE client gone: %s", self.peer)
+
+    def data_received(self, data: bytes) -> None:
+        try:
+            packages = self.framer.feed(data)
+        except DecodeError as exc:
+            self._text(f"cannot frame the stream: {exc}", EXCEPTION)
+            self._close()
+            return
+        for _, package in packages:
+            try:
+                message = decode(package, protocol_version=self.state.version, sender="client")
+            except RtdeSpecError as exc:
+                self._text(f"bad package: {exc}", ERROR)
+                continue
+            try:
+                self.handle(message)
+            except RtdeSpecError as exc:
+                self._text(f"refused: {exc}", ERROR)
+
+    # --- the protocol -------------------------------------------------------
+
+    def handle(self, message: RtdeMessage) -> None:
+        if isinstance(message, gen.RequestProtocolVersion):
+            accepted = message.protocol_version in gen.PROTOCOLS
+            self._send(gen.RequestProtocolVersionReply(accepted=accepted))
+            observe(self.state, message)
+            self.state.on_reply(accepted)
+        elif isinstance(message, gen.GetUrcontrolVersion):
+            v = self.hub.model.version
+            self._send(
+                gen.GetUrcontrolVersionReply(
+                    major=v.major, minor=v.minor, bugfix=v.bugfix, build=v.build or 0
+                )
+            )
+        elif isinstance(message, (gen.SetupOutputsV1, gen.SetupOutputsV2)):
+            frequency = getattr(message, "output_frequency", self.hub.model.base_hz)
+            self._setup_outputs(message.variable_names, frequency)
+        elif isinstance(message, gen.SetupInputs):
+            self._setup_inputs(message.variable_names)
+        elif isinstance(message, gen.Start):
+            ok = self.output is not None
+            if not ok:
+                self._text("start refused: no valid output recipe is set up", ERROR)
+            self.started = ok
+            self._send(gen.StartReply(accepted=ok))
+        elif isinstance(message, gen.Pause):
+            self.started = False
+            self._send(gen.PauseReply(accepted=True))
+        elif isinstance(message, gen.DataPackage):
+            self._inputs(message)
+        elif isinstance(message, (gen.TextMessage, gen.TextMessageV1Client)):
+            log.info("text from %s: %s", self.peer, message.message)
+
+    def _names(self, names: list[str]) -> list[str] | None:
+        """The requested names (a trailing comma's empty name dropped), or None over the limit."""
+        if names and names[-1] == "":
+            names = names[:-1]  # ur_rtde ends its lists with a comma; controllers accept it
+        if len(",".join(names).encode()) > MAX_NAMES:
+            self._text(f"setup refused: names exceed {MAX_NAMES} bytes", ERROR)
+            return None
+        return names
+
+    def _setup_outputs(self, requested: list[str], frequency: float) -> None:
+        names = self._names(requested)
+        model = self.hub.model
+        types = [model.outputs[n].type if n in model.outputs else NOT_FOUND for n in names or []]
+        ok = names is not None and bool(names) and NOT_FOUND not in types
+        if ok and not 0 < frequency <= model.base_hz:
+            self._text(
+                f"setup refused: frequency {frequency} outside (0, {model.base_hz}] Hz",
+                ERROR,
+            )
+            ok = False
+        if ok and self.started:
+            self._text("setup refused while started: pause first", ERROR)
+            ok = False
+        if ok:
+            assert names is not None
+            self.output = RecipeCodec.for_names(names, "output", model.catalogue)
+            self.output_names = tuple(names)
+            self.divisor = max(1, math.floor(model.base_hz / frequency))
+        if self.state.version == 1:
+            self._send(gen.SetupOutputsV1Reply(variable_types=types))
+        else:
+            self._send(
+                gen.SetupOutputsV2Reply(output_recipe_id=1 if ok else INVALID_ID, variable_types=types)
+            )
+
+    def _setup_inputs(self, requested: list[str]) -> None:
+        names = self._names(requested)
+        model, owners = self.hub.model, self.hub.owners
+        types = []
+        for n in names or []:
+            if n not in model.inputs:
+                types.append(NOT_FOUND)
+            elif owners.get(n, self) is not self:
+                types.append(IN_USE)
+            else:
+                types.append(model.inputs[n].type)
+        ok = names is not None and bool(names) and NOT_FOUND not in types and IN_USE not in types
+        recipe_id = INVALID_ID
+        if ok and len(self.inputs) >= MAX_INPUT_RECIPES:
+            self._text(f"setup refused: at most {MAX_INPUT_RECIPES} input recipes", ERROR)
+        elif ok:
+            assert names is not None
+            recipe_id = len(self.inputs) + 1
+            self.inputs[recipe_id] = RecipeCodec.for_names(names, "input", model.catalogue)
+            for n in names:
+                owners[n] = self
+        self._send(gen.SetupInputsReply(input_recipe_id=recipe_id, variable_types=types))
+
+    def _inputs(self, message: gen.DataPackage) -> None:
+        codec = self.inputs.get(message.recipe_id)
+        if codec is None:
+            self._text(f"data package of unknown input recipe {message.recipe_id}", ERROR)
+            return
+        try:
+            values = codec.decode(message.payload)
+        except DecodeError as exc:
+            self._text(f"bad input data: {exc.relocated(PAYLOAD_OFFSET)}", ERROR)
+            return
+        self.hub.model.apply_inputs(values)
+
+    # --- sending ------------------------------------------------------------
+
+    def send_output(self) -> None:
+        assert self.output is not None and self.transport is not None
+        if self.transport.get_write_buffer_size() > SLOW_CLIENT_BYTES:
+            log.warning("dropping %s: it stopped reading", self.peer)
+            self._close()
+            return
+        values = self.hub.model.values
+        data = self.output.encode_package({n: values[n] for n in self.output_names}, recipe_id=1)
+        self.transport.write(data)
+        self.sent += 1
+
+    def _send(self, message: RtdeMessage) -> None:
+        if self.transport is not None and not self.transport.is_closing():
+            self.transport.write(message.to_bytes())
+
+    def _text(self, text: str, level: TextMessageLevel) -> None:
+        log.warning("to %s: %s", self.peer, text)
+        message: Any
+        if self.state.version == 1:
+            message = gen.TextMessageV1Controller(message_type=int(level), message=_ascii(text))
+        else:
+            message = gen.TextMessage(message=_ascii(text), source=SOURCE, warning_level=int(level))
+        self._send(message)
+
+    def _close(self) -> None:
+        self.started = False
+        if self.transport is not None:
+            self.transport.close()
+
+
+def _ascii(text: str) -> str:
+    return text.encode("ascii", "replace").decode("ascii")[:200]

@@ -1,0 +1,176 @@
+"""Run the emulated controller: the RTDE port, the primary/secondary ports and the control loop.
+
+The control loop keeps real time: each step is due at start + step / base rate
+(125 Hz for CB3 versions, 500 Hz for newer); it sleeps to just before the due
+time and waits out the rest, so packages leave within a fraction of a millisecond.
+`Emulator` runs in the caller's event loop; `EmulatorThread` runs one in a
+background thread (tests, the demo, applications that are not asyncio).
+"""
+
+from __future__ import annotations
+
+import asyncio
+import logging
+import threading
+import time
+from dataclasses import dataclass, field
+
+from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
+from rtde_spec.emulator.model import ControllerModel
+from rtde_spec.emulator.primary_server import PrimaryConnection, PrimaryHub
+from rtde_spec.emulator.rtde_server import RtdeConnection, RtdeHub
+from rtde_spec.emulator.scenario import Scenario
+from rtde_spec.spec.catalogue import Catalogue
+
+log = logging.getLogger("rtde_spec.emulator")
+SPIN_SECONDS = 0.0008  # the last part of each wait is spent awake, for sub-millisecond timing
+STATE_HZ = 10
+
+
+@dataclass
+class EmulatorConfig:
+    host: str = "127.0.0.1"
+    rtde_port: int | None = RTDE_PORT
+    primary_port: int | None = PRIMARY_PORTS["primary"]
+    secondary_port: int | None = PRIMARY_PORTS["secondary"]
+    primary_read_only_port: int | None = None
+    secondary_read_only_port: int | None = None
+    scenario: Scenario = field(default_factory=Scenario)
+    controller: str | None = None  # overrides the scenario's version
+
+
+class Emulator:
+    def __init__(self, config: EmulatorConfig | None = None, catalogue: Catalogue | None = None) -> None:
+        self.config = config or EmulatorConfig()
+        cat = catalogue or Catalogue.default()
+        version = self.config.controller or self.config.scenario.controller
+        self.model = ControllerModel(version, cat, self.config.scenario.functions(cat))
+        self.rtde = RtdeHub(self.model)
+        self.primary = PrimaryHub(self.model)
+        self.servers: list[asyncio.AbstractServer] = []
+        self.ports: dict[str, int] = {}
+        self._loop_task: asyncio.Task[None] | None = None
+        self.late_steps = 0
+
+    async def start(self) -> None:
+        loop = asyncio.get_running_loop()
+        c = self.config
+        if c.rtde_port is not None:
+            await self._listen("rtde", c.rtde_port, lambda: RtdeConnection(self.rtde))
+        for name, port, read_only in (
+            ("primary", c.primary_port, False),
+            ("secondary", c.secondary_port, False),
+            ("primary_read_only", c.primary_read_only_port, True),
+            ("secondary_read_only", c.secondary_read_only_port, True),
+        ):
+            if port is not None:
+                await self._listen(name, port, self._primary_factory(name, read_only))
+        self._loop_task = loop.create_task(self._control_loop())
+
+    def _primary_factory(self, name: str, read_only: bool):  # type: ignore[no-untyped-def]
+        return lambda: PrimaryConnection(self.primary, self.ports[name], read_only)
+
+    async def _listen(self, name: str, port: int, factory) -> None:  # type: ignore[no-untyped-def]
+        server = await asyncio.get_running_loop().create_server(factory, self.config.host, port)
+        self.servers.append(server)
+        self.ports[name] = server.sockets[0].getsockname()[1]
+        log.info("%s on %s:%d", name, self.config.host, self.ports[name])
+
+    async def _control_loop(self) -> None:
+        base = self.model.base_hz
+        state_every = max(1, base // STATE_HZ)
+        start = time.perf_counter()
+        step = 0
+        while True:
+            step += 1
+            due = start + step / base
+            delay = due - time.perf_counter()
+            if delay > SPIN_SECONDS:
+                await asyncio.sleep(delay - SPIN_SECONDS)
+            while time.perf_counter() < due:
+                pass
+            if time.perf_counter() - due > 0.1:  # far behind (a stalled machine): skip, don't burst
+                self.late_steps += 1
+                skipped = int((time.perf_counter() - start) * base) - step
+                step += max(0, skipped)
+            self.model.tick(step)
+            self.rtde.send_outputs(step)
+            if step % state_every == 0:
+                self.primary.broadcast_state()
+
+    async def stop(self) -> None:
+        if self._loop_task is not None:
+            self._loop_task.cancel()
+        for server in self.servers:
+            server.close()
+        for conn in list(self.rtde.connections) + list(self.primary.connections):
+            if conn.transport is not None:
+                conn.transport.close()
+        for server in self.servers:
+            await server.wait_closed()
+
+    async def serve_forever(self) -> None:
+        await self.start()
+        try:
+            await asyncio.Event().wait()
+        finally:
+            await self.stop()
+
+
+class EmulatorThread:
+    """An Emulator in a background thread: `with EmulatorThread(config) as emu: ...`."""
+
+    def __init__(self, config: EmulatorConfig | None = None, catalogue: Catalogue | None = None) -> None:
+        self.emulator = Emulator(config, catalogue)
+        self._loop = asyncio.new_event_loop()
+        self._thread = threading.Thread(target=self._run, name="rtde-emulator", daemon=True)
+        self._ready = threading.Event()
+        self._error: BaseException | None = None
+
+    @property
+    def ports(self) -> dict[str, int]:
+        return self.emulator.ports
+
+    @property
+    def model(self) -> ControllerModel:
+        return self.emulator.model
+
+    def _run(self) -> None:
+        asyncio.set_event_loop(self._loop)
+        try:
+            self._loop.run_until_complete(self.emulator.start())
+        except BaseException as exc:
+            self._error = exc
+            self._ready.set()
+            return
+        self._ready.set()
+        self._loop.run_forever()
+
+    def start(self) -> EmulatorThread:
+        self._thread.start()
+        self._ready.wait(10)
+        if self._error is not None:
+            raise self._error
+        return self
+
+    def stop(self) -> None:
+        if not self._thread.is_alive():
+            return
+        future = asyncio.run_coroutine_threadsafe(self.emulator.stop(), self._loop)
+        future.result(10)
+        self._loop.call_soon_threadsafe(self._loop.stop)
+        self._thread.join(10)
+
+    def call(self, fn, *args):  # type: ignore[no-untyped-def]
+        """Run fn(*args) in the emulator's loop (its state is not thread-safe) and return the result."""
+
+        async def run():  # type: ignore[no-untyped-def]
+            return fn(*args)
+
+        return asyncio.run_coroutine_threadsafe(run(), self._loop).result(10)
+
+    def __enter__(self) -> EmulatorThread:
+        return self.start()
+
+    def __exit__(self, *exc: object) -> None:
+        self.stop()
