@@ -49,18 +49,33 @@ _EXPORTS: dict[str, str] = {
     "ProtocolError": "rtde_spec.errors",
     "SpecError": "rtde_spec.errors",
     "UsageError": "rtde_spec.errors",
+    "RtdeConnectionError": "rtde_spec.errors",
+    # transport
+    "RtdeClient": "rtde_spec.rtde.client",
+    "AsyncRtdeClient": "rtde_spec.rtde.aio",
+    "PrimaryClient": "rtde_spec.primary.client",
+    "Emulator": "rtde_spec.emulator.server",
+    "EmulatorThread": "rtde_spec.emulator.server",
+    "EmulatorConfig": "rtde_spec.emulator.server",
 }
 
 __all__ = [
+    "AsyncRtdeClient",
     "Catalogue",
     "DecodeError",
+    "Emulator",
+    "EmulatorConfig",
+    "EmulatorThread",
     "EncodeError",
+    "PrimaryClient",
     "PrimaryStreamDecoder",
     "ProtocolError",
     "ProtocolState",
     "Recipe",
     "RecipeCodec",
     "RecipeError",
+    "RtdeClient",
+    "RtdeConnectionError",
     "RtdeMessage",
     "RtdeSpecError",
     "SessionDecoder",
@@ -99,22 +114,27 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:
+    from rtde_spec.emulator.server import Emulator, EmulatorConfig, EmulatorThread
     from rtde_spec.errors import (
         DecodeError,
         EncodeError,
         ProtocolError,
         RecipeError,
+        RtdeConnectionError,
         RtdeSpecError,
         SpecError,
         UsageError,
     )
     from rtde_spec.output.tables import to_arrow, to_pandas
     from rtde_spec.output.writers import open_writer
+    from rtde_spec.primary.client import PrimaryClient
     from rtde_spec.primary.codec import PrimaryStreamDecoder, decode_message, encode_message
     from rtde_spec.recipes.codec import RecipeCodec
     from rtde_spec.recipes.files import load_recipes, save_recipes
     from rtde_spec.recipes.model import Recipe
     from rtde_spec.recipes.validation import validate_recipes
+    from rtde_spec.rtde.aio import AsyncRtdeClient
+    from rtde_spec.rtde.client import RtdeClient
     from rtde_spec.rtde.codec import build, decode, decode_stream, encode, message_class
     from rtde_spec.rtde.messages import RtdeMessage
     from rtde_spec.rtde.protocol_state import ProtocolState

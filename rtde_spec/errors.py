@@ -82,6 +82,10 @@ class RecipeError(RtdeSpecError, ValueError):
     """A recipe that cannot be used: unknown names, bad direction, bad file."""
 
 
+class RtdeConnectionError(RtdeSpecError, ConnectionError):
+    """Connecting to a controller failed, or it closed the connection; names host and port."""
+
+
 class UsageError(RtdeSpecError):
     """The command line or call asks for something unusable: a missing file, an unknown version."""
 

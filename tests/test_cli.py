@@ -90,7 +90,7 @@ def test_fields_bad_controller() -> None:
 
 
 def test_demo_decodes_the_embedded_session() -> None:
-    result = cli("demo")
+    result = cli("demo", "--offline")
     assert result.returncode == 0, result.stderr
     assert "data_package" in result.stdout and "actual_q=" in result.stdout
     assert "5.12.2" in result.stdout

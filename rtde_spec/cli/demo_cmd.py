@@ -24,11 +24,28 @@ SHOWCASE_VERSIONS = ("3.15.8", "5.12.2", "10.11.0")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("demo", help="decode an embedded example session (no robot needed)")
+    p = sub.add_parser(
+        "demo",
+        help="record from the built-in controller emulator, plot it (no robot needed)",
+        description="Starts the controller emulator on loopback, records a few seconds through the "
+        "RTDE client, writes a CSV and a PNG plot of the joint positions, prints a summary. "
+        "--offline decodes embedded example bytes instead.",
+    )
+    p.add_argument("--offline", action="store_true", help="decode embedded examples only (default: online)")
+    p.add_argument("--seconds", type=float, default=3.0, help="how long to record (default: 3)")
+    p.add_argument("--out", type=Path, default=Path("rtde-demo"), help="output folder (default: ./rtde-demo)")
     p.add_argument(
-        "--session", type=Path, help="a session file of your own, same format (default: the embedded example)"
+        "--session", type=Path, help="with --offline: a session file of your own (default: the embedded one)"
     )
     p.set_defaults(run=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    if args.offline or args.session:
+        return run_offline(args)
+    from rtde_spec.cli.demo_online import run_online
+
+    return run_online(args)
 
 
 def read_session(text: str) -> list[tuple[Sender, bytes, str]]:
@@ -46,7 +63,7 @@ def read_session(text: str) -> list[tuple[Sender, bytes, str]]:
     return out
 
 
-def run(args: argparse.Namespace) -> int:
+def run_offline(args: argparse.Namespace) -> int:
     from rtde_spec.output.describe import describe
     from rtde_spec.rtde.session import SessionDecoder
 

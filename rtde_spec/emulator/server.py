@@ -88,7 +88,7 @@ class Emulator:
             if delay > SPIN_SECONDS:
                 await asyncio.sleep(delay - SPIN_SECONDS)
             while time.perf_counter() < due:
-                pass
+                time.sleep(0)  # stay awake, but let other threads (an in-process client) run
             if time.perf_counter() - due > 0.1:  # far behind (a stalled machine): skip, don't burst
                 self.late_steps += 1
                 skipped = int((time.perf_counter() - start) * base) - step

@@ -1,0 +1,79 @@
+"""A client of the primary/secondary ports: decoded messages in, URScript out where allowed.
+
+Ports 30011/30012 are read-only: sending URScript there is refused here with a
+clear error, instead of the controller silently ignoring it.
+"""
+
+from __future__ import annotations
+
+import socket
+from collections.abc import Iterator
+
+from rtde_spec._generated.constants import PRIMARY_PORTS
+from rtde_spec.errors import RtdeConnectionError, UsageError
+from rtde_spec.primary.codec import PrimaryMessage, PrimaryStreamDecoder
+
+READ_ONLY_PORTS = {port for name, port in PRIMARY_PORTS.items() if name.endswith("read_only")}
+
+
+class PrimaryClient:
+    """`with PrimaryClient(host, 30002) as c: for offset, message in c: ...`"""
+
+    def __init__(self, host: str, port: int = PRIMARY_PORTS["secondary"], *, timeout: float = 5.0) -> None:
+        self.host, self.port, self.timeout = host, port, timeout
+        self.decoder = PrimaryStreamDecoder()
+        self._sock: socket.socket | None = None
+        self.read_only = port in READ_ONLY_PORTS
+
+    @property
+    def where(self) -> str:
+        return f"{self.host}:{self.port}"
+
+    def connect(self) -> PrimaryClient:
+        try:
+            self._sock = socket.create_connection((self.host, self.port), timeout=self.timeout)
+        except OSError as exc:
+            raise RtdeConnectionError(f"cannot connect: {exc.strerror or exc}", subject=self.where) from None
+        return self
+
+    def messages(self) -> Iterator[tuple[int, PrimaryMessage]]:
+        """Decoded messages as they arrive, until the controller closes the connection."""
+        if self._sock is None:
+            self.connect()
+        assert self._sock is not None
+        while True:
+            try:
+                chunk = self._sock.recv(65536)
+            except TimeoutError:
+                raise TimeoutError(f"nothing from {self.where} within {self.timeout} s") from None
+            except OSError as exc:
+                raise RtdeConnectionError(f"connection lost: {exc}", subject=self.where) from None
+            if not chunk:
+                return
+            yield from self.decoder.feed(chunk)
+
+    __iter__ = messages
+
+    def send_script(self, script: str) -> None:
+        """Send URScript (a program or one line); refused on the read-only ports."""
+        if self.read_only:
+            raise UsageError(
+                "this port is read-only: URScript is accepted on the primary and secondary ports "
+                f"({PRIMARY_PORTS['primary']}, {PRIMARY_PORTS['secondary']})",
+                subject=self.where,
+            )
+        if self._sock is None:
+            self.connect()
+        assert self._sock is not None
+        self._sock.sendall(script.encode("utf-8") + (b"" if script.endswith("\n") else b"\n"))
+
+    def close(self) -> None:
+        if self._sock is not None:
+            self._sock.close()
+            self._sock = None
+
+    def __enter__(self) -> PrimaryClient:
+        return self.connect()
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()

@@ -1,0 +1,173 @@
+"""The asyncio RTDE client: the same sans-I/O core as the blocking one, on asyncio streams.
+
+    async with AsyncRtdeClient(host) as client:
+        await client.setup_outputs(["timestamp", "actual_q"], 125)
+        await client.start()
+        async for record in client: ...
+
+A reader task drains the socket from connect on; data packages wait in a bounded
+queue (oldest dropped, counted in `skipped`); every await has a timeout.
+"""
+
+from __future__ import annotations
+
+import asyncio
+import collections
+import logging
+from collections.abc import AsyncIterator, Mapping, Sequence
+from typing import Any
+
+from rtde_spec._generated.constants import RTDE_PORT, RTDE_PROTOCOLS
+from rtde_spec.errors import ProtocolError, RtdeConnectionError
+from rtde_spec.rtde.client import LOG_LEVELS
+from rtde_spec.rtde.client_protocol import ClientProtocol, Data, InputRecipe, Reply, Text
+from rtde_spec.spec.catalogue import Catalogue
+from rtde_spec.spec.versions import Version
+
+log = logging.getLogger("rtde_spec.client")
+
+
+class AsyncRtdeClient:
+    def __init__(
+        self,
+        host: str,
+        port: int = RTDE_PORT,
+        *,
+        timeout: float = 5.0,
+        queue_size: int = 1000,
+        catalogue: Catalogue | None = None,
+    ) -> None:
+        self.host, self.port, self.timeout = host, port, timeout
+        self.core = ClientProtocol(catalogue)
+        self.skipped = 0
+        self._data: collections.deque[Any] = collections.deque(maxlen=queue_size)
+        self._data_event = asyncio.Event()
+        self._replies: asyncio.Queue[Reply | BaseException] = asyncio.Queue()
+        self._writer: asyncio.StreamWriter | None = None
+        self._task: asyncio.Task[None] | None = None
+        self._closed: BaseException | None = None
+
+    @property
+    def where(self) -> str:
+        return f"{self.host}:{self.port}"
+
+    @property
+    def controller_version(self) -> Version | None:
+        return self.core.controller_version
+
+    @property
+    def protocol_version(self) -> int:
+        return self.core.state.version
+
+    async def connect(self, protocol_version: int | None = None) -> AsyncRtdeClient:
+        try:
+            reader, self._writer = await asyncio.wait_for(
+                asyncio.open_connection(self.host, self.port), self.timeout
+            )
+        except (OSError, asyncio.TimeoutError) as exc:
+            raise RtdeConnectionError(f"cannot connect to the RTDE port: {exc}", subject=self.where) from None
+        self._task = asyncio.get_running_loop().create_task(self._read_loop(reader))
+        for version in [protocol_version] if protocol_version else sorted(RTDE_PROTOCOLS, reverse=True):
+            if (await self._request(self.core.request_protocol_version(version))).message.accepted:  # type: ignore[attr-defined]
+                break
+        else:
+            raise ProtocolError("the controller accepted no protocol version", subject=self.where)
+        await self._request(self.core.get_controller_version())
+        return self
+
+    async def setup_outputs(self, names: Sequence[str], frequency: float = 125.0) -> Any:
+        await self._request(self.core.setup_outputs(names, frequency))
+        return self.core.output
+
+    async def setup_inputs(self, names: Sequence[str]) -> InputRecipe:
+        await self._request(self.core.setup_inputs(names))
+        return self.core.inputs[max(self.core.inputs)]
+
+    async def start(self) -> None:
+        if not (await self._request(self.core.start())).message.accepted:  # type: ignore[attr-defined]
+            raise ProtocolError("the controller refused to start", subject=self.where)
+
+    async def pause(self) -> None:
+        await self._request(self.core.pause())
+
+    async def send(self, recipe: InputRecipe, values: Mapping[str, Any] | None = None, **named: Any) -> None:
+        await self._write(self.core.send_inputs(recipe, {**(values or {}), **named}))
+
+    async def receive(self, timeout: float | None = None) -> Any:
+        while not self._data:
+            if self._closed is not None:
+                raise self._closed
+            self._data_event.clear()
+            try:
+                await asyncio.wait_for(self._data_event.wait(), timeout or self.timeout)
+            except asyncio.TimeoutError:
+                raise TimeoutError(f"no data package from {self.where} in time") from None
+        return self._data.popleft()
+
+    async def __aiter__(self) -> AsyncIterator[Any]:
+        while True:
+            try:
+                yield await self.receive()
+            except RtdeConnectionError:
+                return
+
+    async def close(self) -> None:
+        if self._writer is not None:
+            self._writer.close()
+        if self._task is not None:
+            self._task.cancel()
+            try:
+                await self._task
+            except (asyncio.CancelledError, Exception):
+                pass
+
+    async def __aenter__(self) -> AsyncRtdeClient:
+        return await self.connect()
+
+    async def __aexit__(self, *exc: object) -> None:
+        await self.close()
+
+    async def _write(self, data: bytes) -> None:
+        if self._writer is None:
+            raise RtdeConnectionError("not connected", subject=self.where)
+        self._writer.write(data)
+        await self._writer.drain()
+
+    async def _request(self, data: bytes) -> Reply:
+        await self._write(data)
+        try:
+            reply = await asyncio.wait_for(self._replies.get(), self.timeout)
+        except asyncio.TimeoutError:
+            raise TimeoutError(f"no reply from {self.where} within {self.timeout} s") from None
+        if isinstance(reply, BaseException):
+            raise reply
+        if reply.error is not None:
+            raise reply.error
+        return reply
+
+    async def _read_loop(self, reader: asyncio.StreamReader) -> None:
+        try:
+            while True:
+                chunk = await reader.read(65536)
+                if not chunk:
+                    raise RtdeConnectionError("the controller closed the connection", subject=self.where)
+                for event in self.core.receive(chunk):
+                    if isinstance(event, Data):
+                        if len(self._data) == self._data.maxlen:
+                            self.skipped += 1
+                        self._data.append(event.record)
+                        self._data_event.set()
+                    elif isinstance(event, Text):
+                        log.log(LOG_LEVELS[min(event.level, 3)], "%s: %s", event.source, event.message)
+                    else:
+                        self._replies.put_nowait(event)
+        except asyncio.CancelledError:
+            raise
+        except BaseException as exc:
+            self._closed = (
+                exc
+                if isinstance(exc, RtdeConnectionError)
+                else RtdeConnectionError(f"connection lost: {exc}", subject=self.where)
+            )
+            self._replies.put_nowait(self._closed)
+            self._data_event.set()

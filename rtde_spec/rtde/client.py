@@ -1,0 +1,228 @@
+"""A blocking RTDE client over the sans-I/O core, with a reader thread that never stops draining.
+
+The controller drops a client that does not read; so from `connect()` a thread
+reads the socket, hands replies to the caller waiting for them, logs text
+messages, and keeps data packages in a bounded queue (oldest dropped, counted in
+`skipped`). Every blocking call has a timeout; refused and closed connections are
+errors naming host and port.
+"""
+
+from __future__ import annotations
+
+import collections
+import logging
+import queue
+import socket
+import threading
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from typing import Any
+
+from rtde_spec._generated.constants import RTDE_PORT, RTDE_PROTOCOLS
+from rtde_spec.errors import ProtocolError, RtdeConnectionError
+from rtde_spec.rtde.client_protocol import ClientProtocol, Data, InputRecipe, Reply, Text
+from rtde_spec.spec.catalogue import Catalogue
+from rtde_spec.spec.versions import Version
+
+log = logging.getLogger("rtde_spec.client")
+LOG_LEVELS = (logging.CRITICAL, logging.ERROR, logging.WARNING, logging.INFO)  # by text-message level
+
+
+class RtdeClient:
+    """`with RtdeClient("192.168.1.10") as c: c.setup_outputs([...], 125); c.start(); for r in c: ...`"""
+
+    def __init__(
+        self,
+        host: str,
+        port: int = RTDE_PORT,
+        *,
+        timeout: float = 5.0,
+        queue_size: int = 1000,
+        catalogue: Catalogue | None = None,
+    ) -> None:
+        self.host, self.port, self.timeout = host, port, timeout
+        self.core = ClientProtocol(catalogue)
+        self.skipped = 0
+        self.received = 0
+        self._sock: socket.socket | None = None
+        self._replies: queue.Queue[Reply | BaseException] = queue.Queue()
+        self._data: collections.deque[Any] = collections.deque(maxlen=queue_size)
+        self._data_ready = threading.Condition()
+        self._callbacks: list[Callable[[Any], None]] = []
+        self._raw_callbacks: list[Callable[[bytes], None]] = []
+        self._closed: BaseException | None = None
+        self._reader: threading.Thread | None = None
+        self._send_lock = threading.Lock()
+
+    @property
+    def where(self) -> str:
+        return f"{self.host}:{self.port}"
+
+    # --- connection ---------------------------------------------------------
+
+    def connect(self, protocol_version: int | None = None) -> RtdeClient:
+        """Connect, negotiate the newest protocol (falling back), and read the controller version."""
+        try:
+            self._sock = socket.create_connection((self.host, self.port), timeout=self.timeout)
+        except OSError as exc:
+            raise RtdeConnectionError(
+                f"cannot connect to the RTDE port: {exc.strerror or exc}", subject=self.where
+            ) from None
+        self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        self._sock.settimeout(None)
+        self._reader = threading.Thread(target=self._read_loop, name=f"rtde-reader-{self.where}", daemon=True)
+        self._reader.start()
+        for version in [protocol_version] if protocol_version else sorted(RTDE_PROTOCOLS, reverse=True):
+            reply = self._request(self.core.request_protocol_version(version))
+            if reply.message.accepted:  # type: ignore[attr-defined]
+                break
+        else:
+            raise ProtocolError("the controller accepted no protocol version", subject=self.where)
+        self._request(self.core.get_controller_version())
+        return self
+
+    @property
+    def protocol_version(self) -> int:
+        return self.core.state.version
+
+    @property
+    def controller_version(self) -> Version | None:
+        return self.core.controller_version
+
+    @property
+    def connection_lost(self) -> BaseException | None:
+        """Why the connection ended (None while it is open)."""
+        return self._closed
+
+    def close(self) -> None:
+        if self._sock is not None:
+            try:
+                self._sock.shutdown(socket.SHUT_RDWR)
+            except OSError:
+                pass
+            self._sock.close()
+        if self._reader is not None and self._reader is not threading.current_thread():
+            self._reader.join(self.timeout)
+
+    def __enter__(self) -> RtdeClient:
+        return self.connect() if self._sock is None else self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # --- requests -----------------------------------------------------------
+
+    def setup_outputs(self, names: Sequence[str], frequency: float = 125.0) -> Any:
+        """Subscribe to outputs (validated offline first); returns the recipe's codec."""
+        self._request(self.core.setup_outputs(names, frequency))
+        return self.core.output
+
+    def setup_inputs(self, names: Sequence[str]) -> InputRecipe:
+        self._request(self.core.setup_inputs(names))
+        return self.core.inputs[max(self.core.inputs)]
+
+    def start(self) -> None:
+        if not self._request(self.core.start()).message.accepted:  # type: ignore[attr-defined]
+            raise ProtocolError("the controller refused to start", subject=self.where)
+
+    def pause(self) -> None:
+        self._request(self.core.pause())
+
+    def send(self, recipe: InputRecipe, values: Mapping[str, Any] | None = None, **named: Any) -> None:
+        """Write inputs by field name: send(recipe, speed_slider_mask=1, speed_slider_fraction=0.5)."""
+        self._write(self.core.send_inputs(recipe, {**(values or {}), **named}))
+
+    def send_text(self, text: str, level: int = 3) -> None:
+        self._write(self.core.text_message(text, level))
+
+    # --- data ---------------------------------------------------------------
+
+    def receive(self, timeout: float | None = None) -> Any:
+        """The next output record (oldest first); TimeoutError when none arrives in time."""
+        with self._data_ready:
+            if not self._data_ready.wait_for(lambda: self._data or self._closed, timeout or self.timeout):
+                raise TimeoutError(f"no data package from {self.where} within {timeout or self.timeout} s")
+            if self._data:
+                return self._data.popleft()
+        raise self._gone()
+
+    def __iter__(self) -> Iterator[Any]:
+        while True:
+            try:
+                yield self.receive()
+            except RtdeConnectionError:
+                return
+
+    def on_data(self, callback: Callable[[Any], None]) -> None:
+        """Call `callback(record)` in the reader thread for every data package (keep it short)."""
+        self._callbacks.append(callback)
+
+    def on_raw(self, callback: Callable[[bytes], None]) -> None:
+        """Call `callback(package bytes)` for every data package: for recorders that batch."""
+        self._raw_callbacks.append(callback)
+
+    # --- internals ----------------------------------------------------------
+
+    def _write(self, data: bytes) -> None:
+        if self._sock is None:
+            raise RtdeConnectionError("not connected", subject=self.where)
+        try:
+            with self._send_lock:
+                self._sock.sendall(data)
+        except OSError as exc:
+            raise RtdeConnectionError(f"connection lost while sending: {exc}", subject=self.where) from None
+
+    def _request(self, data: bytes) -> Reply:
+        self._write(data)
+        try:
+            reply = self._replies.get(timeout=self.timeout)
+        except queue.Empty:
+            raise TimeoutError(f"no reply from {self.where} within {self.timeout} s") from None
+        if isinstance(reply, BaseException):
+            raise reply
+        if reply.error is not None:
+            raise reply.error
+        return reply
+
+    def _read_loop(self) -> None:
+        sock = self._sock
+        assert sock is not None
+        try:
+            while True:
+                chunk = sock.recv(65536)
+                if not chunk:
+                    raise RtdeConnectionError("the controller closed the connection", subject=self.where)
+                for event in self.core.receive(chunk):
+                    if isinstance(event, Data):
+                        self._deliver(event)
+                    elif isinstance(event, Text):
+                        log.log(LOG_LEVELS[min(event.level, 3)], "%s: %s", event.source, event.message)
+                    else:
+                        self._replies.put(event)
+        except OSError as exc:
+            self._finish(RtdeConnectionError(f"connection lost: {exc.strerror or exc}", subject=self.where))
+        except BaseException as exc:
+            self._finish(exc)
+
+    def _deliver(self, event: Data) -> None:
+        self.received += 1
+        for raw in self._raw_callbacks:
+            raw(event.raw)
+        for callback in self._callbacks:
+            callback(event.record)
+        with self._data_ready:
+            if len(self._data) == self._data.maxlen:
+                self.skipped += 1  # the oldest goes; the socket keeps being drained
+            self._data.append(event.record)
+            self._data_ready.notify()
+
+    def _finish(self, exc: BaseException) -> None:
+        self._closed = exc
+        self._replies.put(exc)
+        with self._data_ready:
+            self._data_ready.notify_all()
+
+    def _gone(self) -> BaseException:
+        return self._closed or RtdeConnectionError("connection closed", subject=self.where)
+
+
+__all__ = ["InputRecipe", "RtdeClient", "RtdeConnectionError"]

@@ -1,0 +1,181 @@
+"""The RTDE client as a sans-I/O state machine: requests out as bytes, bytes in as events.
+
+The blocking and asyncio clients both drive this one core, so the protocol (version
+negotiation, recipes, the data path) is written once. Recipes are validated
+offline against the controller's version before they are sent. Data packages of
+the output recipe skip the generic codec: one prefix check and one unpack each.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+from rtde_spec._generated import rtde_models as gen
+from rtde_spec._generated.constants import DATA_PACKAGE_TYPE, RTDE_ANSWERS, RTDE_LIMITS
+from rtde_spec.errors import ProtocolError, RecipeError, RtdeSpecError
+from rtde_spec.recipes.codec import RecipeCodec
+from rtde_spec.recipes.model import Recipe
+from rtde_spec.rtde.codec import build, decode, observe
+from rtde_spec.rtde.messages import RtdeMessage
+from rtde_spec.rtde.protocol_state import ProtocolState
+from rtde_spec.spec.catalogue import Catalogue
+from rtde_spec.spec.versions import Version
+from rtde_spec.wire.framing import PackageFramer
+
+INVALID_ID = RTDE_LIMITS["invalid_recipe_id"]
+
+
+@dataclass(frozen=True)
+class InputRecipe:
+    """An accepted input recipe: send values for its names with `recipe_id`."""
+
+    recipe_id: int
+    names: tuple[str, ...]
+    codec: RecipeCodec
+
+
+@dataclass(frozen=True)
+class Reply:
+    """The controller's answer to a request (version, setup, start, pause); `error` if refused."""
+
+    message: RtdeMessage
+    error: RtdeSpecError | None = None
+
+
+@dataclass(frozen=True)
+class Data:
+    """A data package of the output recipe, as a record."""
+
+    record: Any
+    raw: bytes
+
+
+@dataclass(frozen=True)
+class Text:
+    """A text message from the controller."""
+
+    level: int
+    message: str
+    source: str
+
+
+Event = Reply | Data | Text
+
+
+class ClientProtocol:
+    def __init__(self, catalogue: Catalogue | None = None) -> None:
+        self.catalogue = catalogue or Catalogue.default()
+        self.state = ProtocolState()
+        self.framer = PackageFramer()
+        self.controller_version: Version | None = None
+        self.output: RecipeCodec | None = None
+        self.output_recipe_id: int | None = None
+        self.inputs: dict[int, InputRecipe] = {}
+        self._requested: list[Any] = []  # setups awaiting their reply, in order
+
+    # --- requests -----------------------------------------------------------
+
+    def request_protocol_version(self, version: int) -> bytes:
+        message = gen.RequestProtocolVersion(protocol_version=version)
+        observe(self.state, message)
+        return message.to_bytes()
+
+    def get_controller_version(self) -> bytes:
+        return build("get_urcontrol_version")
+
+    def setup_outputs(self, names: Sequence[str], frequency: float) -> bytes:
+        """Validate offline (names, direction, version, rate), then the setup request."""
+        self._validate(names, "output", frequency)
+        self._requested.append(("output", tuple(names)))
+        if self.state.version == 1:
+            return gen.SetupOutputsV1(variable_names=list(names)).to_bytes()
+        return gen.SetupOutputsV2(output_frequency=frequency, variable_names=list(names)).to_bytes()
+
+    def setup_inputs(self, names: Sequence[str]) -> bytes:
+        self._validate(names, "input", None)
+        self._requested.append(("input", tuple(names)))
+        return gen.SetupInputs(variable_names=list(names)).to_bytes()
+
+    def start(self) -> bytes:
+        return build("start")
+
+    def pause(self) -> bytes:
+        return build("pause")
+
+    def send_inputs(self, recipe: InputRecipe, values: Mapping[str, Any]) -> bytes:
+        return recipe.codec.encode_package(dict(values), recipe.recipe_id)
+
+    def text_message(self, text: str, level: int, source: str = "rtde_spec") -> bytes:
+        if self.state.version == 1:
+            return gen.TextMessageV1Client(message=text, source=source, warning_level=level).to_bytes()
+        return gen.TextMessage(message=text, source=source, warning_level=level).to_bytes()
+
+    def _validate(self, names: Sequence[str], direction: str, frequency: float | None) -> None:
+        from rtde_spec.recipes.validation import validate_recipes
+
+        controller = str(self.controller_version) if self.controller_version else None
+        recipe = Recipe(tuple(names), direction=direction)  # type: ignore[arg-type]
+        report = validate_recipes(
+            [recipe], controller=controller, frequency=frequency, catalogue=self.catalogue
+        )
+        errors = [p for p in report.all_problems if p.severity == "error"]
+        if errors:
+            listed = "; ".join(f"{p.field or 'recipe'}: {p.message}" for p in errors)
+            where = f" on controller {controller}" if controller else ""
+            raise RecipeError(f"{direction} recipe refused before sending{where}: {listed}")
+
+    # --- incoming -------------------------------------------------------------
+
+    def receive(self, data: bytes) -> list[Event]:
+        """Events for every package this data completes."""
+        events: list[Event] = []
+        output = self.output
+        for _, package in self.framer.feed(data):
+            if output is not None and package[2] == DATA_PACKAGE_TYPE and len(package) == output.package_size:
+                events.append(Data(output.decode_package(package), package))
+                continue
+            message = decode(package, protocol_version=self.state.version, sender="controller")
+            event = self._control(message)
+            if event is not None:
+                events.append(event)
+        return events
+
+    def _control(self, message: RtdeMessage) -> Event | None:
+        if isinstance(message, gen.RequestProtocolVersionReply):
+            observe(self.state, message)
+        elif isinstance(message, gen.GetUrcontrolVersionReply):
+            self.controller_version = Version(message.major, message.minor, message.bugfix, message.build)
+        elif isinstance(message, (gen.SetupOutputsV1Reply, gen.SetupOutputsV2Reply, gen.SetupInputsReply)):
+            try:
+                self._setup_reply(message)
+            except RtdeSpecError as exc:
+                return Reply(message, exc)
+        elif isinstance(message, (gen.TextMessage, gen.TextMessageV1Controller)):
+            level = getattr(message, "warning_level", getattr(message, "message_type", 3))
+            return Text(level, message.message, getattr(message, "source", "controller"))
+        elif isinstance(message, gen.DataPackage):
+            raise ProtocolError(
+                "data package of no recipe this client set up",
+                package="data_package",
+                field="recipe_id",
+                actual=message.recipe_id,
+            )
+        return Reply(message)
+
+    def _setup_reply(self, message: RtdeMessage) -> None:
+        if not self._requested:
+            raise ProtocolError("setup reply without a setup request", package=message.NAME)
+        direction, names = self._requested.pop(0)
+        types: list[str] = list(message.variable_types)  # type: ignore[attr-defined]
+        recipe_id = getattr(message, "output_recipe_id", getattr(message, "input_recipe_id", 1))
+        refused = [f"{n}: {t}" for n, t in zip(names, types, strict=False) if t in RTDE_ANSWERS.values()]
+        if refused or recipe_id == INVALID_ID:
+            reason = ", ".join(refused) or "the controller refused the recipe"
+            raise RecipeError(f"{direction} recipe refused by the controller: {reason}")
+        codec = RecipeCodec.for_types(list(names), types[: len(names)], self.catalogue)
+        if direction == "output":
+            self.output, self.output_recipe_id = codec, recipe_id
+        else:
+            self.inputs[recipe_id] = InputRecipe(recipe_id, tuple(names), codec)

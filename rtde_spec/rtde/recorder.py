@@ -1,0 +1,90 @@
+"""Recording a controller's outputs to a file, through the streaming writers.
+
+Data packages are collected as bytes by the client's reader thread and decoded in
+batches (`RecipeCodec.decode_many`), so recording keeps up at 500 Hz; the file is
+flushed batch by batch, and whatever arrived before Ctrl-C or a dropped
+connection is written and the file closed readable.
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass
+
+from rtde_spec.output.writers import Writer
+from rtde_spec.rtde.client import RtdeClient
+
+BATCH_SECONDS = 0.2
+
+
+@dataclass
+class RecordResult:
+    rows: int
+    seconds: float
+    skipped: int
+    stopped_by: str  # "duration", "samples", "interrupt", "connection"
+
+
+def record(
+    client: RtdeClient,
+    names: Sequence[str],
+    frequency: float,
+    writer: Writer,
+    *,
+    duration: float | None = None,
+    samples: int | None = None,
+    progress: Callable[[int], None] | None = None,
+) -> RecordResult:
+    """Set up `names`, start, and write rows until the duration or sample count is reached."""
+    codec = client.setup_outputs(names, frequency)
+    pending: list[bytes] = []
+    lock = threading.Lock()
+
+    def collect(raw: bytes) -> None:
+        with lock:
+            pending.append(raw)
+
+    client.on_raw(collect)
+    client.start()
+    start = time.monotonic()
+    rows, stopped_by = 0, "duration"
+
+    def flush() -> int:
+        nonlocal pending
+        with lock:
+            batch, pending = pending, []
+        if samples is not None:
+            batch = batch[: max(0, samples - rows)]
+        if not batch:
+            return 0
+        array = codec.decode_many(b"".join(batch))
+        writer.write_columns({name: array[name] for name in codec.names})
+        writer.stream.flush()
+        if progress is not None:
+            progress(len(batch))
+        return len(batch)
+
+    try:
+        while True:
+            time.sleep(BATCH_SECONDS)
+            rows += flush()
+            if samples is not None and rows >= samples:
+                stopped_by = "samples"
+                break
+            if duration is not None and time.monotonic() - start >= duration:
+                break
+            if client.connection_lost is not None:
+                stopped_by = "connection"
+                break
+    except KeyboardInterrupt:
+        stopped_by = "interrupt"
+    finally:
+        rows += flush()
+    if stopped_by != "connection":
+        try:
+            client.pause()
+        except Exception:
+            pass
+    return RecordResult(rows, time.monotonic() - start, client.skipped, stopped_by)
