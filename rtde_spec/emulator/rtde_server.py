@@ -135,20 +135,20 @@ class RtdeConnection(asyncio.Protocol):
         elif isinstance(message, (gen.TextMessage, gen.TextMessageV1Client)):
             log.info("text from %s: %s", self.peer, message.message)
 
-    def _names(self, names: list[str]) -> list[str] | None:
-        """The requested names (a trailing comma's empty name dropped), or None over the limit."""
+    def _names(self, names: list[str]) -> tuple[list[str], bool]:
+        """The requested names (a trailing comma's empty name dropped), and whether they fit the limit."""
         if names and names[-1] == "":
             names = names[:-1]  # ur_rtde ends its lists with a comma; controllers accept it
         if len(",".join(names).encode()) > MAX_NAMES:
             self._text(f"setup refused: names exceed {MAX_NAMES} bytes", ERROR)
-            return None
-        return names
+            return names, False
+        return names, bool(names)
 
     def _setup_outputs(self, requested: list[str], frequency: float) -> None:
-        names = self._names(requested)
+        names, ok = self._names(requested)
         model = self.hub.model
-        types = [model.outputs[n].type if n in model.outputs else NOT_FOUND for n in names or []]
-        ok = names is not None and bool(names) and NOT_FOUND not in types
+        types = [model.outputs[n].type if n in model.outputs else NOT_FOUND for n in names] or [NOT_FOUND]
+        ok = ok and NOT_FOUND not in types
         if ok and not 0 < frequency <= model.base_hz:
             self._text(
                 f"setup refused: frequency {frequency} outside (0, {model.base_hz}] Hz",
@@ -159,7 +159,6 @@ class RtdeConnection(asyncio.Protocol):
             self._text("setup refused while started: pause first", ERROR)
             ok = False
         if ok:
-            assert names is not None
             self.output = RecipeCodec.for_names(names, "output", model.catalogue)
             self.output_names = tuple(names)
             self.divisor = max(1, math.floor(model.base_hz / frequency))
@@ -171,22 +170,22 @@ class RtdeConnection(asyncio.Protocol):
             )
 
     def _setup_inputs(self, requested: list[str]) -> None:
-        names = self._names(requested)
+        names, ok = self._names(requested)
         model, owners = self.hub.model, self.hub.owners
         types = []
-        for n in names or []:
+        for n in names:
             if n not in model.inputs:
                 types.append(NOT_FOUND)
             elif owners.get(n, self) is not self:
                 types.append(IN_USE)
             else:
                 types.append(model.inputs[n].type)
-        ok = names is not None and bool(names) and NOT_FOUND not in types and IN_USE not in types
+        types = types or [NOT_FOUND]
+        ok = ok and NOT_FOUND not in types and IN_USE not in types
         recipe_id = INVALID_ID
         if ok and len(self.inputs) >= MAX_INPUT_RECIPES:
             self._text(f"setup refused: at most {MAX_INPUT_RECIPES} input recipes", ERROR)
         elif ok:
-            assert names is not None
             recipe_id = len(self.inputs) + 1
             self.inputs[recipe_id] = RecipeCodec.for_names(names, "input", model.catalogue)
             for n in names:

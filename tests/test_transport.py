@@ -1,0 +1,297 @@
+"""The transport on real loopback sockets: clients, the emulator, and every error path."""
+
+from __future__ import annotations
+
+import asyncio
+import itertools
+import socket
+import struct
+import time
+from collections.abc import Iterator
+
+import pytest
+
+from rtde_spec import AsyncRtdeClient, EmulatorConfig, EmulatorThread, PrimaryClient, RtdeClient
+from rtde_spec.emulator.scenario import Scenario
+from rtde_spec.errors import RecipeError, RtdeConnectionError, UsageError
+from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
+from rtde_spec.rtde.codec import build, decode_stream
+
+SCENARIO = Scenario.model_validate(
+    {
+        "controller": "5.15.0",
+        "outputs": {
+            "actual_q": [0.1, 0.2, 0.3, 0.4, 0.5, 0.6],
+            "output_double_register_24": {"ramp": {"start": 1.0, "rate": 2.0}},
+        },
+    }
+)
+
+
+def emulator(scenario: Scenario = SCENARIO, **ports: int | None) -> EmulatorThread:
+    config = EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, scenario=scenario)
+    for name, port in ports.items():
+        setattr(config, name, port)
+    return EmulatorThread(config).start()
+
+
+@pytest.fixture
+def emu() -> Iterator[EmulatorThread]:
+    running = emulator()
+    yield running
+    running.stop()
+
+
+def raw(emu: EmulatorThread) -> socket.socket:
+    return socket.create_connection(("127.0.0.1", emu.ports["rtde"]), timeout=2)
+
+
+def read_packages(sock: socket.socket, count: int) -> list:
+    """`count` whole packages from a raw socket, decoded as the controller sent them (protocol 2)."""
+    data = b""
+    while True:
+        try:
+            packages = list(decode_stream(data, sender="controller", protocol_version=2))
+        except Exception:
+            packages = []
+        if len(packages) >= count:
+            return [m for _, m in packages][:count]
+        data += sock.recv(65536)
+
+
+# --- the handshake, both protocol versions ---------------------------------
+
+
+@pytest.mark.parametrize("version", [2, 1])
+def test_handshake_setup_start_data_and_inputs(emu: EmulatorThread, version: int) -> None:
+    with RtdeClient("127.0.0.1", emu.ports["rtde"]).connect(protocol_version=version) as client:
+        assert client.protocol_version == version
+        assert str(client.controller_version) == "5.15.0"
+        client.setup_outputs(
+            ["timestamp", "actual_q", "input_int_register_24", "actual_digital_output_bits"], 500
+        )
+        recipe = client.setup_inputs(
+            ["input_int_register_24", "standard_digital_output_mask", "standard_digital_output"]
+        )
+        assert recipe.recipe_id == 1
+        client.start()
+        first = client.receive()
+        assert first.actual_q == (0.1, 0.2, 0.3, 0.4, 0.5, 0.6)
+        client.send(
+            recipe, input_int_register_24=-7, standard_digital_output_mask=0x0F, standard_digital_output=0x05
+        )
+        deadline = time.time() + 2
+        while time.time() < deadline:
+            record = client.receive()
+            if record.input_int_register_24 == -7:
+                break
+        assert record.input_int_register_24 == -7
+        assert record.actual_digital_output_bits & 0xFF == 0x05
+        client.pause()
+
+
+def test_asyncio_client(emu: EmulatorThread) -> None:
+    async def main() -> tuple[object, object]:
+        async with AsyncRtdeClient("127.0.0.1", emu.ports["rtde"]) as client:
+            await client.setup_outputs(["timestamp", "output_double_register_24"], 250)
+            await client.start()
+            a = await client.receive()
+            b = await client.receive()
+            await client.pause()
+            return a, b
+
+    a, b = asyncio.run(main())
+    assert round(b.timestamp - a.timestamp, 6) == 0.004  # type: ignore[attr-defined]  # 250 Hz of 500
+    assert b.output_double_register_24 == pytest.approx(1.0 + 2.0 * b.timestamp)  # type: ignore[attr-defined]
+
+
+def test_output_rate_is_floor_of_base_over_frequency(emu: EmulatorThread) -> None:
+    with RtdeClient("127.0.0.1", emu.ports["rtde"]) as client:
+        client.setup_outputs(["timestamp"], 150)  # floor(500 / 150) = 3 steps
+        client.start()
+        stamps = [client.receive().timestamp for _ in range(5)]
+    steps = {round((b - a) * 500) for a, b in itertools.pairwise(stamps)}
+    assert steps == {3}
+
+
+def test_cb3_controller_runs_at_125_hz() -> None:
+    cb3 = emulator(Scenario(controller="3.15.8"))
+    try:
+        with RtdeClient("127.0.0.1", cb3.ports["rtde"]) as client:
+            with pytest.raises(RecipeError, match=r"125|frequency"):
+                client.setup_outputs(["timestamp"], 500)  # offline: CB3 tops out at 125 Hz
+            client.setup_outputs(["timestamp"], 125)
+            client.start()
+            a, b = client.receive().timestamp, client.receive().timestamp
+        assert round((b - a) * 125) == 1
+    finally:
+        cb3.stop()
+
+
+# --- what the controller refuses -------------------------------------------
+
+
+def test_connection_refused_names_host_and_port() -> None:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    with pytest.raises(RtdeConnectionError, match=f"127.0.0.1:{port}"):
+        RtdeClient("127.0.0.1", port, timeout=1).connect()
+
+
+def test_unknown_and_unavailable_names_are_refused_before_sending(emu: EmulatorThread) -> None:
+    with RtdeClient("127.0.0.1", emu.ports["rtde"]) as client:
+        with pytest.raises(RecipeError, match="actual_qq"):
+            client.setup_outputs(["timestamp", "actual_qq"], 125)
+        with pytest.raises(RecipeError, match="input"):
+            client.setup_outputs(["speed_slider_mask"], 125)  # an input, not an output
+
+
+def test_emulator_answers_not_found_in_use_and_refuses_start(emu: EmulatorThread) -> None:
+    a, b = raw(emu), raw(emu)
+    for s in (a, b):
+        s.sendall(build("request_protocol_version", protocol_version=2))
+    assert read_packages(a, 1)[0].accepted and read_packages(b, 1)[0].accepted
+    a.sendall(build("start"))
+    reply_and_text = read_packages(a, 2)
+    assert {m.NAME for m in reply_and_text} == {"start_reply", "text_message"}
+    assert not next(m for m in reply_and_text if m.NAME == "start_reply").accepted
+    a.sendall(build("setup_outputs_v2", output_frequency=125.0, variable_names=["timestamp", "no_such"]))
+    reply = read_packages(a, 1)[0]
+    assert reply.output_recipe_id == 0 and reply.variable_types == ["DOUBLE", "NOT_FOUND"]
+    a.sendall(build("setup_inputs", variable_names=["input_int_register_30"]))
+    assert read_packages(a, 1)[0].input_recipe_id == 1
+    b.sendall(build("setup_inputs", variable_names=["input_int_register_30", "input_int_register_31"]))
+    reply = read_packages(b, 1)[0]
+    assert reply.input_recipe_id == 0 and reply.variable_types == ["IN_USE", "INT32"]
+    a.close()  # the owner leaves: the variable is free again
+    time.sleep(0.2)
+    b.sendall(build("setup_inputs", variable_names=["input_int_register_30"]))
+    assert read_packages(b, 1)[0].variable_types == ["INT32"]
+    b.close()
+
+
+def test_in_use_between_two_clients_through_the_client(emu: EmulatorThread) -> None:
+    with RtdeClient("127.0.0.1", emu.ports["rtde"]) as one, RtdeClient("127.0.0.1", emu.ports["rtde"]) as two:
+        one.setup_inputs(["speed_slider_mask", "speed_slider_fraction"])
+        with pytest.raises(RecipeError, match="IN_USE"):
+            two.setup_inputs(["speed_slider_fraction"])
+        one.setup_inputs(["speed_slider_fraction"])  # the same client may use it again
+
+
+def test_names_over_the_setup_limit_get_a_text_message(emu: EmulatorThread) -> None:
+    s = raw(emu)
+    s.sendall(build("request_protocol_version", protocol_version=2))
+    read_packages(s, 1)
+    names = [f"output_double_register_{i % 48}" for i in range(120)]
+    s.sendall(build("setup_outputs_v2", output_frequency=125.0, variable_names=names))
+    got = read_packages(s, 2)
+    text = next(m for m in got if m.NAME == "text_message")
+    assert "2048" in text.message
+    assert next(m for m in got if m.NAME == "setup_outputs_v2_reply").output_recipe_id == 0
+    s.close()
+
+
+# --- hostile and broken clients never touch the others ----------------------
+
+
+def test_garbage_mid_package_disconnects_and_slow_readers(emu: EmulatorThread) -> None:
+    with RtdeClient("127.0.0.1", emu.ports["rtde"]) as good:
+        good.setup_outputs(["timestamp"], 500)
+        good.start()
+        good.receive()
+        garbage = raw(emu)
+        garbage.sendall(b"\x00\x01\xff" + bytes(range(256)))  # a size below the header: cannot be framed
+        assert garbage.recv(4096)  # a text message says why ...
+        garbage.settimeout(2)
+        while garbage.recv(4096):  # ... then the emulator closes that connection
+            pass
+        half = raw(emu)
+        half.sendall(b"\x00\x10V")  # a package cut in its middle, then gone
+        half.close()
+        bad_type = raw(emu)
+        bad_type.sendall(struct.pack(">HB", 3, ord("Z")))
+        assert b"unknown package type" in bad_type.recv(4096)
+        bad_type.close()
+        before = good.received
+        time.sleep(0.3)
+        assert good.received > before + 100  # the well-behaved client kept getting data at 500 Hz
+
+
+def test_a_slow_consumer_keeps_its_connection(emu: EmulatorThread) -> None:
+    with RtdeClient("127.0.0.1", emu.ports["rtde"], queue_size=50) as client:
+        client.setup_outputs(["timestamp", "actual_q"], 500)
+        client.start()
+        time.sleep(1.0)  # read nothing for a second: 500 packages arrive
+        assert client.skipped >= 300  # the oldest were dropped, counted
+        newest = client.receive()
+        assert client.connection_lost is None
+        assert client.receive().timestamp > newest.timestamp
+
+
+def test_closed_by_the_controller_is_an_error_naming_it() -> None:
+    running = emulator()
+    client = RtdeClient("127.0.0.1", running.ports["rtde"], timeout=2).connect()
+    client.setup_outputs(["timestamp"], 125)
+    client.start()
+    client.receive()
+    running.stop()
+    with pytest.raises(RtdeConnectionError, match=r"127\.0\.0\.1"):
+        for _ in range(1000):
+            client.receive(timeout=2)
+    client.close()
+
+
+# --- several clients, the primary ports, scenarios ---------------------------
+
+
+def test_several_clients_at_once(emu: EmulatorThread) -> None:
+    clients = [RtdeClient("127.0.0.1", emu.ports["rtde"]).connect() for _ in range(4)]
+    try:
+        for i, c in enumerate(clients):
+            c.setup_outputs(["timestamp", "actual_q"], 500 / (i + 1))
+            c.start()
+        time.sleep(0.5)
+        counts = [c.received for c in clients]
+        assert all(n > 0 for n in counts) and counts[0] > counts[3] * 2.5
+    finally:
+        for c in clients:
+            c.close()
+
+
+def test_primary_and_secondary_ports_agree_with_rtde(emu: EmulatorThread) -> None:
+    with PrimaryClient("127.0.0.1", emu.ports["secondary"], timeout=2) as client:
+        messages = client.messages()
+        _, version = next(messages)
+        assert str(client.decoder.version) == "5.15.0" and version.NAME == "version_message"
+        _, state = next(messages)
+        assert isinstance(state, RobotStateMessage)
+        assert [j.q_actual for j in state["joint_data"].joints] == [0.1, 0.2, 0.3, 0.4, 0.5, 0.6]
+        assert isinstance(state["robot_mode_data"], PrimaryPart) and state["robot_mode_data"].robot_mode == 7
+    with PrimaryClient("127.0.0.1", emu.ports["primary"]) as client:
+        client.send_script("set_digital_out(1, True)")
+        time.sleep(0.2)
+    assert any("set_digital_out" in text for _, text in emu.emulator.primary.scripts)
+
+
+def test_read_only_port_refuses_script_clearly() -> None:
+    client = PrimaryClient("127.0.0.1", 30011)
+    with pytest.raises(UsageError, match="read-only"):
+        client.send_script("popup('hi')")
+
+
+def test_scenario_files_are_validated(tmp_path) -> None:  # type: ignore[no-untyped-def]
+    from rtde_spec.emulator.scenario import load_scenario
+
+    bad = tmp_path / "s.yaml"
+    bad.write_text("controller: 5.15.0\noutputs:\n  actual_q: {sine: {amplitud: 1}}\n")
+    with pytest.raises(UsageError, match=r"scenario file .*actual_q"):
+        load_scenario(bad)
+    wrong_length = Scenario.model_validate({"outputs": {"actual_q": [1, 2]}})
+    from rtde_spec import Catalogue
+
+    with pytest.raises(UsageError, match="actual_q: needs 6 values"):
+        wrong_length.functions(Catalogue.builtin())
+    unknown = Scenario.model_validate({"outputs": {"actual_qq": 1}})
+    with pytest.raises(UsageError, match="unknown output 'actual_qq'"):
+        unknown.functions(Catalogue.builtin())
