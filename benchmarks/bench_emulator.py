@@ -1,0 +1,219 @@
+"""The emulator at 500 Hz to four clients, and the receive loop's CPU per package, side by side.
+
+1. `rtde-spec serve` in its own process; four clients subscribe to ur_rtde's 58-field
+   recipe at 500 Hz for `--seconds`; every package's arrival is stamped. Reported:
+   missed packages (gaps in the controller timestamp) and the p99 lateness of each
+   package against its due time (first arrival + controller time elapsed).
+2. Receive-loop CPU per package, each client in its own process against the same
+   emulator for `--seconds`: our RtdeClient (58 fields into typed records), ur_rtde's
+   RTDEReceiveInterface (if installed), and a UR-client-style loop (recv, unpack, a
+   dict per package, as UR's rtde.py does).
+
+Targets: no missed packages, p99 lateness <= 1 ms; ours <= 8 µs/package and >= 10x
+less than the UR-client-style loop.
+
+    python benchmarks/bench_emulator.py [--seconds 10]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_recipe_decode import UR_RTDE_DEFAULT_OUTPUTS
+
+TARGET_P99_MS = 1.0
+TARGET_US = 8.0
+TARGET_VS_UR = 10.0
+RATE = 500.0
+
+OURS = """
+import json, sys, time
+from rtde_spec import RtdeClient
+port, seconds, names, mode = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3].split(","), sys.argv[4]
+with RtdeClient("127.0.0.1", port, queue_size=100000) as c:
+    c.setup_outputs(names, 500.0)
+    if mode == "callback":
+        seen = []
+        c.on_data(seen.append)  # records handed over in the reader thread
+    c.start()
+    c.receive(); t0, c0, n0 = time.monotonic(), time.process_time(), c.received
+    if mode == "callback":
+        time.sleep(seconds)
+    else:
+        while time.monotonic() - t0 < seconds:
+            c.receive()  # records handed to this thread, one wake-up each
+    print(json.dumps({"cpu": time.process_time() - c0, "packages": c.received - n0, "skipped": c.skipped}))
+"""
+
+UR_STYLE = """
+import json, socket, struct, sys, time
+sys.path.insert(0, sys.argv[4])
+from ur_client_style import baseline_decoder
+port, seconds = int(sys.argv[1]), float(sys.argv[2])
+names, types = sys.argv[3].split(","), sys.argv[5].split(",")
+s = socket.create_connection(("127.0.0.1", port))
+def send(t, body=b""):
+    s.sendall(struct.pack(">HB", 3 + len(body), t) + body)
+def recv_package():
+    head = b""
+    while len(head) < 3: head += s.recv(3 - len(head))
+    size, t = struct.unpack(">HB", head)
+    body = b""
+    while len(body) < size - 3: body += s.recv(size - 3 - len(body))
+    return t, body
+send(ord("V"), struct.pack(">H", 2)); recv_package()
+send(ord("O"), struct.pack(">d", 500.0) + ",".join(names).encode()); recv_package()
+send(ord("S")); recv_package()
+decode = baseline_decoder(names, types)
+recv_package(); t0, c0, n = time.monotonic(), time.process_time(), 0
+while time.monotonic() - t0 < seconds:
+    t, body = recv_package()
+    if t == ord("U"):
+        state = decode(body[1:]); n += 1
+print(json.dumps({"cpu": time.process_time() - c0, "packages": n}))
+"""
+
+UR_RTDE = """
+import json, sys, time
+import rtde_receive
+port, seconds = int(sys.argv[1]), float(sys.argv[2])
+r = rtde_receive.RTDEReceiveInterface(sys.argv[3], 500.0)
+time.sleep(0.2)
+c0, ts0 = time.process_time(), r.getTimestamp()
+time.sleep(seconds)
+print(json.dumps({"cpu": time.process_time() - c0, "packages": round((r.getTimestamp() - ts0) * 500)}))
+r.disconnect()
+"""
+
+
+def serve(host: str, port: int) -> tuple[subprocess.Popen[str], int]:
+    cmd = [sys.executable, "-m", "rtde_spec", "serve", "--host", host, "--rtde-port", str(port)]
+    proc = subprocess.Popen(
+        [*cmd, "--primary-port", "0", "--secondary-port", "0"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.DEVNULL,
+        text=True,
+    )
+    assert proc.stdout is not None
+    line = proc.stdout.readline()
+    return proc, int(re.search(r"rtde (\d+)", line).group(1))  # type: ignore[union-attr]
+
+
+TIMING = """
+import json, socket, struct, sys, time
+port, seconds, names = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3]
+s = socket.create_connection(("127.0.0.1", port))
+s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+def send(t, body=b""):
+    s.sendall(struct.pack(">HB", 3 + len(body), t) + body)
+buf = b""
+def package():
+    global buf
+    while len(buf) < 3 or len(buf) < struct.unpack_from(">H", buf)[0]:
+        buf += s.recv(65536)
+    size = struct.unpack_from(">H", buf)[0]
+    p, buf = buf[:size], buf[size:]
+    return p
+send(ord("V"), struct.pack(">H", 2)); package()
+send(ord("O"), struct.pack(">d", 500.0) + names.encode()); package()
+send(ord("S")); package()
+stamps = []
+end = time.monotonic() + seconds
+while time.monotonic() < end:
+    p = package()
+    if p[2] == ord("U"):
+        stamps.append((time.perf_counter(), struct.unpack_from(">d", p, 4)[0]))
+a0, t0 = stamps[0]
+late = sorted(max(0.0, (a - a0) - (t - t0)) for a, t in stamps)
+steps = [round((b[1] - a[1]) * 500) for a, b in zip(stamps, stamps[1:])]
+print(json.dumps({"packages": len(stamps), "missed": sum(x - 1 for x in steps if x > 1),
+                  "p99_ms": late[int(len(late) * 0.99)] * 1000, "max_ms": late[-1] * 1000}))
+"""
+
+
+def four_clients(port: int, seconds: float) -> list[dict[str, float]]:
+    """Four light client processes (raw sockets, a timestamp each), so the figure is the emulator's."""
+    names = ",".join(UR_RTDE_DEFAULT_OUTPUTS)  # timestamp first: the client reads it at byte 4
+    procs = [
+        subprocess.Popen(
+            [sys.executable, "-c", TIMING, str(port), str(seconds), names], stdout=subprocess.PIPE, text=True
+        )
+        for _ in range(4)
+    ]
+    return [json.loads(p.communicate(timeout=seconds + 30)[0].strip().splitlines()[-1]) for p in procs]
+
+
+def child(code: str, *args: str) -> dict[str, float]:
+    out = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True, timeout=120)
+    if out.returncode:
+        raise SystemExit(out.stderr)
+    return json.loads(out.stdout.strip().splitlines()[-1])  # type: ignore[no-any-return]
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seconds", type=float, default=10.0, help="length of each run (default: 10)")
+    parser.add_argument("--assert-targets", action="store_true", help="exit 1 on a missed target")
+    args = parser.parse_args(argv)
+    proc, port = serve("127.0.0.1", 0)
+    ok = True
+    try:
+        print(f"emulator: 4 clients x 58 fields at {RATE:g} Hz for {args.seconds:g} s")
+        rows = four_clients(port, args.seconds)
+        for i, r in enumerate(rows):
+            print(
+                f"  client {i}: {r['packages']:.0f} packages, missed {r['missed']:.0f}, "
+                f"p99 lateness {r['p99_ms']:.2f} ms, max {r['max_ms']:.2f} ms"
+            )
+        p99 = max(r["p99_ms"] for r in rows)
+        missed = sum(r["missed"] for r in rows)
+        ok = missed == 0 and p99 <= TARGET_P99_MS
+        print(f"  targets: no missed packages (got {missed:.0f}), p99 <= {TARGET_P99_MS} ms (got {p99:.2f})")
+
+        names = ",".join(UR_RTDE_DEFAULT_OUTPUTS)
+        from rtde_spec import Catalogue
+
+        cat = Catalogue.builtin()
+        types = ",".join(cat.get(n, "output").type for n in UR_RTDE_DEFAULT_OUTPUTS)  # type: ignore[union-attr]
+        print("\nreceive loop, CPU per package (58 fields, 500 Hz, one client each):")
+        ours = child(OURS, str(port), str(args.seconds), names, "callback")
+        iterating = child(OURS, str(port), str(args.seconds), names, "iterate")
+        ur = child(UR_STYLE, str(port), str(args.seconds), names, str(Path(__file__).parent), types)
+        ours_us = ours["cpu"] / ours["packages"] * 1e6
+        ur_us = ur["cpu"] / ur["packages"] * 1e6
+        iter_us = iterating["cpu"] / iterating["packages"] * 1e6
+        print(f"  {'rtde_spec RtdeClient, on_data callback':42s} {ours_us:8.1f} µs")
+        print(f"  {'rtde_spec RtdeClient, for record in client':42s} {iter_us:8.1f} µs")
+        print(f"  {'UR-client-style loop (recv, unpack, dict)':42s} {ur_us:8.1f} µs")
+        try:
+            import rtde_receive  # noqa: F401
+        except ImportError:
+            print("  ur_rtde: not installed (pip install ur_rtde)")
+        else:
+            proc.terminate()
+            proc.wait(10)
+            proc, port = serve("127.0.0.2", 30004)
+            urr = child(UR_RTDE, str(port), str(args.seconds), "127.0.0.2")
+            print(
+                f"  {'ur_rtde RTDEReceiveInterface (C++)':42s} {urr['cpu'] / urr['packages'] * 1e6:8.1f} µs"
+            )
+        ratio = ur_us / ours_us
+        hit = ours_us <= TARGET_US and ratio >= TARGET_VS_UR
+        ok = ok and hit
+        target = f"<= {TARGET_US} µs (got {ours_us:.1f}), >= {TARGET_VS_UR}x less than UR style"
+        print(f"  targets: {target}: {ratio:.1f}x")
+    finally:
+        proc.terminate()
+        proc.wait(10)
+    print(f"\n{'met' if ok else 'MISSED'}")
+    return 0 if ok or not args.assert_targets else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
