@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import shutil
 import subprocess
 import sys
@@ -19,8 +20,22 @@ def test_committed_files_match_the_spec() -> None:
         assert (ROOT / rel).read_text(encoding="utf-8") == text, f"{rel} drifted; run python -m codegen"
 
 
-def test_generation_is_deterministic() -> None:
-    assert generate(load_spec(ROOT / "spec")) == generate(load_spec(ROOT / "spec"))
+def test_generation_is_deterministic_across_hash_seeds(tmp_path: Path) -> None:
+    """Separate processes with different PYTHONHASHSEEDs: set and dict order cannot leak in."""
+    outputs = []
+    for seed in ("0", "1", "4242"):
+        out = tmp_path / seed
+        env = {**os.environ, "PYTHONHASHSEED": seed}
+        result = subprocess.run(
+            [sys.executable, "-m", "codegen", "--out", str(out)],
+            cwd=ROOT,
+            capture_output=True,
+            text=True,
+            env=env,
+        )
+        assert result.returncode == 0, result.stderr
+        outputs.append({p.relative_to(out): p.read_bytes() for p in sorted(out.rglob("*")) if p.is_file()})
+    assert outputs[0] and outputs[0] == outputs[1] == outputs[2]
 
 
 def test_generated_files_are_marked() -> None:
