@@ -1,0 +1,113 @@
+"""Streaming output: every format readable and equal to the decoder's values; the protocol state."""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+import pyarrow.parquet as pq
+import pytest
+
+from rtde_spec import ProtocolState, RecipeCodec, StreamDecoder, build
+from rtde_spec.rtde.codec import decode_stream
+
+from .test_cli import cli
+
+NAMES = ["timestamp", "actual_q", "robot_mode", "output_bit_register_64"]
+CODEC = RecipeCodec.for_names(NAMES, "output")
+
+
+def packages(count: int, start: int = 0) -> bytes:
+    return b"".join(
+        CODEC.encode_package(
+            {"timestamp": i * 0.002, "actual_q": tuple(i + j / 10 for j in range(6)), "robot_mode": i % 8,
+             "output_bit_register_64": i % 2 == 0},
+            recipe_id=1,
+        )
+        for i in range(start, start + count)
+    )  # fmt: skip
+
+
+@pytest.fixture
+def stream(tmp_path: Path) -> Path:
+    # setup exchange as the controller sends it, data, a text message in the middle, more data
+    data = build("request_protocol_version_reply", accepted=True)
+    data += packages(3000) + build("text_message", message="hello", source="ctl", warning_level=3)
+    data += packages(2000, start=3000)
+    path = tmp_path / "controller.bin"
+    path.write_bytes(data)
+    return path
+
+
+def test_parquet_and_csv_hold_every_data_package_with_ur_column_names(stream: Path, tmp_path: Path) -> None:
+    recipe = ",".join(NAMES)
+    parquet, table_csv = tmp_path / "out.parquet", tmp_path / "out.csv"
+    result = cli("decode", str(stream), "--recipe", recipe, "-o", str(parquet))
+    assert result.returncode == 0, result.stderr
+    assert "request_protocol_version_reply x1" in result.stderr and "text_message x1" in result.stderr
+    table = pq.read_table(parquet)
+    expected = ["timestamp", *(f"actual_q_{i}" for i in range(6)), "robot_mode", "output_bit_register_64"]
+    assert table.column_names == expected and table.num_rows == 5000
+    assert table.column("actual_q_3")[4321].as_py() == pytest.approx(4321.3)
+    assert table.column("robot_mode")[4321].as_py() == 4321 % 8
+    assert cli("decode", str(stream), "--recipe", recipe, "-o", str(table_csv)).returncode == 0
+    with open(table_csv, newline="") as f:
+        rows = list(csv.reader(f))
+    assert rows[0] == expected and len(rows) == 5001
+    assert float(rows[4000][0]) == pytest.approx(3999 * 0.002) and float(rows[4000][1]) == 3999.0
+
+
+def test_json_lines_and_json_keep_every_package_in_order(stream: Path, tmp_path: Path) -> None:
+    jsonl, whole = tmp_path / "out.jsonl", tmp_path / "out.json"
+    assert cli("decode", str(stream), "--recipe", ",".join(NAMES), "-o", str(jsonl)).returncode == 0
+    lines = [json.loads(line) for line in jsonl.read_text().splitlines()]
+    assert len(lines) == 5002
+    assert lines[0]["package"] == "request_protocol_version_reply"
+    assert lines[3001]["package"] == "text_message" and lines[3001]["message"] == "hello"
+    assert lines[3002]["actual_q"] == pytest.approx([3000 + j / 10 for j in range(6)])
+    offsets = [line["offset"] for line in lines]
+    assert offsets == sorted(offsets) and len(set(offsets)) == len(offsets)
+    assert cli("decode", str(stream), "--recipe", ",".join(NAMES), "-o", str(whole)).returncode == 0
+    assert json.loads(whole.read_text()) == lines
+
+
+def test_streaming_equals_decoding_the_whole_buffer_at_any_chunk_size(stream: Path) -> None:
+    data = stream.read_bytes()
+    whole = [m.NAME for _, m in decode_stream(data)]
+    for chunk in (1, 7, 1180, 65536):
+        decoder = StreamDecoder("controller", codec=CODEC)
+        names: list[str] = []
+        rows = 0
+        for start in range(0, len(data), chunk):
+            for item in decoder.feed(data[start : start + chunk]):
+                if hasattr(item, "array"):
+                    rows += len(item.array)
+                    names += ["data_package"] * len(item.array)
+                else:
+                    names.append(item.message.NAME)
+        decoder.close()
+        assert names == whole and rows == 5000, chunk
+
+
+def test_protocol_state_follows_the_accepted_request() -> None:
+    both = ProtocolState()
+    assert both.version == 1  # the controller speaks protocol 1 until a request is accepted
+    both.on_request(2)
+    assert both.version == 1
+    both.on_reply(False)
+    assert both.version == 1
+    both.on_request(2)
+    both.on_reply(True)
+    assert both.version == 2
+    controller_side = ProtocolState(one_sided=True)
+    controller_side.on_reply(True)  # the request is not in view: the newest version
+    assert controller_side.version == 2
+    client_side = ProtocolState(one_sided=True)
+    client_side.on_request(2)  # the reply is not in view: taken as accepted
+    assert client_side.version == 2
+
+
+def test_parquet_without_a_file_is_a_usage_error(stream: Path) -> None:
+    result = cli("decode", str(stream), "--recipe", ",".join(NAMES), "--format", "parquet")
+    assert result.returncode == 2 and "-o FILE.parquet" in result.stderr

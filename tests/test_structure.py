@@ -1,0 +1,106 @@
+"""The layout keeps its promises: no import loops, small modules, a public facade, fast start-up."""
+
+from __future__ import annotations
+
+import ast
+import re
+import subprocess
+import sys
+from pathlib import Path
+
+import rtde_spec
+
+from .helpers import ROOT
+
+PACKAGE = ROOT / "rtde_spec"
+MAX_LINES = 400
+
+
+def module_name(path: Path) -> str:
+    parts = list(path.relative_to(ROOT).with_suffix("").parts)
+    return ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+
+
+def import_graph() -> dict[str, set[str]]:
+    """Module -> modules it imports, function-level and TYPE_CHECKING imports included."""
+    modules = {module_name(p): p for p in PACKAGE.rglob("*.py")}
+    graph: dict[str, set[str]] = {m: set() for m in modules}
+    for name, path in modules.items():
+        package = name if path.name == "__init__.py" else name.rpartition(".")[0]
+        for node in ast.walk(ast.parse(path.read_text())):
+            targets: list[str] = []
+            if isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                base = node.module or ""
+                if node.level:
+                    parts = package.split(".")[: len(package.split(".")) - node.level + 1]
+                    base = ".".join([*parts, base] if base else parts)
+                targets = [base, *(f"{base}.{a.name}" for a in node.names)]
+            for target in targets:
+                while target and target not in modules:
+                    target = target.rpartition(".")[0]
+                if target and target != name and not name.startswith(target + ".") and target != "rtde_spec":
+                    graph[name].add(target)
+    return graph
+
+
+def test_no_import_cycles() -> None:
+    graph = import_graph()
+    state: dict[str, int] = {}
+    cycles: list[list[str]] = []
+
+    def visit(node: str, stack: list[str]) -> None:
+        state[node] = 1
+        for nxt in sorted(graph[node]):
+            if state.get(nxt) == 1:
+                cycles.append([*stack[stack.index(nxt) :], nxt])
+            elif nxt not in state:
+                visit(nxt, [*stack, nxt])
+        state[node] = 2
+
+    for node in sorted(graph):
+        if node not in state:
+            visit(node, [node])
+    assert not cycles, cycles
+
+
+def test_generated_code_is_imported_only_by_the_layer_above() -> None:
+    graph = import_graph()
+    for name, targets in graph.items():
+        if name.startswith("rtde_spec._generated"):
+            continue
+        for target in targets:
+            if target.startswith("rtde_spec._generated"):
+                assert not name.startswith("rtde_spec.cli.") or target.endswith("constants"), (name, target)
+
+
+def test_no_hand_written_module_is_over_400_lines() -> None:
+    for path in PACKAGE.rglob("*.py"):
+        if "_generated" in path.parts:
+            continue
+        lines = len(path.read_text().splitlines())
+        assert lines <= MAX_LINES, f"{path.relative_to(ROOT)}: {lines} lines"
+
+
+def test_readme_imports_only_public_names() -> None:
+    readme = (ROOT / "README.md").read_text()
+    blocks = re.findall(r"```python\n(.*?)```", readme, re.S)
+    assert blocks
+    for block in blocks:
+        assert "_generated" not in block
+        for module in re.findall(r"^\s*from ([\w.]+) import", block, re.M):
+            assert module.startswith("rtde_spec"), module
+    for name in rtde_spec.__all__:
+        assert getattr(rtde_spec, name) is not None
+
+
+def test_start_up_does_not_load_pydantic_or_construct() -> None:
+    code = (
+        "import sys\nfrom rtde_spec import RecipeCodec\n"
+        "RecipeCodec.for_names(['timestamp', 'actual_q'], 'output')\n"
+        "import rtde_spec.cli.main\nrtde_spec.cli.main.build_parser()\n"
+        "print(sorted(m for m in ('pydantic', 'construct', 'numpy', 'pyarrow') if m in sys.modules))"
+    )
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert result.stdout.strip() == "[]"
