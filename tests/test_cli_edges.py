@@ -156,7 +156,10 @@ def test_version_and_help_texts() -> None:
             if action.option_strings and not isinstance(
                 action, (argparse._HelpAction, argparse._VersionAction)
             ):
-                assert action.help and "default" in action.help, (p.prog, action.option_strings)
+                assert action.help and ("default" in action.help or "required" in action.help), (
+                    p.prog,
+                    action.option_strings,
+                )
 
 
 def test_controller_errors_say_controller_version() -> None:

@@ -20,13 +20,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--host", required=True, help="controller address (required)")
     p.add_argument("--port", type=int, default=RTDE_PORT, help=f"RTDE port (default: {RTDE_PORT})")
     what = p.add_mutually_exclusive_group(required=True)
-    what.add_argument("--recipe", metavar="FILE", help="recipe file (any format; one output recipe)")
-    what.add_argument("--fields", metavar="A,B,...", help="output names, comma-separated")
+    what.add_argument("--recipe", metavar="FILE", help="recipe file, any format (required: this or --fields)")
+    what.add_argument(
+        "--fields", metavar="A,B,...", help="output names, comma-separated (required: this or --recipe)"
+    )
     p.add_argument("--frequency", type=float, default=125.0, help="output rate in Hz (default: 125)")
     stop = p.add_mutually_exclusive_group()
     stop.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (default: Ctrl-C)")
     stop.add_argument("--samples", type=int, metavar="N", help="stop after N rows (default: Ctrl-C)")
-    p.add_argument("-o", "--output", required=True, metavar="FILE", help="out.csv, out.parquet or out.jsonl")
+    p.add_argument(
+        "-o", "--output", required=True, metavar="FILE", help="out.csv, out.parquet or out.jsonl (required)"
+    )
     p.add_argument("--format", choices=("csv", "parquet", "jsonl"), help="default: from the -o suffix")
     p.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for replies (default: 5)")
     p.set_defaults(run=run)
