@@ -14,11 +14,19 @@ import sys
 from collections.abc import Callable
 
 from rtde_spec import __version__
-from rtde_spec.cli import decode_cmd, demo_cmd, fields_cmd, record_cmd, serve_cmd, validate_cmd
+from rtde_spec.cli import (
+    capture_cmd,
+    decode_cmd,
+    demo_cmd,
+    fields_cmd,
+    record_cmd,
+    serve_cmd,
+    validate_cmd,
+)
 from rtde_spec.cli.common import EXIT_ERROR, EXIT_USAGE
 from rtde_spec.errors import RtdeSpecError, UsageError
 
-COMMANDS = (demo_cmd, decode_cmd, fields_cmd, validate_cmd, serve_cmd, record_cmd)
+COMMANDS = (demo_cmd, decode_cmd, fields_cmd, validate_cmd, serve_cmd, record_cmd, capture_cmd)
 
 
 def build_parser() -> argparse.ArgumentParser:

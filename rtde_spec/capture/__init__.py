@@ -1,0 +1,1 @@
+"""Captures (pcap/pcapng) of RTDE and primary/secondary traffic, decoded into tables."""

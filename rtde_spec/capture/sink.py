@@ -1,0 +1,109 @@
+"""Where decoded capture tables go: a hive-partitioned directory of files, or Arrow tables in memory.
+
+Files are laid out as OUTDIR/<table>/robot=<controller address>/date=<YYYY-MM-DD>/<capture>.<ext>,
+a dataset DuckDB, Polars and Spark read directly with hive partitioning.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+from rtde_spec.errors import require
+from rtde_spec.output.writers import Writer, flat_columns, flatten, open_writer
+
+EXTENSIONS = {"parquet": "parquet", "csv": "csv", "jsonl": "jsonl"}
+
+
+def day_of(capture_time: float) -> str:
+    return time.strftime("%Y-%m-%d", time.gmtime(capture_time))
+
+
+class TableSink:
+    """Rows and columnar batches by table name; `robot` and `day` pick the partition."""
+
+    def __init__(self) -> None:
+        self.rows: dict[str, int] = {}
+        self.recipes: dict[tuple[str, tuple[str, ...]], str] = {}  # (direction, names) -> table
+
+    def table_for_recipe(self, direction: str, names: tuple[str, ...]) -> str:
+        key = (direction, names)
+        if key not in self.recipes:
+            self.recipes[key] = f"rtde_{direction}s_{sum(1 for d, _ in self.recipes if d == direction) + 1}"
+        return self.recipes[key]
+
+    def row(self, table: str, robot: str, day: str, record: Mapping[str, Any]) -> None:
+        self.rows[table] = self.rows.get(table, 0) + 1
+        self._row(table, robot, day, record)
+
+    def columns(self, table: str, robot: str, day: str, columns: Mapping[str, Any]) -> None:
+        size = len(next(iter(columns.values())))
+        self.rows[table] = self.rows.get(table, 0) + size
+        self._columns(table, robot, day, columns)
+
+    def _row(self, table: str, robot: str, day: str, record: Mapping[str, Any]) -> None:
+        raise NotImplementedError
+
+    def _columns(self, table: str, robot: str, day: str, columns: Mapping[str, Any]) -> None:
+        raise NotImplementedError
+
+    def close(self) -> None:
+        pass
+
+
+class DirectorySink(TableSink):
+    def __init__(self, outdir: str | Path, fmt: str, stem: str) -> None:
+        super().__init__()
+        self.outdir, self.fmt, self.stem = Path(outdir), fmt, stem
+        self.writers: dict[tuple[str, str, str], Writer] = {}
+        self.paths: list[Path] = []
+
+    def _writer(self, table: str, robot: str, day: str) -> Writer:
+        key = (table, robot, day)
+        if key not in self.writers:
+            folder = self.outdir / table / f"robot={robot.replace(':', '_')}" / f"date={day}"
+            folder.mkdir(parents=True, exist_ok=True)
+            path = folder / f"{self.stem}.{EXTENSIONS[self.fmt]}"
+            self.paths.append(path)
+            self.writers[key] = open_writer(self.fmt, path)
+        return self.writers[key]
+
+    def _row(self, table: str, robot: str, day: str, record: Mapping[str, Any]) -> None:
+        self._writer(table, robot, day).write(record)
+
+    def _columns(self, table: str, robot: str, day: str, columns: Mapping[str, Any]) -> None:
+        self._writer(table, robot, day).write_columns(columns)
+
+    def close(self) -> None:
+        for writer in self.writers.values():
+            writer.close()
+        if self.recipes:
+            listing = [{"table": t, "direction": d, "names": list(n)} for (d, n), t in self.recipes.items()]
+            (self.outdir / f"recipes-{self.stem}.json").write_text(json.dumps(listing, indent=2) + "\n")
+
+
+class ArrowSink(TableSink):
+    """Tables in memory, for the Python API (`capture_tables`)."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.pa = require("pyarrow", "arrow", "capture tables")
+        self.row_parts: dict[str, list[dict[str, Any]]] = {}
+        self.table_parts: dict[str, list[Any]] = {}
+
+    def _row(self, table: str, robot: str, day: str, record: Mapping[str, Any]) -> None:
+        self.row_parts.setdefault(table, []).append({**flatten(record), "robot": robot, "date": day})
+
+    def _columns(self, table: str, robot: str, day: str, columns: Mapping[str, Any]) -> None:
+        flat = flat_columns(columns)
+        size = len(next(iter(flat.values())))
+        batch = self.pa.table({**flat, "robot": [robot] * size, "date": [day] * size})
+        self.table_parts.setdefault(table, []).append(batch)
+
+    def tables(self) -> dict[str, Any]:
+        out = {name: self.pa.Table.from_pylist(rows) for name, rows in self.row_parts.items()}
+        out.update({name: self.pa.concat_tables(parts) for name, parts in self.table_parts.items()})
+        return out

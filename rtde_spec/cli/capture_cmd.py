@@ -1,0 +1,102 @@
+"""rtde-spec capture FILE... -o OUTDIR: pcap/pcapng captures to tables, in parallel over files."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
+from rtde_spec.errors import UsageError
+
+SUFFIXES = (".pcap", ".pcapng", ".cap")
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "capture",
+        help="decode pcap/pcapng captures of RTDE and primary/secondary traffic into tables",
+        description="Writes one table per kind (data packages per recipe, text messages, setup "
+        "exchanges, primary sub-packages) as a hive-partitioned dataset: "
+        "OUTDIR/<table>/robot=<address>/date=<day>/<capture>.<ext>.",
+    )
+    p.add_argument(
+        "files", nargs="+", metavar="FILE", help="capture files, folders of them, or globs (required)"
+    )
+    p.add_argument("-o", "--outdir", required=True, help="output folder (required)")
+    p.add_argument(
+        "--format", choices=("parquet", "csv", "jsonl"), default="parquet", help="default: parquet"
+    )
+    p.add_argument(
+        "--recipe", metavar="FILE", help="output recipe for captures that start after setup (default: none)"
+    )
+    p.add_argument(
+        "--rtde-port", type=int, action="append", help=f"RTDE port, repeatable (default: {RTDE_PORT})"
+    )
+    p.add_argument(
+        "--primary-port",
+        type=int,
+        action="append",
+        help=f"primary/secondary port, repeatable (default: {', '.join(map(str, PRIMARY_PORTS.values()))})",
+    )
+    p.add_argument("--jobs", type=int, default=1, help="files decoded in parallel processes (default: 1)")
+    p.set_defaults(run=run)
+
+
+def expand(patterns: list[str]) -> list[Path]:
+    files: list[Path] = []
+    for pattern in patterns:
+        path = Path(pattern)
+        if path.is_dir():
+            files += sorted(p for p in path.rglob("*") if p.suffix in SUFFIXES)
+        elif any(ch in pattern for ch in "*?["):
+            files += sorted(Path().glob(pattern))
+        elif path.is_file():
+            files.append(path)
+        else:
+            raise UsageError("no such file", subject=f"file {pattern}")
+    if not files:
+        raise UsageError(f"no capture files in {', '.join(patterns)}")
+    return files
+
+
+def run(args: argparse.Namespace) -> int:
+    from concurrent.futures import ProcessPoolExecutor
+
+    from rtde_spec.capture.decoder import CaptureSummary, decode_to_directory
+    from rtde_spec.cli.record_cmd import names_of
+
+    files = expand(args.files)
+    recipe = names_of(argparse.Namespace(fields=None, recipe=args.recipe)) if args.recipe else None
+    kw = {
+        "rtde_ports": tuple(args.rtde_port or (RTDE_PORT,)),
+        "primary_ports": tuple(args.primary_port or PRIMARY_PORTS.values()),
+    }
+    summaries: list[CaptureSummary] = []
+    if args.jobs > 1 and len(files) > 1:
+        with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+            futures = [
+                pool.submit(decode_to_directory, f, args.outdir, args.format, recipe, **kw) for f in files
+            ]
+            summaries = [f.result() for f in futures]
+    else:
+        summaries = [decode_to_directory(f, args.outdir, args.format, recipe, **kw) for f in files]
+    problems = _report(summaries)
+    return 1 if problems else 0
+
+
+def _report(summaries: list) -> int:  # type: ignore[type-arg]
+    tables: dict[str, int] = {}
+    problems = 0
+    for s in summaries:
+        for name, rows in s.tables.items():
+            tables[name] = tables.get(name, 0) + rows
+        print(f"{s.file}: {s.frames} frames, {len(s.connections)} connections")
+        for c in s.connections:
+            gaps = f", {c.gaps} gaps ({c.lost_bytes} bytes lost)" if c.gaps else ""
+            print(f"  {c.kind:7s} {c.name}: {c.packages} packages{gaps}")
+        for problem in s.problems():
+            problems += 1
+            print(f"  problem: {problem}", file=sys.stderr)
+    print("tables: " + ", ".join(f"{name} ({rows} rows)" for name, rows in sorted(tables.items())))
+    return problems

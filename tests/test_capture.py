@@ -1,0 +1,184 @@
+"""Captures made here (dpkt frame by frame) with every edge case, decoded into tables."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import pyarrow.dataset as ds
+import pytest
+
+from rtde_spec import RecipeCodec, build
+from rtde_spec.capture.decoder import capture_tables, decode_to_directory
+
+from .capture_files import Conversation, write
+from .test_cli import cli
+
+NAMES = ["timestamp", "actual_q", "robot_mode"]
+CODEC = RecipeCodec.for_names(NAMES, "output")
+INPUTS = ["input_int_register_24", "speed_slider_fraction"]
+
+
+def dataset(folder: Path):  # type: ignore[no-untyped-def]
+    """A hive-partitioned table folder, as DuckDB, Polars or Spark would read it."""
+    return ds.dataset(folder, format="parquet", partitioning="hive").to_table()
+
+
+def data(i: int) -> bytes:
+    values = {"timestamp": i * 0.002, "actual_q": tuple(i + j / 10 for j in range(6)), "robot_mode": 7}
+    return CODEC.encode_package(values, recipe_id=1)
+
+
+def session(conv: Conversation, *, setup: bool = True) -> None:
+    conv.handshake()
+    if setup:
+        conv.send("client", build("request_protocol_version", protocol_version=2))
+        conv.send("server", build("request_protocol_version_reply", accepted=True))
+        conv.send("client", build("get_urcontrol_version"))
+        conv.send("server", build("get_urcontrol_version_reply", major=5, minor=15, bugfix=0, build=1))
+        conv.send("client", build("setup_outputs_v2", output_frequency=500.0, variable_names=NAMES))
+        conv.send(
+            "server",
+            build(
+                "setup_outputs_v2_reply", output_recipe_id=1, variable_types=["DOUBLE", "VECTOR6D", "INT32"]
+            ),
+        )
+        conv.send("client", build("setup_inputs", variable_names=INPUTS))
+        conv.send(
+            "server", build("setup_inputs_reply", input_recipe_id=1, variable_types=["INT32", "DOUBLE"])
+        )
+        conv.send("client", build("start"))
+        conv.send("server", build("start_reply", accepted=True))
+
+
+def edge_cases(tmp_path: Path, fmt: str = "pcap", link: str = "ethernet", ipv6: bool = False) -> Path:
+    """One RTDE session with every edge case the issue lists; the expected rows are documented inline."""
+    host = ("fd00::2", "fd00::10") if ipv6 else ("10.0.0.2", "10.0.0.10")
+    conv = Conversation((host[0], 51000), (host[1], 30004), link=link)
+    session(conv)
+    for i in range(0, 100):  # 100 packages, one per segment
+        conv.send("server", data(i))
+    conv.send("server", b"".join(data(i) for i in range(100, 150)))  # 50 packages in one segment
+    whole = data(150)
+    conv.send("server", whole[:1])  # a package split in the middle of its header ...
+    conv.send("server", whole[1:] + data(151)[:40])  # ... and the next split mid-payload
+    _, again = conv.send("server", data(151)[40:])
+    conv.resend(again)  # a retransmission of that segment
+    conv.send("server", data(152), keep=False)  # a lost segment: a gap of one package
+    for i in range(153, 200):
+        conv.send("server", data(i))
+    conv.send(
+        "server", build("text_message", message="protective stop", source="SafetySystem", warning_level=1)
+    )
+    inputs = RecipeCodec.for_names(INPUTS, "input")
+    conv.send("client", inputs.encode_package({"input_int_register_24": 42, "speed_slider_fraction": 0.5}, 1))
+    conv.send("server", data(200)[:-5])  # the capture ends inside the last package
+    return write(tmp_path / f"edge.{fmt}", [conv], fmt)
+
+
+def test_every_edge_case_is_decoded_or_reported(tmp_path: Path) -> None:
+    summary = decode_to_directory(edge_cases(tmp_path), tmp_path / "out")
+    (conn,) = summary.connections
+    assert conn.kind == "rtde" and conn.name == "10.0.0.2:51000-10.0.0.10:30004"
+    assert conn.gaps == 1 and conn.lost_bytes == len(data(152))
+    assert any("ends inside a controller package" in e for e in conn.errors)
+    table = dataset(tmp_path / "out" / "rtde_outputs_1")
+    stamps = [round(t / 0.002) for t in table.column("timestamp").to_pylist()]
+    assert stamps == [i for i in range(200) if i != 152]  # in order, nothing twice, only the lost one missing
+    assert table.column("actual_q_3").to_pylist()[10] == pytest.approx(10.3)
+    assert set(table.column("robot").to_pylist()) == {"10.0.0.10"}
+    assert set(table.column("connection").to_pylist()) == {conn.name}
+    text = (
+        ds.dataset(tmp_path / "out" / "rtde_text", format="parquet", partitioning="hive")
+        .to_table()
+        .to_pylist()
+    )
+    assert text[0]["message"] == "protective stop" and text[0]["sender"] == "controller"
+    setup = (
+        ds.dataset(tmp_path / "out" / "rtde_setup", format="parquet", partitioning="hive")
+        .to_table()
+        .to_pylist()
+    )
+    assert [r["package"] for r in setup][:4] == [
+        "request_protocol_version",
+        "request_protocol_version_reply",
+        "get_urcontrol_version",
+        "get_urcontrol_version_reply",
+    ]
+    inputs = dataset(tmp_path / "out" / "rtde_inputs_1")
+    assert inputs.column("input_int_register_24").to_pylist() == [42]
+    recipes = json.loads(next((tmp_path / "out").glob("recipes-*.json")).read_text())
+    assert {r["table"]: r["names"] for r in recipes}["rtde_outputs_1"] == NAMES
+
+
+def test_capture_time_is_that_of_the_segment_that_completed_each_package(tmp_path: Path) -> None:
+    tables = capture_tables(edge_cases(tmp_path))
+    rows = tables["rtde_outputs_1"].to_pylist()
+    by_index = {round(r["timestamp"] / 0.002): r["capture_time"] for r in rows}
+    assert by_index[100] == by_index[149]  # 50 packages in one segment share its time
+    assert by_index[150] == by_index[150] and by_index[151] > by_index[150]  # completed by later segments
+    assert all(b >= a for a, b in zip(list(by_index.values()), list(by_index.values())[1:], strict=False))
+
+
+@pytest.mark.parametrize(
+    ("fmt", "link", "ipv6"),
+    [("pcapng", "ethernet", False), ("pcap", "sll", True), ("pcapng", "loopback", False)],
+)
+def test_link_types_ip_versions_and_pcapng(tmp_path: Path, fmt: str, link: str, ipv6: bool) -> None:
+    tables = capture_tables(edge_cases(tmp_path, fmt, link, ipv6))
+    assert tables["rtde_outputs_1"].num_rows == 199
+
+
+def test_a_capture_that_starts_after_setup(tmp_path: Path) -> None:
+    conv = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30004))
+    session(conv, setup=False)
+    for i in range(30):
+        conv.send("server", data(i))
+    path = write(tmp_path / "late.pcap", [conv])
+    without = decode_to_directory(path, tmp_path / "a")
+    (problem,) = without.problems()
+    assert (
+        "10.0.0.2:51000-10.0.0.10:30004" in problem and "30 of 64 bytes" in problem and "--recipe" in problem
+    )
+    with_recipe = decode_to_directory(path, tmp_path / "b", recipe_names=NAMES)
+    assert not with_recipe.problems() and with_recipe.tables["rtde_outputs_1"] == 30
+
+
+def test_primary_messages_become_one_table_per_sub_package(tmp_path: Path) -> None:
+    import sys
+
+    from .helpers import ROOT
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from ur5e_robot_state import ur5e_robot_state_bytes
+
+    conv = Conversation(("10.0.0.2", 52000), ("10.0.0.10", 30002))
+    conv.handshake()
+    state = ur5e_robot_state_bytes()
+    for _ in range(5):
+        conv.send("server", state[:700], dt=0.05)
+        conv.send("server", state[700:], dt=0.0)
+    conv.send("client", b"set_digital_out(1, True)\n")
+    tables = capture_tables(write(tmp_path / "primary.pcap", [conv]))
+    joints = tables["primary_joint_data"]
+    assert joints.num_rows == 5 and "joints_5_joint_mode" in joints.column_names
+    assert joints.column("joints_5_joint_mode").to_pylist() == [253] * 5
+    assert tables["primary_cumulative_runtime_data"].num_rows == 5
+    assert tables["primary_scripts"].column("script").to_pylist() == ["set_digital_out(1, True)\n"]
+
+
+def test_cli_decodes_a_folder_in_parallel_into_a_hive_dataset(tmp_path: Path) -> None:
+    folder = tmp_path / "captures"
+    folder.mkdir()
+    for name in ("a", "b", "c"):
+        conv = Conversation(("10.0.0.2", 51000), (f"10.0.0.{ord(name)}", 30004))
+        session(conv)
+        for i in range(20):
+            conv.send("server", data(i))
+        write(folder / f"{name}.pcap", [conv])
+    result = cli("capture", str(folder), "-o", str(tmp_path / "out"), "--jobs", "2")
+    assert result.returncode == 0, result.stderr
+    assert "rtde_outputs_1 (60 rows)" in result.stdout
+    table = dataset(tmp_path / "out" / "rtde_outputs_1")
+    assert table.num_rows == 60 and len(set(table.column("robot").to_pylist())) == 3
+    assert cli("capture", str(tmp_path / "nothing.pcap"), "-o", str(tmp_path / "x")).returncode == 2
