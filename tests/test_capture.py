@@ -182,3 +182,23 @@ def test_cli_decodes_a_folder_in_parallel_into_a_hive_dataset(tmp_path: Path) ->
     table = dataset(tmp_path / "out" / "rtde_outputs_1")
     assert table.num_rows == 60 and len(set(table.column("robot").to_pylist())) == 3
     assert cli("capture", str(tmp_path / "nothing.pcap"), "-o", str(tmp_path / "x")).returncode == 2
+
+
+def test_a_capture_that_starts_inside_a_package_resyncs(tmp_path: Path) -> None:
+    conv = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30004))  # no handshake in the capture
+    stream = b"".join(data(i) for i in range(40))
+    conv.send("server", stream[25:700])  # the capture begins 25 bytes into the first package
+    conv.send("server", stream[700:])
+    tables = capture_tables(write(tmp_path / "mid.pcap", [conv]), recipe=NAMES)
+    stamps = [round(t / 0.002) for t in tables["rtde_outputs_1"].column("timestamp").to_pylist()]
+    assert stamps == list(range(1, 40))
+
+
+def test_plot_of_a_capture_table(tmp_path: Path) -> None:
+    decode_to_directory(edge_cases(tmp_path), tmp_path / "out")
+    png = tmp_path / "q.png"
+    result = cli("plot", str(tmp_path / "out" / "rtde_outputs_1"), "actual_q", "robot_mode", "-o", str(png))
+    assert result.returncode == 0, result.stderr
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
+    missing = cli("plot", str(tmp_path / "out" / "rtde_outputs_1"), "no_such_field", "-o", str(png))
+    assert missing.returncode == 2 and "no_such_field" in missing.stderr

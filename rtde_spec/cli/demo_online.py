@@ -96,24 +96,15 @@ def _summary(columns: dict[str, list[float]]) -> None:
 
 
 def _plot(columns: dict[str, list[float]], path: Path) -> None:
-    try:
-        import matplotlib
+    from rtde_spec.errors import MissingDependencyError
+    from rtde_spec.output.plots import plot_columns
 
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
-    except ImportError:
+    try:
+        plot_columns(
+            columns, ["actual_q"], "timestamp", path, "Joint positions recorded from the controller emulator"
+        )
+    except MissingDependencyError:
         hint = "pip install 'rtde_spec[plot]'"
         print(f"\nNo plot: matplotlib is not installed ({hint}), then run again for {path}")
         return
-    fig, ax = plt.subplots(figsize=(9, 4.5))
-    for i in range(6):
-        ax.plot(columns["timestamp"], columns[f"actual_q_{i}"], label=f"actual_q_{i}")
-    ax.set_xlabel("timestamp [s]")
-    ax.set_ylabel("actual_q [rad]")
-    ax.set_title("Joint positions recorded from the controller emulator")
-    ax.legend(ncol=3, fontsize="small")
-    ax.grid(alpha=0.3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
     print(f"\nPlot: {path}")

@@ -19,6 +19,7 @@ from rtde_spec.cli import (
     decode_cmd,
     demo_cmd,
     fields_cmd,
+    plot_cmd,
     record_cmd,
     serve_cmd,
     validate_cmd,
@@ -26,7 +27,7 @@ from rtde_spec.cli import (
 from rtde_spec.cli.common import EXIT_ERROR, EXIT_USAGE
 from rtde_spec.errors import RtdeSpecError, UsageError
 
-COMMANDS = (demo_cmd, decode_cmd, fields_cmd, validate_cmd, serve_cmd, record_cmd, capture_cmd)
+COMMANDS = (demo_cmd, decode_cmd, fields_cmd, validate_cmd, serve_cmd, record_cmd, capture_cmd, plot_cmd)
 
 
 def build_parser() -> argparse.ArgumentParser:
