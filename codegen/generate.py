@@ -15,6 +15,7 @@ from .emit_docs import (
     emit_types_doc,
 )
 from .emit_enums import emit_enums
+from .emit_lua import emit_lua
 from .emit_primary import emit_primary_models, emit_primary_structs
 from .emit_primary_docs import emit_primary_doc
 from .emit_rtde import emit_rtde_models, emit_rtde_structs
@@ -37,6 +38,7 @@ def generate(spec: Spec) -> dict[str, str]:
         f"{GEN}/rtde_models.py": emit_rtde_models(spec),
         f"{GEN}/primary_models.py": emit_primary_models(spec),
         f"{GEN}/primary_structs.py": emit_primary_structs(spec),
+        f"{GEN}/rtde_spec.lua": emit_lua(spec, catalogue),
         "docs/reference/README.md": emit_index_doc(spec, catalogue),
         "docs/reference/rtde-fields.md": emit_fields_doc(spec, catalogue),
         "docs/reference/rtde-packages.md": emit_packages_doc(spec),

@@ -23,11 +23,22 @@ from rtde_spec.cli import (
     record_cmd,
     serve_cmd,
     validate_cmd,
+    wireshark_cmd,
 )
 from rtde_spec.cli.common import EXIT_ERROR, EXIT_USAGE
 from rtde_spec.errors import RtdeSpecError, UsageError
 
-COMMANDS = (demo_cmd, decode_cmd, fields_cmd, validate_cmd, serve_cmd, record_cmd, capture_cmd, plot_cmd)
+COMMANDS = (
+    demo_cmd,
+    decode_cmd,
+    fields_cmd,
+    validate_cmd,
+    serve_cmd,
+    record_cmd,
+    capture_cmd,
+    plot_cmd,
+    wireshark_cmd,
+)
 
 
 def build_parser() -> argparse.ArgumentParser:

@@ -1,0 +1,38 @@
+"""rtde-spec wireshark: install or locate the dissector generated from the spec."""
+
+from __future__ import annotations
+
+import argparse
+import shutil
+from importlib import resources
+from pathlib import Path
+
+PLUGIN = "rtde_spec.lua"
+DEFAULT_DIR = Path.home() / ".local" / "lib" / "wireshark" / "plugins"
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "wireshark",
+        help="install the Wireshark/tshark dissector generated from the spec (rtde.*, urprimary.*)",
+        description="Without --install, prints the dissector's path, for `tshark -X lua_script:PATH`.",
+    )
+    p.add_argument("--install", action="store_true", help="copy it to the plugins folder (default: print)")
+    p.add_argument("--dir", type=Path, default=DEFAULT_DIR, help=f"plugins folder (default: {DEFAULT_DIR})")
+    p.set_defaults(run=run)
+
+
+def dissector_path() -> Path:
+    return Path(str(resources.files("rtde_spec._generated").joinpath(PLUGIN)))
+
+
+def run(args: argparse.Namespace) -> int:
+    source = dissector_path()
+    if not args.install:
+        print(source)
+        return 0
+    args.dir.mkdir(parents=True, exist_ok=True)
+    target = args.dir / PLUGIN
+    shutil.copyfile(source, target)
+    print(f"installed {target}; Wireshark and tshark load it at their next start")
+    return 0
