@@ -1,0 +1,122 @@
+"""A capture of RTDE data packages (58-field recipe, one per TCP segment, as at 500 Hz) to Parquet,
+side by side with `tshark -r FILE -T fields -e tcp.payload` on the same file, and with
+several files decoded in parallel processes.
+
+Targets: >= 300,000 packages/s end to end on one core; peak memory < 300 MB; near-linear
+speed-up with processes over many files.
+
+    python benchmarks/bench_capture.py [--packages 200000] [--files 4]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+sys.path.insert(0, str(ROOT / "benchmarks"))
+from bench_decode_file import make_file  # noqa: E402
+from bench_recipe_decode import UR_RTDE_DEFAULT_OUTPUTS  # noqa: E402
+
+from rtde_spec import Catalogue, RecipeCodec, build  # noqa: E402
+from rtde_spec.capture.decoder import decode_to_directory  # noqa: E402
+from tests.capture_files import Conversation, write  # noqa: E402
+
+TARGET = 300_000
+CHILD = """
+import json, resource, sys, time
+from rtde_spec.capture.decoder import decode_to_directory
+start = time.perf_counter()
+summary = decode_to_directory(sys.argv[1], sys.argv[2], "parquet")
+print(json.dumps({"seconds": time.perf_counter() - start, "rows": summary.tables.get("rtde_outputs_1", 0),
+                  "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
+"""
+
+
+def make_capture(path: Path, packages: int, server: str = "10.0.0.10") -> None:
+    names = UR_RTDE_DEFAULT_OUTPUTS
+    cat = Catalogue.builtin()
+    codec = RecipeCodec.for_names(names, "output", cat)
+    raw_path = path.with_suffix(".bin")
+    make_file(raw_path, codec, packages)
+    raw = raw_path.read_bytes()
+    conv = Conversation(("10.0.0.2", 51000), (server, 30004))
+    conv.handshake()
+    conv.send("client", build("request_protocol_version", protocol_version=2))
+    conv.send("server", build("request_protocol_version_reply", accepted=True))
+    conv.send("client", build("setup_outputs_v2", output_frequency=500.0, variable_names=names))
+    types = [cat.get(n, "output").type for n in names]  # type: ignore[union-attr]
+    conv.send("server", build("setup_outputs_v2_reply", output_recipe_id=1, variable_types=types))
+    size = codec.package_size
+    for i in range(packages):
+        conv.send("server", raw[i * size : (i + 1) * size])
+    write(path, [conv])
+    raw_path.unlink()
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument(
+        "--packages", type=int, default=200_000, help="packages in the capture (default: 200000)"
+    )
+    parser.add_argument("--files", type=int, default=4, help="files for the parallel run (default: 4)")
+    parser.add_argument("--assert-targets", action="store_true", help="exit 1 on a missed target")
+    args = parser.parse_args(argv)
+    with tempfile.TemporaryDirectory() as tmp:
+        work = Path(tmp)
+        capture = work / "one.pcap"
+        make_capture(capture, args.packages)
+        print(f"{args.packages:,} data packages, {capture.stat().st_size / 1e6:.0f} MB pcap\n")
+        out = subprocess.run(
+            [sys.executable, "-c", CHILD, str(capture), str(work / "out")],
+            capture_output=True,
+            text=True,
+            check=True,
+        )
+        ours = json.loads(out.stdout.strip().splitlines()[-1])
+        rate = ours["rows"] / ours["seconds"]
+        label = "rtde-spec capture to Parquet (one core)"
+        print(f"{label:45s} {rate:10,.0f} packages/s  peak {ours['peak_mb']:.0f} MB")
+        tshark = shutil.which("tshark")
+        if tshark:
+            start = time.perf_counter()
+            subprocess.run(
+                [tshark, "-r", str(capture), "-T", "fields", "-e", "tcp.payload"],
+                stdout=subprocess.DEVNULL,
+                stderr=subprocess.DEVNULL,
+                check=True,
+            )
+            t_rate = args.packages / (time.perf_counter() - start)
+            label = "tshark -T fields -e tcp.payload"
+            print(f"{label:45s} {t_rate:10,.0f} packages/s  (ours: {rate / t_rate:.1f}x)")
+        files = []
+        for i in range(args.files):
+            f = work / f"robot{i}.pcap"
+            make_capture(f, args.packages // args.files, server=f"10.0.1.{i + 1}")
+            files.append(f)
+        per_file = args.packages // args.files
+        rates = {}
+        for jobs in (1, 2):
+            start = time.perf_counter()
+            with ProcessPoolExecutor(max_workers=jobs) as pool:
+                list(pool.map(decode_to_directory, files, [work / f"par{jobs}"] * len(files)))
+            rates[jobs] = per_file * len(files) / (time.perf_counter() - start)
+            print(f"{f'{args.files} files, {jobs} process(es)':45s} {rates[jobs]:10,.0f} packages/s")
+        print(f"speed-up with 2 processes: {rates[2] / rates[1]:.2f}x (2 cores)")
+        ok = rate >= TARGET and ours["peak_mb"] < 300
+        verdict = "met" if ok else "MISSED"
+        got = f"got {rate:,.0f}/s and {ours['peak_mb']:.0f} MB"
+        print(f"\ntargets: >= {TARGET:,} packages/s, < 300 MB ({got}): {verdict}")
+    return 0 if ok or not args.assert_targets else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())
