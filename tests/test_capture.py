@@ -202,3 +202,26 @@ def test_plot_of_a_capture_table(tmp_path: Path) -> None:
     assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and png.stat().st_size > 10_000
     missing = cli("plot", str(tmp_path / "out" / "rtde_outputs_1"), "no_such_field", "-o", str(png))
     assert missing.returncode == 2 and "no_such_field" in missing.stderr
+
+
+def test_dask_on_a_local_cluster_of_two_workers(tmp_path: Path) -> None:
+    distributed = pytest.importorskip("distributed", reason="dask is installed by the test extra")
+    from rtde_spec.capture.fleet import capture_bag, dataset_frame
+
+    paths = []
+    for k in range(4):
+        conv = Conversation(("10.0.0.2", 51000 + k), (f"10.0.2.{k + 1}", 30004))
+        session(conv)
+        for i in range(25):
+            conv.send("server", data(i))
+        paths.append(write(tmp_path / f"robot{k}.pcap", [conv]))
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
+        with distributed.Client(cluster) as client:
+            summaries = capture_bag(paths, tmp_path / "out").compute()
+            assert len(client.scheduler_info()["workers"]) == 2
+    assert sorted(s.tables["rtde_outputs_1"] for s in summaries) == [25] * 4
+    frame = dataset_frame(tmp_path / "out", "rtde_outputs_1").compute()
+    assert len(frame) == 100 and frame["robot"].nunique() == 4
+    assert frame["actual_q_3"].max() == pytest.approx(24.3)
