@@ -40,7 +40,8 @@ def main(argv: list[str] | None = None) -> int:
     stale = (
         sorted(
             str(p.relative_to(args.out))
-            for p in gen_dir.glob("*.py")
+            for p in gen_dir.iterdir()
+            if p.is_file() and p.suffix in (".py", ".lua")
             if str(p.relative_to(args.out)) not in files
         )
         if gen_dir.exists()

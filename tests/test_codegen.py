@@ -52,8 +52,9 @@ def test_check_passes_on_this_tree_and_fails_on_drift(tmp_path: Path) -> None:
     out = tmp_path / "repo"
     (out / "rtde_spec/_generated").mkdir(parents=True)
     shutil.copytree(ROOT / "docs", out / "docs")
-    for path in (ROOT / "rtde_spec/_generated").glob("*.py"):
-        shutil.copy(path, out / "rtde_spec/_generated" / path.name)
+    for path in (ROOT / "rtde_spec/_generated").iterdir():
+        if path.is_file():
+            shutil.copy(path, out / "rtde_spec/_generated" / path.name)
     assert _run("--check", "--out", str(out)).returncode == 0
     spec = tmp_path / "spec"
     shutil.copytree(ROOT / "spec", spec)

@@ -111,3 +111,15 @@ def test_protocol_state_follows_the_accepted_request() -> None:
 def test_parquet_without_a_file_is_a_usage_error(stream: Path) -> None:
     result = cli("decode", str(stream), "--recipe", ",".join(NAMES), "--format", "parquet")
     assert result.returncode == 2 and "-o FILE.parquet" in result.stderr
+
+
+def test_session_learns_a_recipe_sent_with_a_trailing_comma() -> None:
+    from rtde_spec import SessionDecoder
+
+    session = SessionDecoder()
+    session.feed("client", build("setup_outputs_v1", variable_names=["timestamp", "robot_mode", ""]))
+    session.feed("controller", build("setup_outputs_v1_reply", variable_types=["DOUBLE", "INT32"]))
+    package = RecipeCodec.for_names(["timestamp", "robot_mode"], "output").encode_package(
+        {"timestamp": 2.5, "robot_mode": 7}, recipe_id=1
+    )
+    assert session.feed("controller", package).values == {"timestamp": 2.5, "robot_mode": 7}

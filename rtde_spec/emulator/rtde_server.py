@@ -20,7 +20,7 @@ from rtde_spec._generated.constants import RTDE_ANSWERS, RTDE_LIMITS
 from rtde_spec._generated.enums import TextMessageLevel
 from rtde_spec.errors import DecodeError, RtdeSpecError
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
-from rtde_spec.rtde.codec import decode, observe
+from rtde_spec.rtde.codec import decode, observe, setup_names
 from rtde_spec.rtde.messages import RtdeMessage
 from rtde_spec.rtde.protocol_state import ProtocolState
 from rtde_spec.wire.framing import PackageFramer
@@ -137,8 +137,7 @@ class RtdeConnection(asyncio.Protocol):
 
     def _names(self, names: list[str]) -> tuple[list[str], bool]:
         """The requested names (a trailing comma's empty name dropped), and whether they fit the limit."""
-        if names and names[-1] == "":
-            names = names[:-1]  # ur_rtde ends its lists with a comma; controllers accept it
+        names = setup_names(names)
         if len(",".join(names).encode()) > MAX_NAMES:
             self._text(f"setup refused: names exceed {MAX_NAMES} bytes", ERROR)
             return names, False

@@ -200,6 +200,15 @@ def observe(state: ProtocolState, message: RtdeMessage) -> None:
         state.on_reply(message.accepted)
 
 
+def setup_names(names: list[str]) -> list[str]:
+    """The variables a setup request asks for: a trailing comma's empty last name is not one.
+
+    ur_rtde ends its name lists with a comma; controllers answer types for the real
+    names only. The model keeps the empty name so the package round-trips.
+    """
+    return names[:-1] if names and names[-1] == "" else names
+
+
 def encode(message: RtdeMessage) -> bytes:
     """The whole package of a model, header included."""
     return message.to_bytes()

@@ -14,7 +14,7 @@ from rtde_spec._generated import rtde_models as gen
 from rtde_spec._generated.constants import RTDE_DIRECTIONS
 from rtde_spec.errors import DecodeError, RecipeError
 from rtde_spec.recipes.codec import RecipeCodec
-from rtde_spec.rtde.codec import Sender, decode, observe
+from rtde_spec.rtde.codec import Sender, decode, observe, setup_names
 from rtde_spec.rtde.messages import RtdeMessage
 from rtde_spec.rtde.protocol_state import ProtocolState
 from rtde_spec.spec.catalogue import Catalogue
@@ -42,9 +42,9 @@ class SessionDecoder:
         out = DecodedPackage(sender, message)
         observe(self.state, message)
         if isinstance(message, (gen.SetupOutputsV1, gen.SetupOutputsV2)):
-            self._pending_names["output"] = message.variable_names
+            self._pending_names["output"] = setup_names(message.variable_names)
         elif isinstance(message, gen.SetupInputs):
-            self._pending_names["input"] = message.variable_names
+            self._pending_names["input"] = setup_names(message.variable_names)
         elif isinstance(message, (gen.SetupOutputsV1Reply, gen.SetupOutputsV2Reply)):
             recipe_id = getattr(message, "output_recipe_id", 1)
             self._learn("output", recipe_id, message.variable_types, out)
