@@ -54,8 +54,8 @@ def emit_lua(spec: Spec, catalogue: Catalogue) -> str:
     lines.append(f"local vs_package_type = {{ {types} }}\n\n")
     # --- RTDE fields: the header, every package field, every catalogue field
     lines.append("local F = {}\n")
-    lines.append(f'F.size = {_field("rtde.size", "Size", pk.header[0].type)}\n')
-    lines.append(f'F.type = {_field("rtde.type", "Type", pk.header[1].type, "vs_package_type")}\n')
+    lines.append(f"F.size = {_field('rtde.size', 'Size', pk.header[0].type)}\n")
+    lines.append(f"F.type = {_field('rtde.type', 'Type', pk.header[1].type, 'vs_package_type')}\n")
     seen: dict[str, str] = {}
     for msg in pk.messages:
         for fld in msg.fields:
@@ -78,11 +78,15 @@ def emit_lua(spec: Spec, catalogue: Catalogue) -> str:
         field_types[info.name] = info.type
     for name, text in seen.items():
         lines.append(f"F[{lua_str(name)}] = {text}\n")
-    lines.append("local fields = {}\nfor _, f in pairs(F) do table.insert(fields, f) end\nrtde.fields = fields\n\n")
+    lines.append(
+        "local fields = {}\nfor _, f in pairs(F) do table.insert(fields, f) end\nrtde.fields = fields\n\n"
+    )
     lines.append("-- wire types: element size and count\nlocal WIRE = {\n")
     for w in wire.values():
         if w.element is not None:
-            lines.append(f"  [{lua_str(w.name)}] = {{ size = {prims[w.element].size}, count = {w.count} }},\n")
+            lines.append(
+                f"  [{lua_str(w.name)}] = {{ size = {prims[w.element].size}, count = {w.count} }},\n"
+            )
     lines.append("}\nlocal FIELD_TYPE = {\n")
     lines += [f"  [{lua_str(n)}] = {lua_str(t)},\n" for n, t in field_types.items()]
     lines.append("}\n\n-- layouts: type/sender/protocol -> fields\nlocal LAYOUT = {\n")
@@ -90,26 +94,32 @@ def emit_lua(spec: Spec, catalogue: Catalogue) -> str:
         parts = []
         for fld in msg.fields:
             if fld.type in prims:
-                parts.append(f"{{ name = {lua_str(fld.name)}, kind = \"prim\", size = {prims[fld.type].size} }}")
+                parts.append(
+                    f'{{ name = {lua_str(fld.name)}, kind = "prim", size = {prims[fld.type].size} }}'
+                )
             elif fld.length == "rest":
-                parts.append(f"{{ name = {lua_str(fld.name)}, kind = \"rest\" }}")
+                parts.append(f'{{ name = {lua_str(fld.name)}, kind = "rest" }}')
             else:
                 size = prims[fld.length or "uint8"].size
-                parts.append(f"{{ name = {lua_str(fld.name)}, kind = \"prefixed\", size = {size} }}")
+                parts.append(f'{{ name = {lua_str(fld.name)}, kind = "prefixed", size = {size} }}')
         for sender in msg.senders:
             for proto in msg.protocols:
                 key = f"{ord(msg.type)}/{sender}/{proto}"
                 lines.append(f"  [{lua_str(key)}] = {{ name = {lua_str(msg.name)}, {', '.join(parts)} }},\n")
     lines.append("}\n\n")
     senders = [s for s in pk.senders]
-    lines.append(f"local PORT = {pk.port}\nlocal DIRECTION = {{ {senders[0]} = \"{pk.directions[senders[0]]}\", ")
-    lines.append(f"{senders[1]} = \"{pk.directions[senders[1]]}\" }}\n")
+    lines.append(
+        f'local PORT = {pk.port}\nlocal DIRECTION = {{ {senders[0]} = "{pk.directions[senders[0]]}", '
+    )
+    lines.append(f'{senders[1]} = "{pk.directions[senders[1]]}" }}\n')
     lines.append(f"local DATA = {ord(next(m.type for m in pk.messages if m.name == 'data_package'))}\n")
     lines.append(f"local RTDE_HEADER = {sum(prims[h.type].size for h in pk.header)}\n")
     lines.append(f"local RTDE_SIZE = {prims[pk.header[0].type].size}  -- the size field leads the header\n")
     data = next(m for m in pk.messages if m.name == "data_package")
     lead = sum(prims[f.type].size for f in data.fields if f.type in prims)
-    lines.append(f"local PAYLOAD = {sum(prims[h.type].size for h in pk.header) + lead}  -- header, recipe id\n")
+    lines.append(
+        f"local PAYLOAD = {sum(prims[h.type].size for h in pk.header) + lead}  -- header, recipe id\n"
+    )
     lines.append(_RTDE_BODY)
     lines += _primary(spec, prims)
     return "".join(lines)
@@ -227,18 +237,20 @@ def _layout_lua(fields: list[LayoutField], prims: dict, prefix: str, out: dict[s
         kind = fld.kind
         if kind == "value" and fld.type in prims:
             out[abbr] = _field(abbr, fld.name, fld.type or "", f"vs_{fld.enum}" if fld.enum else None)
-            parts.append(f'{{ kind = "prim", f = {lua_str(abbr)}, size = {prims[fld.type].size}, count = {fld.count or 1} }}')
+            parts.append(
+                f'{{ kind = "prim", f = {lua_str(abbr)}, size = {prims[fld.type].size}, count = {fld.count or 1} }}'
+            )
         elif kind == "repeat" and isinstance(fld.repeat, int):
             inner = _layout_lua(fld.fields or [], prims, abbr, out)
             parts.append(f'{{ kind = "repeat", times = {fld.repeat}, fields = {inner} }}')
         elif kind in ("string", "bytes") and fld.length != "rest" and fld.length in prims:
-            out[abbr] = f'ProtoField.string({lua_str(abbr)}, {lua_str(fld.name)})'
+            out[abbr] = f"ProtoField.string({lua_str(abbr)}, {lua_str(fld.name)})"
             parts.append(f'{{ kind = "prefixed", f = {lua_str(abbr)}, size = {prims[fld.length].size} }}')
         elif kind in ("string", "bytes"):
-            out[abbr] = f'ProtoField.string({lua_str(abbr)}, {lua_str(fld.name)})'
+            out[abbr] = f"ProtoField.string({lua_str(abbr)}, {lua_str(fld.name)})"
             parts.append(f'{{ kind = "rest", f = {lua_str(abbr)} }}')
         else:  # switches, optional groups, typed values: shown as the remaining bytes
-            out[abbr] = f'ProtoField.bytes({lua_str(abbr)}, {lua_str(fld.name)})'
+            out[abbr] = f"ProtoField.bytes({lua_str(abbr)}, {lua_str(fld.name)})"
             parts.append(f'{{ kind = "rest", f = {lua_str(abbr)} }}')
             break
     return "{ " + ", ".join(parts) + " }"
@@ -271,13 +283,19 @@ def _primary(spec: Spec, prims: dict) -> list[str]:  # type: ignore[type-arg]
         )
     out = ["\nlocal G = {}\n"]
     out += [f"G[{lua_str(abbr)}] = {text}\n" for abbr, text in fields.items()]
-    out.append("local gfields = {}\nfor _, f in pairs(G) do table.insert(gfields, f) end\nurprimary.fields = gfields\n")
+    out.append(
+        "local gfields = {}\nfor _, f in pairs(G) do table.insert(gfields, f) end\nurprimary.fields = gfields\n"
+    )
     out.append("local FAMILIES = {\n" + "".join(f"  {f},\n" for f in families) + "}\n")
     ports = ", ".join(str(p) for p in pf.ports.values())
     sub_header = sum(prims[h.type].size for h in pf.subpackage_header)
     header = sum(prims[h.type].size for h in pf.header)
-    out.append(f"local PRIMARY_PORTS = {{ {ports} }}\nlocal SUB_HEADER = {sub_header}\nlocal HEADER = {header}\n")
-    out.append(f"local P_SIZE = {prims[pf.header[0].type].size}\nlocal SUB_SIZE = {prims[pf.subpackage_header[0].type].size}\n")
+    out.append(
+        f"local PRIMARY_PORTS = {{ {ports} }}\nlocal SUB_HEADER = {sub_header}\nlocal HEADER = {header}\n"
+    )
+    out.append(
+        f"local P_SIZE = {prims[pf.header[0].type].size}\nlocal SUB_SIZE = {prims[pf.subpackage_header[0].type].size}\n"
+    )
     out.append(_PRIMARY_BODY)
     return out
 
