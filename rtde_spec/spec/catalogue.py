@@ -127,37 +127,9 @@ class Catalogue:
         self.lines = {row[0]: LineInfo(*row) for row in data.LINES}
         self.wire_types = {row[0]: WireTypeInfo(*row) for row in data.WIRE_TYPES}
         self._fields = {d: {} for d in DIRECTIONS}
-        for row in data.FIELDS:
-            (
-                name,
-                direction,
-                wire,
-                doc,
-                unit,
-                enum,
-                bits,
-                deprecated,
-                reserved,
-                sources,
-                family,
-                index,
-                since,
-            ) = row
-            info = FieldInfo(
-                name,
-                direction,
-                self.wire_types[wire],
-                doc,
-                unit,
-                enum,
-                bits,
-                deprecated,
-                reserved,
-                sources,
-                family,
-                index,
-                {line: Version.parse(v) for line, v in since.items()},
-            )
+        for name, direction, wire, *middle, since in data.FIELDS:
+            versions = {line: Version.parse(v) for line, v in since.items()}
+            info = FieldInfo(name, direction, self.wire_types[wire], *middle, versions)
             self._fields[direction][name] = info
         return self
 
