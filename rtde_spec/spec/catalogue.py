@@ -129,7 +129,8 @@ class Catalogue:
         self._fields = {d: {} for d in DIRECTIONS}
         for name, direction, wire, *middle, since in data.FIELDS:
             versions = {line: Version.parse(v) for line, v in since.items()}
-            info = FieldInfo(name, direction, self.wire_types[wire], *middle, versions)
+            fields: tuple[Any, ...] = (name, direction, self.wire_types[wire], *middle, versions)
+            info = FieldInfo(*fields)
             self._fields[direction][name] = info
         return self
 
