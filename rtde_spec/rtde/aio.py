@@ -12,52 +12,25 @@ queue (oldest dropped, counted in `skipped`); every await has a timeout.
 from __future__ import annotations
 
 import asyncio
-import collections
 import logging
 from collections.abc import AsyncIterator, Mapping, Sequence
 from typing import Any
 
-from rtde_spec._generated.constants import RTDE_PORT, RTDE_PROTOCOLS
+from rtde_spec._generated.constants import RTDE_PORT
 from rtde_spec.errors import ProtocolError, RtdeConnectionError
 from rtde_spec.rtde.client import LOG_LEVELS
-from rtde_spec.rtde.client_protocol import ClientProtocol, Data, InputRecipe, Reply, Text
-from rtde_spec.spec.catalogue import Catalogue
-from rtde_spec.spec.versions import Version
+from rtde_spec.rtde.client_protocol import ClientBase, Data, InputRecipe, Reply, Text
 
 log = logging.getLogger("rtde_spec.client")
 
 
-class AsyncRtdeClient:
-    def __init__(
-        self,
-        host: str,
-        port: int = RTDE_PORT,
-        *,
-        timeout: float = 5.0,
-        queue_size: int = 1000,
-        catalogue: Catalogue | None = None,
-    ) -> None:
-        self.host, self.port, self.timeout = host, port, timeout
-        self.core = ClientProtocol(catalogue)
-        self.skipped = 0
-        self._data: collections.deque[Any] = collections.deque(maxlen=queue_size)
+class AsyncRtdeClient(ClientBase):
+    def __init__(self, host: str, port: int = RTDE_PORT, **options: Any) -> None:
+        super().__init__(host, port, **options)
         self._data_event = asyncio.Event()
         self._replies: asyncio.Queue[Reply | BaseException] = asyncio.Queue()
         self._writer: asyncio.StreamWriter | None = None
         self._task: asyncio.Task[None] | None = None
-        self._closed: BaseException | None = None
-
-    @property
-    def where(self) -> str:
-        return f"{self.host}:{self.port}"
-
-    @property
-    def controller_version(self) -> Version | None:
-        return self.core.controller_version
-
-    @property
-    def protocol_version(self) -> int:
-        return self.core.state.version
 
     async def connect(self, protocol_version: int | None = None) -> AsyncRtdeClient:
         try:
@@ -67,7 +40,7 @@ class AsyncRtdeClient:
         except (OSError, asyncio.TimeoutError) as exc:
             raise RtdeConnectionError(f"cannot connect to the RTDE port: {exc}", subject=self.where) from None
         self._task = asyncio.get_running_loop().create_task(self._read_loop(reader))
-        for version in [protocol_version] if protocol_version else sorted(RTDE_PROTOCOLS, reverse=True):
+        for version in self._versions_to_try(protocol_version):
             if (await self._request(self.core.request_protocol_version(version))).message.accepted:  # type: ignore[attr-defined]
                 break
         else:
@@ -153,6 +126,7 @@ class AsyncRtdeClient:
                     raise RtdeConnectionError("the controller closed the connection", subject=self.where)
                 for event in self.core.receive(chunk):
                     if isinstance(event, Data):
+                        self.received += 1
                         if len(self._data) == self._data.maxlen:
                             self.skipped += 1
                         self._data.append(event.record)

@@ -9,7 +9,6 @@ errors naming host and port.
 
 from __future__ import annotations
 
-import collections
 import logging
 import queue
 import socket
@@ -17,45 +16,26 @@ import threading
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any
 
-from rtde_spec._generated.constants import RTDE_PORT, RTDE_PROTOCOLS
+from rtde_spec._generated.constants import RTDE_PORT
 from rtde_spec.errors import ProtocolError, RtdeConnectionError
-from rtde_spec.rtde.client_protocol import ClientProtocol, Data, InputRecipe, Reply, Text
-from rtde_spec.spec.catalogue import Catalogue
-from rtde_spec.spec.versions import Version
+from rtde_spec.rtde.client_protocol import ClientBase, Data, InputRecipe, Reply, Text
 
 log = logging.getLogger("rtde_spec.client")
 LOG_LEVELS = (logging.CRITICAL, logging.ERROR, logging.WARNING, logging.INFO)  # by text-message level
 
 
-class RtdeClient:
+class RtdeClient(ClientBase):
     """`with RtdeClient("192.168.1.10") as c: c.setup_outputs([...], 125); c.start(); for r in c: ...`"""
 
-    def __init__(
-        self,
-        host: str,
-        port: int = RTDE_PORT,
-        *,
-        timeout: float = 5.0,
-        queue_size: int = 1000,
-        catalogue: Catalogue | None = None,
-    ) -> None:
-        self.host, self.port, self.timeout = host, port, timeout
-        self.core = ClientProtocol(catalogue)
-        self.skipped = 0
-        self.received = 0
+    def __init__(self, host: str, port: int = RTDE_PORT, **options: Any) -> None:
+        super().__init__(host, port, **options)
         self._sock: socket.socket | None = None
         self._replies: queue.Queue[Reply | BaseException] = queue.Queue()
-        self._data: collections.deque[Any] = collections.deque(maxlen=queue_size)
         self._data_ready = threading.Condition()
         self._callbacks: list[Callable[[Any], None]] = []
         self._raw_callbacks: list[Callable[[bytes], None]] = []
-        self._closed: BaseException | None = None
         self._reader: threading.Thread | None = None
         self._send_lock = threading.Lock()
-
-    @property
-    def where(self) -> str:
-        return f"{self.host}:{self.port}"
 
     # --- connection ---------------------------------------------------------
 
@@ -71,7 +51,7 @@ class RtdeClient:
         self._sock.settimeout(None)
         self._reader = threading.Thread(target=self._read_loop, name=f"rtde-reader-{self.where}", daemon=True)
         self._reader.start()
-        for version in [protocol_version] if protocol_version else sorted(RTDE_PROTOCOLS, reverse=True):
+        for version in self._versions_to_try(protocol_version):
             reply = self._request(self.core.request_protocol_version(version))
             if reply.message.accepted:  # type: ignore[attr-defined]
                 break
@@ -79,19 +59,6 @@ class RtdeClient:
             raise ProtocolError("the controller accepted no protocol version", subject=self.where)
         self._request(self.core.get_controller_version())
         return self
-
-    @property
-    def protocol_version(self) -> int:
-        return self.core.state.version
-
-    @property
-    def controller_version(self) -> Version | None:
-        return self.core.controller_version
-
-    @property
-    def connection_lost(self) -> BaseException | None:
-        """Why the connection ended (None while it is open)."""
-        return self._closed
 
     def close(self) -> None:
         if self._sock is not None:

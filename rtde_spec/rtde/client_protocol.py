@@ -8,12 +8,19 @@ the output recipe skip the generic codec: one prefix check and one unpack each.
 
 from __future__ import annotations
 
+import collections
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 from rtde_spec._generated import rtde_models as gen
-from rtde_spec._generated.constants import DATA_PACKAGE_TYPE, RTDE_ANSWERS, RTDE_LIMITS
+from rtde_spec._generated.constants import (
+    DATA_PACKAGE_TYPE,
+    RTDE_ANSWERS,
+    RTDE_LIMITS,
+    RTDE_PORT,
+    RTDE_PROTOCOLS,
+)
 from rtde_spec.errors import ProtocolError, RecipeError, RtdeSpecError
 from rtde_spec.recipes.codec import RecipeCodec
 from rtde_spec.recipes.model import Recipe
@@ -179,3 +186,43 @@ class ClientProtocol:
             self.output, self.output_recipe_id = codec, recipe_id
         else:
             self.inputs[recipe_id] = InputRecipe(recipe_id, tuple(names), codec)
+
+
+class ClientBase:
+    """What the blocking and asyncio clients share: the address, the core, the queue, the counters."""
+
+    def __init__(
+        self,
+        host: str,
+        port: int = RTDE_PORT,
+        *,
+        timeout: float = 5.0,
+        queue_size: int = 1000,
+        catalogue: Catalogue | None = None,
+    ) -> None:
+        self.host, self.port, self.timeout = host, port, timeout
+        self.core = ClientProtocol(catalogue)
+        self.skipped = 0
+        self.received = 0
+        self._data: collections.deque[Any] = collections.deque(maxlen=queue_size)
+        self._closed: BaseException | None = None
+
+    @property
+    def where(self) -> str:
+        return f"{self.host}:{self.port}"
+
+    @property
+    def protocol_version(self) -> int:
+        return self.core.state.version
+
+    @property
+    def controller_version(self) -> Version | None:
+        return self.core.controller_version
+
+    @property
+    def connection_lost(self) -> BaseException | None:
+        """Why the connection ended (None while it is open)."""
+        return self._closed
+
+    def _versions_to_try(self, protocol_version: int | None) -> list[int]:
+        return [protocol_version] if protocol_version else sorted(RTDE_PROTOCOLS, reverse=True)
