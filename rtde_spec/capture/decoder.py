@@ -7,7 +7,7 @@ capture time of the segment that completed it.
 
 from __future__ import annotations
 
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -76,12 +76,13 @@ def decode_capture(
     rtde_ports: Sequence[int] = (RTDE_PORT,),
     primary_ports: Sequence[int] = tuple(PRIMARY_PORTS.values()),
     catalogue: Catalogue | None = None,
+    progress: Callable[[int], None] | None = None,
 ) -> CaptureSummary:
     """Decode one capture file into the sink; the summary says what was found and what went wrong."""
     cat = catalogue or Catalogue.default()
     stats: dict[str, int] = {}
     flows: dict[frozenset[tuple[str, int]], _Flow | None] = {}
-    for seg in segments(path, stats):
+    for seg in segments(path, stats, progress):
         key = frozenset({(seg.src, seg.sport), (seg.dst, seg.dport)})
         if key in flows:
             flow = flows[key]

@@ -7,7 +7,7 @@ IPv4 and IPv6. Anything else is counted, not decoded.
 from __future__ import annotations
 
 import socket
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -44,8 +44,10 @@ def _ip_of(dpkt: Any, linktype: int, frame: bytes) -> Any:
     return None
 
 
-def segments(path: str | Path, stats: dict[str, int] | None = None) -> Iterator[Segment]:
-    """Every TCP segment of a capture file, in file order."""
+def segments(
+    path: str | Path, stats: dict[str, int] | None = None, progress: Callable[[int], None] | None = None
+) -> Iterator[Segment]:
+    """Every TCP segment of a capture file, in file order; `progress(bytes read)` now and then."""
     dpkt = require("dpkt", "capture", "reading captures")
     counts = stats if stats is not None else {}
     with open(path, "rb") as f:
@@ -58,6 +60,8 @@ def segments(path: str | Path, stats: dict[str, int] | None = None) -> Iterator[
         linktype = reader.datalink()
         for ts, frame in reader:
             counts["frames"] = counts.get("frames", 0) + 1
+            if progress is not None and counts["frames"] % 4096 == 0:
+                progress(f.tell())
             try:
                 ip = _ip_of(dpkt, linktype, frame)
             except (dpkt.dpkt.UnpackError, IndexError):

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import Any
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.errors import UsageError
@@ -68,7 +69,7 @@ def run(args: argparse.Namespace) -> int:
 
     files = expand(args.files)
     recipe = names_of(argparse.Namespace(fields=None, recipe=args.recipe)) if args.recipe else None
-    kw = {
+    kw: dict[str, Any] = {
         "rtde_ports": tuple(args.rtde_port or (RTDE_PORT,)),
         "primary_ports": tuple(args.primary_port or PRIMARY_PORTS.values()),
     }
@@ -80,7 +81,13 @@ def run(args: argparse.Namespace) -> int:
             ]
             summaries = [f.result() for f in futures]
     else:
-        summaries = [decode_to_directory(f, args.outdir, args.format, recipe, **kw) for f in files]
+        for f in files:
+            bar = _progress(f)
+            if bar is not None:
+                kw["progress"] = lambda done, bar=bar: bar.update(done - bar.n)
+            summaries.append(decode_to_directory(f, args.outdir, args.format, recipe, **kw))
+            if bar is not None:
+                bar.close()
     problems = _report(summaries)
     return 1 if problems else 0
 
@@ -100,3 +107,16 @@ def _report(summaries: list) -> int:  # type: ignore[type-arg]
             print(f"  problem: {problem}", file=sys.stderr)
     print("tables: " + ", ".join(f"{name} ({rows} rows)" for name, rows in sorted(tables.items())))
     return problems
+
+
+def _progress(path: Path):  # type: ignore[no-untyped-def]
+    """A progress bar over the file's bytes, on a terminal, for files worth one."""
+    if not sys.stderr.isatty() or path.stat().st_size < 8 << 20:
+        return None
+    try:
+        from tqdm import tqdm
+    except ImportError:
+        return None
+    return tqdm(
+        total=path.stat().st_size, unit="B", unit_scale=True, desc=path.name, file=sys.stderr, leave=False
+    )
