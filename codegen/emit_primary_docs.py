@@ -127,6 +127,10 @@ def emit_primary_doc(spec: Spec) -> str:
                 out += f"{m.doc}\n\n"
             if m.since:
                 out += "Since: " + ", ".join(f"{k} {v}" for k, v in m.since.items()) + "\n\n"
+            for old in m.older:
+                names = ", ".join(f"`{f.name}` ({f.type})" for f in old.fields)
+                out += f"Controllers before {old.before} send an older layout (decoded when the Version "
+                out += f"message names such a controller): {names}. Source: {old.source}.\n\n"
             rows, end = _rows(m.fields, prims, prefix_size)
             out += md_table(["Offset", "Field", "Type", "Bytes", "Meaning"], rows)
             if end is not None and fam.layout == "subpackages":

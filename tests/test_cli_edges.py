@@ -236,8 +236,9 @@ def test_a_cb2_era_controller_is_flagged_on_every_message() -> None:
     messages = decoder.feed(version_message(1, 8) + bytes.fromhex(ur5e_state_hex()))
     assert str(decoder.version).startswith("1.8")
     for _, message in messages:
-        (warning,) = decoder.warnings_for(message)
-        assert "outside the spec's product lines" in warning
+        warnings = decoder.warnings_for(message)
+        assert "outside the spec's product lines" in warnings[0]
+        assert "robot_mode_data" in warnings[0]  # decoded with the older layout python-urx documents
     modern = PrimaryStreamDecoder()
     for _, message in modern.feed(version_message(5, 15) + bytes.fromhex(ur5e_state_hex())):
         assert modern.warnings_for(message) == []
@@ -278,3 +279,25 @@ def test_key_message_without_length_round_trips_in_the_documents_form() -> None:
     assert message.key_text_message == text.decode()  # type: ignore[union-attr]
     again = decode_message(encode_message(message))
     assert again == message
+
+
+def cb2_robot_state() -> bytes:
+    """A CB2-era Robot State, packed with the struct formats python-urx reads software < 3.0 with."""
+    mode = struct.pack(">Q7?Bd", 99, True, True, True, False, False, True, False, 7, 0.75)
+    board = struct.pack(">hhbbddbbddffffB", 3, 5, 0, 1, 1.5, 2.5, 0, 1, 3.0, 4.0, 35.0, 48.0, 0.75, 0.0625, 1)
+    board += b"\x01\x00"  # masterOnOffState, euromap67InterfaceInstalled: kept as extra bytes
+    subs = b"".join(struct.pack(">IB", 5 + len(body), kind) + body for kind, body in ((0, mode), (3, board)))
+    return struct.pack(">IB", 5 + len(subs), 16) + subs
+
+
+def test_older_layouts_from_public_sources_decode_cb2_values() -> None:
+    decoder = PrimaryStreamDecoder()
+    ((_, _), (_, state)) = decoder.feed(version_message(1, 8) + cb2_robot_state())
+    mode, board = state["robot_mode_data"], state["masterboard_data"]
+    assert (mode.robot_mode, mode.target_speed_fraction, mode.timestamp) == (7, 0.75, 99)
+    assert "control_mode" in mode.missing and mode.control_mode is None
+    assert board.robot_voltage_48v == 48.0 and board.digital_output_bits == 5 and board.safety_mode == 1
+    assert board.extra == b"\x01\x00"
+    # without the version context the current layout would apply: the wrong values of the report
+    wrong = decode_message(cb2_robot_state())["masterboard_data"]
+    assert wrong.robot_voltage_48v != 48.0

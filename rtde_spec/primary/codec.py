@@ -43,6 +43,7 @@ class _Family:
     spec: FamilySpec
     prefix: Layout | None
     members: dict[int, tuple[type[PrimaryPart], Layout]] = field(default_factory=dict)
+    older: dict[int, list[tuple[Version, Layout]]] = field(default_factory=dict)  # oldest range first
 
 
 class PrimaryCodec:
@@ -66,12 +67,23 @@ class PrimaryCodec:
                 layout = Layout(member.fields, prims, self.values)
                 entry.members[member.type] = (cls, layout)
                 self.by_class[cls] = (entry, layout)
+                if member.older:
+                    ranges = [
+                        (Version.parse(o.before), Layout(o.fields, prims, self.values)) for o in member.older
+                    ]
+                    entry.older[member.type] = sorted(ranges, key=lambda r: r[0])
             self.families[fam.type] = entry
 
     # --- decoding -----------------------------------------------------------
 
-    def decode_message(self, data: bytes | bytearray | memoryview, *, strict: bool = True) -> PrimaryMessage:
-        """One whole message; with strict=False bytes after it are ignored."""
+    def decode_message(
+        self, data: bytes | bytearray | memoryview, *, strict: bool = True, version: Version | None = None
+    ) -> PrimaryMessage:
+        """One whole message; with strict=False bytes after it are ignored.
+
+        `version` (from the Version message) picks the spec's older layouts where a
+        sub-package has them.
+        """
         buf = bytes(data)
         hsize = self.header.size
         size, mtype = check_header(
@@ -89,10 +101,12 @@ class PrimaryCodec:
         if layout == "opaque":
             return OpaqueMessage(family=fam.spec.name, type=mtype, raw=buf[hsize:size])
         if layout == "subpackages":
-            return self._robot_state(buf, hsize, size)
+            return self._robot_state(buf, hsize, size, version)
         return self._tagged(fam, buf, hsize, size)
 
-    def _robot_state(self, buf: bytes, pos: int, end: int) -> RobotStateMessage:
+    def _robot_state(
+        self, buf: bytes, pos: int, end: int, version: Version | None = None
+    ) -> RobotStateMessage:
         fam = self.families[gen.FAMILY_TYPES["robot_state"]]
         hsize = self.sub_header.size
         subs: list[Any] = []
@@ -123,6 +137,8 @@ class PrimaryCodec:
                 subs.append(UnknownSubPackage(type=sub_type, size=sub_size, raw=buf[pos : pos + sub_size]))
             else:
                 cls, layout = member
+                if version is not None and sub_type in fam.older:
+                    layout = next((lay for before, lay in fam.older[sub_type] if version < before), layout)
                 subs.append(self._part(cls, layout, buf, pos + hsize, pos + sub_size, {}))
             pos += sub_size
         return build(RobotStateMessage, {"sub_packages": subs})
@@ -153,6 +169,9 @@ class PrimaryCodec:
             raise exc.relocated(package=cls.NAME) from None
         if prefix:
             values.update(prefix)
+        full = self.by_class[cls][1]
+        if full is not layout:  # an older layout: the current fields it lacks are missing too
+            missing = [n for n in full.names if n not in values and n not in missing] + missing
         for name in missing:
             values[name] = None
         values["missing"] = tuple(missing)
@@ -273,7 +292,7 @@ class PrimaryStreamDecoder:
         for offset, raw in self.framer.feed(data):
             self.count += 1
             try:
-                message = self.codec.decode_message(raw)
+                message = self.codec.decode_message(raw, version=self.version)
             except DecodeError as exc:
                 raise exc.in_stream(offset, self.count) from None
             if isinstance(message, gen.VersionMessage) and message.major_version is not None:
@@ -297,9 +316,17 @@ class PrimaryStreamDecoder:
             self.version.major in majors for majors in PRODUCT_LINES.values()
         ):
             lines = ", ".join(f"{name} {'/'.join(map(str, m))}.x" for name, m in PRODUCT_LINES.items())
+            version = self.version
+            older = sorted(
+                m.NAME
+                for fam in self.codec.families.values()
+                for t, (m, _) in fam.members.items()
+                if any(version < before for before, _ in fam.older.get(t, []))
+            )
+            known = f" (older layouts from public sources used for {', '.join(older)})" if older else ""
             out.append(
-                f"controller {self.version} is outside the spec's product lines ({lines}); "
-                "its layouts are not described, so these values may be wrong"
+                f"controller {version} is outside the spec's product lines ({lines}){known}; "
+                "other layouts are not described for it, so values may be wrong"
             )
         if isinstance(message, RobotStateMessage):
             shorter = [s.NAME for s in message.sub_packages if isinstance(s, PrimaryPart) and s.missing]

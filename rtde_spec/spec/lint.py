@@ -328,6 +328,13 @@ def _lint_primary(spec: Spec) -> Found:
             mloc: Loc = (*where, j)
             yield from _since(member.since, spec, (*mloc, "since"))
             yield from _layout(member.fields, spec, (*mloc, "fields"), groups)
+            current = {f.name for f in member.fields}
+            for k, old in enumerate(member.older):
+                oloc: Loc = (*mloc, "older", k)
+                yield from _layout(old.fields, spec, (*oloc, "fields"), {})
+                for m, fld in enumerate(old.fields):
+                    if fld.name not in current:
+                        yield (*oloc, "fields", m, "name"), f"{fld.name!r} is not a field of {member.name}"
 
 
 def lint_spec(spec: Spec) -> list[tuple[str, Loc, str]]:

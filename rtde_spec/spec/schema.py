@@ -289,6 +289,14 @@ class LayoutField(StrictModel):
         return "value"
 
 
+class OlderLayout(StrictModel):
+    """The layout controllers before `before` send (decode only), with the public source for it."""
+
+    before: VersionStr
+    source: str
+    fields: list[LayoutField]
+
+
 class MemberSpec(StrictModel):
     name: Ident
     type: int
@@ -296,6 +304,7 @@ class MemberSpec(StrictModel):
     doc_ref: str | None = None
     since: Since | None = None
     fields: list[LayoutField]
+    older: list[OlderLayout] = []
 
 
 class FamilySpec(StrictModel):
