@@ -79,6 +79,21 @@ while time.monotonic() - t0 < seconds:
 print(json.dumps({"cpu": time.process_time() - c0, "packages": n}))
 """
 
+FLOOR = """
+import json, socket, struct, sys, time
+port, seconds, names = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3]
+s = socket.create_connection(("127.0.0.1", port))
+def send(t, body=b""):
+    s.sendall(struct.pack(">HB", 3 + len(body), t) + body)
+send(ord("V"), struct.pack(">H", 2)); s.recv(100)
+send(ord("O"), struct.pack(">d", 500.0) + names.encode()); s.recv(4096)
+send(ord("S")); s.recv(100)
+got, t0, c0 = 0, time.monotonic(), time.process_time()
+while time.monotonic() - t0 < seconds:
+    got += len(s.recv(65536))  # nothing else: what a wake-up per TCP segment costs
+print(json.dumps({"cpu": time.process_time() - c0, "packages": got / (4 + int(sys.argv[4]))}))
+"""
+
 UR_RTDE = """
 import json, sys, time
 import rtde_receive
@@ -90,6 +105,12 @@ time.sleep(seconds)
 print(json.dumps({"cpu": time.process_time() - c0, "packages": round((r.getTimestamp() - ts0) * 500)}))
 r.disconnect()
 """
+
+
+def payload_size(names: list[str]) -> int:
+    from rtde_spec import RecipeCodec
+
+    return RecipeCodec.for_names(names, "output").size
 
 
 def serve(host: str, port: int) -> tuple[subprocess.Popen[str], int]:
@@ -185,12 +206,16 @@ def main(argv: list[str] | None = None) -> int:
         ours = child(OURS, str(port), str(args.seconds), names, "callback")
         iterating = child(OURS, str(port), str(args.seconds), names, "iterate")
         ur = child(UR_STYLE, str(port), str(args.seconds), names, str(Path(__file__).parent), types)
+        size = str(payload_size(UR_RTDE_DEFAULT_OUTPUTS))
+        floor = child(FLOOR, str(port), str(args.seconds), names, size)
         ours_us = ours["cpu"] / ours["packages"] * 1e6
         ur_us = ur["cpu"] / ur["packages"] * 1e6
         iter_us = iterating["cpu"] / iterating["packages"] * 1e6
         print(f"  {'rtde_spec RtdeClient, on_data callback':42s} {ours_us:8.1f} µs")
         print(f"  {'rtde_spec RtdeClient, for record in client':42s} {iter_us:8.1f} µs")
         print(f"  {'UR-client-style loop (recv, unpack, dict)':42s} {ur_us:8.1f} µs")
+        floor_us = floor["cpu"] / floor["packages"] * 1e6
+        print(f"  {'floor: bare recv() loop, nothing decoded':42s} {floor_us:8.1f} µs")
         try:
             import rtde_receive  # noqa: F401
         except ImportError:
