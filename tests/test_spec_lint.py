@@ -187,6 +187,14 @@ CASES: list[tuple[str, str, str, str, str, str]] = [
         "unknown primitive 'uint9'",
     ),
     (
+        "member type not in its enum",
+        "primary/interface.yaml",
+        "      - name: key_message\n        type: 7\n",
+        "      - name: key_message\n        type: 8\n",
+        "families[1](robot_message).members[4](key_message).type",
+        "robot_message member number 8 is not a value of RobotMessageType",
+    ),
+    (
         "rest field not last",
         "rtde/packages.yaml",
         "      - {name: message_type, type: uint8, enum: TextMessageLevel, doc: Severity}\n"
@@ -232,3 +240,12 @@ def test_missing_file_and_bad_yaml(spec_copy: Path) -> None:
     issues = _issues(spec_copy)
     assert any(i.file == "rtde/enums.yaml" and "not found" in i.reason for i in issues)
     assert any(i.file == "rtde/types.yaml" and "not valid YAML" in i.reason for i in issues)
+
+
+def test_an_enum_value_without_its_member_is_reported_at_the_members(spec_copy: Path) -> None:
+    _edit(spec_copy, "primary/enums.yaml", "      - {name: VERSION, value: 3}\n",
+          "      - {name: VERSION, value: 3}\n      - {name: NEWER_THING, value: 4}\n")  # fmt: skip
+    issues = _issues(spec_copy)
+    (issue,) = [i for i in issues if "NEWER_THING" in i.reason]
+    assert issue.file == "primary/interface.yaml" and "families[1](robot_message).members" in issue.path
+    assert "RobotMessageType.NEWER_THING (4) has no robot_message member" in issue.reason

@@ -14,6 +14,7 @@ from rtde_spec.spec.schema import (
     FieldsFile,
     FieldSpec,
     LayoutField,
+    PrimaryFile,
     Since,
     Spec,
 )
@@ -311,6 +312,7 @@ def _lint_primary(spec: Spec) -> Found:
         yield loc, reason
     for loc, reason in _duplicates([str(f.type) for f in pf.families], ("families",), "message type"):
         yield loc, reason
+    yield from _type_numbers(pf, enums)
     groups: dict[str, str] = {}
     for i, fam in enumerate(pf.families):
         floc: Loc = ("families", i)
@@ -335,6 +337,44 @@ def _lint_primary(spec: Spec) -> Found:
                 for m, fld in enumerate(old.fields):
                     if fld.name not in current:
                         yield (*oloc, "fields", m, "name"), f"{fld.name!r} is not a field of {member.name}"
+
+
+def _type_numbers(pf: PrimaryFile, enums: dict[str, EnumSpec]) -> Iterator[tuple[Loc, str]]:
+    """Family and member type numbers are exactly the values of the enums that name them.
+
+    A family's number is a value of the header's type enum; a member's, a value of the
+    enum of the field that selects it (the sub-package header's type, or the family's tag);
+    and every value of those enums has its family or member, so neither side can drift.
+    """
+
+    def tie(
+        numbers: dict[int, Loc], enum_name: str | None, what: str, where: Loc
+    ) -> Iterator[tuple[Loc, str]]:
+        enum = enums.get(enum_name or "")
+        if enum is None:
+            yield where, f"{what} numbers are tied to no enum"
+            return
+        values = {v.value: v.name for v in enum.values}
+        for number, loc in numbers.items():
+            if number not in values:
+                yield loc, f"{what} number {number} is not a value of {enum.name}"
+        for value, name in values.items():
+            if value not in numbers:
+                yield where, f"{enum.name}.{name} ({value}) has no {what}"
+
+    families: dict[int, Loc] = {f.type: ("families", i, "type") for i, f in enumerate(pf.families)}
+    yield from tie(families, pf.header[1].enum, "message type", ("families",))
+    for i, fam in enumerate(pf.families):
+        if fam.layout == "opaque":
+            continue
+        if fam.layout == "subpackages":
+            enum_name = pf.subpackage_header[1].enum
+        else:
+            enum_name = next((p.enum for p in fam.prefix if p.name == fam.tag), None)
+        members: dict[int, Loc] = {
+            m.type: ("families", i, "members", j, "type") for j, m in enumerate(fam.members)
+        }
+        yield from tie(members, enum_name, f"{fam.name} member", ("families", i, "members"))
 
 
 def lint_spec(spec: Spec) -> list[tuple[str, Loc, str]]:
