@@ -45,6 +45,8 @@ def _meaning(fld: LayoutField) -> str:
         text += f" Values: [{fld.enum}](enums.md#{fld.enum.lower()})."
     if fld.unit:
         text += f" [{fld.unit}]"
+    if fld.since:
+        text += " Since " + ", ".join(f"{line} {v}" for line, v in fld.since.items()) + "."
     if fld.fallback:
         text += f" Without a length prefix that fits exactly, the text is the {fld.fallback}."
     if fld.peers:

@@ -301,3 +301,18 @@ def test_older_layouts_from_public_sources_decode_cb2_values() -> None:
     # without the version context the current layout would apply: the wrong values of the report
     wrong = decode_message(cb2_robot_state())["masterboard_data"]
     assert wrong.robot_voltage_48v != 48.0
+
+
+def test_missing_fields_are_judged_by_their_since() -> None:
+    # robot mode data as CB3 3.1 sends it (python-urx: !IBQ???????BBdd): no speed fraction limit
+    body = struct.pack(">Q7?BBdd", 5, True, True, True, False, False, False, False, 7, 0, 1.0, 1.0)
+    sub = struct.pack(">IB", 5 + len(body), 0) + body
+    state = struct.pack(">IB", 5 + len(sub), 16) + sub
+    old = PrimaryStreamDecoder()
+    (_, (_, message)) = old.feed(version_message(3, 1) + state)
+    assert set(message["robot_mode_data"].missing) == {"target_speed_fraction_limit", "reserved"}
+    assert old.warnings_for(message) == []  # older than the fields' since on CB3: expected
+    new = PrimaryStreamDecoder()
+    (_, (_, message)) = new.feed(version_message(5, 15) + state)
+    (warning,) = new.warnings_for(message)
+    assert "robot_mode_data.target_speed_fraction_limit" in warning and "robot_mode_data.reserved" in warning

@@ -99,8 +99,8 @@ class RobotModeData(PrimaryPart):
     control_mode: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: ControlMode)')] = None
     target_speed_fraction: Annotated[float | None, Field(description='')] = None
     speed_scaling: Annotated[float | None, Field(description='')] = None
-    target_speed_fraction_limit: Annotated[float | None, Field(description='')] = None
-    reserved: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='Internal use only')] = None
+    target_speed_fraction_limit: Annotated[float | None, Field(description='python-urx reads 3.0/3.1 without it and 3.2 with it (urx/ursecmon.py)')] = None
+    reserved: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='Internal use only. Not in the 46-byte layout python-urx reads for CB3 3.2; its first CB3 version is unknown')] = None
 
 
 class JointData(PrimaryPart):
@@ -191,12 +191,12 @@ class CartesianInfo(PrimaryPart):
     rx: Annotated[float | None, Field(description='[rad]')] = None
     ry: Annotated[float | None, Field(description='[rad]')] = None
     rz: Annotated[float | None, Field(description='[rad]')] = None
-    tcp_offset_x: Annotated[float | None, Field(description='[m]')] = None
-    tcp_offset_y: Annotated[float | None, Field(description='[m]')] = None
-    tcp_offset_z: Annotated[float | None, Field(description='[m]')] = None
-    tcp_offset_rx: Annotated[float | None, Field(description='[rad]')] = None
-    tcp_offset_ry: Annotated[float | None, Field(description='[rad]')] = None
-    tcp_offset_rz: Annotated[float | None, Field(description='[rad]')] = None
+    tcp_offset_x: Annotated[float | None, Field(description='python-urx reads it from 3.2 on [m]')] = None
+    tcp_offset_y: Annotated[float | None, Field(description='python-urx reads it from 3.2 on [m]')] = None
+    tcp_offset_z: Annotated[float | None, Field(description='python-urx reads it from 3.2 on [m]')] = None
+    tcp_offset_rx: Annotated[float | None, Field(description='python-urx reads it from 3.2 on [rad]')] = None
+    tcp_offset_ry: Annotated[float | None, Field(description='python-urx reads it from 3.2 on [rad]')] = None
+    tcp_offset_rz: Annotated[float | None, Field(description='python-urx reads it from 3.2 on [rad]')] = None
 
 
 class KinematicsInfo(PrimaryPart):

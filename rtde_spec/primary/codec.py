@@ -59,6 +59,8 @@ class PrimaryCodec:
         self.max_size = pf.max_message_bytes
         self.families: dict[int, _Family] = {}
         self.by_class: dict[type[PrimaryPart], tuple[_Family, Layout]] = {}
+        # (member, field) -> first version per product line, for fields added after their member
+        self.field_since: dict[tuple[str, str], dict[str, Version]] = {}
         for fam in pf.families:
             prefix = Layout(fam.prefix, prims, self.values) if fam.prefix else None
             entry = _Family(fam, prefix)
@@ -67,6 +69,10 @@ class PrimaryCodec:
                 layout = Layout(member.fields, prims, self.values)
                 entry.members[member.type] = (cls, layout)
                 self.by_class[cls] = (entry, layout)
+                for fld in member.fields:
+                    if fld.since:
+                        since = {line: Version.parse(v) for line, v in fld.since.items()}
+                        self.field_since[(member.name, fld.name)] = since
                 if member.older:
                     ranges = [
                         (Version.parse(o.before), Layout(o.fields, prims, self.values)) for o in member.older
@@ -305,6 +311,22 @@ class PrimaryStreamDecoder:
             out.append((offset, message))
         return out
 
+    def _unexpected_missing(self, parts: list[Any]) -> list[str]:
+        """Missing fields that the controller's version should have sent (by the fields' `since`)."""
+        if self.version is None:
+            return []
+        line = next((name for name, majors in PRODUCT_LINES.items() if self.version.major in majors), None)
+        if line is None:
+            return []  # outside the product lines: reported on its own
+        out = []
+        for part in parts:
+            for name in getattr(part, "missing", ()):
+                since = self.codec.field_since.get((part.NAME, name))
+                expected = since is not None and (line not in since or self.version < since[line])
+                if not expected:
+                    out.append(f"{part.NAME}.{name}")
+        return out
+
     def warnings_for(self, message: PrimaryMessage) -> list[str]:
         """Why this message's values may be wrong: an unknown controller line, or layouts that disagree.
 
@@ -328,6 +350,11 @@ class PrimaryStreamDecoder:
                 f"controller {version} is outside the spec's product lines ({lines}){known}; "
                 "other layouts are not described for it, so values may be wrong"
             )
+        parts = message.sub_packages if isinstance(message, RobotStateMessage) else [message]
+        unexpected = self._unexpected_missing(parts)
+        if unexpected:
+            names = ", ".join(unexpected)
+            out.append(f"missing on controller {self.version}, which the spec says sends them: {names}")
         if isinstance(message, RobotStateMessage):
             shorter = [s.NAME for s in message.sub_packages if isinstance(s, PrimaryPart) and s.missing]
             longer = [s.NAME for s in message.sub_packages if isinstance(s, PrimaryPart) and s.extra]

@@ -244,6 +244,7 @@ def _layout(fields: list[LayoutField], spec: Spec, loc: Loc, groups: dict[str, s
             yield (*floc, "name"), f"duplicate field name {fld.name!r}"
         if fld.enum is not None and fld.enum not in enums:
             yield (*floc, "enum"), f"unknown enum {fld.enum!r}"
+        yield from _since(fld.since, spec, (*floc, "since"))
         if kind == "value" and fld.type not in prims:
             yield (*floc, "type"), f"unknown type {fld.type!r}"
         if fld.count is not None and kind != "value":

@@ -274,6 +274,7 @@ class LayoutField(StrictModel):
     enum: str | None = None
     unit: str | None = None
     doc: str | None = None
+    since: Since | None = None  # the first version per product line that sends this field
 
     @property
     def kind(self) -> str:
