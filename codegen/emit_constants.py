@@ -21,6 +21,8 @@ def emit_constants(spec: Spec) -> str:
     fixed = [f for f in data.fields if f.type in prims and f.length is None]
     prefix_codes = "".join(prims[f.type].struct for f in fixed)
     prefix_names = (*(h.name for h in pk.header), *(f.name for f in fixed))
+    sizes = [prims[h.type].size for h in pk.header] + [prims[f.type].size for f in fixed]
+    prefix_offsets = tuple(sum(sizes[:i]) for i in range(len(sizes)))
     lines = [
         PY_HEADER,
         '"""Plain constants of the spec, importable without pydantic or construct."""\n\n',
@@ -43,6 +45,8 @@ def emit_constants(spec: Spec) -> str:
         f"DATA_PACKAGE_PREFIX_FORMAT = {header + prefix_codes!r}\n",
         '"""struct format of a data package up to its payload: the header, then the recipe id."""\n',
         f"DATA_PACKAGE_PREFIX_FIELDS: tuple[str, ...] = {prefix_names!r}\n",
+        f"DATA_PACKAGE_PREFIX_OFFSETS: tuple[int, ...] = {prefix_offsets!r}\n",
+        '"""Byte offset of each prefix field (size, type, recipe id) in a data package."""\n',
         "PRODUCT_LINES: dict[str, tuple[int, ...]] = {\n",
     ]
     for line in spec.product_lines.product_lines:

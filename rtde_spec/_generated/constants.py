@@ -20,6 +20,8 @@ DATA_PACKAGE_TYPE = 85  # 'U'
 DATA_PACKAGE_PREFIX_FORMAT = '>HBB'
 """struct format of a data package up to its payload: the header, then the recipe id."""
 DATA_PACKAGE_PREFIX_FIELDS: tuple[str, ...] = ('size', 'type', 'recipe_id')
+DATA_PACKAGE_PREFIX_OFFSETS: tuple[int, ...] = (0, 2, 3)
+"""Byte offset of each prefix field (size, type, recipe id) in a data package."""
 PRODUCT_LINES: dict[str, tuple[int, ...]] = {
     'cb3': (3,),
     'e-series': (5,),

@@ -16,6 +16,7 @@ from typing import TYPE_CHECKING, Any
 from rtde_spec._generated.constants import (
     BYTE_ORDER,
     DATA_PACKAGE_PREFIX_FIELDS,
+    DATA_PACKAGE_PREFIX_OFFSETS,
     DATA_PACKAGE_TYPE,
     RTDE_LIMITS,
 )
@@ -29,6 +30,7 @@ if TYPE_CHECKING:
 
 _PREFIX = PREFIX  # header + recipe id
 _PREFIX_FIELDS = DATA_PACKAGE_PREFIX_FIELDS
+_SIZE_AT, _TYPE_AT, _RECIPE_ID_AT = DATA_PACKAGE_PREFIX_OFFSETS
 PAYLOAD_OFFSET = _PREFIX.size
 _new_tuple = tuple.__new__
 _PY = {"int": int, "float": float, "bool": bool, "str": str}
@@ -181,7 +183,7 @@ class RecipeCodec:
             raise DecodeError(
                 "not a data package",
                 field="type",
-                offset=2,
+                offset=_TYPE_AT,
                 expected=DATA_PACKAGE_TYPE,
                 actual=ptype,
             )
@@ -189,7 +191,7 @@ class RecipeCodec:
             raise DecodeError(
                 "size field disagrees with the package length",
                 field="size",
-                offset=0,
+                offset=_SIZE_AT,
                 expected=len(data),
                 actual=size,
             )
@@ -198,7 +200,7 @@ class RecipeCodec:
                 "data package of another recipe",
                 package="data_package",
                 field="recipe_id",
-                offset=3,
+                offset=_RECIPE_ID_AT,
                 expected=recipe_id,
                 actual=rid,
             )

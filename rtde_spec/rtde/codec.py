@@ -22,6 +22,7 @@ from rtde_spec.wire.framing import PackageFramer, check_header
 
 Sender = Literal["controller", "client"]
 _HEADER = struct.Struct(gen.HEADER_FORMAT)
+_TYPE_AT = struct.calcsize(gen.HEADER_FORMAT[0] + gen.HEADER_FORMAT[1])  # the type follows the size
 _BY_NAME: dict[str, type[RtdeMessage]] = {cls.NAME: cls for cls in gen.MESSAGES}
 
 
@@ -47,14 +48,14 @@ def message_class(package_type: int, sender: str, protocol_version: int) -> type
         raise DecodeError(
             f"unknown package type {_type_text(package_type)}",
             field="type",
-            offset=2,
+            offset=_TYPE_AT,
             expected=known,
             actual=package_type,
         )
     raise DecodeError(
         f"{gen.PACKAGE_TYPES[package_type]} is never sent by the {sender} in protocol {protocol_version}",
         field="type",
-        offset=2,
+        offset=_TYPE_AT,
     )
 
 
