@@ -185,7 +185,6 @@ def _lint_types_enums(spec: Spec) -> Iterator[tuple[str, Loc, str]]:
 def _lint_packages(spec: Spec) -> Iterator[tuple[str, Loc, str]]:
     pk = spec.packages
     prims = {p.name for p in spec.primitives.primitives}
-    enums = {e.name for e in spec.all_enums}
     codes = [p.code for p in pk.package_types]
     for dup, reason in _duplicates(codes, ("package_types",), "package type"):
         yield "packages", dup, reason
@@ -214,21 +213,15 @@ def _lint_packages(spec: Spec) -> Iterator[tuple[str, Loc, str]]:
                         (f"{msg.type!r} from {sender} in protocol {proto} is also {claimed[key]}"),
                     )
                 claimed[key] = msg.name
+        yield from (
+            ("packages", where, reason) for where, reason in _layout(msg.fields, spec, (*loc, "fields"), {})
+        )
         for j, fld in enumerate(msg.fields):
             floc: Loc = (*loc, "fields", j)
-            if fld.type in ("string", "bytes"):
-                if fld.length is None:
-                    yield "packages", (*floc, "length"), f"{fld.type} needs length: rest or uint8"
-                if fld.length == "rest" and j != len(msg.fields) - 1:
-                    yield "packages", (*floc, "length"), "only the last field can run to the end"
-            elif fld.type not in prims:
-                yield "packages", (*floc, "type"), f"unknown type {fld.type!r}"
-            elif fld.length is not None:
-                yield "packages", (*floc, "length"), "length applies to string and bytes only"
-            if fld.format is not None and fld.type != "string":
-                yield "packages", (*floc, "format"), "format applies to strings only"
-            if fld.enum is not None and fld.enum not in enums:
-                yield "packages", (*floc, "enum"), f"unknown enum {fld.enum!r}"
+            if fld.kind not in ("value", "string", "bytes") or fld.count is not None:
+                yield "packages", floc, "RTDE packages hold primitives, strings and bytes only"
+            elif fld.kind in ("string", "bytes") and fld.length not in ("rest", "uint8"):
+                yield "packages", (*floc, "length"), f"{fld.type} needs length: rest or uint8"
 
 
 def _layout(fields: list[LayoutField], spec: Spec, loc: Loc, groups: dict[str, str]) -> Found:
@@ -286,7 +279,8 @@ def _layout(fields: list[LayoutField], spec: Spec, loc: Loc, groups: dict[str, s
             yield (*floc, "fields"), "repeat, when and group need fields"
         open_ended = fld.length == "rest" or fld.repeat == "until_end" or kind == "values"
         if open_ended and i != len(fields) - 1:
-            yield (*floc, "name"), "only the last field can run to the end"
+            culprit = "length" if fld.length == "rest" else "repeat" if fld.repeat == "until_end" else "type"
+            yield (*floc, culprit), "only the last field can run to the end"
         seen.append(fld.name)
 
 

@@ -194,62 +194,6 @@ class EnumsFile(StrictModel):
 # --- spec/rtde/packages.yaml -----------------------------------------------
 
 
-class PackageField(StrictModel):
-    name: Ident
-    type: str
-    doc: str | None = None
-    unit: str | None = None
-    enum: str | None = None
-    length: Literal["rest", "uint8"] | None = None
-    format: Literal["csv"] | None = None
-
-
-class PackageTypeSpec(StrictModel):
-    code: Annotated[str, Field(min_length=1, max_length=1)]
-    name: str
-
-
-class MessageSpec(StrictModel):
-    name: Ident
-    type: Annotated[str, Field(min_length=1, max_length=1)]
-    sender: str | list[str]
-    protocols: list[int]
-    doc: str | None = None
-    fields: list[PackageField]
-
-    @property
-    def senders(self) -> tuple[str, ...]:
-        return (self.sender,) if isinstance(self.sender, str) else tuple(self.sender)
-
-
-class Limits(StrictModel):
-    setup_names_max_bytes: int
-    input_recipes_max: int
-    invalid_recipe_id: int
-    package_max_bytes: int
-
-
-class Answers(StrictModel):
-    not_found: Annotated[str, Field(pattern=r"^[A-Z_]+$")]
-    in_use: Annotated[str, Field(pattern=r"^[A-Z_]+$")]
-
-
-class PackagesFile(StrictModel):
-    port: int
-    doc_ref: str | None = None
-    byte_order: Literal["big", "little"]
-    answers: Answers
-    directions: dict[str, Literal["input", "output"]]
-    limits: Limits
-    header: list[PackageField]
-    senders: dict[str, str]
-    package_types: list[PackageTypeSpec]
-    messages: list[MessageSpec]
-
-
-# --- spec/primary/interface.yaml -------------------------------------------
-
-
 class CaseSpec(StrictModel):
     type: str
     length: str | None = None
@@ -259,7 +203,7 @@ class LayoutField(StrictModel):
     """One field of a primary-interface layout: a value, a string, or a group."""
 
     name: Ident
-    type: str | None = None
+    type: str = ""  # a primitive, "string", "bytes" or "variable_values"; empty for groups and switches
     count: Annotated[int, Field(ge=1)] | None = None
     length: str | None = None
     fallback: Literal["rest"] | None = None  # a prefix that does not fit exactly: the string is the rest
@@ -288,6 +232,55 @@ class LayoutField(StrictModel):
         if self.type == "variable_values":
             return "values"
         return "value"
+
+
+PackageField = LayoutField  # one field model for RTDE packages and primary messages
+
+
+class PackageTypeSpec(StrictModel):
+    code: Annotated[str, Field(min_length=1, max_length=1)]
+    name: str
+
+
+class MessageSpec(StrictModel):
+    name: Ident
+    type: Annotated[str, Field(min_length=1, max_length=1)]
+    sender: str | list[str]
+    protocols: list[int]
+    doc: str | None = None
+    fields: list[LayoutField]
+
+    @property
+    def senders(self) -> tuple[str, ...]:
+        return (self.sender,) if isinstance(self.sender, str) else tuple(self.sender)
+
+
+class Limits(StrictModel):
+    setup_names_max_bytes: int
+    input_recipes_max: int
+    invalid_recipe_id: int
+    package_max_bytes: int
+
+
+class Answers(StrictModel):
+    not_found: Annotated[str, Field(pattern=r"^[A-Z_]+$")]
+    in_use: Annotated[str, Field(pattern=r"^[A-Z_]+$")]
+
+
+class PackagesFile(StrictModel):
+    port: int
+    doc_ref: str | None = None
+    byte_order: Literal["big", "little"]
+    answers: Answers
+    directions: dict[str, Literal["input", "output"]]
+    limits: Limits
+    header: list[LayoutField]
+    senders: dict[str, str]
+    package_types: list[PackageTypeSpec]
+    messages: list[MessageSpec]
+
+
+# --- spec/primary/interface.yaml -------------------------------------------
 
 
 class OlderLayout(StrictModel):
@@ -331,8 +324,8 @@ class PrimaryFile(StrictModel):
     doc_ref: str | None = None
     ports: dict[str, int]
     max_message_bytes: Annotated[int, Field(ge=16)]
-    header: list[PackageField]
-    subpackage_header: list[PackageField]
+    header: list[LayoutField]
+    subpackage_header: list[LayoutField]
     value_separator: Annotated[int, Field(ge=0, le=255)]
     value_types: list[ValueTypeSpec]
     families: list[FamilySpec]
