@@ -28,12 +28,12 @@ from rtde_spec.primary.base import (
     UnknownSubPackage,
 )
 from rtde_spec.primary.fast_models import build, maker
-from rtde_spec.primary.layout import Layout
 from rtde_spec.primary.values import ValueTable
 from rtde_spec.spec.catalogue import Catalogue
 from rtde_spec.spec.schema import FamilySpec, Spec
 from rtde_spec.spec.versions import Version
 from rtde_spec.wire.framing import PackageFramer, check_header
+from rtde_spec.wire.layout import Layout
 
 PrimaryMessage = RobotStateMessage | PrimaryPart | OpaqueMessage | UnknownMessage | UnknownMember
 

@@ -1,24 +1,25 @@
 """bytes <-> RTDE package models, for every package type, protocol version and sender.
 
-Decoding first walks the spec's layout over the bytes, so truncation, bad length
-prefixes and non-ASCII text are reported with field and byte offset; only then
-does the construct struct parse. Nothing below raises anything but RtdeSpecError.
+Decoding runs the one layout engine (`wire.layout`, shared with the primary
+interface) once per package; truncation, bad length prefixes and non-ASCII text
+are reported with field and byte offset. Nothing below raises anything but
+RtdeSpecError. The construct structs are the readable, public definition.
 """
 
 from __future__ import annotations
 
 import struct
 from collections.abc import Iterator
+from functools import cache
 from typing import Any, Literal
 
-from construct import ConstructError
-from pydantic import ValidationError
-
 from rtde_spec._generated import rtde_models as gen
+from rtde_spec._generated.constants import BYTE_ORDER
 from rtde_spec.errors import DecodeError, EncodeError
 from rtde_spec.rtde.messages import RtdeMessage
 from rtde_spec.rtde.protocol_state import INITIAL_VERSION, ProtocolState
 from rtde_spec.wire.framing import PackageFramer, check_header
+from rtde_spec.wire.layout import Layout
 
 Sender = Literal["controller", "client"]
 _HEADER = struct.Struct(gen.HEADER_FORMAT)
@@ -67,72 +68,50 @@ def message_by_name(name: str) -> type[RtdeMessage]:
         raise EncodeError(f"unknown package {name!r}", expected=", ".join(_BY_NAME)) from None
 
 
-def _check_layout(cls: type[RtdeMessage], body: bytes, strict: bool) -> None:
-    """Walk the spec layout over the body; raise DecodeError where it does not fit."""
-    pos = 0
-    for lay in cls.LAYOUT:
-        at = gen.HEADER_SIZE + pos
-        left = len(body) - pos
-        if lay.kind in ("fixed", "prefixed") and left < lay.size:
-            what = "length prefix" if lay.kind == "prefixed" else "field"
-            raise DecodeError(
-                f"package ends inside the {what}",
-                package=cls.NAME,
-                field=lay.name,
-                offset=at,
-                expected=f"{lay.size} bytes",
-                actual=f"{left} bytes",
-            )
-        if lay.kind == "fixed":
-            pos += lay.size
-            continue
-        if lay.kind == "prefixed":
-            length = int.from_bytes(body[pos : pos + lay.size], "big")
-            start = pos + lay.size
-            if len(body) - start < length:
-                raise DecodeError(
-                    f"length prefix says {length} bytes but the package ends first",
-                    package=cls.NAME,
-                    field=lay.name,
-                    offset=at,
-                    expected=f"{length} bytes",
-                    actual=f"{len(body) - start} bytes",
-                )
-            end = start + length
-        else:
-            start, end = pos, len(body)
-        if lay.text:
-            for i in range(start, end):
-                if body[i] > 0x7F:
-                    raise DecodeError(
-                        "text is not ASCII",
-                        package=cls.NAME,
-                        field=lay.name,
-                        offset=gen.HEADER_SIZE + i,
-                        expected="bytes 0x00..0x7f",
-                        actual=f"0x{body[i]:02x}",
-                    )
-        pos = end
-    if strict and pos < len(body):
-        raise DecodeError(
-            f"{len(body) - pos} bytes after the last field",
-            package=cls.NAME,
-            offset=gen.HEADER_SIZE + pos,
-            expected=f"package size {gen.HEADER_SIZE + pos}",
-            actual=f"package size {gen.HEADER_SIZE + len(body)}",
-        )
+@cache
+def _layouts() -> dict[str, Layout]:
+    """Every package's layout, compiled once for the shared engine from the spec's fields."""
+    from rtde_spec._generated.spec_data import SPEC
+    from rtde_spec.spec.schema import LayoutField, Primitive
+
+    prims = {p["name"]: Primitive.model_validate(p) for p in SPEC["primitives"]["primitives"]}
+    out = {}
+    for msg in SPEC["packages"]["messages"]:
+        fields = [LayoutField.model_validate(f) for f in msg.get("fields", [])]
+        out[msg["name"]] = Layout(fields, prims, order=BYTE_ORDER, ascii_only=True)
+    return out
 
 
 def decode_body(cls: type[RtdeMessage], body: bytes, *, strict: bool = True) -> RtdeMessage:
-    """The model of one package body (the bytes after the header)."""
-    _check_layout(cls, body, strict)
+    """The model of one package body (the bytes after the header), parsed once by the layout engine.
+
+    Truncation, bad length prefixes and non-ASCII text are DecodeErrors with the
+    field and the byte offset in the package.
+    """
     try:
-        parsed = cls.STRUCT.parse(body)
-        values = {lay.name: parsed[lay.name] for lay in cls.LAYOUT}
+        values, missing, stop = _layouts()[cls.NAME].decode(body, 0, len(body))
+    except DecodeError as exc:
+        raise exc.relocated(gen.HEADER_SIZE, package=cls.NAME) from None
+    if missing:
+        raise DecodeError(
+            "package ends inside this field",
+            package=cls.NAME,
+            field=missing[0],
+            offset=gen.HEADER_SIZE + stop,
+            actual=f"{len(body) - stop} bytes left",
+        )
+    if strict and stop < len(body):
+        raise DecodeError(
+            f"{len(body) - stop} bytes after the last field",
+            package=cls.NAME,
+            offset=gen.HEADER_SIZE + stop,
+            expected=f"package size {gen.HEADER_SIZE + stop}",
+            actual=f"package size {gen.HEADER_SIZE + len(body)}",
+        )
+    try:
         return cls(**values)
-    except (ConstructError, ValidationError, EncodeError, UnicodeDecodeError) as exc:
-        # unreachable when the layout walk above is right; never leak internals
-        raise DecodeError(f"does not decode: {exc}", package=cls.NAME) from None
+    except EncodeError as exc:  # a value the model refuses (unreachable for bytes the engine accepted)
+        raise DecodeError(f"does not decode: {exc.reason}", package=cls.NAME, field=exc.field) from None
 
 
 def decode(

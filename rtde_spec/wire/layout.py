@@ -1,4 +1,7 @@
-"""Compile a primary-interface layout (spec fields) into a decoder and an encoder.
+"""The one layout engine: spec fields compiled into a decoder and an encoder.
+
+RTDE packages and primary/secondary messages are both described by `LayoutField`s
+and decoded here, each package parsed once.
 
 Runs of fixed-size fields — primitives, arrays, groups repeated a fixed number of
 times — become one struct.Struct plus one generated regrouping function, so a
@@ -16,12 +19,14 @@ from __future__ import annotations
 import struct
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-from rtde_spec._generated.constants import PRIMARY_BYTE_ORDER as ORDER
+from rtde_spec._generated.constants import PRIMARY_BYTE_ORDER
 from rtde_spec.errors import DecodeError, EncodeError
-from rtde_spec.primary.values import ValueTable
 from rtde_spec.spec.schema import CaseSpec, LayoutField, Primitive
+
+if TYPE_CHECKING:
+    from rtde_spec.primary.values import ValueTable
 
 Values = dict[str, Any]
 
@@ -34,11 +39,12 @@ class Atom:
     fmt: str
     size: int
     expr: Callable[[int], tuple[str, int]]  # flat index -> (python expression, next index)
+    order: str  # struct's byte-order prefix
     struct: struct.Struct = field(init=False)
     regroup: Callable[[tuple[Any, ...]], Any] = field(init=False)
 
     def __post_init__(self) -> None:
-        self.struct = struct.Struct(ORDER + self.fmt)
+        self.struct = struct.Struct(self.order + self.fmt)
         source, _ = self.expr(0)
         self.regroup = eval(f"lambda t: {source}")
 
@@ -46,11 +52,12 @@ class Atom:
 @dataclass
 class FixedStep:
     atoms: list[Atom]
+    order: str
     struct: struct.Struct = field(init=False)
     regroup: Callable[[tuple[Any, ...]], Values] = field(init=False)
 
     def __post_init__(self) -> None:
-        self.struct = struct.Struct(ORDER + "".join(a.fmt for a in self.atoms))
+        self.struct = struct.Struct(self.order + "".join(a.fmt for a in self.atoms))
         parts = []
         index = 0
         for atom in self.atoms:
@@ -62,7 +69,17 @@ class FixedStep:
 class Layout:
     """Decoder and encoder of one list of layout fields."""
 
-    def __init__(self, fields: list[LayoutField], prims: dict[str, Primitive], values: ValueTable) -> None:
+    def __init__(
+        self,
+        fields: list[LayoutField],
+        prims: dict[str, Primitive],
+        values: ValueTable | None = None,
+        *,
+        order: str = PRIMARY_BYTE_ORDER,
+        ascii_only: bool = False,
+    ) -> None:
+        """`values` decodes typed global-variable values (primary); `ascii_only` refuses other text (RTDE)."""
+        self.order, self.ascii_only = order, ascii_only
         self.fields = fields
         self.prims = prims
         self.value_table = values
@@ -73,17 +90,17 @@ class Layout:
         run: list[Atom] = []
         for fld in fields:
             if fld.fields is not None:
-                self.groups[fld.name] = Layout(fld.fields, prims, values)
+                self.groups[fld.name] = Layout(fld.fields, prims, values, order=order, ascii_only=ascii_only)
             atom = self._atom(fld)
             if atom is not None:
                 run.append(atom)
                 continue
             if run:
-                self.steps.append(FixedStep(run))
+                self.steps.append(FixedStep(run, order))
                 run = []
             self.steps.append(fld)
         if run:
-            self.steps.append(FixedStep(run))
+            self.steps.append(FixedStep(run, order))
         only = self.steps[0] if len(self.steps) == 1 else None
         self._single: FixedStep | None = only if isinstance(only, FixedStep) else None
         fixed_steps = [s for s in self.steps if isinstance(s, FixedStep)]
@@ -101,7 +118,7 @@ class Layout:
             def value_expr(i: int, count: int = count) -> tuple[str, int]:
                 return (f"t[{i}]" if count == 1 else f"t[{i}:{i + count}]"), i + count
 
-            return Atom(fld.name, prim.struct * count, prim.size * count, value_expr)
+            return Atom(fld.name, prim.struct * count, prim.size * count, value_expr, self.order)
         if kind == "repeat" and isinstance(fld.repeat, int):
             inner = [self._atom(f) for f in fld.fields or []]
             if any(a is None for a in inner):
@@ -120,7 +137,7 @@ class Layout:
                 return "[" + ", ".join(entries) + "]", i
 
             fmt = "".join(a.fmt for a in atoms) * times
-            return Atom(fld.name, fmt, sum(a.size for a in atoms) * times, group_expr)
+            return Atom(fld.name, fmt, sum(a.size for a in atoms) * times, group_expr, self.order)
         return None
 
     # --- decoding -----------------------------------------------------------
@@ -207,9 +224,20 @@ class Layout:
                 raw, pos = self._prefixed(buf, pos, end, fld.length or "", name)
                 if raw is None:
                     return False, pos
+            if kind == "string" and self.ascii_only:
+                bad = next((i for i, b in enumerate(raw) if b > 0x7F), None)
+                if bad is not None:
+                    raise DecodeError(
+                        "text is not ASCII",
+                        field=name,
+                        offset=pos - len(raw) + bad,
+                        expected="bytes 0x00..0x7f",
+                        actual=f"0x{raw[bad]:02x}",
+                    )
             values[fld.name] = _text(raw, fld.format) if kind == "string" else raw
             return True, pos
         if kind == "values":
+            assert self.value_table is not None, "typed values need a ValueTable"
             values[fld.name] = self.value_table.decode_all(buf, pos, end, name)
             return True, end
         if kind == "switch":
@@ -226,7 +254,7 @@ class Layout:
             prim = self.prims[case]
             if end - pos < prim.size:
                 return False, pos
-            (values[fld.name],) = struct.unpack_from(ORDER + prim.struct, buf, pos)
+            (values[fld.name],) = struct.unpack_from(self.order + prim.struct, buf, pos)
             return True, pos + prim.size
         inner = self.groups[fld.name]
         if kind == "optional":
@@ -283,18 +311,19 @@ class Layout:
                 items = tuple(value) if fld.count else (value,)
                 if fld.count and len(items) != fld.count:
                     raise EncodeError(f"needs exactly {fld.count} values", field=name, actual=len(items))
-                return struct.pack(ORDER + prim.struct * len(items), *items)
+                return struct.pack(self.order + prim.struct * len(items), *items)
             if kind in ("string", "bytes"):
                 raw = _untext(value, fld.format) if kind == "string" else bytes(value)
                 return raw if fld.length == "rest" else self._prefix(fld.length or "", len(raw), name) + raw
             if kind == "values":
+                assert self.value_table is not None, "typed values need a ValueTable"
                 return self.value_table.encode_all(list(value), name)
             if kind == "switch":
                 case = (fld.cases or {})[values[fld.switch or ""]]
                 if isinstance(case, CaseSpec):
                     raw = str(value).encode("utf-8", "surrogateescape")
                     return self._prefix(case.length or "", len(raw), name) + raw
-                return struct.pack(ORDER + self.prims[case].struct, value)
+                return struct.pack(self.order + self.prims[case].struct, value)
             inner = self.groups[fld.name]
             if kind == "optional":
                 return inner.encode(_as_dict(value), f"{name}.")
