@@ -10,16 +10,14 @@ from __future__ import annotations
 
 import struct
 from collections.abc import Iterator
-from functools import cache
 from typing import Any, Literal
 
 from rtde_spec._generated import rtde_models as gen
-from rtde_spec._generated.constants import BYTE_ORDER
 from rtde_spec.errors import DecodeError, EncodeError
+from rtde_spec.rtde.layouts import layouts
 from rtde_spec.rtde.messages import RtdeMessage
 from rtde_spec.rtde.protocol_state import INITIAL_VERSION, ProtocolState
 from rtde_spec.wire.framing import PackageFramer, check_header
-from rtde_spec.wire.layout import Layout
 
 Sender = Literal["controller", "client"]
 _HEADER = struct.Struct(gen.HEADER_FORMAT)
@@ -68,20 +66,6 @@ def message_by_name(name: str) -> type[RtdeMessage]:
         raise EncodeError(f"unknown package {name!r}", expected=", ".join(_BY_NAME)) from None
 
 
-@cache
-def _layouts() -> dict[str, Layout]:
-    """Every package's layout, compiled once for the shared engine from the spec's fields."""
-    from rtde_spec._generated.spec_data import SPEC
-    from rtde_spec.spec.schema import LayoutField, Primitive
-
-    prims = {p["name"]: Primitive.model_validate(p) for p in SPEC["primitives"]["primitives"]}
-    out = {}
-    for msg in SPEC["packages"]["messages"]:
-        fields = [LayoutField.model_validate(f) for f in msg.get("fields", [])]
-        out[msg["name"]] = Layout(fields, prims, order=BYTE_ORDER, ascii_only=True)
-    return out
-
-
 def decode_body(cls: type[RtdeMessage], body: bytes, *, strict: bool = True) -> RtdeMessage:
     """The model of one package body (the bytes after the header), parsed once by the layout engine.
 
@@ -89,7 +73,7 @@ def decode_body(cls: type[RtdeMessage], body: bytes, *, strict: bool = True) -> 
     field and the byte offset in the package.
     """
     try:
-        values, missing, stop = _layouts()[cls.NAME].decode(body, 0, len(body))
+        values, missing, stop = layouts()[cls.NAME].decode(body, 0, len(body))
     except DecodeError as exc:
         raise exc.relocated(gen.HEADER_SIZE, package=cls.NAME) from None
     if missing:

@@ -1,7 +1,7 @@
 """Base class of the generated package models, and the layout rows the codec walks.
 
 Encoding lives here (not in the codec) so the generated models need nothing that
-imports them back.
+imports them back; it runs the same layout engine as decoding.
 """
 
 from __future__ import annotations
@@ -11,10 +11,10 @@ from dataclasses import dataclass
 from functools import cache
 from typing import TYPE_CHECKING, Any, ClassVar, Literal
 
-from construct import ConstructError
 from pydantic import BaseModel, ConfigDict, ValidationError
 
 from rtde_spec.errors import EncodeError
+from rtde_spec.rtde.layouts import layouts
 from rtde_spec.wire.pydantic_errors import encode_error
 
 if TYPE_CHECKING:
@@ -66,9 +66,9 @@ class RtdeMessage(BaseModel):
         # models built with model_construct skip validation; check again here
         cls(**values)
         try:
-            body = cls.STRUCT.build(values)
-        except (ConstructError, UnicodeEncodeError, TypeError, ValueError) as exc:
-            raise EncodeError(f"cannot be built: {exc}", package=cls.NAME) from None
+            body = layouts()[cls.NAME].encode(values)
+        except EncodeError as exc:
+            raise exc.relocated(package=cls.NAME) from None
         header = _header(cls.HEADER_FORMAT)
         size = header.size + len(body)
         if size > cls.MAX_SIZE:
