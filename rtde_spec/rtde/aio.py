@@ -112,11 +112,7 @@ class AsyncRtdeClient(ClientBase):
             reply = await asyncio.wait_for(self._replies.get(), self.timeout)
         except asyncio.TimeoutError:
             raise TimeoutError(f"no reply from {self.where} within {self.timeout} s") from None
-        if isinstance(reply, BaseException):
-            raise reply
-        if reply.error is not None:
-            raise reply.error
-        return reply
+        return self._checked_reply(reply)
 
     async def _read_loop(self, reader: asyncio.StreamReader) -> None:
         try:

@@ -144,11 +144,7 @@ class RtdeClient(ClientBase):
             reply = self._replies.get(timeout=self.timeout)
         except queue.Empty:
             raise TimeoutError(f"no reply from {self.where} within {self.timeout} s") from None
-        if isinstance(reply, BaseException):
-            raise reply
-        if reply.error is not None:
-            raise reply.error
-        return reply
+        return self._checked_reply(reply)
 
     def _read_loop(self) -> None:
         sock = self._sock

@@ -224,5 +224,14 @@ class ClientBase:
         """Why the connection ended (None while it is open)."""
         return self._closed
 
+    @staticmethod
+    def _checked_reply(reply: Reply | BaseException) -> Reply:
+        """The reply, or the error the reader or the controller's refusal handed over."""
+        if isinstance(reply, BaseException):
+            raise reply
+        if reply.error is not None:
+            raise reply.error
+        return reply
+
     def _versions_to_try(self, protocol_version: int | None) -> list[int]:
         return [protocol_version] if protocol_version else sorted(RTDE_PROTOCOLS, reverse=True)
