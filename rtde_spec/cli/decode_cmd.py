@@ -22,7 +22,7 @@ if TYPE_CHECKING:
     from rtde_spec.recipes.codec import RecipeCodec
     from rtde_spec.rtde.stream import Batch, Package
 
-CHUNK = 2 << 20
+CHUNK = 8 << 20
 FORMAT_CHOICES = ("table", "jsonl", "json", "csv", "parquet")
 
 
@@ -142,7 +142,7 @@ def run(args: argparse.Namespace) -> int:
 
         return run_primary(b"".join(chunks(args)), fmt, args.output)
     codec = recipe_codec(args)
-    writer = open_writer(fmt, args.output)
+    writer = open_writer(fmt, args.output, background=True)
     if fmt == "json":
         writer.single = True  # type: ignore[attr-defined]  # one package prints as one object
     try:

@@ -61,7 +61,7 @@ def record(
             return 0
         array = codec.decode_many(b"".join(batch))
         writer.write_columns({name: array[name] for name in codec.names})
-        writer.stream.flush()
+        writer.flush()
         if progress is not None:
             progress(len(batch))
         return len(batch)

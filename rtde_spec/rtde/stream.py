@@ -72,7 +72,8 @@ class StreamDecoder:
             if not self._started:
                 self.state.version = starting_version(chunk, self._given_version)
                 self._started = True
-            if self._run is not None and len(chunk) >= self._run[0] and chunk.startswith(self._run[1]):
+            run = self._run
+            if run is not None and len(chunk) >= run[0] and bytes(chunk[: len(run[1])]) == run[1]:
                 yield self._batch_of(offset, chunk)
             else:
                 yield self._one(offset, chunk)
@@ -81,7 +82,7 @@ class StreamDecoder:
         """DecodeError if the stream ended inside a package."""
         self._framer.close()
 
-    def _batch_of(self, offset: int, run: bytes) -> Batch:
+    def _batch_of(self, offset: int, run: bytes | memoryview) -> Batch:
         assert self.codec is not None
         try:
             array = self.codec.decode_many(run)

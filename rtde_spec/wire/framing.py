@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import struct
+from typing import Any
 
 from rtde_spec._generated.rtde_models import HEADER_FORMAT, HEADER_SIZE
 from rtde_spec.errors import DecodeError
@@ -50,11 +51,20 @@ class PackageFramer:
         With `run` = (package size, leading bytes), back-to-back packages of that size
         starting with those bytes come out together as one item (several packages'
         bytes), found with one vectorised comparison: the fast path for data packages.
+        A run at the start of a `bytes` input, with nothing held, is a memoryview of
+        that input rather than a copy (bytes cannot change under it).
         """
         if self._broken is not None:
             raise self._broken
+        out: list[tuple[int, Any]] = []
+        if run is not None and isinstance(data, bytes):
+            data = self._run_in_place(data, run, out)
         self._buf += data
-        out: list[tuple[int, bytes]] = []
+        self._drain(run, out)
+        return out
+
+    def _drain(self, run: tuple[int, bytes] | None, out: list[tuple[int, Any]]) -> None:
+        """Every whole package held in the buffer to `out`; a partial one stays."""
         buf, start = self._buf, self._start
         while len(buf) - start >= self._size_bytes:
             if run is not None and buf.startswith(run[1], start):
@@ -87,7 +97,30 @@ class PackageFramer:
         if start:
             del buf[:start]
         self._start = 0
-        return out
+
+    def _run_in_place(self, data: bytes, run: tuple[int, bytes], out: list[tuple[int, Any]]) -> bytes:
+        """The run in immutable `data` as a view of it (no copy); returns what is left to buffer.
+
+        A package begun in the last feed is completed from the head of `data` first
+        (a small copy), so the run after it is found in place too.
+        """
+        start = 0
+        held = len(self._buf) - self._start
+        if held >= self._size_bytes:
+            size = int.from_bytes(self._buf[self._start : self._start + self._size_bytes], "big")
+            if self._header_size <= size and 0 < size - held <= len(data):
+                start = size - held
+                self._buf += data[:start]
+                self._drain(run, out)
+        if len(self._buf) != self._start or not data.startswith(run[1], start):
+            return data[start:] if start else data
+        count = _run_length(data, start, run[0], run[1])
+        if not count:
+            return data[start:] if start else data
+        end = start + count * run[0]
+        out.append((self._offset, memoryview(data)[start:end]))
+        self._offset += end - start
+        return data[end:]
 
     def close(self) -> None:
         """Raise DecodeError if the stream ended inside a package."""
@@ -163,7 +196,7 @@ def check_header(
     return size, kind
 
 
-def _run_length(buf: bytearray, start: int, size: int, lead: bytes) -> int:
+def _run_length(buf: bytes | bytearray, start: int, size: int, lead: bytes) -> int:
     """How many whole packages of `size` from `start` all begin with `lead` (numpy, one pass)."""
     import numpy as np
 

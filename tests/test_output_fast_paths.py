@@ -1,0 +1,168 @@
+"""The fast paths behind streaming output give what the plain paths give.
+
+Framing in place (views of the input, no copy), JSON Lines from numpy columns
+without Python objects, the background file writer, and Parquet's per-column
+compression: each checked against the straightforward way or the file read back.
+"""
+
+from __future__ import annotations
+
+import io
+import itertools
+import math
+from pathlib import Path
+
+import numpy as np
+import orjson
+import pyarrow.parquet as pq
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from rtde_spec import RecipeCodec, StreamDecoder, build, open_writer
+from rtde_spec.output.background import BackgroundStream
+from rtde_spec.output.jsonlines import fits, formatter
+from rtde_spec.wire.framing import PackageFramer
+
+NAMES = ["timestamp", "actual_q", "robot_mode", "output_bit_register_64", "actual_digital_input_bits"]
+CODEC = RecipeCodec.for_names(NAMES, "output")
+RUN = (CODEC.package_size, CODEC.encode_package(
+    {"timestamp": 0.0, "actual_q": (0.0,) * 6, "robot_mode": 0, "output_bit_register_64": False,
+     "actual_digital_input_bits": 0}, recipe_id=1)[:3])  # fmt: skip
+TEXT = build("text_message", message="hello", source="ctl", warning_level=3)
+
+
+def data_packages(count: int, start: int = 0) -> bytes:
+    return b"".join(
+        CODEC.encode_package(
+            {"timestamp": i * 0.002, "actual_q": tuple(i + j / 8 for j in range(6)), "robot_mode": i % 8,
+             "output_bit_register_64": i % 3 == 0, "actual_digital_input_bits": i * 2654435761 % 2**64},
+            recipe_id=1,
+        )
+        for i in range(start, start + count)
+    )  # fmt: skip
+
+
+REPLY = build("request_protocol_version_reply", accepted=True)
+STREAM = REPLY + data_packages(40) + TEXT + data_packages(25, 40)
+
+
+def frame(pieces: list[bytes | bytearray]) -> list[tuple[int, bytes]]:
+    """(offset, bytes) of every package; runs (several data packages in one item) split up."""
+    framer = PackageFramer()
+    out = []
+    for piece in pieces:
+        for offset, chunk in framer.feed(piece, RUN):
+            size = int.from_bytes(chunk[:2], "big")
+            out += [(offset + k, bytes(chunk[k : k + size])) for k in range(0, len(chunk), size)]
+    framer.close()
+    return out
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.integers(0, len(STREAM)), max_size=12))
+def test_framing_in_place_equals_framing_a_copy_at_any_cut(cuts: list[int]) -> None:
+    bounds = [0, *sorted(cuts), len(STREAM)]
+    pieces = [STREAM[a:b] for a, b in itertools.pairwise(bounds)]
+    as_bytes = frame(pieces)  # runs come out as views of the input where they can
+    as_bytearray = frame([bytearray(p) for p in pieces])  # always copied through the buffer
+    assert as_bytes == as_bytearray
+    assert b"".join(chunk for _, chunk in as_bytes) == STREAM
+    offsets = [offset for offset, _ in as_bytes]
+    assert offsets == sorted(offsets) and offsets[0] == 0 and len(as_bytes) == 67
+
+
+def test_a_run_framed_in_place_is_a_view_and_a_bytearray_run_is_a_copy() -> None:
+    data = data_packages(10)
+    [(_, chunk)] = PackageFramer().feed(data, RUN)
+    assert isinstance(chunk, memoryview) and chunk.obj is data  # no copy of immutable input
+    mutable = bytearray(data)
+    [(_, copied)] = PackageFramer().feed(mutable, RUN)
+    mutable[:] = bytes(len(mutable))
+    assert copied == data  # the caller may reuse its buffer
+
+
+@pytest.mark.parametrize("chunk", [1, 500, CODEC.package_size + 1, 4096, len(STREAM)])
+def test_stream_decoder_values_equal_decoding_the_packages_whole(chunk: int) -> None:
+    decoder = StreamDecoder("controller", codec=CODEC)
+    arrays, texts = [], []
+    for start in range(0, len(STREAM), chunk):
+        for item in decoder.feed(STREAM[start : start + chunk]):
+            if hasattr(item, "array"):
+                arrays.append(item.array)
+            else:
+                texts.append(item.message.NAME)
+    decoder.close()
+    got = np.concatenate(arrays)
+    want = np.concatenate([CODEC.decode_many(data_packages(40)), CODEC.decode_many(data_packages(25, 40))])
+    assert texts == ["request_protocol_version_reply", "text_message"] and got.tobytes() == want.tobytes()
+
+
+def row_dicts(columns: dict[str, np.ndarray]) -> bytes:
+    """The plain way: Python values, one dict per row, orjson per row."""
+    names = list(columns)
+    lists = [columns[n].astype(columns[n].dtype.newbyteorder("=")).tolist() for n in names]
+    return b"".join(orjson.dumps(dict(zip(names, v, strict=True))) + b"\n" for v in zip(*lists, strict=True))
+
+
+def test_json_lines_from_columns_equal_json_of_row_dicts_for_every_kind() -> None:
+    rows = 7
+    columns = {
+        "f8": np.array([0.1, -0.0, math.nan, math.inf, -math.inf, 1e308, 5e-324], dtype=">f8"),
+        "vec": np.arange(rows * 3, dtype="<f8").reshape(rows, 3) / 7,
+        "i1": np.array([-128, 127, 0, -1, 5, 6, 7], dtype="i1"),
+        "u8": np.array([2**64 - 1, 0, 1, 2**63, 3, 4, 5], dtype=">u8"),
+        'quote "and" 100%': np.array([1, 2, 3, 4, 5, 6, 7], dtype=">u4"),
+        "bits": np.array([[True, False]] * rows),
+        "i8vec": np.array([[-(2**63), 2**63 - 1]] * rows, dtype=">i8"),
+        "u1": np.arange(rows, dtype="u1"),
+    }
+    assert fits(columns)
+    lines = formatter()
+    assert lines(columns) == row_dicts(columns)
+    one = {"only": np.array([1.5, 2.5])}
+    assert lines(one) == row_dicts(one)  # a new set of columns: planned anew
+    assert lines({"only": np.array([], dtype=float)}) == b""
+
+
+def test_json_lines_of_a_real_recipe_equal_row_dicts() -> None:
+    array = CODEC.decode_many(data_packages(300))
+    columns = {name: array[name] for name in CODEC.names}
+    assert formatter()(columns) == row_dicts(columns)
+
+
+class Failing(io.BytesIO):
+    def write(self, block: object) -> int:
+        raise OSError(28, "No space left on device")
+
+
+def test_background_stream_keeps_order_and_raises_the_writers_error_in_the_caller() -> None:
+    target = io.BytesIO()
+    stream = BackgroundStream(target)
+    blocks = [bytes([i % 256]) * size for i, size in enumerate([3, 2 << 20, 10, 1, 3 << 20, 7] * 3)]
+    for block in blocks:
+        stream.write(block)
+    stream.flush()
+    assert target.getvalue() == b"".join(blocks)
+    stream.close()
+    broken = BackgroundStream(Failing())
+    with pytest.raises(OSError, match="No space left"):
+        broken.write(b"x" * (2 << 20))
+        broken.flush()
+    broken.close()
+
+
+def test_parquet_compresses_only_the_columns_that_pay(tmp_path: Path) -> None:
+    array = CODEC.decode_many(data_packages(500))
+    path = tmp_path / "out.parquet"
+    writer = open_writer("parquet", path)
+    writer.write_columns({name: array[name] for name in CODEC.names})
+    writer.close()
+    meta = pq.ParquetFile(path).metadata.row_group(0)
+    codecs = {meta.column(i).path_in_schema: meta.column(i).compression for i in range(meta.num_columns)}
+    assert codecs["actual_q_0"] == "UNCOMPRESSED" and codecs["timestamp"] == "UNCOMPRESSED"
+    assert codecs["robot_mode"] == "SNAPPY" and codecs["output_bit_register_64"] == "SNAPPY"
+    table = pq.read_table(path)
+    assert table.column("actual_q_5").to_pylist() == [i + 5 / 8 for i in range(500)]
+    bits = [i * 2654435761 % 2**64 for i in range(500)]
+    assert table.column("actual_digital_input_bits").to_pylist() == bits
