@@ -198,11 +198,27 @@ CASES: list[tuple[str, str, str, str, str, str]] = [
         "rest field not last",
         "rtde/packages.yaml",
         "      - {name: message_type, type: uint8, enum: TextMessageLevel, doc: Severity}\n"
-        "      - {name: message, type: string, length: rest}",
-        "      - {name: message, type: string, length: rest}\n"
+        '      - {name: message, type: string, length: rest, doc: "The text, to the end of the package"}',
+        '      - {name: message, type: string, length: rest, doc: "The text, to the end of the package"}\n'
         "      - {name: message_type, type: uint8, enum: TextMessageLevel, doc: Severity}",
         "fields[0](message).length",
         "only the last field",
+    ),
+    (
+        "primary field without a doc",
+        "primary/interface.yaml",
+        '{name: q_target, type: double, unit: rad, doc: "q_target: target joint position"}',
+        "{name: q_target, type: double, unit: rad}",
+        "members[1](joint_data).fields[0](joints).fields[1](q_target).doc",
+        "field 'q_target' has no doc",
+    ),
+    (
+        "rtde package field without a doc",
+        "rtde/packages.yaml",
+        '{name: recipe_id, type: uint8, doc: "The recipe whose layout',
+        '{name: recipe_id, type: uint8, dox: "The recipe whose layout',
+        "messages[7](data_package).fields[0](recipe_id)",
+        "field 'recipe_id' has no doc",
     ),
 ]
 

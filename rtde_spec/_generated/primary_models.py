@@ -23,14 +23,14 @@ class JointState(PrimaryGroup):
     NAME: ClassVar[str] = 'JointState'
     ENUMS: ClassVar[dict[str, str]] = {'joint_mode': 'JointMode'}
 
-    q_actual: Annotated[float, Field(description='[rad]')]
-    q_target: Annotated[float, Field(description='[rad]')]
-    qd_actual: Annotated[float, Field(description='[rad/s]')]
-    i_actual: Annotated[float, Field(description='[A]')]
-    v_actual: Annotated[float, Field(description='[V]')]
-    t_motor: Annotated[float, Field(description='[°C]')]
+    q_actual: Annotated[float, Field(description='q_actual: actual joint position [rad]')]
+    q_target: Annotated[float, Field(description='q_target: target joint position [rad]')]
+    qd_actual: Annotated[float, Field(description='qd_actual: actual joint velocity [rad/s]')]
+    i_actual: Annotated[float, Field(description='I_actual: actual joint current [A]')]
+    v_actual: Annotated[float, Field(description='V_actual: actual joint voltage [V]')]
+    t_motor: Annotated[float, Field(description='T_motor: joint motor temperature [°C]')]
     reserved: Annotated[float, Field(description='Deprecated — ignore')]
-    joint_mode: Annotated[Annotated[int, Field(ge=0, le=255)], Field(description='(values: JointMode)')]
+    joint_mode: Annotated[Annotated[int, Field(ge=0, le=255)], Field(description='jointMode (Joint Modes) (values: JointMode)')]
 
 
 class ImmiData(PrimaryGroup):
@@ -39,41 +39,41 @@ class ImmiData(PrimaryGroup):
     NAME: ClassVar[str] = 'ImmiData'
     ENUMS: ClassVar[dict[str, str]] = {}
 
-    immi_input_bits: Annotated[Annotated[int, Field(ge=0, le=4294967295)], Field(description='')]
-    immi_output_bits: Annotated[Annotated[int, Field(ge=0, le=4294967295)], Field(description='')]
-    immi_voltage_24v: Annotated[float, Field(description='[V]')]
-    immi_current: Annotated[float, Field(description='[A]')]
+    immi_input_bits: Annotated[Annotated[int, Field(ge=0, le=4294967295)], Field(description='euromap67InputBits: IMMI (Euromap 67) inputs, one bit each')]
+    immi_output_bits: Annotated[Annotated[int, Field(ge=0, le=4294967295)], Field(description='euromap67OutputBits: IMMI (Euromap 67) outputs, one bit each')]
+    immi_voltage_24v: Annotated[float, Field(description='euromap67Voltage24V: IMMI 24 V supply voltage [V]')]
+    immi_current: Annotated[float, Field(description='euromap67Current: IMMI supply current [A]')]
 
 
 class JointLimits(PrimaryGroup):
-    """JointLimits"""
+    """One entry per joint, base first"""
 
     NAME: ClassVar[str] = 'JointLimits'
     ENUMS: ClassVar[dict[str, str]] = {}
 
-    joint_min_limit: Annotated[float, Field(description='[rad]')]
-    joint_max_limit: Annotated[float, Field(description='[rad]')]
+    joint_min_limit: Annotated[float, Field(description='jointMinLimit: lowest allowed joint position [rad]')]
+    joint_max_limit: Annotated[float, Field(description='jointMaxLimit: highest allowed joint position [rad]')]
 
 
 class JointMotionLimits(PrimaryGroup):
-    """JointMotionLimits"""
+    """One entry per joint, base first"""
 
     NAME: ClassVar[str] = 'JointMotionLimits'
     ENUMS: ClassVar[dict[str, str]] = {}
 
-    joint_max_speed: Annotated[float, Field(description='[rad/s]')]
-    joint_max_acceleration: Annotated[float, Field(description='[rad/s²]')]
+    joint_max_speed: Annotated[float, Field(description='jointMaxSpeed: highest allowed joint speed [rad/s]')]
+    joint_max_acceleration: Annotated[float, Field(description='jointMaxAcceleration: highest allowed joint acceleration [rad/s²]')]
 
 
 class ProgramThread(PrimaryGroup):
-    """ProgramThread"""
+    """One entry per running thread with labeled lines"""
 
     NAME: ClassVar[str] = 'ProgramThread'
     ENUMS: ClassVar[dict[str, str]] = {}
 
     label_id: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)], Field(description='Last executed line label id')]
-    label_name: Annotated[str, Field(description='')]
-    thread_name: Annotated[str, Field(description='')]
+    label_name: Annotated[str, Field(description='labelName: last executed line label name')]
+    thread_name: Annotated[str, Field(description='threadName: the name of the thread')]
 
 
 class RobotModeData(PrimaryPart):
@@ -88,17 +88,17 @@ class RobotModeData(PrimaryPart):
     ENUMS: ClassVar[dict[str, str]] = {'robot_mode': 'RobotMode', 'control_mode': 'ControlMode'}
 
     timestamp: Annotated[Annotated[int, Field(ge=0, le=18446744073709551615)] | None, Field(description='Microseconds since the controller started [µs]')] = None
-    is_real_robot_connected: Annotated[bool | None, Field(description='')] = None
-    is_real_robot_enabled: Annotated[bool | None, Field(description='')] = None
-    is_robot_power_on: Annotated[bool | None, Field(description='')] = None
-    is_emergency_stopped: Annotated[bool | None, Field(description='')] = None
-    is_protective_stopped: Annotated[bool | None, Field(description='')] = None
-    is_program_running: Annotated[bool | None, Field(description='')] = None
-    is_program_paused: Annotated[bool | None, Field(description='')] = None
-    robot_mode: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: RobotMode)')] = None
-    control_mode: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: ControlMode)')] = None
-    target_speed_fraction: Annotated[float | None, Field(description='')] = None
-    speed_scaling: Annotated[float | None, Field(description='')] = None
+    is_real_robot_connected: Annotated[bool | None, Field(description='isRealRobotConnected: a real arm is connected (false in simulation)')] = None
+    is_real_robot_enabled: Annotated[bool | None, Field(description='isRealRobotEnabled: the real arm is enabled (false when simulating)')] = None
+    is_robot_power_on: Annotated[bool | None, Field(description='isRobotPowerOn: the arm is powered')] = None
+    is_emergency_stopped: Annotated[bool | None, Field(description='isEmergencyStopped: an emergency stop is active')] = None
+    is_protective_stopped: Annotated[bool | None, Field(description='isProtectiveStopped: a protective stop is active')] = None
+    is_program_running: Annotated[bool | None, Field(description='isProgramRunning: a program is running')] = None
+    is_program_paused: Annotated[bool | None, Field(description='isProgramPaused: the running program is paused')] = None
+    robot_mode: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='robotMode (Robot Modes) (values: RobotMode)')] = None
+    control_mode: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='controlMode (Control Modes) (values: ControlMode)')] = None
+    target_speed_fraction: Annotated[float | None, Field(description='targetSpeedFraction: the speed slider, 0..1')] = None
+    speed_scaling: Annotated[float | None, Field(description='speedScaling: the speed scaling applied by the controller now, 0..1')] = None
     target_speed_fraction_limit: Annotated[float | None, Field(description='python-urx reads 3.0/3.1 without it and 3.2 with it (urx/ursecmon.py)')] = None
     reserved: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='Internal use only. Not in the 46-byte layout python-urx reads for CB3 3.2; its first CB3 version is unknown')] = None
 
@@ -128,15 +128,15 @@ class ToolData(PrimaryPart):
     TYPE: ClassVar[int] = 2
     ENUMS: ClassVar[dict[str, str]] = {'tool_mode': 'JointMode'}
 
-    analog_input_range0: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='')] = None
-    analog_input_range1: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='')] = None
-    analog_input0: Annotated[float | None, Field(description='')] = None
-    analog_input1: Annotated[float | None, Field(description='')] = None
-    tool_voltage_48v: Annotated[float | None, Field(description='[V]')] = None
-    tool_output_voltage: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='[V]')] = None
-    tool_current: Annotated[float | None, Field(description='[A]')] = None
-    tool_temperature: Annotated[float | None, Field(description='[°C]')] = None
-    tool_mode: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: JointMode)')] = None
+    analog_input_range0: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='analogInputRange0: range of tool analog input 0')] = None
+    analog_input_range1: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='analogInputRange1: range of tool analog input 1')] = None
+    analog_input0: Annotated[float | None, Field(description='analogInput0: tool analog input 0 (A or V by its range)')] = None
+    analog_input1: Annotated[float | None, Field(description='analogInput1: tool analog input 1 (A or V by its range)')] = None
+    tool_voltage_48v: Annotated[float | None, Field(description='toolVoltage48V: tool supply voltage [V]')] = None
+    tool_output_voltage: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='toolOutputVoltage: tool output voltage setting (0, 12 or 24) [V]')] = None
+    tool_current: Annotated[float | None, Field(description='toolCurrent: tool current [A]')] = None
+    tool_temperature: Annotated[float | None, Field(description='toolTemperature: tool temperature [°C]')] = None
+    tool_mode: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='toolMode (Tool Modes) (values: JointMode)')] = None
 
 
 class MasterboardData(PrimaryPart):
@@ -150,27 +150,27 @@ class MasterboardData(PrimaryPart):
     TYPE: ClassVar[int] = 3
     ENUMS: ClassVar[dict[str, str]] = {'safety_mode': 'SafetyMode'}
 
-    digital_input_bits: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='')] = None
-    digital_output_bits: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='')] = None
-    analog_input_range0: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='')] = None
-    analog_input_range1: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='')] = None
-    analog_input0: Annotated[float | None, Field(description='')] = None
-    analog_input1: Annotated[float | None, Field(description='')] = None
-    analog_output_domain0: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='')] = None
-    analog_output_domain1: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='')] = None
-    analog_output0: Annotated[float | None, Field(description='')] = None
-    analog_output1: Annotated[float | None, Field(description='')] = None
-    masterboard_temperature: Annotated[float | None, Field(description='[°C]')] = None
-    robot_voltage_48v: Annotated[float | None, Field(description='[V]')] = None
-    robot_current: Annotated[float | None, Field(description='[A]')] = None
-    master_io_current: Annotated[float | None, Field(description='[A]')] = None
-    safety_mode: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: SafetyMode)')] = None
-    in_reduced_mode: Annotated[bool | None, Field(description='')] = None
+    digital_input_bits: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='digitalInputBits: standard and configurable digital inputs, one bit each')] = None
+    digital_output_bits: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='digitalOutputBits: standard and configurable digital outputs, one bit each')] = None
+    analog_input_range0: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='analogInputRange0: range of standard analog input 0')] = None
+    analog_input_range1: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='analogInputRange1: range of standard analog input 1')] = None
+    analog_input0: Annotated[float | None, Field(description='analogInput0: standard analog input 0 (A or V by its range)')] = None
+    analog_input1: Annotated[float | None, Field(description='analogInput1: standard analog input 1 (A or V by its range)')] = None
+    analog_output_domain0: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='analogOutputDomain0: current or voltage domain of analog output 0 (char in the document)')] = None
+    analog_output_domain1: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='analogOutputDomain1: current or voltage domain of analog output 1 (char in the document)')] = None
+    analog_output0: Annotated[float | None, Field(description='analogOutput0: standard analog output 0')] = None
+    analog_output1: Annotated[float | None, Field(description='analogOutput1: standard analog output 1')] = None
+    masterboard_temperature: Annotated[float | None, Field(description='masterBoardTemperature: control box masterboard temperature [°C]')] = None
+    robot_voltage_48v: Annotated[float | None, Field(description='robotVoltage48V: arm supply voltage [V]')] = None
+    robot_current: Annotated[float | None, Field(description='robotCurrent: arm supply current [A]')] = None
+    master_io_current: Annotated[float | None, Field(description='masterIOCurrent: current drawn through the control box I/O [A]')] = None
+    safety_mode: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='safetyMode (Safety Modes) (values: SafetyMode)')] = None
+    in_reduced_mode: Annotated[bool | None, Field(description='InReducedMode: the safety system is in reduced mode')] = None
     immi_interface_installed: Annotated[bool | None, Field(description='True if the IMMI interface is installed')] = None
     immi: Annotated[ImmiData | None, Field(description='Present only when immi_interface_installed is true')] = None
     reserved: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='Used by Universal Robots software only')] = None
-    operational_mode_selector_input: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='')] = None
-    three_position_enabling_device_input: Annotated[bool | None, Field(description='')] = None
+    operational_mode_selector_input: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='operationalModeSelectorInput: state of the operational mode selector input')] = None
+    three_position_enabling_device_input: Annotated[bool | None, Field(description='threePositionEnablingDeviceInput: state of the 3-position enabling device input')] = None
     reserved_2: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='Used by Universal Robots software only')] = None
 
 
@@ -185,12 +185,12 @@ class CartesianInfo(PrimaryPart):
     TYPE: ClassVar[int] = 4
     ENUMS: ClassVar[dict[str, str]] = {}
 
-    x: Annotated[float | None, Field(description='[m]')] = None
-    y: Annotated[float | None, Field(description='[m]')] = None
-    z: Annotated[float | None, Field(description='[m]')] = None
-    rx: Annotated[float | None, Field(description='[rad]')] = None
-    ry: Annotated[float | None, Field(description='[rad]')] = None
-    rz: Annotated[float | None, Field(description='[rad]')] = None
+    x: Annotated[float | None, Field(description='X: TCP position in the base frame [m]')] = None
+    y: Annotated[float | None, Field(description='Y: TCP position in the base frame [m]')] = None
+    z: Annotated[float | None, Field(description='Z: TCP position in the base frame [m]')] = None
+    rx: Annotated[float | None, Field(description='Rx: TCP orientation as a rotation vector [rad]')] = None
+    ry: Annotated[float | None, Field(description='Ry: TCP orientation as a rotation vector [rad]')] = None
+    rz: Annotated[float | None, Field(description='Rz: TCP orientation as a rotation vector [rad]')] = None
     tcp_offset_x: Annotated[float | None, Field(description='python-urx reads it from 3.2 on [m]')] = None
     tcp_offset_y: Annotated[float | None, Field(description='python-urx reads it from 3.2 on [m]')] = None
     tcp_offset_z: Annotated[float | None, Field(description='python-urx reads it from 3.2 on [m]')] = None
@@ -210,12 +210,12 @@ class KinematicsInfo(PrimaryPart):
     TYPE: ClassVar[int] = 5
     ENUMS: ClassVar[dict[str, str]] = {}
 
-    checksum: Annotated[Annotated[tuple[Annotated[int, Field(ge=0, le=4294967295)], ...], Field(min_length=6, max_length=6)] | None, Field(description='')] = None
-    dh_theta: Annotated[Annotated[tuple[float, ...], Field(min_length=6, max_length=6)] | None, Field(description='')] = None
-    dh_a: Annotated[Annotated[tuple[float, ...], Field(min_length=6, max_length=6)] | None, Field(description='')] = None
-    dh_d: Annotated[Annotated[tuple[float, ...], Field(min_length=6, max_length=6)] | None, Field(description='')] = None
-    dh_alpha: Annotated[Annotated[tuple[float, ...], Field(min_length=6, max_length=6)] | None, Field(description='')] = None
-    calibration_status: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='')] = None
+    checksum: Annotated[Annotated[tuple[Annotated[int, Field(ge=0, le=4294967295)], ...], Field(min_length=6, max_length=6)] | None, Field(description='checksum: one checksum per joint of its kinematics calibration')] = None
+    dh_theta: Annotated[Annotated[tuple[float, ...], Field(min_length=6, max_length=6)] | None, Field(description='DHtheta: Denavit-Hartenberg theta per joint')] = None
+    dh_a: Annotated[Annotated[tuple[float, ...], Field(min_length=6, max_length=6)] | None, Field(description='DHa: Denavit-Hartenberg a per joint')] = None
+    dh_d: Annotated[Annotated[tuple[float, ...], Field(min_length=6, max_length=6)] | None, Field(description='Dhd: Denavit-Hartenberg d per joint')] = None
+    dh_alpha: Annotated[Annotated[tuple[float, ...], Field(min_length=6, max_length=6)] | None, Field(description='Dhalpha: Denavit-Hartenberg alpha per joint')] = None
+    calibration_status: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='calibration_status: state of the kinematics calibration')] = None
 
 
 class ConfigurationData(PrimaryPart):
@@ -229,21 +229,21 @@ class ConfigurationData(PrimaryPart):
     TYPE: ClassVar[int] = 6
     ENUMS: ClassVar[dict[str, str]] = {'robot_type': 'RobotType'}
 
-    joint_limits: Annotated[Annotated[tuple[JointLimits, ...], Field(min_length=6, max_length=6)] | None, Field(description='')] = None
-    joint_motion_limits: Annotated[Annotated[tuple[JointMotionLimits, ...], Field(min_length=6, max_length=6)] | None, Field(description='')] = None
-    v_joint_default: Annotated[float | None, Field(description='')] = None
-    a_joint_default: Annotated[float | None, Field(description='')] = None
-    v_tool_default: Annotated[float | None, Field(description='')] = None
-    a_tool_default: Annotated[float | None, Field(description='')] = None
-    eq_radius: Annotated[float | None, Field(description='')] = None
-    dh_a: Annotated[Annotated[tuple[float, ...], Field(min_length=6, max_length=6)] | None, Field(description='')] = None
-    dh_d: Annotated[Annotated[tuple[float, ...], Field(min_length=6, max_length=6)] | None, Field(description='')] = None
-    dh_alpha: Annotated[Annotated[tuple[float, ...], Field(min_length=6, max_length=6)] | None, Field(description='')] = None
-    dh_theta: Annotated[Annotated[tuple[float, ...], Field(min_length=6, max_length=6)] | None, Field(description='')] = None
-    masterboard_version: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='')] = None
+    joint_limits: Annotated[Annotated[tuple[JointLimits, ...], Field(min_length=6, max_length=6)] | None, Field(description='One entry per joint, base first')] = None
+    joint_motion_limits: Annotated[Annotated[tuple[JointMotionLimits, ...], Field(min_length=6, max_length=6)] | None, Field(description='One entry per joint, base first')] = None
+    v_joint_default: Annotated[float | None, Field(description='vJointDefault: default joint speed (rad/s)')] = None
+    a_joint_default: Annotated[float | None, Field(description='aJointDefault: default joint acceleration (rad/s²)')] = None
+    v_tool_default: Annotated[float | None, Field(description='vToolDefault: default tool speed (m/s)')] = None
+    a_tool_default: Annotated[float | None, Field(description='aToolDefault: default tool acceleration (m/s²)')] = None
+    eq_radius: Annotated[float | None, Field(description='eqRadius: equivalent radius used to convert tool speed to joint speed (m)')] = None
+    dh_a: Annotated[Annotated[tuple[float, ...], Field(min_length=6, max_length=6)] | None, Field(description='DHa: Denavit-Hartenberg a per joint')] = None
+    dh_d: Annotated[Annotated[tuple[float, ...], Field(min_length=6, max_length=6)] | None, Field(description='Dhd: Denavit-Hartenberg d per joint')] = None
+    dh_alpha: Annotated[Annotated[tuple[float, ...], Field(min_length=6, max_length=6)] | None, Field(description='DHalpha: Denavit-Hartenberg alpha per joint')] = None
+    dh_theta: Annotated[Annotated[tuple[float, ...], Field(min_length=6, max_length=6)] | None, Field(description='DHtheta: Denavit-Hartenberg theta per joint')] = None
+    masterboard_version: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='masterboardVersion: masterboard hardware version')] = None
     reserved: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='Deprecated')] = None
-    robot_type: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='(values: RobotType)')] = None
-    robot_sub_type: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='')] = None
+    robot_type: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='robotType: Robot Arm type (UR3, UR5, UR10, ...) (values: RobotType)')] = None
+    robot_sub_type: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='robotSubType: Robot Arm sub-type')] = None
 
 
 class ForceModeData(PrimaryPart):
@@ -263,7 +263,7 @@ class ForceModeData(PrimaryPart):
     frx: Annotated[float | None, Field(description='Deprecated — always 0.0')] = None
     fry: Annotated[float | None, Field(description='Deprecated — always 0.0')] = None
     frz: Annotated[float | None, Field(description='Deprecated — always 0.0')] = None
-    robot_dexterity: Annotated[float | None, Field(description='')] = None
+    robot_dexterity: Annotated[float | None, Field(description='robotDexterity: how far the arm is from a singularity; higher is better')] = None
 
 
 class AdditionalInfo(PrimaryPart):
@@ -277,10 +277,10 @@ class AdditionalInfo(PrimaryPart):
     TYPE: ClassVar[int] = 8
     ENUMS: ClassVar[dict[str, str]] = {'tp_type': 'TeachPendantType'}
 
-    tp_button_state: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='')] = None
-    is_manual_freedrive_allowed: Annotated[bool | None, Field(description='')] = None
-    is_freedrive_io_pressed: Annotated[bool | None, Field(description='')] = None
-    tp_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: TeachPendantType)')] = None
+    tp_button_state: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='tpButtonState: teach pendant buttons pressed (freedrive, power), one bit each')] = None
+    is_manual_freedrive_allowed: Annotated[bool | None, Field(description='freedriveButtonEnabled: freedrive by hand is allowed now')] = None
+    is_freedrive_io_pressed: Annotated[bool | None, Field(description='IOEnabledFreedrive: freedrive is requested through an I/O')] = None
+    tp_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='Teach Pendant Type (values: TeachPendantType)')] = None
 
 
 class CalibrationData(PrimaryPart):
@@ -294,7 +294,7 @@ class CalibrationData(PrimaryPart):
     TYPE: ClassVar[int] = 9
     ENUMS: ClassVar[dict[str, str]] = {}
 
-    data: Annotated[bytes | None, Field(description='')] = None
+    data: Annotated[bytes | None, Field(description='The sub-package body: used by UR software only')] = None
 
 
 class SafetyData(PrimaryPart):
@@ -308,7 +308,7 @@ class SafetyData(PrimaryPart):
     TYPE: ClassVar[int] = 10
     ENUMS: ClassVar[dict[str, str]] = {}
 
-    data: Annotated[bytes | None, Field(description='')] = None
+    data: Annotated[bytes | None, Field(description='The sub-package body: used by UR software only')] = None
 
 
 class ToolCommInfo(PrimaryPart):
@@ -322,12 +322,12 @@ class ToolCommInfo(PrimaryPart):
     TYPE: ClassVar[int] = 11
     ENUMS: ClassVar[dict[str, str]] = {}
 
-    tool_communication_is_enabled: Annotated[bool | None, Field(description='')] = None
-    baud_rate: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='')] = None
-    parity: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='')] = None
-    stop_bits: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='')] = None
-    rx_idle_chars: Annotated[float | None, Field(description='')] = None
-    tx_idle_chars: Annotated[float | None, Field(description='')] = None
+    tool_communication_is_enabled: Annotated[bool | None, Field(description="toolCommunicationIsEnabled: the tool's RS-485 communication is on")] = None
+    baud_rate: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='baudRate: tool communication baud rate')] = None
+    parity: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='parity: tool communication parity (0 none, 1 odd, 2 even)')] = None
+    stop_bits: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='stopBits: tool communication stop bits')] = None
+    rx_idle_chars: Annotated[float | None, Field(description='RxIdleChars: idle characters before a receive is complete')] = None
+    tx_idle_chars: Annotated[float | None, Field(description='TxIdleChars: idle characters before sending')] = None
 
 
 class ToolModeInfo(PrimaryPart):
@@ -341,9 +341,9 @@ class ToolModeInfo(PrimaryPart):
     TYPE: ClassVar[int] = 12
     ENUMS: ClassVar[dict[str, str]] = {'output_mode': 'ToolOutputMode', 'digital_output_mode_pin0': 'ToolDigitalOutputMode', 'digital_output_mode_pin1': 'ToolDigitalOutputMode'}
 
-    output_mode: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: ToolOutputMode)')] = None
-    digital_output_mode_pin0: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: ToolDigitalOutputMode)')] = None
-    digital_output_mode_pin1: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: ToolDigitalOutputMode)')] = None
+    output_mode: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='outputMode: tool output mode (values: ToolOutputMode)')] = None
+    digital_output_mode_pin0: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='digitalOutputModeOutput0: mode of tool digital output 0 (values: ToolDigitalOutputMode)')] = None
+    digital_output_mode_pin1: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='digitalOutputModeOutput1: mode of tool digital output 1 (values: ToolDigitalOutputMode)')] = None
 
 
 class SingularityInfo(PrimaryPart):
@@ -357,8 +357,8 @@ class SingularityInfo(PrimaryPart):
     TYPE: ClassVar[int] = 13
     ENUMS: ClassVar[dict[str, str]] = {}
 
-    singularity_severity: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='')] = None
-    singularity_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='')] = None
+    singularity_severity: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='singularitySeverity: used by UR software only')] = None
+    singularity_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='singularityType: used by UR software only')] = None
 
 
 class PayloadInfo(PrimaryPart):
@@ -372,7 +372,7 @@ class PayloadInfo(PrimaryPart):
     TYPE: ClassVar[int] = 14
     ENUMS: ClassVar[dict[str, str]] = {}
 
-    data: Annotated[bytes | None, Field(description='')] = None
+    data: Annotated[bytes | None, Field(description='The sub-package body: used by UR software only')] = None
 
 
 class InternalData(PrimaryPart):
@@ -386,7 +386,7 @@ class InternalData(PrimaryPart):
     TYPE: ClassVar[int] = 15
     ENUMS: ClassVar[dict[str, str]] = {}
 
-    data: Annotated[bytes | None, Field(description='')] = None
+    data: Annotated[bytes | None, Field(description='The sub-package body: used by UR software only')] = None
 
 
 class CumulativeRuntimeData(PrimaryPart):
@@ -416,9 +416,9 @@ class TextMessage(PrimaryPart):
     ENUMS: ClassVar[dict[str, str]] = {'source': 'MessageSource', 'robot_message_type': 'RobotMessageType'}
 
     timestamp: Annotated[Annotated[int, Field(ge=0, le=18446744073709551615)] | None, Field(description='Microseconds since the controller started [µs]')] = None
-    source: Annotated[Annotated[int, Field(ge=-128, le=127)] | None, Field(description='(values: MessageSource)')] = None
-    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: RobotMessageType)')] = 0
-    text_message: Annotated[str | None, Field(description='')] = None
+    source: Annotated[Annotated[int, Field(ge=-128, le=127)] | None, Field(description='source (Message Sources) (values: MessageSource)')] = None
+    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='robotMessageType: which sub-message follows (values: RobotMessageType)')] = 0
+    text_message: Annotated[str | None, Field(description='textMessage: the text, to the end of the message')] = None
 
 
 class VersionMessage(PrimaryPart):
@@ -433,14 +433,14 @@ class VersionMessage(PrimaryPart):
     ENUMS: ClassVar[dict[str, str]] = {'source': 'MessageSource', 'robot_message_type': 'RobotMessageType'}
 
     timestamp: Annotated[Annotated[int, Field(ge=0, le=18446744073709551615)] | None, Field(description='Microseconds since the controller started [µs]')] = None
-    source: Annotated[Annotated[int, Field(ge=-128, le=127)] | None, Field(description='(values: MessageSource)')] = None
-    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: RobotMessageType)')] = 3
-    project_name: Annotated[str | None, Field(description='')] = None
-    major_version: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='')] = None
-    minor_version: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='')] = None
-    bugfix_version: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='')] = None
-    build_number: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='')] = None
-    build_date: Annotated[str | None, Field(description='')] = None
+    source: Annotated[Annotated[int, Field(ge=-128, le=127)] | None, Field(description='source (Message Sources) (values: MessageSource)')] = None
+    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='robotMessageType: which sub-message follows (values: RobotMessageType)')] = 3
+    project_name: Annotated[str | None, Field(description='projectName: the name of the software (e.g. URControl)')] = None
+    major_version: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='majorVersion of the controller software')] = None
+    minor_version: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='minorVersion of the controller software')] = None
+    bugfix_version: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='bugfixVersion of the controller software')] = None
+    build_number: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='buildNumber of the controller software')] = None
+    build_date: Annotated[str | None, Field(description='buildDate: when the software was built, as text')] = None
 
 
 class SafetyModeMessage(PrimaryPart):
@@ -455,13 +455,13 @@ class SafetyModeMessage(PrimaryPart):
     ENUMS: ClassVar[dict[str, str]] = {'source': 'MessageSource', 'robot_message_type': 'RobotMessageType', 'safety_mode_type': 'SafetyMode', 'report_data_type': 'ReportDataType'}
 
     timestamp: Annotated[Annotated[int, Field(ge=0, le=18446744073709551615)] | None, Field(description='Microseconds since the controller started [µs]')] = None
-    source: Annotated[Annotated[int, Field(ge=-128, le=127)] | None, Field(description='(values: MessageSource)')] = None
-    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: RobotMessageType)')] = 5
-    robot_message_code: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='')] = None
-    robot_message_argument: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='')] = None
-    safety_mode_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: SafetyMode)')] = None
-    report_data_type: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='(values: ReportDataType)')] = None
-    report_data: Annotated[float | int | None, Field(description='')] = None
+    source: Annotated[Annotated[int, Field(ge=-128, le=127)] | None, Field(description='source (Message Sources) (values: MessageSource)')] = None
+    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='robotMessageType: which sub-message follows (values: RobotMessageType)')] = 5
+    robot_message_code: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='robotMessageCode: code of the event')] = None
+    robot_message_argument: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='robotMessageArgument: argument of the code')] = None
+    safety_mode_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='safetyModeType (Safety Mode Types) (values: SafetyMode)')] = None
+    report_data_type: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='reportDataType: the type of report_data (0,1 uint32; 2 int32; 3 float; 4 uint32 shown as hex) (values: ReportDataType)')] = None
+    report_data: Annotated[float | int | None, Field(description='reportData: a value of the type report_data_type names')] = None
 
 
 class RobotCommMessage(PrimaryPart):
@@ -476,13 +476,13 @@ class RobotCommMessage(PrimaryPart):
     ENUMS: ClassVar[dict[str, str]] = {'source': 'MessageSource', 'robot_message_type': 'RobotMessageType', 'robot_message_report_level': 'ReportLevel', 'data_type': 'ReportDataType'}
 
     timestamp: Annotated[Annotated[int, Field(ge=0, le=18446744073709551615)] | None, Field(description='Microseconds since the controller started [µs]')] = None
-    source: Annotated[Annotated[int, Field(ge=-128, le=127)] | None, Field(description='(values: MessageSource)')] = None
-    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: RobotMessageType)')] = 6
-    robot_message_code: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='')] = None
-    robot_message_argument: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='')] = None
-    robot_message_report_level: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='(values: ReportLevel)')] = None
-    data_type: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='(values: ReportDataType)')] = None
-    report_data: Annotated[float | int | str | None, Field(description='')] = None
+    source: Annotated[Annotated[int, Field(ge=-128, le=127)] | None, Field(description='source (Message Sources) (values: MessageSource)')] = None
+    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='robotMessageType: which sub-message follows (values: RobotMessageType)')] = 6
+    robot_message_code: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='robotMessageCode: code of the error')] = None
+    robot_message_argument: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='robotMessageArgument: argument of the code')] = None
+    robot_message_report_level: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='robotMessageReportLevel (Report Levels) (values: ReportLevel)')] = None
+    data_type: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='robotMessageDataType: the type of report_data (0-4 a 32-bit number, 5 a string) (values: ReportDataType)')] = None
+    report_data: Annotated[float | int | str | None, Field(description='robotMessageData: a value of the type data_type names')] = None
     report_text: Annotated[str | None, Field(description='Text after the report data; not in the document (empty when absent).')] = None
 
 
@@ -498,12 +498,12 @@ class KeyMessage(PrimaryPart):
     ENUMS: ClassVar[dict[str, str]] = {'source': 'MessageSource', 'robot_message_type': 'RobotMessageType'}
 
     timestamp: Annotated[Annotated[int, Field(ge=0, le=18446744073709551615)] | None, Field(description='Microseconds since the controller started [µs]')] = None
-    source: Annotated[Annotated[int, Field(ge=-128, le=127)] | None, Field(description='(values: MessageSource)')] = None
-    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: RobotMessageType)')] = 7
-    robot_message_code: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='')] = None
-    robot_message_argument: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='')] = None
-    robot_message_title: Annotated[str | None, Field(description='')] = None
-    key_text_message: Annotated[str | None, Field(description='')] = None
+    source: Annotated[Annotated[int, Field(ge=-128, le=127)] | None, Field(description='source (Message Sources) (values: MessageSource)')] = None
+    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='robotMessageType: which sub-message follows (values: RobotMessageType)')] = 7
+    robot_message_code: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='robotMessageCode: code of the key event')] = None
+    robot_message_argument: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='robotMessageArgument: argument of the code')] = None
+    robot_message_title: Annotated[str | None, Field(description='robotMessageTitle: the title')] = None
+    key_text_message: Annotated[str | None, Field(description='keyTextMessage: the text')] = None
 
 
 class RequestValueMessage(PrimaryPart):
@@ -518,11 +518,11 @@ class RequestValueMessage(PrimaryPart):
     ENUMS: ClassVar[dict[str, str]] = {'source': 'MessageSource', 'robot_message_type': 'RobotMessageType', 'requested_type': 'RequestedType'}
 
     timestamp: Annotated[Annotated[int, Field(ge=0, le=18446744073709551615)] | None, Field(description='Microseconds since the controller started [µs]')] = None
-    source: Annotated[Annotated[int, Field(ge=-128, le=127)] | None, Field(description='(values: MessageSource)')] = None
-    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: RobotMessageType)')] = 9
-    request_id: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='')] = None
-    requested_type: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='(values: RequestedType)')] = None
-    request_text_message: Annotated[str | None, Field(description='')] = None
+    source: Annotated[Annotated[int, Field(ge=-128, le=127)] | None, Field(description='source (Message Sources) (values: MessageSource)')] = None
+    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='robotMessageType: which sub-message follows (values: RobotMessageType)')] = 9
+    request_id: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='requestId: to send the answer back with')] = None
+    requested_type: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='requestedType (Requested Types): what kind of value the program asks for (values: RequestedType)')] = None
+    request_text_message: Annotated[str | None, Field(description='requestTextMessage: the question shown to the user')] = None
 
 
 class RuntimeExceptionMessage(PrimaryPart):
@@ -537,11 +537,11 @@ class RuntimeExceptionMessage(PrimaryPart):
     ENUMS: ClassVar[dict[str, str]] = {'source': 'MessageSource', 'robot_message_type': 'RobotMessageType'}
 
     timestamp: Annotated[Annotated[int, Field(ge=0, le=18446744073709551615)] | None, Field(description='Microseconds since the controller started [µs]')] = None
-    source: Annotated[Annotated[int, Field(ge=-128, le=127)] | None, Field(description='(values: MessageSource)')] = None
-    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: RobotMessageType)')] = 10
-    script_line_number: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='')] = None
-    script_column_number: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='')] = None
-    runtime_exception_text_message: Annotated[str | None, Field(description='')] = None
+    source: Annotated[Annotated[int, Field(ge=-128, le=127)] | None, Field(description='source (Message Sources) (values: MessageSource)')] = None
+    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='robotMessageType: which sub-message follows (values: RobotMessageType)')] = 10
+    script_line_number: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='scriptLineNumber: line of the script where it failed')] = None
+    script_column_number: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='scriptColumnNumber: column of the script where it failed')] = None
+    runtime_exception_text_message: Annotated[str | None, Field(description='runtimeExceptionTextMessage: the text of the exception')] = None
 
 
 class ProgramThreadsMessage(PrimaryPart):
@@ -556,9 +556,9 @@ class ProgramThreadsMessage(PrimaryPart):
     ENUMS: ClassVar[dict[str, str]] = {'source': 'MessageSource', 'robot_message_type': 'RobotMessageType'}
 
     timestamp: Annotated[Annotated[int, Field(ge=0, le=18446744073709551615)] | None, Field(description='Microseconds since the controller started [µs]')] = None
-    source: Annotated[Annotated[int, Field(ge=-128, le=127)] | None, Field(description='(values: MessageSource)')] = None
-    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: RobotMessageType)')] = 14
-    threads: Annotated[list[ProgramThread] | None, Field(description='')] = None
+    source: Annotated[Annotated[int, Field(ge=-128, le=127)] | None, Field(description='source (Message Sources) (values: MessageSource)')] = None
+    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='robotMessageType: which sub-message follows (values: RobotMessageType)')] = 14
+    threads: Annotated[list[ProgramThread] | None, Field(description='One entry per running thread with labeled lines')] = None
 
 
 class GlobalVariablesSetupMessage(PrimaryPart):
@@ -573,9 +573,9 @@ class GlobalVariablesSetupMessage(PrimaryPart):
     ENUMS: ClassVar[dict[str, str]] = {'robot_message_type': 'ProgramStateMessageType'}
 
     timestamp: Annotated[Annotated[int, Field(ge=0, le=18446744073709551615)] | None, Field(description='Microseconds since the controller started [µs]')] = None
-    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: ProgramStateMessageType)')] = 0
-    start_index: Annotated[Annotated[int, Field(ge=0, le=65535)] | None, Field(description='')] = None
-    variable_names: Annotated[list[str] | None, Field(description='')] = None
+    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='robotMessageType: which program state message follows (values: ProgramStateMessageType)')] = 0
+    start_index: Annotated[Annotated[int, Field(ge=0, le=65535)] | None, Field(description='startIndex: index of the first name in this message')] = None
+    variable_names: Annotated[list[str] | None, Field(description='variableNames: the names, each ended by a newline')] = None
 
 
 class GlobalVariablesUpdateMessage(PrimaryPart):
@@ -590,9 +590,9 @@ class GlobalVariablesUpdateMessage(PrimaryPart):
     ENUMS: ClassVar[dict[str, str]] = {'robot_message_type': 'ProgramStateMessageType'}
 
     timestamp: Annotated[Annotated[int, Field(ge=0, le=18446744073709551615)] | None, Field(description='Microseconds since the controller started [µs]')] = None
-    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='(values: ProgramStateMessageType)')] = 1
-    start_index: Annotated[Annotated[int, Field(ge=0, le=65535)] | None, Field(description='')] = None
-    variable_values: Annotated[list[VariableValue] | None, Field(description='')] = None
+    robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='robotMessageType: which program state message follows (values: ProgramStateMessageType)')] = 1
+    start_index: Annotated[Annotated[int, Field(ge=0, le=65535)] | None, Field(description='startIndex: index of the first value in this message')] = None
+    variable_values: Annotated[list[VariableValue] | None, Field(description='variableValues: typed values (a type byte, the value), each followed by a newline')] = None
 
 
 MEMBERS: dict[tuple[str, int], type[PrimaryPart]] = {

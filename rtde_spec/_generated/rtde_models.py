@@ -119,10 +119,10 @@ class GetUrcontrolVersionReply(RtdeMessage):
         FieldLayout('build', 'fixed', 4),
     )
 
-    major: Annotated[Annotated[int, Field(ge=0, le=4294967295)], Field(description='')]
-    minor: Annotated[Annotated[int, Field(ge=0, le=4294967295)], Field(description='')]
-    bugfix: Annotated[Annotated[int, Field(ge=0, le=4294967295)], Field(description='')]
-    build: Annotated[Annotated[int, Field(ge=0, le=4294967295)], Field(description='')]
+    major: Annotated[Annotated[int, Field(ge=0, le=4294967295)], Field(description='Major version of the controller software (5 on an e-Series)')]
+    minor: Annotated[Annotated[int, Field(ge=0, le=4294967295)], Field(description='Minor version of the controller software')]
+    bugfix: Annotated[Annotated[int, Field(ge=0, le=4294967295)], Field(description='Bugfix version of the controller software')]
+    build: Annotated[Annotated[int, Field(ge=0, le=4294967295)], Field(description='Build number of the controller software')]
 
 
 class TextMessageV1Controller(RtdeMessage):
@@ -147,7 +147,7 @@ class TextMessageV1Controller(RtdeMessage):
     )
 
     message_type: Annotated[Annotated[int, Field(ge=0, le=255)], Field(description='Severity (values: TextMessageLevel)')]
-    message: Annotated[AsciiStr, Field(description='')]
+    message: Annotated[AsciiStr, Field(description='The text, to the end of the package')]
 
 
 class TextMessageV1Client(RtdeMessage):
@@ -172,9 +172,9 @@ class TextMessageV1Client(RtdeMessage):
         FieldLayout('warning_level', 'fixed', 1),
     )
 
-    message: Annotated[ShortAsciiStr, Field(description='')]
-    source: Annotated[ShortAsciiStr, Field(description='')]
-    warning_level: Annotated[Annotated[int, Field(ge=0, le=255)], Field(description='(values: TextMessageLevel)')]
+    message: Annotated[ShortAsciiStr, Field(description='The text, after its length')]
+    source: Annotated[ShortAsciiStr, Field(description="Who sends it (e.g. the client's name), after its length")]
+    warning_level: Annotated[Annotated[int, Field(ge=0, le=255)], Field(description='Exception, error, warning or info (values: TextMessageLevel)')]
 
 
 class TextMessage(RtdeMessage):
@@ -199,9 +199,9 @@ class TextMessage(RtdeMessage):
         FieldLayout('warning_level', 'fixed', 1),
     )
 
-    message: Annotated[ShortAsciiStr, Field(description='')]
-    source: Annotated[ShortAsciiStr, Field(description='')]
-    warning_level: Annotated[Annotated[int, Field(ge=0, le=255)], Field(description='(values: TextMessageLevel)')]
+    message: Annotated[ShortAsciiStr, Field(description='The text, after its length')]
+    source: Annotated[ShortAsciiStr, Field(description="Who sends it (e.g. the client's name), after its length")]
+    warning_level: Annotated[Annotated[int, Field(ge=0, le=255)], Field(description='Exception, error, warning or info (values: TextMessageLevel)')]
 
 
 class DataPackage(RtdeMessage):
@@ -225,7 +225,7 @@ class DataPackage(RtdeMessage):
         FieldLayout('payload', 'rest', 0, False),
     )
 
-    recipe_id: Annotated[Annotated[int, Field(ge=0, le=255)], Field(description='')]
+    recipe_id: Annotated[Annotated[int, Field(ge=0, le=255)], Field(description='The recipe whose layout the payload has (from its setup reply)')]
     payload: Annotated[bytes, Field(description='Recipe variables, big-endian, in recipe order')]
 
 
@@ -249,7 +249,7 @@ class SetupOutputsV1(RtdeMessage):
         FieldLayout('variable_names', 'rest', 0, True),
     )
 
-    variable_names: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='')]
+    variable_names: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='Output variable names, comma separated')]
 
 
 class SetupOutputsV1Reply(RtdeMessage):
@@ -272,7 +272,7 @@ class SetupOutputsV1Reply(RtdeMessage):
         FieldLayout('variable_types', 'rest', 0, True),
     )
 
-    variable_types: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='')]
+    variable_types: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='One type per requested name, in order, comma separated (NOT_FOUND or IN_USE where refused)')]
 
 
 class SetupOutputsV2(RtdeMessage):
@@ -296,8 +296,8 @@ class SetupOutputsV2(RtdeMessage):
         FieldLayout('variable_names', 'rest', 0, True),
     )
 
-    output_frequency: Annotated[float, Field(description='[Hz]')]
-    variable_names: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='')]
+    output_frequency: Annotated[float, Field(description="Output frequency, 1 up to the controller's maximum (125 Hz on CB3, 500 Hz on e-Series) [Hz]")]
+    variable_names: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='Output variable names, comma separated')]
 
 
 class SetupOutputsV2Reply(RtdeMessage):
@@ -321,8 +321,8 @@ class SetupOutputsV2Reply(RtdeMessage):
         FieldLayout('variable_types', 'rest', 0, True),
     )
 
-    output_recipe_id: Annotated[Annotated[int, Field(ge=0, le=255)], Field(description='')]
-    variable_types: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='')]
+    output_recipe_id: Annotated[Annotated[int, Field(ge=0, le=255)], Field(description='The id data packages of this recipe carry; 0 when the recipe is invalid')]
+    variable_types: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='One type per requested name, in order, comma separated (NOT_FOUND or IN_USE where refused)')]
 
 
 class SetupInputs(RtdeMessage):
@@ -345,7 +345,7 @@ class SetupInputs(RtdeMessage):
         FieldLayout('variable_names', 'rest', 0, True),
     )
 
-    variable_names: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='')]
+    variable_names: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='Input variable names, comma separated')]
 
 
 class SetupInputsReply(RtdeMessage):
@@ -369,8 +369,8 @@ class SetupInputsReply(RtdeMessage):
         FieldLayout('variable_types', 'rest', 0, True),
     )
 
-    input_recipe_id: Annotated[Annotated[int, Field(ge=0, le=255)], Field(description='')]
-    variable_types: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='')]
+    input_recipe_id: Annotated[Annotated[int, Field(ge=0, le=255)], Field(description='The id to send data packages of this recipe with; 0 when the recipe is invalid')]
+    variable_types: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='One type per requested name, in order, comma separated (NOT_FOUND or IN_USE where refused)')]
 
 
 class Start(RtdeMessage):

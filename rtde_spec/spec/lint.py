@@ -224,8 +224,14 @@ def _lint_packages(spec: Spec) -> Iterator[tuple[str, Loc, str]]:
                 yield "packages", (*floc, "length"), f"{fld.type} needs length: rest or uint8"
 
 
-def _layout(fields: list[LayoutField], spec: Spec, loc: Loc, groups: dict[str, str]) -> Found:
-    """Kinds, references to earlier fields, and that open-ended fields come last."""
+def _layout(
+    fields: list[LayoutField], spec: Spec, loc: Loc, groups: dict[str, str], documented: bool = True
+) -> Found:
+    """Kinds, references to earlier fields, that open-ended fields come last, and a doc on each.
+
+    The doc is what reference docs and models show a user; an older layout's fields
+    are the current fields again and carry theirs there (`documented=False`).
+    """
     prims = {p.name: p for p in spec.primitives.primitives}
     ints = {n for n, p in prims.items() if p.kind == "int"}
     enums = {e.name for e in spec.all_enums}
@@ -235,6 +241,8 @@ def _layout(fields: list[LayoutField], spec: Spec, loc: Loc, groups: dict[str, s
         kind = fld.kind
         if fld.name in seen:
             yield (*floc, "name"), f"duplicate field name {fld.name!r}"
+        if documented and not (fld.doc or "").strip():
+            yield (*floc, "doc"), f"field {fld.name!r} has no doc (say what the document says of it)"
         if fld.enum is not None and fld.enum not in enums:
             yield (*floc, "enum"), f"unknown enum {fld.enum!r}"
         yield from _since(fld.since, spec, (*floc, "since"))
@@ -274,7 +282,7 @@ def _layout(fields: list[LayoutField], spec: Spec, loc: Loc, groups: dict[str, s
                 groups[fld.group] = fld.name
             if kind == "repeat" and fld.when is not None:
                 yield (*floc, "when"), "a group is either repeated or conditional"
-            yield from _layout(fld.fields or [], spec, (*floc, "fields"), groups)
+            yield from _layout(fld.fields or [], spec, (*floc, "fields"), groups, documented)
         elif fld.group is not None or fld.repeat is not None or fld.when is not None:
             yield (*floc, "fields"), "repeat, when and group need fields"
         open_ended = fld.length == "rest" or fld.repeat == "until_end" or kind == "values"
@@ -328,7 +336,7 @@ def _lint_primary(spec: Spec) -> Found:
             current = {f.name for f in member.fields}
             for k, old in enumerate(member.older):
                 oloc: Loc = (*mloc, "older", k)
-                yield from _layout(old.fields, spec, (*oloc, "fields"), {})
+                yield from _layout(old.fields, spec, (*oloc, "fields"), {}, documented=False)
                 for m, fld in enumerate(old.fields):
                     if fld.name not in current:
                         yield (*oloc, "fields", m, "name"), f"{fld.name!r} is not a field of {member.name}"
