@@ -215,8 +215,9 @@ CASES: list[tuple[str, str, str, str, str, str]] = [
     (
         "rtde package field without a doc",
         "rtde/packages.yaml",
-        '{name: recipe_id, type: uint8, doc: "The recipe whose layout',
-        '{name: recipe_id, type: uint8, dox: "The recipe whose layout',
+        '{name: recipe_id, type: uint8, doc: "The recipe whose layout the payload has '
+        '(from its setup reply)"}',
+        "{name: recipe_id, type: uint8}",
         "messages[7](data_package).fields[0](recipe_id)",
         "field 'recipe_id' has no doc",
     ),
