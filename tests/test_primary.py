@@ -21,7 +21,13 @@ from rtde_spec.primary.base import (
     UnknownMessage,
     UnknownSubPackage,
 )
-from rtde_spec.primary.codec import PrimaryStreamDecoder, decode_message, decode_stream, encode_message
+from rtde_spec.primary.codec import (
+    PrimaryStreamDecoder,
+    decode_message,
+    decode_stream,
+    default_codec,
+    encode_message,
+)
 from rtde_spec.spec.schema import LayoutField
 from rtde_spec.spec.versions import Version
 
@@ -297,3 +303,32 @@ def test_ur5e_like_robot_state_of_the_benchmark() -> None:
     assert message["joint_data"].joints[5].joint_mode == 253
     assert message["robot_mode_data"].robot_mode == 7
     assert encode_message(message) == data
+
+
+STATE_KEYS = [key for key in MEMBER_KEYS if key[0] == "robot_state"]
+
+
+@pytest.mark.parametrize("key", STATE_KEYS, ids=[f"{f}-{t}" for f, t in STATE_KEYS])
+def test_compiled_sub_package_decoder_equals_the_layout_walk(key: tuple[str, int]) -> None:
+    """The generated straight-line decoder of a sub-package gives the general path's model."""
+    codec = default_codec()
+    cls, layout = codec.families[16].members[key[1]]
+    fast = codec._fast.get(key[1])
+    assert fast is not None, f"{cls.NAME} has no compiled decoder"
+
+    @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+    @given(member_strategy(*key), st.binary(max_size=6), st.integers(0, 400))
+    def check(part: PrimaryPart, tail: bytes, cut: int) -> None:
+        body = encode_message(part)[10:] + tail  # after the message and sub-package headers
+        walked = codec._part(cls, layout, body, 0, len(body), {})
+        got = fast(body, 0, len(body))
+        assert got == walked
+        if layout.fixed_size is not None:  # a rest-of-part field takes the tail; otherwise it is extra
+            assert got.extra == tail
+        assert type(got).model_validate(got.model_dump()) == got  # what validation makes of it
+        short = body[: min(cut, len(body))]
+        general = codec._part(cls, layout, short, 0, len(short), {})
+        compiled = fast(short, 0, len(short))
+        assert compiled is None if general.missing else compiled == general  # None: the walk decides
+
+    check()

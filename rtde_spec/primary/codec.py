@@ -27,6 +27,7 @@ from rtde_spec.primary.base import (
     UnknownMessage,
     UnknownSubPackage,
 )
+from rtde_spec.primary.compiled import Decoder, compile_part
 from rtde_spec.primary.fast_models import build, maker
 from rtde_spec.primary.values import ValueTable
 from rtde_spec.spec.catalogue import Catalogue
@@ -79,6 +80,13 @@ class PrimaryCodec:
                     ]
                     entry.older[member.type] = sorted(ranges, key=lambda r: r[0])
             self.families[fam.type] = entry
+        # straight-line decoders of Robot State sub-packages (see compiled.py): type -> decode
+        state = self.families[gen.FAMILY_TYPES["robot_state"]]
+        self._fast: dict[int, Decoder] = {}
+        for sub_type, (cls, layout) in state.members.items():
+            decoder = compile_part(cls, layout)
+            if decoder is not None:
+                self._fast[sub_type] = decoder
 
     # --- decoding -----------------------------------------------------------
 
@@ -138,6 +146,13 @@ class PrimaryCodec:
                     expected=f"{hsize}..{end - pos}",
                     actual=sub_size,
                 )
+            fast = self._fast.get(sub_type)
+            if fast is not None and (version is None or sub_type not in fam.older):
+                part = fast(buf, pos + hsize, pos + sub_size)  # None: shorter than the layout
+                if part is not None:
+                    subs.append(part)
+                    pos += sub_size
+                    continue
             member = fam.members.get(sub_type)
             if member is None:
                 subs.append(UnknownSubPackage(type=sub_type, size=sub_size, raw=buf[pos : pos + sub_size]))

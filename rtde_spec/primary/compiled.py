@@ -1,0 +1,151 @@
+"""One generated function per Robot State sub-package: few unpacks, then its models.
+
+A Robot State is ~30 frozen models (sub-packages, joints, limits). The general
+layout walk costs a dict per group, a regroup pass and a function call per model;
+here each sub-package gets straight-line code, built once from the same spec
+layout: one unpack per fixed run (fixed groups included), a branch for a
+conditional group, a slice for trailing bytes, and every model's __dict__ filled
+directly (as `fast_models.maker` does, minus the call). A part shorter than its
+layout returns None and the general walk names what is missing; layouts with
+strings, switches or open-ended groups are not compiled.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from pydantic import BaseModel
+
+from rtde_spec._generated import primary_models as gen
+from rtde_spec.spec.schema import LayoutField
+from rtde_spec.wire.layout import Layout
+
+Decoder = Callable[[bytes, int, int], Any]
+
+_SLOTS = BaseModel.__dict__  # the slot descriptors pydantic keeps per instance
+
+
+class _Source:
+    """Statements of one generated function, and the objects it names."""
+
+    def __init__(self) -> None:
+        self.lines: list[str] = []
+        self.indent = ""
+        self.env: dict[str, Any] = {
+            "_new": object.__new__,
+            "_dict": _SLOTS["__dict__"].__set__,
+            "_fields_set": _SLOTS["__pydantic_fields_set__"].__set__,
+            "_extra": _SLOTS["__pydantic_extra__"].__set__,
+            "_private": _SLOTS["__pydantic_private__"].__set__,
+        }
+        self.count = 0
+
+    def name(self, prefix: str, value: Any = None) -> str:
+        self.count += 1
+        name = f"{prefix}{self.count}"
+        if value is not None:
+            self.env[name] = value
+        return name
+
+    def add(self, *lines: str) -> None:
+        self.lines += [self.indent + line for line in lines]
+
+    def model(self, cls: type[BaseModel], entries: list[str]) -> str:
+        """Statements making one `cls` from 'key: expression' entries; returns its variable."""
+        if set(cls.model_fields) != {e.split(":")[0].strip("'") for e in entries}:
+            raise _NotFixed
+        var, name, fields = self.name("m"), self.name("C", cls), self.name("F", set(cls.model_fields))
+        self.add(
+            f"{var} = _new({name})",
+            f"_dict({var}, {{{', '.join(entries)}}})",
+            f"_fields_set({var}, {fields})",
+            f"_extra({var}, None)",
+            f"_private({var}, None)",
+        )
+        return var
+
+
+class _NotFixed(Exception):
+    """The layout has a part the generated code does not cover: the general path decodes it."""
+
+
+def _fields(src: _Source, fields: list[LayoutField], t: str, index: int) -> tuple[list[str], int]:
+    """'name: expression' entries for fixed fields read from tuple `t` at `index`."""
+    entries = []
+    for fld in fields:
+        if fld.kind == "value":
+            count = fld.count or 1
+            expr = f"{t}[{index}]" if fld.count is None else f"{t}[{index}:{index + count}]"
+            entries.append(f"{fld.name!r}: {expr}")
+            index += count
+        elif fld.kind == "repeat" and isinstance(fld.repeat, int) and fld.group is not None:
+            made = []
+            for _ in range(fld.repeat):
+                values, index = _fields(src, fld.fields or [], t, index)
+                made.append(src.model(gen.GROUPS[fld.group], values))
+            entries.append(f"{fld.name!r}: ({', '.join(made)},)")
+        else:
+            raise _NotFixed
+    return entries, index
+
+
+def _unpack(src: _Source, layout: Layout, fields: list[LayoutField]) -> list[str]:
+    """Statements reading one fixed run at p (None when the part is too short); its entries."""
+    step = Layout(fields, layout.prims, order=layout.order)._single
+    if step is None:
+        raise _NotFixed
+    t, unpack = src.name("t"), src.name("U", step.struct.unpack_from)
+    size = step.struct.size
+    src.add(f"if end - p < {size}:", "    return None", f"{t} = {unpack}(buf, p)", f"p += {size}")
+    entries, _ = _fields(src, fields, t, 0)
+    return entries
+
+
+def _body(src: _Source, layout: Layout) -> list[str]:
+    """Entries of every field: fixed runs, conditional fixed groups, a trailing rest of bytes/text."""
+    entries: list[str] = []
+    run: list[LayoutField] = []
+    for i, fld in enumerate(layout.fields):
+        if fld.kind == "value" or (fld.kind == "repeat" and isinstance(fld.repeat, int)):
+            run.append(fld)
+            continue
+        if run:
+            entries += _unpack(src, layout, run)
+            run = []
+        if fld.kind == "optional" and fld.group is not None:
+            flag = next(e.split(": ", 1)[1] for e in entries if e.startswith(repr(fld.when) + ":"))
+            var = src.name("o")
+            src.add(f"if {flag}:")
+            src.indent += "    "
+            inner = _unpack(src, layout, fld.fields or [])
+            src.add(f"{var} = {src.model(gen.GROUPS[fld.group], inner)}")
+            src.indent = src.indent[:-4]
+            src.add("else:", f"    {var} = None")
+            entries.append(f"{fld.name!r}: {var}")
+        elif fld.kind == "bytes" and fld.length == "rest" and i == len(layout.fields) - 1:
+            src.add("rest = buf[p:end]", "p = end")
+            entries.append(f"{fld.name!r}: rest")
+        else:
+            raise _NotFixed
+    if run:
+        entries += _unpack(src, layout, run)
+    return entries
+
+
+def compile_part(cls: type[BaseModel], layout: Layout) -> Decoder | None:
+    """decode(buf, start, end) -> the part's model, or None when the part is shorter than its layout.
+
+    None from compile_part itself: the layout has strings, switches or open-ended groups,
+    which the general path decodes. Bytes after the layout are the part's `extra`.
+    """
+    src = _Source()
+    src.add("p = start")
+    try:
+        entries = _body(src, layout)
+        part = src.model(cls, [*entries, "'missing': ()", "'extra': buf[p:end]"])
+    except _NotFixed:
+        return None
+    body = "\n    ".join([*src.lines, f"return {part}"])
+    exec(f"def decode(buf, start, end):\n    {body}\n", src.env)
+    return src.env["decode"]  # type: ignore[no-any-return]
