@@ -7,7 +7,7 @@ from typing import Any
 
 from rtde_spec.spec.schema import CaseSpec, FamilySpec, LayoutField, MemberSpec, Primitive, Spec
 
-from .emit_rtde import CONSTRUCT_BY_STRUCT, prims_of
+from .emit_construct import CONSTRUCT_BY_STRUCT, prims_of, struct_body
 from .emit_types import scalar_annotation
 from .render import PY_HEADER, camel, docstring, field_description, upper
 
@@ -136,48 +136,11 @@ def emit_primary_models(spec: Spec) -> str:
 # --- construct ---------------------------------------------------------------
 
 
-def _construct(fld: LayoutField, prims: dict[str, Primitive], indent: str) -> str:
-    kind = fld.kind
-    c = CONSTRUCT_BY_STRUCT
-    if kind == "value":
-        one = c[prims[fld.type or ""].struct]
-        return f"Array({fld.count}, {one})" if fld.count else one
-    if kind in ("string", "bytes"):
-        if fld.length == "rest":
-            if kind == "string":
-                return "lines_string()" if fld.format == "lines" else 'GreedyString("utf8")'
-            return "GreedyBytes"
-        prefix = c[prims[fld.length or ""].struct]
-        if kind == "string" and fld.fallback == "rest":
-            return f"prefixed_or_rest({prefix})"
-        return f'PascalString({prefix}, "utf8")' if kind == "string" else f"Prefixed({prefix}, GreedyBytes)"
-    if kind == "values":
-        return "GreedyBytes  # typed values: rtde_spec.primary.values"
-    if kind == "switch":
-        cases = []
-        for value, case in (fld.cases or {}).items():
-            if isinstance(case, CaseSpec):
-                cases.append(f'{value}: PascalString({c[prims[case.length or ""].struct]}, "utf8")')
-            else:
-                cases.append(f"{value}: {c[prims[case].struct]}")
-        return f"Switch(this.{fld.switch}, {{{', '.join(cases)}}})"
-    inner = _struct_body(fld.fields or [], prims, indent + "    ")
-    if kind == "optional":
-        return f"If(this.{fld.when}, Struct(\n{inner}{indent}))"
-    if isinstance(fld.repeat, int):
-        return f"Array({fld.repeat}, Struct(\n{inner}{indent}))"
-    return f"GreedyRange(Struct(\n{inner}{indent}))"
-
-
-def _struct_body(fields: list[LayoutField], prims: dict[str, Primitive], indent: str) -> str:
-    return "".join(f'{indent}"{f.name}" / {_construct(f, prims, indent)},\n' for f in fields)
-
-
 def emit_primary_structs(spec: Spec) -> str:
     prims = prims_of(spec)
     pf = spec.primary
-    header = _struct_body([LayoutField(name=h.name, type=h.type) for h in pf.header], prims, "    ")
-    sub = _struct_body([LayoutField(name=h.name, type=h.type) for h in pf.subpackage_header], prims, "    ")
+    header = struct_body([LayoutField(name=h.name, type=h.type) for h in pf.header], prims, "    ")
+    sub = struct_body([LayoutField(name=h.name, type=h.type) for h in pf.subpackage_header], prims, "    ")
     out = [
         PY_HEADER,
         '"""construct structs of the primary interface: one per sub-package or tagged message.\n\n'
@@ -210,7 +173,7 @@ def emit_primary_structs(spec: Spec) -> str:
     out.append(f"\nSUBPACKAGE_HEADER = Struct(\n{sub})\n")
     for fam in pf.families:
         for member in fam.members:
-            body = _struct_body([*fam.prefix, *member.fields], prims, "    ")
+            body = struct_body([*fam.prefix, *member.fields], prims, "    ")
             out.append(f"\n{upper(fam.name)}_{upper(member.name)} = Struct(\n{body})\n")
     out += [_whole_message(fam, pf.header, pf.subpackage_header, prims) for fam in pf.families]
     return "".join(out)
@@ -236,7 +199,7 @@ def _whole_message(
             f'"body" / FixedSized(this.size - {sub_head}, {switch})))'
         )
     else:
-        prefix = _struct_body(fam.prefix, prims, "            ")
+        prefix = struct_body(fam.prefix, prims, "            ")
         cases = ", ".join(f"{m.type}: {name}_{upper(m.name)}" for m in fam.members)
         body = (
             f'Struct(\n        "prefix" / Peek(Struct(\n{prefix}        )),\n'

@@ -6,39 +6,13 @@ senders (e.g. the text message of protocol 1 differs by sender).
 
 from __future__ import annotations
 
+import re
+
 from rtde_spec.spec.schema import MessageSpec, PackageField, Primitive, Spec
 
+from .emit_construct import CONSTRUCT_BY_STRUCT, prims_of, struct_body
 from .emit_types import scalar_annotation
 from .render import PY_HEADER, camel, docstring, field_description, upper
-
-#: construct's name for each struct format character of spec/common/primitives.yaml
-CONSTRUCT_BY_STRUCT = {
-    "?": "Flag",
-    "B": "Int8ub",
-    "b": "Int8sb",
-    "H": "Int16ub",
-    "h": "Int16sb",
-    "I": "Int32ub",
-    "i": "Int32sb",
-    "Q": "Int64ub",
-    "q": "Int64sb",
-    "f": "Float32b",
-    "d": "Float64b",
-}
-
-
-def prims_of(spec: Spec) -> dict[str, Primitive]:
-    return {p.name: p for p in spec.primitives.primitives}
-
-
-def _construct(fld: PackageField, prims: dict[str, Primitive]) -> str:
-    if fld.type == "bytes":
-        return "GreedyBytes"
-    if fld.type == "string":
-        if fld.length == "uint8":
-            return f'PascalString({CONSTRUCT_BY_STRUCT[prims["uint8"].struct]}, "ascii")'
-        return "csv_string()" if fld.format == "csv" else 'GreedyString("ascii")'
-    return CONSTRUCT_BY_STRUCT[prims[fld.type].struct]
 
 
 def _annotation(fld: PackageField, prims: dict[str, Primitive]) -> str:
@@ -52,13 +26,16 @@ def _annotation(fld: PackageField, prims: dict[str, Primitive]) -> str:
     return scalar_annotation(prim.kind, prim.bounds)
 
 
-def _layout(fld: PackageField, prims: dict[str, Primitive]) -> str:
-    text = fld.type == "string"
-    if fld.length == "rest":
-        return f"FieldLayout({fld.name!r}, 'rest', 0, {text})"
-    if fld.length == "uint8":
-        return f"FieldLayout({fld.name!r}, 'prefixed', {prims['uint8'].size}, {text})"
-    return f"FieldLayout({fld.name!r}, 'fixed', {prims[fld.type].size})"
+CONSTRUCT_NAMES = (
+    "Array",
+    "GreedyBytes",
+    "GreedyRange",
+    "GreedyString",
+    "If",
+    "PascalString",
+    "Prefixed",
+    "Switch",
+)
 
 
 def emit_rtde_structs(spec: Spec) -> str:
@@ -74,10 +51,10 @@ def emit_rtde_structs(spec: Spec) -> str:
     used = {"Struct"}
     bodies: list[str] = []
     for msg in pk.messages:
-        parts = [f'    "{fld.name}" / {_construct(fld, prims)},\n' for fld in msg.fields]
+        parts = [struct_body([fld], prims, "    ", "ascii") for fld in msg.fields]
         for part in parts:
             used.update(n for n in CONSTRUCT_BY_STRUCT.values() if n in part)
-            used.update(n for n in ("GreedyBytes", "GreedyString", "PascalString") if n in part)
+            used.update(n for n in CONSTRUCT_NAMES if re.search(rf"\b{n}\b", part))
         body = f"\n{upper(msg.name)} = Struct(\n{''.join(parts)})\n"
         body += docstring(msg.doc or msg.name, indent="")
         bodies.append(body)
@@ -138,8 +115,7 @@ def _model(msg: MessageSpec, spec: Spec, prims: dict[str, Primitive]) -> str:
         leading.append(prims[fld.type].struct)
     fixed = order_of(spec.packages.byte_order) + "".join(leading)
     out.append(f"    FIXED_FORMAT: ClassVar[str] = {fixed!r}  # leading fixed fields\n")
-    layout = "".join(f"        {_layout(f, prims)},\n" for f in msg.fields)
-    out.append(f"    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (\n{layout}    )\n")
+    out.append(f"    FIELDS: ClassVar[tuple[str, ...]] = {tuple(f.name for f in msg.fields)!r}\n")
     if msg.fields:
         out.append("\n")
     for fld in msg.fields:
@@ -159,7 +135,7 @@ def emit_rtde_models(spec: Spec) -> str:
         "from construct import Construct\n",
         "from pydantic import Field\n\n",
         "from rtde_spec._generated import rtde_structs as structs\n",
-        "from rtde_spec.rtde.messages import FieldLayout, RtdeMessage\n",
+        "from rtde_spec.rtde.messages import RtdeMessage\n",
         "{model_types_import}",
         f"PORT = {pk.port}\n",
         f"HEADER_FORMAT = {header_format(spec)!r}\n",

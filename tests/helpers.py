@@ -10,6 +10,7 @@ import yaml
 from rtde_spec._generated import rtde_models as gen
 from rtde_spec._generated import rtde_structs
 from rtde_spec.rtde.codec import decode, encode, message_by_name
+from rtde_spec.rtde.layouts import layouts
 from rtde_spec.rtde.messages import RtdeMessage
 
 DATA = Path(__file__).parent / "data"
@@ -24,9 +25,9 @@ def expected_values(package: str, fields: dict[str, Any]) -> dict[str, Any]:
     """Golden field values as the model holds them (bytes fields are hex in YAML)."""
     cls = message_by_name(package)
     out = {}
-    for lay in cls.LAYOUT:
-        value = fields[lay.name]
-        out[lay.name] = bytes.fromhex(value) if lay.kind == "rest" and not lay.text else value
+    for fld in layouts()[cls.NAME].fields:
+        value = fields[fld.name]
+        out[fld.name] = bytes.fromhex(value) if fld.kind == "bytes" else value
     return out
 
 
@@ -44,7 +45,7 @@ def assert_package(data: bytes, message: RtdeMessage, sender: str, protocol: int
     assert cls.STRUCT.build(values) == body
     parsed = cls.STRUCT.parse(body)
     assert {k: parsed[k] for k in values} == values
-    if all(lay.kind == "fixed" for lay in cls.LAYOUT):
+    if layouts()[cls.NAME].fixed_size is not None:
         assert cls.STRUCT.sizeof() == len(body)
     whole = getattr(rtde_structs, f"{cls.NAME.upper()}_PACKAGE")
     assert whole.build({"body": values}) == data

@@ -37,5 +37,5 @@ def test_every_type_sender_protocol_has_exactly_one_layout() -> None:
 
 
 def test_protocol_1_text_message_layout_depends_on_sender() -> None:
-    assert message_by_name("text_message_v1_controller").LAYOUT[0].name == "message_type"
-    assert message_by_name("text_message_v1_client").LAYOUT[0].name == "message"
+    assert message_by_name("text_message_v1_controller").FIELDS[0] == "message_type"
+    assert message_by_name("text_message_v1_client").FIELDS[0] == "message"

@@ -7,7 +7,7 @@ from construct import Construct
 from pydantic import Field
 
 from rtde_spec._generated import rtde_structs as structs
-from rtde_spec.rtde.messages import FieldLayout, RtdeMessage
+from rtde_spec.rtde.messages import RtdeMessage
 from rtde_spec.wire.model_types import AsciiStr, CsvItem, ShortAsciiStr
 
 PORT = 30004
@@ -46,9 +46,7 @@ class RequestProtocolVersion(RtdeMessage):
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>H'  # leading fixed fields
-    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
-        FieldLayout('protocol_version', 'fixed', 2),
-    )
+    FIELDS: ClassVar[tuple[str, ...]] = ('protocol_version',)
 
     protocol_version: Annotated[Annotated[int, Field(ge=0, le=65535)], Field(description='Requested protocol version')]
 
@@ -69,9 +67,7 @@ class RequestProtocolVersionReply(RtdeMessage):
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>?'  # leading fixed fields
-    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
-        FieldLayout('accepted', 'fixed', 1),
-    )
+    FIELDS: ClassVar[tuple[str, ...]] = ('accepted',)
 
     accepted: Annotated[bool, Field(description='1 (success) or 0 (failed)')]
 
@@ -92,8 +88,7 @@ class GetUrcontrolVersion(RtdeMessage):
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
-    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
-    )
+    FIELDS: ClassVar[tuple[str, ...]] = ()
 
 
 class GetUrcontrolVersionReply(RtdeMessage):
@@ -112,12 +107,7 @@ class GetUrcontrolVersionReply(RtdeMessage):
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>IIII'  # leading fixed fields
-    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
-        FieldLayout('major', 'fixed', 4),
-        FieldLayout('minor', 'fixed', 4),
-        FieldLayout('bugfix', 'fixed', 4),
-        FieldLayout('build', 'fixed', 4),
-    )
+    FIELDS: ClassVar[tuple[str, ...]] = ('major', 'minor', 'bugfix', 'build')
 
     major: Annotated[Annotated[int, Field(ge=0, le=4294967295)], Field(description='Major version of the controller software (5 on an e-Series)')]
     minor: Annotated[Annotated[int, Field(ge=0, le=4294967295)], Field(description='Minor version of the controller software')]
@@ -141,10 +131,7 @@ class TextMessageV1Controller(RtdeMessage):
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {'message_type': 'TextMessageLevel'}
     FIXED_FORMAT: ClassVar[str] = '>B'  # leading fixed fields
-    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
-        FieldLayout('message_type', 'fixed', 1),
-        FieldLayout('message', 'rest', 0, True),
-    )
+    FIELDS: ClassVar[tuple[str, ...]] = ('message_type', 'message')
 
     message_type: Annotated[Annotated[int, Field(ge=0, le=255)], Field(description='Severity (values: TextMessageLevel)')]
     message: Annotated[AsciiStr, Field(description='The text, to the end of the package')]
@@ -166,11 +153,7 @@ class TextMessageV1Client(RtdeMessage):
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {'warning_level': 'TextMessageLevel'}
     FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
-    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
-        FieldLayout('message', 'prefixed', 1, True),
-        FieldLayout('source', 'prefixed', 1, True),
-        FieldLayout('warning_level', 'fixed', 1),
-    )
+    FIELDS: ClassVar[tuple[str, ...]] = ('message', 'source', 'warning_level')
 
     message: Annotated[ShortAsciiStr, Field(description='The text, after its length')]
     source: Annotated[ShortAsciiStr, Field(description="Who sends it (e.g. the client's name), after its length")]
@@ -193,11 +176,7 @@ class TextMessage(RtdeMessage):
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {'warning_level': 'TextMessageLevel'}
     FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
-    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
-        FieldLayout('message', 'prefixed', 1, True),
-        FieldLayout('source', 'prefixed', 1, True),
-        FieldLayout('warning_level', 'fixed', 1),
-    )
+    FIELDS: ClassVar[tuple[str, ...]] = ('message', 'source', 'warning_level')
 
     message: Annotated[ShortAsciiStr, Field(description='The text, after its length')]
     source: Annotated[ShortAsciiStr, Field(description="Who sends it (e.g. the client's name), after its length")]
@@ -220,10 +199,7 @@ class DataPackage(RtdeMessage):
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>B'  # leading fixed fields
-    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
-        FieldLayout('recipe_id', 'fixed', 1),
-        FieldLayout('payload', 'rest', 0, False),
-    )
+    FIELDS: ClassVar[tuple[str, ...]] = ('recipe_id', 'payload')
 
     recipe_id: Annotated[Annotated[int, Field(ge=0, le=255)], Field(description='The recipe whose layout the payload has (from its setup reply)')]
     payload: Annotated[bytes, Field(description='Recipe variables, big-endian, in recipe order')]
@@ -245,9 +221,7 @@ class SetupOutputsV1(RtdeMessage):
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
-    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
-        FieldLayout('variable_names', 'rest', 0, True),
-    )
+    FIELDS: ClassVar[tuple[str, ...]] = ('variable_names',)
 
     variable_names: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='Output variable names, comma separated')]
 
@@ -268,9 +242,7 @@ class SetupOutputsV1Reply(RtdeMessage):
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
-    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
-        FieldLayout('variable_types', 'rest', 0, True),
-    )
+    FIELDS: ClassVar[tuple[str, ...]] = ('variable_types',)
 
     variable_types: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='One type per requested name, in order, comma separated (NOT_FOUND or IN_USE where refused)')]
 
@@ -291,10 +263,7 @@ class SetupOutputsV2(RtdeMessage):
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>d'  # leading fixed fields
-    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
-        FieldLayout('output_frequency', 'fixed', 8),
-        FieldLayout('variable_names', 'rest', 0, True),
-    )
+    FIELDS: ClassVar[tuple[str, ...]] = ('output_frequency', 'variable_names')
 
     output_frequency: Annotated[float, Field(description="Output frequency, 1 up to the controller's maximum (125 Hz on CB3, 500 Hz on e-Series) [Hz]")]
     variable_names: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='Output variable names, comma separated')]
@@ -316,10 +285,7 @@ class SetupOutputsV2Reply(RtdeMessage):
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>B'  # leading fixed fields
-    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
-        FieldLayout('output_recipe_id', 'fixed', 1),
-        FieldLayout('variable_types', 'rest', 0, True),
-    )
+    FIELDS: ClassVar[tuple[str, ...]] = ('output_recipe_id', 'variable_types')
 
     output_recipe_id: Annotated[Annotated[int, Field(ge=0, le=255)], Field(description='The id data packages of this recipe carry; 0 when the recipe is invalid')]
     variable_types: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='One type per requested name, in order, comma separated (NOT_FOUND or IN_USE where refused)')]
@@ -341,9 +307,7 @@ class SetupInputs(RtdeMessage):
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
-    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
-        FieldLayout('variable_names', 'rest', 0, True),
-    )
+    FIELDS: ClassVar[tuple[str, ...]] = ('variable_names',)
 
     variable_names: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='Input variable names, comma separated')]
 
@@ -364,10 +328,7 @@ class SetupInputsReply(RtdeMessage):
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>B'  # leading fixed fields
-    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
-        FieldLayout('input_recipe_id', 'fixed', 1),
-        FieldLayout('variable_types', 'rest', 0, True),
-    )
+    FIELDS: ClassVar[tuple[str, ...]] = ('input_recipe_id', 'variable_types')
 
     input_recipe_id: Annotated[Annotated[int, Field(ge=0, le=255)], Field(description='The id to send data packages of this recipe with; 0 when the recipe is invalid')]
     variable_types: Annotated[Annotated[list[CsvItem], Field(min_length=1)], Field(description='One type per requested name, in order, comma separated (NOT_FOUND or IN_USE where refused)')]
@@ -389,8 +350,7 @@ class Start(RtdeMessage):
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
-    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
-    )
+    FIELDS: ClassVar[tuple[str, ...]] = ()
 
 
 class StartReply(RtdeMessage):
@@ -406,9 +366,7 @@ class StartReply(RtdeMessage):
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>?'  # leading fixed fields
-    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
-        FieldLayout('accepted', 'fixed', 1),
-    )
+    FIELDS: ClassVar[tuple[str, ...]] = ('accepted',)
 
     accepted: Annotated[bool, Field(description='1 (success) or 0 (failed)')]
 
@@ -429,8 +387,7 @@ class Pause(RtdeMessage):
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>'  # leading fixed fields
-    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
-    )
+    FIELDS: ClassVar[tuple[str, ...]] = ()
 
 
 class PauseReply(RtdeMessage):
@@ -449,9 +406,7 @@ class PauseReply(RtdeMessage):
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
     FIXED_FORMAT: ClassVar[str] = '>?'  # leading fixed fields
-    LAYOUT: ClassVar[tuple[FieldLayout, ...]] = (
-        FieldLayout('accepted', 'fixed', 1),
-    )
+    FIELDS: ClassVar[tuple[str, ...]] = ('accepted',)
 
     accepted: Annotated[bool, Field(description='Always 1 (success)')]
 

@@ -7,9 +7,8 @@ imports them back; it runs the same layout engine as decoding.
 from __future__ import annotations
 
 import struct
-from dataclasses import dataclass
 from functools import cache
-from typing import TYPE_CHECKING, Any, ClassVar, Literal
+from typing import TYPE_CHECKING, Any, ClassVar
 
 from pydantic import BaseModel, ConfigDict, ValidationError
 
@@ -19,20 +18,6 @@ from rtde_spec.wire.pydantic_errors import encode_error
 
 if TYPE_CHECKING:
     from construct import Construct
-
-
-@dataclass(frozen=True)
-class FieldLayout:
-    """How one package field sits on the wire, so errors can name its byte offset.
-
-    kind: fixed (a primitive of `size` bytes), prefixed (a uint8 length, then the
-    bytes), rest (everything up to the end of the package).
-    """
-
-    name: str
-    kind: Literal["fixed", "prefixed", "rest"]
-    size: int
-    text: bool = False
 
 
 class RtdeMessage(BaseModel):
@@ -46,7 +31,7 @@ class RtdeMessage(BaseModel):
     SENDERS: ClassVar[tuple[str, ...]]
     PROTOCOLS: ClassVar[tuple[int, ...]]
     STRUCT: ClassVar[Construct]
-    LAYOUT: ClassVar[tuple[FieldLayout, ...]]
+    FIELDS: ClassVar[tuple[str, ...]]  # field names in wire order; the layout is the spec's (rtde/layouts.py)
     ENUMS: ClassVar[dict[str, str]]  # field name -> enum name in spec/
     FIXED_FORMAT: ClassVar[str]  # struct format of the leading fixed-size fields
     HEADER_FORMAT: ClassVar[str]  # struct format of the header (size, type)
@@ -62,7 +47,7 @@ class RtdeMessage(BaseModel):
     def to_bytes(self) -> bytes:
         """The whole package, header included."""
         cls = type(self)
-        values: dict[str, Any] = {lay.name: getattr(self, lay.name) for lay in cls.LAYOUT}
+        values: dict[str, Any] = {name: getattr(self, name) for name in cls.FIELDS}
         # models built with model_construct skip validation; check again here
         cls(**values)
         try:
@@ -83,7 +68,7 @@ class RtdeMessage(BaseModel):
 
     def fields(self) -> dict[str, object]:
         """Field values keyed by the spec's field names, in wire order."""
-        return {layout.name: getattr(self, layout.name) for layout in self.LAYOUT}
+        return {name: getattr(self, name) for name in self.FIELDS}
 
 
 @cache
