@@ -7,6 +7,7 @@ from itertools import groupby
 from rtde_spec.spec.catalogue import Catalogue, FieldInfo
 from rtde_spec.spec.schema import FieldSpec, MessageSpec, Spec
 
+from .layout_docs import header_rows, layout_rows
 from .render import MD_HEADER, md_table
 
 
@@ -116,32 +117,9 @@ def emit_fields_doc(spec: Spec, cat: Catalogue) -> str:
 
 def _layout_rows(msg: MessageSpec, spec: Spec) -> list[list[object]]:
     prims = {p.name: p for p in spec.primitives.primitives}
-    rows: list[list[object]] = []
-    offset: int | str = 0
-    for h in spec.packages.header:
-        rows.append([offset, h.name, h.type, prims[h.type].size, h.doc or ""])
-        assert isinstance(offset, int)
-        offset += prims[h.type].size
-    for fld in msg.fields:
-        meaning = fld.doc or ""
-        if fld.enum:
-            meaning += f" Values: [{fld.enum}](enums.md#{fld.enum.lower()})."
-        if fld.unit:
-            meaning += f" [{fld.unit}]"
-        if fld.length == "rest":
-            kind = f"{fld.type} (to end{', comma-separated' if fld.format == 'csv' else ''})"
-            rows.append([offset, fld.name, kind, "size − offset", meaning.strip()])
-            offset = "—"
-        elif fld.length == "uint8":
-            rows.append([offset, f"{fld.name} (length)", "uint8", 1, f"Length of {fld.name}"])
-            start = offset + 1 if isinstance(offset, int) else offset
-            rows.append([start, fld.name, "string", "length", meaning.strip()])
-            offset = f"{start} + length" if isinstance(start, int) else "after " + fld.name
-        else:
-            size = prims[fld.type].size
-            rows.append([offset, fld.name, fld.type, size, meaning.strip()])
-            offset = offset + size if isinstance(offset, int) else f"after {fld.name}"
-    return rows
+    head = header_rows(spec.packages.header, prims)
+    body, _ = layout_rows(msg.fields, prims, sum(prims[h.type].size for h in spec.packages.header))
+    return head + body
 
 
 def emit_packages_doc(spec: Spec) -> str:
