@@ -5,42 +5,11 @@ from __future__ import annotations
 
 from typing import Any
 
-from rtde_spec.spec.schema import CaseSpec, FamilySpec, LayoutField, MemberSpec, Primitive, Spec
+from rtde_spec.spec.schema import FamilySpec, LayoutField, MemberSpec, Primitive, Spec
 
 from .emit_construct import CONSTRUCT_BY_STRUCT, prims_of, struct_body
-from .emit_types import scalar_annotation
-from .render import PY_HEADER, camel, docstring, field_description, upper
-
-
-def _case_annotation(case: str | CaseSpec, prims: dict[str, Primitive]) -> str:
-    if isinstance(case, CaseSpec):
-        return "str"
-    prim = prims[case]
-    return {"int": "int", "float": "float", "bool": "bool"}[prim.kind]
-
-
-def _annotation(fld: LayoutField, prims: dict[str, Primitive]) -> str:
-    kind = fld.kind
-    if kind == "value":
-        prim = prims[fld.type or ""]
-        one = scalar_annotation(prim.kind, prim.bounds)
-        if fld.count:
-            return f"Annotated[tuple[{one}, ...], Field(min_length={fld.count}, max_length={fld.count})]"
-        return one
-    if kind == "string":
-        return "list[str]" if fld.format else "str"
-    if kind == "bytes":
-        return "bytes"
-    if kind == "values":
-        return "list[VariableValue]"
-    if kind == "switch":
-        options = sorted({_case_annotation(c, prims) for c in (fld.cases or {}).values()})
-        return " | ".join(options)
-    if kind == "optional":
-        return f"{fld.group}"
-    if isinstance(fld.repeat, int):
-        return f"Annotated[tuple[{fld.group}, ...], Field(min_length={fld.repeat}, max_length={fld.repeat})]"
-    return f"list[{fld.group}]"
+from .model_fields import field_lines
+from .render import PY_HEADER, camel, docstring, upper
 
 
 def _groups(fields: list[LayoutField], out: list[tuple[str, list[LayoutField], str | None]]) -> None:
@@ -48,27 +17,6 @@ def _groups(fields: list[LayoutField], out: list[tuple[str, list[LayoutField], s
         if fld.fields is not None:
             _groups(fld.fields, out)  # inner groups first: they are referenced
             out.append((fld.group or "", fld.fields, fld.doc))
-
-
-def _field_lines(
-    fields: list[LayoutField],
-    prims: dict[str, Primitive],
-    optional: bool,
-    defaults: dict[str, int] | None = None,
-) -> list[str]:
-    lines = []
-    for fld in fields:
-        ann = _annotation(fld, prims)
-        desc = field_description(fld.doc, fld.enum, fld.unit)
-        if optional:
-            default = (defaults or {}).get(fld.name)
-            lines.append(
-                f"    {fld.name}: Annotated[{ann} | None, Field(description={desc!r})] = "
-                f"{default if default is not None else 'None'}\n"
-            )
-        else:
-            lines.append(f"    {fld.name}: Annotated[{ann}, Field(description={desc!r})]\n")
-    return lines
 
 
 def _member_class(
@@ -85,7 +33,7 @@ def _member_class(
     enums = {f.name: f.enum for f in [*prefix, *member.fields] if f.enum}
     out.append(f"    ENUMS: ClassVar[dict[str, str]] = {enums!r}\n\n")
     defaults = {tag: member.type} if tag else {}
-    out += _field_lines([*prefix, *member.fields], prims, optional=True, defaults=defaults)
+    out += field_lines([*prefix, *member.fields], prims, optional=True, defaults=defaults)
     return "".join(out)
 
 
@@ -117,7 +65,7 @@ def emit_primary_models(spec: Spec) -> str:
         out.append(f"\n    NAME: ClassVar[str] = {name!r}\n")
         enums = {f.name: f.enum for f in fields if f.enum}
         out.append(f"    ENUMS: ClassVar[dict[str, str]] = {enums!r}\n\n")
-        out += _field_lines(fields, prims, optional=False)
+        out += field_lines(fields, prims, optional=False)
     registry = []
     for fam in pf.families:
         for member in fam.members:

@@ -8,23 +8,11 @@ from __future__ import annotations
 
 import re
 
-from rtde_spec.spec.schema import MessageSpec, PackageField, Primitive, Spec
+from rtde_spec.spec.schema import MessageSpec, Primitive, Spec
 
 from .emit_construct import CONSTRUCT_BY_STRUCT, prims_of, struct_body
-from .emit_types import scalar_annotation
-from .render import PY_HEADER, camel, docstring, field_description, upper
-
-
-def _annotation(fld: PackageField, prims: dict[str, Primitive]) -> str:
-    if fld.type == "bytes":
-        return "bytes"
-    if fld.type == "string":
-        if fld.format == "csv":
-            return "Annotated[list[CsvItem], Field(min_length=1)]"
-        return "ShortAsciiStr" if fld.length == "uint8" else "AsciiStr"
-    prim = prims[fld.type]
-    return scalar_annotation(prim.kind, prim.bounds)
-
+from .model_fields import field_lines
+from .render import PY_HEADER, camel, docstring, upper
 
 CONSTRUCT_NAMES = (
     "Array",
@@ -118,10 +106,7 @@ def _model(msg: MessageSpec, spec: Spec, prims: dict[str, Primitive]) -> str:
     out.append(f"    FIELDS: ClassVar[tuple[str, ...]] = {tuple(f.name for f in msg.fields)!r}\n")
     if msg.fields:
         out.append("\n")
-    for fld in msg.fields:
-        desc = field_description(fld.doc, fld.enum, fld.unit)
-        ann = _annotation(fld, prims)
-        out.append(f"    {fld.name}: Annotated[{ann}, Field(description={desc!r})]\n")
+    out += field_lines(msg.fields, prims, optional=False, text="ascii")
     return "".join(out)
 
 
