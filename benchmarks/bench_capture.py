@@ -23,7 +23,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
-from bench_decode_file import make_file  # noqa: E402
+from bench_decode_file import PEAK_MB, make_file  # noqa: E402
 from bench_recipe_decode import UR_RTDE_DEFAULT_OUTPUTS  # noqa: E402
 
 from rtde_spec import Catalogue, RecipeCodec, build  # noqa: E402
@@ -31,13 +31,13 @@ from rtde_spec.capture.decoder import decode_to_directory  # noqa: E402
 from tests.capture_files import Conversation, write  # noqa: E402
 
 TARGET = 300_000
-CHILD = """
-import json, resource, sys, time
+CHILD = PEAK_MB + """
+import json, sys, time
 from rtde_spec.capture.decoder import decode_to_directory
 start = time.perf_counter()
 summary = decode_to_directory(sys.argv[1], sys.argv[2], "parquet")
 print(json.dumps({"seconds": time.perf_counter() - start, "rows": summary.tables.get("rtde_outputs_1", 0),
-                  "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
+                  "peak_mb": peak_mb()}))
 """
 
 

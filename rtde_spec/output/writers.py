@@ -25,6 +25,7 @@ from rtde_spec.output.text import safe_text, table
 FORMATS = ("table", "jsonl", "json", "csv", "parquet")
 TABULAR = ("csv", "parquet")
 _PARQUET_BATCH_ROWS = 16384
+_JSON_SLICE_ROWS = 2048
 
 
 def plain(value: Any) -> Any:
@@ -151,8 +152,11 @@ class JsonLinesWriter(Writer):
 
     def write_columns(self, columns: Mapping[str, Any]) -> None:
         if jsonlines.fits(columns):
-            self.stream.write(self._lines(columns))
-            self.rows += len(next(iter(columns.values())))
+            rows = len(next(iter(columns.values())))
+            for start in range(0, rows, _JSON_SLICE_ROWS):  # ~4 kB of text a row: bounded pieces
+                piece = {n: c[start : start + _JSON_SLICE_ROWS] for n, c in columns.items()}
+                self.stream.write(self._lines(piece))
+            self.rows += rows
             return
         names = list(columns)
         lists = [_native(columns[n]).tolist() for n in names]  # C-speed conversion, native order first
