@@ -82,19 +82,30 @@ def decode_capture(
     cat = catalogue or Catalogue.default()
     stats: dict[str, int] = {}
     flows: dict[frozenset[tuple[str, int]], _Flow | None] = {}
+    # (src, sport, dst, dport) -> (flow, sender, its direction): one lookup per segment
+    routes: dict[tuple[str, int, str, int], tuple[_Flow, str, Direction] | None] = {}
     for seg in segments(path, stats, progress):
-        key = frozenset({(seg.src, seg.sport), (seg.dst, seg.dport)})
-        if key in flows:
-            flow = flows[key]
-        else:
-            flow = _classify(seg, sink, recipe, rtde_ports, primary_ports, cat)
-            if flow is None and not seg.payload:
-                continue  # a handshake segment on an unknown port: decide on the first data
-            flows[key] = flow
-        if flow is None:
+        route_key = seg[1:5]
+        route = routes.get(route_key, False)
+        if route is False:
+            key = frozenset({(seg.src, seg.sport), (seg.dst, seg.dport)})
+            if key in flows:
+                flow = flows[key]
+            else:
+                flow = _classify(seg, sink, recipe, rtde_ports, primary_ports, cat)
+                if flow is None and not seg.payload:
+                    continue  # a handshake segment on an unknown port: decide on the first data
+                flows[key] = flow
+            if flow is None:
+                route = None
+            else:
+                sender = "client" if (seg.src, seg.sport) == flow.client else "controller"
+                route = (flow, sender, flow.directions[sender])
+            routes[route_key] = route
+        if route is None:
             continue
-        sender = "client" if (seg.src, seg.sport) == flow.client else "controller"
-        for chunk in flow.directions[sender].feed(seg.time, seg.seq, seg.payload, syn=bool(seg.flags & SYN)):
+        flow, sender, direction = route
+        for chunk in direction.feed(seg.time, seg.seq, seg.payload, syn=bool(seg.flags & SYN)):
             flow.decoder.feed(sender, chunk)
     summary = CaptureSummary(str(path), stats.get("frames", 0))
     for flow in (f for f in flows.values() if f is not None):

@@ -1,24 +1,28 @@
-"""TCP segments out of pcap and pcapng files, through dpkt.
+"""TCP segments out of pcap and pcapng files, headers read with `struct`.
 
-Link types: Ethernet, Linux cooked (SLL and SLL2), BSD loopback/null and raw IP;
-IPv4 and IPv6. Anything else is counted, not decoded.
+Link types: Ethernet (with 802.1Q/802.1ad tags), Linux cooked (SLL and SLL2), BSD
+loopback/null and raw IP; IPv4 (not fragmented) and IPv6 (hop-by-hop, routing and
+destination options skipped). Anything else is counted, not decoded.
 """
 
 from __future__ import annotations
 
 import socket
+import struct
 from collections.abc import Callable, Iterator
-from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import NamedTuple
 
-from rtde_spec.errors import UsageError, require
+from rtde_spec.capture.pcapfile import frames
 
 FIN, SYN, RST = 0x01, 0x02, 0x04
+IPV4, IPV6, VLAN = 0x0800, 0x86DD, (0x8100, 0x88A8)
+TCP = 6
+IPV6_OPTION_HEADERS = {0, 43, 60}  # hop-by-hop, routing, destination options: skipped over
+_TCP = struct.Struct(">HHI4xBB")  # ports, seq, (ack), data offset byte, flags
 
 
-@dataclass(frozen=True)
-class Segment:
+class Segment(NamedTuple):
     time: float
     src: str
     sport: int
@@ -29,56 +33,92 @@ class Segment:
     payload: bytes
 
 
-def _ip_of(dpkt: Any, linktype: int, frame: bytes) -> Any:
+def _ip_start(linktype: int, frame: bytes) -> tuple[int, int] | None:
+    """(ethertype-like IP version tag, offset of the IP header) of a frame; None for other traffic."""
     if linktype == 1:  # Ethernet
-        return dpkt.ethernet.Ethernet(frame).data
-    if linktype == 113:  # Linux cooked v1
-        return dpkt.sll.SLL(frame).data
-    if linktype == 276:  # Linux cooked v2
-        return dpkt.sll2.SLL2(frame).data
+        at, ethertype = 12, int.from_bytes(frame[12:14], "big")
+        while ethertype in VLAN:
+            at += 4
+            ethertype = int.from_bytes(frame[at : at + 2], "big")
+        return ethertype, at + 2
+    if linktype == 113:  # Linux cooked v1: protocol at 14, IP at 16
+        return int.from_bytes(frame[14:16], "big"), 16
+    if linktype == 276:  # Linux cooked v2: protocol at 0, IP at 20
+        return int.from_bytes(frame[0:2], "big"), 20
     if linktype in (0, 108):  # BSD loopback / OpenBSD loop: a 4-byte family, then IP
-        version = frame[4] >> 4 if len(frame) > 4 else 0
-        return (dpkt.ip.IP if version == 4 else dpkt.ip6.IP6)(frame[4:])
-    if linktype in (101, 12, 14):  # raw IP
-        return (dpkt.ip.IP if frame[0] >> 4 == 4 else dpkt.ip6.IP6)(frame)
+        return (IPV4 if len(frame) > 4 and frame[4] >> 4 == 4 else IPV6), 4
+    if linktype in (101, 12, 14, 228, 229):  # raw IP
+        return (IPV4 if frame and frame[0] >> 4 == 4 else IPV6), 0
     return None
+
+
+def _tcp_of(linktype: int, frame: bytes, addresses: dict[bytes, str]) -> tuple[str, str, int, int] | None:
+    """(src, dst, TCP header offset, end of the TCP segment); None when the frame is not TCP."""
+    start = _ip_start(linktype, frame)
+    if start is None:
+        return None
+    kind, at = start
+    if kind == IPV4:
+        if len(frame) < at + 20 or frame[at] >> 4 != 4:
+            return None
+        if frame[at + 9] != TCP:
+            return None
+        if int.from_bytes(frame[at + 6 : at + 8], "big") & 0x3FFF:  # more fragments, or an offset
+            return None
+        end = min(len(frame), at + int.from_bytes(frame[at + 2 : at + 4], "big"))  # not the padding
+        src, dst, family = frame[at + 12 : at + 16], frame[at + 16 : at + 20], socket.AF_INET
+        tcp = at + (frame[at] & 0x0F) * 4
+    elif kind == IPV6:
+        if len(frame) < at + 40 or frame[at] >> 4 != 6:
+            return None
+        end = min(len(frame), at + 40 + int.from_bytes(frame[at + 4 : at + 6], "big"))
+        src, dst, family = frame[at + 8 : at + 24], frame[at + 24 : at + 40], socket.AF_INET6
+        nxt, tcp = frame[at + 6], at + 40
+        while nxt in IPV6_OPTION_HEADERS and tcp + 2 <= end:
+            nxt, tcp = frame[tcp], tcp + (frame[tcp + 1] + 1) * 8
+        if nxt != TCP:
+            return None
+    else:
+        return None
+    if tcp + 20 > end:
+        return None
+    for raw in (src, dst):
+        if raw not in addresses:
+            addresses[raw] = socket.inet_ntop(family, raw)
+    return addresses[src], addresses[dst], tcp, end
 
 
 def segments(
     path: str | Path, stats: dict[str, int] | None = None, progress: Callable[[int], None] | None = None
 ) -> Iterator[Segment]:
     """Every TCP segment of a capture file, in file order; `progress(bytes read)` now and then."""
-    dpkt = require("dpkt", "capture", "reading captures")
     counts = stats if stats is not None else {}
+    addresses: dict[bytes, str] = {}  # raw address -> text, converted once per address
+    unpack = _TCP.unpack_from
+    frames_seen = not_tcp = undecodable = 0
     with open(path, "rb") as f:
-        magic = f.read(4)
-        f.seek(0)
         try:
-            reader = dpkt.pcapng.Reader(f) if magic == b"\x0a\x0d\x0d\x0a" else dpkt.pcap.Reader(f)
-        except (ValueError, dpkt.dpkt.NeedData) as exc:
-            raise UsageError(f"not a pcap or pcapng file ({exc})", subject=f"file {path}") from None
-        linktype = reader.datalink()
-        for ts, frame in reader:
-            counts["frames"] = counts.get("frames", 0) + 1
-            if progress is not None and counts["frames"] % 4096 == 0:
-                progress(f.tell())
-            try:
-                ip = _ip_of(dpkt, linktype, frame)
-            except (dpkt.dpkt.UnpackError, IndexError):
-                counts["undecodable"] = counts.get("undecodable", 0) + 1
-                continue
-            tcp = getattr(ip, "data", None)
-            if not isinstance(tcp, dpkt.tcp.TCP):
-                counts["not_tcp"] = counts.get("not_tcp", 0) + 1
-                continue
-            family = socket.AF_INET6 if isinstance(ip, dpkt.ip6.IP6) else socket.AF_INET
-            yield Segment(
-                float(ts),
-                socket.inet_ntop(family, ip.src),
-                tcp.sport,
-                socket.inet_ntop(family, ip.dst),
-                tcp.dport,
-                tcp.seq,
-                tcp.flags,
-                bytes(tcp.data),
-            )
+            for ts, linktype, frame in frames(f, str(path), counts):
+                frames_seen += 1
+                if progress is not None and frames_seen % 4096 == 0:
+                    progress(f.tell())
+                try:
+                    found = _tcp_of(linktype, frame, addresses)
+                except (IndexError, ValueError, OSError):
+                    undecodable += 1
+                    continue
+                if found is None:
+                    not_tcp += 1
+                    continue
+                src, dst, at, end = found
+                sport, dport, seq, offset, flags = unpack(frame, at)
+                data = at + (offset >> 4) * 4
+                if data > end:
+                    undecodable += 1
+                    continue
+                yield Segment(ts, src, sport, dst, dport, seq, flags, frame[data:end])
+        finally:
+            counts["frames"] = counts.get("frames", 0) + frames_seen
+            for key, value in (("not_tcp", not_tcp), ("undecodable", undecodable)):
+                if value:
+                    counts[key] = counts.get(key, 0) + value

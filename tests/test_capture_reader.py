@@ -1,0 +1,116 @@
+"""The struct-based capture reader on files it must read: byte orders, time units, pcapng blocks.
+
+Frames are built by dpkt (an independent implementation); the file containers are
+packed here by hand from the pcap and pcapng formats, so each variant is exercised.
+"""
+
+from __future__ import annotations
+
+import socket
+import struct
+from pathlib import Path
+
+import dpkt
+import pytest
+
+from rtde_spec.capture.packets import segments
+from rtde_spec.errors import UsageError
+
+PAYLOAD = b"\x00\x05V\x00\x02"  # an RTDE version request
+
+
+def ip_tcp(v6: bool = False, seq: int = 7, payload: bytes = PAYLOAD) -> bytes:
+    tcp = dpkt.tcp.TCP(sport=51000, dport=30004, seq=seq, ack=1, flags=dpkt.tcp.TH_ACK, data=payload)
+    if v6:
+        src, dst = socket.inet_pton(socket.AF_INET6, "fd00::2"), socket.inet_pton(socket.AF_INET6, "fd00::10")
+        return bytes(dpkt.ip6.IP6(src=src, dst=dst, nxt=6, hlim=64, data=tcp, plen=len(bytes(tcp))))
+    return bytes(
+        dpkt.ip.IP(src=socket.inet_aton("10.0.0.2"), dst=socket.inet_aton("10.0.0.10"), p=6, data=tcp)
+    )
+
+
+def ethernet(ip: bytes, vlan: bool = False, pad: int = 0) -> bytes:
+    tag = b"\x81\x00\x00\x64" if vlan else b""
+    kind = b"\x86\xdd" if ip[0] >> 4 == 6 else b"\x08\x00"
+    return b"\x04" * 6 + b"\x02" * 6 + tag + kind + ip + b"\x00" * pad  # padding after the IP packet
+
+
+def pcap(
+    frames: list[tuple[int, int, bytes]], order: str = "<", nano: bool = False, linktype: int = 1
+) -> bytes:
+    magic = 0xA1B23C4D if nano else 0xA1B2C3D4
+    out = struct.pack(order + "IHHiIII", magic, 2, 4, 0, 0, 65535, linktype)
+    for sec, frac, frame in frames:
+        out += struct.pack(order + "IIII", sec, frac, len(frame), len(frame)) + frame
+    return out
+
+
+def block(btype: int, body: bytes, order: str = "<") -> bytes:
+    body += b"\x00" * (-len(body) % 4)
+    length = len(body) + 12
+    return struct.pack(order + "II", btype, length) + body + struct.pack(order + "I", length)
+
+
+def pcapng(order: str = "<") -> bytes:
+    shb = block(0x0A0D0D0A, struct.pack(order + "IHHq", 0x1A2B3C4D, 1, 0, -1), order)
+    idb_eth = block(1, struct.pack(order + "HHI", 1, 0, 65535), order)
+    tsresol = struct.pack(order + "HH", 9, 1) + b"\x09" + b"\x00" * 3 + struct.pack(order + "HH", 0, 0)
+    idb_raw = block(1, struct.pack(order + "HHI", 101, 0, 65535) + tsresol, order)  # nanoseconds
+    frame1 = ethernet(ip_tcp(seq=1))
+    epb1 = block(6, struct.pack(order + "IIIII", 0, 0, 1_500_000, len(frame1), len(frame1)) + frame1, order)
+    frame2 = ip_tcp(v6=True, seq=2)
+    stamp = 2_250_000_000  # 2.25 s in nanoseconds
+    epb2 = struct.pack(order + "IIIII", 1, stamp >> 32, stamp & 0xFFFFFFFF, len(frame2), len(frame2))
+    custom = block(0xBAD, b"skipped", order)
+    spb = block(3, struct.pack(order + "I", len(frame1)) + ethernet(ip_tcp(seq=3)), order)
+    return shb + idb_eth + idb_raw + epb1 + block(6, epb2 + frame2, order) + custom + spb
+
+
+def read(tmp_path: Path, data: bytes) -> tuple[list, dict[str, int]]:
+    path = tmp_path / "capture"
+    path.write_bytes(data)
+    stats: dict[str, int] = {}
+    return list(segments(path, stats)), stats
+
+
+@pytest.mark.parametrize("order", ["<", ">"])
+@pytest.mark.parametrize("nano", [False, True])
+def test_classic_pcap_in_both_byte_orders_and_time_units(tmp_path: Path, order: str, nano: bool) -> None:
+    frac = 250_000_000 if nano else 250_000
+    frames = [(100, frac, ethernet(ip_tcp(seq=9), pad=6)), (101, 0, ethernet(ip_tcp(v6=True), vlan=True))]
+    segs, stats = read(tmp_path, pcap(frames, order, nano))
+    assert stats["frames"] == 2 and "not_tcp" not in stats
+    first, second = segs
+    assert first.time == pytest.approx(100.25) and second.time == 101.0
+    assert (first.src, first.sport, first.dst, first.dport, first.seq) == (
+        "10.0.0.2",
+        51000,
+        "10.0.0.10",
+        30004,
+        9,
+    )
+    assert first.payload == PAYLOAD  # the Ethernet padding after the IP packet is not payload
+    assert (second.src, second.dst, second.payload) == ("fd00::2", "fd00::10", PAYLOAD)
+
+
+@pytest.mark.parametrize("order", ["<", ">"])
+def test_pcapng_interfaces_resolutions_and_blocks(tmp_path: Path, order: str) -> None:
+    segs, stats = read(tmp_path, pcapng(order))
+    assert [s.seq for s in segs] == [1, 2, 3] and all(s.payload == PAYLOAD for s in segs)
+    assert segs[0].time == pytest.approx(1.5)  # microseconds by default
+    assert segs[1].time == pytest.approx(2.25) and segs[1].src == "fd00::2"  # raw IPv6, nanoseconds
+    assert stats["frames"] == 3
+
+
+def test_what_is_not_tcp_is_counted_and_a_cut_record_reported(tmp_path: Path) -> None:
+    udp = bytes(dpkt.ip.IP(src=b"\x0a\0\0\x02", dst=b"\x0a\0\0\x0a", p=17, data=dpkt.udp.UDP(data=b"x")))
+    arp = b"\xff" * 12 + b"\x08\x06" + b"\x00" * 28
+    data = pcap([(1, 0, ethernet(udp)), (2, 0, arp), (3, 0, ethernet(ip_tcp()))])
+    segs, stats = read(tmp_path, data[:-10])  # the last record cut off
+    assert segs == [] and stats["not_tcp"] == 2 and stats["truncated"] == 1 and stats["frames"] == 2
+
+
+@pytest.mark.parametrize("data", [b"", b"GIF89a" + b"\0" * 40, b"\xd4\xc3\xb2\xa1\x02\x00"])
+def test_not_a_capture_is_a_usage_error(tmp_path: Path, data: bytes) -> None:
+    with pytest.raises(UsageError, match="not a pcap"):
+        read(tmp_path, data)
