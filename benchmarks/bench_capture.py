@@ -31,7 +31,9 @@ from rtde_spec.capture.decoder import decode_to_directory  # noqa: E402
 from tests.capture_files import Conversation, write  # noqa: E402
 
 TARGET = 300_000
-CHILD = PEAK_MB + """
+CHILD = (
+    PEAK_MB
+    + """
 import json, sys, time
 from rtde_spec.capture.decoder import decode_to_directory
 start = time.perf_counter()
@@ -39,6 +41,7 @@ summary = decode_to_directory(sys.argv[1], sys.argv[2], "parquet")
 print(json.dumps({"seconds": time.perf_counter() - start, "rows": summary.tables.get("rtde_outputs_1", 0),
                   "peak_mb": peak_mb()}))
 """
+)
 
 
 def make_capture(path: Path, packages: int, server: str = "10.0.0.10") -> None:

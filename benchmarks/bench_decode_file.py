@@ -51,7 +51,9 @@ def peak_mb():
         return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 """
 
-CHILD = PEAK_MB + """
+CHILD = (
+    PEAK_MB
+    + """
 import json, os, sys, tempfile, time
 from rtde_spec.cli.main import main
 args = sys.argv[1:]
@@ -68,6 +70,7 @@ for _ in range(int(os.environ.get("BENCH_REPEAT", "3"))):
 peak = peak_mb()
 print(json.dumps({"code": code, "seconds": sorted(times)[len(times) // 2], "peak_mb": peak}))
 """
+)
 
 
 def make_file(path: Path, codec: RecipeCodec, count: int) -> None:
