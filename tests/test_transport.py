@@ -105,6 +105,44 @@ def test_asyncio_client(emu: EmulatorThread) -> None:
     assert b.output_double_register_24 == pytest.approx(1.0 + 2.0 * b.timestamp)  # type: ignore[attr-defined]
 
 
+@pytest.mark.skipif(not hasattr(socket, "SO_RCVLOWAT"), reason="no SO_RCVLOWAT on this platform")
+def test_batched_reader_wakes_once_per_batch_and_replies_still_come_at_once(emu: EmulatorThread) -> None:
+    with RtdeClient("127.0.0.1", emu.ports["rtde"], batch=20) as client:
+        client.setup_outputs(["timestamp"], 500)
+        reads: list[int] = []
+        receive = client.core.receive
+
+        def counted(data: bytes) -> list:
+            reads.append(len(data))
+            return receive(data)
+
+        client.core.receive = counted  # type: ignore[method-assign]
+        client.start()
+        stamps = [client.receive().timestamp for _ in range(100)]
+        began = time.monotonic()
+        client.pause()  # its reply is 4 bytes, far below the low mark: it must not wait for a batch
+        answered = time.monotonic() - began
+    assert [round((b - a) * 500) for a, b in itertools.pairwise(stamps)] == [1] * 99  # all, in order
+    assert answered < 0.5
+    size = client.core.output.package_size
+    assert max(reads) >= 20 * size and len(reads) < 100 / 20 * 2 + 4  # a wake-up per ~20 packages
+
+
+async def _batched_async(port: int) -> tuple[list[float], float]:
+    async with AsyncRtdeClient("127.0.0.1", port, batch=20) as client:
+        await client.setup_outputs(["timestamp"], 500)
+        await client.start()
+        stamps = [(await client.receive()).timestamp for _ in range(60)]
+        began = time.monotonic()
+        await client.pause()
+        return stamps, time.monotonic() - began
+
+
+def test_batched_asyncio_client(emu: EmulatorThread) -> None:
+    stamps, answered = asyncio.run(_batched_async(emu.ports["rtde"]))
+    assert [round((b - a) * 500) for a, b in itertools.pairwise(stamps)] == [1] * 59 and answered < 0.5
+
+
 def test_output_rate_is_floor_of_base_over_frequency(emu: EmulatorThread) -> None:
     with RtdeClient("127.0.0.1", emu.ports["rtde"]) as client:
         client.setup_outputs(["timestamp"], 150)  # floor(500 / 150) = 3 steps

@@ -53,14 +53,16 @@ def names_of(args: argparse.Namespace) -> list[str]:
 def run(args: argparse.Namespace) -> int:
     from rtde_spec.output.writers import format_for, open_writer
     from rtde_spec.rtde.client import RtdeClient
-    from rtde_spec.rtde.recorder import record
+    from rtde_spec.rtde.recorder import BATCH_SECONDS, record
 
     fmt = format_for(args.output, args.format)
     if fmt not in ("csv", "parquet", "jsonl"):
         raise UsageError(f"-o {args.output}: use .csv, .parquet or .jsonl (or --format)")
     names = names_of(args)
     bar = _progress(args)
-    with RtdeClient(args.host, args.port, timeout=args.timeout) as client:
+    # the reader wakes every ~0.1 s, half the recorder's write interval: no row waits longer
+    batch = max(1, int(args.frequency * BATCH_SECONDS / 2))
+    with RtdeClient(args.host, args.port, timeout=args.timeout, batch=batch) as client:
         writer = open_writer(fmt, args.output)
         try:
             result = record(

@@ -59,6 +59,11 @@ class AsyncRtdeClient(ClientBase):
     async def start(self) -> None:
         if not (await self._request(self.core.start())).message.accepted:  # type: ignore[attr-defined]
             raise ProtocolError("the controller refused to start", subject=self.where)
+        if self.batch > 1 and self.core.output is not None:
+            self._wake_after(self._socket(), self.batch * self.core.output.package_size)
+
+    def _socket(self) -> Any:
+        return self._writer.get_extra_info("socket") if self._writer is not None else None
 
     async def pause(self) -> None:
         await self._request(self.core.pause())
@@ -107,6 +112,8 @@ class AsyncRtdeClient(ClientBase):
         await self._writer.drain()
 
     async def _request(self, data: bytes) -> Reply:
+        if self._low_mark > 1:
+            self._wake_after(self._socket(), 1)  # the reply must not wait for a batch
         await self._write(data)
         try:
             reply = await asyncio.wait_for(self._replies.get(), self.timeout)
@@ -117,7 +124,7 @@ class AsyncRtdeClient(ClientBase):
     async def _read_loop(self, reader: asyncio.StreamReader) -> None:
         try:
             while True:
-                chunk = await reader.read(65536)
+                chunk = await reader.read(max(65536, 2 * self._low_mark))
                 if not chunk:
                     raise RtdeConnectionError("the controller closed the connection", subject=self.where)
                 for event in self.core.receive(chunk):

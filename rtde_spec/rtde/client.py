@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import logging
 import queue
+import select
 import socket
 import threading
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -90,6 +91,8 @@ class RtdeClient(ClientBase):
     def start(self) -> None:
         if not self._request(self.core.start()).message.accepted:  # type: ignore[attr-defined]
             raise ProtocolError("the controller refused to start", subject=self.where)
+        if self.batch > 1 and self.core.output is not None and hasattr(select, "poll"):
+            self._wake_after(self._sock, self.batch * self.core.output.package_size)
 
     def pause(self) -> None:
         self._request(self.core.pause())
@@ -139,6 +142,8 @@ class RtdeClient(ClientBase):
             raise RtdeConnectionError(f"connection lost while sending: {exc}", subject=self.where) from None
 
     def _request(self, data: bytes) -> Reply:
+        if self._low_mark > 1:
+            self._wake_after(self._sock, 1)  # the reply must not wait for a batch
         self._write(data)
         try:
             reply = self._replies.get(timeout=self.timeout)
@@ -149,34 +154,51 @@ class RtdeClient(ClientBase):
     def _read_loop(self) -> None:
         sock = self._sock
         assert sock is not None
+        poller = select.poll() if hasattr(select, "poll") else None
+        if poller is not None:
+            poller.register(sock, select.POLLIN)
         try:
             while True:
-                chunk = sock.recv(65536)
+                if self._low_mark > 1 and poller is not None:
+                    # a blocked recv keeps the low mark it started with; poll sees it lowered
+                    poller.poll()
+                chunk = sock.recv(max(65536, 2 * self._low_mark))
                 if not chunk:
                     raise RtdeConnectionError("the controller closed the connection", subject=self.where)
+                data: list[Data] = []
                 for event in self.core.receive(chunk):
                     if isinstance(event, Data):
-                        self._deliver(event)
-                    elif isinstance(event, Text):
+                        data.append(event)
+                        continue
+                    if data:  # keep the order of data and replies
+                        self._deliver(data)
+                        data = []
+                    if isinstance(event, Text):
                         log.log(LOG_LEVELS[min(event.level, 3)], "%s: %s", event.source, event.message)
                     else:
                         self._replies.put(event)
+                if data:
+                    self._deliver(data)
         except OSError as exc:
             self._finish(RtdeConnectionError(f"connection lost: {exc.strerror or exc}", subject=self.where))
         except BaseException as exc:
             self._finish(exc)
 
-    def _deliver(self, event: Data) -> None:
-        self.received += 1
+    def _deliver(self, events: list[Data]) -> None:
+        """Hand over the data packages of one read: callbacks, then the queue under one lock."""
+        self.received += len(events)
         for raw in self._raw_callbacks:
-            raw(event.raw)
+            for event in events:
+                raw(event.raw)
         for callback in self._callbacks:
-            callback(event.record)
+            for event in events:
+                callback(event.record)
         with self._data_ready:
-            if len(self._data) == self._data.maxlen:
-                self.skipped += 1  # the oldest goes; the socket keeps being drained
-            self._data.append(event.record)
-            self._data_ready.notify()
+            room = self._data.maxlen - len(self._data)  # type: ignore[operator]
+            if len(events) > room:
+                self.skipped += len(events) - room  # the oldest go; the socket keeps being drained
+            self._data.extend(event.record for event in events)
+            self._data_ready.notify(len(events))
 
     def _finish(self, exc: BaseException) -> None:
         self._closed = exc

@@ -9,6 +9,7 @@ the output recipe skip the generic codec: one prefix check and one unpack each.
 from __future__ import annotations
 
 import collections
+import socket
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -198,14 +199,35 @@ class ClientBase:
         *,
         timeout: float = 5.0,
         queue_size: int = 1000,
+        batch: int = 1,
         catalogue: Catalogue | None = None,
     ) -> None:
-        self.host, self.port, self.timeout = host, port, timeout
+        """`batch` > 1: the reader wakes once per that many data packages (less CPU per package,
+        batch / frequency more latency): for recording and logging, not for control loops."""
+        if batch < 1:
+            raise ValueError(f"batch must be at least 1, not {batch}")
+        self.host, self.port, self.timeout, self.batch = host, port, timeout, batch
         self.core = ClientProtocol(catalogue)
         self.skipped = 0
         self.received = 0
         self._data: collections.deque[Any] = collections.deque(maxlen=queue_size)
         self._closed: BaseException | None = None
+        self._low_mark = 1  # SO_RCVLOWAT in force: bytes the reader waits for
+
+    def _wake_after(self, sock: Any, size: int) -> None:
+        """The reader wakes once `size` bytes wait (SO_RCVLOWAT); 1 restores per-package.
+
+        Linux wakes a reader already blocked (or an event loop's poll) when the mark
+        drops below what waits, so a reply after a request is never held back. Where
+        the option is missing the client stays per package.
+        """
+        if sock is None or not hasattr(socket, "SO_RCVLOWAT"):
+            return
+        try:
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVLOWAT, size)
+            self._low_mark = size
+        except OSError:
+            self._low_mark = 1
 
     @property
     def where(self) -> str:
