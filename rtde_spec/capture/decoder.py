@@ -85,9 +85,10 @@ def decode_capture(
     # (src, sport, dst, dport) -> (flow, sender, its direction): one lookup per segment
     routes: dict[tuple[str, int, str, int], tuple[_Flow, str, Direction] | None] = {}
     for seg in segments(path, stats, progress):
-        route_key = seg[1:5]
-        route = routes.get(route_key, False)
-        if route is False:
+        route_key = (seg.src, seg.sport, seg.dst, seg.dport)
+        if route_key in routes:
+            route = routes[route_key]
+        else:
             key = frozenset({(seg.src, seg.sport), (seg.dst, seg.dport)})
             if key in flows:
                 flow = flows[key]
