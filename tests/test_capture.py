@@ -225,3 +225,54 @@ def test_dask_on_a_local_cluster_of_two_workers(tmp_path: Path) -> None:
     frame = dataset_frame(tmp_path / "out", "rtde_outputs_1").compute()
     assert len(frame) == 100 and frame["robot"].nunique() == 4
     assert frame["actual_q_3"].max() == pytest.approx(24.3)
+
+
+def test_runs_of_data_segments_decode_exactly_as_segment_by_segment(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Runs (in-order segments of one whole data package each) skip reassembly; nothing else changes."""
+    robots = []
+    for n, host in enumerate(("10.0.0.10", "10.0.0.11")):
+        conv = Conversation((f"10.0.0.{2 + n}", 51000 + n), (host, 30004))
+        session(conv)
+        robots.append(conv)
+    for i in range(300):  # two robots interleaved in blocks of 40: runs break at every switch
+        conv = robots[(i // 40) % 2]
+        conv.time = max(c.time for c in robots)  # one clock, so the file keeps this order
+        conv.send("server", data(i))
+    robots[0].send("server", b"".join(data(i) for i in range(300, 310)))  # several in one segment
+    _, again = robots[0].send("server", data(310))
+    robots[0].resend(again)  # a retransmission inside a run
+    robots[0].send("server", data(311), keep=False)  # a lost segment
+    for i in range(312, 400):
+        robots[0].send("server", data(i))
+    path = write(tmp_path / "two.pcap", robots)
+    import rtde_spec.capture.decoder as decoder
+    from rtde_spec.capture.connections import RtdeConnection
+
+    runs: list[int] = []
+    feed_run = RtdeConnection.feed_run
+    monkeypatch.setattr(
+        RtdeConnection, "feed_run", lambda self, s, c, d, t: (runs.append(len(t)), feed_run(self, s, c, d, t))
+    )
+    with_runs = capture_tables(path)
+    assert len(runs) >= 6 and sum(runs) >= 250  # the run path did most of the work
+
+    monkeypatch.setattr(decoder, "RUN_MIN", 10**9)  # every run replayed segment by segment
+    one_by_one = capture_tables(path)
+    assert with_runs.keys() == one_by_one.keys()
+    for name, table in with_runs.items():  # the same rows, in the same order within each connection
+        got, want = table.to_pylist(), one_by_one[name].to_pylist()
+        for conn in {r.get("connection") for r in want}:
+            assert [r for r in got if r.get("connection") == conn] == [
+                r for r in want if r.get("connection") == conn
+            ], (name, conn)
+        assert len(got) == len(want), name
+    rows = with_runs["rtde_outputs_1"]
+    assert rows.num_rows == 399  # 400 packages, one lost
+    by_connection = {}
+    for row in rows.to_pylist():
+        by_connection.setdefault(row["connection"], []).append(round(row["timestamp"] / 0.002))
+    first, second = sorted(by_connection.values(), key=len, reverse=True)
+    assert second == [i for i in range(300) if (i // 40) % 2 == 1]
+    assert first == [i for i in range(400) if i != 311 and (i >= 300 or (i // 40) % 2 == 0)]

@@ -119,6 +119,24 @@ class RtdeConnection:
                     continue
             self._control(sender, package, chunk.time)
 
+    def run_codec(self, sender: str, package: bytes) -> RecipeCodec | None:
+        """The codec for a run of whole data packages like `package`, one per segment, from here on.
+
+        Only when nothing is held in the framing (the run starts on a package boundary).
+        """
+        framing = self.framing[sender]
+        if framing.buf or not framing.synced:
+            return None
+        return self._codec(sender, package)
+
+    def feed_run(self, sender: str, codec: RecipeCodec, data: bytes, times: list[float]) -> None:
+        """Whole data packages of `codec`, back to back, each from its own segment at `times`."""
+        key = (sender, data[RTDE_HEADER])
+        self._flush(key)  # rows batched before the run come first
+        self.counts.packages += len(times)
+        self.batches[key] = (codec, [data], times)
+        self._flush(key, count=len(times))
+
     def _codec(self, sender: str, package: bytes) -> RecipeCodec | None:
         direction = RTDE_DIRECTIONS[sender]
         codec = self.session.recipes.get((direction, package[3]))
@@ -139,7 +157,7 @@ class RtdeConnection:
         if len(raws) >= BATCH:
             self._flush(key)
 
-    def _flush(self, key: tuple[str, int]) -> None:
+    def _flush(self, key: tuple[str, int], count: int | None = None) -> None:
         entry = self.batches.pop(key, None)
         if entry is None or not entry[1]:
             return
@@ -147,9 +165,10 @@ class RtdeConnection:
 
         codec, raws, times = entry
         array = codec.decode_many(b"".join(raws))
+        rows = len(raws) if count is None else count
         table = self.sink.table_for_recipe(RTDE_DIRECTIONS[key[0]], codec.names)
         columns: dict[str, Any] = {
-            "connection": np.array([self.name] * len(raws)),
+            "connection": np.full(rows, self.name),
             "capture_time": np.array(times),
         }
         columns.update({name: array[name] for name in codec.names})

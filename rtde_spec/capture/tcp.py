@@ -73,6 +73,15 @@ class Direction:
                     self.next_seq = (self.next_seq + len(payload) - already) % MOD
         return out
 
+    def in_order_at(self, seq: int) -> bool:
+        """Whether a segment at `seq` would be delivered as it is: next in order, nothing waiting."""
+        return self.next_seq == seq and not self.waiting
+
+    def advance(self, size: int) -> None:
+        """Account for `size` bytes delivered in order outside `feed` (a run of whole packages)."""
+        assert self.next_seq is not None
+        self.next_seq = (self.next_seq + size) % MOD
+
     def skip_gap(self) -> list[Chunk]:
         """Declare the hole before the earliest waiting segment lost; deliver from there."""
         if not self.waiting or self.next_seq is None:
