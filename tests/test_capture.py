@@ -227,8 +227,9 @@ def test_dask_on_a_local_cluster_of_two_workers(tmp_path: Path) -> None:
     assert frame["actual_q_3"].max() == pytest.approx(24.3)
 
 
+@pytest.mark.parametrize("fmt", ["pcap", "pcapng"])  # runs: in bulk in pcap blocks, per segment in pcapng
 def test_runs_of_data_segments_decode_exactly_as_segment_by_segment(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, fmt: str
 ) -> None:
     """Runs (in-order segments of one whole data package each) skip reassembly; nothing else changes."""
     robots = []
@@ -246,8 +247,9 @@ def test_runs_of_data_segments_decode_exactly_as_segment_by_segment(
     robots[0].send("server", data(311), keep=False)  # a lost segment
     for i in range(312, 400):
         robots[0].send("server", data(i))
-    path = write(tmp_path / "two.pcap", robots)
+    path = write(tmp_path / f"two.{fmt}", robots, fmt)
     import rtde_spec.capture.decoder as decoder
+    from rtde_spec.capture import bulk
     from rtde_spec.capture.connections import RtdeConnection
 
     runs: list[int] = []
@@ -258,7 +260,8 @@ def test_runs_of_data_segments_decode_exactly_as_segment_by_segment(
     with_runs = capture_tables(path)
     assert len(runs) >= 6 and sum(runs) >= 250  # the run path did most of the work
 
-    monkeypatch.setattr(decoder, "RUN_MIN", 10**9)  # every run replayed segment by segment
+    monkeypatch.setattr(decoder, "RUN_MIN", 10**9)  # every run replayed segment by segment ...
+    monkeypatch.setattr(bulk, "MIN_RUN", 10**9)  # ... and none found in bulk in the file's blocks
     one_by_one = capture_tables(path)
     assert with_runs.keys() == one_by_one.keys()
     for name, table in with_runs.items():  # the same rows, in the same order within each connection

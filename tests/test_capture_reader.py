@@ -13,7 +13,8 @@ from pathlib import Path
 import dpkt
 import pytest
 
-from rtde_spec.capture.packets import segments
+from rtde_spec.capture.bulk import DataRun
+from rtde_spec.capture.packets import Segment, items, segments
 from rtde_spec.errors import UsageError
 
 PAYLOAD = b"\x00\x05V\x00\x02"  # an RTDE version request
@@ -114,3 +115,21 @@ def test_what_is_not_tcp_is_counted_and_a_cut_record_reported(tmp_path: Path) ->
 def test_not_a_capture_is_a_usage_error(tmp_path: Path, data: bytes) -> None:
     with pytest.raises(UsageError, match="not a pcap"):
         read(tmp_path, data)
+
+
+@pytest.mark.parametrize("pads", [[0] * 20, [i % 3 for i in range(20)]], ids=["even", "uneven"])
+def test_a_run_of_data_frames_is_found_in_bulk_with_its_payloads(tmp_path: Path, pads: list[int]) -> None:
+    packages = [struct.pack(">HBB", 12, ord("U"), 1) + struct.pack(">d", i / 8) for i in range(20)]
+    frames = [
+        (1000 + i, 0, ethernet(ip_tcp(seq=100 + 12 * i, payload=p), pad=pad))
+        for i, (p, pad) in enumerate(zip(packages, pads, strict=True))
+    ]
+    frames.append((2000, 0, ethernet(ip_tcp(seq=999))))  # not part of the run
+    path = tmp_path / "run.pcap"
+    path.write_bytes(pcap(frames))
+    found = list(items(path))
+    run, last = found
+    assert isinstance(run, DataRun) and isinstance(last, Segment) and last.seq == 999
+    assert run.data == b"".join(packages) and run.size == 12 and run.seq == 100
+    assert run.times == [1000.0 + i for i in range(20)] and (run.src, run.dport) == ("10.0.0.2", 30004)
+    assert [s.payload for s in segments(path)][:20] == packages  # the same, segment by segment

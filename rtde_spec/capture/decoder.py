@@ -14,7 +14,7 @@ from typing import Any
 
 from rtde_spec._generated.constants import DATA_PACKAGE_TYPE, PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.capture.connections import PrimaryConnection, RtdeConnection
-from rtde_spec.capture.packets import FIN, RST, SYN, Segment, segments
+from rtde_spec.capture.packets import FIN, RST, SYN, Segment, expand, items
 from rtde_spec.capture.sink import ArrowSink, DirectorySink, TableSink
 from rtde_spec.capture.tcp import MOD, Direction
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
@@ -87,35 +87,59 @@ def decode_capture(
     # (src, sport, dst, dport) -> (flow, sender, its direction): one lookup per segment
     routes: dict[tuple[str, int, str, int], Route | None] = {}
     run: _Run | None = None  # data segments, one whole package each, in order: decoded together
-    for seg in segments(path, stats, progress):
+
+    def route_of(seg: Segment) -> Route | bool | None:
+        """The segment's route; False: a handshake on an unknown port, decided on the first data."""
         route_key = (seg.src, seg.sport, seg.dst, seg.dport)
         if route_key in routes:
-            route = routes[route_key]
+            return routes[route_key]
+        key = frozenset({(seg.src, seg.sport), (seg.dst, seg.dport)})
+        if key in flows:
+            flow = flows[key]
         else:
-            key = frozenset({(seg.src, seg.sport), (seg.dst, seg.dport)})
-            if key in flows:
-                flow = flows[key]
-            else:
-                flow = _classify(seg, sink, recipe, rtde_ports, primary_ports, cat)
-                if flow is None and not seg.payload:
-                    continue  # a handshake segment on an unknown port: decide on the first data
-                flows[key] = flow
-            if flow is None:
-                route = None
-            else:
-                sender = "client" if (seg.src, seg.sport) == flow.client else "controller"
-                route = (flow, sender, flow.directions[sender])
-            routes[route_key] = route
-        if route is None:
-            continue
+            flow = _classify(seg, sink, recipe, rtde_ports, primary_ports, cat)
+            if flow is None and not seg.payload:
+                return False
+            flows[key] = flow
+        route: Route | None = None
+        if flow is not None:
+            sender = "client" if (seg.src, seg.sport) == flow.client else "controller"
+            route = (flow, sender, flow.directions[sender])
+        routes[route_key] = route
+        return route
+
+    def one(seg: Segment) -> None:
+        nonlocal run
+        route = route_of(seg)
+        if route is None or route is False:
+            return
+        assert not isinstance(route, bool)
         if run is not None:
             if run.takes(route, seg):
-                continue
+                return
             run.flush()
             run = None
         run = _Run.start(route, seg)
         if run is None:
             _feed(route, seg)
+
+    for item in items(path, stats, progress):
+        if isinstance(item, Segment):
+            one(item)
+            continue
+        first = next(expand(item))
+        route = route_of(first)
+        whole = _Run.start(route, first) if isinstance(route, tuple) else None
+        if whole is None:
+            for seg in expand(item):  # not a run this connection can take whole: segment by segment
+                one(seg)
+            continue
+        if run is not None:
+            run.flush()
+            run = None
+        flow, sender, direction = whole.route
+        direction.advance(len(item.data))
+        flow.decoder.feed_run(sender, whole.codec, item.data, item.times)
     if run is not None:
         run.flush()
     summary = CaptureSummary(str(path), stats.get("frames", 0))

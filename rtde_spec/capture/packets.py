@@ -13,9 +13,12 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import NamedTuple
 
-from rtde_spec.capture.pcapfile import frames
+from rtde_spec.capture.bulk import DataRun, pcap_blocks, run_of, runs
+from rtde_spec.capture.pcapfile import PCAP_MAGIC, frames
+from rtde_spec.errors import UsageError
 
 FIN, SYN, RST = 0x01, 0x02, 0x04
+ACK_PSH = 0x18  # the flags a run's segments stand for (a run has no FIN, SYN or RST)
 IPV4, IPV6, VLAN = 0x0800, 0x86DD, (0x8100, 0x88A8)
 TCP = 6
 IPV6_OPTION_HEADERS = {0, 43, 60}  # hop-by-hop, routing, destination options: skipped over
@@ -88,37 +91,89 @@ def _tcp_of(linktype: int, frame: bytes, addresses: dict[bytes, str]) -> tuple[s
     return addresses[src], addresses[dst], tcp, end
 
 
+def _segment(
+    ts: float, linktype: int, frame: bytes, addresses: dict[bytes, str], counts: dict[str, int]
+) -> Segment | None:
+    """The TCP segment in one frame; None (counted) when it is not one."""
+    try:
+        found = _tcp_of(linktype, frame, addresses)
+    except (IndexError, ValueError, OSError):
+        counts["undecodable"] = counts.get("undecodable", 0) + 1
+        return None
+    if found is None:
+        counts["not_tcp"] = counts.get("not_tcp", 0) + 1
+        return None
+    src, dst, at, end = found
+    sport, dport, seq, offset, flags = _TCP.unpack_from(frame, at)
+    data = at + (offset >> 4) * 4
+    if data > end:
+        counts["undecodable"] = counts.get("undecodable", 0) + 1
+        return None
+    return Segment(ts, src, sport, dst, dport, seq, flags, frame[data:end])
+
+
+def items(
+    path: str | Path, stats: dict[str, int] | None = None, progress: Callable[[int], None] | None = None
+) -> Iterator[Segment | DataRun]:
+    """TCP segments of a capture in file order; runs of data segments as one DataRun each.
+
+    Runs are found in classic pcap files of Ethernet frames (`capture/bulk.py`); every
+    other file and frame comes segment by segment.
+    """
+    counts = stats if stats is not None else {}
+    counts.setdefault("frames", 0)
+    addresses: dict[bytes, str] = {}  # raw address -> text, converted once per address
+    with open(path, "rb") as f:
+        head = f.read(24)
+        magic = int.from_bytes(head[:4], "little")
+        if magic not in PCAP_MAGIC:
+            f.seek(0)
+            for ts, linktype, frame in frames(f, str(path), counts):
+                counts["frames"] += 1
+                if progress is not None and counts["frames"] % 4096 == 0:
+                    progress(f.tell())
+                seg = _segment(ts, linktype, frame, addresses, counts)
+                if seg is not None:
+                    yield seg
+            return
+        if len(head) < 24:
+            raise UsageError("not a pcap file (its header is cut off)", subject=f"file {path}")
+        order, unit = PCAP_MAGIC[magic]
+        linktype = struct.unpack(order + "I", head[20:24])[0] & 0x0FFFFFFF  # upper bits: FCS flags
+        for records in pcap_blocks(f, order, unit, counts):
+            buf, offsets, lengths, times = records.buf, records.offsets, records.lengths, records.times
+            counts["frames"] += len(offsets)
+            done = 0
+            for first, end in [*runs(records, linktype), (len(offsets), len(offsets))]:
+                for k in range(done, first):
+                    seg = _segment(
+                        times[k], linktype, buf[offsets[k] : offsets[k] + lengths[k]], addresses, counts
+                    )
+                    if seg is not None:
+                        yield seg
+                if first < end:
+                    yield run_of(records, first, end)
+                done = end
+            if progress is not None:
+                progress(f.tell())
+
+
 def segments(
     path: str | Path, stats: dict[str, int] | None = None, progress: Callable[[int], None] | None = None
 ) -> Iterator[Segment]:
-    """Every TCP segment of a capture file, in file order; `progress(bytes read)` now and then."""
-    counts = stats if stats is not None else {}
-    addresses: dict[bytes, str] = {}  # raw address -> text, converted once per address
-    unpack = _TCP.unpack_from
-    frames_seen = not_tcp = undecodable = 0
-    with open(path, "rb") as f:
-        try:
-            for ts, linktype, frame in frames(f, str(path), counts):
-                frames_seen += 1
-                if progress is not None and frames_seen % 4096 == 0:
-                    progress(f.tell())
-                try:
-                    found = _tcp_of(linktype, frame, addresses)
-                except (IndexError, ValueError, OSError):
-                    undecodable += 1
-                    continue
-                if found is None:
-                    not_tcp += 1
-                    continue
-                src, dst, at, end = found
-                sport, dport, seq, offset, flags = unpack(frame, at)
-                data = at + (offset >> 4) * 4
-                if data > end:
-                    undecodable += 1
-                    continue
-                yield Segment(ts, src, sport, dst, dport, seq, flags, frame[data:end])
-        finally:
-            counts["frames"] = counts.get("frames", 0) + frames_seen
-            for key, value in (("not_tcp", not_tcp), ("undecodable", undecodable)):
-                if value:
-                    counts[key] = counts.get(key, 0) + value
+    """Every TCP segment of a capture file, in file order (runs expanded)."""
+    for item in items(path, stats, progress):
+        if isinstance(item, Segment):
+            yield item
+        else:
+            yield from expand(item)
+
+
+def expand(run: DataRun) -> Iterator[Segment]:
+    """The segments a DataRun stands for."""
+    for i, ts in enumerate(run.times):
+        start = i * run.size
+        seq = (run.seq + start) % (1 << 32)
+        yield Segment(
+            ts, run.src, run.sport, run.dst, run.dport, seq, ACK_PSH, run.data[start : start + run.size]
+        )

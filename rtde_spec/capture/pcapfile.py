@@ -19,7 +19,7 @@ from rtde_spec.errors import UsageError
 BLOCK = 8 << 20
 PCAPNG_SHB = 0x0A0D0D0A
 PCAPNG_BYTE_ORDER = 0x1A2B3C4D
-_PCAP_MAGIC = {  # magic as read little-endian -> (byte order, seconds per timestamp unit)
+PCAP_MAGIC = {  # magic as read little-endian -> (byte order, seconds per timestamp unit)
     0xA1B2C3D4: ("<", 1e-6),
     0xA1B23C4D: ("<", 1e-9),
     0xD4C3B2A1: (">", 1e-6),
@@ -60,8 +60,8 @@ def frames(f: IO[bytes], name: str, stats: dict[str, int]) -> Iterator[Frame]:
     magic = int.from_bytes(head, "little")
     if magic == PCAPNG_SHB:
         yield from _pcapng(reader, head, name, stats)
-    elif magic in _PCAP_MAGIC:
-        yield from _pcap(reader, *_PCAP_MAGIC[magic], name, stats)
+    elif magic in PCAP_MAGIC:
+        yield from _pcap(reader, *PCAP_MAGIC[magic], name, stats)
     else:
         raise UsageError(f"not a pcap or pcapng file (magic {head.hex()})", subject=f"file {name}")
 
