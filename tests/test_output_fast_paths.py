@@ -10,6 +10,8 @@ from __future__ import annotations
 import io
 import itertools
 import math
+import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -166,3 +168,25 @@ def test_parquet_compresses_only_the_columns_that_pay(tmp_path: Path) -> None:
     assert table.column("actual_q_5").to_pylist() == [i + 5 / 8 for i in range(500)]
     bits = [i * 2654435761 % 2**64 for i in range(500)]
     assert table.column("actual_digital_input_bits").to_pylist() == bits
+
+
+def test_parquet_of_numbers_and_text_neither_imports_pandas_nor_changes_values(tmp_path: Path) -> None:
+    """Arrow arrays come from numpy buffers: pandas (50 MB, a quarter second) stays unloaded."""
+    code = f"""
+import sys, numpy as np
+from rtde_spec import open_writer
+writer = open_writer("parquet", {str(tmp_path / "t.parquet")!r})
+writer.write_columns({{"connection": np.full(3, "10.0.0.2:5-x"), "robot": np.array(["a", "é", ""]),
+                      "flag": np.array([True, False, True]), "q": np.array([[1.5, 2.5]] * 3)}})
+writer.close()
+print("pandas" in sys.modules)
+"""
+    result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
+    assert result.stdout.strip() == "False"
+    table = pq.read_table(tmp_path / "t.parquet")
+    assert table.column("robot").to_pylist() == ["a", "é", ""]
+    assert table.column("connection").to_pylist() == ["10.0.0.2:5-x"] * 3
+    assert (
+        table.column("flag").to_pylist() == [True, False, True]
+        and table.column("q_1").to_pylist() == [2.5] * 3
+    )

@@ -43,32 +43,45 @@ class Records:
     """One block of a pcap file: where each whole record's frame starts, its length and time."""
 
     buf: bytes
-    offsets: list[int]
-    lengths: list[int]
-    times: list[float]
+    offsets: Any  # numpy int64
+    lengths: Any  # numpy int64
+    times: Any  # numpy float64
 
 
 def pcap_blocks(f: IO[bytes], order: str, unit: float, stats: dict[str, int]) -> Iterator[Records]:
-    """Blocks of whole records after the 24-byte file header (the file positioned after it)."""
-    record = struct.Struct(order + "IIII")
-    unpack = record.unpack_from
+    """Blocks of whole records after the 24-byte file header (the file positioned after it).
+
+    Records of one size in a row (a steady stream) are read as numpy columns through a
+    strided view of their headers; only where the size changes is a header read alone.
+    """
+    import numpy as np
+
+    size_at = struct.Struct(order + "I").unpack_from  # a record header's captured length, at +8
+    u32 = np.dtype(order + "u4")
     carry = b""
     while True:
         chunk = f.read(BLOCK)
         buf = carry + chunk if carry else chunk
         pos, end = 0, len(buf)
-        offsets: list[int] = []
-        lengths: list[int] = []
-        times: list[float] = []
+        pieces: list[tuple[Any, Any, Any]] = []  # (offsets, lengths, times) of runs of records
         while pos + 16 <= end:
-            sec, frac, caplen, _ = unpack(buf, pos)
-            if pos + 16 + caplen > end:
+            (caplen,) = size_at(buf, pos + 8)
+            stride = 16 + caplen
+            if pos + stride > end:
                 break
-            offsets.append(pos + 16)
-            lengths.append(caplen)
-            times.append(sec + frac * unit)
-            pos += 16 + caplen
-        if offsets:
+            count = (end - pos) // stride
+            same = 1
+            if count > 1:
+                sizes = np.ndarray((count,), dtype=u32, buffer=buf, offset=pos + 8, strides=(stride,))
+                differs = sizes != caplen
+                same = int(differs.argmax()) if differs.any() else count
+            starts = pos + np.arange(same, dtype=np.int64) * stride
+            secs = np.ndarray((same,), dtype=u32, buffer=buf, offset=pos, strides=(stride,))
+            fracs = np.ndarray((same,), dtype=u32, buffer=buf, offset=pos + 4, strides=(stride,))
+            pieces.append((starts + 16, np.full(same, caplen, dtype=np.int64), secs + fracs * unit))
+            pos += same * stride
+        if pieces:
+            offsets, lengths, times = (np.concatenate(column) for column in zip(*pieces, strict=True))
             yield Records(buf, offsets, lengths, times)
         carry = buf[pos:]
         if not chunk:
@@ -86,8 +99,8 @@ def runs(records: Records, linktype: int) -> list[tuple[int, int]]:
         return []
     u8 = np.frombuffer(records.buf, dtype=np.uint8)
     last = len(u8) - 1
-    off = np.asarray(records.offsets, dtype=np.int64)
-    cap_end = off + np.asarray(records.lengths, dtype=np.int64)
+    off = records.offsets
+    cap_end = off + records.lengths
 
     def at(index: Any) -> Any:
         return u8[np.minimum(index, last)].astype(np.int64)
@@ -131,12 +144,12 @@ def run_of(records: Records, first: int, end: int) -> DataRun:
     import numpy as np
 
     buf = records.buf
-    ip = records.offsets[first] + ETH
+    ip = int(records.offsets[first]) + ETH
     tcp = ip + (buf[ip] & 0x0F) * 4
     pay = tcp + (buf[tcp + 12] >> 4) * 4
     size = int.from_bytes(buf[pay : pay + 2], "big")
     u8 = np.frombuffer(buf, dtype=np.uint8)  # header lengths may differ frame to frame (options)
-    offs = np.asarray(records.offsets[first:end], dtype=np.int64)
+    offs = records.offsets[first:end]
     ihl = (u8[offs + ETH] & 0x0F).astype(np.int64) * 4
     doff = (u8[offs + ETH + ihl + 12] >> 4).astype(np.int64) * 4
     starts = offs + ETH + ihl + doff
@@ -156,6 +169,6 @@ def run_of(records: Records, first: int, end: int) -> DataRun:
         dport,
         seq,
         size,
-        records.times[first:end],
+        records.times[first:end].tolist(),
         data,
     )

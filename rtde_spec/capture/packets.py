@@ -141,7 +141,12 @@ def items(
         order, unit = PCAP_MAGIC[magic]
         linktype = struct.unpack(order + "I", head[20:24])[0] & 0x0FFFFFFF  # upper bits: FCS flags
         for records in pcap_blocks(f, order, unit, counts):
-            buf, offsets, lengths, times = records.buf, records.offsets, records.lengths, records.times
+            buf, offsets, lengths, times = (
+                records.buf,
+                records.offsets.tolist(),
+                records.lengths.tolist(),
+                records.times.tolist(),
+            )
             counts["frames"] += len(offsets)
             done = 0
             for first, end in [*runs(records, linktype), (len(offsets), len(offsets))]:

@@ -61,7 +61,13 @@ def arrow_array(column: Any) -> Any:
     import numpy as np
     import pyarrow as pa
 
-    if column.dtype.kind not in "biuf":  # text and objects: pyarrow's own conversion
+    if column.dtype.kind == "U":  # text (connection names, robots, dates): offsets and UTF-8 bytes
+        encoded = [value.encode("utf-8") for value in column.tolist()]
+        offsets = np.zeros(len(encoded) + 1, dtype=np.int32)
+        np.cumsum([len(e) for e in encoded], out=offsets[1:])
+        buffers = [None, pa.py_buffer(offsets), pa.py_buffer(b"".join(encoded))]
+        return pa.Array.from_buffers(pa.string(), len(encoded), buffers)
+    if column.dtype.kind not in "biuf":  # objects: pyarrow's own conversion
         return pa.array(column)
     if column.dtype.kind == "b":
         bits = np.packbits(column, bitorder="little")  # Arrow keeps bools as a bitmap
