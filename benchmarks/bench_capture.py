@@ -31,6 +31,7 @@ from bench_recipe_decode import UR_RTDE_DEFAULT_OUTPUTS  # noqa: E402
 
 from rtde_spec import Catalogue, RecipeCodec, build  # noqa: E402
 from rtde_spec.capture.decoder import decode_to_directory  # noqa: E402
+from rtde_spec.output.writers import one_core_per_process  # noqa: E402
 from tests.capture_files import Conversation, write  # noqa: E402
 
 TARGET = 300_000
@@ -124,9 +125,12 @@ def main(argv: list[str] | None = None) -> int:
         per_file = args.packages // args.files
         os.sync()
         rates = {}
+        import pyarrow.parquet  # noqa: F401  # loaded before the pools fork, as `rtde-spec capture --jobs` does
+
         for jobs in (1, 2):
             start = time.perf_counter()
-            with ProcessPoolExecutor(max_workers=jobs) as pool:
+            init = one_core_per_process if jobs > 1 else None  # as `rtde-spec capture --jobs N` does
+            with ProcessPoolExecutor(max_workers=jobs, initializer=init) as pool:
                 list(pool.map(decode_to_directory, files, [work / f"par{jobs}"] * len(files)))
             rates[jobs] = per_file * len(files) / (time.perf_counter() - start)
             print(f"{f'{args.files} files, {jobs} process(es)':45s} {rates[jobs]:10,.0f} packages/s")

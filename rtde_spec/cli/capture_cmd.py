@@ -75,7 +75,12 @@ def run(args: argparse.Namespace) -> int:
     }
     summaries: list[CaptureSummary] = []
     if args.jobs > 1 and len(files) > 1:
-        with ProcessPoolExecutor(max_workers=args.jobs) as pool:
+        from rtde_spec.output.writers import one_core_per_process
+
+        if args.format == "parquet":  # imported once here: forked workers start with it loaded
+            import pyarrow.parquet  # noqa: F401
+
+        with ProcessPoolExecutor(max_workers=args.jobs, initializer=one_core_per_process) as pool:
             futures = [
                 pool.submit(decode_to_directory, f, args.outdir, args.format, recipe, **kw) for f in files
             ]

@@ -256,6 +256,7 @@ class ParquetWriter(Writer):
     """
 
     ROW_GROUP_ROWS = 4096
+    THREADED = True  # encode row groups on a second thread; False where processes share the cores
 
     def __init__(self, stream: IO[bytes] | str) -> None:
         super().__init__(stream)  # type: ignore[arg-type]  # a path: pyarrow opens the file itself
@@ -302,6 +303,9 @@ class ParquetWriter(Writer):
         group = self._pa.concat_tables(self._tables)
         self._tables, self._held = [], 0
         self._wait()
+        if not self.THREADED:
+            self._writer.write_table(group, row_group_size=group.num_rows)
+            return
         if self._pool is None:
             from concurrent.futures import ThreadPoolExecutor
 
@@ -385,3 +389,8 @@ def open_writer(fmt: str, path: str | Path | None = None, *, background: bool = 
     writer = _WRITERS[fmt](BackgroundStream(stream) if background else stream)  # type: ignore[arg-type]
     writer.owns_stream = path is not None
     return writer
+
+
+def one_core_per_process() -> None:
+    """Worker processes that each take a core (`capture --jobs`) write Parquet in the calling thread."""
+    ParquetWriter.THREADED = False
