@@ -15,13 +15,20 @@ from collections.abc import Iterator
 from dataclasses import dataclass
 from typing import IO, Any
 
-from rtde_spec._generated.constants import DATA_PACKAGE_TYPE
+from rtde_spec._generated.constants import (
+    DATA_PACKAGE_PREFIX_FORMAT,
+    DATA_PACKAGE_PREFIX_OFFSETS,
+    DATA_PACKAGE_TYPE,
+)
 
 BLOCK = 8 << 20
 ETHERNET, IPV4, TCP = 1, 0x0800, 6
 ETH, IP_MIN, TCP_MIN = 14, 20, 20
 NOT_DATA = 0x07  # FIN, SYN, RST
 MIN_RUN = 16  # shorter runs are handed back frame by frame
+SIZE_AT, TYPE_AT, _ = DATA_PACKAGE_PREFIX_OFFSETS  # where a data package says its size and type
+SIZE_BYTES = TYPE_AT - SIZE_AT
+PREFIX_BYTES = struct.calcsize(DATA_PACKAGE_PREFIX_FORMAT)
 
 
 @dataclass
@@ -124,10 +131,11 @@ def runs(records: Records, linktype: int) -> list[tuple[int, int]]:
     end = ip + be(ip + 2, 2)
     size = end - pay
     ok &= (end <= cap_end) & (size > 4) & ((at(tcp + 13) & NOT_DATA) == 0)
-    ok &= (at(pay + 2) == DATA_PACKAGE_TYPE) & (be(pay, 2) == size)
+    ok &= (at(pay + TYPE_AT) == DATA_PACKAGE_TYPE) & (be(pay + SIZE_AT, SIZE_BYTES) == size)
     if not ok.any():
         return []
-    key = [be(ip + 12, 4), be(ip + 16, 4), be(tcp, 4), size, be(pay, 4)]  # addresses, ports, size, prefix
+    prefix = be(pay, PREFIX_BYTES)  # size, type and recipe id
+    key = [be(ip + 12, 4), be(ip + 16, 4), be(tcp, 4), size, prefix]  # addresses, ports, size, prefix
     seq = be(tcp + 4, 4)
     follows = ok[1:] & ok[:-1] & (seq[1:] == (seq[:-1] + size[:-1]) % (1 << 32))
     for column in key:
@@ -147,7 +155,7 @@ def run_of(records: Records, first: int, end: int) -> DataRun:
     ip = int(records.offsets[first]) + ETH
     tcp = ip + (buf[ip] & 0x0F) * 4
     pay = tcp + (buf[tcp + 12] >> 4) * 4
-    size = int.from_bytes(buf[pay : pay + 2], "big")
+    size = int.from_bytes(buf[pay + SIZE_AT : pay + SIZE_AT + SIZE_BYTES], "big")
     u8 = np.frombuffer(buf, dtype=np.uint8)  # header lengths may differ frame to frame (options)
     offs = records.offsets[first:end]
     ihl = (u8[offs + ETH] & 0x0F).astype(np.int64) * 4

@@ -13,6 +13,7 @@ from pathlib import Path
 from typing import Any
 
 from rtde_spec._generated.constants import DATA_PACKAGE_TYPE, PRIMARY_PORTS, RTDE_PORT
+from rtde_spec.capture.bulk import SIZE_AT, SIZE_BYTES, TYPE_AT
 from rtde_spec.capture.connections import PrimaryConnection, RtdeConnection
 from rtde_spec.capture.packets import FIN, RST, SYN, Segment, expand, items
 from rtde_spec.capture.sink import ArrowSink, DirectorySink, TableSink
@@ -199,7 +200,8 @@ class _Run:
         payload = seg.payload
         if flow.kind != "rtde" or seg.flags & _NOT_DATA or len(payload) <= RUN_HEAD:
             return None
-        if payload[2] != DATA_PACKAGE_TYPE or int.from_bytes(payload[:2], "big") != len(payload):
+        size = int.from_bytes(payload[SIZE_AT : SIZE_AT + SIZE_BYTES], "big")
+        if payload[TYPE_AT] != DATA_PACKAGE_TYPE or size != len(payload):
             return None
         if not direction.in_order_at(seg.seq):
             return None
