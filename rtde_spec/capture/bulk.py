@@ -1,4 +1,4 @@
-"""Whole runs of RTDE data segments found in a block of a classic pcap file with numpy.
+"""Whole runs of RTDE data segments found in a block of a capture file with numpy.
 
 At 500 Hz nearly every frame of an RTDE capture is Ethernet, IPv4, TCP, one whole data
 package of the same size, the sequence numbers following on. Per block of the file the
@@ -11,17 +11,16 @@ from __future__ import annotations
 
 import socket
 import struct
-from collections.abc import Iterator
 from dataclasses import dataclass
-from typing import IO, Any
+from typing import Any
 
 from rtde_spec._generated.constants import (
     DATA_PACKAGE_PREFIX_FORMAT,
     DATA_PACKAGE_PREFIX_OFFSETS,
     DATA_PACKAGE_TYPE,
 )
+from rtde_spec.capture.pcapfile import Records
 
-BLOCK = 8 << 20
 ETHERNET, IPV4, TCP = 1, 0x0800, 6
 ETH, IP_MIN, TCP_MIN = 14, 20, 20
 NOT_DATA = 0x07  # FIN, SYN, RST
@@ -45,64 +44,12 @@ class DataRun:
     data: bytes  # the packages back to back
 
 
-@dataclass
-class Records:
-    """One block of a pcap file: where each whole record's frame starts, its length and time."""
-
-    buf: bytes
-    offsets: Any  # numpy int64
-    lengths: Any  # numpy int64
-    times: Any  # numpy float64
-
-
-def pcap_blocks(f: IO[bytes], order: str, unit: float, stats: dict[str, int]) -> Iterator[Records]:
-    """Blocks of whole records after the 24-byte file header (the file positioned after it).
-
-    Records of one size in a row (a steady stream) are read as numpy columns through a
-    strided view of their headers; only where the size changes is a header read alone.
-    """
-    import numpy as np
-
-    size_at = struct.Struct(order + "I").unpack_from  # a record header's captured length, at +8
-    u32 = np.dtype(order + "u4")
-    carry = b""
-    while True:
-        chunk = f.read(BLOCK)
-        buf = carry + chunk if carry else chunk
-        pos, end = 0, len(buf)
-        pieces: list[tuple[Any, Any, Any]] = []  # (offsets, lengths, times) of runs of records
-        while pos + 16 <= end:
-            (caplen,) = size_at(buf, pos + 8)
-            stride = 16 + caplen
-            if pos + stride > end:
-                break
-            count = (end - pos) // stride
-            same = 1
-            if count > 1:
-                sizes = np.ndarray((count,), dtype=u32, buffer=buf, offset=pos + 8, strides=(stride,))
-                differs = sizes != caplen
-                same = int(differs.argmax()) if differs.any() else count
-            starts = pos + np.arange(same, dtype=np.int64) * stride
-            secs = np.ndarray((same,), dtype=u32, buffer=buf, offset=pos, strides=(stride,))
-            fracs = np.ndarray((same,), dtype=u32, buffer=buf, offset=pos + 4, strides=(stride,))
-            pieces.append((starts + 16, np.full(same, caplen, dtype=np.int64), secs + fracs * unit))
-            pos += same * stride
-        if pieces:
-            offsets, lengths, times = (np.concatenate(column) for column in zip(*pieces, strict=True))
-            yield Records(buf, offsets, lengths, times)
-        carry = buf[pos:]
-        if not chunk:
-            if carry:
-                stats["truncated"] = stats.get("truncated", 0) + 1
-            return
-
-
-def runs(records: Records, linktype: int) -> list[tuple[int, int]]:
+def runs(records: Records) -> list[tuple[int, int]]:
     """(first, end) record indexes of every run of at least MIN_RUN data frames."""
     import numpy as np
 
     n = len(records.offsets)
-    if linktype != ETHERNET or n < MIN_RUN:
+    if n < MIN_RUN or not (records.links == ETHERNET).any():
         return []
     u8 = np.frombuffer(records.buf, dtype=np.uint8)
     last = len(u8) - 1
@@ -119,7 +66,7 @@ def runs(records: Records, linktype: int) -> list[tuple[int, int]]:
         return value
 
     ip = off + ETH
-    ok = cap_end >= ip + IP_MIN + TCP_MIN
+    ok = (records.links == ETHERNET) & (cap_end >= ip + IP_MIN + TCP_MIN)
     ok &= be(off + 12, 2) == IPV4
     ok &= (at(ip) >> 4) == 4
     ok &= at(ip + 9) == TCP

@@ -13,9 +13,8 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import NamedTuple
 
-from rtde_spec.capture.bulk import DataRun, pcap_blocks, run_of, runs
-from rtde_spec.capture.pcapfile import PCAP_MAGIC, frames
-from rtde_spec.errors import UsageError
+from rtde_spec.capture.bulk import DataRun, run_of, runs
+from rtde_spec.capture.pcapfile import blocks
 
 FIN, SYN, RST = 0x01, 0x02, 0x04
 ACK_PSH = 0x18  # the flags a run's segments stand for (a run has no FIN, SYN or RST)
@@ -117,43 +116,23 @@ def items(
 ) -> Iterator[Segment | DataRun]:
     """TCP segments of a capture in file order; runs of data segments as one DataRun each.
 
-    Runs are found in classic pcap files of Ethernet frames (`capture/bulk.py`); every
-    other file and frame comes segment by segment.
+    Runs are found per block of the file among Ethernet frames (`capture/bulk.py`); every
+    other frame comes segment by segment.
     """
     counts = stats if stats is not None else {}
     counts.setdefault("frames", 0)
     addresses: dict[bytes, str] = {}  # raw address -> text, converted once per address
     with open(path, "rb") as f:
-        head = f.read(24)
-        magic = int.from_bytes(head[:4], "little")
-        if magic not in PCAP_MAGIC:
-            f.seek(0)
-            for ts, linktype, frame in frames(f, str(path), counts):
-                counts["frames"] += 1
-                if progress is not None and counts["frames"] % 4096 == 0:
-                    progress(f.tell())
-                seg = _segment(ts, linktype, frame, addresses, counts)
-                if seg is not None:
-                    yield seg
-            return
-        if len(head) < 24:
-            raise UsageError("not a pcap file (its header is cut off)", subject=f"file {path}")
-        order, unit = PCAP_MAGIC[magic]
-        linktype = struct.unpack(order + "I", head[20:24])[0] & 0x0FFFFFFF  # upper bits: FCS flags
-        for records in pcap_blocks(f, order, unit, counts):
-            buf, offsets, lengths, times = (
-                records.buf,
-                records.offsets.tolist(),
-                records.lengths.tolist(),
-                records.times.tolist(),
-            )
+        for records in blocks(f, str(path), counts):
+            buf = records.buf
+            offsets, lengths = records.offsets.tolist(), records.lengths.tolist()
+            times, links = records.times.tolist(), records.links.tolist()
             counts["frames"] += len(offsets)
             done = 0
-            for first, end in [*runs(records, linktype), (len(offsets), len(offsets))]:
+            for first, end in [*runs(records), (len(offsets), len(offsets))]:
                 for k in range(done, first):
-                    seg = _segment(
-                        times[k], linktype, buf[offsets[k] : offsets[k] + lengths[k]], addresses, counts
-                    )
+                    frame = buf[offsets[k] : offsets[k] + lengths[k]]
+                    seg = _segment(times[k], links[k], frame, addresses, counts)
                     if seg is not None:
                         yield seg
                 if first < end:
