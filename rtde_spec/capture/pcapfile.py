@@ -16,7 +16,7 @@ blocks; other blocks are skipped. A cut-off last record is counted in
 from __future__ import annotations
 
 import struct
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import IO, Any
 
@@ -98,6 +98,26 @@ def frames(f: IO[bytes], name: str, stats: dict[str, int]) -> Iterator[Frame]:
             yield ts, link, buf[off : off + length]
 
 
+def _by_block(
+    f: IO[bytes], carry: bytes, stats: dict[str, int], parse: Callable[[bytes, _Columns], int]
+) -> Iterator[Records]:
+    """Read the file a block at a time; `parse` finds the whole records in a block and says
+    where they end; the rest is carried into the next block (or counted as cut off at the end)."""
+    while True:
+        chunk = f.read(BLOCK)
+        buf = carry + chunk if carry else chunk
+        found = _Columns()
+        pos = parse(buf, found)
+        records = found.records(buf)
+        if records is not None:
+            yield records
+        carry = buf[pos:]
+        if not chunk:
+            if carry:
+                stats["truncated"] = stats.get("truncated", 0) + 1
+            return
+
+
 def _pcap(f: IO[bytes], order: str, unit: float, name: str, stats: dict[str, int]) -> Iterator[Records]:
     import numpy as np
 
@@ -107,31 +127,22 @@ def _pcap(f: IO[bytes], order: str, unit: float, name: str, stats: dict[str, int
     linktype = struct.unpack(order + "I", rest[16:20])[0] & 0x0FFFFFFF  # upper bits: FCS flags
     size_at = struct.Struct(order + "I").unpack_from  # a record header's captured length, at +8
     u32 = np.dtype(order + "u4")
-    carry = b""
-    while True:
-        chunk = f.read(BLOCK)
-        buf = carry + chunk if carry else chunk
+
+    def parse(buf: bytes, found: _Columns) -> int:
         pos, end = 0, len(buf)
-        found = _Columns()
         while pos + 16 <= end:
             (caplen,) = size_at(buf, pos + 8)
             stride = 16 + caplen
             if pos + stride > end:
                 break
             same = _same_run(buf, pos, stride, (end - pos) // stride, 8, caplen, u32)
-            secs = np.ndarray((same,), dtype=u32, buffer=buf, offset=pos, strides=(stride,))
-            fracs = np.ndarray((same,), dtype=u32, buffer=buf, offset=pos + 4, strides=(stride,))
+            secs, fracs = (_strided(buf, pos + at, stride, same, u32) for at in (0, 4))
             starts = pos + 16 + np.arange(same, dtype=np.int64) * stride
             found.add(starts, np.full(same, caplen, dtype=np.int64), secs + fracs * unit, linktype)
             pos += same * stride
-        records = found.records(buf)
-        if records is not None:
-            yield records
-        carry = buf[pos:]
-        if not chunk:
-            if carry:
-                stats["truncated"] = stats.get("truncated", 0) + 1
-            return
+        return pos
+
+    yield from _by_block(f, b"", stats, parse)
 
 
 def _strided(buf: bytes, start: int, stride: int, count: int, dtype: Any) -> Any:
@@ -143,12 +154,9 @@ def _strided(buf: bytes, start: int, stride: int, count: int, dtype: Any) -> Any
 
 def _same_run(buf: bytes, pos: int, stride: int, count: int, at: int, value: int, dtype: Any) -> int:
     """How many records of `stride` bytes from `pos` on hold `value` at offset `at` (at least 1)."""
-    import numpy as np
-
     if count <= 1:
         return 1
-    column = np.ndarray((count,), dtype=dtype, buffer=buf, offset=pos + at, strides=(stride,))
-    differs = column != value
+    differs = _strided(buf, pos + at, stride, count, dtype) != value
     return int(differs.argmax()) if differs.any() else count
 
 
@@ -157,12 +165,10 @@ def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int]) -> Ite
 
     order = "<"
     interfaces: list[tuple[int, float]] = []  # (link type, seconds per timestamp unit)
-    carry = first
-    while True:
-        chunk = f.read(BLOCK)
-        buf = carry + chunk if carry else chunk
+
+    def parse(buf: bytes, found: _Columns) -> int:
+        nonlocal order, interfaces
         pos, end = 0, len(buf)
-        found = _Columns()
         while pos + 12 <= end:
             if int.from_bytes(buf[pos : pos + 4], "little") == PCAPNG_SHB:  # a new section
                 magic = int.from_bytes(buf[pos + 8 : pos + 12], "little")
@@ -181,10 +187,8 @@ def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int]) -> Ite
                 same = min(same, _same_run(buf, pos, length, same, 8, iface, u32))
                 linktype, unit = interfaces[iface] if iface < len(interfaces) else (-1, 1e-6)
                 high, low, caplen = (_strided(buf, pos + at, length, same, u32) for at in (12, 16, 20))
-                stamps = (high << 32) | low
-                lengths = np.minimum(caplen, length - 32)
                 starts = pos + 28 + np.arange(same, dtype=np.int64) * length
-                found.add(starts, lengths, stamps * unit, linktype)
+                found.add(starts, np.minimum(caplen, length - 32), ((high << 32) | low) * unit, linktype)
                 pos += same * length
                 continue
             if btype == IDB:
@@ -195,14 +199,9 @@ def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int]) -> Ite
                 size = min(origlen, length - 16)
                 found.add(np.array([pos + 12]), np.array([size]), np.array([0.0]), interfaces[0][0])
             pos += length
-        records = found.records(buf)
-        if records is not None:
-            yield records
-        carry = buf[pos:]
-        if not chunk:
-            if carry:
-                stats["truncated"] = stats.get("truncated", 0) + 1
-            return
+        return pos
+
+    yield from _by_block(f, first, stats, parse)
 
 
 def _resolution(options: bytes, order: str) -> float:
