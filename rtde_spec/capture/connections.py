@@ -10,13 +10,20 @@ controller's messages; what the client sends is URScript.
 from __future__ import annotations
 
 import json
+import struct
 from dataclasses import dataclass, field
 from typing import Any
 
 from pydantic import BaseModel
 
 from rtde_spec._generated import rtde_models as gen
-from rtde_spec._generated.constants import DATA_PACKAGE_TYPE, RTDE_DIRECTIONS
+from rtde_spec._generated.constants import (
+    DATA_PACKAGE_PREFIX_OFFSETS,
+    DATA_PACKAGE_TYPE,
+    RTDE_DIRECTIONS,
+    RTDE_HEADER_FORMAT,
+    RTDE_LIMITS,
+)
 from rtde_spec.capture.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
 from rtde_spec.errors import RtdeSpecError
@@ -28,8 +35,9 @@ from rtde_spec.rtde.session import SessionDecoder
 from rtde_spec.spec.catalogue import Catalogue
 
 BATCH = 4096
-RTDE_HEADER = 3
-PRIMARY_HEADER = 5
+RTDE_HEADER = struct.calcsize(RTDE_HEADER_FORMAT)
+_SIZE_AT, _TYPE_AT, RECIPE_ID_AT = DATA_PACKAGE_PREFIX_OFFSETS
+RTDE_SIZE_BYTES = _TYPE_AT - _SIZE_AT  # the size field leads the header
 
 
 @dataclass
@@ -105,7 +113,10 @@ class RtdeConnection:
         self.name, self.robot, self.sink, self.given = name, robot, sink, given
         self.session = SessionDecoder(catalogue=catalogue)
         types = set(gen.PACKAGE_TYPES)
-        self.framing = {s: Framing(2, RTDE_HEADER, types, 65535) for s in ("controller", "client")}
+        limit = RTDE_LIMITS["package_max_bytes"]
+        self.framing = {
+            s: Framing(RTDE_SIZE_BYTES, RTDE_HEADER, types, limit) for s in ("controller", "client")
+        }
         self.counts = Counts()
         self.batches: dict[tuple[str, int], tuple[RecipeCodec, list[bytes], list[float]]] = {}
 
@@ -131,7 +142,7 @@ class RtdeConnection:
 
     def feed_run(self, sender: str, codec: RecipeCodec, data: bytes, times: list[float]) -> None:
         """Whole data packages of `codec`, back to back, each from its own segment at `times`."""
-        key = (sender, data[RTDE_HEADER])
+        key = (sender, data[RECIPE_ID_AT])
         self._flush(key)  # rows batched before the run come first
         self.counts.packages += len(times)
         self.batches[key] = (codec, [data], times)
@@ -215,7 +226,8 @@ class PrimaryConnection:
         self.name, self.robot, self.sink = name, robot, sink
         self.codec = default_codec()
         families = {f.spec.type for f in self.codec.families.values()}
-        self.framing = Framing(4, PRIMARY_HEADER, families, self.codec.max_size)
+        codec = self.codec
+        self.framing = Framing(codec.size_bytes, codec.header.size, families, codec.max_size)
         self.counts = Counts()
 
     def feed(self, sender: str, chunk: Chunk) -> None:

@@ -14,14 +14,16 @@ from typing import Any
 
 from rtde_spec._generated.constants import DATA_PACKAGE_TYPE, PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.capture.bulk import SIZE_AT, SIZE_BYTES, TYPE_AT
-from rtde_spec.capture.connections import PrimaryConnection, RtdeConnection
+from rtde_spec.capture.connections import RTDE_HEADER, PrimaryConnection, RtdeConnection
 from rtde_spec.capture.packets import FIN, RST, SYN, Segment, expand, items
 from rtde_spec.capture.sink import ArrowSink, DirectorySink, TableSink
 from rtde_spec.capture.tcp import MOD, Direction
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
+from rtde_spec.rtde.codec import build
 from rtde_spec.spec.catalogue import Catalogue
 
-RTDE_VERSION_REQUEST = bytes.fromhex("000556")  # size 5, type 'V': how an RTDE client opens
+# how an RTDE client opens: the header of a protocol version request (its size and type)
+RTDE_VERSION_REQUEST = build("request_protocol_version", protocol_version=2)[:RTDE_HEADER]
 RUN_HEAD = PAYLOAD_OFFSET  # size, type, recipe id: the bytes every data package of one run shares
 RUN_MIN, RUN_MAX = 16, 4096  # shorter runs go segment by segment; longer ones are cut
 

@@ -58,6 +58,8 @@ class PrimaryCodec:
         self.header = struct.Struct(ORDER + "".join(prims[h.type].struct for h in pf.header))
         self.sub_header = struct.Struct(ORDER + "".join(prims[h.type].struct for h in pf.subpackage_header))
         self.max_size = pf.max_message_bytes
+        # bytes of the size field a message starts with (what a stream is framed by)
+        self.size_bytes = prims[next(h.type for h in pf.header if h.name == "size")].size
         self.families: dict[int, _Family] = {}
         self.by_class: dict[type[PrimaryPart], tuple[_Family, Layout]] = {}
         # (member, field) -> first version per product line, for fields added after their member
