@@ -6,13 +6,16 @@ packed here by hand from the pcap and pcapng formats, so each variant is exercis
 
 from __future__ import annotations
 
+import os
 import socket
 import struct
+import threading
 from pathlib import Path
 
 import dpkt
 import pytest
 
+from rtde_spec.capture import pcapfile
 from rtde_spec.capture.bulk import DataRun
 from rtde_spec.capture.packets import Segment, items, segments
 from rtde_spec.errors import UsageError
@@ -131,5 +134,64 @@ def test_a_run_of_data_frames_is_found_in_bulk_with_its_payloads(tmp_path: Path,
     run, last = found
     assert isinstance(run, DataRun) and isinstance(last, Segment) and last.seq == 999
     assert run.data == b"".join(packages) and run.size == 12 and run.seq == 100
-    assert run.times == [1000.0 + i for i in range(20)] and (run.src, run.dport) == ("10.0.0.2", 30004)
+    assert run.times.tolist() == [1000.0 + i for i in range(20)] and (run.src, run.dport) == (
+        "10.0.0.2",
+        30004,
+    )
     assert [s.payload for s in segments(path)][:20] == packages  # the same, segment by segment
+
+
+def _from_fifo(tmp_path: Path, data: bytes, name: str = "pipe") -> tuple[list, dict[str, int]]:
+    """segments() of `data` written into a named pipe: a file that cannot be mapped, only read."""
+    path = tmp_path / name
+    os.mkfifo(path)
+
+    def feed() -> None:
+        with open(path, "wb") as f:
+            f.write(data)
+
+    writer = threading.Thread(target=feed)
+    writer.start()
+    stats: dict[str, int] = {}
+    seen: list[int] = []
+    try:
+        found = list(segments(path, stats, seen.append))
+    finally:
+        writer.join()
+    assert seen == sorted(seen) and (seen[-1] == len(data) or "truncated" in stats)  # progress: bytes done
+    return found, stats
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="named pipes are POSIX")
+@pytest.mark.parametrize("kind", ["pcap", "pcapng"])
+@pytest.mark.parametrize("block", [64, 300, 8 << 20])
+def test_blocks_of_a_mapped_file_and_of_a_pipe_give_the_same_frames(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, kind: str, block: int
+) -> None:
+    """Records cut by a block's end, and records longer than a block, are read whole either way."""
+    monkeypatch.setattr(pcapfile, "BLOCK", block)
+    payloads = [bytes([i]) * (i * 37 % 400) for i in range(1, 30)]  # some frames longer than a block
+    frames = [ethernet(ip_tcp(seq=i, payload=p)) for i, p in enumerate(payloads)]
+    if kind == "pcap":
+        data = pcap([(i, 0, f) for i, f in enumerate(frames)])
+    else:
+        head = pcapng()
+        data = head + b"".join(block_(f, i) for i, f in enumerate(frames))
+    mapped, mapped_stats = read(tmp_path, data)
+    seen: list[int] = []
+    assert len(list(segments(tmp_path / "capture", {}, seen.append))) == len(mapped)
+    assert seen == sorted(seen) and seen[-1] == len(data)  # progress reaches the file's end
+    piped, piped_stats = _from_fifo(tmp_path, data)
+    extra = 3 if kind == "pcapng" else 0  # the frames of pcapng()'s own blocks come first
+    assert [s.payload for s in mapped][extra:] == payloads
+    assert [(s.time, s.seq, s.payload) for s in piped] == [(s.time, s.seq, s.payload) for s in mapped]
+    assert mapped_stats == piped_stats and "truncated" not in mapped_stats
+    cut_mapped, cut_stats = read(tmp_path, data[:-5])  # the last record cut off, both ways
+    cut_piped, cut_piped_stats = _from_fifo(tmp_path, data[:-5], "cut")
+    assert cut_stats["truncated"] == 1 and len(cut_mapped) == len(mapped) - 1
+    assert cut_piped_stats == cut_stats and len(cut_piped) == len(cut_mapped)
+
+
+def block_(frame: bytes, i: int) -> bytes:
+    """An enhanced packet block on interface 0 (Ethernet), `i` microseconds in."""
+    return block(6, struct.pack("<IIIII", 0, 0, i, len(frame), len(frame)) + frame)

@@ -190,3 +190,19 @@ print("pandas" in sys.modules)
         table.column("flag").to_pylist() == [True, False, True]
         and table.column("q_1").to_pylist() == [2.5] * 3
     )
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.lists(st.text(max_size=6), max_size=20), st.booleans())
+def test_text_columns_to_arrow_as_pyarrow_makes_them(values: list[str], constant: bool) -> None:
+    """Text columns (the one-value fast path included) hold what pyarrow's own conversion holds."""
+    import pyarrow as pa
+
+    from rtde_spec.output.tables import arrow_array
+
+    if constant and values:
+        values = [values[0]] * len(values)
+    column = np.array(values, dtype=str) if values else np.array([], dtype="U1")
+    got = arrow_array(column)
+    got.validate(full=True)
+    assert got.type == pa.string() and got.to_pylist() == [str(v) for v in column.tolist()]

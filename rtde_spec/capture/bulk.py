@@ -3,8 +3,9 @@
 At 500 Hz nearly every frame of an RTDE capture is Ethernet, IPv4, TCP, one whole data
 package of the same size, the sequence numbers following on. Per block of the file the
 record headers are walked once; then the IP and TCP headers of every frame are read
-as numpy columns, runs of such frames are marked, and each run's payloads are gathered
-into one bytes object. Every other frame is handed back whole, to be read one by one.
+as numpy columns, runs of such frames are marked, and each run's payloads are handed on
+as a numpy view of the file (rows of one package each), copied only when decoded.
+Every other frame is handed back whole, to be read one by one.
 """
 
 from __future__ import annotations
@@ -40,8 +41,13 @@ class DataRun:
     dport: int
     seq: int  # of the first frame
     size: int
-    times: list[float]
-    data: bytes  # the packages back to back
+    times: Any  # numpy float64, one per package
+    rows: Any  # numpy uint8 (packages, size): one package per row
+
+    @property
+    def data(self) -> bytes:
+        """The packages back to back."""
+        return self.rows.tobytes()  # type: ignore[no-any-return]
 
 
 def runs(records: Records) -> list[tuple[int, int]]:
@@ -109,13 +115,12 @@ def run_of(records: Records, first: int, end: int) -> DataRun:
     doff = (u8[offs + ETH + ihl + 12] >> 4).astype(np.int64) * 4
     starts = offs + ETH + ihl + doff
     stride = int(starts[1] - starts[0]) if len(starts) > 1 else size
-    if (np.diff(starts) == stride).all() and stride >= size:  # records evenly spaced: one strided copy
-        view = np.ndarray(
+    if (np.diff(starts) == stride).all() and stride >= size:  # records evenly spaced: a strided view
+        rows = np.ndarray(
             (len(starts), size), dtype=np.uint8, buffer=buf, offset=int(starts[0]), strides=(stride, 1)
         )
-        data = view.tobytes()
     else:
-        data = b"".join([buf[int(a) : int(a) + size] for a in starts])
+        rows = u8[starts[:, None] + np.arange(size)]  # gathered (a copy)
     sport, dport, seq = struct.unpack_from(">HHI", buf, tcp)
     return DataRun(
         socket.inet_ntop(socket.AF_INET, buf[ip + 12 : ip + 16]),
@@ -124,6 +129,6 @@ def run_of(records: Records, first: int, end: int) -> DataRun:
         dport,
         seq,
         size,
-        records.times[first:end].tolist(),
-        data,
+        records.times[first:end],
+        rows,
     )

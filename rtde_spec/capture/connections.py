@@ -27,7 +27,7 @@ from rtde_spec._generated.constants import (
 from rtde_spec.capture.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
 from rtde_spec.errors import RtdeSpecError
-from rtde_spec.output.writers import plain
+from rtde_spec.output.base import plain
 from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
 from rtde_spec.primary.codec import default_codec
 from rtde_spec.recipes.codec import RecipeCodec
@@ -118,7 +118,7 @@ class RtdeConnection:
             s: Framing(RTDE_SIZE_BYTES, RTDE_HEADER, types, limit) for s in ("controller", "client")
         }
         self.counts = Counts()
-        self.batches: dict[tuple[str, int], tuple[RecipeCodec, list[bytes], list[float]]] = {}
+        self.batches: dict[tuple[str, int], tuple[RecipeCodec, Any, Any]] = {}  # packages: bytes list or rows
 
     def feed(self, sender: str, chunk: Chunk) -> None:
         for package in self.framing[sender].feed(chunk):
@@ -140,13 +140,14 @@ class RtdeConnection:
             return None
         return self._codec(sender, package)
 
-    def feed_run(self, sender: str, codec: RecipeCodec, data: bytes, times: list[float]) -> None:
-        """Whole data packages of `codec`, back to back, each from its own segment at `times`."""
-        key = (sender, data[RECIPE_ID_AT])
+    def feed_run(self, sender: str, codec: RecipeCodec, rows: Any, times: Any) -> None:
+        """Whole data packages of `codec` (numpy uint8 rows, one package each), each from its
+        own segment at `times`; decoded straight from the rows, which may be a view of the file."""
+        key = (sender, int(rows[0, RECIPE_ID_AT]))
         self._flush(key)  # rows batched before the run come first
         self.counts.packages += len(times)
-        self.batches[key] = (codec, [data], times)
-        self._flush(key, count=len(times))
+        self.batches[key] = (codec, rows, times)
+        self._flush(key)
 
     def _codec(self, sender: str, package: bytes) -> RecipeCodec | None:
         direction = RTDE_DIRECTIONS[sender]
@@ -168,15 +169,15 @@ class RtdeConnection:
         if len(raws) >= BATCH:
             self._flush(key)
 
-    def _flush(self, key: tuple[str, int], count: int | None = None) -> None:
+    def _flush(self, key: tuple[str, int]) -> None:
         entry = self.batches.pop(key, None)
-        if entry is None or not entry[1]:
+        if entry is None or not len(entry[1]):
             return
         import numpy as np
 
         codec, raws, times = entry
-        array = codec.decode_many(b"".join(raws))
-        rows = len(raws) if count is None else count
+        array = codec.decode_many(raws if isinstance(raws, np.ndarray) else b"".join(raws))
+        rows = len(array)
         table = self.sink.table_for_recipe(RTDE_DIRECTIONS[key[0]], codec.names)
         columns: dict[str, Any] = {
             "connection": np.full(rows, self.name),

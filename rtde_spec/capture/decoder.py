@@ -141,8 +141,8 @@ def decode_capture(
             run.flush()
             run = None
         flow, sender, direction = whole.route
-        direction.advance(len(item.data))
-        flow.decoder.feed_run(sender, whole.codec, item.data, item.times)
+        direction.advance(item.rows.size)
+        flow.decoder.feed_run(sender, whole.codec, item.rows, item.times)
     if run is not None:
         run.flush()
     summary = CaptureSummary(str(path), stats.get("frames", 0))
@@ -234,9 +234,12 @@ class _Run:
                 _feed(self.route, seg)
             return
         flow, sender, direction = self.route
+        import numpy as np
+
         data = b"".join(s.payload for s in self.segments)
         direction.advance(len(data))
-        flow.decoder.feed_run(sender, self.codec, data, [s.time for s in self.segments])
+        rows = np.frombuffer(data, dtype=np.uint8).reshape(len(self.segments), -1)
+        flow.decoder.feed_run(sender, self.codec, rows, np.array([s.time for s in self.segments]))
 
 
 def _classify(

@@ -139,7 +139,7 @@ def items(
                     yield run_of(records, first, end)
                 done = end
             if progress is not None:
-                progress(f.tell())
+                progress(records.upto)
 
 
 def segments(
@@ -155,9 +155,6 @@ def segments(
 
 def expand(run: DataRun) -> Iterator[Segment]:
     """The segments a DataRun stands for."""
-    for i, ts in enumerate(run.times):
-        start = i * run.size
-        seq = (run.seq + start) % (1 << 32)
-        yield Segment(
-            ts, run.src, run.sport, run.dst, run.dport, seq, ACK_PSH, run.data[start : start + run.size]
-        )
+    for i, (ts, row) in enumerate(zip(run.times.tolist(), run.rows, strict=True)):
+        seq = (run.seq + i * run.size) % (1 << 32)
+        yield Segment(ts, run.src, run.sport, run.dst, run.dport, seq, ACK_PSH, row.tobytes())

@@ -13,7 +13,8 @@ from pathlib import Path
 from typing import Any
 
 from rtde_spec.errors import require
-from rtde_spec.output.writers import Writer, flat_columns, flatten, open_writer
+from rtde_spec.output.base import Writer, flat_columns, flatten
+from rtde_spec.output.writers import open_writer
 
 EXTENSIONS = {"parquet": "parquet", "csv": "csv", "jsonl": "jsonl"}
 

@@ -75,7 +75,7 @@ def run(args: argparse.Namespace) -> int:
     }
     summaries: list[CaptureSummary] = []
     if args.jobs > 1 and len(files) > 1:
-        from rtde_spec.output.writers import one_core_per_process
+        from rtde_spec.output.parquet import one_core_per_process
 
         if args.format == "parquet":  # imported once here: forked workers start with it loaded
             import pyarrow.parquet  # noqa: F401

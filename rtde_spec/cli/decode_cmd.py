@@ -18,7 +18,7 @@ from rtde_spec.cli.common import existing_file, read_input, reject_capture
 from rtde_spec.errors import RtdeSpecError, UsageError
 
 if TYPE_CHECKING:
-    from rtde_spec.output.writers import Writer
+    from rtde_spec.output.base import Writer
     from rtde_spec.recipes.codec import RecipeCodec
     from rtde_spec.rtde.stream import Batch, Package
 

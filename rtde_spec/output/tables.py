@@ -62,6 +62,11 @@ def arrow_array(column: Any) -> Any:
     import pyarrow as pa
 
     if column.dtype.kind == "U":  # text (connection names, robots, dates): offsets and UTF-8 bytes
+        if len(column) and (column == column[0]).all():  # one value throughout (a connection's name)
+            one = str(column[0]).encode("utf-8")
+            offsets = np.arange(len(column) + 1, dtype=np.int32) * len(one)
+            buffers = [None, pa.py_buffer(offsets), pa.py_buffer(one * len(column))]
+            return pa.Array.from_buffers(pa.string(), len(column), buffers)
         encoded = [value.encode("utf-8") for value in column.tolist()]
         offsets = np.zeros(len(encoded) + 1, dtype=np.int32)
         np.cumsum([len(e) for e in encoded], out=offsets[1:])

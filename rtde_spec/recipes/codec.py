@@ -288,22 +288,34 @@ class RecipeCodec:
             assert self._dtype.itemsize == self.package_size
         return self._dtype
 
-    def decode_many(self, buffer: bytes | bytearray | memoryview, recipe_id: int | None = None) -> Any:
-        """Many same-recipe data packages back to back -> a numpy structured array.
+    def decode_many(self, buffer: bytes | bytearray | memoryview | Any, recipe_id: int | None = None) -> Any:
+        """Many same-recipe data packages -> a numpy structured array, without a copy.
 
-        Zero-copy when the buffer holds only these packages; every package's size,
-        type and recipe id are checked (vectorised), and the first bad one is named.
+        `buffer`: the packages back to back, or a 2-D numpy uint8 array with one package
+        per row (rows may be spaced, as in a view of a capture file). Every package's
+        size, type and recipe id are checked in one pass, and the first bad one is named.
         """
         np = require("numpy", "numpy", "decode_many")
-        if len(buffer) % self.package_size:
+        size = self.package_size
+        if isinstance(buffer, np.ndarray) and buffer.ndim == 2:
+            if buffer.dtype != np.uint8 or buffer.shape[1] != size:
+                raise DecodeError(
+                    "rows are not this recipe's data packages",
+                    expected=f"uint8 rows of {size} bytes",
+                    actual=f"{buffer.dtype} rows of {buffer.shape[1]}",
+                )
+            rows, stride = buffer, buffer.strides[0]
+        elif len(buffer) % size:
             raise DecodeError(
                 "buffer is not a whole number of this recipe's data packages",
-                offset=len(buffer) - len(buffer) % self.package_size,
-                expected=f"a multiple of {self.package_size} bytes",
+                offset=len(buffer) - len(buffer) % size,
+                expected=f"a multiple of {size} bytes",
                 actual=f"{len(buffer)} bytes",
             )
-        arr = np.frombuffer(buffer, dtype=self.dtype)
-        bad = self._bad_prefixes(np, arr, recipe_id)
+        else:
+            rows, stride = np.frombuffer(buffer, dtype=np.uint8).reshape(-1, size), size
+        arr = rows.view(self.dtype)[:, 0] if len(rows) else np.zeros(0, dtype=self.dtype)
+        bad = self._bad_prefixes(np, rows, recipe_id)
         if bad.any():
             index = int(np.argmax(bad))
             row = arr[index]
@@ -311,19 +323,22 @@ class RecipeCodec:
                 f"package {index} is not a data package of this recipe "
                 f"(size {int(row['size'])}, type {int(row['type'])}, recipe {int(row['recipe_id'])})",
                 package="data_package",
-                offset=index * self.package_size,
-                expected=f"size {self.package_size}, type {DATA_PACKAGE_TYPE}"
+                offset=index * stride,
+                expected=f"size {size}, type {DATA_PACKAGE_TYPE}"
                 + (f", recipe {recipe_id}" if recipe_id is not None else ""),
             )
         return arr
 
-    def _bad_prefixes(self, np: Any, arr: Any, recipe_id: int | None) -> Any:
+    def _bad_prefixes(self, np: Any, rows: Any, recipe_id: int | None) -> Any:
         """Which packages' size, type or recipe id is wrong: one comparison over a strided view."""
-        if _PREFIX_WORD is None or not len(arr):  # a prefix of no machine-word size: field by field
+        if not len(rows):
+            return np.zeros(0, dtype=bool)
+        if _PREFIX_WORD is None:  # a prefix of no machine-word size: field by field
+            arr = rows.view(self.dtype)[:, 0]
             bad = (arr["size"] != self.package_size) | (arr["type"] != DATA_PACKAGE_TYPE)
             return bad | (arr["recipe_id"] != recipe_id) if recipe_id is not None else bad
         dtype, mask = _PREFIX_WORD
-        words = np.ndarray((len(arr),), dtype=dtype, buffer=arr, strides=(self.package_size,))
+        words = rows[:, : _PREFIX.size].view(dtype)[:, 0]
         want = int.from_bytes(_PREFIX.pack(self.package_size, DATA_PACKAGE_TYPE, recipe_id or 0), "big")
         return words != want if recipe_id is not None else (words & mask) != want
 

@@ -13,7 +13,7 @@ import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
-from rtde_spec.output.writers import Writer
+from rtde_spec.output.base import Writer
 from rtde_spec.rtde.client import RtdeClient
 
 BATCH_SECONDS = 0.2

@@ -1,0 +1,97 @@
+"""What every writer shares: the Writer base, and records and numpy columns made flat
+(vectors to `name_0..name_N`, as UR's own recorder names them; bytes as hex)."""
+
+from __future__ import annotations
+
+import json
+from collections.abc import Mapping
+from typing import IO, Any
+
+from rtde_spec.output.background import BackgroundStream
+
+
+def plain(value: Any) -> Any:
+    """A JSON-able value: bytes as hex, tuples as lists, numpy scalars as Python numbers."""
+    if isinstance(value, (bytes, bytearray, memoryview)):
+        return bytes(value).hex()
+    if isinstance(value, (list, tuple)):
+        return [plain(v) for v in value]
+    if isinstance(value, Mapping):
+        return {str(k): plain(v) for k, v in value.items()}
+    if value is None or isinstance(value, (bool, str, float)):
+        return value
+    if isinstance(value, int):
+        return int(value)
+    if hasattr(value, "item"):
+        return value.item()
+    return str(value)
+
+
+def flatten(record: Mapping[str, Any]) -> dict[str, Any]:
+    """Vectors to name_0..name_N, bytes to hex, nested records to JSON text."""
+    out: dict[str, Any] = {}
+    for name, value in record.items():
+        if isinstance(value, (list, tuple)) and all(isinstance(v, (int, float)) for v in value):
+            for i, v in enumerate(value):
+                out[f"{name}_{i}"] = v
+        elif isinstance(value, (list, tuple, Mapping)):
+            out[name] = json.dumps(plain(value))
+        elif isinstance(value, (bytes, bytearray, memoryview)):
+            out[name] = bytes(value).hex()
+        else:
+            out[name] = value
+    return out
+
+
+def native_order(column: Any) -> Any:
+    """The column in native byte order (big-endian wire values would convert one by one)."""
+    return column if column.dtype.isnative else column.astype(column.dtype.newbyteorder("="))
+
+
+def flat_columns(columns: Mapping[str, Any]) -> dict[str, Any]:
+    """numpy columns (2-D for vectors) to 1-D columns named name_0..name_N, native byte order.
+
+    Each output column is made contiguous and native in one pass, so Arrow takes it
+    without another copy.
+    """
+    out: dict[str, Any] = {}
+    for name, column in columns.items():
+        native = column.dtype.newbyteorder("=")
+        if column.ndim == 1:
+            out[name] = column if column.dtype.isnative else column.astype(native)
+        else:
+            for i in range(column.shape[1]):
+                out[f"{name}_{i}"] = column[:, i].astype(native)
+    return out
+
+
+class Writer:
+    """Base: counts rows; subclasses write them."""
+
+    def __init__(self, stream: IO[bytes]) -> None:
+        self.stream = stream
+        self.rows = 0
+        self.owns_stream = False  # open_writer's own file: closed with the writer
+
+    def write(self, record: Mapping[str, Any]) -> None:
+        raise NotImplementedError
+
+    def flush(self) -> None:
+        """Everything written so far is in the file (the recorder calls this per batch)."""
+        self.stream.flush()
+
+    def write_columns(self, columns: Mapping[str, Any]) -> None:
+        """A batch of data packages as numpy columns (same names as the rows would have)."""
+        names = list(columns)
+        lists = [columns[n].tolist() for n in names]
+        for values in zip(*lists, strict=True):
+            self.write(dict(zip(names, values, strict=True)))
+
+    def close(self) -> None:
+        stream = self.stream
+        if isinstance(stream, BackgroundStream):
+            stream.close()
+            stream = stream.raw
+        stream.flush()
+        if self.owns_stream:
+            stream.close()

@@ -1,0 +1,132 @@
+"""Parquet output, streamed as row groups, encoded on a second thread where a core is free."""
+
+from __future__ import annotations
+
+import os
+from collections.abc import Mapping
+from typing import IO, Any
+
+from rtde_spec.errors import require
+from rtde_spec.output.base import Writer, flat_columns, flatten
+from rtde_spec.output.tables import arrow_table
+
+_PARQUET_BATCH_ROWS = 16384
+
+
+class ParquetWriter(Writer):
+    """Parquet, streamed as row groups of about `ROW_GROUP_ROWS`; the schema is the first batch's.
+
+    Dictionary encoding, compression and statistics only where they pay: integer and
+    bool columns (modes, bits, registers), and statistics for the timestamp. Float
+    columns of robot data rarely repeat and do not compress (snappy saves under 1 %
+    on them); encoding and compressing them anyway costs most of the write time.
+    Snappy and uncompressed are what every Parquet reader reads.
+    """
+
+    ROW_GROUP_ROWS = 4096
+    THREADED: bool | None = None  # encode row groups on a second thread; None: when a second core is ours
+
+    def __init__(self, stream: IO[bytes] | str) -> None:
+        super().__init__(stream)  # type: ignore[arg-type]  # a path: pyarrow opens the file itself
+        self._pa = require("pyarrow", "parquet", "Parquet output")
+        self._pq = require("pyarrow.parquet", "parquet", "Parquet output")
+        self._writer: Any = None
+        self._rows: list[dict[str, Any]] = []
+        self._tables: list[Any] = []
+        self._held = 0
+        self._pool: Any = None
+        self._pending: Any = None
+
+    def _open(self, schema: Any) -> None:
+        pa = self._pa
+        discrete = [f.name for f in schema if not pa.types.is_floating(f.type)]
+        stats = [*discrete, *(["timestamp"] if "timestamp" in schema.names else [])]
+        compression = {f.name: "snappy" if f.name in discrete else "none" for f in schema}
+        self._writer = self._pq.ParquetWriter(
+            self.stream,
+            schema,
+            use_dictionary=discrete or False,
+            write_statistics=stats or False,
+            compression=compression,
+        )
+
+    def _add(self, table_: Any) -> None:
+        if self._writer is None:
+            self._open(table_.schema)
+        elif table_.schema != self._writer.schema:
+            table_ = table_.select(self._writer.schema.names).cast(self._writer.schema)
+        self._tables.append(table_)
+        self._held += table_.num_rows
+        if self._held >= self.ROW_GROUP_ROWS:
+            self._write_held()
+
+    def _write_held(self) -> None:
+        """Hand the held rows to the writing thread; at most one row group is in flight.
+
+        pyarrow encodes with the GIL released, so on two cores the next batch decodes
+        while this one is written. Memory stays bounded: one group held, one writing.
+        """
+        if not self._tables:
+            return
+        group = self._pa.concat_tables(self._tables)
+        self._tables, self._held = [], 0
+        self._wait()
+        if not (self.THREADED if self.THREADED is not None else usable_cores() > 1):
+            self._writer.write_table(group, row_group_size=group.num_rows)
+            return
+        if self._pool is None:
+            from concurrent.futures import ThreadPoolExecutor
+
+            self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="parquet")
+        self._pending = self._pool.submit(self._writer.write_table, group, row_group_size=group.num_rows)
+
+    def flush(self) -> None:
+        """Wait for the row group in flight; held rows wait for a whole group (or close)."""
+        self._wait()
+
+    def _wait(self) -> None:
+        if self._pending is not None:
+            pending, self._pending = self._pending, None
+            pending.result()  # re-raises a write error here, in the caller's thread
+
+    def write(self, record: Mapping[str, Any]) -> None:
+        self._rows.append(flatten(record))
+        self.rows += 1
+        if len(self._rows) >= _PARQUET_BATCH_ROWS:
+            self._flush_rows()
+
+    def _flush_rows(self) -> None:
+        if self._rows:
+            self._add(self._pa.Table.from_pylist(self._rows))
+            self._rows = []
+
+    def write_columns(self, columns: Mapping[str, Any]) -> None:
+        self._flush_rows()
+        flat = flat_columns(columns)
+        self._add(arrow_table(flat))
+        self.rows += len(next(iter(flat.values()))) if flat else 0
+
+    def close(self) -> None:
+        self._flush_rows()
+        try:
+            if self._writer is not None:
+                self._write_held()
+                self._wait()
+                self._writer.close()
+        finally:
+            if self._pool is not None:
+                self._pool.shutdown()
+        if not isinstance(self.stream, str):
+            super().close()
+
+
+def usable_cores() -> int:
+    """Cores this process may run on (its affinity where the system says, else all)."""
+    if hasattr(os, "sched_getaffinity"):
+        return len(os.sched_getaffinity(0))
+    return os.cpu_count() or 1
+
+
+def one_core_per_process() -> None:
+    """Worker processes that each take a core (`capture --jobs`) write Parquet in the calling thread."""
+    ParquetWriter.THREADED = False
