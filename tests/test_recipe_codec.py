@@ -132,6 +132,31 @@ def test_package_checks() -> None:
         codec.decode_many(package + b"\0")
 
 
+@pytest.mark.parametrize("gap", [0, 5, 40])
+def test_bulk_decode_of_spaced_rows_as_a_capture_file_holds_them(gap: int) -> None:
+    """Rows of packages with other bytes between them (frame headers in a capture) decode in
+    place as they do back to back; a bad row is named by its place in the buffer."""
+    codec = RecipeCodec.for_names(["timestamp", "actual_q", "robot_mode"], "output")
+    packages = [
+        codec.encode_package({"timestamp": i / 2, "actual_q": (i,) * 6, "robot_mode": i}, 1) for i in range(7)
+    ]
+    size = codec.package_size
+    spaced = b"".join(b"\xee" * gap + p for p in packages)
+    rows = np.ndarray((7, size), np.uint8, buffer=spaced, offset=gap, strides=(size + gap, 1))
+    arr = codec.decode_many(rows, recipe_id=1)
+    assert np.array_equal(arr, codec.decode_many(b"".join(packages)))
+    assert arr["actual_q"][3].tolist() == [3.0] * 6 and arr["robot_mode"].tolist() == list(range(7))
+    broken = bytearray(spaced)
+    broken[gap + 4 * (size + gap) + 2] = ord("M")  # package 4 is not a data package
+    rows = np.ndarray((7, size), np.uint8, buffer=bytes(broken), offset=gap, strides=(size + gap, 1))
+    with pytest.raises(DecodeError) as info:
+        codec.decode_many(rows)
+    assert "package 4" in str(info.value) and info.value.offset == 4 * (size + gap)
+    with pytest.raises(DecodeError, match="rows of"):
+        codec.decode_many(np.zeros((2, size + 1), np.uint8))
+    assert len(codec.decode_many(np.zeros((0, size), np.uint8))) == 0
+
+
 def test_recipe_errors() -> None:
     with pytest.raises(RecipeError, match="unknown output field"):
         RecipeCodec.for_names(["nope"], "output")
