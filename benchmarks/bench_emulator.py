@@ -43,13 +43,17 @@ port, seconds, names, mode = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3].s
 batch = BATCH if mode.endswith("batched") else 1
 with RtdeClient("127.0.0.1", port, queue_size=100000, batch=batch) as c:
     c.setup_outputs(names, 500.0)
+    latest = []
     if mode.startswith("callback"):
-        seen = []
-        c.on_data(seen.append)  # records handed over in the reader thread
+        c.on_data(latest.append)  # records handed over in the reader thread
     c.start()
-    c.receive(); t0, c0, n0 = time.monotonic(), time.process_time(), c.received
+    while c.received == 0:
+        time.sleep(0.001)
+    latest.clear(); t0, c0, n0 = time.monotonic(), time.process_time(), c.received
     if mode.startswith("callback"):
-        time.sleep(seconds)
+        while time.monotonic() - t0 < seconds:
+            time.sleep(0.1)
+            del latest[:-1]  # the consumer keeps the newest record, as a control loop would
     else:
         while time.monotonic() - t0 < seconds:
             c.receive()  # records handed to this thread, one wake-up each

@@ -72,6 +72,31 @@ def test_bulk_decode_matches_per_packet(case: tuple[RecipeCodec, dict], count: i
             assert _same(column[0].item(), expected)
 
 
+@settings(max_examples=100, deadline=None)
+@given(recipe_and_values(), st.integers(0, 12), st.integers(0, 11))
+def test_records_of_many_packages_are_those_of_each(
+    case: tuple[RecipeCodec, dict], count: int, bad: int
+) -> None:
+    """decode_records (one C loop) gives what decode_package gives per package, and names a
+    bad package by its place as decode_package would."""
+    codec, values = case
+    package = codec.encode_package(values, recipe_id=9)
+    data = package * count
+    records = codec.decode_records(data, recipe_id=9)
+    assert records == [codec.decode_package(package, recipe_id=9)] * count
+    assert all(type(r) is codec.record_type for r in records)
+    if bad < count:
+        broken = bytearray(data)
+        broken[bad * len(package) + 2] ^= 0xFF  # its type
+        with pytest.raises(DecodeError) as info:
+            codec.decode_records(bytes(broken))
+        assert info.value.offset == bad * len(package) + 2 and f"#{bad}" in str(info.value)
+        with pytest.raises(DecodeError, match="another recipe"):
+            codec.decode_records(data, recipe_id=8)
+    with pytest.raises(DecodeError, match="whole number"):
+        codec.decode_records(data + b"\0")
+
+
 def test_uint8_out_of_range_names_field_and_bounds() -> None:
     codec = RecipeCodec.for_names(["standard_digital_output_mask", "speed_slider_fraction"], "input")
     with pytest.raises(EncodeError) as info:

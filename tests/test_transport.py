@@ -8,6 +8,7 @@ import socket
 import struct
 import time
 from collections.abc import Iterator
+from pathlib import Path
 
 import pytest
 
@@ -141,6 +142,46 @@ async def _batched_async(port: int) -> tuple[list[float], float]:
 def test_batched_asyncio_client(emu: EmulatorThread) -> None:
     stamps, answered = asyncio.run(_batched_async(emu.ports["rtde"]))
     assert [round((b - a) * 500) for a, b in itertools.pairwise(stamps)] == [1] * 59 and answered < 0.5
+
+
+@pytest.mark.parametrize("batch", [1, 20])
+def test_callbacks_take_every_record_instead_of_the_queue(emu: EmulatorThread, batch: int) -> None:
+    """Push or pull: with on_data/on_raw every package goes to the callbacks, in order, and
+    nothing piles up in a queue nobody reads (so nothing is counted as skipped)."""
+    records: list = []
+    raws: list[bytes] = []
+    with RtdeClient("127.0.0.1", emu.ports["rtde"], queue_size=5, batch=batch) as client:
+        client.setup_outputs(["timestamp", "actual_q"], 500)
+        client.on_data(records.append)
+        client.on_raw(raws.append)
+        client.start()
+        deadline = time.monotonic() + 5
+        while len(records) < 120 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        with pytest.raises(UsageError, match="callbacks"):
+            client.receive()
+        client.pause()
+        codec = client.core.output
+    assert len(records) >= 120 and client.skipped == 0 and client.received >= len(records)
+    stamps = [r.timestamp for r in records[:120]]
+    assert [round((b - a) * 500) for a, b in itertools.pairwise(stamps)] == [1] * 119
+    assert records[0].actual_q == pytest.approx((0.1, 0.2, 0.3, 0.4, 0.5, 0.6))
+    assert [codec.decode_package(r).timestamp for r in raws[:120]] == stamps  # the same packages
+
+
+def test_recording_reports_nothing_skipped_when_every_row_is_written(
+    emu: EmulatorThread, tmp_path: Path
+) -> None:
+    from rtde_spec.output.writers import open_writer
+    from rtde_spec.rtde.recorder import record
+
+    out = tmp_path / "rows.csv"
+    writer = open_writer("csv", out)
+    with RtdeClient("127.0.0.1", emu.ports["rtde"], queue_size=10) as client:
+        result = record(client, ["timestamp"], 500, writer, samples=300)
+    writer.close()
+    rows = out.read_text().splitlines()[1:]
+    assert result.rows == len(rows) == 300 and result.skipped == 0  # more rows than the queue holds
 
 
 def test_output_rate_is_floor_of_base_over_frequency(emu: EmulatorThread) -> None:

@@ -19,7 +19,7 @@ from typing import Any
 from rtde_spec._generated.constants import RTDE_PORT
 from rtde_spec.errors import ProtocolError, RtdeConnectionError
 from rtde_spec.rtde.client import LOG_LEVELS
-from rtde_spec.rtde.client_protocol import ClientBase, Data, InputRecipe, Reply, Text
+from rtde_spec.rtde.client_protocol import ClientBase, DataRun, InputRecipe, Reply, Text
 
 log = logging.getLogger("rtde_spec.client")
 
@@ -128,11 +128,11 @@ class AsyncRtdeClient(ClientBase):
                 if not chunk:
                     raise RtdeConnectionError("the controller closed the connection", subject=self.where)
                 for event in self.core.receive(chunk):
-                    if isinstance(event, Data):
-                        self.received += 1
-                        if len(self._data) == self._data.maxlen:
-                            self.skipped += 1
-                        self._data.append(event.record)
+                    if isinstance(event, DataRun):
+                        got = len(event.records)
+                        self.received += got
+                        self.skipped += max(0, len(self._data) + got - self._data.maxlen)  # type: ignore[operator]
+                        self._data.extend(event.records)
                         self._data_event.set()
                     elif isinstance(event, Text):
                         log.log(LOG_LEVELS[min(event.level, 3)], "%s: %s", event.source, event.message)

@@ -18,8 +18,8 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any
 
 from rtde_spec._generated.constants import RTDE_PORT
-from rtde_spec.errors import ProtocolError, RtdeConnectionError
-from rtde_spec.rtde.client_protocol import ClientBase, Data, InputRecipe, Reply, Text
+from rtde_spec.errors import ProtocolError, RtdeConnectionError, UsageError
+from rtde_spec.rtde.client_protocol import ClientBase, DataRun, InputRecipe, Reply, Text
 
 log = logging.getLogger("rtde_spec.client")
 LOG_LEVELS = (logging.CRITICAL, logging.ERROR, logging.WARNING, logging.INFO)  # by text-message level
@@ -108,6 +108,11 @@ class RtdeClient(ClientBase):
 
     def receive(self, timeout: float | None = None) -> Any:
         """The next output record (oldest first); TimeoutError when none arrives in time."""
+        if self._callbacks or self._raw_callbacks:
+            raise UsageError(
+                "data packages go to the on_data/on_raw callbacks, not to receive()",
+                subject=self.where,
+            )
         with self._data_ready:
             if not self._data_ready.wait_for(lambda: self._data or self._closed, timeout or self.timeout):
                 raise TimeoutError(f"no data package from {self.where} within {timeout or self.timeout} s")
@@ -123,11 +128,16 @@ class RtdeClient(ClientBase):
                 return
 
     def on_data(self, callback: Callable[[Any], None]) -> None:
-        """Call `callback(record)` in the reader thread for every data package (keep it short)."""
+        """Call `callback(record)` in the reader thread for every data package (keep it short).
+
+        Push or pull: with a callback, records go to it instead of the queue (a queue
+        nobody reads would only fill and count its oldest as skipped).
+        """
         self._callbacks.append(callback)
 
     def on_raw(self, callback: Callable[[bytes], None]) -> None:
-        """Call `callback(package bytes)` for every data package: for recorders that batch."""
+        """Call `callback(package bytes)` for every data package: for recorders that batch
+        (instead of the queue, as `on_data`)."""
         self._raw_callbacks.append(callback)
 
     # --- internals ----------------------------------------------------------
@@ -165,9 +175,9 @@ class RtdeClient(ClientBase):
                 chunk = sock.recv(max(65536, 2 * self._low_mark))
                 if not chunk:
                     raise RtdeConnectionError("the controller closed the connection", subject=self.where)
-                data: list[Data] = []
+                data: list[DataRun] = []
                 for event in self.core.receive(chunk):
-                    if isinstance(event, Data):
+                    if isinstance(event, DataRun):
                         data.append(event)
                         continue
                     if data:  # keep the order of data and replies
@@ -184,21 +194,26 @@ class RtdeClient(ClientBase):
         except BaseException as exc:
             self._finish(exc)
 
-    def _deliver(self, events: list[Data]) -> None:
-        """Hand over the data packages of one read: callbacks, then the queue under one lock."""
-        self.received += len(events)
-        for raw in self._raw_callbacks:
-            for event in events:
-                raw(event.raw)
-        for callback in self._callbacks:
-            for event in events:
-                callback(event.record)
+    def _deliver(self, runs: list[DataRun]) -> None:
+        """Hand over the data packages of one read: to the callbacks if there are any,
+        else to the queue under one lock (the oldest dropped and counted when full)."""
+        records = runs[0].records if len(runs) == 1 else [r for run in runs for r in run.records]
+        self.received += len(records)
+        if self._callbacks or self._raw_callbacks:
+            for raw in self._raw_callbacks:
+                for run in runs:
+                    for package in run.packages():
+                        raw(package)
+            for callback in self._callbacks:
+                for record in records:
+                    callback(record)
+            return
         with self._data_ready:
             room = self._data.maxlen - len(self._data)  # type: ignore[operator]
-            if len(events) > room:
-                self.skipped += len(events) - room  # the oldest go; the socket keeps being drained
-            self._data.extend(event.record for event in events)
-            self._data_ready.notify(len(events))
+            if len(records) > room:
+                self.skipped += len(records) - room  # the oldest go; the socket keeps being drained
+            self._data.extend(records)
+            self._data_ready.notify(len(records))
 
     def _finish(self, exc: BaseException) -> None:
         self._closed = exc

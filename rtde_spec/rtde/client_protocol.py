@@ -3,13 +3,15 @@
 The blocking and asyncio clients both drive this one core, so the protocol (version
 negotiation, recipes, the data path) is written once. Recipes are validated
 offline against the controller's version before they are sent. Data packages of
-the output recipe skip the generic codec: one prefix check and one unpack each.
+the output recipe skip the generic codec: those that arrive back to back in one read
+are cut out together and become records in one C loop (`RecipeCodec.decode_records`).
 """
 
 from __future__ import annotations
 
 import collections
 import socket
+import struct
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -22,6 +24,7 @@ from rtde_spec._generated.constants import (
     RTDE_PORT,
     RTDE_PROTOCOLS,
 )
+from rtde_spec._generated.rtde_models import HEADER_FORMAT
 from rtde_spec.errors import ProtocolError, RecipeError, RtdeSpecError
 from rtde_spec.recipes.codec import RecipeCodec
 from rtde_spec.recipes.model import Recipe
@@ -53,11 +56,17 @@ class Reply:
 
 
 @dataclass(frozen=True)
-class Data:
-    """A data package of the output recipe, as a record."""
+class DataRun:
+    """Data packages of the output recipe that came back to back (one or more), as records."""
 
-    record: Any
-    raw: bytes
+    records: list[Any]
+    raw: bytes | memoryview  # the packages, back to back
+    size: int  # bytes per package
+
+    def packages(self) -> list[bytes]:
+        """Each package's bytes."""
+        raw, size = self.raw, self.size
+        return [bytes(raw[at : at + size]) for at in range(0, len(raw), size)]
 
 
 @dataclass(frozen=True)
@@ -69,7 +78,7 @@ class Text:
     source: str
 
 
-Event = Reply | Data | Text
+Event = Reply | DataRun | Text
 
 
 class ClientProtocol:
@@ -80,6 +89,7 @@ class ClientProtocol:
         self.controller_version: Version | None = None
         self.output: RecipeCodec | None = None
         self.output_recipe_id: int | None = None
+        self._run: tuple[int, bytes] | None = None  # (size, leading bytes) of the output's packages
         self.inputs: dict[int, InputRecipe] = {}
         self._requested: list[Any] = []  # setups awaiting their reply, in order
 
@@ -139,12 +149,12 @@ class ClientProtocol:
     def receive(self, data: bytes) -> list[Event]:
         """Events for every package this data completes."""
         events: list[Event] = []
-        output = self.output
-        for _, package in self.framer.feed(data):
-            if output is not None and package[2] == DATA_PACKAGE_TYPE and len(package) == output.package_size:
-                events.append(Data(output.decode_package(package), package))
+        output, run = self.output, self._run
+        for _, package in self.framer.feed(data, run):
+            if output is not None and run is not None and package[: len(run[1])] == run[1]:
+                events.append(DataRun(output.decode_records(package), package, run[0]))
                 continue
-            message = decode(package, protocol_version=self.state.version, sender="controller")
+            message = decode(bytes(package), protocol_version=self.state.version, sender="controller")
             event = self._control(message)
             if event is not None:
                 events.append(event)
@@ -185,6 +195,8 @@ class ClientProtocol:
         codec = RecipeCodec.for_types(list(names), types[: len(names)], self.catalogue)
         if direction == "output":
             self.output, self.output_recipe_id = codec, recipe_id
+            lead = struct.pack(HEADER_FORMAT, codec.package_size, DATA_PACKAGE_TYPE)
+            self._run = (codec.package_size, lead)
         else:
             self.inputs[recipe_id] = InputRecipe(recipe_id, tuple(names), codec)
 
