@@ -149,7 +149,11 @@ def _populate(mapped: mmap.mmap, start: int, end: int) -> None:
 
 
 def _mapped(f: IO[bytes]) -> mmap.mmap | None:
-    """The whole file mapped read-only, or None where it cannot be (a pipe, an empty file)."""
+    """The whole file mapped read-only, or None where it cannot be (a pipe, an empty file).
+
+    A capture still being written is read up to its size when opened, as a read would
+    at that moment.
+    """
     try:
         return mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ)
     except (OSError, ValueError, AttributeError):  # io.UnsupportedOperation is an OSError
