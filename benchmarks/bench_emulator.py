@@ -37,23 +37,21 @@ BATCH = 50  # packages per reader wake-up in the batched row: 100 ms at 500 Hz, 
 OURS = (
     f"BATCH = {BATCH}\n"
     + """
-import json, sys, time
+import functools, json, sys, time
 from rtde_spec import RtdeClient
 port, seconds, names, mode = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3].split(","), sys.argv[4]
 batch = BATCH if mode.endswith("batched") else 1
 with RtdeClient("127.0.0.1", port, queue_size=100000, batch=batch) as c:
     c.setup_outputs(names, 500.0)
-    latest = []
-    if mode.startswith("callback"):
-        c.on_data(latest.append)  # records handed over in the reader thread
+    newest = [None]
+    if mode.startswith("callback"):  # records handed over in the reader thread; the consumer
+        c.on_data(functools.partial(newest.__setitem__, 0))  # keeps the newest, as the UR-style loop
     c.start()
     while c.received == 0:
         time.sleep(0.001)
-    latest.clear(); t0, c0, n0 = time.monotonic(), time.process_time(), c.received
+    t0, c0, n0 = time.monotonic(), time.process_time(), c.received
     if mode.startswith("callback"):
-        while time.monotonic() - t0 < seconds:
-            time.sleep(0.1)
-            del latest[:-1]  # the consumer keeps the newest record, as a control loop would
+        time.sleep(seconds)
     else:
         while time.monotonic() - t0 < seconds:
             c.receive()  # records handed to this thread, one wake-up each

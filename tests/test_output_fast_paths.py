@@ -13,6 +13,7 @@ import math
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 import orjson
@@ -206,3 +207,47 @@ def test_text_columns_to_arrow_as_pyarrow_makes_them(values: list[str], constant
     got = arrow_array(column)
     got.validate(full=True)
     assert got.type == pa.string() and got.to_pylist() == [str(v) for v in column.tolist()]
+
+
+def _client_with_recipe() -> Any:
+    """A sans-I/O client core that has negotiated protocol 2 and set up NAMES as its outputs."""
+    from rtde_spec.rtde.client_protocol import ClientProtocol
+
+    core = ClientProtocol()
+    core.request_protocol_version(2)
+    core.receive(build("request_protocol_version_reply", accepted=True))
+    core.setup_outputs(NAMES, 125.0)
+    types = [core.catalogue.get(n, "output").type for n in NAMES]
+    core.receive(build("setup_outputs_v2_reply", output_recipe_id=1, variable_types=types))
+    return core
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.lists(st.integers(1, 400), max_size=12))
+def test_client_core_gives_the_same_events_whatever_the_reads(cuts: list[int]) -> None:
+    """One package per read (the per-package path), several, or split anywhere: the same
+    records and text in the same order, and the stream offset counts every byte."""
+    from rtde_spec.rtde.client_protocol import DataRun, Text
+
+    stream = data_packages(3) + TEXT + data_packages(4, start=3)
+    reference = _client_with_recipe()
+    size = CODEC.package_size
+    whole = [stream[:size], stream[size : 2 * size], stream[2 * size : 3 * size], stream[3 * size :]]
+
+    def events(core: Any, reads: list[bytes]) -> list[Any]:
+        out: list[Any] = []
+        for read in reads:
+            for event in core.receive(read):
+                out += event.records if isinstance(event, DataRun) else [event]
+        return out
+
+    before = reference.framer.offset
+    expected = events(reference, whole)  # the first three reads: one whole data package each
+    assert reference.framer.offset - before == len(stream) and reference.framer.pending == 0
+    assert [isinstance(e, Text) for e in expected] == [False] * 3 + [True] + [False] * 4
+    assert [e.timestamp for e in expected if not isinstance(e, Text)] == [i * 0.002 for i in range(7)]
+    bounds = sorted({min(c, len(stream)) for c in itertools.accumulate(cuts)} | {0, len(stream)})
+    core = _client_with_recipe()
+    start = core.framer.offset
+    assert events(core, [stream[a:b] for a, b in itertools.pairwise(bounds)]) == expected
+    assert core.framer.offset - start == len(stream) and core.framer.pending == 0

@@ -26,7 +26,7 @@ from rtde_spec._generated.constants import (
 )
 from rtde_spec._generated.rtde_models import HEADER_FORMAT
 from rtde_spec.errors import ProtocolError, RecipeError, RtdeSpecError
-from rtde_spec.recipes.codec import RecipeCodec
+from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
 from rtde_spec.recipes.model import Recipe
 from rtde_spec.rtde.codec import build, decode, observe
 from rtde_spec.rtde.messages import RtdeMessage
@@ -148,8 +148,10 @@ class ClientProtocol:
 
     def receive(self, data: bytes) -> list[Event]:
         """Events for every package this data completes."""
-        events: list[Event] = []
         output, run = self.output, self._run
+        if output is not None and run is not None and self.framer.take_whole(data, *run):
+            return [DataRun([output.decode_record(data, PAYLOAD_OFFSET)], data, run[0])]
+        events: list[Event] = []
         for _, package in self.framer.feed(data, run):
             if output is not None and run is not None and package[: len(run[1])] == run[1]:
                 events.append(DataRun(output.decode_records(package), package, run[0]))

@@ -63,6 +63,16 @@ class PackageFramer:
         self._drain(run, out)
         return out
 
+    def take_whole(self, data: bytes, size: int, lead: bytes) -> bool:
+        """Whether `data` is exactly one package of `size` starting with `lead`, with nothing
+        held (then it counts as framed): a client woken per package skips the general path."""
+        if len(data) != size or self._start != len(self._buf) or self._broken is not None:
+            return False
+        if not data.startswith(lead):
+            return False
+        self._offset += size
+        return True
+
     def _drain(self, run: tuple[int, bytes] | None, out: list[tuple[int, Any]]) -> None:
         """Every whole package held in the buffer to `out`; a partial one stays."""
         buf, start = self._buf, self._start
