@@ -102,6 +102,27 @@ while time.monotonic() - t0 < seconds:
 print(json.dumps({"cpu": time.process_time() - c0, "packages": got / (4 + int(sys.argv[4]))}))
 """
 
+FLOOR_BATCHED = f"BATCH = {BATCH}\n" + """
+import json, socket, struct, sys, time
+port, seconds, names, size = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3], int(sys.argv[4])
+s = socket.create_connection(("127.0.0.1", port))
+def send(t, body=b""):
+    s.sendall(struct.pack(">HB", 3 + len(body), t) + body)
+send(ord("V"), struct.pack(">H", 2)); s.recv(100)
+send(ord("O"), struct.pack(">d", 500.0) + names.encode()); s.recv(4096)
+send(ord("S")); s.recv(100)
+s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVLOWAT, BATCH * (4 + size))
+values = struct.Struct(">4x" + sys.argv[5])  # every value of a package, its prefix skipped
+got, held, t0, c0 = 0, b"", time.monotonic(), time.process_time()
+while time.monotonic() - t0 < seconds:
+    data = held + s.recv(2 * BATCH * (4 + size))
+    whole = len(data) // (4 + size) * (4 + size)
+    newest = list(values.iter_unpack(data[:whole]))[-1]  # plain tuples: no names, no checks
+    held = data[whole:]
+    got += whole // (4 + size)
+print(json.dumps({"cpu": time.process_time() - c0, "packages": got}))
+"""
+
 UR_RTDE = """
 import json, sys, time
 import rtde_receive
@@ -206,7 +227,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  targets: no missed packages (got {missed:.0f}), p99 <= {TARGET_P99_MS} ms (got {p99:.2f})")
 
         names = ",".join(UR_RTDE_DEFAULT_OUTPUTS)
-        from rtde_spec import Catalogue
+        from rtde_spec import Catalogue, RecipeCodec
 
         cat = Catalogue.builtin()
         types = ",".join(cat.get(n, "output").type for n in UR_RTDE_DEFAULT_OUTPUTS)  # type: ignore[union-attr]
@@ -217,6 +238,8 @@ def main(argv: list[str] | None = None) -> int:
         ur = child(UR_STYLE, str(port), str(args.seconds), names, str(Path(__file__).parent), types)
         size = str(payload_size(UR_RTDE_DEFAULT_OUTPUTS))
         floor = child(FLOOR, str(port), str(args.seconds), names, size)
+        fmt = RecipeCodec.for_names(UR_RTDE_DEFAULT_OUTPUTS, "output").struct.format[1:]
+        floor_batched = child(FLOOR_BATCHED, str(port), str(args.seconds), names, size, fmt)
         ours_us = ours["cpu"] / ours["packages"] * 1e6
         ur_us = ur["cpu"] / ur["packages"] * 1e6
         iter_us = iterating["cpu"] / iterating["packages"] * 1e6
@@ -228,6 +251,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  {'UR-client-style loop (recv, unpack, dict)':42s} {ur_us:8.1f} µs")
         floor_us = floor["cpu"] / floor["packages"] * 1e6
         print(f"  {'floor: bare recv() loop, nothing decoded':42s} {floor_us:8.1f} µs")
+        floor_b_us = floor_batched["cpu"] / floor_batched["packages"] * 1e6
+        label = f"floor, batch={BATCH}: recv + struct tuples"
+        print(f"  {label:42s} {floor_b_us:8.1f} µs  (plain tuples of Python numbers, nothing else)")
         try:
             import rtde_receive  # noqa: F401
         except ImportError:

@@ -6,6 +6,7 @@ import asyncio
 import itertools
 import socket
 import struct
+import threading
 import time
 from collections.abc import Iterator
 from pathlib import Path
@@ -318,6 +319,57 @@ def test_closed_by_the_controller_is_an_error_naming_it() -> None:
     with pytest.raises(RtdeConnectionError, match=r"127\.0\.0\.1"):
         for _ in range(1000):
             client.receive(timeout=2)
+    client.close()
+
+
+def test_receive_times_out_then_hands_over_what_came_before_a_close() -> None:
+    running = emulator()
+    client = RtdeClient("127.0.0.1", running.ports["rtde"], timeout=5).connect()
+    client.setup_outputs(["timestamp"], 500)
+    began = time.monotonic()
+    with pytest.raises(TimeoutError, match="no data package"):
+        client.receive(timeout=0.2)  # not started: nothing comes
+    assert 0.15 < time.monotonic() - began < 2
+    client.start()
+    time.sleep(0.2)
+    running.stop()
+    deadline = time.monotonic() + 5
+    while client.connection_lost is None and time.monotonic() < deadline:
+        time.sleep(0.01)
+    stamps = []
+    with pytest.raises(RtdeConnectionError):
+        while True:
+            stamps.append(client.receive().timestamp)  # what came first, then the close
+    assert len(stamps) >= 20 and [round((b - a) * 500) for a, b in itertools.pairwise(stamps)] == [1] * (
+        len(stamps) - 1
+    )
+    client.close()
+
+
+def test_every_reader_waiting_hears_the_close() -> None:
+    running = emulator()
+    client = RtdeClient("127.0.0.1", running.ports["rtde"], timeout=10).connect()
+    client.setup_outputs(["timestamp"], 125)  # not started: the readers wait
+    outcomes: list[str] = []
+
+    def wait() -> None:
+        try:
+            client.receive()
+            outcomes.append("record")
+        except RtdeConnectionError:
+            outcomes.append("closed")
+        except TimeoutError:
+            outcomes.append("timeout")
+
+    readers = [threading.Thread(target=wait) for _ in range(3)]
+    for r in readers:
+        r.start()
+    time.sleep(0.2)
+    began = time.monotonic()
+    running.stop()
+    for r in readers:
+        r.join(12)
+    assert outcomes == ["closed"] * 3 and time.monotonic() - began < 5
     client.close()
 
 

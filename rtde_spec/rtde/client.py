@@ -14,6 +14,7 @@ import queue
 import select
 import socket
 import threading
+import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any
 
@@ -32,7 +33,7 @@ class RtdeClient(ClientBase):
         super().__init__(host, port, **options)
         self._sock: socket.socket | None = None
         self._replies: queue.Queue[Reply | BaseException] = queue.Queue()
-        self._data_ready = threading.Condition()
+        self._bell: queue.SimpleQueue[None] = queue.SimpleQueue()  # rung when records wait (C-level wait)
         self._callbacks: list[Callable[[Any], None]] = []
         self._raw_callbacks: list[Callable[[bytes], None]] = []
         self._reader: threading.Thread | None = None
@@ -113,12 +114,22 @@ class RtdeClient(ClientBase):
                 "data packages go to the on_data/on_raw callbacks, not to receive()",
                 subject=self.where,
             )
-        with self._data_ready:
-            if not self._data_ready.wait_for(lambda: self._data or self._closed, timeout or self.timeout):
-                raise TimeoutError(f"no data package from {self.where} within {timeout or self.timeout} s")
-            if self._data:
-                return self._data.popleft()
-        raise self._gone()
+        wait = timeout or self.timeout
+        deadline: float | None = None
+        while True:
+            try:
+                return self._data.popleft()  # records waiting: no lock, no wait
+            except IndexError:
+                pass
+            if self._closed is not None:
+                self._bell.put(None)  # and the next waiting reader hears it too
+                raise self._gone()
+            deadline = deadline if deadline is not None else time.monotonic() + wait
+            try:
+                self._bell.get(timeout=max(0.0, deadline - time.monotonic()))
+            except queue.Empty:
+                if not self._data and self._closed is None:
+                    raise TimeoutError(f"no data package from {self.where} within {wait} s") from None
 
     def __iter__(self) -> Iterator[Any]:
         while True:
@@ -195,8 +206,12 @@ class RtdeClient(ClientBase):
             self._finish(exc)
 
     def _deliver(self, runs: list[DataRun]) -> None:
-        """Hand over the data packages of one read: to the callbacks if there are any,
-        else to the queue under one lock (the oldest dropped and counted when full)."""
+        """Hand over the data packages of one read: to the callbacks if there are any, else
+        to the queue (the oldest dropped and counted when full), ringing for a waiting reader.
+
+        The deque is safe between one producer and consumers without a lock; records go in
+        before the ring, so whoever takes a ring finds them.
+        """
         records = runs[0].records if len(runs) == 1 else [r for run in runs for r in run.records]
         self.received += len(records)
         if self._callbacks or self._raw_callbacks:
@@ -208,18 +223,17 @@ class RtdeClient(ClientBase):
                 for record in records:
                     callback(record)
             return
-        with self._data_ready:
-            room = self._data.maxlen - len(self._data)  # type: ignore[operator]
-            if len(records) > room:
-                self.skipped += len(records) - room  # the oldest go; the socket keeps being drained
-            self._data.extend(records)
-            self._data_ready.notify(len(records))
+        room = self._data.maxlen - len(self._data)  # type: ignore[operator]
+        if len(records) > room:
+            self.skipped += len(records) - room  # the oldest go; the socket keeps being drained
+        self._data.extend(records)
+        if not self._bell.qsize():  # one ring is enough: the woken reader finds all in the queue
+            self._bell.put(None)
 
     def _finish(self, exc: BaseException) -> None:
         self._closed = exc
         self._replies.put(exc)
-        with self._data_ready:
-            self._data_ready.notify_all()
+        self._bell.put(None)
 
     def _gone(self) -> BaseException:
         return self._closed or RtdeConnectionError("connection closed", subject=self.where)
