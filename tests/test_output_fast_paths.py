@@ -246,6 +246,10 @@ def test_client_core_gives_the_same_events_whatever_the_reads(cuts: list[int]) -
     assert reference.framer.offset - before == len(stream) and reference.framer.pending == 0
     assert [isinstance(e, Text) for e in expected] == [False] * 3 + [True] + [False] * 4
     assert [e.timestamp for e in expected if not isinstance(e, Text)] == [i * 0.002 for i in range(7)]
+    runs = _client_with_recipe()  # reads of several whole data packages each, as a batched client
+    start = runs.framer.offset
+    runs_reads = [stream[: 3 * size], TEXT, stream[3 * size + len(TEXT) :]]
+    assert events(runs, runs_reads) == expected and runs.framer.offset - start == len(stream)
     bounds = sorted({min(c, len(stream)) for c in itertools.accumulate(cuts)} | {0, len(stream)})
     core = _client_with_recipe()
     start = core.framer.offset

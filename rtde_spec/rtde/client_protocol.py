@@ -149,8 +149,12 @@ class ClientProtocol:
     def receive(self, data: bytes) -> list[Event]:
         """Events for every package this data completes."""
         output, run = self.output, self._run
-        if output is not None and run is not None and self.framer.take_whole(data, *run):
-            return [DataRun([output.decode_record(data, PAYLOAD_OFFSET)], data, run[0])]
+        if output is not None and run is not None:
+            count = self.framer.take_run(data, *run)  # the usual read: only data packages
+            if count == 1:
+                return [DataRun([output.decode_record(data, PAYLOAD_OFFSET)], data, run[0])]
+            if count:
+                return [DataRun(output.decode_records(data), data, run[0])]
         events: list[Event] = []
         for _, package in self.framer.feed(data, run):
             if output is not None and run is not None and package[: len(run[1])] == run[1]:

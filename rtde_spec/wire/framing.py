@@ -63,15 +63,20 @@ class PackageFramer:
         self._drain(run, out)
         return out
 
-    def take_whole(self, data: bytes, size: int, lead: bytes) -> bool:
-        """Whether `data` is exactly one package of `size` starting with `lead`, with nothing
-        held (then it counts as framed): a client woken per package skips the general path."""
-        if len(data) != size or self._start != len(self._buf) or self._broken is not None:
-            return False
-        if not data.startswith(lead):
-            return False
-        self._offset += size
-        return True
+    def take_run(self, data: bytes, size: int, lead: bytes) -> int:
+        """How many packages `data` is, when it is only whole packages of `size` that each begin
+        with `lead` and nothing is held (then they count as framed); else 0.
+
+        What a client's read usually is (a read ends where a TCP segment does): it skips
+        the general path.
+        """
+        if not data or len(data) % size or self._start != len(self._buf) or self._broken is not None:
+            return 0
+        count = len(data) // size
+        if not (data.startswith(lead) if count == 1 else _run_length(data, 0, size, lead) == count):
+            return 0
+        self._offset += len(data)
+        return count
 
     def _drain(self, run: tuple[int, bytes] | None, out: list[tuple[int, Any]]) -> None:
         """Every whole package held in the buffer to `out`; a partial one stays."""
