@@ -239,6 +239,11 @@ class RecipeCodec:
                     self._package_prefix(data[at : at + size], recipe_id)
                 except DecodeError as exc:
                     raise exc.in_stream(at, k) from None
+        return self._framed_records(data)
+
+    def _framed_records(self, data: bytes | bytearray | memoryview) -> list[Any]:
+        """`decode_records` for packages a framer has already checked (size and type of each):
+        the client's read path, where the check would be done twice."""
         record_type = self.record_type
         return [_new_tuple(record_type, values) for values in self._packages.iter_unpack(data)]
 

@@ -154,7 +154,7 @@ class ClientProtocol:
             if count == 1:
                 return [DataRun([output.decode_record(data, PAYLOAD_OFFSET)], data, run[0])]
             if count:
-                return [DataRun(output.decode_records(data), data, run[0])]
+                return [DataRun(output._framed_records(data), data, run[0])]
         events: list[Event] = []
         for _, package in self.framer.feed(data, run):
             if output is not None and run is not None and package[: len(run[1])] == run[1]:
