@@ -87,31 +87,36 @@ while time.monotonic() - t0 < seconds:
 print(json.dumps({"cpu": time.process_time() - c0, "packages": n}))
 """
 
-FLOOR = """
-import json, socket, struct, sys, time
-port, seconds, names = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3]
+HANDSHAKE = """
 s = socket.create_connection(("127.0.0.1", port))
 def send(t, body=b""):
     s.sendall(struct.pack(">HB", 3 + len(body), t) + body)
 send(ord("V"), struct.pack(">H", 2)); s.recv(100)
 send(ord("O"), struct.pack(">d", 500.0) + names.encode()); s.recv(4096)
 send(ord("S")); s.recv(100)
-got, t0, c0 = 0, time.monotonic(), time.process_time()
+"""  # protocol 2, outputs at 500 Hz, started: raw, for the floors
+
+FLOOR = (
+    """
+import json, socket, struct, sys, time
+port, seconds, names = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3]
+"""
+    + HANDSHAKE
+    + """got, t0, c0 = 0, time.monotonic(), time.process_time()
 while time.monotonic() - t0 < seconds:
     got += len(s.recv(65536))  # nothing else: what a wake-up per TCP segment costs
 print(json.dumps({"cpu": time.process_time() - c0, "packages": got / (4 + int(sys.argv[4]))}))
 """
+)
 
-FLOOR_BATCHED = f"BATCH = {BATCH}\n" + """
+FLOOR_BATCHED = (
+    f"BATCH = {BATCH}\n"
+    + """
 import json, socket, struct, sys, time
 port, seconds, names, size = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3], int(sys.argv[4])
-s = socket.create_connection(("127.0.0.1", port))
-def send(t, body=b""):
-    s.sendall(struct.pack(">HB", 3 + len(body), t) + body)
-send(ord("V"), struct.pack(">H", 2)); s.recv(100)
-send(ord("O"), struct.pack(">d", 500.0) + names.encode()); s.recv(4096)
-send(ord("S")); s.recv(100)
-s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVLOWAT, BATCH * (4 + size))
+"""
+    + HANDSHAKE
+    + """s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVLOWAT, BATCH * (4 + size))
 values = struct.Struct(">4x" + sys.argv[5])  # every value of a package, its prefix skipped
 got, held, t0, c0 = 0, b"", time.monotonic(), time.process_time()
 while time.monotonic() - t0 < seconds:
@@ -122,6 +127,7 @@ while time.monotonic() - t0 < seconds:
     got += whole // (4 + size)
 print(json.dumps({"cpu": time.process_time() - c0, "packages": got}))
 """
+)
 
 UR_RTDE = """
 import json, sys, time

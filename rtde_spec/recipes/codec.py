@@ -221,13 +221,7 @@ class RecipeCodec:
         type, recipe id if given); a bad package is named with its stream offset.
         """
         size = self.package_size
-        if len(data) % size:
-            raise DecodeError(
-                "not a whole number of this recipe's data packages",
-                offset=len(data) - len(data) % size,
-                expected=f"a multiple of {size} bytes",
-                actual=f"{len(data)} bytes",
-            )
+        self._whole_packages(len(data))
         seen = set(self._prefixes.iter_unpack(data))
         if (
             seen
@@ -342,14 +336,8 @@ class RecipeCodec:
                     actual=f"{buffer.dtype} rows of {buffer.shape[1]}",
                 )
             rows, stride = buffer, buffer.strides[0]
-        elif len(buffer) % size:
-            raise DecodeError(
-                "buffer is not a whole number of this recipe's data packages",
-                offset=len(buffer) - len(buffer) % size,
-                expected=f"a multiple of {size} bytes",
-                actual=f"{len(buffer)} bytes",
-            )
         else:
+            self._whole_packages(len(buffer))
             rows, stride = np.frombuffer(buffer, dtype=np.uint8).reshape(-1, size), size
         arr = rows.view(self.dtype)[:, 0] if len(rows) else np.zeros(0, dtype=self.dtype)
         bad = self._bad_prefixes(np, rows, recipe_id)
@@ -365,6 +353,17 @@ class RecipeCodec:
                 + (f", recipe {recipe_id}" if recipe_id is not None else ""),
             )
         return arr
+
+    def _whole_packages(self, length: int) -> None:
+        """DecodeError unless `length` bytes are a whole number of this recipe's packages."""
+        size = self.package_size
+        if length % size:
+            raise DecodeError(
+                "not a whole number of this recipe's data packages",
+                offset=length - length % size,
+                expected=f"a multiple of {size} bytes",
+                actual=f"{length} bytes",
+            )
 
     def _bad_prefixes(self, np: Any, rows: Any, recipe_id: int | None) -> Any:
         """Which packages' size, type or recipe id is wrong: one comparison over a strided view."""
