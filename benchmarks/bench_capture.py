@@ -1,7 +1,8 @@
 """A capture of RTDE data packages (58-field recipe, one per TCP segment, as at 500 Hz) to Parquet,
 side by side with `tshark -r FILE -T fields -e tcp.payload` on the same file, and with
-several files decoded in parallel processes, warmed by a first pass (to Parquet, and to CSV, whose CPU-bound
-formatting shows what the process pool gives when memory bandwidth is not the limit).
+several files decoded in parallel processes, warmed by a first pass (to Parquet, and to
+CSV, whose CPU-bound formatting shows what the pool gives when memory bandwidth is not
+the limit).
 
 Targets: >= 300,000 packages/s end to end on one core; peak memory < 300 MB; near-linear
 speed-up with processes over many files. The timed child is pinned to one CPU (its
