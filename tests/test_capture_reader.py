@@ -133,7 +133,7 @@ def test_a_run_of_data_frames_is_found_in_bulk_with_its_payloads(tmp_path: Path,
     found = list(items(path))
     run, last = found
     assert isinstance(run, DataRun) and isinstance(last, Segment) and last.seq == 999
-    assert run.data == b"".join(packages) and run.size == 12 and run.seq == 100
+    assert run.rows.tobytes() == b"".join(packages) and run.size == 12 and run.seq == 100
     assert run.times.tolist() == [1000.0 + i for i in range(20)] and (run.src, run.dport) == (
         "10.0.0.2",
         30004,

@@ -44,11 +44,6 @@ class DataRun:
     times: Any  # numpy float64, one per package
     rows: Any  # numpy uint8 (packages, size): one package per row
 
-    @property
-    def data(self) -> bytes:
-        """The packages back to back."""
-        return self.rows.tobytes()  # type: ignore[no-any-return]
-
 
 def runs(records: Records) -> list[tuple[int, int]]:
     """(first, end) record indexes of every run of at least MIN_RUN data frames."""
