@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import json
+import os
+import threading
 from pathlib import Path
 
 import pyarrow.dataset as ds
@@ -279,3 +281,38 @@ def test_runs_of_data_segments_decode_exactly_as_segment_by_segment(
     first, second = sorted(by_connection.values(), key=len, reverse=True)
     assert second == [i for i in range(300) if (i // 40) % 2 == 1]
     assert first == [i for i in range(400) if i != 311 and (i >= 300 or (i // 40) % 2 == 0)]
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="named pipes are POSIX")
+def test_an_interrupted_live_capture_keeps_what_was_decoded(tmp_path: Path) -> None:
+    """Ctrl-C while reading a pipe (tcpdump -w - | rtde-spec capture -): the rows decoded so
+    far are in whole, readable tables."""
+    conv = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30004))
+    session(conv)
+    for i in range(0, 400, 2):
+        conv.send("server", data(i) + data(i + 1))  # two per segment: decoded in batches, held a while
+    capture = write(tmp_path / "all.pcap", [conv]).read_bytes()
+    pipe = tmp_path / "live"
+    os.mkfifo(pipe)
+    stop = threading.Event()
+
+    def feed() -> None:
+        with open(pipe, "wb") as f:
+            f.write(capture[: len(capture) // 2])
+            f.flush()
+            stop.wait(10)  # the rest never comes: the reader is interrupted first
+
+    def interrupt(done: int) -> None:
+        if done >= len(capture) // 4:
+            raise KeyboardInterrupt
+
+    writer = threading.Thread(target=feed)
+    writer.start()
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            decode_to_directory(pipe, tmp_path / "out", progress=interrupt)
+    finally:
+        stop.set()
+        writer.join()
+    stamps = dataset(tmp_path / "out" / "rtde_outputs_1").column("timestamp").to_pylist()
+    assert 0 < len(stamps) < 400 and stamps == [i * 0.002 for i in range(len(stamps))]

@@ -195,3 +195,51 @@ def test_blocks_of_a_mapped_file_and_of_a_pipe_give_the_same_frames(
 def block_(frame: bytes, i: int) -> bytes:
     """An enhanced packet block on interface 0 (Ethernet), `i` microseconds in."""
     return block(6, struct.pack("<IIIII", 0, 0, i, len(frame), len(frame)) + frame)
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="named pipes are POSIX")
+def test_a_live_pipe_is_decoded_as_it_comes(tmp_path: Path) -> None:
+    """Frames written into a pipe come out before the writer is done (tcpdump -w - | ...)."""
+    path = tmp_path / "live"
+    os.mkfifo(path)
+    data = pcap([(i, 0, ethernet(ip_tcp(seq=i))) for i in range(10)])
+    first_seen = threading.Event()
+    in_time: list[bool] = []
+
+    def feed() -> None:
+        with open(path, "wb") as f:
+            f.write(data[: len(data) // 2])
+            f.flush()
+            in_time.append(first_seen.wait(5))  # the rest only once the first frames came out
+            f.write(data[len(data) // 2 :])
+
+    writer = threading.Thread(target=feed)
+    writer.start()
+    seqs = []
+    try:
+        for seg in segments(path):
+            seqs.append(seg.seq)
+            first_seen.set()
+    finally:
+        first_seen.set()
+        writer.join()
+    assert seqs == list(range(10))
+    assert in_time == [True]  # frames came out while the writer was still writing
+
+
+def test_cli_decodes_a_capture_piped_to_standard_input(tmp_path: Path) -> None:
+    import subprocess
+    import sys
+
+    frames = [(i, 0, ethernet(ip_tcp(seq=100 + len(PAYLOAD) * i))) for i in range(5)]  # 5 requests in a row
+    data = pcap(frames)
+    out = tmp_path / "out"
+    result = subprocess.run(
+        [sys.executable, "-m", "rtde_spec", "capture", "-", "-o", str(out)],
+        input=data,
+        capture_output=True,
+        timeout=60,
+    )
+    assert result.returncode == 0, result.stderr.decode()
+    assert b"/dev/stdin: 5 frames, 1 connections" in result.stdout and b": 5 packages" in result.stdout
+    assert (out / "rtde_setup").is_dir()  # the requests, as a table

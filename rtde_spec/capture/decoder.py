@@ -126,23 +126,30 @@ def decode_capture(
         if run is None:
             _feed(route, seg)
 
-    for item in items(path, stats, progress):
-        if isinstance(item, Segment):
-            one(item)
-            continue
-        first = next(expand(item))
-        route = route_of(first)
-        whole = _Run.start(route, first) if isinstance(route, tuple) else None
-        if whole is None:
-            for seg in expand(item):  # not a run this connection can take whole: segment by segment
-                one(seg)
-            continue
+    try:
+        for item in items(path, stats, progress):
+            if isinstance(item, Segment):
+                one(item)
+                continue
+            first = next(expand(item))
+            route = route_of(first)
+            if run is not None:  # segments held first, so the direction is where this run starts
+                run.flush()
+                run = None
+            whole = _Run.start(route, first) if isinstance(route, tuple) else None
+            if whole is None:
+                for seg in expand(item):  # not a run this connection can take whole: segment by segment
+                    one(seg)
+                continue
+            flow, sender, direction = whole.route
+            direction.advance(item.rows.size)
+            flow.decoder.feed_run(sender, whole.codec, item.rows, item.times)
+    except BaseException:  # Ctrl-C on a live pipe, a read error: what was decoded reaches the tables
         if run is not None:
             run.flush()
-            run = None
-        flow, sender, direction = whole.route
-        direction.advance(item.rows.size)
-        flow.decoder.feed_run(sender, whole.codec, item.rows, item.times)
+        for open_flow in (f for f in flows.values() if f is not None):
+            open_flow.decoder.close()
+        raise
     if run is not None:
         run.flush()
     summary = CaptureSummary(str(path), stats.get("frames", 0))

@@ -163,9 +163,14 @@ def _mapped(f: IO[bytes]) -> mmap.mmap | None:
 def _read_blocks(
     f: IO[bytes], carry: bytes, start: int, stats: dict[str, int], parse: Parse
 ) -> Iterator[Records]:
-    """`_by_block` for what cannot be mapped: read, and carry a cut-off record over."""
+    """`_by_block` for what cannot be mapped: read, and carry a cut-off record over.
+
+    `read1` takes what a pipe has (up to a block) rather than waiting for a whole block,
+    so a live capture piped in is decoded as it comes.
+    """
+    read = getattr(f, "read1", f.read)
     while True:
-        chunk = f.read(BLOCK)
+        chunk = read(BLOCK)
         buf = carry + chunk if carry else chunk
         found = _Columns()
         pos = parse(buf, 0, len(buf), found)

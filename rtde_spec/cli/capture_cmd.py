@@ -22,7 +22,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "OUTDIR/<table>/robot=<address>/date=<day>/<capture>.<ext>.",
     )
     p.add_argument(
-        "files", nargs="+", metavar="FILE", help="capture files, folders of them, or globs (required)"
+        "files",
+        nargs="+",
+        metavar="FILE",
+        help="capture files, folders of them, globs, or - for standard input "
+        "(tcpdump -w - ... | rtde-spec capture - -o OUT) (required)",
     )
     p.add_argument("-o", "--outdir", required=True, help="output folder (required)")
     p.add_argument(
@@ -44,15 +48,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run)
 
 
+STDIN = "/dev/stdin"  # `-`: a capture piped in (read to its end; Linux and macOS)
+
+
 def expand(patterns: list[str]) -> list[Path]:
     files: list[Path] = []
     for pattern in patterns:
-        path = Path(pattern)
+        path = Path(STDIN if pattern == "-" else pattern)
         if path.is_dir():
             files += sorted(p for p in path.rglob("*") if p.suffix in SUFFIXES)
         elif any(ch in pattern for ch in "*?["):
             files += sorted(Path().glob(pattern))
-        elif path.is_file():
+        elif path.exists():  # a file, or a pipe (read to its end)
             files.append(path)
         else:
             raise UsageError("no such file", subject=f"file {pattern}")
