@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+import sys
 import threading
 from pathlib import Path
 
@@ -11,7 +12,7 @@ import pyarrow.dataset as ds
 import pytest
 
 from rtde_spec import RecipeCodec, build
-from rtde_spec.capture.decoder import capture_tables, decode_to_directory
+from rtde_spec.capture.decoder import CaptureInterrupted, capture_tables, decode_to_directory
 
 from .capture_files import Conversation, write
 from .test_cli import cli
@@ -309,10 +310,46 @@ def test_an_interrupted_live_capture_keeps_what_was_decoded(tmp_path: Path) -> N
     writer = threading.Thread(target=feed)
     writer.start()
     try:
-        with pytest.raises(KeyboardInterrupt):
+        with pytest.raises(CaptureInterrupted) as info:  # a KeyboardInterrupt, with what was kept
             decode_to_directory(pipe, tmp_path / "out", progress=interrupt)
     finally:
         stop.set()
         writer.join()
     stamps = dataset(tmp_path / "out" / "rtde_outputs_1").column("timestamp").to_pylist()
     assert 0 < len(stamps) < 400 and stamps == [i * 0.002 for i in range(len(stamps))]
+    summary = info.value.summary
+    assert summary.tables["rtde_outputs_1"] == len(stamps) and summary.connections[0].packages >= len(stamps)
+
+
+@pytest.mark.skipif(sys.platform != "linux", reason="reads how much a pipe holds (Linux FIONREAD)")
+def test_ctrl_c_on_a_piped_capture_reports_what_was_kept(tmp_path: Path) -> None:
+    import fcntl
+    import signal
+    import struct
+    import subprocess
+    import termios
+    import time
+
+    conv = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30004))
+    session(conv)
+    for i in range(300):
+        conv.send("server", data(i))
+    capture = write(tmp_path / "all.pcap", [conv]).read_bytes()
+    cmd = [sys.executable, "-m", "rtde_spec", "capture", "-", "-o", str(tmp_path / "out")]
+    proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    assert proc.stdin is not None
+    proc.stdin.write(capture[: len(capture) // 2])
+    proc.stdin.flush()
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:  # until the capture has read everything sent
+        held = struct.unpack("i", fcntl.ioctl(proc.stdin.fileno(), termios.FIONREAD, b"\0" * 4))[0]
+        if not held:
+            break
+        time.sleep(0.05)
+    time.sleep(1.0)  # and decoded it
+    proc.send_signal(signal.SIGINT)
+    out, err = proc.communicate(timeout=30)
+    assert proc.returncode == 130, err.decode()
+    rows = dataset(tmp_path / "out" / "rtde_outputs_1").num_rows
+    assert 0 < rows < 300 and f"rtde_outputs_1 ({rows} rows)".encode() in out
+    assert b"1 connections" in out and b"written whole" in err

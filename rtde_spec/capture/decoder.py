@@ -144,16 +144,19 @@ def decode_capture(
             flow, sender, direction = whole.route
             direction.advance(item.rows.size)
             flow.decoder.feed_run(sender, whole.codec, item.rows, item.times)
-    except BaseException:  # Ctrl-C on a live pipe, a read error: what was decoded reaches the tables
+    except BaseException as exc:  # Ctrl-C on a live pipe, a read error: what was decoded reaches the tables
         if run is not None:
             run.flush()
-        for open_flow in (f for f in flows.values() if f is not None):
-            open_flow.decoder.close()
+        live = [f for f in flows.values() if f is not None]
+        for flow in live:
+            flow.decoder.close()
+        if isinstance(exc, KeyboardInterrupt):
+            raise CaptureInterrupted(_summary(path, stats, live)) from exc
         raise
     if run is not None:
         run.flush()
-    summary = CaptureSummary(str(path), stats.get("frames", 0))
-    for flow in (f for f in flows.values() if f is not None):
+    live = [f for f in flows.values() if f is not None]
+    for flow in live:
         for sender, direction in flow.directions.items():
             for chunk in direction.skip_gap():  # whatever still waits behind a hole at the end
                 flow.decoder.feed(sender, chunk)
@@ -163,6 +166,12 @@ def decode_capture(
                     f"the capture ends inside a {sender} package ({leftover} bytes)"
                 )
         flow.decoder.close()
+    return _summary(path, stats, live)
+
+
+def _summary(path: str | Path, stats: dict[str, int], flows: list[_Flow]) -> CaptureSummary:
+    summary = CaptureSummary(str(path), stats.get("frames", 0))
+    for flow in flows:
         counts = flow.decoder.counts
         summary.connections.append(
             ConnectionSummary(
@@ -176,6 +185,15 @@ def decode_capture(
             )
         )
     return summary
+
+
+class CaptureInterrupted(KeyboardInterrupt):
+    """Ctrl-C during a capture (a live pipe); `summary` says what was decoded before it,
+    and every table written is whole."""
+
+    def __init__(self, summary: CaptureSummary) -> None:
+        super().__init__()
+        self.summary = summary
 
 
 Route = tuple[_Flow, str, Direction]  # the flow, who sends, and that sender's direction
@@ -285,8 +303,14 @@ def decode_to_directory(
     sink = DirectorySink(outdir, fmt, Path(path).stem)
     try:
         summary = decode_capture(path, sink, recipe=codec, **kw)
-    finally:
+    except CaptureInterrupted as stop:
         sink.close()
+        stop.summary.tables, stop.summary.paths = dict(sink.rows), [str(p) for p in sink.paths]
+        raise
+    except BaseException:
+        sink.close()
+        raise
+    sink.close()
     summary.tables = dict(sink.rows)
     summary.paths = [str(p) for p in sink.paths]
     return summary

@@ -71,7 +71,7 @@ def expand(patterns: list[str]) -> list[Path]:
 def run(args: argparse.Namespace) -> int:
     from concurrent.futures import ProcessPoolExecutor
 
-    from rtde_spec.capture.decoder import CaptureSummary, decode_to_directory
+    from rtde_spec.capture.decoder import CaptureInterrupted, CaptureSummary, decode_to_directory
     from rtde_spec.cli.record_cmd import names_of
 
     files = expand(args.files)
@@ -97,9 +97,15 @@ def run(args: argparse.Namespace) -> int:
             bar = _progress(f)
             if bar is not None:
                 kw["progress"] = lambda done, bar=bar: bar.update(done - bar.n)
-            summaries.append(decode_to_directory(f, args.outdir, args.format, recipe, **kw))
-            if bar is not None:
-                bar.close()
+            try:
+                summaries.append(decode_to_directory(f, args.outdir, args.format, recipe, **kw))
+            except CaptureInterrupted as stop:  # Ctrl-C (a live pipe): report what was kept
+                _report([*summaries, stop.summary])
+                print("interrupted: the tables above are written whole", file=sys.stderr)
+                return 130
+            finally:
+                if bar is not None:
+                    bar.close()
     problems = _report(summaries)
     return 1 if problems else 0
 
