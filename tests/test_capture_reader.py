@@ -243,3 +243,19 @@ def test_cli_decodes_a_capture_piped_to_standard_input(tmp_path: Path) -> None:
     assert result.returncode == 0, result.stderr.decode()
     assert b"/dev/stdin: 5 frames, 1 connections" in result.stdout and b": 5 packages" in result.stdout
     assert (out / "rtde_setup").is_dir()  # the requests, as a table
+
+
+def test_a_file_cut_shorter_while_it_is_read_is_an_error_not_a_fault(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    monkeypatch.setattr(pcapfile, "BLOCK", 256)
+    path = tmp_path / "shrinking.pcap"
+    path.write_bytes(pcap([(i, 0, ethernet(ip_tcp(seq=i))) for i in range(40)]))
+    seen = 0
+    with pytest.raises(UsageError, match="got shorter while it was read"):
+        for _ in segments(path):
+            seen += 1
+            if seen == 3:
+                with open(path, "r+b") as f:
+                    f.truncate(1000)  # another program cuts the capture
+    assert seen >= 3

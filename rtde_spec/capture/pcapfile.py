@@ -18,6 +18,7 @@ blocks; other blocks are skipped. A cut-off last record is counted in
 from __future__ import annotations
 
 import mmap
+import os
 import struct
 import sys
 from collections.abc import Callable, Iterator
@@ -121,6 +122,11 @@ def _by_block(
     page = mmap.ALLOCATIONGRANULARITY
     while pos < size:
         end = min(size, pos + window)
+        if os.fstat(f.fileno()).st_size < end:  # reading a mapped page past the end would fault
+            raise UsageError(
+                f"the file got shorter while it was read (byte {end} of {size} is gone)",
+                subject=f"file {getattr(f, 'name', '?')}",
+            )
         _populate(mapped, pos // page * page, end)
         found = _Columns()
         reached = parse(mapped, pos, end, found)
