@@ -8,6 +8,8 @@ import sys
 from collections.abc import Sequence
 from typing import Any
 
+from rtde_spec.output.base import plain
+
 # C0 controls (but not through them tab/newline in a cell), DEL and C1 controls
 _CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f]")
 
@@ -17,25 +19,8 @@ def safe_text(text: str) -> str:
     return _CONTROL.sub(lambda m: f"\\x{ord(m.group()):02x}", text)
 
 
-def jsonable(value: Any) -> Any:
-    """Values as JSON can hold them: bytes as hex, tuples as lists, enums as ints."""
-    if isinstance(value, (bytes, bytearray, memoryview)):
-        return bytes(value).hex()
-    if isinstance(value, (list, tuple)):
-        return [jsonable(v) for v in value]
-    if isinstance(value, dict):
-        return {str(k): jsonable(v) for k, v in value.items()}
-    if isinstance(value, bool) or value is None or isinstance(value, str):
-        return value
-    if isinstance(value, int):
-        return int(value)
-    if isinstance(value, float):
-        return value
-    return str(value)
-
-
 def print_json(value: Any) -> None:
-    json.dump(jsonable(value), sys.stdout, indent=2)
+    json.dump(plain(value), sys.stdout, indent=2)
     sys.stdout.write("\n")
 
 
