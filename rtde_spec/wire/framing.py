@@ -50,7 +50,8 @@ class PackageFramer:
 
         With `run` = (package size, leading bytes), back-to-back packages of that size
         starting with those bytes come out together as one item (several packages'
-        bytes), found with one vectorised comparison: the fast path for data packages.
+        bytes), found with one strided comparison per leading byte: the fast path for
+        data packages.
         A run at the start of a `bytes` input, with nothing held, is a memoryview of
         that input rather than a copy (bytes cannot change under it).
         """
