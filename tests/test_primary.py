@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import sys
+
+import json
 import struct
 from typing import Any
 
@@ -332,3 +335,40 @@ def test_compiled_sub_package_decoder_equals_the_layout_walk(key: tuple[str, int
         assert compiled is None if general.missing else compiled == general  # None: the walk decides
 
     check()
+
+
+def test_decoded_models_behave_as_validated_ones_for_pydantic_operations() -> None:
+    """Decoded models leave pydantic's bookkeeping slots unset (PrimaryModel.__getattr__
+    answers for them): equality both ways, copies, pickling, dumps and fields-set match a
+    model built by validation, and unknown attributes still raise."""
+    import copy
+    import pickle
+
+    from .helpers import ROOT
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        from ur5e_robot_state import ur5e_robot_state_bytes
+    finally:
+        sys.path.pop(0)
+    message = decode_message(ur5e_robot_state_bytes())
+    parts = [type(s).model_validate(s.model_dump()) for s in message.sub_packages]
+    twin = RobotStateMessage(sub_packages=parts)
+    for decoded, validated in [(message, twin), *zip(message.sub_packages, twin.sub_packages, strict=True)]:
+        assert decoded == validated and validated == decoded
+        assert decoded.model_fields_set == validated.model_fields_set == set(type(decoded).model_fields)
+        assert decoded.model_dump() == validated.model_dump()
+        assert json.loads(decoded.model_dump_json()) == json.loads(validated.model_dump_json())
+        assert decoded.model_dump(exclude_unset=True) == validated.model_dump(exclude_unset=True)
+        for other in (copy.copy(decoded), copy.deepcopy(decoded), pickle.loads(pickle.dumps(decoded))):
+            assert other == validated and other.model_dump() == validated.model_dump()
+        assert repr(decoded).startswith(type(validated).__name__ + "(")
+        with pytest.raises(AttributeError, match="no attribute 'not_a_field'"):
+            decoded.not_a_field  # noqa: B018
+    joints = message["joint_data"].joints
+    assert "JointState(q_actual=0.5, q_target=0.25" in repr(message)
+    assert joints[0] == twin["joint_data"].joints[0] != joints[0].model_copy(update={"q_actual": 9.0})
+    moved = message["joint_data"].model_copy(update={"extra": b"\x01"})
+    assert moved.extra == b"\x01" and moved.joints == joints
+    with pytest.raises(Exception, match="frozen"):
+        joints[0].q_actual = 1.0  # type: ignore[misc]

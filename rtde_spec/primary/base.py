@@ -10,6 +10,10 @@ from pydantic import BaseModel, ConfigDict, ValidationError
 from rtde_spec.wire.pydantic_errors import encode_error
 
 
+# slots a frozen model without extra keys or private attributes always holds None in
+_UNSET_SLOTS = frozenset({"__pydantic_extra__", "__pydantic_private__"})
+
+
 class PrimaryModel(BaseModel):
     """Frozen, no unknown keys; user construction fails with EncodeError."""
 
@@ -21,6 +25,14 @@ class PrimaryModel(BaseModel):
             super().__init__(**data)
         except ValidationError as exc:
             raise encode_error(exc, type(self).NAME, type(self)) from None
+
+    def __getattr__(self, item: str) -> Any:
+        """Decoded models leave pydantic's bookkeeping slots unset (see fast_models): their values here."""
+        if item == "__pydantic_fields_set__":
+            return set(type(self).model_fields)
+        if item in _UNSET_SLOTS:
+            return None
+        return super().__getattr__(item)  # type: ignore[misc]
 
 
 class PrimaryGroup(PrimaryModel):

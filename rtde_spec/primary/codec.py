@@ -125,46 +125,65 @@ class PrimaryCodec:
     ) -> RobotStateMessage:
         fam = self.families[gen.FAMILY_TYPES["robot_state"]]
         hsize = self.sub_header.size
+        unpack = self.sub_header.unpack_from
+        fast_get = self._fast.get
+        # a version picks older layouts, which only the general walk reads
+        older = fam.older if version is not None else {}
         subs: list[Any] = []
+        append = subs.append
         while pos < end:
-            if end - pos < hsize:
-                raise DecodeError(
-                    "sub-package header cut off by the end of the message",
-                    package="robot_state",
-                    field="size",
-                    offset=pos,
-                    expected=f"{hsize} bytes",
-                    actual=f"{end - pos} bytes",
-                )
-            sub_size, sub_type = self.sub_header.unpack_from(buf, pos)
-            if sub_size < hsize or sub_size > end - pos:
-                raise DecodeError(
-                    "sub-package size is smaller than its header"
-                    if sub_size < hsize
-                    else "sub-package size runs past the end of the message",
-                    package="robot_state",
-                    field="size",
-                    offset=pos,
-                    expected=f"{hsize}..{end - pos}",
-                    actual=sub_size,
-                )
-            fast = self._fast.get(sub_type)
-            if fast is not None and (version is None or sub_type not in fam.older):
-                part = fast(buf, pos + hsize, pos + sub_size)  # None: shorter than the layout
-                if part is not None:
-                    subs.append(part)
-                    pos += sub_size
+            if end - pos >= hsize:
+                sub_size, sub_type = unpack(buf, pos)
+                stop = pos + sub_size
+                if sub_size >= hsize and stop <= end:
+                    fast = fast_get(sub_type)
+                    if fast is not None and sub_type not in older:
+                        part = fast(buf, pos + hsize, stop)  # None: shorter than the layout
+                        if part is not None:
+                            append(part)
+                            pos = stop
+                            continue
+                    append(self._sub_package(fam, sub_type, buf, pos, stop, version))
+                    pos = stop
                     continue
-            member = fam.members.get(sub_type)
-            if member is None:
-                subs.append(UnknownSubPackage(type=sub_type, size=sub_size, raw=buf[pos : pos + sub_size]))
-            else:
-                cls, layout = member
-                if version is not None and sub_type in fam.older:
-                    layout = next((lay for before, lay in fam.older[sub_type] if version < before), layout)
-                subs.append(self._part(cls, layout, buf, pos + hsize, pos + sub_size, {}))
-            pos += sub_size
+            self._bad_sub_header(buf, pos, end)
         return build(RobotStateMessage, {"sub_packages": subs})
+
+    def _sub_package(
+        self, fam: _Family, sub_type: int, buf: bytes, pos: int, stop: int, version: Version | None
+    ) -> Any:
+        """A sub-package the straight-line decoders do not take: unknown, older or shorter."""
+        member = fam.members.get(sub_type)
+        if member is None:
+            return UnknownSubPackage(type=sub_type, size=stop - pos, raw=buf[pos:stop])
+        cls, layout = member
+        if version is not None and sub_type in fam.older:
+            layout = next((lay for before, lay in fam.older[sub_type] if version < before), layout)
+        return self._part(cls, layout, buf, pos + self.sub_header.size, stop, {})
+
+    def _bad_sub_header(self, buf: bytes, pos: int, end: int) -> None:
+        """Raise what is wrong with the sub-package header at `pos`."""
+        hsize = self.sub_header.size
+        if end - pos < hsize:
+            raise DecodeError(
+                "sub-package header cut off by the end of the message",
+                package="robot_state",
+                field="size",
+                offset=pos,
+                expected=f"{hsize} bytes",
+                actual=f"{end - pos} bytes",
+            )
+        sub_size = self.sub_header.unpack_from(buf, pos)[0]
+        raise DecodeError(
+            "sub-package size is smaller than its header"
+            if sub_size < hsize
+            else "sub-package size runs past the end of the message",
+            package="robot_state",
+            field="size",
+            offset=pos,
+            expected=f"{hsize}..{end - pos}",
+            actual=sub_size,
+        )
 
     def _tagged(self, fam: _Family, buf: bytes, pos: int, end: int) -> PrimaryMessage:
         assert fam.prefix is not None

@@ -5,7 +5,8 @@ layout walk costs a dict per group, a regroup pass and a function call per model
 here each sub-package gets straight-line code, built once from the same spec
 layout: one unpack per fixed run (fixed groups included), a branch for a
 conditional group, a slice for trailing bytes, and every model's __dict__ filled
-directly (as `fast_models.maker` does, minus the call). A part shorter than its
+directly, pydantic's bookkeeping slots left to `PrimaryModel.__getattr__` (as
+`fast_models.maker` does, minus the call). A part shorter than its
 layout returns None and the general walk names what is missing; layouts with
 strings, switches or open-ended groups are not compiled.
 """
@@ -32,13 +33,7 @@ class _Source:
     def __init__(self) -> None:
         self.lines: list[str] = []
         self.indent = ""
-        self.env: dict[str, Any] = {
-            "_new": object.__new__,
-            "_dict": _SLOTS["__dict__"].__set__,
-            "_fields_set": _SLOTS["__pydantic_fields_set__"].__set__,
-            "_extra": _SLOTS["__pydantic_extra__"].__set__,
-            "_private": _SLOTS["__pydantic_private__"].__set__,
-        }
+        self.env: dict[str, Any] = {"_new": object.__new__, "_dict": _SLOTS["__dict__"].__set__}
         self.count = 0
 
     def name(self, prefix: str, value: Any = None) -> str:
@@ -55,13 +50,10 @@ class _Source:
         """Statements making one `cls` from 'key: expression' entries; returns its variable."""
         if set(cls.model_fields) != {e.split(":")[0].strip("'") for e in entries}:
             raise _NotFixed
-        var, name, fields = self.name("m"), self.name("C", cls), self.name("F", set(cls.model_fields))
+        var, name = self.name("m"), self.name("C", cls)
         self.add(
             f"{var} = _new({name})",
             f"_dict({var}, {{{', '.join(entries)}}})",
-            f"_fields_set({var}, {fields})",
-            f"_extra({var}, None)",
-            f"_private({var}, None)",
         )
         return var
 

@@ -3,9 +3,11 @@
 A decoded Robot State has ~30 models; pydantic validation of values that come
 straight from `struct` (ints in range by construction, exact tuple lengths)
 costs most of the decode time. This fills the model's __dict__ the way
-pydantic's own model_construct does, minus its per-field loop. The tests check
-every decoded model equals its validated twin. Only for frozen models: the
-fields-set record is shared between instances of a class.
+pydantic's own model_construct does, minus its per-field loop, and leaves
+pydantic's three bookkeeping slots (fields set, extra, private) unset:
+`PrimaryModel.__getattr__` answers for them, so each model costs one allocation
+and one dict. The tests check every decoded model equals its validated twin and
+survives copy, pickle and dumps. Only for frozen PrimaryModels.
 """
 
 from __future__ import annotations
@@ -15,10 +17,12 @@ from typing import Any, TypeVar
 
 from pydantic import BaseModel
 
-M = TypeVar("M", bound=BaseModel)
-_setattr = object.__setattr__
+from rtde_spec.primary.base import PrimaryModel
+
+M = TypeVar("M", bound=PrimaryModel)
+_set_dict = BaseModel.__dict__["__dict__"].__set__
 _new = object.__new__
-_MAKERS: dict[type[BaseModel], Callable[[dict[str, Any]], Any]] = {}
+_MAKERS: dict[type[PrimaryModel], Callable[[dict[str, Any]], Any]] = {}
 
 
 def maker(cls: type[M]) -> Callable[[dict[str, Any]], M]:
@@ -30,14 +34,10 @@ def maker(cls: type[M]) -> Callable[[dict[str, Any]], M]:
     fields = cls.model_fields
     count = len(fields)
     defaults = {n: i.default for n, i in fields.items() if not i.is_required()}
-    fields_set = set(fields)
 
     def make(values: dict[str, Any]) -> M:
         obj = _new(cls)
-        _setattr(obj, "__dict__", values if len(values) == count else {**defaults, **values})
-        _setattr(obj, "__pydantic_fields_set__", fields_set)
-        _setattr(obj, "__pydantic_extra__", None)
-        _setattr(obj, "__pydantic_private__", None)
+        _set_dict(obj, values if len(values) == count else {**defaults, **values})
         return obj  # type: ignore[no-any-return]
 
     _MAKERS[cls] = make

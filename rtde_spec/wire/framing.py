@@ -168,8 +168,8 @@ def check_header(
     it are an error too (`hint` says what to use for several).
     """
     hsize = header.size
-    size_bytes = struct.calcsize(header.format[:2])
     if len(buf) < hsize:
+        size_bytes = struct.calcsize(header.format[:2])
         raise DecodeError(
             f"too short for the {what} header",
             field="size" if len(buf) < size_bytes else "type",
