@@ -9,7 +9,6 @@ from pydantic import BaseModel, ConfigDict, ValidationError
 
 from rtde_spec.wire.pydantic_errors import encode_error
 
-
 # slots a frozen model without extra keys or private attributes always holds None in
 _UNSET_SLOTS = frozenset({"__pydantic_extra__", "__pydantic_private__"})
 
