@@ -28,7 +28,7 @@ from rtde_spec.primary.base import (
     UnknownSubPackage,
 )
 from rtde_spec.primary.compiled import Decoder, compile_part
-from rtde_spec.primary.fast_models import build, maker
+from rtde_spec.primary.fast_models import build, with_groups
 from rtde_spec.primary.values import ValueTable
 from rtde_spec.spec.catalogue import Catalogue
 from rtde_spec.spec.schema import FamilySpec, Spec
@@ -219,7 +219,7 @@ class PrimaryCodec:
         values["missing"] = tuple(missing)
         values["extra"] = buf[stop:end]
         if layout.group_fields:
-            _with_groups(layout, values)
+            with_groups(layout, values)
         return build(cls, values)
 
     # --- encoding -----------------------------------------------------------
@@ -274,26 +274,6 @@ class PrimaryCodec:
                 actual=f"{size} bytes",
             )
         return header.pack(size, mtype) + body
-
-
-def _with_groups(layout: Layout, values: dict[str, Any]) -> dict[str, Any]:
-    """Nested group dicts of a decoded part turned into their generated models."""
-    for fld in layout.group_fields:
-        if values.get(fld.name) is None:
-            continue
-        inner = layout.groups[fld.name]
-        cls = gen.GROUPS[fld.group or ""]
-        value = values[fld.name]
-        make = maker(cls)
-        if fld.kind == "optional":
-            values[fld.name] = make(_with_groups(inner, value))
-        elif inner.group_fields:
-            entries = [make(_with_groups(inner, v)) for v in value]
-            values[fld.name] = tuple(entries) if isinstance(fld.repeat, int) else entries
-        else:
-            entries = [make(v) for v in value]
-            values[fld.name] = tuple(entries) if isinstance(fld.repeat, int) else entries
-    return values
 
 
 @cache

@@ -17,7 +17,9 @@ from typing import Any, TypeVar
 
 from pydantic import BaseModel
 
+from rtde_spec._generated import primary_models as gen
 from rtde_spec.primary.base import PrimaryModel
+from rtde_spec.wire.layout import Layout
 
 M = TypeVar("M", bound=PrimaryModel)
 _set_dict = BaseModel.__dict__["__dict__"].__set__
@@ -47,3 +49,23 @@ def maker(cls: type[M]) -> Callable[[dict[str, Any]], M]:
 def build(cls: type[M], values: dict[str, Any]) -> M:
     """An instance of `cls` holding `values` (plus defaults), unvalidated."""
     return maker(cls)(values)
+
+
+def with_groups(layout: Layout, values: dict[str, Any]) -> dict[str, Any]:
+    """Nested group dicts of a decoded part turned into their generated models."""
+    for fld in layout.group_fields:
+        if values.get(fld.name) is None:
+            continue
+        inner = layout.groups[fld.name]
+        cls = gen.GROUPS[fld.group or ""]
+        value = values[fld.name]
+        make = maker(cls)
+        if fld.kind == "optional":
+            values[fld.name] = make(with_groups(inner, value))
+        elif inner.group_fields:
+            entries = [make(with_groups(inner, v)) for v in value]
+            values[fld.name] = tuple(entries) if isinstance(fld.repeat, int) else entries
+        else:
+            entries = [make(v) for v in value]
+            values[fld.name] = tuple(entries) if isinstance(fld.repeat, int) else entries
+    return values
