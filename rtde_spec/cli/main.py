@@ -23,6 +23,7 @@ from rtde_spec.cli import (
     record_cmd,
     serve_cmd,
     validate_cmd,
+    watch_cmd,
     wireshark_cmd,
 )
 from rtde_spec.cli.common import EXIT_ERROR, EXIT_USAGE
@@ -35,6 +36,7 @@ COMMANDS = (
     validate_cmd,
     serve_cmd,
     record_cmd,
+    watch_cmd,
     capture_cmd,
     plot_cmd,
     wireshark_cmd,
