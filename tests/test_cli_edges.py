@@ -316,3 +316,40 @@ def test_missing_fields_are_judged_by_their_since() -> None:
     (_, (_, message)) = new.feed(version_message(5, 15) + state)
     (warning,) = new.warnings_for(message)
     assert "robot_mode_data.target_speed_fraction_limit" in warning and "robot_mode_data.reserved" in warning
+
+
+def test_a_stream_of_a_newer_controller_takes_the_straight_line_decoders() -> None:
+    """After a Version message of 3.0 or newer, the sub-packages that have pre-3.0 layouts are
+    still decoded by the generated decoders (the version picks their current layout); older
+    versions take the general walk with the older layout."""
+    import sys
+
+    from rtde_spec.primary.codec import default_codec
+    from rtde_spec.spec.versions import Version
+
+    from .helpers import ROOT
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        from ur5e_robot_state import ur5e_robot_state_bytes
+    finally:
+        sys.path.pop(0)
+    codec = default_codec()
+    state = ur5e_robot_state_bytes()
+    fam = codec.families[16]
+    assert codec._older_for(fam, Version(5, 15, 0)) == frozenset() == codec._older_for(fam, None)
+    assert codec._older_for(fam, Version(1, 8, 0)) == {0, 3}
+    walked: list[str] = []
+    general = codec._part
+
+    def counting(cls, *args):  # type: ignore[no-untyped-def]
+        walked.append(cls.NAME)
+        return general(cls, *args)
+
+    codec._part = counting  # type: ignore[method-assign]
+    try:
+        decoder = PrimaryStreamDecoder(codec)
+        ((_, _), (_, message)) = decoder.feed(version_message(5, 15) + state)
+    finally:
+        del codec._part
+    assert walked == ["version_message"] and message == decode_message(state)  # a tagged message: the walk

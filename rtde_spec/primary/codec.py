@@ -85,6 +85,7 @@ class PrimaryCodec:
         # straight-line decoders of Robot State sub-packages (see compiled.py): type -> decode
         state = self.families[gen.FAMILY_TYPES["robot_state"]]
         self._fast: dict[int, Decoder] = {}
+        self._older_cache: dict[Version, frozenset[int]] = {}
         for sub_type, (cls, layout) in state.members.items():
             decoder = compile_part(cls, layout)
             if decoder is not None:
@@ -127,8 +128,7 @@ class PrimaryCodec:
         hsize = self.sub_header.size
         unpack = self.sub_header.unpack_from
         fast_get = self._fast.get
-        # a version picks older layouts, which only the general walk reads
-        older = fam.older if version is not None else {}
+        older = self._older_for(fam, version)
         subs: list[Any] = []
         append = subs.append
         while pos < end:
@@ -148,6 +148,16 @@ class PrimaryCodec:
                     continue
             self._bad_sub_header(buf, pos, end)
         return build(RobotStateMessage, {"sub_packages": subs})
+
+    def _older_for(self, fam: _Family, version: Version | None) -> frozenset[int]:
+        """Sub-package types for which `version` picks an older layout: only the general walk reads those."""
+        if version is None:
+            return frozenset()
+        found = self._older_cache.get(version)
+        if found is None:
+            found = frozenset(t for t, ranges in fam.older.items() if any(version < b for b, _ in ranges))
+            self._older_cache[version] = found
+        return found
 
     def _sub_package(
         self, fam: _Family, sub_type: int, buf: bytes, pos: int, stop: int, version: Version | None
