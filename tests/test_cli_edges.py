@@ -336,20 +336,23 @@ def test_a_stream_of_a_newer_controller_takes_the_straight_line_decoders() -> No
         sys.path.pop(0)
     codec = default_codec()
     state = ur5e_robot_state_bytes()
-    fam = codec.families[16]
-    assert codec._older_for(fam, Version(5, 15, 0)) == frozenset() == codec._older_for(fam, None)
-    assert codec._older_for(fam, Version(1, 8, 0)) == {0, 3}
+    reader = codec.robot_state
+    assert reader.older_for(Version(5, 15, 0)) == frozenset() == reader.older_for(None)
+    assert reader.older_for(Version(1, 8, 0)) == {0, 3}
     walked: list[str] = []
-    general = codec._part
+    general = reader.walk
 
     def counting(cls, *args):  # type: ignore[no-untyped-def]
         walked.append(cls.NAME)
         return general(cls, *args)
 
-    codec._part = counting  # type: ignore[method-assign]
+    reader.walk = counting
     try:
         decoder = PrimaryStreamDecoder(codec)
         ((_, _), (_, message)) = decoder.feed(version_message(5, 15) + state)
+        old = PrimaryStreamDecoder(codec)
+        old.feed(version_message(1, 8) + state)
     finally:
-        del codec._part
-    assert walked == ["version_message"] and message == decode_message(state)  # a tagged message: the walk
+        reader.walk = general
+    assert walked == ["robot_mode_data", "masterboard_data"]  # only for the 1.8 stream
+    assert message == decode_message(state)

@@ -315,7 +315,7 @@ def test_compiled_sub_package_decoder_equals_the_layout_walk(key: tuple[str, int
     """The generated straight-line decoder of a sub-package gives the general path's model."""
     codec = default_codec()
     cls, layout = codec.families[16].members[key[1]]
-    fast = codec._fast.get(key[1])
+    fast = codec.robot_state.fast.get(key[1])
     assert fast is not None, f"{cls.NAME} has no compiled decoder"
 
     @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])

@@ -11,7 +11,7 @@ from __future__ import annotations
 import struct
 from collections.abc import Iterator
 from dataclasses import dataclass, field
-from functools import cache
+from functools import cache, partial
 from typing import Any
 
 from rtde_spec._generated import primary_models as gen
@@ -27,8 +27,8 @@ from rtde_spec.primary.base import (
     UnknownMessage,
     UnknownSubPackage,
 )
-from rtde_spec.primary.compiled import Decoder, compile_part
 from rtde_spec.primary.fast_models import build, with_groups
+from rtde_spec.primary.robot_state import RobotStateReader
 from rtde_spec.primary.values import ValueTable
 from rtde_spec.spec.catalogue import Catalogue
 from rtde_spec.spec.schema import FamilySpec, Spec
@@ -82,14 +82,10 @@ class PrimaryCodec:
                     ]
                     entry.older[member.type] = sorted(ranges, key=lambda r: r[0])
             self.families[fam.type] = entry
-        # straight-line decoders of Robot State sub-packages (see compiled.py): type -> decode
+        # Robot State: generated decoders per sub-package and per message shape (robot_state.py)
         state = self.families[gen.FAMILY_TYPES["robot_state"]]
-        self._fast: dict[int, Decoder] = {}
-        self._older_cache: dict[Version, frozenset[int]] = {}
-        for sub_type, (cls, layout) in state.members.items():
-            decoder = compile_part(cls, layout)
-            if decoder is not None:
-                self._fast[sub_type] = decoder
+        walk = partial(self._part, prefix={})
+        self.robot_state = RobotStateReader(state.members, state.older, self.sub_header, walk)
 
     # --- decoding -----------------------------------------------------------
 
@@ -118,82 +114,8 @@ class PrimaryCodec:
         if layout == "opaque":
             return OpaqueMessage(family=fam.spec.name, type=mtype, raw=buf[hsize:size])
         if layout == "subpackages":
-            return self._robot_state(buf, hsize, size, version)
+            return self.robot_state.decode(buf, hsize, size, version)
         return self._tagged(fam, buf, hsize, size)
-
-    def _robot_state(
-        self, buf: bytes, pos: int, end: int, version: Version | None = None
-    ) -> RobotStateMessage:
-        fam = self.families[gen.FAMILY_TYPES["robot_state"]]
-        hsize = self.sub_header.size
-        unpack = self.sub_header.unpack_from
-        fast_get = self._fast.get
-        older = self._older_for(fam, version)
-        subs: list[Any] = []
-        append = subs.append
-        while pos < end:
-            if end - pos >= hsize:
-                sub_size, sub_type = unpack(buf, pos)
-                stop = pos + sub_size
-                if sub_size >= hsize and stop <= end:
-                    fast = fast_get(sub_type)
-                    if fast is not None and sub_type not in older:
-                        part = fast(buf, pos + hsize, stop)  # None: shorter than the layout
-                        if part is not None:
-                            append(part)
-                            pos = stop
-                            continue
-                    append(self._sub_package(fam, sub_type, buf, pos, stop, version))
-                    pos = stop
-                    continue
-            self._bad_sub_header(buf, pos, end)
-        return build(RobotStateMessage, {"sub_packages": subs})
-
-    def _older_for(self, fam: _Family, version: Version | None) -> frozenset[int]:
-        """Sub-package types for which `version` picks an older layout: only the general walk reads those."""
-        if version is None:
-            return frozenset()
-        found = self._older_cache.get(version)
-        if found is None:
-            found = frozenset(t for t, ranges in fam.older.items() if any(version < b for b, _ in ranges))
-            self._older_cache[version] = found
-        return found
-
-    def _sub_package(
-        self, fam: _Family, sub_type: int, buf: bytes, pos: int, stop: int, version: Version | None
-    ) -> Any:
-        """A sub-package the straight-line decoders do not take: unknown, older or shorter."""
-        member = fam.members.get(sub_type)
-        if member is None:
-            return UnknownSubPackage(type=sub_type, size=stop - pos, raw=buf[pos:stop])
-        cls, layout = member
-        if version is not None and sub_type in fam.older:
-            layout = next((lay for before, lay in fam.older[sub_type] if version < before), layout)
-        return self._part(cls, layout, buf, pos + self.sub_header.size, stop, {})
-
-    def _bad_sub_header(self, buf: bytes, pos: int, end: int) -> None:
-        """Raise what is wrong with the sub-package header at `pos`."""
-        hsize = self.sub_header.size
-        if end - pos < hsize:
-            raise DecodeError(
-                "sub-package header cut off by the end of the message",
-                package="robot_state",
-                field="size",
-                offset=pos,
-                expected=f"{hsize} bytes",
-                actual=f"{end - pos} bytes",
-            )
-        sub_size = self.sub_header.unpack_from(buf, pos)[0]
-        raise DecodeError(
-            "sub-package size is smaller than its header"
-            if sub_size < hsize
-            else "sub-package size runs past the end of the message",
-            package="robot_state",
-            field="size",
-            offset=pos,
-            expected=f"{hsize}..{end - pos}",
-            actual=sub_size,
-        )
 
     def _tagged(self, fam: _Family, buf: bytes, pos: int, end: int) -> PrimaryMessage:
         assert fam.prefix is not None

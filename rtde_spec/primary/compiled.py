@@ -13,6 +13,7 @@ strings, switches or open-ended groups are not compiled.
 
 from __future__ import annotations
 
+import struct
 from collections.abc import Callable
 from typing import Any
 
@@ -125,6 +126,12 @@ def _body(src: _Source, layout: Layout) -> list[str]:
     return entries
 
 
+def _emit_part(src: _Source, cls: type[BaseModel], layout: Layout) -> str:
+    """Statements decoding one part between `p` and `end`; returns the variable of its model."""
+    entries = _body(src, layout)
+    return src.model(cls, [*entries, "'missing': ()", "'extra': buf[p:end]"])
+
+
 def compile_part(cls: type[BaseModel], layout: Layout) -> Decoder | None:
     """decode(buf, start, end) -> the part's model, or None when the part is shorter than its layout.
 
@@ -134,10 +141,94 @@ def compile_part(cls: type[BaseModel], layout: Layout) -> Decoder | None:
     src = _Source()
     src.add("p = start")
     try:
-        entries = _body(src, layout)
-        part = src.model(cls, [*entries, "'missing': ()", "'extra': buf[p:end]"])
+        part = _emit_part(src, cls, layout)
     except _NotFixed:
         return None
     body = "\n    ".join([*src.lines, f"return {part}"])
     exec(f"def decode(buf, start, end):\n    {body}\n", src.env)
+    return src.env["decode"]  # type: ignore[no-any-return]
+
+
+ShapeDecoder = Callable[[bytes, int], "list[Any] | None"]
+
+
+class _Shared:
+    """One struct over a whole message: the fixed runs of its parts at their offsets."""
+
+    def __init__(self, src: _Source) -> None:
+        self.runs: list[tuple[int, str]] = []  # (offset from pos, format without byte order)
+        self.count = 0  # values so far
+        self.order = ""
+        self.var = src.name("T")
+
+    def add(self, offset: int, fmt: struct.Struct) -> int:
+        """Register a run; returns the index of its first value in the shared tuple."""
+        first = self.count
+        self.order = fmt.format[0]
+        self.runs.append((offset, fmt.format[1:]))
+        self.count += len(fmt.unpack(bytes(fmt.size)))
+        return first
+
+    def struct(self) -> struct.Struct:
+        parts, at = [], 0
+        for offset, fmt in self.runs:
+            parts += [f"{offset - at}x", fmt]
+            at = offset + struct.calcsize(self.order + fmt)
+        return struct.Struct(self.order + "".join(parts))
+
+
+def _merged_part(
+    src: _Source, shared: _Shared, cls: type[BaseModel], layout: Layout, start: int, end: int
+) -> str | None:
+    """A part of fixed fields (and perhaps trailing rest-of-part bytes) read from the shared
+    tuple, its extra bytes sliced at known offsets; None when it has other fields."""
+    fields, rest = list(layout.fields), None
+    if fields and fields[-1].kind == "bytes" and fields[-1].length == "rest":
+        rest = fields.pop()
+    if any(f.kind != "value" and not (f.kind == "repeat" and isinstance(f.repeat, int)) for f in fields):
+        return None
+    size, entries = 0, list[str]()
+    if fields:
+        step = Layout(fields, layout.prims, order=layout.order)._single
+        if step is None:
+            raise _NotFixed
+        size = step.struct.size
+        if end - start < size:  # shorter than its layout: the general walk names what is missing
+            raise _NotFixed
+        entries, _ = _fields(src, fields, shared.var, shared.add(start, step.struct))
+    tail = f"buf[pos + {start + size}:pos + {end}]" if start + size < end else "b''"
+    if rest is not None:
+        entries.append(f"{rest.name!r}: {tail}")
+        tail = "b''"
+    return src.model(cls, [*entries, "'missing': ()", f"'extra': {tail}"])
+
+
+def compile_shape(parts: list[tuple[type[BaseModel], Layout, int]], header_size: int) -> ShapeDecoder | None:
+    """decode(buf, pos) -> the models of a run of sub-packages of exactly these (class, layout,
+    size including header) at `pos`, in one function: one unpack for every fixed field of
+    the message, no loop, no call per part.
+
+    A controller sends the same sub-packages every time, so a Robot State of a shape seen
+    before is decoded by straight-line code end to end. None from decode: a part with a
+    conditional group is shorter than its layout (the general walk then names what is
+    missing); None from compile_shape: a part is shorter than its layout, or has a
+    layout the generated code does not cover.
+    """
+    src = _Source()
+    shared = _Shared(src)
+    made, offset = [], 0
+    try:
+        for cls, layout, size in parts:
+            start, end = offset + header_size, offset + size
+            var = _merged_part(src, shared, cls, layout, start, end)
+            if var is None:  # a conditional group: this part reads on its own
+                src.add(f"p = pos + {start}", f"end = pos + {end}")
+                var = _emit_part(src, cls, layout)
+            made.append(var)
+            offset += size
+    except _NotFixed:
+        return None
+    head = [f"{shared.var} = {src.name('U', shared.struct().unpack_from)}(buf, pos)"] if shared.runs else []
+    body = "\n    ".join([*head, *src.lines, f"return [{', '.join(made)}]"])
+    exec(f"def decode(buf, pos):\n    {body}\n", src.env)
     return src.env["decode"]  # type: ignore[no-any-return]

@@ -1,0 +1,156 @@
+"""Robot State (message type 16): the walk over its sub-packages, and its fast paths.
+
+Three ways, fastest first: a message of a shape (sub-package sizes and types in order)
+seen before is decoded by one generated function (`compiled.compile_shape`); otherwise
+each sub-package goes to its generated decoder (`compiled.compile_part`); parts that
+are unknown, shorter than their layout, or of an older layout picked by the controller
+version take the general layout walk, which names what is missing. All three give the
+same models (tests compare them).
+"""
+
+from __future__ import annotations
+
+import struct
+from collections.abc import Callable
+from typing import Any
+
+from rtde_spec.errors import DecodeError
+from rtde_spec.primary.base import PrimaryPart, RobotStateMessage, UnknownSubPackage
+from rtde_spec.primary.compiled import Decoder, ShapeDecoder, compile_part, compile_shape
+from rtde_spec.primary.fast_models import maker
+from rtde_spec.spec.versions import Version
+from rtde_spec.wire.layout import Layout
+
+Members = dict[int, tuple[type[PrimaryPart], Layout]]
+Older = dict[int, list[tuple[Version, Layout]]]  # sub-package type -> (first version not using it, layout)
+PartWalk = Callable[[type[PrimaryPart], Layout, bytes, int, int], Any]  # the general layout walk
+
+Shape = tuple[tuple[int, int], ...]  # (size, type) of each sub-package, in order
+_NONE: frozenset[int] = frozenset()
+
+
+class RobotStateReader:
+    """Decodes Robot State bodies for one codec; learns the shapes a controller sends."""
+
+    SHAPES_PER_SIZE = 4  # a controller sends one or two shapes (the first message adds configuration)
+    SEEN_LIMIT = 256  # shapes counted before one is compiled; the count is forgotten beyond this
+
+    def __init__(self, members: Members, older: Older, header: struct.Struct, walk: PartWalk) -> None:
+        self.members, self.older, self.header, self.walk = members, older, header, walk
+        self.fast: dict[int, Decoder] = {}
+        for sub_type, (cls, layout) in members.items():
+            decoder = compile_part(cls, layout)
+            if decoder is not None:
+                self.fast[sub_type] = decoder
+        self._older: dict[Version, frozenset[int]] = {}
+        # body size -> (header check, expected headers, decoder) of the shapes compiled
+        self.shapes: dict[int, list[tuple[Any, tuple[int, ...], ShapeDecoder]]] = {}
+        self._seen: dict[Shape, int] = {}
+        self._make = maker(RobotStateMessage)
+
+    def decode(self, buf: bytes, pos: int, end: int, version: Version | None = None) -> RobotStateMessage:
+        older = self.older_for(version) if version is not None else _NONE
+        shapes = self.shapes.get(end - pos)
+        if shapes is not None and not older:
+            for check, expected, decode in shapes:
+                if check(buf, pos) == expected:
+                    subs = decode(buf, pos)
+                    if subs is not None:
+                        return self._make({"sub_packages": subs})
+                    break
+        subs, shape = self._walk(buf, pos, end, older, version)
+        if shape is not None and not older:
+            self._learn(end - pos, shape)
+        return self._make({"sub_packages": subs})
+
+    def older_for(self, version: Version | None) -> frozenset[int]:
+        """Sub-package types for which `version` picks an older layout: only the general walk reads those."""
+        if version is None:
+            return frozenset()
+        found = self._older.get(version)
+        if found is None:
+            found = frozenset(t for t, ranges in self.older.items() if any(version < b for b, _ in ranges))
+            self._older[version] = found
+        return found
+
+    def _walk(
+        self, buf: bytes, pos: int, end: int, older: frozenset[int], version: Version | None
+    ) -> tuple[list[Any], Shape | None]:
+        """Every sub-package, one at a time; the shape when all went to their generated decoders."""
+        hsize = self.header.size
+        unpack = self.header.unpack_from
+        fast_get = self.fast.get
+        subs: list[Any] = []
+        shape: list[tuple[int, int]] | None = []
+        while pos < end:
+            if end - pos >= hsize:
+                sub_size, sub_type = unpack(buf, pos)
+                stop = pos + sub_size
+                if sub_size >= hsize and stop <= end:
+                    fast = fast_get(sub_type)
+                    part = (
+                        fast(buf, pos + hsize, stop) if fast is not None and sub_type not in older else None
+                    )
+                    if part is not None:
+                        if shape is not None:
+                            shape.append((sub_size, sub_type))
+                    else:  # unknown, older or shorter than its layout
+                        part, shape = self._sub_package(sub_type, buf, pos, stop, version), None
+                    subs.append(part)
+                    pos = stop
+                    continue
+            self._bad_header(buf, pos, end)
+        return subs, tuple(shape) if shape else None
+
+    def _learn(self, size: int, shape: Shape) -> None:
+        """Compile a decoder for a shape the second time it is seen (a one-off costs nothing)."""
+        compiled = self.shapes.setdefault(size, [])
+        if len(compiled) >= self.SHAPES_PER_SIZE:
+            return
+        seen = self._seen.get(shape, 0) + 1
+        if len(self._seen) >= self.SEEN_LIMIT:
+            self._seen.clear()
+        self._seen[shape] = seen
+        if seen < 2:
+            return
+        decode = compile_shape([(*self.members[t], s) for s, t in shape], self.header.size)
+        if decode is None:
+            return
+        fmt = "".join(f"{self.header.format[1:]}{s - self.header.size}x" for s, _ in shape)
+        check = struct.Struct(self.header.format[0] + fmt).unpack_from
+        compiled.append((check, tuple(v for pair in shape for v in pair), decode))
+        del self._seen[shape]
+
+    def _sub_package(self, sub_type: int, buf: bytes, pos: int, stop: int, version: Version | None) -> Any:
+        """A sub-package the generated decoders do not take: unknown, older or shorter."""
+        member = self.members.get(sub_type)
+        if member is None:
+            return UnknownSubPackage(type=sub_type, size=stop - pos, raw=buf[pos:stop])
+        cls, layout = member
+        if version is not None and sub_type in self.older:
+            layout = next((lay for before, lay in self.older[sub_type] if version < before), layout)
+        return self.walk(cls, layout, buf, pos + self.header.size, stop)
+
+    def _bad_header(self, buf: bytes, pos: int, end: int) -> None:
+        """Raise what is wrong with the sub-package header at `pos`."""
+        hsize = self.header.size
+        if end - pos < hsize:
+            raise DecodeError(
+                "sub-package header cut off by the end of the message",
+                package="robot_state",
+                field="size",
+                offset=pos,
+                expected=f"{hsize} bytes",
+                actual=f"{end - pos} bytes",
+            )
+        sub_size = self.header.unpack_from(buf, pos)[0]
+        raise DecodeError(
+            "sub-package size is smaller than its header"
+            if sub_size < hsize
+            else "sub-package size runs past the end of the message",
+            package="robot_state",
+            field="size",
+            offset=pos,
+            expected=f"{hsize}..{end - pos}",
+            actual=sub_size,
+        )
