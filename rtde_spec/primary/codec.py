@@ -97,16 +97,18 @@ class PrimaryCodec:
         `version` (from the Version message) picks the spec's older layouts where a
         sub-package has them.
         """
-        buf = bytes(data)
+        buf = data if type(data) is bytes else bytes(data)
         hsize = self.header.size
-        size, mtype = check_header(
-            buf,
-            self.header,
-            what="message",
-            max_size=self.max_size,
-            strict=strict,
-            hint="; use PrimaryStreamDecoder for several",
-        )
+        size, mtype = self.header.unpack_from(buf) if len(buf) >= hsize else (0, 0)
+        if not (hsize <= size <= self.max_size and (size == len(buf) or (not strict and size < len(buf)))):
+            size, mtype = check_header(  # says what is wrong
+                buf,
+                self.header,
+                what="message",
+                max_size=self.max_size,
+                strict=strict,
+                hint="; use PrimaryStreamDecoder for several",
+            )
         fam = self.families.get(mtype)
         if fam is None:
             return UnknownMessage(type=mtype, size=size, raw=buf[:size])

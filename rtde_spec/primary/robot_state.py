@@ -14,6 +14,8 @@ import struct
 from collections.abc import Callable
 from typing import Any
 
+from pydantic import BaseModel
+
 from rtde_spec.errors import DecodeError
 from rtde_spec.primary.base import PrimaryPart, RobotStateMessage, UnknownSubPackage
 from rtde_spec.primary.compiled import Decoder, ShapeDecoder, compile_part, compile_shape
@@ -27,6 +29,8 @@ PartWalk = Callable[[type[PrimaryPart], Layout, bytes, int, int], Any]  # the ge
 
 Shape = tuple[tuple[int, int], ...]  # (size, type) of each sub-package, in order
 _NONE: frozenset[int] = frozenset()
+_new = object.__new__
+_set_dict = BaseModel.__dict__["__dict__"].__set__  # fast_models.maker, without its call
 
 
 class RobotStateReader:
@@ -56,7 +60,9 @@ class RobotStateReader:
                 if check(buf, pos) == expected:
                     subs = decode(buf, pos)
                     if subs is not None:
-                        return self._make({"sub_packages": subs})
+                        message = _new(RobotStateMessage)
+                        _set_dict(message, {"sub_packages": subs})
+                        return message  # type: ignore[no-any-return]
                     break
         subs, shape = self._walk(buf, pos, end, older, version)
         if shape is not None and not older:
