@@ -23,7 +23,9 @@ class ParquetWriter(Writer):
     Snappy and uncompressed are what every Parquet reader reads.
     """
 
-    ROW_GROUP_ROWS = 4096
+    # ~20 MB of the 58-field recipe: per column chunk the writer pays a fixed cost, which at
+    # 4,096 rows was half its time (2.3 against 1.3 µs a row); readers also prefer big groups
+    ROW_GROUP_ROWS = 16384
     THREADED: bool | None = None  # encode row groups on a second thread; None: when a second core is ours
 
     def __init__(self, stream: IO[bytes] | str) -> None:
