@@ -255,3 +255,26 @@ def test_client_core_gives_the_same_events_whatever_the_reads(cuts: list[int]) -
     start = core.framer.offset
     assert events(core, [stream[a:b] for a, b in itertools.pairwise(bounds)]) == expected
     assert core.framer.offset - start == len(stream) and core.framer.pending == 0
+
+
+def test_a_read_the_size_of_whole_packages_that_is_not_only_data_takes_the_general_path() -> None:
+    """A batched client decodes a read of N package sizes before it checks the leads; a read of
+    that length holding a text message (or a package of another recipe) is then framed the
+    general way, and no record of the first decode survives."""
+    from rtde_spec.rtde.client_protocol import DataRun, Text
+
+    size = CODEC.package_size
+    stream = data_packages(1) + TEXT + data_packages(3, start=1)
+    cut = 2 * size  # the first read: one package, the text, and a piece of the next package
+    core = _client_with_recipe()
+    got: list[Any] = []
+    for read in (stream[:cut], stream[cut:]):
+        for event in core.receive(read):
+            got += event.records if isinstance(event, DataRun) else [event]
+    assert [type(e).__name__ for e in got] == ["Record", "Text", "Record", "Record", "Record"]
+    assert isinstance(got[1], Text)
+    assert [e.timestamp for e in got if not isinstance(e, Text)] == [i * 0.002 for i in range(4)]
+    other = bytearray(data_packages(2))
+    other[3] = 9  # recipe id 9 in the first package: not this client's recipe
+    with pytest.raises(Exception, match="recipe"):
+        _client_with_recipe().receive(bytes(other))
