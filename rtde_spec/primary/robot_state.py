@@ -125,7 +125,7 @@ class RobotStateReader:
         fmt = "".join(f"{self.header.format[1:]}{s - self.header.size}x" for s, _ in shape)
         check = struct.Struct(self.header.format[0] + fmt).unpack_from
         compiled.append((check, tuple(v for pair in shape for v in pair), decode))
-        del self._seen[shape]
+        self._seen.pop(shape, None)  # (another thread may have compiled it too)
 
     def _sub_package(self, sub_type: int, buf: bytes, pos: int, stop: int, version: Version | None) -> Any:
         """A sub-package the generated decoders do not take: unknown, older or shorter."""
