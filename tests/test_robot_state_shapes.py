@@ -126,3 +126,32 @@ def test_shapes_per_size_are_bounded() -> None:
         seen += 1
     assert seen > reader.SHAPES_PER_SIZE and sizes
     assert all(len(v) <= reader.SHAPES_PER_SIZE for v in reader.shapes.values())
+
+
+def test_threads_sharing_a_codec_learn_shapes_without_errors() -> None:
+    """The default codec is shared; threads that learn the same shapes at once get the walk's
+    models, and the shapes stay bounded."""
+    import threading
+
+    codec = fresh()
+    names = ["robot_mode_data", "cartesian_info", "tool_data", "force_mode_data"]
+    messages = [message([golden_part(a), golden_part(b)]) for a in names for b in names]
+    expected = [walked(codec, m) for m in messages]
+    errors: list[BaseException] = []
+
+    def work() -> None:
+        try:
+            for _ in range(30):
+                for data, want in zip(messages, expected, strict=True):
+                    assert codec.decode_message(data).sub_packages == want  # type: ignore[union-attr]
+        except BaseException as exc:
+            errors.append(exc)
+
+    threads = [threading.Thread(target=work) for _ in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert errors == []
+    assert all(len(v) <= codec.robot_state.SHAPES_PER_SIZE + 3 for v in codec.robot_state.shapes.values())
+    assert sum(len(v) for v in codec.robot_state.shapes.values()) >= 4
