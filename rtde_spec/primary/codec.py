@@ -83,7 +83,8 @@ class PrimaryCodec:
                     entry.older[member.type] = sorted(ranges, key=lambda r: r[0])
             self.families[fam.type] = entry
         # Robot State: generated decoders per sub-package and per message shape (robot_state.py)
-        state = self.families[gen.FAMILY_TYPES["robot_state"]]
+        self.state_type = gen.FAMILY_TYPES["robot_state"]
+        state = self.families[self.state_type]
         walk = partial(self._part, prefix={})
         self.robot_state = RobotStateReader(state.members, state.older, self.sub_header, walk)
 
@@ -109,6 +110,8 @@ class PrimaryCodec:
                 strict=strict,
                 hint="; use PrimaryStreamDecoder for several",
             )
+        if mtype == self.state_type:  # most of a stream: Robot State, ten times a second
+            return self.robot_state.decode(buf, hsize, size, version)
         fam = self.families.get(mtype)
         if fam is None:
             return UnknownMessage(type=mtype, size=size, raw=buf[:size])
