@@ -2,7 +2,8 @@
 
 The Robot State is built from the same model the RTDE port reads, so a client sees
 the same joint positions and modes on both. Bytes a client sends are taken as
-URScript and kept (read-only ports drop them, as a controller does).
+URScript and kept, its I/O calls run (`script.py`; read-only ports drop what they get,
+as a controller does).
 """
 
 from __future__ import annotations
@@ -12,6 +13,7 @@ import logging
 from typing import TYPE_CHECKING
 
 from rtde_spec._generated.enums import ControlMode, MessageSource, RobotMessageType, RobotMode
+from rtde_spec.emulator.script import run_script
 from rtde_spec.primary import models as pm
 from rtde_spec.primary.base import RobotStateMessage
 from rtde_spec.primary.codec import encode_message
@@ -126,7 +128,8 @@ class PrimaryConnection(asyncio.Protocol):
             return  # a read-only port ignores what clients send
         text = data.decode("utf-8", "replace")
         self.hub.scripts.append((self.port, text))
-        log.info("URScript on port %d: %s", self.port, text.strip()[:80])
+        applied = run_script(self.hub.model, text)
+        log.info("URScript on port %d: %s (%d I/O calls run)", self.port, text.strip()[:80], len(applied))
 
     def send(self, data: bytes) -> None:
         if self.transport is None or self.transport.is_closing():

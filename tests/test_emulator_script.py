@@ -1,0 +1,71 @@
+"""URScript I/O calls sent to the emulator's primary/secondary ports show up on RTDE, as on a controller."""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from rtde_spec import EmulatorConfig, EmulatorThread, PrimaryClient, RtdeClient
+from rtde_spec.emulator.model import ControllerModel
+from rtde_spec.emulator.script import run_script
+
+
+def test_io_calls_set_the_outputs_a_controller_shows() -> None:
+    model = ControllerModel("5.15.0")
+    program = """def prog():
+      set_standard_digital_out(3, True)
+      set_configurable_digital_out(1, True)
+      set_tool_digital_out(0, True)
+      set_standard_analog_out(1, 0.25)
+      textmsg("not an I/O call")
+      movej([0, 0, 0, 0, 0, 0])
+    end"""
+    applied = run_script(model, program)
+    assert applied == [
+        "set_standard_digital_out(3, True)",
+        "set_configurable_digital_out(1, True)",
+        "set_tool_digital_out(0, True)",
+        "set_standard_analog_out(1, 0.25)",
+    ]
+    bits = model.values["actual_digital_output_bits"]
+    assert bits == (1 << 3) | (1 << (8 + 1)) | (1 << 16)
+    assert model.values["standard_analog_output1"] == 0.25
+    run_script(model, "set_standard_digital_out(3, False)\nset_standard_digital_out(0, true)")
+    assert model.values["actual_digital_output_bits"] == 1 | (1 << 9) | (1 << 16)
+
+
+@pytest.mark.parametrize(
+    "line",
+    [
+        "set_standard_digital_out(8, True)",  # no pin 8
+        "set_tool_digital_out(2, True)",  # the tool has two
+        "set_standard_digital_out(1, 0.5)",  # not a bool
+        "set_standard_analog_out(2, 0.5)",  # two analog outputs
+        "set_standard_digital_out(x, True)",  # not a literal
+        "garbage((((",
+    ],
+)
+def test_calls_a_controller_would_refuse_change_nothing(line: str) -> None:
+    model = ControllerModel("5.15.0")
+    before = dict(model.values)
+    assert run_script(model, line) == [] and model.values == before
+
+
+def test_a_script_on_the_primary_port_shows_on_rtde_and_not_from_a_read_only_port() -> None:
+    config = EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, secondary_read_only_port=0)
+    emu = EmulatorThread(config).start()
+    try:
+        with PrimaryClient("127.0.0.1", emu.ports["secondary_read_only"]) as quiet:
+            quiet._sock.sendall(b"set_standard_digital_out(5, True)\n")  # type: ignore[union-attr]
+        with PrimaryClient("127.0.0.1", emu.ports["primary"]) as client:
+            client.send_script("set_standard_digital_out(2, True)\nset_standard_analog_out(0, 0.5)")
+            time.sleep(0.3)
+        with RtdeClient("127.0.0.1", emu.ports["rtde"]) as robot:
+            robot.setup_outputs(["actual_digital_output_bits", "standard_analog_output0"], 125)
+            robot.start()
+            record = robot.receive()
+        assert record.actual_digital_output_bits == 1 << 2  # not bit 5: read-only ports ignore scripts
+        assert record.standard_analog_output0 == 0.5
+    finally:
+        emu.stop()
