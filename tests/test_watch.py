@@ -49,6 +49,7 @@ def test_version_then_modes_once_then_only_changes(
     assert kinds == ["version", "state"]  # four Robot States, the modes did not change after the first
     assert "URControl 5.11.2" in lines[0]
     assert "robot mode 7 (RUNNING)" in lines[1] and "speed slider 1.0" in lines[1]
+    assert "safety mode 1 (NORMAL)" in lines[1]
 
 
 def test_a_speed_slider_set_over_rtde_shows_as_a_change(

@@ -1,4 +1,5 @@
-"""The emulator's primary and secondary ports: the Version message, then Robot State at 10 Hz.
+"""The emulator's primary and secondary ports: the Version message, then Robot State at 10 Hz
+(robot mode, joints, cartesian info, masterboard).
 
 The Robot State is built from the same model the RTDE port reads, so a client sees
 the same joint positions and modes on both. Bytes a client sends are taken as
@@ -12,7 +13,14 @@ import asyncio
 import logging
 from typing import TYPE_CHECKING
 
-from rtde_spec._generated.enums import ControlMode, MessageSource, RobotMessageType, RobotMode
+from rtde_spec._generated.enums import (
+    AnalogIoTypes,
+    ControlMode,
+    MessageSource,
+    RobotMessageType,
+    RobotMode,
+    SafetyMode,
+)
 from rtde_spec.emulator.script import run_script
 from rtde_spec.primary import models as pm
 from rtde_spec.primary.base import RobotStateMessage
@@ -95,9 +103,39 @@ class PrimaryHub:
                 ),
                 pm.JointData(joints=joints),
                 pm.CartesianInfo(**dict(zip(CARTESIAN, (*pose, *offset), strict=True))),
+                self._masterboard(),
             ]
         )
         return encode_message(message)
+
+    def _masterboard(self) -> pm.MasterboardData:
+        """I/O, supply and safety mode as the RTDE outputs have them (a set type bit: voltage)."""
+        values = self.model.values
+        types = int(values.get("analog_io_types", 0))
+        return pm.MasterboardData(
+            digital_input_bits=int(values.get("actual_digital_input_bits", 0)) & 0xFFFF,
+            digital_output_bits=int(values.get("actual_digital_output_bits", 0)) & 0xFFFF,
+            analog_input_range0=int(bool(types & AnalogIoTypes.ANALOG_INPUT_0_VOLTAGE)),
+            analog_input_range1=int(bool(types & AnalogIoTypes.ANALOG_INPUT_1_VOLTAGE)),
+            analog_input0=values.get("standard_analog_input0", 0.0),
+            analog_input1=values.get("standard_analog_input1", 0.0),
+            analog_output_domain0=int(bool(types & AnalogIoTypes.ANALOG_OUTPUT_0_VOLTAGE)),
+            analog_output_domain1=int(bool(types & AnalogIoTypes.ANALOG_OUTPUT_1_VOLTAGE)),
+            analog_output0=values.get("standard_analog_output0", 0.0),
+            analog_output1=values.get("standard_analog_output1", 0.0),
+            masterboard_temperature=35.0,
+            robot_voltage_48v=values.get("actual_robot_voltage", 48.0) or 48.0,
+            robot_current=values.get("actual_robot_current", 0.0),
+            master_io_current=values.get("io_current", 0.0),
+            safety_mode=int(values.get("safety_mode", SafetyMode.NORMAL)),
+            in_reduced_mode=False,
+            immi_interface_installed=False,
+            immi=None,
+            reserved=0,
+            operational_mode_selector_input=0,
+            three_position_enabling_device_input=False,
+            reserved_2=0,
+        )
 
     def broadcast_state(self) -> None:
         if self.connections:
