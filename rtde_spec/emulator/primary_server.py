@@ -109,7 +109,11 @@ class PrimaryHub:
         return encode_message(message)
 
     def _masterboard(self) -> pm.MasterboardData:
-        """I/O, supply and safety mode as the RTDE outputs have them (a set type bit: voltage)."""
+        """I/O, supply and safety mode as the RTDE outputs have them.
+
+        The document gives no encoding of the analog ranges and domains; the emulator
+        sends 1 for voltage and 0 for current, as the bits of RTDE's analog_io_types.
+        """
         values = self.model.values
         types = int(values.get("analog_io_types", 0))
         return pm.MasterboardData(
