@@ -155,3 +155,48 @@ def test_threads_sharing_a_codec_learn_shapes_without_errors() -> None:
     assert errors == []
     assert all(len(v) <= codec.robot_state.SHAPES_PER_SIZE + 3 for v in codec.robot_state.shapes.values())
     assert sum(len(v) for v in codec.robot_state.shapes.values()) >= 4
+
+
+@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@given(st.lists(st.tuples(st.integers(0, 1331), st.integers(0, 255)), min_size=1, max_size=6))
+def test_damaged_bytes_of_a_learned_shape_decode_as_without_shapes(edits: list[tuple[int, int]]) -> None:
+    """Bytes changed anywhere in a message whose shape is learned (headers included): the
+    result, or the error, is the one a codec that never learned a shape gives."""
+    import sys
+
+    from rtde_spec.errors import DecodeError
+
+    from .helpers import ROOT
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    try:
+        from ur5e_robot_state import ur5e_robot_state_bytes
+    finally:
+        sys.path.pop(0)
+    data = ur5e_robot_state_bytes()
+    learned, plain = _learned(data), fresh()
+    plain.robot_state.SHAPES_PER_SIZE = 0
+    damaged = bytearray(data)
+    for at, value in edits:
+        damaged[at % len(data)] = value
+    outcomes = []
+    for codec in (learned, plain):
+        try:
+            outcomes.append(codec.decode_message(bytes(damaged)))
+        except DecodeError as exc:
+            outcomes.append(str(exc))
+    assert outcomes[0] == outcomes[1]
+    assert learned.robot_state.shapes[len(data) - 5]  # the learned shape was there to try
+
+
+_LEARNED: dict[bytes, PrimaryCodec] = {}
+
+
+def _learned(data: bytes) -> PrimaryCodec:
+    """A codec that has seen `data` twice (its shape compiled), made once per test run."""
+    if data not in _LEARNED:
+        codec = fresh()
+        codec.decode_message(data)
+        codec.decode_message(data)
+        _LEARNED[data] = codec
+    return _LEARNED[data]
