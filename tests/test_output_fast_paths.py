@@ -278,3 +278,41 @@ def test_a_read_the_size_of_whole_packages_that_is_not_only_data_takes_the_gener
     other[3] = 9  # recipe id 9 in the first package: not this client's recipe
     with pytest.raises(Exception, match="recipe"):
         _client_with_recipe().receive(bytes(other))
+
+
+@settings(max_examples=80, deadline=None)
+@given(st.integers(0, 5), st.integers(0, 3), st.integers(0, 255))
+def test_a_damaged_lead_in_a_batched_read_ends_as_in_reads_of_one_package(
+    package: int, byte: int, value: int
+) -> None:
+    """One lead byte (size, type, recipe id) changed in one of six packages: a read of all
+    six (decoded first, checked after) ends as six reads of one package each — no record
+    of a damaged package, the same records before it, then an error (which one may differ:
+    a whole read can find the next package unframeable before the damaged one is judged),
+    or the same records when there is no error (all six when the byte did not change; fewer
+    when a larger size makes the framer wait for more)."""
+    from rtde_spec.errors import RtdeSpecError
+    from rtde_spec.rtde.client_protocol import DataRun
+
+    size = CODEC.package_size
+    stream = bytearray(data_packages(6))
+    unchanged = stream[package * size + byte] == value
+    stream[package * size + byte] = value
+
+    def outcome(reads: list[bytes]) -> tuple[list[Any], str | None]:
+        core, got = _client_with_recipe(), []
+        try:
+            for read in reads:
+                for event in core.receive(read):
+                    got += event.records if isinstance(event, DataRun) else [event]
+        except RtdeSpecError as exc:
+            return got, type(exc).__name__
+        return got, None
+
+    whole = outcome([bytes(stream)])
+    single = outcome([bytes(stream[i : i + size]) for i in range(0, len(stream), size)])
+    assert (whole[1] is None) == (single[1] is None)
+    if whole[1] is None:
+        assert whole[0] == single[0] and (len(whole[0]) == 6 or not unchanged)
+    else:
+        assert whole[0] == single[0][: len(whole[0])] and len(whole[0]) <= package
