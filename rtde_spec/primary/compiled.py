@@ -36,6 +36,8 @@ class _Source:
         self.indent = ""
         self.env: dict[str, Any] = {"_new": object.__new__, "_dict": _SLOTS["__dict__"].__set__}
         self.count = 0
+        # batched: models are made all at once by two C loops at the end (see compile_shape)
+        self.batched: list[tuple[str, type[BaseModel], str]] | None = None
 
     def name(self, prefix: str, value: Any = None) -> str:
         self.count += 1
@@ -51,6 +53,10 @@ class _Source:
         """Statements making one `cls` from 'key: expression' entries; returns its variable."""
         if set(cls.model_fields) != {e.split(":")[0].strip("'") for e in entries}:
             raise _NotFixed
+        if self.batched is not None:
+            var = self.name("m")
+            self.batched.append((var, cls, f"{{{', '.join(entries)}}}"))
+            return var
         var, name = self.name("m"), self.name("C", cls)
         self.add(
             f"{var} = _new({name})",
@@ -217,10 +223,13 @@ def compile_shape(parts: list[tuple[type[BaseModel], Layout, int]], header_size:
     src = _Source()
     shared = _Shared(src)
     made, offset = [], 0
+    batched: list[tuple[str, type[BaseModel], str]] = []
     try:
         for cls, layout, size in parts:
             start, end = offset + header_size, offset + size
+            src.batched = batched
             var = _merged_part(src, shared, cls, layout, start, end)
+            src.batched = None
             if var is None:  # a conditional group: this part reads on its own
                 src.add(f"p = pos + {start}", f"end = pos + {end}")
                 var = _emit_part(src, cls, layout)
@@ -229,6 +238,12 @@ def compile_shape(parts: list[tuple[type[BaseModel], Layout, int]], header_size:
     except _NotFixed:
         return None
     head = [f"{shared.var} = {src.name('U', shared.struct().unpack_from)}(buf, pos)"] if shared.runs else []
-    body = "\n    ".join([*head, *src.lines, f"return [{', '.join(made)}]"])
+    tail = []
+    if batched:  # every model of the fixed parts: made, then filled, each in one C loop
+        names = ", ".join(v for v, _, _ in batched)
+        classes = src.name("K", tuple(c for _, c, _ in batched))
+        head.append(f"({names},) = map(_new, {classes})")
+        tail.append(f"any(map(_dict, ({names},), ({', '.join(d for _, _, d in batched)},)))")
+    body = "\n    ".join([*head, *src.lines, *tail, f"return [{', '.join(made)}]"])
     exec(f"def decode(buf, pos):\n    {body}\n", src.env)
     return src.env["decode"]  # type: ignore[no-any-return]
