@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import collections
 import socket
-import struct
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -24,9 +23,9 @@ from rtde_spec._generated.constants import (
     RTDE_PORT,
     RTDE_PROTOCOLS,
 )
-from rtde_spec._generated.rtde_models import HEADER_FORMAT
 from rtde_spec.errors import ProtocolError, RecipeError, RtdeSpecError
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
+from rtde_spec.recipes.encoding import PREFIX
 from rtde_spec.recipes.model import Recipe
 from rtde_spec.rtde.codec import build, decode, observe
 from rtde_spec.rtde.messages import RtdeMessage
@@ -206,7 +205,7 @@ class ClientProtocol:
         if direction == "output":
             self.output, self.output_recipe_id = codec, recipe_id
             # size, type and recipe id: a package of another recipe is never read as this one
-            lead = struct.pack(HEADER_FORMAT, codec.package_size, DATA_PACKAGE_TYPE) + bytes([recipe_id])
+            lead = PREFIX.pack(codec.package_size, DATA_PACKAGE_TYPE, recipe_id)
             self._run = (codec.package_size, lead)
         else:
             self.inputs[recipe_id] = InputRecipe(recipe_id, tuple(names), codec)
