@@ -87,12 +87,10 @@ def run(args: argparse.Namespace) -> int:
 def _lines(message: Any, changes: StateChanges, every: bool) -> list[tuple[str, str]]:
     """(kind, text) lines for one message: robot messages always, Robot State when modes change."""
     from rtde_spec.primary.base import RobotStateMessage
-    from rtde_spec.primary.events import describe_message
+    from rtde_spec.primary.events import message_parts
 
     if not isinstance(message, RobotStateMessage):
-        text = describe_message(message) or ""
-        kind, _, rest = text.partition("  ")
-        return [(kind, rest)]
+        return [message_parts(message) or ("message", "")]
     out = []
     changed = changes.describe(message)
     if changed:

@@ -66,6 +66,12 @@ def code(part: PrimaryPart) -> str:
 
 def describe_message(message: Any) -> str | None:
     """One line for a message that is not Robot State (None for Robot State); wire text escaped."""
+    parts = message_parts(message)
+    return None if parts is None else f"{parts[0]}  {parts[1]}"
+
+
+def message_parts(message: Any) -> tuple[str, str] | None:
+    """(kind, text) of a message that is not Robot State, e.g. ("key", "C1A2 Title: ...")."""
     if isinstance(message, RobotStateMessage):
         return None
     name = getattr(message, "NAME", type(message).__name__)
@@ -91,7 +97,7 @@ def describe_message(message: Any) -> str | None:
         name, text = message.family, f"{len(message.raw)} bytes: {message.raw.hex()}"
     else:
         text = _fields(message)
-    return safe_text(f"{name.removesuffix('_message')}  {text}").replace("\n", "\\n")
+    return name.removesuffix("_message"), safe_text(text).replace("\n", "\\n")
 
 
 def _enum(part: Any, field: str) -> str:
