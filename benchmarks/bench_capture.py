@@ -1,8 +1,9 @@
 """A capture of RTDE data packages (58-field recipe, one per TCP segment, as at 500 Hz) to Parquet,
 side by side with `tshark -r FILE -T fields -e tcp.payload` on the same file, and with
-several files decoded in parallel processes, warmed by a first pass (to Parquet, and to
-CSV, whose CPU-bound formatting shows what the pool gives when memory bandwidth is not
-the limit).
+several files decoded in parallel processes (to Parquet, and to CSV, whose CPU-bound
+formatting shows what the pool gives when memory bandwidth is not the limit), beside the
+machine's own 2-process speed-up on pure CPU work. The parallel rows are sampled in turn,
+round by round after a warming round, and compared within each round.
 
 Targets: >= 300,000 packages/s end to end on one core; peak memory < 300 MB; near-linear
 speed-up with processes over many files. The timed child is pinned to one CPU (its
@@ -10,7 +11,7 @@ Parquet writer then writes in the decoding thread), first decodes a small captur
 imports and first-call set-up (measured on their own, printed) are not in the rate, and
 reports the median of three runs.
 
-    python benchmarks/bench_capture.py [--packages 200000] [--files 4]
+    python benchmarks/bench_capture.py [--packages 200000] [--files 4] [--rounds 5]
 """
 
 from __future__ import annotations
@@ -39,6 +40,7 @@ from rtde_spec.output.parquet import one_core_per_process  # noqa: E402
 from tests.capture_files import Conversation, write  # noqa: E402
 
 TARGET = 300_000
+SPIN = 3_000_000  # loop steps per task of the pure-CPU row
 WARM_PACKAGES = 5_000  # decoded first in the same process: start-up is measured on its own
 CHILD = (
     PEAK_MB
@@ -71,19 +73,51 @@ def spin(n: int) -> int:
     return total
 
 
-def cpu_speed_up(n: int = 3_000_000) -> float:
-    """The machine's own 2-process speed-up on pure CPU work, measured now (median of three)."""
-    rates = {}
-    for jobs in (1, 2):
-        times = []
-        with ProcessPoolExecutor(max_workers=jobs) as pool:
-            list(pool.map(spin, [1000] * jobs))  # the workers are up before the clock starts
-            for _ in range(3):
+PARQUET_1 = "1 process, one core"
+PARQUET_2 = "2 processes, one core each"
+CSV_1 = "to CSV (CPU-bound): 1 process"
+CSV_2 = "to CSV (CPU-bound): 2 processes"
+SPIN_1, SPIN_2 = "spin, 1 process", "spin, 2 processes"
+
+
+def parallel_rows(files: list[Path], out: Path, rounds: int) -> dict[str, list[float]]:
+    """Seconds per round for each row, the rows sampled in turn within a round (the machine's
+    speed drifts 2x within minutes here: rows timed in blocks compared different machines).
+
+    Pools as `rtde-spec capture --jobs` makes them (1 and 2, one core each), plus one whose
+    Parquet writer thread may take the second core; the pure-CPU spin runs on the same pools.
+    """
+    runs = (  # label, format, pool
+        (PARQUET_1, "parquet", 1),
+        (PARQUET_2, "parquet", 2),
+        ("1 process, its writer thread on core 2", "parquet", 0),
+        (CSV_1, "csv", 1),
+        (CSV_2, "csv", 2),
+    )
+    n = len(files)
+    pools = {
+        0: ProcessPoolExecutor(max_workers=1),
+        1: ProcessPoolExecutor(max_workers=1, initializer=one_core_per_process),
+        2: ProcessPoolExecutor(max_workers=2, initializer=one_core_per_process),
+    }
+    got: dict[str, list[float]] = {label: [] for label, _, _ in runs} | {SPIN_1: [], SPIN_2: []}
+    try:
+        for attempt in range(rounds + 1):  # the first round warms the workers and is not kept
+            for label, fmt, pool in runs:
+                shutil.rmtree(out, ignore_errors=True)
                 start = time.perf_counter()
-                list(pool.map(spin, [n] * 4))
-                times.append(time.perf_counter() - start)
-        rates[jobs] = 1 / statistics.median(times)
-    return rates[2] / rates[1]
+                list(pools[pool].map(decode_to_directory, files, [out] * n, [fmt] * n))
+                if attempt:
+                    got[label].append(time.perf_counter() - start)
+            for label, pool in ((SPIN_1, 1), (SPIN_2, 2)):
+                start = time.perf_counter()
+                list(pools[pool].map(spin, [SPIN] * 4))
+                if attempt:
+                    got[label].append(time.perf_counter() - start)
+    finally:
+        for executor in pools.values():
+            executor.shutdown()
+    return got
 
 
 def make_capture(path: Path, packages: int, server: str = "10.0.0.10") -> None:
@@ -123,6 +157,7 @@ def main(argv: list[str] | None = None) -> int:
         "--packages", type=int, default=200_000, help="packages in the capture (default: 200000)"
     )
     parser.add_argument("--files", type=int, default=4, help="files for the parallel run (default: 4)")
+    parser.add_argument("--rounds", type=int, default=5, help="rounds of the parallel rows (default: 5)")
     parser.add_argument("--assert-targets", action="store_true", help="exit 1 on a missed target")
     args = parser.parse_args(argv)
     with tempfile.TemporaryDirectory() as tmp:
@@ -160,35 +195,31 @@ def main(argv: list[str] | None = None) -> int:
         files = [work / f"robot{i}.pcap" for i in range(args.files)]
         per_file = args.packages // args.files
         make_captures(*((f, per_file, f"10.0.1.{i + 1}") for i, f in enumerate(files)))
-        rates = {}
         import pyarrow.parquet  # noqa: F401  # loaded before the pools fork, as `rtde-spec capture --jobs` does
 
-        runs = (  # (label, format, processes, initializer): `rtde-spec capture --jobs N` is 1 and 2
-            ("1 process, one core", "parquet", 1, one_core_per_process),
-            ("2 processes, one core each", "parquet", 2, one_core_per_process),
-            ("1 process, its writer thread on core 2", "parquet", 1, None),
-            ("to CSV (CPU-bound): 1 process", "csv", 1, one_core_per_process),
-            ("to CSV (CPU-bound): 2 processes", "csv", 2, one_core_per_process),
-        )
+        rows = parallel_rows(files, work / "par", args.rounds)
         n = len(files)
-        for label, fmt, jobs, init in runs:
-            times = []
-            with ProcessPoolExecutor(max_workers=jobs, initializer=init) as pool:
-                for attempt in range(4):  # a first pass warms the workers; the median of three after
-                    shutil.rmtree(work / "par", ignore_errors=True)
-                    start = time.perf_counter()
-                    list(pool.map(decode_to_directory, files, [work / "par"] * n, [fmt] * n))
-                    if attempt:
-                        times.append(time.perf_counter() - start)
-            rates[label] = per_file * len(files) / statistics.median(times)
-            print(f"{f'{args.files} files, {label}':45s} {rates[label]:10,.0f} packages/s")
-        speed_up = rates[runs[1][0]] / rates[runs[0][0]]
-        csv_speed_up = rates[runs[4][0]] / rates[runs[3][0]]
-        print(f"speed-up with 2 processes: {speed_up:.2f}x (2 cores; 1.0x = none, 2.0x = linear)")
-        print(f"  the same to CSV, where formatting, not memory, is the work: {csv_speed_up:.2f}x")
-        machine = cpu_speed_up()
-        print(f"  this machine's own, on pure CPU work (no memory traffic), now: {machine:.2f}x")
-        print(f"  ours as a share of the machine's: {(speed_up - 1) / max(machine - 1, 1e-9):.0%}")
+        for label, got in rows.items():
+            if not label.startswith("spin"):
+                rate_of = statistics.median(per_file * n / t for t in got)
+                print(f"{f'{n} files, {label}':45s} {rate_of:10,.0f} packages/s")
+        ratios = {  # per round, each pair sampled back to back: a drift of the machine hits both
+            key: [a / b for a, b in zip(rows[one], rows[two], strict=True)]
+            for key, one, two in (
+                ("parquet", PARQUET_1, PARQUET_2),
+                ("csv", CSV_1, CSV_2),
+                ("machine", SPIN_1, SPIN_2),
+            )
+        }
+        mid = {key: statistics.median(got) for key, got in ratios.items()}
+        print(f"speed-up with 2 processes: {mid['parquet']:.2f}x (2 cores; 1.0x = none, 2.0x = linear)")
+        print(f"  the same to CSV, where formatting, not memory, is the work: {mid['csv']:.2f}x")
+        machine = mid["machine"]
+        print(f"  this machine's own, on pure CPU work (no memory traffic), same rounds: {machine:.2f}x")
+        print(f"  ours as a share of the machine's: {(mid['parquet'] - 1) / max(machine - 1, 1e-9):.0%}")
+        rounds = zip(ratios["parquet"], ratios["machine"], strict=True)
+        pairs = ", ".join(f"{a:.2f}/{b:.2f}" for a, b in rounds)
+        print(f"  rounds, Parquet/machine: {pairs}")
         ok = rate >= TARGET and ours["peak_mb"] < 300
         verdict = "met" if ok else "MISSED"
         got = f"got {rate:,.0f}/s and {ours['peak_mb']:.0f} MB"
