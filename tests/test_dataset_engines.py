@@ -68,3 +68,33 @@ def test_the_readme_polars_line_reads_the_dataset(tables: Path) -> None:
     # timestamp, actual_q_0..5, robot_mode, connection, capture_time, and the partitions robot, date
     assert (int(shape[1]), int(shape[2])) == (PACKAGES * len(ROBOTS), 12)
     assert ROBOTS[0] in result.stdout  # the robot partition is a column
+
+
+def test_files_of_earlier_versions_with_nullable_columns_read_beside_new_ones(
+    tables: Path, tmp_path: Path
+) -> None:
+    """Data columns became REQUIRED; a dataset that also holds files written before (OPTIONAL
+    columns) still reads as one in DuckDB, Polars and Arrow."""
+    import duckdb
+    import polars as pl
+    import pyarrow as pa
+    import pyarrow.dataset as ds
+    import pyarrow.parquet as pq
+
+    new = next((tables / "tables" / "rtde_outputs_1").rglob("*.parquet"))
+    old_style = pq.read_table(new)
+    old_style = old_style.cast(pa.schema([f.with_nullable(True) for f in old_style.schema]))
+    folder = tmp_path / "mixed" / "robot=old" / "date=2020-01-01"
+    folder.mkdir(parents=True)
+    pq.write_table(old_style, folder / "old.parquet")
+    assert pq.ParquetFile(folder / "old.parquet").schema.column(0).max_definition_level == 1
+    target = tmp_path / "mixed" / new.relative_to(tables / "tables" / "rtde_outputs_1")
+    target.parent.mkdir(parents=True)
+    target.write_bytes(new.read_bytes())
+    rows = 2 * old_style.num_rows
+    glob = str(tmp_path / "mixed" / "**" / "*.parquet")
+    assert ds.dataset(tmp_path / "mixed", format="parquet", partitioning="hive").to_table().num_rows == rows
+    assert duckdb.sql(f"SELECT count(*) FROM read_parquet('{glob}', hive_partitioning=1)").fetchall() == [
+        (rows,)
+    ]
+    assert pl.scan_parquet(glob, hive_partitioning=True).collect().height == rows

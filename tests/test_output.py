@@ -123,3 +123,31 @@ def test_session_learns_a_recipe_sent_with_a_trailing_comma() -> None:
         {"timestamp": 2.5, "robot_mode": 7}, recipe_id=1
     )
     assert session.feed("controller", package).values == {"timestamp": 2.5, "robot_mode": 7}
+
+
+def test_data_package_columns_are_required_in_parquet(stream: Path, tmp_path: Path) -> None:
+    """No data package lacks a value, so its columns are REQUIRED: no definition levels to encode."""
+    parquet = tmp_path / "out.parquet"
+    assert cli("decode", str(stream), "--recipe", ",".join(NAMES), "-o", str(parquet)).returncode == 0
+    schema = pq.ParquetFile(parquet).schema
+    assert [schema.column(i).max_definition_level for i in range(len(schema))] == [0] * len(schema)
+    assert not any(field.nullable for field in pq.read_schema(parquet))
+
+
+def test_a_later_batch_missing_a_value_is_an_error_naming_the_column(tmp_path: Path) -> None:
+    import numpy as np
+
+    from rtde_spec.errors import UsageError
+    from rtde_spec.output.parquet import ParquetWriter
+
+    writer = ParquetWriter(str(tmp_path / "out.parquet"))
+    writer.write_columns({"timestamp": np.arange(3.0), "actual_q": np.ones((3, 6))})
+    writer.write({"timestamp": 1.5, "actual_q": [2.0] * 6})  # a row that fits: cast to the file's types
+    writer.write({"timestamp": None, "actual_q": [2.0] * 6})
+    with pytest.raises(UsageError, match=r"Parquet output.*'timestamp'.*null"):
+        writer.close()
+    writer = ParquetWriter(str(tmp_path / "other.parquet"))
+    writer.write_columns({"timestamp": np.arange(3.0)})
+    writer.write({"robot_mode": 7})
+    with pytest.raises(UsageError, match=r"lacks the file's columns \['timestamp'\]"):
+        writer.close()

@@ -6,11 +6,12 @@ import os
 from collections.abc import Mapping
 from typing import IO, Any
 
-from rtde_spec.errors import require
+from rtde_spec.errors import UsageError, require
 from rtde_spec.output.base import Writer, flat_columns, flatten
 from rtde_spec.output.tables import arrow_table
 
 _PARQUET_BATCH_ROWS = 16384
+WHERE = "Parquet output"
 
 
 class ParquetWriter(Writer):
@@ -56,11 +57,23 @@ class ParquetWriter(Writer):
         if self._writer is None:
             self._open(table_.schema)
         elif table_.schema != self._writer.schema:
-            table_ = table_.select(self._writer.schema.names).cast(self._writer.schema)
+            table_ = self._conformed(table_)
         self._tables.append(table_)
         self._held += table_.num_rows
         if self._held >= self.ROW_GROUP_ROWS:
             self._write_held()
+
+    def _conformed(self, table_: Any) -> Any:
+        """A later batch in the file's schema (its first batch's); a value missing where the
+        first batch had none in that column is an error naming it, not a corrupt file."""
+        schema = self._writer.schema
+        missing = [n for n in schema.names if n not in table_.column_names]
+        if missing:
+            raise UsageError(f"a batch lacks the file's columns {missing[:5]}", subject=WHERE)
+        try:
+            return table_.select(schema.names).cast(schema)
+        except (ValueError, self._pa.ArrowInvalid) as exc:
+            raise UsageError(f"a batch does not fit the file's columns: {exc}", subject=WHERE) from exc
 
     def _write_held(self) -> None:
         """Hand the held rows to the writing thread; at most one row group is in flight.
