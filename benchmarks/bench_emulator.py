@@ -35,6 +35,7 @@ RATE = 500.0
 
 ROUNDS = 3  # of the batched client and its floor, in turn
 BATCH = 50  # packages per reader wake-up in the batched row: 100 ms at 500 Hz, as `rtde-spec record`
+BATCH_LONG = 100  # and one wake-up per 200 ms: what a wake-up itself costs shows in the difference
 
 OURS = (
     f"BATCH = {BATCH}\n"
@@ -42,7 +43,7 @@ OURS = (
 import functools, json, sys, time
 from rtde_spec import RtdeClient
 port, seconds, names, mode = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3].split(","), sys.argv[4]
-batch = BATCH if mode.endswith("batched") else 1
+batch = int(sys.argv[5]) if len(sys.argv) > 5 else BATCH if mode.endswith("batched") else 1
 with RtdeClient("127.0.0.1", port, queue_size=100000, batch=batch) as c:
     c.setup_outputs(names, 500.0)
     newest = [None]
@@ -248,27 +249,31 @@ def main(argv: list[str] | None = None) -> int:
         fmt = RecipeCodec.for_names(UR_RTDE_DEFAULT_OUTPUTS, "output").struct.format[1:]
         # the batched client and its floor are a few µs apart on a machine whose speed drifts
         # more than that: rounds of the two in turn, medians reported
-        rounds: list[tuple[float, float]] = []
+        rounds: list[tuple[float, float, float]] = []
         for _ in range(ROUNDS):
             mine = child(OURS, str(port), str(args.seconds / 2), names, "callback-batched")
             low = child(FLOOR_BATCHED, str(port), str(args.seconds / 2), names, size, fmt)
-            rounds.append((mine["cpu"] / mine["packages"] * 1e6, low["cpu"] / low["packages"] * 1e6))
+            longer = child(OURS, str(port), str(args.seconds / 2), names, "callback-batched", str(BATCH_LONG))
+            rounds.append(tuple(r["cpu"] / r["packages"] * 1e6 for r in (mine, low, longer)))  # type: ignore[arg-type]
         batched_us = statistics.median(r[0] for r in rounds)
         floor_b_us = statistics.median(r[1] for r in rounds)
+        longer_us = statistics.median(r[2] for r in rounds)
         ours_us = ours["cpu"] / ours["packages"] * 1e6
         ur_us = ur["cpu"] / ur["packages"] * 1e6
         iter_us = iterating["cpu"] / iterating["packages"] * 1e6
         print(f"  {'rtde_spec RtdeClient, on_data callback':42s} {ours_us:8.1f} µs")
         label = f"rtde_spec RtdeClient(batch={BATCH}), on_data"
         print(f"  {label:42s} {batched_us:8.1f} µs  (one wake-up per {BATCH} packages: for recording)")
+        label = f"rtde_spec RtdeClient(batch={BATCH_LONG}), on_data"
+        print(f"  {label:42s} {longer_us:8.1f} µs  (one wake-up per {BATCH_LONG / RATE * 1000:.0f} ms)")
         print(f"  {'rtde_spec RtdeClient, for record in client':42s} {iter_us:8.1f} µs")
         print(f"  {'UR-client-style loop (recv, unpack, dict)':42s} {ur_us:8.1f} µs")
         floor_us = floor["cpu"] / floor["packages"] * 1e6
         print(f"  {'floor: bare recv() loop, nothing decoded':42s} {floor_us:8.1f} µs")
         label = f"floor, batch={BATCH}: recv + struct tuples"
         print(f"  {label:42s} {floor_b_us:8.1f} µs  (plain tuples of Python numbers, nothing else)")
-        listed = ", ".join(f"{a:.1f}/{b:.1f}" for a, b in rounds)
-        print(f"  (batch={BATCH} rounds, ours/floor, medians above: {listed})")
+        listed = ", ".join(f"{a:.1f}/{b:.1f}/{c:.1f}" for a, b, c in rounds)
+        print(f"  (rounds, ours batch={BATCH}/floor/ours batch={BATCH_LONG}, medians above: {listed})")
         try:
             import rtde_receive  # noqa: F401
         except ImportError:
@@ -281,12 +286,17 @@ def main(argv: list[str] | None = None) -> int:
             print(
                 f"  {'ur_rtde RTDEReceiveInterface (C++)':42s} {urr['cpu'] / urr['packages'] * 1e6:8.1f} µs"
             )
-        for label, got in (("per package", ours_us), (f"batch={BATCH}", batched_us)):
+        verdicts = {}
+        for label, got in (
+            ("per package", ours_us),
+            (f"batch={BATCH}", batched_us),
+            (f"batch={BATCH_LONG}", longer_us),
+        ):
             ratio = ur_us / got
-            hit = got <= TARGET_US and ratio >= TARGET_VS_UR
+            verdicts[label] = hit = got <= TARGET_US and ratio >= TARGET_VS_UR
             target = f"<= {TARGET_US} µs (got {got:.1f}), >= {TARGET_VS_UR}x less than UR style"
             print(f"  targets, {label}: {target}: {ratio:.1f}x: {'met' if hit else 'MISSED'}")
-        ok = ok and hit  # the batched mode is the one for the CPU target; per package is for latency
+        ok = ok and verdicts[f"batch={BATCH}"]  # the recorder's batch is the one for the CPU target
     finally:
         proc.terminate()
         proc.wait(10)

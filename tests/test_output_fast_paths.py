@@ -316,3 +316,43 @@ def test_a_damaged_lead_in_a_batched_read_ends_as_in_reads_of_one_package(
         assert whole[0] == single[0] and (len(whole[0]) == 6 or not unchanged)
     else:
         assert whole[0] == single[0][: len(whole[0])] and len(whole[0]) <= package
+
+
+@pytest.mark.parametrize("reads", ["one per package", "whole batch", "cut mid-package"])
+def test_a_core_that_wants_no_records_frames_counts_and_checks_as_one_that_does(reads: str) -> None:
+    """`want_records = False` (a client with only raw callbacks, as the recorder): the same
+    packages, counted alike and the same bytes; no record made; a package of another
+    recipe is still refused."""
+    from rtde_spec.rtde.client_protocol import DataRun
+
+    size = CODEC.package_size
+    stream = data_packages(5) + TEXT + data_packages(4, start=5)
+    if reads == "one per package":
+        cuts = [size * i for i in range(6)] + [5 * size + len(TEXT) + size * i for i in range(5)]
+    elif reads == "whole batch":
+        cuts = [0, 5 * size, 5 * size + len(TEXT), len(stream)]
+    else:
+        cuts = [0, 7, 2 * size + 3, 5 * size + 2, len(stream) - 9, len(stream)]
+    chunks = [stream[a:b] for a, b in itertools.pairwise(cuts)]
+
+    def run(want: bool) -> tuple[list[int], list[bytes], int]:
+        core = _client_with_recipe()
+        core.want_records = want
+        counts, raws, made = [], [], 0
+        for chunk in chunks:
+            for event in core.receive(chunk):
+                if isinstance(event, DataRun):
+                    counts.append(event.count)
+                    raws += event.packages()
+                    made += len(event.records)
+        return counts, raws, made
+
+    with_records, without = run(True), run(False)
+    assert with_records[:2] == without[:2] and sum(without[0]) == 9 and len(without[1]) == 9
+    assert with_records[2] == 9 and without[2] == 0
+    other = bytearray(data_packages(2))
+    other[3] = 9  # recipe id 9: not this client's recipe
+    core = _client_with_recipe()
+    core.want_records = False
+    with pytest.raises(Exception, match="recipe"):
+        core.receive(bytes(other))

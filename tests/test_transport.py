@@ -170,6 +170,31 @@ def test_callbacks_take_every_record_instead_of_the_queue(emu: EmulatorThread, b
     assert [codec.decode_package(r).timestamp for r in raws[:120]] == stamps  # the same packages
 
 
+def test_a_client_with_only_raw_callbacks_makes_no_records_until_one_is_wanted(emu: EmulatorThread) -> None:
+    """The recorder's case: raw bytes only, so no typed record is made (less CPU per
+    package), every package still counted and in order; an `on_data` added later gets records."""
+    raws: list[bytes] = []
+    records: list = []
+    with RtdeClient("127.0.0.1", emu.ports["rtde"], batch=20) as client:
+        client.setup_outputs(["timestamp", "actual_q"], 500)
+        client.on_raw(raws.append)
+        assert client.core.want_records is False
+        client.start()
+        deadline = time.monotonic() + 5
+        while len(raws) < 100 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        client.on_data(records.append)
+        assert client.core.want_records is True
+        while len(records) < 40 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        client.pause()
+        codec = client.core.output
+    stamps = [codec.decode_package(r).timestamp for r in raws]
+    assert len(stamps) >= 140 and client.received == len(raws) and client.skipped == 0
+    assert [round((b - a) * 500) for a, b in itertools.pairwise(stamps)] == [1] * (len(stamps) - 1)
+    assert [r.timestamp for r in records] == stamps[len(stamps) - len(records) :]
+
+
 def test_recording_reports_nothing_skipped_when_every_row_is_written(
     emu: EmulatorThread, tmp_path: Path
 ) -> None:

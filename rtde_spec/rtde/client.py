@@ -145,11 +145,13 @@ class RtdeClient(ClientBase):
         nobody reads would only fill and count its oldest as skipped).
         """
         self._callbacks.append(callback)
+        self.core.want_records = True
 
     def on_raw(self, callback: Callable[[bytes], None]) -> None:
         """Call `callback(package bytes)` for every data package: for recorders that batch
-        (instead of the queue, as `on_data`)."""
+        (instead of the queue, as `on_data`). With no `on_data` callback, no records are made."""
         self._raw_callbacks.append(callback)
+        self.core.want_records = bool(self._callbacks)
 
     # --- internals ----------------------------------------------------------
 
@@ -218,7 +220,7 @@ class RtdeClient(ClientBase):
         before the ring, so whoever takes a ring finds them.
         """
         records = runs[0].records if len(runs) == 1 else [r for run in runs for r in run.records]
-        self.received += len(records)
+        self.received += runs[0].count if len(runs) == 1 else sum(run.count for run in runs)
         if self._callbacks or self._raw_callbacks:
             for raw in self._raw_callbacks:
                 for run in runs:

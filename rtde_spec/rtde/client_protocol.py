@@ -56,11 +56,16 @@ class Reply:
 
 @dataclass(frozen=True)
 class DataRun:
-    """Data packages of the output recipe that came back to back (one or more), as records."""
+    """Data packages of the output recipe that came back to back (one or more), as records
+    (an empty list when the core was told no one wants them: `ClientProtocol.want_records`)."""
 
     records: list[Any]
     raw: bytes | memoryview  # the packages, back to back
     size: int  # bytes per package
+
+    @property
+    def count(self) -> int:
+        return len(self.raw) // self.size
 
     def packages(self) -> list[bytes]:
         """Each package's bytes."""
@@ -91,6 +96,9 @@ class ClientProtocol:
         self._run: tuple[int, bytes] | None = None  # (size, leading bytes) of the output's packages
         self.inputs: dict[int, InputRecipe] = {}
         self._requested: list[Any] = []  # setups awaiting their reply, in order
+        # False when only raw bytes are taken (a recorder decoding its batches with numpy):
+        # data packages are framed and checked, and no record is made
+        self.want_records = True
 
     # --- requests -----------------------------------------------------------
 
@@ -149,19 +157,22 @@ class ClientProtocol:
         """Events for every package this data completes."""
         output, run = self.output, self._run
         if output is not None and run is not None:
+            wanted = self.want_records
             if len(data) == run[0]:  # the usual read at one package per wake-up
                 if self.framer.take_run(data, *run):
-                    return [DataRun([output.decode_record(data, PAYLOAD_OFFSET)], data, run[0])]
+                    one = [output.decode_record(data, PAYLOAD_OFFSET)] if wanted else []
+                    return [DataRun(one, data, run[0])]
             elif len(data) % run[0] == 0 and not self.framer.pending:  # a batch of whole packages
                 # decoded first, checked after: the read's bytes come into the cache once (a
                 # batch's bytes are cold after the wait); bad leads drop the records, below
-                records = output._framed_records(data)
+                records = output._framed_records(data) if wanted else []
                 if self.framer.take_run(data, *run):
                     return [DataRun(records, data, run[0])]
         events: list[Event] = []
         for _, package in self.framer.feed(data, run):
             if output is not None and run is not None and package[: len(run[1])] == run[1]:
-                events.append(DataRun(output.decode_records(package), package, run[0]))
+                records = output.decode_records(package) if self.want_records else []
+                events.append(DataRun(records, package, run[0]))
                 continue
             message = decode(bytes(package), protocol_version=self.state.version, sender="controller")
             event = self._control(message)
