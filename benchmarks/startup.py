@@ -82,7 +82,7 @@ def main() -> int:
             "fields --controller 5.15": ([*cli, "fields", "--controller", "5.15.0"], (0,)),
             "capture 1 package -> parquet": ([*cli, "capture", str(pcap), "-o", str(folder / "out")], (0,)),
             "record -> network": (
-                [*cli, "record", "--host", "127.0.0.1", "--port", port] + RECORD_ARGS + [str(folder / "r.csv")],
+                [*cli, "record", "--host", "127.0.0.1", "--port", port, *RECORD_ARGS, str(folder / "r.csv")],
                 (1,),
             ),
         }
