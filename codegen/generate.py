@@ -5,6 +5,7 @@ from __future__ import annotations
 from rtde_spec.spec.catalogue import Catalogue
 from rtde_spec.spec.schema import Spec
 
+from .emit_arms import emit_arms
 from .emit_constants import emit_catalogue_data, emit_constants
 from .emit_data import emit_spec_data
 from .emit_docs import (
@@ -45,4 +46,5 @@ def generate(spec: Spec) -> dict[str, str]:
         "docs/reference/enums.md": emit_enums_doc(spec),
         "docs/reference/primary.md": emit_primary_doc(spec),
         "docs/reference/rtde-types.md": emit_types_doc(spec, catalogue),
+        **emit_arms(),
     }
