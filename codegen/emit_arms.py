@@ -68,6 +68,6 @@ def _markdown(arms: ArmsFile) -> str:
     for m in arms.models:
         out.append(f"\n## {m.name}\n\n{m.doc}\n\nSource: {m.source}\n\n")
         columns = zip(m.dh.a, m.dh.d, m.dh.alpha, m.joint_range_deg, strict=True)
-        dh = [(i + 1, f"{a:g}", f"{d:g}", _angle(alpha), f"±{r:g}") for i, (a, d, alpha, r) in enumerate(columns)]
+        dh = [(i + 1, f"{a:g}", f"{d:g}", _angle(al), f"±{r:g}") for i, (a, d, al, r) in enumerate(columns)]
         out.append(md_table(["joint", "a [m]", "d [m]", "alpha [rad]", "range [deg]"], dh))
     return "".join(out)
