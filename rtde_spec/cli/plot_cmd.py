@@ -1,57 +1,156 @@
-"""rtde-spec plot TABLE FIELD... -o out.png: time on x, one line per vector component, units from the spec."""
+"""rtde-spec plot TABLE FIELD... -o out.png: time on x, one line per vector component, units from the spec.
+
+TABLE may be a file, one table's hive dataset (`OUT/rtde_outputs_1`), or the whole
+folder `capture -o OUT` wrote: then the table holding the fields is picked (or named
+with --table), and a dataset of several robots is plotted per robot (or one, --robot).
+"""
 
 from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import Any
 
-from rtde_spec.errors import UsageError
+from rtde_spec.errors import DecodeError, UsageError
 
 TIME_COLUMNS = ("timestamp", "capture_time")
+PARTITIONS = ("robot", "date")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "plot",
         help="plot fields of a recorded or decoded table (CSV, Parquet, JSON Lines, or a dataset folder)",
-        description="Needs matplotlib: pip install 'rtde_spec[plot]'.",
+        description="Needs matplotlib: pip install 'rtde_spec[plot]'. TABLE: a file, a table folder of "
+        "`capture -o OUT` (OUT/rtde_outputs_1), or OUT itself (the table with the fields is found).",
     )
     p.add_argument(
-        "table", metavar="TABLE", help="a .csv, .parquet, .jsonl file or a hive dataset folder (required)"
+        "table",
+        metavar="TABLE",
+        help="a .csv, .parquet, .jsonl file, a hive dataset folder or a capture output folder (required)",
     )
     p.add_argument(
         "fields", nargs="+", metavar="FIELD", help="fields to plot; a vector plots all its components"
     )
     p.add_argument("-o", "--output", required=True, metavar="PNG", help="image to write (required)")
     p.add_argument("--time", help="time column (default: timestamp, else capture_time)")
+    p.add_argument("--table", dest="table_name", metavar="NAME", help="table of a capture output folder")
+    p.add_argument("--robot", help="only this robot of a dataset of several (default: one line each)")
     p.set_defaults(run=run)
 
 
-def load(path: Path) -> dict[str, list[float]]:
-    """The table's columns as lists (pyarrow reads every format; CSV falls back to the csv module)."""
-    if path.is_dir() or path.suffix in (".parquet", ".pq"):
-        from rtde_spec.errors import require
+def _has_parquet(folder: Path) -> bool:
+    return any(folder.rglob("*.parquet"))
 
-        dataset = require("pyarrow.dataset", "parquet", "plotting Parquet")
-        table = dataset.dataset(path, format="parquet", partitioning="hive").to_table()
+
+def tables_in(folder: Path) -> list[str]:
+    """The tables of a capture output folder: sub-folders that are not hive partitions."""
+    return sorted(
+        p.name for p in folder.iterdir() if p.is_dir() and "=" not in p.name and _has_parquet(p)
+    )
+
+
+def _schema_names(folder: Path) -> set[str]:
+    from rtde_spec.errors import require
+
+    dataset = require("pyarrow.dataset", "parquet", "plotting Parquet")
+    return set(dataset.dataset(folder, format="parquet", partitioning="hive").schema.names)
+
+
+def pick_table(folder: Path, fields: list[str], name: str | None) -> Path:
+    """The folder itself when it is one table; else the table that holds every field."""
+    tables = tables_in(folder)
+    if not tables:
+        return folder
+    if name is not None:
+        if name not in tables:
+            raise UsageError(f"no table {name!r}; the folder has: {', '.join(tables)}", subject=f"{folder}")
+        return folder / name
+    from rtde_spec.output.plots import components
+
+    holding = [
+        t for t in tables if all(components(dict.fromkeys(_schema_names(folder / t)), f) for f in fields)
+    ]
+    if len(holding) == 1:
+        return folder / holding[0]
+    if not holding:
+        raise UsageError(
+            f"no table has every field of {', '.join(fields)}; tables: {', '.join(tables)} "
+            "(plot one with --table NAME)",
+            subject=f"{folder}",
+        )
+    raise UsageError(
+        f"several tables have {', '.join(fields)}: {', '.join(holding)}; name one with --table NAME",
+        subject=f"{folder}",
+    )
+
+
+def _read_dataset(path: Path) -> Any:
+    from rtde_spec.errors import require
+
+    dataset = require("pyarrow.dataset", "parquet", "plotting Parquet")
+    pa = require("pyarrow", "parquet", "plotting Parquet")
+    try:
+        return dataset.dataset(path, format="parquet", partitioning="hive").to_table()
+    except (pa.ArrowInvalid, pa.ArrowTypeError, OSError) as exc:
+        raise DecodeError(f"not a readable Parquet table or dataset: {exc}", subject=f"{path}") from exc
+
+
+def load(path: Path) -> dict[str, list[Any]]:
+    """The table's columns as lists (pyarrow reads Parquet; JSON Lines and CSV are read here)."""
+    if path.is_dir() or path.suffix in (".parquet", ".pq"):
+        table = _read_dataset(path)
         return {name: table.column(name).to_pylist() for name in table.column_names}
     if path.suffix in (".jsonl", ".ndjson"):
         import json
 
-        rows = [json.loads(line) for line in path.read_text().splitlines() if line.strip()]
+        rows = []
+        with open(path, encoding="utf-8", errors="replace") as f:
+            for number, line in enumerate(f, 1):
+                if line.strip():
+                    try:
+                        rows.append(json.loads(line))
+                    except ValueError as exc:
+                        raise DecodeError(f"line {number} is not JSON: {exc}", subject=f"{path}") from exc
         return {key: [row.get(key) for row in rows] for key in rows[0]} if rows else {}
     import csv
 
-    with open(path, newline="") as f:
+    with open(path, newline="", encoding="utf-8", errors="replace") as f:
         reader = csv.DictReader(f)
-        columns: dict[str, list[float]] = {n: [] for n in reader.fieldnames or []}
+        columns: dict[str, list[Any]] = {n: [] for n in reader.fieldnames or []}
         for row in reader:
             for key, value in row.items():
+                if key is None or key not in columns:
+                    continue
                 try:
                     columns[key].append(float(value))
                 except (TypeError, ValueError):
                     columns[key].append(float("nan"))
     return columns
+
+
+def split_robots(columns: dict[str, list[Any]], robot: str | None) -> dict[str, dict[str, list[Any]]]:
+    """One set of columns per robot of a dataset (a single entry when there is no robot column)."""
+    robots = columns.get("robot")
+    if robots is None:
+        if robot is not None:
+            raise UsageError("--robot given, but the table has no robot column")
+        return {"": columns}
+    names = sorted({str(r) for r in robots})
+    if robot is not None:
+        if robot not in names:
+            raise UsageError(f"no robot {robot!r} in the table; it has: {', '.join(names)}")
+        names = [robot]
+    out = {}
+    for name in names:
+        keep = [i for i, r in enumerate(robots) if str(r) == name]
+        out[name] = {k: [v[i] for i in keep] for k, v in columns.items() if k not in PARTITIONS}
+    return out
+
+
+def _by_time(columns: dict[str, list[Any]], time_column: str) -> dict[str, list[Any]]:
+    order = sorted(range(len(columns[time_column])), key=columns[time_column].__getitem__)
+    return {k: [v[i] for i in order] for k, v in columns.items()}
 
 
 def run(args: argparse.Namespace) -> int:
@@ -60,11 +159,16 @@ def run(args: argparse.Namespace) -> int:
     path = Path(args.table)
     if not path.exists():
         raise UsageError("no such table", subject=f"file {path}")
+    if path.is_dir():
+        path = pick_table(path, args.fields, args.table_name)
     columns = load(path)
     time_column = args.time or next((c for c in TIME_COLUMNS if c in columns), None)
     if time_column is None or time_column not in columns:
         have = ", ".join(list(columns)[:12])
         raise UsageError(f"no time column; the table has: {have}", subject=f"file {path}")
-    plot_columns(columns, args.fields, time_column, args.output)
+    per_robot = {
+        robot: _by_time(cols, time_column) for robot, cols in split_robots(columns, args.robot).items()
+    }
+    plot_columns(per_robot, args.fields, time_column, args.output, title=str(path))
     print(f"wrote {args.output}")
     return 0

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -18,37 +19,58 @@ def components(columns: Mapping[str, Any], field: str) -> list[str]:
 
 
 def plot_columns(
-    columns: Mapping[str, Sequence[float]],
+    columns: Mapping[str, Sequence[float]] | Mapping[str, Mapping[str, Sequence[float]]],
     fields: Sequence[str],
     time_column: str,
     path: str | Path,
     title: str | None = None,
 ) -> None:
-    """Write a PNG; needs matplotlib (the `plot` extra)."""
+    """Write a PNG; needs matplotlib (the `plot` extra).
+
+    `columns` is one table's columns, or {label: columns} for several (e.g. one per
+    robot of a dataset), drawn in the same panels with the label in the legend. The
+    image appears only whole: drawn beside `path` and renamed into place.
+    """
     from rtde_spec.spec.catalogue import Catalogue
 
     matplotlib = require("matplotlib", "plot", "plotting")
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    tables: Mapping[str, Mapping[str, Sequence[float]]]
+    if columns and all(isinstance(v, Mapping) for v in columns.values()):
+        tables = columns  # type: ignore[assignment]
+    else:
+        tables = {"": columns}  # type: ignore[dict-item]
     cat = Catalogue.default()
     size = (9, 3.2 * len(fields) if len(fields) > 1 else 4.5)
     fig, axes = plt.subplots(len(fields), 1, figsize=size, sharex=True, squeeze=False)
-    for ax, field in zip(axes[:, 0], fields, strict=True):
-        names = components(columns, field)
-        if not names:
-            raise UsageError(f"no column {field!r} (nor {field}_0, ...)")
-        for name in names:
-            ax.plot(columns[time_column], columns[name], label=name)
-        info = cat.get(field, "output") or cat.get(field, "input")
-        unit = f" [{info.unit}]" if info is not None and info.unit else ""
-        ax.set_ylabel(f"{field}{unit}")
-        ax.grid(alpha=0.3)
-        if len(names) > 1:
-            ax.legend(ncol=3, fontsize="small")
-    axes[-1, 0].set_xlabel(f"{time_column} [s]")
-    if title:
-        axes[0, 0].set_title(title)
-    fig.tight_layout()
-    fig.savefig(path, dpi=100)
-    plt.close(fig)
+    try:
+        for ax, field in zip(axes[:, 0], fields, strict=True):
+            lines = 0
+            for label, table in tables.items():
+                names = components(table, field)
+                if not names:
+                    raise UsageError(f"no column {field!r} (nor {field}_0, ...)")
+                for name in names:
+                    ax.plot(table[time_column], table[name], label=f"{label} {name}".strip())
+                    lines += 1
+            info = cat.get(field, "output") or cat.get(field, "input")
+            unit = f" [{info.unit}]" if info is not None and info.unit else ""
+            ax.set_ylabel(f"{field}{unit}")
+            ax.grid(alpha=0.3)
+            if lines > 1:
+                ax.legend(ncol=3, fontsize="small")
+        axes[-1, 0].set_xlabel(f"{time_column} [s]")
+        if title:
+            axes[0, 0].set_title(title)
+        fig.tight_layout()
+        target = Path(path)
+        part = target.with_name(f".{target.name}.part")
+        try:
+            fig.savefig(part, dpi=100, format=target.suffix.lstrip(".") or "png")
+            os.replace(part, target)
+        finally:
+            part.unlink(missing_ok=True)
+    finally:
+        plt.close(fig)
