@@ -76,4 +76,3 @@ def test_a_file_that_is_not_parquet_is_a_clear_error(tmp_path: Path) -> None:
     bad.write_bytes(b"PAR1 this is not a parquet file")
     result = cli("plot", str(bad), "actual_q", "-o", str(tmp_path / "q.png"))
     assert result.returncode == 1 and "bad.parquet" in result.stderr and "Traceback" not in result.stderr
-

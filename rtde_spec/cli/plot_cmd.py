@@ -45,9 +45,7 @@ def _has_parquet(folder: Path) -> bool:
 
 def tables_in(folder: Path) -> list[str]:
     """The tables of a capture output folder: sub-folders that are not hive partitions."""
-    return sorted(
-        p.name for p in folder.iterdir() if p.is_dir() and "=" not in p.name and _has_parquet(p)
-    )
+    return sorted(p.name for p in folder.iterdir() if p.is_dir() and "=" not in p.name and _has_parquet(p))
 
 
 def _schema_names(folder: Path) -> set[str]:
