@@ -3,6 +3,13 @@
 Each value is a type byte then its data; top-level values end with a separator
 byte. LIST and MATRIX nest (type, value) pairs without separators. The type
 table, its codes and layouts come from the spec.
+
+Hostile counts cannot make a decode allocate more than a small multiple of its
+input: every LIST or MATRIX element takes at least one byte on the wire (its type
+byte), so a count whose elements cannot fit in the bytes left is refused before
+anything is built. A row of a 0-column matrix takes no bytes at all, so each such
+row is charged one byte of the message's value bytes: all the empty rows of one
+message together are at most as many as its value bytes.
 """
 
 from __future__ import annotations
@@ -17,6 +24,9 @@ from rtde_spec._generated.constants import PRIMARY_BYTE_ORDER as ORDER
 from rtde_spec.errors import DecodeError, EncodeError
 
 MAX_DEPTH = 32  # nested lists deeper than this are refused, not recursed into
+_set_dict = BaseModel.__dict__["__dict__"].__set__
+_set_slot = object.__setattr__
+_new = object.__new__
 
 
 class VariableValue(BaseModel):
@@ -33,6 +43,23 @@ class VariableValue(BaseModel):
     ) = None
 
 
+_BOTH_SET = {"type", "value"}  # shared: a frozen model's fields-set is only ever copied
+
+
+def _made(name: str, value: Any) -> VariableValue:
+    """A decoded value, unvalidated (struct typed it): what model_construct does, in one step.
+
+    Validating the value union per element costs most of a decode and ~2x the memory
+    (benchmarks/faults_bombs.py); the primary tests check these equal validated twins.
+    """
+    obj = _new(VariableValue)
+    _set_dict(obj, {"type": name, "value": value})
+    _set_slot(obj, "__pydantic_fields_set__", _BOTH_SET)
+    _set_slot(obj, "__pydantic_extra__", None)
+    _set_slot(obj, "__pydantic_private__", None)
+    return obj  # type: ignore[no-any-return]
+
+
 class ValueTable:
     """Codes and layouts of the value types, built from spec data."""
 
@@ -43,9 +70,20 @@ class ValueTable:
         self.by_name: dict[str, tuple[int, Any]] = {}
         self.separator = separator
         self.prims = prims
+        # values with no data, or only True/False, are shared: a list of them costs a pointer each
+        self._shared: dict[tuple[str, Any], VariableValue] = {}
         for vt in value_types:
             self.by_code[codes[vt.name]] = vt
             self.by_name[vt.name] = (codes[vt.name], vt)
+            if vt.kind == "none":
+                self._shared[(vt.name, None)] = VariableValue(type=vt.name)
+            elif vt.kind == "string":
+                self._shared[(vt.name, "")] = _made(vt.name, "")
+            elif vt.kind == "scalar" and vt.count == 1 and self.prims[vt.element].struct == "?":
+                self._shared[(vt.name, False)] = _made(vt.name, False)
+                self._shared[(vt.name, True)] = _made(vt.name, True)
+        # fewest bytes one element of a LIST or MATRIX takes: its type byte and the smallest data
+        self.min_element = 1 + min(self._min_data(vt) for vt in value_types)
 
     @cache  # noqa: B019 - one table per process
     def _struct(self, fmt: str) -> struct.Struct:
@@ -54,12 +92,21 @@ class ValueTable:
     def _prefix(self, name: str) -> struct.Struct:
         return self._struct(self.prims[name].struct)
 
+    def _min_data(self, vt: Any) -> int:
+        """Fewest data bytes a value of this type has after its type byte."""
+        if vt.kind == "none":
+            return 0
+        if vt.kind == "scalar":
+            return self._struct(self.prims[vt.element].struct * vt.count).size
+        return self._prefix(vt.length).size * (2 if vt.kind == "matrix" else 1)
+
     # --- decoding -----------------------------------------------------------
 
     def decode_all(self, buf: bytes, pos: int, end: int, field: str) -> list[VariableValue]:
         out = []
+        budget = [end - pos]  # empty matrix rows left to build: one per value byte
         while pos < end:
-            value, pos = self._decode_one(buf, pos, end, field, 0)
+            value, pos = self._decode_one(buf, pos, end, field, 0, budget)
             if pos >= end or buf[pos] != self.separator:
                 raise DecodeError(
                     "global variable value not followed by its separator",
@@ -82,8 +129,36 @@ class ValueTable:
                 actual=f"{end - pos} bytes",
             )
 
+    def _check_count(
+        self, kind: str, count: int, empty_rows: int, pos: int, end: int, field: str, budget: list[int]
+    ) -> None:
+        """Refuse a count whose elements cannot fit in the bytes left, before building any.
+
+        `empty_rows` (rows of a 0-column matrix) take no bytes: they are charged to the
+        message's budget instead, so they too stay within its size.
+        """
+        need = count * self.min_element
+        if need > end - pos:
+            raise DecodeError(
+                f"{kind} of {count} elements cannot fit in the bytes left",
+                field=field,
+                offset=pos,
+                expected=f">= {need} bytes ({count} x >= {self.min_element})",
+                actual=f"{end - pos} bytes left",
+            )
+        if empty_rows:
+            budget[0] -= empty_rows
+            if budget[0] < 0:
+                raise DecodeError(
+                    f"matrix of {empty_rows} rows x 0 columns: more empty rows than the message has bytes",
+                    field=field,
+                    offset=pos,
+                    expected=f"<= {budget[0] + empty_rows} empty rows",
+                    actual=f"{empty_rows} rows",
+                )
+
     def _decode_one(
-        self, buf: bytes, pos: int, end: int, field: str, depth: int
+        self, buf: bytes, pos: int, end: int, field: str, depth: int, budget: list[int]
     ) -> tuple[VariableValue, int]:
         if depth > MAX_DEPTH:
             raise DecodeError(
@@ -104,14 +179,17 @@ class ValueTable:
             )
         pos += 1
         if vt.kind == "none":
-            return VariableValue(type=vt.name), pos
+            return self._shared[(vt.name, None)], pos
         if vt.kind == "scalar":
             prim = self.prims[vt.element]
             st = self._struct(prim.struct * vt.count)
             self._need(buf, pos, st.size, end, field)
             items = st.unpack_from(buf, pos)
-            value = items[0] if vt.count == 1 else tuple(items)
-            return VariableValue(type=vt.name, value=value), pos + st.size
+            if vt.count != 1:
+                return _made(vt.name, tuple(items)), pos + st.size
+            value = items[0]
+            shared = self._shared.get((vt.name, value)) if type(value) is bool else None
+            return shared or _made(vt.name, value), pos + st.size
         prefix = self._prefix(vt.length)
         self._need(buf, pos, prefix.size, end, field)
         (length,) = prefix.unpack_from(buf, pos)
@@ -119,25 +197,27 @@ class ValueTable:
         if vt.kind == "string":
             self._need(buf, pos, length, end, field)
             text = bytes(buf[pos : pos + length]).decode("utf-8", "surrogateescape")
-            return VariableValue(type=vt.name, value=text), pos + length
+            return (self._shared[(vt.name, "")] if not text else _made(vt.name, text)), pos + length
         if vt.kind == "list":
+            self._check_count("list", length, 0, pos, end, field, budget)
             items_out = []
             for _ in range(length):
-                item, pos = self._decode_one(buf, pos, end, field, depth + 1)
+                item, pos = self._decode_one(buf, pos, end, field, depth + 1, budget)
                 items_out.append(item)
-            return VariableValue(type=vt.name, value=items_out), pos
+            return _made(vt.name, items_out), pos
         # matrix: rows then columns, both of the length primitive
         self._need(buf, pos, prefix.size, end, field)
         (cols,) = prefix.unpack_from(buf, pos)
         pos += prefix.size
+        self._check_count("matrix", length * cols, 0 if cols else length, pos, end, field, budget)
         rows = []
         for _ in range(length):
             row = []
             for _ in range(cols):
-                item, pos = self._decode_one(buf, pos, end, field, depth + 1)
+                item, pos = self._decode_one(buf, pos, end, field, depth + 1, budget)
                 row.append(item)
             rows.append(row)
-        return VariableValue(type=vt.name, value=rows), pos
+        return _made(vt.name, rows), pos
 
     # --- encoding -----------------------------------------------------------
 
