@@ -1,7 +1,9 @@
 """Recipe files: UR's XML configuration, one name per line, comma lists, YAML and JSON.
 
-XML is parsed with defusedxml (no entity expansion, no external entities or DTDs)
-and every file is size-bounded before it is parsed.
+XML is parsed with defusedxml (no entity expansion, no external entities or DTDs),
+YAML without aliases (no "billion laughs") and bounded nesting, JSON with its
+nesting bounded by the interpreter's recursion limit (an error, not a crash);
+every file is size-bounded before it is parsed.
 """
 
 from __future__ import annotations
@@ -17,6 +19,7 @@ from defusedxml import DefusedXmlException
 
 from rtde_spec.errors import RecipeError
 from rtde_spec.recipes.model import FILE_FORMATS, Direction, Recipe
+from rtde_spec.spec import safe_yaml
 
 MAX_FILE_BYTES = 1 << 20  # 1 MiB: recipes are names; anything larger is not a recipe
 FORMATS = FILE_FORMATS
@@ -153,10 +156,16 @@ def _recipe_from_mapping(item: Any, where: str, index: int) -> Recipe:
             f"recipe {index}: direction must be input or output", subject=at(where), actual=direction
         )
     frequency = item.get("frequency")
+    try:
+        hz = float(frequency) if frequency is not None else None
+    except (TypeError, ValueError, OverflowError):
+        raise RecipeError(
+            f"recipe {index}: frequency must be a number", subject=at(where), actual=repr(frequency)[:80]
+        ) from None
     return Recipe(
         tuple(names),
         direction=direction,
-        frequency=float(frequency) if frequency is not None else None,
+        frequency=hz,
         controller=str(item["controller"]) if item.get("controller") is not None else None,
         key=item.get("key"),
         declared_types=declared,
@@ -179,16 +188,22 @@ def _from_data(data: Any, where: str) -> list[Recipe]:
 
 def _from_yaml(text: str, where: str) -> list[Recipe]:
     try:
-        return _from_data(yaml.safe_load(text), where)
+        data = safe_yaml.load(text)
     except yaml.YAMLError as exc:
         raise RecipeError(f"not valid YAML: {exc}", subject=at(where)) from None
+    return _from_data(data, where)
 
 
 def _from_json(text: str, where: str) -> list[Recipe]:
     try:
-        return _from_data(json.loads(text), where)
+        data = json.loads(text)
     except json.JSONDecodeError as exc:
         raise RecipeError(f"not valid JSON at line {exc.lineno}: {exc.msg}", subject=at(where)) from None
+    except RecursionError:
+        raise RecipeError("JSON nests too deeply to be a recipe", subject=at(where)) from None
+    except ValueError as exc:  # e.g. an integer of more digits than Python converts
+        raise RecipeError(f"not valid JSON: {exc}", subject=at(where)) from None
+    return _from_data(data, where)
 
 
 # --- writing -----------------------------------------------------------------
