@@ -22,6 +22,7 @@ from rtde_spec.cli import (
     plot_cmd,
     record_cmd,
     serve_cmd,
+    spec_cmd,
     validate_cmd,
     watch_cmd,
     wireshark_cmd,
@@ -40,6 +41,7 @@ COMMANDS = (
     capture_cmd,
     plot_cmd,
     wireshark_cmd,
+    spec_cmd,
 )
 
 

@@ -108,7 +108,25 @@ class TypesFile(StrictModel):
 
 Since = dict[str, VersionStr]
 IndexRange = tuple[Annotated[int, Field(ge=0)], Annotated[int, Field(ge=0)]]
-Source = Literal["cb3-guide", "e-series-guide", "third-party", "user"]
+#: a document id: cb3-guide, e-series-guide, third-party, user, or a document an import named
+Source = Annotated[str, Field(pattern=r"^[a-z0-9][a-z0-9.-]*$")]
+#: what an import can find different between a document and the spec
+DiffWhat = Literal["added", "removed", "type", "direction", "availability", "range", "description"]
+
+
+class Conflict(StrictModel):
+    """A difference a document shows against the spec, decided on purpose.
+
+    `spec import` suppresses exactly this difference (what, the document's value as
+    the importer prints it, and the index range for register families) and shows it
+    with --show-known; any other difference of the same field is still reported.
+    """
+
+    what: DiffWhat
+    document: str | None = None
+    index: IndexRange | None = None
+    sources: Annotated[list[Source], Field(min_length=1)]
+    decision: Annotated[str, Field(min_length=1)]
 
 
 class RangeSpec(StrictModel):
@@ -131,6 +149,7 @@ class FieldSpec(StrictModel):
     deprecated: str | None = None
     doc_ref: str | None = None
     sources: list[Source] = []
+    conflicts: list[Conflict] = []
 
     @property
     def is_family(self) -> bool:
@@ -219,6 +238,7 @@ class LayoutField(StrictModel):
     unit: str | None = None
     doc: str | None = None
     since: Since | None = None  # the first version per product line that sends this field
+    conflicts: list[Conflict] = []  # differences a document shows, decided on purpose
 
     @property
     def kind(self) -> str:
@@ -299,6 +319,7 @@ class MemberSpec(StrictModel):
     since: Since | None = None
     fields: list[LayoutField]
     older: list[OlderLayout] = []
+    conflicts: list[Conflict] = []
 
 
 class FamilySpec(StrictModel):

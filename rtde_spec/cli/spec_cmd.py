@@ -1,0 +1,133 @@
+"""rtde-spec spec import DOCUMENT: read a published UR document and diff it against spec/.
+
+The importer and ruamel.yaml are imported only when this runs, so `rtde-spec --help`
+stays fast.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from rtde_spec.cli.common import EXIT_ERROR
+from rtde_spec.output.text import print_json, table
+
+if TYPE_CHECKING:
+    from rtde_spec.spec.importers.changes import Change
+
+
+def add_parser(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("spec", help="work on spec/: import a published UR document")
+    inner = p.add_subparsers(dest="spec_command", metavar="ACTION")
+    inner.required = True
+    imp = inner.add_parser(
+        "import",
+        help="read an RTDE guide (text, Markdown, HTML) or the primary interface document; report changes",
+        description="Compare a published document with the spec: added, removed, type, direction, "
+        "availability per product line, register range and description changes, per field.",
+    )
+    imp.add_argument("document", type=Path, help="the document (its form is detected from the content)")
+    imp.add_argument("--spec-dir", type=Path, default=Path("spec"), help="spec root (default: ./spec)")
+    imp.add_argument("--json", action="store_true", help='print {"added", "removed", "changed"} as JSON')
+    imp.add_argument(
+        "--show-known", action="store_true", help="also list differences the spec records as conflicts"
+    )
+    imp.add_argument("--write", action="store_true", help="apply the differences to the spec YAML in place")
+    imp.add_argument(
+        "-o", "--overlay", type=Path, metavar="FILE", help="write the added fields as an --extra-fields file"
+    )
+    imp.add_argument("--source", help="document id recorded in `sources` (default: from the document's form)")
+    imp.add_argument(
+        "--line",
+        choices=("cb3", "e-series", "polyscope-x"),
+        help="product line the document is for (default: detected)",
+    )
+    imp.add_argument(
+        "--check", action="store_true", help="exit 1 when there are differences the spec does not record"
+    )
+    imp.set_defaults(run=run)
+
+
+def _cell(what: str, value: Any) -> str:
+    from rtde_spec.spec.importers.changes import value_text
+
+    text = value_text(what, value)
+    return "" if text is None else text if len(text) <= 70 else text[:67] + "..."
+
+
+def _rows(changes: list[Change]) -> list[list[Any]]:
+    rows = []
+    for c in changes:
+        index = f"[{c.index[0]}..{c.index[1]}]" if c.index else ""
+        rows.append(
+            [
+                c.kind,
+                c.field,
+                c.where,
+                c.what,
+                index,
+                _cell(c.what, c.old),
+                _cell(c.what, c.new),
+                c.line or "",
+            ]
+        )
+    return rows
+
+
+def run(args: argparse.Namespace) -> int:
+    from rtde_spec.spec.importers import read_document
+    from rtde_spec.spec.importers.diff import diff_fields
+    from rtde_spec.spec.importers.primary_diff import diff_primary
+    from rtde_spec.spec.loader import load_spec
+
+    spec = load_spec(args.spec_dir)
+    doc = read_document(args.document, spec, source=args.source, line=args.line)
+    changes = diff_primary(doc, spec) if doc.interface == "primary" else diff_fields(doc, spec)
+    new = [c for c in changes if c.known is None]
+    known = [c for c in changes if c.known is not None]
+    if args.json:
+        out: dict[str, Any] = {
+            "document": str(args.document),
+            "format": doc.format,
+            "source": doc.source,
+            "line": doc.line,
+            "added": [c.record() for c in new if c.kind == "added"],
+            "removed": [c.record() for c in new if c.kind == "removed"],
+            "changed": [c.record() for c in new if c.kind == "changed"],
+        }
+        if args.show_known:
+            out["known"] = [c.record() for c in known]
+        print_json(out)
+    else:
+        head = ["change", "field", "where", "what", "index", "spec", "document", "line"]
+        print(f"{args.document}: {doc.format}, {doc.source}, written for {doc.line}")
+        if new:
+            print(table(head, _rows(new)))
+        if args.show_known and known:
+            print("\nknown conflicts (recorded in the spec):")
+            rows = [
+                [*r, c.known.decision if c.known else ""] for r, c in zip(_rows(known), known, strict=True)
+            ]
+            print(table([*head, "decision"], rows))
+        counts = {k: sum(c.kind == k for c in new) for k in ("added", "removed", "changed")}
+        hint = "" if args.show_known or not known else " (--show-known lists them)"
+        print(
+            f"\n{counts['added']} added, {counts['removed']} removed, {counts['changed']} changed; "
+            f"{len(known)} known conflicts{hint}"
+        )
+    if args.write:
+        from rtde_spec.spec.importers.write import write_changes
+
+        written = write_changes(changes, doc, spec, args.spec_dir)
+        print(
+            f"wrote {len(written)} of {len(new)} changes to {args.spec_dir}; run `python -m codegen`",
+            file=sys.stderr,
+        )
+    if args.overlay is not None:
+        from rtde_spec.spec.importers.write import write_overlay
+
+        count = write_overlay(changes, doc, spec, args.overlay)
+        print(f"wrote {count} added fields to {args.overlay}", file=sys.stderr)
+    return EXIT_ERROR if args.check and new else 0

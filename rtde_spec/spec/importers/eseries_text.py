@@ -1,0 +1,76 @@
+"""The e-Series-era guide as text: each table cell on a line of its own, ended by `|`.
+
+Rows are not always four lines: an empty comment and version come as `||` on one
+line, a cell can be missing (safety_status), and the last row of a table can stop
+short where the table ends (external_force_torque). A row therefore starts where
+a name cell is followed by a type cell, not every fourth line.
+"""
+
+from __future__ import annotations
+
+from rtde_spec.spec.importers.tables import Table, is_heading
+
+
+def _cells(line: str) -> list[str] | None:
+    """The cells of one line, or None when the line is not part of a table."""
+    text = line.rstrip()
+    if not text.endswith("|"):
+        return None
+    if text.strip() == "||":
+        return ["", ""]
+    return [text[:-1].strip()]
+
+
+def read_tables(text: str, is_type: object = None) -> list[Table]:
+    """Tables with their cells in document order; rows are split by `split_rows`."""
+    tables: list[Table] = []
+    heading = ""
+    cells: list[tuple[int, str]] = []
+    header: list[str] = []
+    start = 0
+    in_table = False
+
+    def close() -> None:
+        if header:
+            table = Table(heading, list(header), start)
+            table.rows = [(n, [c]) for n, c in cells]  # one cell per row until split_rows
+            tables.append(table)
+
+    for number, raw in enumerate(text.splitlines(), start=1):
+        got = _cells(raw)
+        if got is None:
+            if in_table:
+                close()
+                in_table, header, cells = False, [], []
+            if is_heading(raw):
+                heading = raw.strip()
+            continue
+        if not in_table:
+            in_table, start, header, cells = True, number, [], []
+        if raw.strip().startswith("|-") or raw.strip().startswith("|:"):
+            header = [c for _, c in cells]
+            cells = []
+            continue
+        cells.extend((number, c) for c in got)
+    if in_table:
+        close()
+    return tables
+
+
+def split_rows(table: Table, starts_row: object) -> Table:
+    """Group a table's cells into rows: a row starts at a name cell followed by a type cell."""
+    assert callable(starts_row)
+    flat = [(n, row[0]) for n, row in table.rows]
+    out = Table(table.heading, table.header, table.line)
+    i = 0
+    while i < len(flat):
+        if i + 1 < len(flat) and starts_row(flat[i][1], flat[i + 1][1]):
+            line, cells = flat[i][0], [flat[i][1], flat[i + 1][1]]
+            i += 2
+            while i < len(flat) and not (i + 1 < len(flat) and starts_row(flat[i][1], flat[i + 1][1])):
+                cells.append(flat[i][1])
+                i += 1
+            out.rows.append((line, cells))
+        else:
+            i += 1
+    return out

@@ -1,0 +1,76 @@
+"""What a published document says, in one shape whatever its format.
+
+Each format reader (CB3-era text, e-Series-era text, Markdown, HTML, the primary
+interface text) produces these; the diff modules compare them with the spec.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+#: (low, high) inclusive register index range, or None for the whole field
+IndexSpan = tuple[int, int] | None
+
+
+@dataclass
+class VersionNote:
+    """One part of an "introduced in" cell: the versions per product line for an index range."""
+
+    span: IndexSpan
+    versions: dict[str, str]  # product line id -> version
+
+
+@dataclass
+class DocField:
+    """One row of an RTDE field table."""
+
+    name: str  # a family keeps {X} in its name
+    direction: str  # input | output
+    type: str  # as normalised to a spec type name when it matches one, else as written
+    doc: str
+    line: int  # 1-based line of the document the row starts on
+    index: tuple[int, int] | None = None
+    notes: list[VersionNote] = field(default_factory=list)
+    version_text: str = ""  # the cell as written, for the report
+
+
+@dataclass
+class DocLayoutField:
+    """One row of a primary-interface message table (groups flattened to a path)."""
+
+    name: str
+    key: str  # the name normalised to match the spec's snake_case
+    type: str  # a primitive, "string", "bytes", "switch", or "" when the document gives none
+    doc: str
+    line: int
+    group: str = ""  # the repeated or conditional group the row belongs to
+    versions: dict[str, str] = field(default_factory=dict)
+    version_text: str = ""
+
+
+@dataclass
+class DocMember:
+    """A message or sub-package of the primary document."""
+
+    title: str
+    family_type: int | None
+    member_type: int | None
+    line: int
+    fields: list[DocLayoutField] = field(default_factory=list)
+    versions: dict[str, str] = field(default_factory=dict)  # "introduced in" of the header rows
+
+
+@dataclass
+class Document:
+    """A document as read: its format, the product line it speaks for, and its tables."""
+
+    path: str
+    format: str  # cb3-text | e-series-text | markdown | html | primary-text
+    source: str  # the id recorded in `sources` (cb3-guide, e-series-guide, ...)
+    line: str = ""  # the product line whose versions the document lists first
+    fields: list[DocField] = field(default_factory=list)
+    members: list[DocMember] = field(default_factory=list)
+
+    @property
+    def interface(self) -> str:
+        return "primary" if self.format == "primary-text" else "rtde"

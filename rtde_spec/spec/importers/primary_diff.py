@@ -1,0 +1,156 @@
+"""Compare the primary interface document with spec/primary/interface.yaml, field by field.
+
+Fields are matched by name once both are flattened to one spelling (camelCase and
+snake_case agree), in order within a message; groups (repeated for each joint,
+present only if ...) are part of a field's type as compared.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from rtde_spec.spec.importers.cells import words
+from rtde_spec.spec.importers.changes import Availability, Change, mark_known, resolve
+from rtde_spec.spec.importers.model import DocLayoutField, DocMember, Document
+from rtde_spec.spec.importers.primary_text import key
+from rtde_spec.spec.schema import FamilySpec, LayoutField, MemberSpec, Spec
+from rtde_spec.spec.versions import Version
+
+
+@dataclass
+class _Leaf:
+    path: str
+    key: str
+    type: str
+    field: LayoutField
+
+
+def type_text(fld: LayoutField) -> str:
+    """A field's type as the document's rows can say it (double[6], string(uint8), bytes)."""
+    kind = fld.kind
+    if kind == "value":
+        return f"{fld.type}[{fld.count}]" if fld.count else fld.type
+    if kind == "string":
+        return "string" if fld.length in (None, "rest") else f"string({fld.length})"
+    if kind in ("bytes", "values"):
+        return "bytes"
+    return kind
+
+
+def _leaves(fields: list[LayoutField], prefix: str = "", group: str = "") -> list[_Leaf]:
+    out: list[_Leaf] = []
+    for fld in fields:
+        if fld.fields is not None:
+            inner = f"repeat {fld.repeat}" if fld.repeat is not None else f"when {key(fld.when or '')}"
+            out += _leaves(fld.fields, f"{prefix}{fld.name}.", inner)
+            continue
+        text = type_text(fld)
+        out.append(_Leaf(prefix + fld.name, key(fld.name), f"{text} in {group}" if group else text, fld))
+    return out
+
+
+def _doc_type(row: DocLayoutField) -> str:
+    return f"{row.type} in {row.group}" if row.group else row.type
+
+
+def _norm(avail: Availability) -> Availability:
+    return {k: (str(Version.parse(v)) if v else None) for k, v in avail.items()}
+
+
+def _covered(named: dict[str, str], doc: Document, spec: Spec) -> list[str]:
+    ids = {doc.line, *named}
+    for line in spec.product_lines.product_lines:
+        if line.inherits in ids:
+            ids.add(line.id)
+    return [p.id for p in spec.product_lines.product_lines if p.id in ids]
+
+
+def _availability(
+    named: dict[str, str], spec_since: dict[str, str] | None, doc: Document, spec: Spec
+) -> tuple[Availability, Availability]:
+    lines = spec.product_lines.product_lines
+    covered = _covered(named, doc, spec)
+    first = next(p.first_version for p in lines if p.id == doc.line)
+    ours = _norm(resolve(spec_since, lines, covered))
+    theirs = _norm(resolve(named or {doc.line: first}, lines, covered))
+    return ours, theirs
+
+
+def _find(spec: Spec, member: DocMember) -> tuple[FamilySpec, MemberSpec | None] | None:
+    for fam in spec.primary.families:
+        if fam.type == member.family_type:
+            return fam, next((m for m in fam.members if m.type == member.member_type), None)
+    return None
+
+
+def _describe_changed(row: DocLayoutField, fld: LayoutField) -> bool:
+    theirs = words(row.doc)
+    ours = words(" ".join(p for p in (fld.doc, fld.enum, fld.name.replace("_", " "), fld.unit) if p))
+    missing = theirs - ours
+    return len(missing) >= 3 and len(missing) / len(theirs) > 0.5
+
+
+def _member_changes(
+    member: DocMember, fam: FamilySpec, spec_member: MemberSpec, doc: Document, spec: Spec
+) -> list[Change]:
+    where = f"{fam.name}/{spec_member.name}"
+    out: list[Change] = []
+    ours, theirs = _availability(member.versions, spec_member.since, doc, spec)
+    if ours != theirs:
+        out.append(
+            mark_known(
+                Change("changed", "availability", spec_member.name, where, ours, theirs, member.line),
+                spec_member.conflicts,
+            )
+        )
+    leaves = _leaves(spec_member.fields)
+    used: set[int] = set()
+    for row in member.fields:
+        match = next((i for i, leaf in enumerate(leaves) if i not in used and leaf.key == row.key), None)
+        if match is None:
+            change = Change("added", "added", row.name, where, None, _doc_type(row), row.line)
+            change.extra["row"] = row
+            out.append(mark_known(change, spec_member.conflicts))
+            continue
+        used.add(match)
+        leaf = leaves[match]
+        found: list[Change] = []
+        if leaf.type != _doc_type(row) and row.type:
+            found.append(Change("changed", "type", leaf.path, where, leaf.type, _doc_type(row), row.line))
+        since = leaf.field.since or spec_member.since
+        ours, theirs = _availability(row.versions or member.versions, since, doc, spec)
+        if ours != theirs:
+            found.append(Change("changed", "availability", leaf.path, where, ours, theirs, row.line))
+        if row.doc and _describe_changed(row, leaf.field):
+            found.append(
+                Change("changed", "description", leaf.path, where, leaf.field.doc, row.doc, row.line)
+            )
+        for change in found:
+            change.extra["row"] = row
+            out.append(mark_known(change, leaf.field.conflicts))
+    for i, leaf in enumerate(leaves):
+        if i not in used:
+            out.append(
+                mark_known(
+                    Change("removed", "removed", leaf.path, where, leaf.type, None, None),
+                    leaf.field.conflicts,
+                )
+            )
+    return out
+
+
+def diff_primary(doc: Document, spec: Spec) -> list[Change]:
+    """Every difference between the document's message tables and spec/primary, known ones marked."""
+    out: list[Change] = []
+    for member in doc.members:
+        found = _find(spec, member)
+        if found is None or found[1] is None:
+            family = found[0].name if found else f"type {member.family_type}"
+            change = Change(
+                "added", "added", member.title, family, None, f"sub-type {member.member_type}", member.line
+            )
+            change.extra["member"] = member
+            out.append(change)
+            continue
+        out += _member_changes(member, found[0], found[1], doc, spec)
+    return out

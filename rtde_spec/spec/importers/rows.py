@@ -1,0 +1,56 @@
+"""From a guide's field tables to DocFields: names, families, types, versions per range."""
+
+from __future__ import annotations
+
+from collections import Counter
+
+from rtde_spec.spec.importers.cells import Lines, parse_name, parse_versions, spans_in, versions_in_text
+from rtde_spec.spec.importers.model import DocField
+from rtde_spec.spec.importers.tables import Table
+
+
+def field_rows(tables: list[Table], lines: Lines) -> list[DocField]:
+    out: list[DocField] = []
+    for table in tables:
+        direction = table.direction
+        if not table.is_field_table or direction is None:
+            continue
+        for line, cells in table.rows:
+            if len(cells) < 2 or not cells[0].strip():
+                continue
+            out.append(_field(cells, direction, line, lines))
+    return out
+
+
+def _field(cells: list[str], direction: str, line: int, lines: Lines) -> DocField:
+    name, span, family = parse_name(cells[0])
+    comment = cells[2].strip() if len(cells) > 2 else ""
+    version = " ".join(c.strip() for c in cells[3:] if c.strip())
+    notes, rest = parse_versions(version, lines) if version else ([], "")
+    if not version and comment:
+        # an earlier edition merged the columns, or a cell is missing (e-Series safety_status)
+        notes, comment = versions_in_text(comment, lines)
+    if family and span is None:
+        spans = spans_in(comment)
+        span = (min(a for a, _ in spans), max(b for _, b in spans)) if spans else None
+    doc = comment if not rest else f"{comment} ({rest})"
+    return DocField(
+        name=name,
+        direction=direction,
+        type=lines.type_name(cells[1]),
+        doc=doc,
+        line=line,
+        index=span if family else None,
+        notes=notes,
+        version_text=version,
+    )
+
+
+def main_line(fields: list[DocField], default: str) -> str:
+    """The product line a document speaks for: the one its version cells name first most often."""
+    counts: Counter[str] = Counter()
+    for fld in fields:
+        for note in fld.notes:
+            if note.versions:
+                counts[next(iter(note.versions))] += 1
+    return counts.most_common(1)[0][0] if counts else default
