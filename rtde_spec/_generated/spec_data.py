@@ -172,27 +172,56 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                'URCaps)',
                         'since': {'cb3': '3.9.0', 'e-series': '5.3.0'},
                         'index': [64, 127],
-                        'sources': ['cb3-guide', 'e-series-guide']},
+                        'sources': ['cb3-guide', 'e-series-guide'],
+                        'conflicts': [{'what': 'availability',
+                                       'document': 'cb3 3.3.0',
+                                       'index': [64, 127],
+                                       'sources': ['universal-robot-rust-crate-readme'],
+                                       'decision': "The crate README's row has no version (the "
+                                                   'cell was lost); both UR guides give 3.9.0 / '
+                                                   '5.3.0. Kept.'}]},
                        {'name': 'input_int_register_{X}',
                         'type': 'INT32',
-                        'doc': 'General purpose integer register {X}',
+                        'doc': 'General purpose integer register {X}: the lower range is reserved '
+                               'for the Fieldbus/PLC interface, the upper range can be used by '
+                               'external RTDE clients (e.g. URCaps)',
                         'index': [0, 47],
                         'ranges': [{'index': [0, 23],
                                     'since': {'cb3': '3.4.0', 'e-series': '5.0.0'},
                                     'reserved': 'Fieldbus/PLC interface'},
                                    {'index': [24, 47],
                                     'since': {'cb3': '3.9.0', 'e-series': '5.3.0'}}],
-                        'sources': ['cb3-guide', 'e-series-guide']},
+                        'sources': ['cb3-guide', 'e-series-guide'],
+                        'conflicts': [{'what': 'availability',
+                                       'document': 'cb3 3.9.0, e-series 5.3.0, polyscope-x 10.0.0',
+                                       'index': [0, 23],
+                                       'sources': ['universal-robot-rust-crate-readme'],
+                                       'decision': 'The crate README gives the whole family the '
+                                                   "upper range's 3.9.0 / 5.3.0 (its comment still "
+                                                   'says [0..23] 3.4.0); the CB3 guide gives '
+                                                   '[0..23] 3.4.0 and the e-Series guide dates '
+                                                   "only [24..47]. Kept the guides' versions."}]},
                        {'name': 'input_double_register_{X}',
                         'type': 'DOUBLE',
-                        'doc': 'General purpose double register {X}',
+                        'doc': 'General purpose double register {X}: the lower range is reserved '
+                               'for the Fieldbus/PLC interface, the upper range can be used by '
+                               'external RTDE clients (e.g. URCaps)',
                         'index': [0, 47],
                         'ranges': [{'index': [0, 23],
                                     'since': {'cb3': '3.4.0', 'e-series': '5.0.0'},
                                     'reserved': 'Fieldbus/PLC interface'},
                                    {'index': [24, 47],
                                     'since': {'cb3': '3.9.0', 'e-series': '5.3.0'}}],
-                        'sources': ['cb3-guide', 'e-series-guide']},
+                        'sources': ['cb3-guide', 'e-series-guide'],
+                        'conflicts': [{'what': 'availability',
+                                       'document': 'cb3 3.9.0, e-series 5.3.0, polyscope-x 10.0.0',
+                                       'index': [0, 23],
+                                       'sources': ['universal-robot-rust-crate-readme'],
+                                       'decision': 'The crate README gives the whole family the '
+                                                   "upper range's 3.9.0 / 5.3.0 (its comment still "
+                                                   'says [0..23] 3.4.0); the CB3 guide gives '
+                                                   '[0..23] 3.4.0 and the e-Series guide dates '
+                                                   "only [24..47]. Kept the guides' versions."}]},
                        {'name': 'external_force_torque',
                         'type': 'VECTOR6D',
                         'doc': 'Input external wrench when using the ft_rtde_input_enable builtin',
@@ -444,7 +473,15 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                 'emergency stopped, emergency stopped, violation, fault, stopped '
                                 'due to safety; bit 11 (5.25.0 / 10.12.0): 3PE input active',
                          'bits': 'SafetyStatusBits',
-                         'sources': ['cb3-guide', 'e-series-guide']},
+                         'sources': ['cb3-guide', 'e-series-guide'],
+                         'conflicts': [{'what': 'availability',
+                                        'document': 'e-series 5.25.0, polyscope-x 10.12.0',
+                                        'sources': ['e-series-guide'],
+                                        'decision': "The e-Series guide's version cell belongs to "
+                                                    'bit 11 (Is 3PE input active, 5.25.0 / '
+                                                    '10.12.0), not to the field, which both guides '
+                                                    "list from the first version. Kept; the bit's "
+                                                    "version is in the field's doc."}]},
                         {'name': 'analog_io_types',
                          'type': 'UINT32',
                          'doc': 'Bits 0-3: analog input 0, analog input 1, analog output 0, analog '
@@ -498,7 +535,14 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                          'type': 'UINT32',
                          'doc': 'Tool mode (one of the joint/tool mode constants)',
                          'enum': 'JointMode',
-                         'sources': ['cb3-guide', 'e-series-guide']},
+                         'sources': ['cb3-guide', 'e-series-guide'],
+                         'conflicts': [{'what': 'description',
+                                        'document': 'Tool mode - Please see Remote Control Via '
+                                                    'TCP/IP - 16496',
+                                        'sources': ['universal-robot-rust-crate-readme'],
+                                        'decision': 'The crate README points to another article; '
+                                                    'the guides say tool mode / one of the tool '
+                                                    'mode constants (JointMode values). Kept.'}]},
                         {'name': 'tool_analog_input_types',
                          'type': 'UINT32',
                          'doc': 'Output domain {0=current[mA], 1=voltage[V]} (bits 0-1: '
@@ -554,62 +598,160 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                          'sources': ['cb3-guide', 'e-series-guide']},
                         {'name': 'output_int_register_{X}',
                          'type': 'INT32',
-                         'doc': 'General purpose integer register {X}',
+                         'doc': 'General purpose integer register {X}: the lower range is reserved '
+                                'for the Fieldbus/PLC interface, the upper range can be used by '
+                                'external RTDE clients (e.g. URCaps)',
                          'index': [0, 47],
                          'ranges': [{'index': [0, 23],
                                      'since': {'cb3': '3.4.0', 'e-series': '5.0.0'},
                                      'reserved': 'Fieldbus/PLC interface'},
                                     {'index': [24, 47],
                                      'since': {'cb3': '3.9.0', 'e-series': '5.3.0'}}],
-                         'sources': ['cb3-guide', 'e-series-guide']},
+                         'sources': ['cb3-guide', 'e-series-guide'],
+                         'conflicts': [{'what': 'availability',
+                                        'document': 'cb3 3.9.0, e-series 5.3.0, polyscope-x 10.0.0',
+                                        'index': [0, 23],
+                                        'sources': ['universal-robot-rust-crate-readme'],
+                                        'decision': 'The crate README gives the whole family the '
+                                                    "upper range's 3.9.0 / 5.3.0 (its comment "
+                                                    'still says [0..23] 3.4.0); the CB3 guide '
+                                                    'gives [0..23] 3.4.0 and the e-Series guide '
+                                                    "dates only [24..47]. Kept the guides' "
+                                                    'versions.'}]},
                         {'name': 'output_double_register_{X}',
                          'type': 'DOUBLE',
-                         'doc': 'General purpose double register {X}',
+                         'doc': 'General purpose double register {X}: the lower range is reserved '
+                                'for the Fieldbus/PLC interface, the upper range can be used by '
+                                'external RTDE clients (e.g. URCaps)',
                          'index': [0, 47],
                          'ranges': [{'index': [0, 23],
                                      'since': {'cb3': '3.4.0', 'e-series': '5.0.0'},
                                      'reserved': 'Fieldbus/PLC interface'},
                                     {'index': [24, 47],
                                      'since': {'cb3': '3.9.0', 'e-series': '5.3.0'}}],
-                         'sources': ['cb3-guide', 'e-series-guide']},
+                         'sources': ['cb3-guide', 'e-series-guide'],
+                         'conflicts': [{'what': 'availability',
+                                        'document': 'cb3 3.9.0, e-series 5.3.0, polyscope-x 10.0.0',
+                                        'index': [0, 23],
+                                        'sources': ['universal-robot-rust-crate-readme'],
+                                        'decision': 'The crate README gives the whole family the '
+                                                    "upper range's 3.9.0 / 5.3.0 (its comment "
+                                                    'still says [0..23] 3.4.0); the CB3 guide '
+                                                    'gives [0..23] 3.4.0 and the e-Series guide '
+                                                    "dates only [24..47]. Kept the guides' "
+                                                    'versions.'}]},
                         {'name': 'input_bit_registers0_to_31',
                          'type': 'UINT32',
                          'doc': 'General purpose input bits 0-31 (input read-back)',
                          'since': {'cb3': '3.4.0', 'e-series': '5.0.0'},
                          'reserved': 'Fieldbus/PLC interface',
-                         'sources': ['cb3-guide', 'e-series-guide']},
+                         'sources': ['cb3-guide', 'e-series-guide'],
+                         'conflicts': [{'what': 'availability',
+                                        'document': 'cb3 3.3.0',
+                                        'sources': ['universal-robot-rust-crate-readme'],
+                                        'decision': "The crate README's first row of this "
+                                                    'read-back field has no version; its second '
+                                                    'row and the CB3 guide give 3.4.0. Kept '
+                                                    '3.4.0.'}]},
                         {'name': 'input_bit_registers32_to_63',
                          'type': 'UINT32',
                          'doc': 'General purpose input bits 32-63 (input read-back)',
                          'since': {'cb3': '3.4.0', 'e-series': '5.0.0'},
                          'reserved': 'Fieldbus/PLC interface',
-                         'sources': ['cb3-guide', 'e-series-guide']},
+                         'sources': ['cb3-guide', 'e-series-guide'],
+                         'conflicts': [{'what': 'availability',
+                                        'document': 'cb3 3.3.0',
+                                        'sources': ['universal-robot-rust-crate-readme'],
+                                        'decision': "The crate README's first row of this "
+                                                    'read-back field has no version; its second '
+                                                    'row and the CB3 guide give 3.4.0. Kept '
+                                                    '3.4.0.'}]},
                         {'name': 'input_bit_register_{X}',
                          'type': 'BOOL',
-                         'doc': 'General purpose input bit register {X} (input read-back)',
+                         'doc': 'General purpose input bit register {X} (input read-back): the '
+                                'upper range of the boolean registers, for external RTDE clients '
+                                '(e.g. URCaps)',
                          'since': {'cb3': '3.9.0', 'e-series': '5.3.0'},
                          'index': [64, 127],
                          'sources': ['cb3-guide', 'e-series-guide']},
                         {'name': 'input_int_register_{X}',
                          'type': 'INT32',
-                         'doc': 'General purpose input integer register {X} (input read-back)',
+                         'doc': 'General purpose input integer register {X} (input read-back): the '
+                                'lower range of the integer input registers is reserved for the '
+                                'Fieldbus/PLC interface, the upper range can be used by external '
+                                'RTDE clients (e.g. URCaps)',
                          'index': [0, 47],
                          'ranges': [{'index': [0, 23],
                                      'since': {'cb3': '3.4.0', 'e-series': '5.0.0'},
                                      'reserved': 'Fieldbus/PLC interface'},
                                     {'index': [24, 47],
                                      'since': {'cb3': '3.9.0', 'e-series': '5.3.0'}}],
-                         'sources': ['cb3-guide', 'e-series-guide']},
+                         'sources': ['cb3-guide', 'e-series-guide'],
+                         'conflicts': [{'what': 'availability',
+                                        'document': 'cb3 3.9.0, e-series 5.3.0, polyscope-x 10.0.0',
+                                        'index': [0, 23],
+                                        'sources': ['universal-robot-rust-crate-readme'],
+                                        'decision': 'The crate README gives the whole family the '
+                                                    "upper range's 3.9.0 / 5.3.0 (its comment "
+                                                    'still says [0..23] 3.4.0); the CB3 guide '
+                                                    'gives [0..23] 3.4.0 and the e-Series guide '
+                                                    "dates only [24..47]. Kept the guides' "
+                                                    'versions.'},
+                                       {'what': 'range',
+                                        'document': '[0, 48]',
+                                        'sources': ['cb3-guide',
+                                                    'universal-robot-rust-crate-readme'],
+                                        'decision': 'The CB3 guide (and the crate README after it) '
+                                                    'name the input read-back family X=[0 .. 48], '
+                                                    'but their own comment says 48 registers, '
+                                                    '[0..23] and [24..47], like the input family '
+                                                    'and the e-Series guide. Kept [0, 47]: a 49th '
+                                                    'register exists nowhere else.'},
+                                       {'what': 'range',
+                                        'document': '[0, 23]',
+                                        'sources': ['universal-robot-rust-crate-readme'],
+                                        'decision': 'The crate README lists the read-back family a '
+                                                    'second time with only [0..23] (3.4.0); the '
+                                                    'guides list [0..47]. Kept [0, 47].'}]},
                         {'name': 'input_double_register_{X}',
                          'type': 'DOUBLE',
-                         'doc': 'General purpose input double register {X} (input read-back)',
+                         'doc': 'General purpose input double register {X} (input read-back): the '
+                                'lower range of the double input registers is reserved for the '
+                                'Fieldbus/PLC interface, the upper range can be used by external '
+                                'RTDE clients (e.g. URCaps)',
                          'index': [0, 47],
                          'ranges': [{'index': [0, 23],
                                      'since': {'cb3': '3.4.0', 'e-series': '5.0.0'},
                                      'reserved': 'Fieldbus/PLC interface'},
                                     {'index': [24, 47],
                                      'since': {'cb3': '3.9.0', 'e-series': '5.3.0'}}],
-                         'sources': ['cb3-guide', 'e-series-guide']},
+                         'sources': ['cb3-guide', 'e-series-guide'],
+                         'conflicts': [{'what': 'availability',
+                                        'document': 'cb3 3.9.0, e-series 5.3.0, polyscope-x 10.0.0',
+                                        'index': [0, 23],
+                                        'sources': ['universal-robot-rust-crate-readme'],
+                                        'decision': 'The crate README gives the whole family the '
+                                                    "upper range's 3.9.0 / 5.3.0 (its comment "
+                                                    'still says [0..23] 3.4.0); the CB3 guide '
+                                                    'gives [0..23] 3.4.0 and the e-Series guide '
+                                                    "dates only [24..47]. Kept the guides' "
+                                                    'versions.'},
+                                       {'what': 'range',
+                                        'document': '[0, 48]',
+                                        'sources': ['cb3-guide',
+                                                    'universal-robot-rust-crate-readme'],
+                                        'decision': 'The CB3 guide (and the crate README after it) '
+                                                    'name the input read-back family X=[0 .. 48], '
+                                                    'but their own comment says 48 registers, '
+                                                    '[0..23] and [24..47], like the input family '
+                                                    'and the e-Series guide. Kept [0, 47]: a 49th '
+                                                    'register exists nowhere else.'},
+                                       {'what': 'range',
+                                        'document': '[0, 23]',
+                                        'sources': ['universal-robot-rust-crate-readme'],
+                                        'decision': 'The crate README lists the read-back family a '
+                                                    'second time with only [0..23] (3.4.0); the '
+                                                    'guides list [0..47]. Kept [0, 47].'}]},
                         {'name': 'tool_output_mode',
                          'type': 'UINT8',
                          'doc': 'The current output mode of the tool digital outputs',
@@ -617,7 +759,21 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                          'since': {'cb3': '3.3.0', 'e-series': '5.2.0'},
                          'doc_ref': 'e-Series version from an earlier edition of the guide '
                                     '(universal-robot crate README)',
-                         'sources': ['cb3-guide', 'e-series-guide']},
+                         'sources': ['cb3-guide', 'e-series-guide'],
+                         'conflicts': [{'what': 'availability',
+                                        'document': 'e-series 5.0.0, polyscope-x 10.0.0',
+                                        'sources': ['e-series-guide'],
+                                        'decision': 'The current e-Series guide leaves the version '
+                                                    'cell empty; the earlier edition the crate '
+                                                    'README copies gives 5.2.0. Kept 5.2.0: a '
+                                                    'recipe checked against 5.2.0 cannot be '
+                                                    'refused NOT_FOUND by an older controller.'},
+                                       {'what': 'availability',
+                                        'document': 'cb3 -, e-series 5.2.0, polyscope-x 10.0.0',
+                                        'sources': ['universal-robot-rust-crate-readme'],
+                                        'decision': 'The crate README gives only the e-Series '
+                                                    'version; the CB3 guide lists the field on CB3 '
+                                                    'with no version (3.3.0). Kept both lines.'}]},
                         {'name': 'tool_digital_output0_mode',
                          'type': 'UINT8',
                          'doc': 'The current mode of tool digital output 0',
@@ -625,7 +781,21 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                          'since': {'cb3': '3.3.0', 'e-series': '5.2.0'},
                          'doc_ref': 'e-Series version from an earlier edition of the guide '
                                     '(universal-robot crate README)',
-                         'sources': ['cb3-guide', 'e-series-guide']},
+                         'sources': ['cb3-guide', 'e-series-guide'],
+                         'conflicts': [{'what': 'availability',
+                                        'document': 'e-series 5.0.0, polyscope-x 10.0.0',
+                                        'sources': ['e-series-guide'],
+                                        'decision': 'The current e-Series guide leaves the version '
+                                                    'cell empty; the earlier edition the crate '
+                                                    'README copies gives 5.2.0. Kept 5.2.0: a '
+                                                    'recipe checked against 5.2.0 cannot be '
+                                                    'refused NOT_FOUND by an older controller.'},
+                                       {'what': 'availability',
+                                        'document': 'cb3 -, e-series 5.2.0, polyscope-x 10.0.0',
+                                        'sources': ['universal-robot-rust-crate-readme'],
+                                        'decision': 'The crate README gives only the e-Series '
+                                                    'version; the CB3 guide lists the field on CB3 '
+                                                    'with no version (3.3.0). Kept both lines.'}]},
                         {'name': 'tool_digital_output1_mode',
                          'type': 'UINT8',
                          'doc': 'The current mode of tool digital output 1',
@@ -633,7 +803,21 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                          'since': {'cb3': '3.3.0', 'e-series': '5.2.0'},
                          'doc_ref': 'e-Series version from an earlier edition of the guide '
                                     '(universal-robot crate README)',
-                         'sources': ['cb3-guide', 'e-series-guide']},
+                         'sources': ['cb3-guide', 'e-series-guide'],
+                         'conflicts': [{'what': 'availability',
+                                        'document': 'e-series 5.0.0, polyscope-x 10.0.0',
+                                        'sources': ['e-series-guide'],
+                                        'decision': 'The current e-Series guide leaves the version '
+                                                    'cell empty; the earlier edition the crate '
+                                                    'README copies gives 5.2.0. Kept 5.2.0: a '
+                                                    'recipe checked against 5.2.0 cannot be '
+                                                    'refused NOT_FOUND by an older controller.'},
+                                       {'what': 'availability',
+                                        'document': 'cb3 -, e-series 5.2.0, polyscope-x 10.0.0',
+                                        'sources': ['universal-robot-rust-crate-readme'],
+                                        'decision': 'The crate README gives only the e-Series '
+                                                    'version; the CB3 guide lists the field on CB3 '
+                                                    'with no version (3.3.0). Kept both lines.'}]},
                         {'name': 'actual_robot_energy_consumed',
                          'type': 'DOUBLE',
                          'doc': 'Robot arm energy consumption since controller startup',
@@ -659,9 +843,15 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                          'sources': ['e-series-guide']},
                         {'name': 'joint_position_deviation_ratio',
                          'type': 'DOUBLE',
-                         'doc': 'How close the robot is to a C153 or C159 joint position deviation '
-                                'protective stop; one is triggered when the value reaches 1.0',
-                         'sources': ['cb3-guide', 'e-series-guide']},
+                         'doc': 'A non-negative value to monitor how close the robot is to '
+                                'triggering a C153 or C159 joint position deviation protective '
+                                'stop; one is triggered when the value is equal to or exceeds 1.0',
+                         'sources': ['cb3-guide', 'e-series-guide'],
+                         'conflicts': [{'what': 'removed',
+                                        'sources': ['universal-robot-rust-crate-readme'],
+                                        'decision': "The crate README's output table stops before "
+                                                    'this row (a partial copy of an earlier '
+                                                    'guide); both UR guides list it. Kept.'}]},
                         {'name': 'collision_detection_ratio',
                          'type': 'DOUBLE',
                          'doc': 'A C157 or C158 protective stop is triggered when the value '
@@ -691,25 +881,46 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                          'type': 'DOUBLE',
                          'doc': 'Payload mass',
                          'unit': 'kg',
-                         'sources': ['cb3-guide', 'e-series-guide']},
+                         'sources': ['cb3-guide', 'e-series-guide'],
+                         'conflicts': [{'what': 'removed',
+                                        'sources': ['universal-robot-rust-crate-readme'],
+                                        'decision': "The crate README's output table stops before "
+                                                    'this row (a partial copy of an earlier '
+                                                    'guide); both UR guides list it. Kept.'}]},
                         {'name': 'payload_cog',
                          'type': 'VECTOR3D',
                          'doc': 'Payload center of gravity (CoGx, CoGy, CoGz)',
                          'unit': 'm',
                          'since': {'cb3': '3.3.0', 'e-series': '5.5.0'},
-                         'sources': ['cb3-guide', 'e-series-guide']},
+                         'sources': ['cb3-guide', 'e-series-guide'],
+                         'conflicts': [{'what': 'removed',
+                                        'sources': ['universal-robot-rust-crate-readme'],
+                                        'decision': "The crate README's output table stops before "
+                                                    'this row (a partial copy of an earlier '
+                                                    'guide); both UR guides list it. Kept.'}]},
                         {'name': 'payload_inertia',
                          'type': 'VECTOR6D',
                          'doc': 'Payload inertia matrix elements (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)',
                          'unit': 'kg·m²',
                          'since': {'cb3': '3.3.0', 'e-series': '5.11.0'},
-                         'sources': ['cb3-guide', 'e-series-guide']},
+                         'sources': ['cb3-guide', 'e-series-guide'],
+                         'conflicts': [{'what': 'removed',
+                                        'sources': ['universal-robot-rust-crate-readme'],
+                                        'decision': "The crate README's output table stops before "
+                                                    'this row (a partial copy of an earlier '
+                                                    'guide); both UR guides list it. Kept.'}]},
                         {'name': 'script_control_line',
                          'type': 'UINT32',
-                         'doc': 'Script line number in control of the robot while a script thread '
-                                'locks it; 0 when no thread does',
+                         'doc': 'Script line number in control of the robot while one of the '
+                                "script's threads has it locked; 0 when no thread is locking the "
+                                'robot. Not the program tree line number PolyScope displays',
                          'since': {'cb3': '3.14.0', 'e-series': '5.9.0'},
-                         'sources': ['cb3-guide', 'e-series-guide']},
+                         'sources': ['cb3-guide', 'e-series-guide'],
+                         'conflicts': [{'what': 'removed',
+                                        'sources': ['universal-robot-rust-crate-readme'],
+                                        'decision': "The crate README's output table stops before "
+                                                    'this row (a partial copy of an earlier '
+                                                    'guide); both UR guides list it. Kept.'}]},
                         {'name': 'time_scale_source',
                          'type': 'INT32',
                          'doc': 'Cause of time scaling',
