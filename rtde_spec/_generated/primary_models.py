@@ -482,7 +482,7 @@ class RobotCommMessage(PrimaryPart):
     robot_message_argument: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='robotMessageArgument: argument of the code')] = None
     robot_message_report_level: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='robotMessageReportLevel (Report Levels) (values: ReportLevel)')] = None
     data_type: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='robotMessageDataType: the type of report_data (0-4 a 32-bit number, 5 a string) (values: ReportDataType)')] = None
-    report_data: Annotated[float | int | str | None, Field(description='robotMessageData: a value of the type data_type names')] = None
+    report_data: Annotated[float | int | str | None, Field(description='robotMessageData: a value of the type data_type names; the last field is a 32-bit number for data types 0-4 or a variable length string for data type 5')] = None
     report_text: Annotated[str | None, Field(description='Text after the report data; not in the document (empty when absent).')] = None
 
 
@@ -575,7 +575,7 @@ class GlobalVariablesSetupMessage(PrimaryPart):
     timestamp: Annotated[Annotated[int, Field(ge=0, le=18446744073709551615)] | None, Field(description='Microseconds since the controller started [µs]')] = None
     robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='robotMessageType: which program state message follows (values: ProgramStateMessageType)')] = 0
     start_index: Annotated[Annotated[int, Field(ge=0, le=65535)] | None, Field(description='startIndex: index of the first name in this message')] = None
-    variable_names: Annotated[list[str] | None, Field(description='variableNames: the names, each ended by a newline')] = None
+    variable_names: Annotated[list[str] | None, Field(description="variableNames: the list of names, each followed by a new line character ('\\n')")] = None
 
 
 class GlobalVariablesUpdateMessage(PrimaryPart):
@@ -592,7 +592,7 @@ class GlobalVariablesUpdateMessage(PrimaryPart):
     timestamp: Annotated[Annotated[int, Field(ge=0, le=18446744073709551615)] | None, Field(description='Microseconds since the controller started [µs]')] = None
     robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='robotMessageType: which program state message follows (values: ProgramStateMessageType)')] = 1
     start_index: Annotated[Annotated[int, Field(ge=0, le=65535)] | None, Field(description='startIndex: index of the first value in this message')] = None
-    variable_values: Annotated[list[VariableValue] | None, Field(description='variableValues: typed values (a type byte, the value), each followed by a newline')] = None
+    variable_values: Annotated[list[VariableValue] | None, Field(description='variableValues: each variable value contains a type byte, its data and a terminating new line character')] = None
 
 
 MEMBERS: dict[tuple[str, int], type[PrimaryPart]] = {

@@ -2243,7 +2243,27 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                     'type': 'bytes',
                                                     'length': 'rest',
                                                     'doc': 'The sub-package body: used by UR '
-                                                           'software only'}]},
+                                                           'software only',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['primary-guide'],
+                                                                   'decision': "The document's "
+                                                                               '`reserved`: kept '
+                                                                               'as the '
+                                                                               "sub-package's "
+                                                                               'bytes (see the '
+                                                                               "member's "
+                                                                               'conflicts).'}]}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'reserved',
+                                                       'document': 'uint32',
+                                                       'sources': ['primary-guide'],
+                                                       'decision': 'The document calls the body '
+                                                                   '`reserved` (used by UR '
+                                                                   'software only); the spec keeps '
+                                                                   'the whole body as `data` '
+                                                                   'bytes, whatever its length, so '
+                                                                   "no firmware's sub-package "
+                                                                   'fails to decode.'}]},
                                        {'name': 'safety_data',
                                         'type': 10,
                                         'doc': 'Internal to UR software; kept as bytes.',
@@ -2251,7 +2271,27 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                     'type': 'bytes',
                                                     'length': 'rest',
                                                     'doc': 'The sub-package body: used by UR '
-                                                           'software only'}]},
+                                                           'software only',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['primary-guide'],
+                                                                   'decision': "The document's "
+                                                                               '`reserved`: kept '
+                                                                               'as the '
+                                                                               "sub-package's "
+                                                                               'bytes (see the '
+                                                                               "member's "
+                                                                               'conflicts).'}]}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'reserved',
+                                                       'document': 'bytes',
+                                                       'sources': ['primary-guide'],
+                                                       'decision': 'The document calls the body '
+                                                                   '`reserved` (used by UR '
+                                                                   'software only); the spec keeps '
+                                                                   'the whole body as `data` '
+                                                                   'bytes, whatever its length, so '
+                                                                   "no firmware's sub-package "
+                                                                   'fails to decode.'}]},
                                        {'name': 'tool_comm_info',
                                         'type': 11,
                                         'fields': [{'name': 'tool_communication_is_enabled',
@@ -2314,7 +2354,27 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                     'type': 'bytes',
                                                     'length': 'rest',
                                                     'doc': 'The sub-package body: used by UR '
-                                                           'software only'}]},
+                                                           'software only',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['primary-guide'],
+                                                                   'decision': "The document's "
+                                                                               '`reserved`: kept '
+                                                                               'as the '
+                                                                               "sub-package's "
+                                                                               'bytes (see the '
+                                                                               "member's "
+                                                                               'conflicts).'}]}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'reserved',
+                                                       'document': 'bytes',
+                                                       'sources': ['primary-guide'],
+                                                       'decision': 'The document calls the body '
+                                                                   '`reserved` (used by UR '
+                                                                   'software only); the spec keeps '
+                                                                   'the whole body as `data` '
+                                                                   'bytes, whatever its length, so '
+                                                                   "no firmware's sub-package "
+                                                                   'fails to decode.'}]},
                                        {'name': 'internal_data',
                                         'type': 15,
                                         'doc': 'Internal to UR software; kept as bytes.',
@@ -2322,7 +2382,27 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                     'type': 'bytes',
                                                     'length': 'rest',
                                                     'doc': 'The sub-package body: used by UR '
-                                                           'software only'}]},
+                                                           'software only',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['primary-guide'],
+                                                                   'decision': "The document's "
+                                                                               '`reserved`: kept '
+                                                                               'as the '
+                                                                               "sub-package's "
+                                                                               'bytes (see the '
+                                                                               "member's "
+                                                                               'conflicts).'}]}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'reserved',
+                                                       'document': 'bytes',
+                                                       'sources': ['primary-guide'],
+                                                       'decision': 'The document calls the body '
+                                                                   '`reserved` (used by UR '
+                                                                   'software only); the spec keeps '
+                                                                   'the whole body as `data` '
+                                                                   'bytes, whatever its length, so '
+                                                                   "no firmware's sub-package "
+                                                                   'fails to decode.'}]},
                                        {'name': 'cumulative_runtime_data',
                                         'type': 16,
                                         'doc': 'Sent once per second.',
@@ -2469,7 +2549,10 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                               '5': {'type': 'string',
                                                                     'length': 'uint16'}},
                                                     'doc': 'robotMessageData: a value of the type '
-                                                           'data_type names'},
+                                                           'data_type names; the last field is a '
+                                                           '32-bit number for data types 0-4 or a '
+                                                           'variable length string for data type '
+                                                           '5'},
                                                    {'name': 'report_text',
                                                     'type': 'string',
                                                     'length': 'rest',
@@ -2486,7 +2569,16 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                              'decode without error and re-encode '
                                                              'to the same bytes.',
                                                     'doc': 'Text after the report data; not in the '
-                                                           'document (empty when absent).'}]},
+                                                           'document (empty when absent).',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['primary-guide'],
+                                                                   'decision': 'Not in the '
+                                                                               "document; UR's C++ "
+                                                                               'client library '
+                                                                               'reads a text after '
+                                                                               'the report data '
+                                                                               '(see peers). '
+                                                                               'Kept.'}]}]},
                                        {'name': 'key_message',
                                         'type': 7,
                                         'doc': 'Primary interface only.',
@@ -2625,8 +2717,9 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                              'reads the rest of the message as the '
                                                              'names. Agreed.',
                                                     'format': 'lines',
-                                                    'doc': 'variableNames: the names, each ended '
-                                                           'by a newline'}]},
+                                                    'doc': 'variableNames: the list of names, each '
+                                                           'followed by a new line character '
+                                                           "('\\n')"}]},
                                        {'name': 'global_variables_update_message',
                                         'type': 1,
                                         'doc': "Values in the order of the setup message's names, "
@@ -2637,9 +2730,9 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                            'in this message'},
                                                    {'name': 'variable_values',
                                                     'type': 'variable_values',
-                                                    'doc': 'variableValues: typed values (a type '
-                                                           'byte, the value), each followed by a '
-                                                           'newline'}]}]},
+                                                    'doc': 'variableValues: each variable value '
+                                                           'contains a type byte, its data and a '
+                                                           'terminating new line character'}]}]},
                           {'name': 'modbus_info_message',
                            'type': 5,
                            'layout': 'opaque',

@@ -68,6 +68,16 @@ def _field(entry: FieldSpec, spec: Spec, loc: Loc) -> Found:
         elif prim and not integer:
             yield (*loc, "bits"), f"bitfield {entry.bits!r} on non-integer type {entry.type}"
     yield from _since(entry.since, spec, (*loc, "since"))
+    for i, conflict in enumerate(entry.conflicts):
+        cloc: Loc = (*loc, "conflicts", i)
+        if conflict.field is not None:
+            yield (*cloc, "field"), "field names a message's field; an RTDE field's conflicts are its own"
+        if conflict.index is None:
+            continue
+        if entry.index is None:
+            yield (*cloc, "index"), "an index range applies to register families only"
+        elif not (entry.index[0] <= conflict.index[0] <= conflict.index[1] <= entry.index[1]):
+            yield (*cloc, "index"), f"range {list(conflict.index)} is outside the index {list(entry.index)}"
     has_placeholder = "{X}" in entry.name
     if entry.index is None:
         if has_placeholder:

@@ -123,6 +123,7 @@ class Conflict(StrictModel):
     """
 
     what: DiffWhat
+    field: str | None = None  # on a message: the document's name of the field it adds
     document: str | None = None
     index: IndexRange | None = None
     sources: Annotated[list[Source], Field(min_length=1)]

@@ -57,6 +57,8 @@ def matches(conflict: Conflict, change: Change) -> bool:
     """Whether a recorded conflict covers exactly this difference."""
     if conflict.what != change.what:
         return False
+    if conflict.field is not None and conflict.field != change.field:
+        return False
     if conflict.index is not None and tuple(conflict.index) != change.index:
         return False
     return conflict.document is None or conflict.document == change.document_value
