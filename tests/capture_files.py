@@ -85,3 +85,75 @@ def write(path: Path, conversations: list[Conversation], fmt: str = "pcap") -> P
         for ts, frame in frames:
             writer.writepkt(frame, ts=ts)
     return path
+
+
+# --- RTDE sessions with losses, for the fault tests and benchmarks/faults_capture.py ---
+
+SMALL = ("timestamp", "actual_q", "robot_mode")  # a 64-byte data package
+INPUTS = ("input_int_register_24", "speed_slider_fraction")
+
+
+def rtde_setup(conv: Conversation, names: tuple[str, ...] = SMALL, recipe_id: int = 1) -> None:
+    """Handshake, version, output and input setup, start: what a recorder sends first."""
+    from rtde_spec import Catalogue, build
+
+    cat = Catalogue.builtin()
+    types = [cat.get(n, "output").type for n in names]  # type: ignore[union-attr]
+    conv.handshake()
+    conv.send("client", build("request_protocol_version", protocol_version=2))
+    conv.send("server", build("request_protocol_version_reply", accepted=True))
+    conv.send("client", build("setup_outputs_v2", output_frequency=500.0, variable_names=list(names)))
+    conv.send("server", build("setup_outputs_v2_reply", output_recipe_id=recipe_id, variable_types=types))
+    conv.send("client", build("start"))
+    conv.send("server", build("start_reply", accepted=True))
+
+
+def rtde_packages(count: int, names: tuple[str, ...] = SMALL, recipe_id: int = 1) -> list[bytes]:
+    """`count` data packages; `timestamp` is the package's index times 2 ms, floats i + 0.5,
+    integers i % 100 (vectors repeat the value)."""
+    from rtde_spec import Catalogue, RecipeCodec
+
+    codec = RecipeCodec.for_names(list(names), "output", Catalogue.builtin())
+    out = []
+    for i in range(count):
+        values: dict[str, object] = {}
+        for item in codec.items:
+            one: object = (i + 0.5) if item.wire.kind == "float" else (i % 100)
+            values[item.name] = tuple([one] * item.wire.count) if item.wire.count > 1 else one
+        values["timestamp"] = i * 0.002
+        out.append(codec.encode_package(values, recipe_id=recipe_id))
+    return out
+
+
+def rtde_capture(
+    path: Path,
+    packages: list[bytes],
+    *,
+    lost: set[int] = frozenset(),  # type: ignore[assignment]
+    segment: int | None = None,
+    names: tuple[str, ...] = SMALL,
+    fmt: str = "pcap",
+) -> Path:
+    """An RTDE session: setup, then `packages` from the controller, one per segment or cut
+    into `segment`-byte segments; the segments numbered in `lost` are left out."""
+    conv = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30004))
+    rtde_setup(conv, names)
+    if segment is None:
+        pieces = packages
+    else:
+        stream = b"".join(packages)
+        pieces = [stream[i : i + segment] for i in range(0, len(stream), segment)]
+    for n, piece in enumerate(pieces):
+        conv.send("server", piece, keep=n not in lost)
+    return write(path, [conv], fmt)
+
+
+def packages_touched(packages: list[bytes], segment: int, lost: set[int]) -> set[int]:
+    """Indexes of the packages that share a byte with a lost `segment`-byte segment."""
+    touched, start = set(), 0
+    for i, package in enumerate(packages):
+        end = start + len(package)
+        if any(start < (s + 1) * segment and s * segment < end for s in lost):
+            touched.add(i)
+        start = end
+    return touched

@@ -1,10 +1,11 @@
-"""One TCP connection of a capture: its protocol, its two directions, and its decoded packages.
+"""Records: the packages of one TCP connection of a capture, decoded into rows for the sink.
 
 RTDE connections keep the session state (protocol version, recipes from the setup
 exchange) through `SessionDecoder`; data packages of a known recipe are batched and
-decoded together. After a gap the stream is searched for the next package boundary
-that two consecutive headers confirm. Primary/secondary connections decode the
-controller's messages; what the client sends is URScript.
+decoded together. Each direction's bytes are cut into packages by `framing.Framing`;
+what a connection adds to it is its protocol's check of a resynchronisation candidate
+(a known recipe's id and size; sub-packages that fill their message). Primary/secondary
+connections decode the controller's messages; what the client sends is URScript.
 """
 
 from __future__ import annotations
@@ -14,8 +15,6 @@ import struct
 from dataclasses import dataclass, field
 from typing import Any
 
-from pydantic import BaseModel
-
 from rtde_spec._generated import rtde_models as gen
 from rtde_spec._generated.constants import (
     DATA_PACKAGE_PREFIX_OFFSETS,
@@ -24,6 +23,8 @@ from rtde_spec._generated.constants import (
     RTDE_HEADER_FORMAT,
     RTDE_LIMITS,
 )
+from rtde_spec.capture.framing import NO, STRONG, WEAK, Check, Framing
+from rtde_spec.capture.rows import flatten_part, text_columns, wide_values
 from rtde_spec.capture.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
 from rtde_spec.errors import RtdeSpecError
@@ -36,8 +37,8 @@ from rtde_spec.spec.catalogue import Catalogue
 
 BATCH = 4096
 RTDE_HEADER = struct.calcsize(RTDE_HEADER_FORMAT)
-_SIZE_AT, _TYPE_AT, RECIPE_ID_AT = DATA_PACKAGE_PREFIX_OFFSETS
-RTDE_SIZE_BYTES = _TYPE_AT - _SIZE_AT  # the size field leads the header
+_SIZE_AT, TYPE_AT, RECIPE_ID_AT = DATA_PACKAGE_PREFIX_OFFSETS
+RTDE_SIZE_BYTES = TYPE_AT - _SIZE_AT  # the size field leads the header
 
 
 @dataclass
@@ -45,65 +46,6 @@ class Counts:
     packages: int = 0
     errors: list[str] = field(default_factory=list)
     unknown_recipe_sizes: dict[int, int] = field(default_factory=dict)  # data package size -> count
-
-
-class Framing:
-    """Cut one direction's bytes into packages; after a gap, find a boundary two headers confirm."""
-
-    def __init__(self, size_bytes: int, header: int, types: set[int], max_size: int) -> None:
-        self.size_bytes, self.header, self.types, self.max_size = size_bytes, header, types, max_size
-        self.buf = bytearray()
-        self.synced = True
-
-    def plausible(self, at: int) -> int | None:
-        buf = self.buf
-        if len(buf) - at < self.header:
-            return None
-        size = int.from_bytes(buf[at : at + self.size_bytes], "big")
-        if size < self.header or size > self.max_size or buf[at + self.size_bytes] not in self.types:
-            return None
-        return size
-
-    def feed(self, chunk: Chunk) -> list[bytes]:
-        if chunk.gap_before:
-            self.buf.clear()
-            self.synced = False
-        self.buf += chunk.data
-        if not self.synced and not self._resync():
-            return []
-        out: list[bytes] = []
-        pos = 0
-        buf = self.buf
-        while len(buf) - pos >= self.header:
-            size = self.plausible(pos)
-            if size is None:  # not a header where one must be: treat as lost sync
-                del buf[:pos]
-                self.synced = False
-                if not self._resync():
-                    return out
-                pos = 0
-                continue
-            if len(buf) - pos < size:
-                break
-            out.append(bytes(buf[pos : pos + size]))
-            pos += size
-        del buf[:pos]
-        return out
-
-    def _resync(self) -> bool:
-        for at in range(len(self.buf) - self.header + 1):
-            size = self.plausible(at)
-            if size is None:
-                continue
-            following = at + size
-            if following == len(self.buf) or self.plausible(following) is not None:
-                del self.buf[:at]
-                self.synced = True
-                return True
-        keep = self.header - 1
-        if len(self.buf) > keep:
-            del self.buf[: len(self.buf) - keep]
-        return False
 
 
 class RtdeConnection:
@@ -115,20 +57,52 @@ class RtdeConnection:
         types = set(gen.PACKAGE_TYPES)
         limit = RTDE_LIMITS["package_max_bytes"]
         self.framing = {
-            s: Framing(RTDE_SIZE_BYTES, RTDE_HEADER, types, limit) for s in ("controller", "client")
+            s: Framing(RTDE_SIZE_BYTES, RTDE_HEADER, types, limit, self._check(s)) for s in RTDE_DIRECTIONS
         }
         self.counts = Counts()
+        self.last_time = 0.0
         self.batches: dict[tuple[str, int], tuple[RecipeCodec, Any, Any]] = {}  # packages: bytes list or rows
 
     def feed(self, sender: str, chunk: Chunk) -> None:
-        for package in self.framing[sender].feed(chunk):
+        self.last_time = chunk.time
+        self._packages(sender, self.framing[sender].feed(chunk), chunk.time)
+
+    def _packages(self, sender: str, packages: list[bytes], time: float) -> None:
+        for package in packages:
             self.counts.packages += 1
-            if package[2] == DATA_PACKAGE_TYPE and len(package) > 3:
+            if package[TYPE_AT] == DATA_PACKAGE_TYPE and len(package) > RECIPE_ID_AT:
                 codec = self._codec(sender, package)
                 if codec is not None:
-                    self._batch(sender, package[3], codec, package, chunk.time)
+                    self._batch(sender, package[RECIPE_ID_AT], codec, package, time)
                     continue
-            self._control(sender, package, chunk.time)
+            self._control(sender, package, time)
+
+    def _check(self, sender: str) -> Check:
+        """A resynchronisation candidate that is a data package must be of a recipe this direction
+        has (its id and size): then it is surely one; of no recipe it has, surely not."""
+        direction = RTDE_DIRECTIONS[sender]
+
+        def check(buf: bytearray, at: int, size: int) -> int:
+            if buf[at + TYPE_AT] != DATA_PACKAGE_TYPE:
+                return WEAK
+            if size <= RECIPE_ID_AT:
+                return NO
+            codec = self.session.recipes.get((direction, buf[at + RECIPE_ID_AT]))
+            if codec is None and direction == "output":
+                codec = self.given
+            if codec is not None:
+                return STRONG if codec.package_size == size else NO
+            return NO if any(d == direction for d, _ in self.session.recipes) else WEAK
+
+        return check
+
+    def framings(self) -> dict[str, Framing]:
+        return self.framing
+
+    def finish(self) -> None:
+        """The end of the capture: packages held back for confirmation are decoded."""
+        for sender, framing in self.framing.items():
+            self._packages(sender, framing.finish(), self.last_time)
 
     def run_codec(self, sender: str, package: bytes) -> RecipeCodec | None:
         """The codec for a run of whole data packages like `package`, one per segment, from here on.
@@ -206,7 +180,9 @@ class RtdeConnection:
                 direction = RTDE_DIRECTIONS[sender]
                 names = tuple(decoded.values)
                 table = self.sink.table_for_recipe(direction, names)
-                self.sink.row(table, self.robot, day_of(time), {**base, **decoded.values})
+                codec = self.session.recipes.get((direction, package[RECIPE_ID_AT]))
+                values = wide_values(decoded.values, codec)
+                self.sink.row(table, self.robot, day_of(time), {**base, **values})
             elif self.given is None or RTDE_DIRECTIONS[sender] != "output":
                 sizes = self.counts.unknown_recipe_sizes
                 sizes[len(package)] = sizes.get(len(package), 0) + 1
@@ -228,22 +204,34 @@ class PrimaryConnection:
         self.codec = default_codec()
         families = {f.spec.type for f in self.codec.families.values()}
         codec = self.codec
-        self.framing = Framing(codec.size_bytes, codec.header.size, families, codec.max_size)
+        self.framing = Framing(codec.size_bytes, codec.header.size, families, codec.max_size, _tiled(codec))
         self.counts = Counts()
+        self.last_time = 0.0
 
     def feed(self, sender: str, chunk: Chunk) -> None:
         base = {"connection": self.name, "capture_time": chunk.time}
         day = day_of(chunk.time)
         if sender == "client":  # URScript (or anything else a client sends)
-            text = chunk.data.decode("utf-8", "replace")
-            self.sink.row("primary_scripts", self.robot, day, {**base, "script": text})
+            self.sink.row("primary_scripts", self.robot, day, {**base, **text_columns("script", chunk.data)})
             return
-        for raw in self.framing.feed(chunk):
+        self.last_time = chunk.time
+        self._messages(self.framing.feed(chunk), chunk.time)
+
+    def framings(self) -> dict[str, Framing]:
+        return {"controller": self.framing}
+
+    def finish(self) -> None:
+        self._messages(self.framing.finish(), self.last_time)
+
+    def _messages(self, raws: list[bytes], time: float) -> None:
+        base = {"connection": self.name, "capture_time": time}
+        day = day_of(time)
+        for raw in raws:
             self.counts.packages += 1
             try:
                 message = self.codec.decode_message(raw)
             except RtdeSpecError as exc:
-                self.counts.errors.append(f"message at {chunk.time:.6f}: {exc}")
+                self.counts.errors.append(f"message at {time:.6f}: {exc}")
                 continue
             parts = message.sub_packages if isinstance(message, RobotStateMessage) else [message]
             for part in parts:
@@ -259,24 +247,21 @@ class PrimaryConnection:
         pass
 
 
-def flatten_part(part: PrimaryPart) -> dict[str, Any]:
-    """A sub-package or message as one flat row: groups and vectors spread into numbered columns."""
-    out: dict[str, Any] = {}
+def _tiled(codec: Any) -> Check:
+    """A candidate message of a family made of sub-packages is surely one when their sizes fill it."""
+    tiled = {t for t, f in codec.families.items() if f.spec.layout == "subpackages"}
+    at_type, head, sub = codec.size_bytes, codec.header.size, codec.sub_header
 
-    def put(prefix: str, value: Any) -> None:
-        if isinstance(value, BaseModel):
-            for key in type(value).model_fields:
-                put(f"{prefix}_{key}", getattr(value, key))
-        elif isinstance(value, (list, tuple)) and value and not isinstance(value[0], (str, dict)):
-            for i, item in enumerate(value):
-                put(f"{prefix}_{i}", item)
-        elif isinstance(value, (list, tuple, dict)):
-            out[prefix] = json.dumps(plain(value))
-        elif isinstance(value, (bytes, bytearray)):
-            out[prefix] = bytes(value).hex()
-        else:
-            out[prefix] = value
+    def check(buf: bytearray, at: int, size: int) -> int:
+        end = at + size
+        if buf[at + at_type] not in tiled or end > len(buf):
+            return WEAK
+        pos = at + head
+        while end - pos >= sub.size:
+            step = sub.unpack_from(buf, pos)[0]
+            if step < sub.size:
+                return WEAK
+            pos += step
+        return STRONG if pos == end else WEAK
 
-    for key, value in part.values().items():
-        put(key, value)
-    return out
+    return check

@@ -1,8 +1,10 @@
-"""Decode capture files: segments -> per-connection reassembly -> sessions -> tables.
+"""Decode capture files, one way through: packets -> TCP streams -> framing -> records -> sink.
 
-Connections are recognised by port (configurable) and, on other ports, by content
-(an RTDE version request from the client). Every decoded package carries the
-capture time of the segment that completed it.
+This module drives the layers (`packets`, `tcp`, `framing` inside `connections`, `sink`);
+none of them calls back up. Connections are recognised by port (configurable) and, on
+other ports, by content (an RTDE version request from the client). Every decoded
+package carries the capture time of the segment that completed it. At the end every
+hole still open in a TCP stream is declared lost and everything after it decoded.
 """
 
 from __future__ import annotations
@@ -16,7 +18,8 @@ from rtde_spec._generated.constants import DATA_PACKAGE_TYPE, PRIMARY_PORTS, RTD
 from rtde_spec.capture.bulk import SIZE_AT, SIZE_BYTES, TYPE_AT
 from rtde_spec.capture.connections import RTDE_HEADER, PrimaryConnection, RtdeConnection
 from rtde_spec.capture.packets import FIN, RST, SYN, Segment, expand, items
-from rtde_spec.capture.sink import ArrowSink, DirectorySink, TableSink
+from rtde_spec.capture.sink import ArrowSink, DirectorySink, TableSink, output_stem
+from rtde_spec.capture.summary import CaptureSummary, ConnectionSummary
 from rtde_spec.capture.tcp import MOD, Direction
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
 from rtde_spec.rtde.codec import build
@@ -26,40 +29,6 @@ from rtde_spec.spec.catalogue import Catalogue
 RTDE_VERSION_REQUEST = build("request_protocol_version", protocol_version=2)[:RTDE_HEADER]
 RUN_HEAD = PAYLOAD_OFFSET  # size, type, recipe id: the bytes every data package of one run shares
 RUN_MIN, RUN_MAX = 16, 4096  # shorter runs go segment by segment; longer ones are cut
-
-
-@dataclass
-class ConnectionSummary:
-    name: str
-    kind: str
-    packages: int
-    gaps: int
-    lost_bytes: int
-    errors: list[str]
-    unknown_recipe_sizes: dict[int, int]
-
-
-@dataclass
-class CaptureSummary:
-    file: str
-    frames: int = 0
-    connections: list[ConnectionSummary] = field(default_factory=list)
-    tables: dict[str, int] = field(default_factory=dict)
-    paths: list[str] = field(default_factory=list)
-
-    def problems(self) -> list[str]:
-        out = []
-        for c in self.connections:
-            out += [f"{c.name}: {e}" for e in c.errors]
-            if c.unknown_recipe_sizes:
-                sizes = ", ".join(
-                    f"{n} of {size} bytes" for size, n in sorted(c.unknown_recipe_sizes.items())
-                )
-                out.append(
-                    f"{c.name}: data packages without a recipe ({sizes}); the capture starts after the "
-                    "setup exchange: give the recipe with --recipe FILE"
-                )
-        return out
 
 
 @dataclass
@@ -157,22 +126,31 @@ def decode_capture(
         run.flush()
     live = [f for f in flows.values() if f is not None]
     for flow in live:
-        for sender, direction in flow.directions.items():
-            for chunk in direction.skip_gap():  # whatever still waits behind a hole at the end
-                flow.decoder.feed(sender, chunk)
-            leftover = len(flow.decoder.framing[sender].buf) if flow.kind == "rtde" else 0
-            if leftover:
-                flow.decoder.counts.errors.append(
-                    f"the capture ends inside a {sender} package ({leftover} bytes)"
-                )
-        flow.decoder.close()
+        _finish(flow)
     return _summary(path, stats, live)
 
 
+def _finish(flow: _Flow) -> None:
+    """The end of the capture: every hole still open is lost; what follows it is decoded."""
+    decoder = flow.decoder
+    for sender, direction in flow.directions.items():
+        for chunk in direction.drain():
+            decoder.feed(sender, chunk)
+    decoder.finish()
+    for sender, framing in decoder.framings().items():
+        if framing.buf:
+            framing.cut += 1
+            decoder.counts.errors.append(
+                f"the capture ends inside a {sender} package ({len(framing.buf)} bytes of it)"
+            )
+    decoder.close()
+
+
 def _summary(path: str | Path, stats: dict[str, int], flows: list[_Flow]) -> CaptureSummary:
-    summary = CaptureSummary(str(path), stats.get("frames", 0))
+    summary = CaptureSummary(str(path), stats.get("frames", 0), reading=dict(stats))
     for flow in flows:
         counts = flow.decoder.counts
+        framings = flow.decoder.framings().values()
         summary.connections.append(
             ConnectionSummary(
                 flow.decoder.name,
@@ -182,6 +160,9 @@ def _summary(path: str | Path, stats: dict[str, int], flows: list[_Flow]) -> Cap
                 sum(d.lost_bytes for d in flow.directions.values()),
                 counts.errors,
                 counts.unknown_recipe_sizes,
+                skipped_bytes=sum(f.skipped for f in framings),
+                cut_packages=sum(f.cut for f in framings),
+                lead_in_bytes=sum(f.lead_in for f in framings),
             )
         )
     return summary
@@ -300,7 +281,7 @@ def decode_to_directory(
 ) -> CaptureSummary:
     """One file into OUTDIR (the unit of work of parallel and Dask runs; picklable arguments)."""
     codec = RecipeCodec.for_names(recipe_names, "output") if recipe_names else None
-    sink = DirectorySink(outdir, fmt, Path(path).stem)
+    sink = DirectorySink(outdir, fmt, output_stem(path))
     try:
         summary = decode_capture(path, sink, recipe=codec, **kw)
     except CaptureInterrupted as stop:

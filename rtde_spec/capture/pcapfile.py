@@ -28,6 +28,7 @@ from typing import IO, Any
 from rtde_spec.errors import UsageError
 
 BLOCK = 8 << 20
+LATEST_TIME = float(1 << 33)  # seconds: the year 2242; a later (or negative) capture time is damage
 MADV_POPULATE_READ = getattr(mmap, "MADV_POPULATE_READ", 22)  # Linux's value; Python 3.11 lacks the name
 PCAPNG_SHB = 0x0A0D0D0A  # the same bytes in either byte order
 PCAPNG_BYTE_ORDER = 0x1A2B3C4D
@@ -59,19 +60,23 @@ class _Columns:
 
     def __init__(self) -> None:
         self.pieces: list[tuple[Any, Any, Any, Any]] = []
+        self.stop: int | None = None  # a block that cannot be one: its length (reading stops before it)
 
     def add(self, offsets: Any, lengths: Any, times: Any, link: int) -> None:
         import numpy as np
 
         self.pieces.append((offsets, lengths, times, np.full(len(offsets), link, dtype=np.int64)))
 
-    def records(self, buf: bytes | mmap.mmap, upto: int) -> Records | None:
+    def records(self, buf: bytes | mmap.mmap, upto: int, stats: dict[str, int]) -> Records | None:
         import numpy as np
 
         if not self.pieces:
             return None
         columns = (np.concatenate(column) for column in zip(*self.pieces, strict=True))
         offsets, lengths, times, links = columns
+        bad = np.count_nonzero(~((times >= 0) & (times < LATEST_TIME)))  # NaN is not < either
+        if bad:
+            stats["bad_times"] = stats.get("bad_times", 0) + int(bad)
         return Records(
             buf, upto, offsets.astype(np.int64), lengths.astype(np.int64), times.astype(np.float64), links
         )
@@ -106,17 +111,18 @@ def frames(f: IO[bytes], name: str, stats: dict[str, int]) -> Iterator[Frame]:
 
 
 Parse = Callable[[Any, int, int, _Columns], int]
+Claim = Callable[[Any, int], int]  # the length the record header at a position claims (0: no header)
 
 
 def _by_block(
-    f: IO[bytes], carry: bytes, start: int, stats: dict[str, int], parse: Parse
+    f: IO[bytes], carry: bytes, start: int, stats: dict[str, int], parse: Parse, claim: Claim
 ) -> Iterator[Records]:
     """The file a block at a time; `parse(buf, start, end, found)` finds the whole records in
     buf[start:end] and says where they end; the rest goes into the next block (or is
     counted as cut off at the end). `carry`: bytes already read, from file position `start`."""
     mapped = _mapped(f)
     if mapped is None:
-        yield from _read_blocks(f, carry, start, stats, parse)
+        yield from _read_blocks(f, carry, start, stats, parse, claim)
         return
     pos, size, window = start, len(mapped), BLOCK
     page = mmap.ALLOCATIONGRANULARITY
@@ -130,9 +136,12 @@ def _by_block(
         _populate(mapped, pos // page * page, end)
         found = _Columns()
         reached = parse(mapped, pos, end, found)
-        records = found.records(mapped, reached)
+        records = found.records(mapped, reached, stats)
         if records is not None:
             yield records
+        if found.stop is not None:
+            _stopped(stats, reached, size - reached, bad_block=found.stop)
+            return
         if reached == pos:  # no whole record in the window
             if end == size:
                 break
@@ -142,7 +151,21 @@ def _by_block(
             mapped.madvise(mmap.MADV_DONTNEED, pos // page * page, (reached // page - pos // page) * page)
         pos, window = reached, BLOCK
     if pos < size:
+        _stopped(stats, pos, size - pos, claimed=claim(mapped, pos))
+
+
+def _stopped(
+    stats: dict[str, int], at: int, unread: int, *, claimed: int = 0, bad_block: int | None = None
+) -> None:
+    """Reading ended `unread` bytes before the end of the file, at byte `at`."""
+    stats["stopped_at"] = at
+    stats["unread_bytes"] = unread
+    if bad_block is not None:
+        stats["bad_blocks"] = 1
+        stats["bad_block_length"] = bad_block
+    else:
         stats["truncated"] = stats.get("truncated", 0) + 1
+        stats["claimed"] = claimed
 
 
 def _populate(mapped: mmap.mmap, start: int, end: int) -> None:
@@ -167,27 +190,43 @@ def _mapped(f: IO[bytes]) -> mmap.mmap | None:
 
 
 def _read_blocks(
-    f: IO[bytes], carry: bytes, start: int, stats: dict[str, int], parse: Parse
+    f: IO[bytes], carry: bytes, start: int, stats: dict[str, int], parse: Parse, claim: Claim
 ) -> Iterator[Records]:
     """`_by_block` for what cannot be mapped: read, and carry a cut-off record over.
 
     `read1` takes what a pipe has (up to a block) rather than waiting for a whole block,
-    so a live capture piped in is decoded as it comes.
+    so a live capture piped in is decoded as it comes. A record larger than what is
+    held is waited for by doubling what is read before trying again, so a record
+    claiming gigabytes costs reading the input once, not once per block.
     """
     read = getattr(f, "read1", f.read)
+    want = 0  # bytes to hold before parsing again (a large record is still coming)
     while True:
-        chunk = read(BLOCK)
-        buf = carry + chunk if carry else chunk
+        pieces = [carry] if carry else []
+        held = len(carry)
+        chunk = b""
+        while True:
+            chunk = read(BLOCK)
+            if chunk:
+                pieces.append(chunk)
+                held += len(chunk)
+            if not chunk or held >= want:
+                break
+        buf = b"".join(pieces) if len(pieces) != 1 else pieces[0]
         found = _Columns()
         pos = parse(buf, 0, len(buf), found)
-        start += pos
-        records = found.records(buf, start)
+        records = found.records(buf, start + pos, stats)
         if records is not None:
             yield records
+        if found.stop is not None:
+            _stopped(stats, start + pos, len(buf) - pos, bad_block=found.stop)  # of a pipe: what was read
+            return
+        start += pos
         carry = buf[pos:]
+        want = 2 * len(carry) if pos == 0 and len(carry) >= BLOCK else 0
         if not chunk:
             if carry:
-                stats["truncated"] = stats.get("truncated", 0) + 1
+                _stopped(stats, start, len(carry), claimed=claim(carry, 0))
             return
 
 
@@ -214,7 +253,10 @@ def _pcap(f: IO[bytes], order: str, unit: float, name: str, stats: dict[str, int
             pos += same * stride
         return pos
 
-    yield from _by_block(f, b"", 24, stats, parse)  # after the file header
+    def claim(buf: Any, pos: int) -> int:
+        return int(size_at(buf, pos + 8)[0]) + 16 if len(buf) - pos >= 16 else 0
+
+    yield from _by_block(f, b"", 24, stats, parse, claim)  # after the file header
 
 
 def _strided(buf: Any, start: int, stride: int, count: int, dtype: Any) -> Any:
@@ -246,8 +288,9 @@ def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int]) -> Ite
                 order = "<" if magic == PCAPNG_BYTE_ORDER else ">"
                 interfaces = []
             btype, length = struct.unpack_from(order + "II", buf, pos)
-            if length < 12 or length % 4:
-                raise UsageError(f"pcapng block of length {length} inside the file", subject=f"file {name}")
+            if length < 12 or length % 4:  # no block: the file is damaged from here on
+                found.stop = length
+                return pos
             if pos + length > end:
                 break
             if btype == EPB and length >= 32:
@@ -267,12 +310,15 @@ def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int]) -> Ite
                 interfaces.append((linktype, _resolution(buf[pos + 16 : pos + length - 4], order)))
             elif btype == SPB and interfaces:  # no time, interface 0, cut at the snap length
                 (origlen,) = struct.unpack_from(order + "I", buf, pos + 8)
-                size = min(origlen, length - 16)
+                size = max(0, min(origlen, length - 16))
                 found.add(np.array([pos + 12]), np.array([size]), np.array([0.0]), interfaces[0][0])
             pos += length
         return pos
 
-    yield from _by_block(f, first, 0, stats, parse)
+    def claim(buf: Any, pos: int) -> int:
+        return int(struct.unpack_from(order + "I", buf, pos + 4)[0]) if len(buf) - pos >= 8 else 0
+
+    yield from _by_block(f, first, 0, stats, parse, claim)
 
 
 def _resolution(options: bytes, order: str) -> float:

@@ -1,12 +1,18 @@
-"""Where decoded capture tables go: a hive-partitioned directory of files, or Arrow tables in memory.
+"""The sink, the last layer of a capture: a hive-partitioned directory of files, or Arrow tables.
 
-Files are laid out as OUTDIR/<table>/robot=<controller address>/date=<YYYY-MM-DD>/<capture>.<ext>,
-a dataset DuckDB, Polars and Spark read directly with hive partitioning.
+Files are laid out as OUTDIR/<table>/robot=<controller address>/date=<YYYY-MM-DD>/<stem>.<ext>,
+a dataset DuckDB, Polars and Spark read directly with hive partitioning. The stem names
+the input and is unique to it (`output_stem`), so captures of the same name from different
+folders never overwrite each other, and a re-run replaces its own outputs only. Every file
+appears complete: the writers write beside the name and rename into place at close.
 """
 
 from __future__ import annotations
 
+import hashlib
 import json
+import os
+import stat
 import time
 from collections.abc import Mapping
 from pathlib import Path
@@ -19,8 +25,32 @@ from rtde_spec.output.writers import open_writer
 EXTENSIONS = {"parquet": "parquet", "csv": "csv", "jsonl": "jsonl"}
 
 
+UNKNOWN_DAY = "unknown"  # the partition of rows whose capture time is no date (a damaged record)
+
+
 def day_of(capture_time: float) -> str:
-    return time.strftime("%Y-%m-%d", time.gmtime(capture_time))
+    try:
+        return time.strftime("%Y-%m-%d", time.gmtime(capture_time))
+    except (OverflowError, OSError, ValueError):  # beyond the years a date holds, or NaN
+        return UNKNOWN_DAY
+
+
+def output_stem(path: str | Path) -> str:
+    """The name of one input's outputs: its stem and 8 hex digits of its absolute path.
+
+    Stable across re-runs of the same file (a re-run replaces its own outputs), and
+    unique per input (a/x.pcap and b/x.pcap give x-<one>.parquet and x-<other>.parquet).
+    A pipe (standard input) is a new capture each time: its stem gets the start time.
+    """
+    path = Path(path)
+    try:
+        regular = stat.S_ISREG(path.stat().st_mode)
+    except OSError:
+        regular = False
+    if not regular:
+        return f"{path.stem}-{time.strftime('%Y%m%dT%H%M%S', time.gmtime())}-{os.getpid()}"
+    key = os.fsencode(os.path.realpath(path))
+    return f"{path.stem}-{hashlib.sha1(key).hexdigest()[:8]}"
 
 
 class TableSink:
@@ -79,11 +109,20 @@ class DirectorySink(TableSink):
         self._writer(table, robot, day).write_columns(columns)
 
     def close(self) -> None:
-        for writer in self.writers.values():
-            writer.close()
+        failed: BaseException | None = None
+        for writer in self.writers.values():  # every table closed, even after one fails
+            try:
+                writer.close()
+            except Exception as exc:
+                failed = failed or exc
+        if failed is not None:
+            raise failed
         if self.recipes:
             listing = [{"table": t, "direction": d, "names": list(n)} for (d, n), t in self.recipes.items()]
-            (self.outdir / f"recipes-{self.stem}.json").write_text(json.dumps(listing, indent=2) + "\n")
+            target = self.outdir / f"recipes-{self.stem}.json"
+            partial = target.with_name(f".{target.name}.{os.getpid()}.partial")
+            partial.write_text(json.dumps(listing, indent=2) + "\n")
+            os.replace(partial, target)  # whole or not at all
 
 
 class ArrowSink(TableSink):

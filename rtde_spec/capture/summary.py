@@ -1,0 +1,99 @@
+"""What a capture gave and what it lost, per file and per connection: the summary `capture` prints.
+
+Damage is anything the input lacked or garbled: records cut off or unreadable,
+impossible timestamps, TCP gaps, bytes passed over to find the next package, packages
+cut by a gap or by the end of the capture, packages that do not decode. A capture
+that starts in the middle of a connection is not damaged: the bytes before its first
+package boundary are counted apart (`lead_in`). Packages without a known recipe are
+not damage either: the user can decode them by giving `--recipe`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+
+@dataclass
+class ConnectionSummary:
+    name: str
+    kind: str
+    packages: int
+    gaps: int
+    lost_bytes: int  # in TCP gaps: never in the capture
+    errors: list[str]
+    unknown_recipe_sizes: dict[int, int]
+    skipped_bytes: int = 0  # in the capture, but passed over to find the next package
+    cut_packages: int = 0  # begun before a gap, or at the end of the capture, and never completed
+    lead_in_bytes: int = 0  # before the first package of a connection captured from its middle
+
+
+@dataclass
+class CaptureSummary:
+    file: str
+    frames: int = 0
+    connections: list[ConnectionSummary] = field(default_factory=list)
+    tables: dict[str, int] = field(default_factory=dict)
+    paths: list[str] = field(default_factory=list)
+    reading: dict[str, int] = field(default_factory=dict)  # the file reader's counts (pcapfile, packets)
+
+    @property
+    def packages(self) -> int:
+        return sum(c.packages for c in self.connections)
+
+    def damage(self) -> list[str]:
+        """What was lost or garbled, one line each; empty for an undamaged input."""
+        out = []
+        r = self.reading
+        if r.get("truncated"):
+            where = f" at byte {r['stopped_at']}" if "stopped_at" in r else ""
+            claim = f" (it claims {r['claimed']} bytes)" if r.get("claimed") else ""
+            unread = f"; {r['unread_bytes']} bytes not read" if r.get("unread_bytes") else ""
+            out.append(f"the last record is cut off{where}{claim}{unread}")
+        if r.get("bad_blocks"):
+            out.append(
+                f"reading stopped at byte {r['stopped_at']}: a pcapng block of length "
+                f"{r['bad_block_length']} cannot be one; {r.get('unread_bytes', 0)} bytes not read"
+            )
+        if r.get("bad_times"):
+            out.append(f"{r['bad_times']} frames with an impossible capture time (kept; date=unknown)")
+        if r.get("undecodable"):
+            out.append(f"{r['undecodable']} frames whose IP/TCP headers do not decode")
+        for c in self.connections:
+            if c.gaps:
+                out.append(f"{c.name}: {c.gaps} TCP gaps, {c.lost_bytes} bytes never captured")
+            if c.skipped_bytes or c.cut_packages:
+                out.append(
+                    f"{c.name}: {c.skipped_bytes} bytes skipped to find the next package "
+                    f"({c.cut_packages} packages cut)"
+                )
+            out += [f"{c.name}: {e}" for e in c.errors]
+        return out
+
+    def needs_recipe(self) -> list[str]:
+        """Data packages that need `--recipe` to decode (a capture that starts after setup)."""
+        out = []
+        for c in self.connections:
+            if c.unknown_recipe_sizes:
+                sizes = ", ".join(
+                    f"{n} of {size} bytes" for size, n in sorted(c.unknown_recipe_sizes.items())
+                )
+                out.append(
+                    f"{c.name}: data packages without a recipe ({sizes}); the capture starts after the "
+                    "setup exchange: give the recipe with --recipe FILE"
+                )
+        return out
+
+    def problems(self) -> list[str]:
+        return self.needs_recipe() + self.damage()
+
+    def line(self) -> str:
+        """One line: frames, packages, gaps, bytes skipped, records cut off."""
+        gaps = sum(c.gaps for c in self.connections)
+        lost = sum(c.lost_bytes for c in self.connections)
+        skipped = sum(c.skipped_bytes for c in self.connections)
+        truncated = self.reading.get("truncated", 0) + self.reading.get("bad_blocks", 0)
+        verdict = "damaged" if self.damage() else "ok"
+        return (
+            f"{self.file}: {verdict}: {self.frames} frames, {self.packages} packages, {gaps} gaps "
+            f"({lost} bytes lost), {skipped} bytes skipped, {truncated} truncated records"
+        )
