@@ -2,15 +2,16 @@
 (robot mode, joints, cartesian info, masterboard).
 
 The Robot State is built from the same model the RTDE port reads, so a client sees
-the same joint positions and modes on both. Bytes a client sends are taken as
-URScript and kept, its I/O calls run (`script.py`; read-only ports drop what they get,
-as a controller does).
+the same joint positions and modes on both. What a client sends is cut into
+scripts (a line, or a `def ... end` program; script_framer.py), the last few kept, their
+I/O calls run (`script.py`); read-only ports drop what they get, as a controller does.
+Each client is held to the port's limits (guard.py).
 """
 
 from __future__ import annotations
 
-import asyncio
 import logging
+from collections import deque
 from typing import TYPE_CHECKING
 
 from rtde_spec._generated.enums import (
@@ -21,7 +22,10 @@ from rtde_spec._generated.enums import (
     RobotMode,
     SafetyMode,
 )
+from rtde_spec.emulator.guard import GuardedConnection, Port
 from rtde_spec.emulator.script import run_script
+from rtde_spec.emulator.script_framer import ScriptFramer
+from rtde_spec.errors import ProtocolError
 from rtde_spec.primary import models as pm
 from rtde_spec.primary.base import RobotStateMessage
 from rtde_spec.primary.codec import encode_message
@@ -32,6 +36,7 @@ if TYPE_CHECKING:
 log = logging.getLogger("rtde_spec.emulator")
 PROJECT = "URControl"
 BUILD_DATE = "emulated by rtde_spec"
+KEEP_SCRIPTS = 64  # the last scripts received, for tests and `watch` to look at
 CARTESIAN = [n for n in pm.CartesianInfo.model_fields if n not in ("extra", "missing")]
 
 
@@ -41,7 +46,13 @@ class PrimaryHub:
     def __init__(self, model: ControllerModel) -> None:
         self.model = model
         self.connections: set[PrimaryConnection] = set()
-        self.scripts: list[tuple[int, str]] = []  # (port, script text)
+        self.scripts: deque[tuple[int, str]] = deque(maxlen=KEEP_SCRIPTS)  # (port, script text)
+
+    def run(self, port: int, text: str) -> None:
+        """A whole script from a client: kept (the last few), its I/O calls run."""
+        self.scripts.append((port, text))
+        applied = run_script(self.model, text)
+        log.info("URScript on port %d: %s (%d I/O calls run)", port, text.strip()[:80], len(applied))
 
     def version_message(self) -> bytes:
         v = self.model.version
@@ -151,32 +162,32 @@ class PrimaryHub:
         return int(self.model.time * 1_000_000)
 
 
-class PrimaryConnection(asyncio.Protocol):
-    def __init__(self, hub: PrimaryHub, port: int, read_only: bool) -> None:
-        self.hub, self.port, self.read_only = hub, port, read_only
-        self.transport: asyncio.Transport | None = None
+class PrimaryConnection(GuardedConnection):
+    """One client of a primary/secondary port: the Version message, Robot State, its scripts run."""
 
-    def connection_made(self, transport: asyncio.BaseTransport) -> None:
-        assert isinstance(transport, asyncio.Transport)
-        self.transport = transport
+    def __init__(self, hub: PrimaryHub, port: Port, number: int, read_only: bool) -> None:
+        super().__init__(port)
+        self.hub, self.number, self.read_only = hub, number, read_only
+        self.framer = ScriptFramer()
+
+    def opened(self) -> None:
         self.hub.connections.add(self)
-        transport.write(self.hub.version_message())
+        self.write(self.hub.version_message())
 
-    def connection_lost(self, exc: Exception | None) -> None:
+    def closed(self) -> None:
         self.hub.connections.discard(self)
 
     def data_received(self, data: bytes) -> None:
-        if self.read_only:
+        if self.read_only or self.dropped:
             return  # a read-only port ignores what clients send
-        text = data.decode("utf-8", "replace")
-        self.hub.scripts.append((self.port, text))
-        applied = run_script(self.hub.model, text)
-        log.info("URScript on port %d: %s (%d I/O calls run)", self.port, text.strip()[:80], len(applied))
+        try:
+            scripts = self.framer.feed(data)
+        except ProtocolError as exc:
+            self.drop(f"sent {exc}")
+            return
+        if self.received(self.framer.pending, len(scripts)):
+            for text in scripts:
+                self.hub.run(self.number, text)
 
     def send(self, data: bytes) -> None:
-        if self.transport is None or self.transport.is_closing():
-            return
-        if self.transport.get_write_buffer_size() > 1 << 20:
-            self.transport.close()  # a client that stopped reading
-            return
-        self.transport.write(data)
+        self.write(data)

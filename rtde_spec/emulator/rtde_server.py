@@ -5,12 +5,13 @@ IN_USE in setup replies; input recipe ids from 1 (0 refuses a recipe); one outpu
 recipe per client; start refused without an output recipe; pause always accepted;
 outputs every floor(base / frequency) control steps; names limited to the spec's
 setup byte limit. Bad input gets a text message, or that client's disconnect when
-its stream cannot be framed — never an effect on other clients.
+its stream cannot be framed or it sends too many bad packages; a client is held to the
+port's limits (guard.py: first package soon after connecting, no package left half
+sent, bounded backlog) — never an effect on other clients.
 """
 
 from __future__ import annotations
 
-import asyncio
 import logging
 import math
 from typing import TYPE_CHECKING, Any
@@ -18,6 +19,7 @@ from typing import TYPE_CHECKING, Any
 from rtde_spec._generated import rtde_models as gen
 from rtde_spec._generated.constants import RTDE_ANSWERS, RTDE_LIMITS
 from rtde_spec._generated.enums import TextMessageLevel
+from rtde_spec.emulator.guard import GuardedConnection, Port
 from rtde_spec.errors import DecodeError, RtdeSpecError
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
 from rtde_spec.rtde.codec import decode, observe, setup_names
@@ -35,7 +37,6 @@ MAX_NAMES = RTDE_LIMITS["setup_names_max_bytes"]
 MAX_INPUT_RECIPES = RTDE_LIMITS["input_recipes_max"]
 SOURCE = "rtde_spec emulator"
 ERROR, EXCEPTION = TextMessageLevel.ERROR_MESSAGE, TextMessageLevel.EXCEPTION_MESSAGE
-SLOW_CLIENT_BYTES = 4 << 20  # a client this far behind is dropped, as a controller drops it
 
 
 class RtdeHub:
@@ -53,30 +54,31 @@ class RtdeHub:
                 conn.send_output()
 
 
-class RtdeConnection(asyncio.Protocol):
-    def __init__(self, hub: RtdeHub) -> None:
+class RtdeConnection(GuardedConnection):
+    """One RTDE client: its protocol version, recipes and start state; held to the port's limits."""
+
+    needs_handshake = True
+
+    def __init__(self, hub: RtdeHub, port: Port) -> None:
+        super().__init__(port)
         self.hub = hub
         self.state = ProtocolState()
         self.framer = PackageFramer()
-        self.transport: asyncio.Transport | None = None
         self.output: RecipeCodec | None = None
         self.output_names: tuple[str, ...] = ()
         self.divisor = 1
         self.inputs: dict[int, RecipeCodec] = {}
         self.started = False
         self.sent = 0
-        self.peer = "?"
 
     # --- asyncio ------------------------------------------------------------
 
-    def connection_made(self, transport: asyncio.BaseTransport) -> None:
-        assert isinstance(transport, asyncio.Transport)
-        self.transport = transport
-        self.peer = str(transport.get_extra_info("peername"))
+    def opened(self) -> None:
         self.hub.connections.add(self)
         log.info("RTDE client connected: %s", self.peer)
 
-    def connection_lost(self, exc: Exception | None) -> None:
+    def closed(self) -> None:
+        self.started = False
         self.hub.connections.discard(self)
         for name, owner in list(self.hub.owners.items()):
             if owner is self:
@@ -84,22 +86,31 @@ class RtdeConnection(asyncio.Protocol):
         log.info("RTDE client gone: %s", self.peer)
 
     def data_received(self, data: bytes) -> None:
+        if self.dropped:
+            return
         try:
             packages = self.framer.feed(data)
         except DecodeError as exc:
-            self._text(f"cannot frame the stream: {exc}", EXCEPTION)
-            self._close()
+            self._send_text(f"cannot frame the stream: {exc}", EXCEPTION)
+            self.drop(f"its stream cannot be framed: {exc}")
+            return
+        if not self.received(self.framer.pending, len(packages)):
             return
         for _, package in packages:
             try:
                 message = decode(package, protocol_version=self.state.version, sender="client")
             except RtdeSpecError as exc:
-                self._text(f"bad package: {exc}", ERROR)
-                continue
+                if self.refused_message(str(exc)):
+                    # the first bad package is logged; later ones only go to the client
+                    self._text(f"bad package: {exc}", ERROR, logged=self.bad_messages == 1)
+                    continue
+                return
             try:
                 self.handle(message)
             except RtdeSpecError as exc:
                 self._text(f"refused: {exc}", ERROR)
+            if self.dropped:
+                return
 
     # --- the protocol -------------------------------------------------------
 
@@ -206,33 +217,29 @@ class RtdeConnection(asyncio.Protocol):
     # --- sending ------------------------------------------------------------
 
     def send_output(self) -> None:
-        assert self.output is not None and self.transport is not None
-        if self.transport.get_write_buffer_size() > SLOW_CLIENT_BYTES:
-            log.warning("dropping %s: it stopped reading", self.peer)
-            self._close()
-            return
+        assert self.output is not None
         values = self.hub.model.values
         data = self.output.encode_package({n: values[n] for n in self.output_names}, recipe_id=1)
-        self.transport.write(data)
-        self.sent += 1
+        if self.write(data):
+            self.sent += 1
+        else:
+            self.started = False
 
     def _send(self, message: RtdeMessage) -> None:
-        if self.transport is not None and not self.transport.is_closing():
-            self.transport.write(message.to_bytes())
+        self.write(message.to_bytes())
 
-    def _text(self, text: str, level: TextMessageLevel) -> None:
-        log.warning("to %s: %s", self.peer, text)
+    def _text(self, text: str, level: TextMessageLevel, logged: bool = True) -> None:
+        if logged:
+            log.warning("to %s: %s", self.peer, text)
+        self._send_text(text, level)
+
+    def _send_text(self, text: str, level: TextMessageLevel) -> None:
         message: Any
         if self.state.version == 1:
             message = gen.TextMessageV1Controller(message_type=int(level), message=_ascii(text))
         else:
             message = gen.TextMessage(message=_ascii(text), source=SOURCE, warning_level=int(level))
         self._send(message)
-
-    def _close(self) -> None:
-        self.started = False
-        if self.transport is not None:
-            self.transport.close()
 
 
 def _ascii(text: str) -> str:

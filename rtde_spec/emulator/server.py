@@ -16,6 +16,7 @@ import time
 from dataclasses import dataclass, field
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
+from rtde_spec.emulator.guard import ClientLimits, Port
 from rtde_spec.emulator.model import ControllerModel
 from rtde_spec.emulator.primary_server import PrimaryConnection, PrimaryHub
 from rtde_spec.emulator.rtde_server import RtdeConnection, RtdeHub
@@ -37,6 +38,10 @@ class EmulatorConfig:
     secondary_read_only_port: int | None = None
     scenario: Scenario = field(default_factory=Scenario)
     controller: str | None = None  # overrides the scenario's version
+    limits: ClientLimits = field(default_factory=ClientLimits)  # what one client may cost, per port
+    # after falling this far behind (s, a stalled machine) the loop skips steps rather than
+    # sending them late in a burst; None: every step is sent, late if need be
+    skip_after: float | None = 0.1
 
 
 class Emulator:
@@ -49,6 +54,7 @@ class Emulator:
         self.primary = PrimaryHub(self.model)
         self.servers: list[asyncio.AbstractServer] = []
         self.ports: dict[str, int] = {}
+        self.clients: dict[str, Port] = {}  # port name -> its connections, under the limits
         self._loop_task: asyncio.Task[None] | None = None
         self.late_steps = 0
 
@@ -56,7 +62,8 @@ class Emulator:
         loop = asyncio.get_running_loop()
         c = self.config
         if c.rtde_port is not None:
-            await self._listen("rtde", c.rtde_port, lambda: RtdeConnection(self.rtde))
+            clients = self._port("rtde")
+            await self._listen("rtde", c.rtde_port, lambda: RtdeConnection(self.rtde, clients))
         for name, port, read_only in (
             ("primary", c.primary_port, False),
             ("secondary", c.secondary_port, False),
@@ -67,8 +74,13 @@ class Emulator:
                 await self._listen(name, port, self._primary_factory(name, read_only))
         self._loop_task = loop.create_task(self._control_loop())
 
+    def _port(self, name: str) -> Port:
+        self.clients[name] = Port(name, self.config.limits)
+        return self.clients[name]
+
     def _primary_factory(self, name: str, read_only: bool):  # type: ignore[no-untyped-def]
-        return lambda: PrimaryConnection(self.primary, self.ports[name], read_only)
+        port = self._port(name)
+        return lambda: PrimaryConnection(self.primary, port, self.ports[name], read_only)
 
     async def _listen(self, name: str, port: int, factory) -> None:  # type: ignore[no-untyped-def]
         server = await asyncio.get_running_loop().create_server(factory, self.config.host, port)
@@ -89,7 +101,8 @@ class Emulator:
                 await asyncio.sleep(delay - SPIN_SECONDS)
             while time.perf_counter() < due:
                 time.sleep(0)  # stay awake, but let other threads (an in-process client) run
-            if time.perf_counter() - due > 0.1:  # far behind (a stalled machine): skip, don't burst
+            skip_after = self.config.skip_after
+            if skip_after is not None and time.perf_counter() - due > skip_after:  # skip, don't burst
                 self.late_steps += 1
                 skipped = int((time.perf_counter() - start) * base) - step
                 step += max(0, skipped)
@@ -97,15 +110,19 @@ class Emulator:
             self.rtde.send_outputs(step)
             if step % state_every == 0:
                 self.primary.broadcast_state()
+                now = time.monotonic()
+                for port in self.clients.values():
+                    port.check(now)
 
     async def stop(self) -> None:
         if self._loop_task is not None:
             self._loop_task.cancel()
         for server in self.servers:
             server.close()
-        for conn in list(self.rtde.connections) + list(self.primary.connections):
-            if conn.transport is not None:
-                conn.transport.close()
+        for port in self.clients.values():
+            for conn in list(port.connections):
+                if conn.transport is not None:
+                    conn.transport.abort()
         for server in self.servers:
             await server.wait_closed()
 

@@ -1,0 +1,79 @@
+"""Cut URScript arriving on a primary/secondary port into what a controller runs.
+
+A controller runs a line sent outside a program as soon as its newline arrives, and
+a `def` (or `sec`) program once its closing `end` has; a line without its newline is
+not run yet. Bytes that cannot be URScript text (invalid UTF-8, NUL and other control
+bytes) are refused, and what is held unfinished is counted so the server can bound it.
+"""
+
+from __future__ import annotations
+
+import re
+
+from rtde_spec.errors import ProtocolError
+
+_NOT_TEXT = re.compile(rb"[\x00-\x08\x0b\x0e-\x1f\x7f]")
+_OPENS = re.compile(r"^(def|sec|thread|if|while)\b.*:$")
+_ENDS = re.compile(r"^end\b")
+_PROGRAM = re.compile(r"^(def|sec)\b")
+
+
+class ScriptFramer:
+    """Feed bytes as they arrive; each call returns the scripts completed (lines or programs)."""
+
+    def __init__(self) -> None:
+        self._held = bytearray()  # the unfinished last line
+        self._program: list[str] = []  # lines of a program whose `end` has not come
+        self._program_bytes = 0
+        self._depth = 0
+
+    @property
+    def pending(self) -> int:
+        """Bytes held that are not a whole script yet."""
+        return len(self._held) + self._program_bytes
+
+    def feed(self, data: bytes) -> list[str]:
+        """Scripts completed by `data`, in order; ProtocolError for bytes that are no URScript."""
+        bad = _NOT_TEXT.search(data)
+        if bad is not None:
+            raise ProtocolError(
+                "bytes that are no URScript text",
+                offset=bad.start(),
+                actual=f"0x{data[bad.start()]:02x}",
+            )
+        self._held += data
+        cut = self._held.rfind(b"\n")
+        if cut < 0:
+            return []
+        whole = bytes(self._held[: cut + 1])
+        del self._held[: cut + 1]
+        try:
+            text = whole.decode("utf-8")
+        except UnicodeDecodeError as exc:
+            raise ProtocolError("bytes that are no UTF-8 text", offset=exc.start) from None
+        return self._scripts(text.splitlines())
+
+    def _scripts(self, lines: list[str]) -> list[str]:
+        out: list[str] = []
+        loose: list[str] = []  # lines outside any program, run together
+        for line in lines:
+            code = line.split("#", 1)[0].strip()
+            if self._depth == 0 and not (code and _OPENS.match(code)):
+                if code:
+                    loose.append(line)
+                continue
+            if self._depth == 0 and loose:
+                out.append("\n".join(loose) + "\n")
+                loose = []
+            if _OPENS.match(code):
+                self._depth += 1
+            elif _ENDS.match(code):
+                self._depth -= 1
+            self._program.append(line)
+            self._program_bytes += len(line) + 1
+            if self._depth == 0:
+                out.append("\n".join(self._program) + "\n")
+                self._program, self._program_bytes = [], 0
+        if loose:
+            out.append("\n".join(loose) + "\n")
+        return out
