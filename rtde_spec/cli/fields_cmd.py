@@ -22,6 +22,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--direction", choices=("input", "output"), help="only this direction (default: both)")
     p.add_argument("--json", action="store_true", help="print JSON (default: a table)")
+    p.add_argument(
+        "--primary", action="store_true", help="list primary/secondary interface fields instead (with since)"
+    )
+    p.add_argument(
+        "--diff",
+        nargs=2,
+        metavar=("A", "B"),
+        type=controller_version,
+        help="fields added and removed from controller version A to B, per interface",
+    )
     p.set_defaults(run=run)
 
 
@@ -46,6 +56,12 @@ def field_record(info: FieldInfo, catalogue: Catalogue) -> dict[str, object]:
 
 def run(args: argparse.Namespace) -> int:
     catalogue = catalogue_for(args)
+    if args.diff:
+        from rtde_spec.cli.fields_diff import print_diff
+
+        return print_diff(catalogue, args.diff[0], args.diff[1], args.json)
+    if args.primary:
+        return _run_primary(args, catalogue)
     infos = catalogue.fields(args.direction, args.controller)
     if args.json:
         print_json([field_record(i, catalogue) for i in infos])
@@ -57,4 +73,32 @@ def run(args: argparse.Namespace) -> int:
     print(table(["name", "direction", "type", "bytes", "since", "unit", "doc"], rows))
     where = f" on {args.controller}" if args.controller else ""
     print(f"\n{len(infos)} fields{where}")
+    return 0
+
+
+def _run_primary(args: argparse.Namespace, catalogue: Catalogue) -> int:
+    from rtde_spec.spec.primary_fields import available, primary_fields
+
+    infos = primary_fields(catalogue)
+    if args.controller:
+        infos = [i for i in infos if available(i, catalogue, args.controller)]
+    since = [", ".join(f"{k} {v}" for k, v in i.since.items()) or "not available" for i in infos]
+    if args.json:
+        print_json(
+            [
+                {
+                    "message": i.message,
+                    "name": i.name,
+                    "type": i.type,
+                    "since": {k: str(v) for k, v in i.since.items()},
+                    "doc": i.doc,
+                }
+                for i in infos
+            ]
+        )
+        return 0
+    rows = [[i.message, i.name, i.type, s, i.doc or ""] for i, s in zip(infos, since, strict=True)]
+    print(table(["message", "field", "type", "since", "doc"], rows))
+    where = f" on {args.controller}" if args.controller else ""
+    print(f"\n{len(infos)} primary fields{where}")
     return 0

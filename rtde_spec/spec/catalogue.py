@@ -191,6 +191,10 @@ class Catalogue:
             )
         return out
 
+    def resolve_since(self, since: dict[str, str] | None) -> dict[str, Version]:
+        """Per product line the first version of a `since` map (omitted: every line; inherits)."""
+        return self._resolve_since(since)
+
     def _resolve_since(self, since: dict[str, str] | None) -> dict[str, Version]:
         resolved: dict[str, Version] = {}
         for line in self.lines.values():

@@ -7,6 +7,7 @@ applied to the indices it names, and contiguous runs become `ranges` again.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
 from rtde_spec.spec.schema import ProductLine
@@ -19,7 +20,7 @@ def all_lines(lines: list[ProductLine]) -> dict[str, str]:
     return {p.id: p.first_version for p in lines if p.inherits is None}
 
 
-def apply(since: Since, new: dict[str, str | None], lines: list[ProductLine]) -> Since:
+def apply(since: Mapping[str, str] | None, new: Mapping[str, str | None], lines: list[ProductLine]) -> Since:
     """A since map with the document's versions for the lines it speaks of (None: not there)."""
     out = dict(since) if since is not None else all_lines(lines)
     by_id = {p.id: p for p in lines}
@@ -53,7 +54,7 @@ def expand(entry: Any) -> dict[int, tuple[Since, str | None]]:
     return out
 
 
-def runs(per_index: dict[int, tuple[Since, str | None]]) -> list[tuple[int, int, Since, str | None]]:
+def runs(per_index: Mapping[int, tuple[Since, str | None]]) -> list[tuple[int, int, Since, str | None]]:
     """Contiguous indices with the same since and reserved note."""
     out: list[tuple[int, int, Since, str | None]] = []
     for i in sorted(per_index):

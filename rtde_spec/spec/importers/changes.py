@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
+from dataclasses import field as dc_field
 from typing import Any
 
 from rtde_spec.spec.schema import Conflict, ProductLine
@@ -23,7 +24,7 @@ class Change:
     line: int | None = None
     index: tuple[int, int] | None = None
     known: Conflict | None = None
-    extra: dict[str, Any] = field(default_factory=dict)  # what --write needs (the document's row)
+    extra: dict[str, Any] = dc_field(default_factory=dict)  # what --write needs (the document's row)
 
     @property
     def document_value(self) -> str | None:

@@ -90,7 +90,8 @@ def _availability_changes(row: DocField, entry: FieldSpec, doc: Document, spec: 
 
     def flush() -> None:
         if last is not None and last[0] != last[1] and run:
-            span = None if run[0] is None else (run[0], run[-1])
+            first, last_index = run[0], run[-1]
+            span = None if first is None or last_index is None else (first, last_index)
             out.append(
                 Change("changed", "availability", entry.name, row.direction, last[0], last[1], row.line, span)
             )

@@ -122,7 +122,8 @@ def _apply_rtde(change: Change, data: Any, doc: Document, spec: Spec) -> None:
         return
     entry = next(e for e in data[key] if e["name"] == change.field)
     if change.what == "removed":
-        gone = {doc.line: None} | {p.id: None for p in lines if p.inherits == doc.line}
+        gone: dict[str, str | None] = {doc.line: None}
+        gone.update({p.id: None for p in lines if p.inherits == doc.line})
         if entry.get("index") is not None:
             per = {i: (av.apply(s, gone, lines), r) for i, (s, r) in av.expand(entry).items()}
             if all(s == {} for s, _ in per.values()):
@@ -141,11 +142,16 @@ def _apply_rtde(change: Change, data: Any, doc: Document, spec: Spec) -> None:
     elif change.what == "description":
         entry["doc"] = change.new
     elif change.what == "range":
+        from rtde_spec.spec.importers.diff import doc_availability
+
         per = av.expand(entry)
         low, high = change.new
-        edge_low, edge_high = per[min(per)], per[max(per)]
-        per = {i: per.get(i, edge_low if i < min(per) else edge_high) for i in range(low, high + 1)}
-        _set_family(entry, per)
+        row: DocField = change.extra["row"]
+        for i in range(low, high + 1):
+            if i not in per:  # a new index: the document's versions for it, the edge's reserved note
+                edge = per[min(per)] if i < min(per) else per[max(per)]
+                per[i] = (av.apply(edge[0], doc_availability(row, i, doc.line, spec), lines), edge[1])
+        _set_family(entry, {i: v for i, v in per.items() if low <= i <= high})
     elif change.what == "availability":
         if entry.get("index") is not None:
             per = av.expand(entry)
