@@ -109,7 +109,11 @@ def test_primary_document_groups_prefixes_and_versions(spec) -> None:  # type: i
     doc = read_document(DATA / "primary_interfaces.txt", spec)
     cart, joints, key = doc.members
     assert (cart.family_type, cart.member_type, joints.member_type, key.family_type, key.member_type) == (
-        16, 4, 1, 20, 7,
+        16,
+        4,
+        1,
+        20,
+        7,
     )
     assert [f.group for f in joints.fields] == ["repeat 6", "repeat 6"]
     assert [(f.name, f.type) for f in key.fields] == [
@@ -128,7 +132,9 @@ def test_primary_document_groups_prefixes_and_versions(spec) -> None:  # type: i
 @needs_seeds
 @pytest.mark.parametrize("name", SEED_FILES)
 def test_each_seed_reimports_clean(name: str, capsys: pytest.CaptureFixture[str]) -> None:
-    code = main(["spec", "import", str(SEEDS / name), "--spec-dir", str(ROOT / "spec"), "--json", "--show-known"])
+    code = main(
+        ["spec", "import", str(SEEDS / name), "--spec-dir", str(ROOT / "spec"), "--json", "--show-known"]
+    )
     out = json.loads(capsys.readouterr().out)
     assert code == 0
     assert (out["added"], out["removed"], out["changed"]) == ([], [], [])
@@ -138,7 +144,16 @@ def test_each_seed_reimports_clean(name: str, capsys: pytest.CaptureFixture[str]
 
 @needs_seeds
 def test_seed_conflicts_are_shown_with_show_known(capsys: pytest.CaptureFixture[str]) -> None:
-    main(["spec", "import", str(SEEDS / "rtde-guide-cb3-era.txt"), "--spec-dir", str(ROOT / "spec"), "--show-known"])
+    main(
+        [
+            "spec",
+            "import",
+            str(SEEDS / "rtde-guide-cb3-era.txt"),
+            "--spec-dir",
+            str(ROOT / "spec"),
+            "--show-known",
+        ]
+    )
     out = capsys.readouterr().out
     assert "input_int_register_{X}" in out and "[0, 48]" in out and "The CB3 guide" in out
     assert "0 added, 0 removed, 0 changed; 2 known conflicts" in out
@@ -154,7 +169,9 @@ def test_importing_the_full_eseries_guide_takes_under_a_second(spec) -> None:  #
     assert elapsed < 1.0, elapsed
 
 
-def test_a_document_of_no_known_form_is_a_usage_error(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_a_document_of_no_known_form_is_a_usage_error(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     path = tmp_path / "notes.txt"
     path.write_text("just some text\n")
     assert main(["spec", "import", str(path), "--spec-dir", str(ROOT / "spec")]) == 2
