@@ -1,14 +1,18 @@
-"""The emulated controller's state: every output the version has, moved by time and inputs.
+"""The emulated controller's state: every output the version has, moved by time, inputs and programs.
 
 Defaults describe a powered robot in RUNNING mode with no program; the timestamp
-advances with the control steps; a scenario sets outputs as constants or functions
-of time; inputs change the outputs a real controller reflects them in (digital and
-analog outputs, the speed slider, and every input register's read-back).
-Enum values and bit positions come from the generated spec tables.
+advances with the control steps; URScript programs move the arm (`program.py`),
+and joints, TCP pose and speed, runtime state and speed scaling follow each step;
+a scenario sets outputs as constants or functions of time (and the TCP pose then
+follows the scenario's joints); inputs change the outputs a real controller reflects
+them in (digital and analog outputs, the speed slider, every input register's
+read-back). The dashboard's power, brake, stop and play requests act through the
+methods of `RobotModes`. Enum values and bit positions come from the generated tables.
 """
 
 from __future__ import annotations
 
+from collections import deque
 from collections.abc import Callable, Mapping
 from typing import Any
 
@@ -24,6 +28,13 @@ from rtde_spec._generated.enums import (
     SafetyStatusBits,
     StandardAnalogOutputBits,
 )
+from rtde_spec.emulator.arm import Arm
+from rtde_spec.emulator.events import ScriptEvent
+from rtde_spec.emulator.modes import RobotModes
+from rtde_spec.emulator.motion import MotionError
+from rtde_spec.emulator.program import Program
+from rtde_spec.emulator.urscript import ScriptFault, parse
+from rtde_spec.spec.arms import arm_model
 from rtde_spec.spec.catalogue import Catalogue, FieldInfo
 from rtde_spec.spec.versions import Version
 
@@ -62,14 +73,20 @@ def _zero(info: FieldInfo) -> Any:
     return one if info.wire.count == 1 else (one,) * info.wire.count
 
 
-class ControllerModel:
-    """Output values by name, for one controller version."""
+MAX_EVENTS = 1000  # messages kept for the servers to send; the oldest go first
+NOT_READY = "The robot is not ready: power it on, release the brakes and clear any safety stop"
+SECONDARY_STEPS = 10_000  # a `sec` program runs at once; this bounds it
+
+
+class ControllerModel(RobotModes):
+    """Output values by name, for one controller version and one arm model (default UR5e)."""
 
     def __init__(
         self,
         version: str,
         catalogue: Catalogue | None = None,
         functions: Mapping[str, Callable[[float], Any]] | None = None,
+        model: str = "UR5e",
     ) -> None:
         self.catalogue = catalogue or Catalogue.default()
         self.version = Version.parse(version)
@@ -79,19 +96,117 @@ class ControllerModel:
         self.inputs = {i.name: i for i in self.catalogue.fields("input", self.version)}
         self.values: dict[str, Any] = {n: DEFAULTS.get(n, _zero(i)) for n, i in self.outputs.items()}
         self.functions = dict(functions or {})
+        self.arm = Arm(arm_model(model), HOME_Q)
+        self.program: Program | None = None
+        self.paused = False
+        self.loaded: str | None = None  # a program the dashboard loaded, run by play()
+        self.events: deque[ScriptEvent] = deque(maxlen=MAX_EVENTS)
         self.step = 0
         self.time = 0.0
         self.tick(0)
 
     def tick(self, step: int) -> None:
-        """Move to control step `step`: the timestamp, then every scenario function."""
+        """Move to control step `step`: the arm and its program, the timestamp, scenario functions."""
+        dt = max(0, step - self.step) / self.base_hz
         self.step = step
         self.time = step / self.base_hz
         values = self.values
+        if dt > 0 and self.can_move() and not self.paused:
+            self._advance(dt)
         if "timestamp" in values:
             values["timestamp"] = self.time
+        self._publish()
         for name, fn in self.functions.items():
             values[name] = fn(self.time)
+        if "actual_q" in self.functions and "actual_TCP_pose" not in self.functions:
+            values["actual_TCP_pose"] = self.arm.pose(values["actual_q"])  # consistent with the joints
+
+    def _advance(self, dt: float) -> None:
+        """One control step of motion (slowed by the speed slider) and of the program."""
+        slider = float(self.values.get("target_speed_fraction", 1.0))
+        try:
+            self.arm.step(dt * slider)
+        except MotionError as exc:
+            line = self.arm.motion.line if self.arm.motion is not None else 0
+            self.arm.halt()
+            if self.program is not None:
+                self.program.fail(ScriptFault(str(exc), line, 1))
+        program = self.program
+        if program is not None:
+            program.advance(dt)
+            if program.finished:
+                self._end_program()
+
+    def _publish(self) -> None:
+        """Joints, TCP pose and speed, runtime state and speed scaling into the outputs."""
+        values, state = self.values, self.arm.state
+        frozen = self.paused or not self.can_move()
+        q = tuple(float(v) for v in state.q)
+        qd = (0.0,) * 6 if frozen else tuple(float(v) for v in state.qd)
+        qdd = (0.0,) * 6 if frozen else tuple(float(v) for v in state.qdd)
+        pose = self.arm.pose()
+        speed = (0.0,) * 6 if frozen else self.arm.tcp_speed()
+        for name, value in (
+            ("actual_q", q), ("target_q", q), ("actual_qd", qd), ("target_qd", qd), ("target_qdd", qdd),
+            ("actual_TCP_pose", pose), ("target_TCP_pose", pose),
+            ("actual_TCP_speed", speed), ("target_TCP_speed", speed), ("tcp_offset", self.arm.tcp),
+        ):  # fmt: skip
+            if name in values:
+                values[name] = value
+        if "speed_scaling" in values:
+            values["speed_scaling"] = 0.0 if frozen else float(values.get("target_speed_fraction", 1.0))
+
+    # --- programs -------------------------------------------------------------
+
+    def run_script(self, text: str) -> Program | None:
+        """Start `text` as the robot's program (a `sec` program runs beside it, at once).
+
+        A script that cannot be read, names something unknown, or comes while the
+        arm cannot move is refused with a runtime exception event; nothing of it runs.
+        """
+        try:
+            script = parse(text)
+            program = Program(script, self)
+        except ScriptFault as fault:
+            self.emit(ScriptEvent("runtime_exception", fault.text, fault.line, fault.column))
+            return None
+        if script.secondary:
+            for _ in range(SECONDARY_STEPS):
+                program.advance(0.0)
+                if program.finished:
+                    break
+            return program
+        if not self.can_move():
+            self.emit(ScriptEvent("runtime_exception", NOT_READY, program=program.name))
+            return None
+        if self.program is not None:
+            self.stop_program()
+        self.program, self.paused = program, False
+        self._program_bits()
+        self.emit(ScriptEvent("program_started", program.name, program=program.name))
+        program.advance(0.0)  # runs at once up to its first wait, as the controller does
+        if program.finished:
+            self._end_program()
+        return program
+
+    def _end_program(self) -> None:
+        program, self.program = self.program, None
+        motion = self.arm.motion
+        if motion is not None and (motion.holds or program is None or program.fault is not None):
+            self.arm.stop(getattr(motion, "a", 1.4))  # a held speed or a failed move decelerates
+        self.paused = False
+        self._program_bits()
+        name = program.name if program is not None else ""
+        self.emit(ScriptEvent("program_stopped", name, program=name))
+
+    def emit(self, event: ScriptEvent) -> None:
+        self.events.append(event)
+
+    def drain_events(self) -> list[ScriptEvent]:
+        """The events since the last call, oldest first (the servers send them)."""
+        out = list(self.events)
+        self.events.clear()
+        return out
 
     def apply_inputs(self, inputs: Mapping[str, Any]) -> None:
         """A data package from a client: read-backs, then what the outputs reflect."""

@@ -1,52 +1,56 @@
-"""URScript the emulator understands: the I/O calls a test sends to the primary or secondary
-port, which a controller runs and then shows on RTDE and in Robot State.
+"""URScript sent to the emulator's primary/secondary ports: run as the controller runs it.
 
-Only one call per line, with literal arguments (`set_standard_digital_out(3, True)`),
-inside or outside a `def ...: ... end` program; the calls run at once, in order (no
-motion, no timing). Every other line is kept but does nothing, as the emulator says in
-its log.
+`run_script` starts a text as the robot's program (the URScript interpreter is
+`urscript.py`, its runner `program.py`): I/O calls before the first motion or sleep
+take effect at once, motions then run with the control steps. A script that cannot
+run becomes a runtime exception event on the model (`model.drain_events()`), never
+a silent drop. `ScriptReceiver` joins what a connection sends into whole programs,
+since TCP may split a `def ... end` anywhere.
 """
 
 from __future__ import annotations
 
-import re
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from rtde_spec.emulator.model import ControllerModel
 
-_CALL = re.compile(
-    r"^\s*(\w+)\(\s*(\d+)\s*,\s*(True|False|true|false|[-+]?[0-9.]+(?:[eE][-+]?\d+)?)\s*\)\s*$"
-)
-# script function -> (output group, pins it has), names as in the Script manual
-_DIGITAL = {
-    "set_standard_digital_out": ("standard", 8),
-    "set_configurable_digital_out": ("configurable", 8),
-    "set_tool_digital_out": ("tool", 2),
-}
-_ANALOG = {"set_standard_analog_out": 2}  # the deprecated set_digital_out/set_analog_out are not run
+MAX_PENDING = 1 << 20  # bytes of an unfinished program kept per connection
 
 
 def run_script(model: ControllerModel, text: str) -> list[str]:
-    """Apply the I/O calls of `text` to the controller model; returns the calls applied."""
-    applied = []
-    for line in text.splitlines():
-        found = _CALL.match(line)
-        if found is None:
-            continue
-        name, pin, arg = found.group(1), int(found.group(2)), found.group(3)
-        if name in _DIGITAL:
-            group, pins = _DIGITAL[name]
-            if pin >= pins or arg.lower() not in ("true", "false"):
-                continue
-            on = arg.lower() == "true"
-            model.apply_inputs(
-                {f"{group}_digital_output_mask": 1 << pin, f"{group}_digital_output": int(on) << pin}
-            )
-        elif name in _ANALOG and pin < _ANALOG[name] and arg.lower() not in ("true", "false"):
-            # a fraction of the output's range, as the RTDE input; the domain (V or mA) stays
-            model.values[f"standard_analog_output{pin}"] = min(1.0, max(0.0, float(arg)))
-        else:
-            continue
-        applied.append(line.strip())
-    return applied
+    """Start `text` on the model; returns the I/O calls that ran at once, as written."""
+    program = model.run_script(text)
+    return list(program.applied) if program is not None else []
+
+
+class ScriptReceiver:
+    """Bytes of one connection -> whole scripts: complete lines, and a `def`/`sec` only with its `end`."""
+
+    def __init__(self) -> None:
+        self.pending = ""
+
+    def feed(self, data: bytes) -> list[str]:
+        self.pending += data.decode("utf-8", "replace")
+        if len(self.pending) > MAX_PENDING:  # never ends: keep memory bounded, let the parser report it
+            text, self.pending = self.pending, ""
+            return [text]
+        cut = self.pending.rfind("\n")
+        if cut < 0:
+            return []
+        ready, rest = self.pending[: cut + 1], self.pending[cut + 1 :]
+        depth = 0
+        last_whole = 0
+        offset = 0
+        for line in ready.splitlines(keepends=True):
+            offset += len(line)
+            word = line.strip().split("(")[0].split()
+            if word and word[0] in ("def", "sec"):
+                depth += 1
+            elif line.strip() == "end" and depth > 0:
+                depth -= 1
+            if depth == 0:
+                last_whole = offset
+        self.pending = ready[last_whole:] + rest
+        whole = ready[:last_whole]
+        return [whole] if whole.strip() else []

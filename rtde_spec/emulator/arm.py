@@ -1,0 +1,85 @@
+"""The emulated arm: joint state, the motion it runs, and the TCP pose and speed its joints give.
+
+Kept apart from the controller model so motion and kinematics can be tested on
+their own; the model writes what this holds into its outputs every control step.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+
+import numpy as np
+
+from rtde_spec.emulator import kinematics as kin
+from rtde_spec.emulator.motion import MOVEJ_A, LinearSpeed, Motion, State, rest, stop_joints, stop_linear
+from rtde_spec.spec.arms import ArmModel
+
+SPEED_STEP = 1e-4  # s: TCP speed is the pose change over this much joint motion
+
+
+class Arm:
+    """Joint state plus the current motion; `step(dt)` moves it on by trajectory time dt."""
+
+    def __init__(self, model: ArmModel, q: Sequence[float]) -> None:
+        self.model = model
+        self.state = rest(q)
+        self.tcp: tuple[float, ...] = (0.0,) * 6
+        self.motion: Motion | None = None
+        self._pose_cache: tuple[tuple[float, ...], tuple[float, ...], kin.Pose] | None = None
+
+    @property
+    def moving(self) -> bool:
+        return self.motion is not None
+
+    def move(self, motion: Motion) -> None:
+        self.motion = motion
+
+    def step(self, dt: float) -> None:
+        """Advance the motion; a finished one (not a held speed) leaves the arm at rest."""
+        if self.motion is None:
+            return
+        self.state = self.motion.step(dt)
+        if self.motion.done and not self.motion.holds:
+            self.state = rest(self.state.q)
+            self.motion = None
+
+    def halt(self) -> None:
+        """Stand still at once (power loss, protective stop): no deceleration."""
+        self.motion = None
+        self.state = rest(self.state.q)
+
+    def stop(self, a: float = MOVEJ_A, linear: bool = False) -> None:
+        """Decelerate from the current velocity (stopj, stopl, the end of a program)."""
+        if not np.any(self.state.qd):
+            self.halt()
+            return
+        if linear or isinstance(self.motion, LinearSpeed):
+            self.motion = stop_linear(self.model, self.tcp, self.state, a)
+        else:
+            self.motion = stop_joints(self.state, a)
+
+    def place(self, q: Sequence[float]) -> None:
+        """Joints set from outside (a scenario): at rest there."""
+        self.motion = None
+        self.state = rest(q)
+
+    def pose(self, q: kin.Floats | None = None) -> kin.Pose:
+        """FK of q (default: the arm's joints) with the TCP offset; the last answer is cached."""
+        key = tuple(float(v) for v in (self.state.q if q is None else q))
+        cached = self._pose_cache
+        if cached is not None and cached[0] == key and cached[1] == self.tcp:
+            return cached[2]
+        pose = kin.forward(self.model, key, self.tcp)
+        self._pose_cache = (key, self.tcp, pose)
+        return pose
+
+    def tcp_speed(self, state: State | None = None) -> tuple[float, ...]:
+        """TCP velocity in Base (m/s, then rad/s as a rotation vector rate) at the joints' speed."""
+        state = state or self.state
+        if not np.any(state.qd):
+            return (0.0,) * 6
+        here = self.pose(state.q)
+        ahead = kin.forward(self.model, state.q + state.qd * SPEED_STEP, self.tcp)
+        turn = kin.mul(kin.rotvec_to_rot(ahead[3:]), kin.transpose(kin.rotvec_to_rot(here[3:])))
+        linear = ((a - h) / SPEED_STEP for a, h in zip(ahead[:3], here[:3], strict=True))
+        return (*linear, *(w / SPEED_STEP for w in kin.matrix_to_rotvec(turn)))

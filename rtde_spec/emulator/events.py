@@ -1,0 +1,26 @@
+"""What a running program tells the world: the messages the primary/secondary ports send for it.
+
+The model queues these; the servers drain them and send each as the robot message a
+controller sends (runtime exception, text, popup, program state).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Literal
+
+EventKind = Literal["runtime_exception", "text", "popup", "program_started", "program_stopped"]
+
+
+@dataclass(frozen=True)
+class ScriptEvent:
+    """One message: `runtime_exception` carries the script line and column (1-based) it failed at."""
+
+    kind: EventKind
+    text: str
+    line: int = 0
+    column: int = 0
+    title: str = ""
+    warning: bool = False
+    error: bool = False
+    program: str = ""  # the program's name (its def), for program state messages

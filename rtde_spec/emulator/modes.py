@@ -1,0 +1,183 @@
+"""Power, brakes, safety stops and program control: what the dashboard (and scenarios) ask of the robot.
+
+Each request sets robot_mode, safety_mode/safety_status, their bits, joint modes and
+runtime_state through the generated enums, and answers whether it was accepted,
+so the dashboard server can give the controller's reply text. A robot that is
+powered off, braked or safety-stopped does not move and runs no program.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING, Any
+
+from rtde_spec._generated.enums import (
+    JointMode,
+    ProgramState,
+    RobotMode,
+    RobotStatusBits,
+    SafetyMode,
+    SafetyStatus,
+    SafetyStatusBits,
+)
+from rtde_spec.emulator.motion import MOVEJ_A
+
+if TYPE_CHECKING:
+    from rtde_spec.emulator.arm import Arm
+    from rtde_spec.emulator.events import ScriptEvent
+    from rtde_spec.emulator.program import Program
+
+
+class RobotModes:
+    """Mixed into ControllerModel: the state machine of power, brakes, safety and the program."""
+
+    values: dict[str, Any]
+    arm: Arm
+    program: Program | None
+    paused: bool
+    loaded: str | None
+
+    def run_script(self, text: str) -> Program | None:
+        raise NotImplementedError
+
+    def emit(self, event: ScriptEvent) -> None:
+        raise NotImplementedError
+
+    def _end_program(self) -> None:
+        raise NotImplementedError
+
+    # --- what the state allows ------------------------------------------------
+
+    @property
+    def robot_mode(self) -> int:
+        return int(self.values.get("robot_mode", RobotMode.RUNNING))
+
+    @property
+    def safety_mode(self) -> int:
+        return int(self.values.get("safety_mode", SafetyMode.NORMAL))
+
+    def can_move(self) -> bool:
+        """Powered, brakes released, no safety stop."""
+        return self.robot_mode == RobotMode.RUNNING and self.safety_mode in (
+            SafetyMode.NORMAL,
+            SafetyMode.REDUCED,
+        )
+
+    @property
+    def program_state(self) -> ProgramState:
+        if self.program is None:
+            return ProgramState.STOPPED
+        return ProgramState.PAUSED if self.paused else ProgramState.RUNNING
+
+    # --- power and brakes -------------------------------------------------------
+
+    def power_on(self) -> bool:
+        """Power the arm: IDLE with the brakes on (as after the controller's POWER_ON phase)."""
+        if self.robot_mode in (RobotMode.IDLE, RobotMode.RUNNING):
+            return True
+        self._set("robot_mode", RobotMode.IDLE)
+        self._bits("robot_status_bits", RobotStatusBits.POWER_ON, True)
+        self._joints(JointMode.IDLE)
+        return True
+
+    def power_off(self) -> bool:
+        """Cut arm power: the arm stands where it is, the program stops."""
+        self.arm.halt()
+        if self.program is not None:
+            self._end_program()
+        self._set("robot_mode", RobotMode.POWER_OFF)
+        self._bits("robot_status_bits", RobotStatusBits.POWER_ON, False)
+        self._joints(JointMode.POWER_OFF)
+        return True
+
+    def release_brakes(self) -> bool:
+        """IDLE -> RUNNING; refused while powered off."""
+        if self.robot_mode == RobotMode.RUNNING:
+            return True
+        if self.robot_mode != RobotMode.IDLE:
+            return False
+        self._set("robot_mode", RobotMode.RUNNING)
+        self._joints(JointMode.RUNNING)
+        return True
+
+    # --- safety -----------------------------------------------------------------
+
+    def protective_stop(self) -> bool:
+        """Halt at once and pause the program until unlocked and played again."""
+        if self.program is None:
+            self.arm.halt()
+        else:  # the motion is kept, frozen, and goes on when the program is played again
+            self.paused = True
+            self._program_bits()
+        self._safety(
+            SafetyMode.PROTECTIVE_STOP, SafetyStatus.PROTECTIVE_STOP, SafetyStatusBits.PROTECTIVE_STOPPED
+        )
+        return True
+
+    def unlock_protective_stop(self) -> bool:
+        if self.safety_mode != SafetyMode.PROTECTIVE_STOP:
+            return False
+        self._safety(SafetyMode.NORMAL, SafetyStatus.NORMAL, SafetyStatusBits.NORMAL_MODE)
+        return True
+
+    # --- the program --------------------------------------------------------------
+
+    def load_program(self, text: str) -> None:
+        """Keep a program (URScript text) for play()."""
+        self.loaded = text
+
+    def play(self) -> bool:
+        """Resume a paused program, or start the loaded one; refused when the arm cannot move."""
+        if not self.can_move():
+            return False
+        if self.program is not None and self.paused:
+            self.paused = False
+            self._program_bits()
+            return True
+        if self.program is not None:
+            return True
+        return self.loaded is not None and self.run_script(self.loaded) is not None
+
+    def pause_program(self) -> bool:
+        if self.program is None:
+            return False
+        self.paused = True
+        self._program_bits()
+        return True
+
+    def stop_program(self) -> bool:
+        """End the program; a moving arm decelerates (stop category 2)."""
+        if self.program is None:
+            return False
+        frozen = self.paused or not self.can_move()
+        self.program.finished = True
+        self._end_program()
+        if frozen:
+            self.arm.halt()
+        elif self.arm.moving:
+            self.arm.stop(MOVEJ_A)
+        return True
+
+    # --- how the outputs show it ----------------------------------------------------
+
+    def _program_bits(self) -> None:
+        self._set("runtime_state", self.program_state)
+        running = self.program is not None and not self.paused
+        self._bits("robot_status_bits", RobotStatusBits.PROGRAM_RUNNING, running)
+
+    def _safety(self, mode: SafetyMode, status: SafetyStatus, bits: SafetyStatusBits) -> None:
+        self._set("safety_mode", mode)
+        self._set("safety_status", status)
+        self._set("safety_status_bits", bits)
+
+    def _joints(self, mode: JointMode) -> None:
+        if "joint_mode" in self.values:
+            self.values["joint_mode"] = (int(mode),) * 6
+
+    def _set(self, name: str, value: int) -> None:
+        if name in self.values:
+            self.values[name] = int(value)
+
+    def _bits(self, name: str, bit: int, on: bool) -> None:
+        if name in self.values:
+            current = int(self.values[name])
+            self.values[name] = (current | int(bit)) if on else (current & ~int(bit))
