@@ -10,7 +10,7 @@ import socket
 from collections.abc import Iterator
 
 from rtde_spec._generated.constants import PRIMARY_PORTS
-from rtde_spec.errors import RtdeConnectionError, UsageError
+from rtde_spec.errors import DecodeError, RtdeConnectionError, UsageError
 from rtde_spec.primary.codec import PrimaryMessage, PrimaryStreamDecoder
 
 READ_ONLY_PORTS = {port for name, port in PRIMARY_PORTS.items() if name.endswith("read_only")}
@@ -37,7 +37,8 @@ class PrimaryClient:
         return self
 
     def messages(self) -> Iterator[tuple[int, PrimaryMessage]]:
-        """Decoded messages as they arrive, until the controller closes the connection."""
+        """Decoded messages as they arrive, until the controller closes the connection (a close
+        inside a message raises DecodeError saying how much of it came)."""
         if self._sock is None:
             self.connect()
         assert self._sock is not None
@@ -47,10 +48,30 @@ class PrimaryClient:
             except TimeoutError:
                 raise TimeoutError(f"nothing from {self.where} within {self.timeout} s") from None
             except OSError as exc:
+                self._raise_if_cut(f"connection lost: {exc.strerror or exc}")
                 raise RtdeConnectionError(f"connection lost: {exc}", subject=self.where) from None
             if not chunk:
+                self._raise_if_cut("the controller closed the connection")
                 return
             yield from self.decoder.feed(chunk)
+
+    def _raise_if_cut(self, cause: str) -> None:
+        """A DecodeError if the connection ended inside a message: its bytes are lost, not dropped
+        silently."""
+        framer = self.decoder.framer
+        held = framer.pending
+        if not held:
+            return
+        try:
+            framer.close()
+        except DecodeError as exc:
+            raise DecodeError(
+                f"connection closed inside a message: {held} of {exc.expected} ({cause})",
+                subject=self.where,
+                offset=exc.offset,
+                expected=exc.expected,
+                actual=exc.actual,
+            ) from None
 
     __iter__ = messages
 

@@ -6,7 +6,9 @@
         async for record in client: ...
 
 A reader task drains the socket from connect on; data packages wait in a bounded
-queue (oldest dropped, counted in `skipped`); every await has a timeout.
+queue (oldest dropped, counted in `skipped`); every await has a timeout. As with the
+blocking client, a clean close ends `async for` quietly, while a package that does not
+decode, breaks the protocol or is cut off by the close ends it with that error.
 """
 
 from __future__ import annotations
@@ -17,9 +19,9 @@ from collections.abc import AsyncIterator, Mapping, Sequence
 from typing import Any
 
 from rtde_spec._generated.constants import RTDE_PORT
-from rtde_spec.errors import ProtocolError, RtdeConnectionError
+from rtde_spec.errors import ProtocolError, RtdeConnectionError, RtdeSpecError
 from rtde_spec.rtde.client import LOG_LEVELS
-from rtde_spec.rtde.client_protocol import ClientBase, DataRun, InputRecipe, Reply, Text
+from rtde_spec.rtde.client_protocol import ClientBase, DataRun, Event, InputRecipe, Reply, Text
 
 log = logging.getLogger("rtde_spec.client")
 
@@ -112,39 +114,59 @@ class AsyncRtdeClient(ClientBase):
         await self._writer.drain()
 
     async def _request(self, data: bytes) -> Reply:
+        """Send a request (built by the core just before) and wait for the reply matched to it."""
+        request = self.core.last_request
+        assert request is not None
+        if self._closed is not None:
+            self.core.forget(request)
+            raise self._closed
         if self._low_mark > 1:
             self._wake_after(self._socket(), 1)  # the reply must not wait for a batch
         await self._write(data)
-        try:
-            reply = await asyncio.wait_for(self._replies.get(), self.timeout)
-        except asyncio.TimeoutError:
-            raise TimeoutError(f"no reply from {self.where} within {self.timeout} s") from None
-        return self._checked_reply(reply)
+        loop = asyncio.get_running_loop()
+        deadline = loop.time() + self.timeout
+        while True:
+            try:
+                reply = await asyncio.wait_for(self._replies.get(), max(0.0, deadline - loop.time()))
+            except asyncio.TimeoutError:
+                if self._closed is not None:
+                    raise self._closed from None
+                raise self.core.no_reply(request, self.timeout, self.where) from None
+            if isinstance(reply, BaseException) or reply.request is request:
+                return self._checked_reply(reply)
+            # else the late reply of a request that timed out before: not this one's
 
     async def _read_loop(self, reader: asyncio.StreamReader) -> None:
         try:
             while True:
-                chunk = await reader.read(max(65536, 2 * self._low_mark))
+                try:
+                    chunk = await reader.read(max(65536, 2 * self._low_mark))
+                except OSError as exc:
+                    raise self.core.closed(self.where, f"connection lost: {exc.strerror or exc}") from None
                 if not chunk:
-                    raise RtdeConnectionError("the controller closed the connection", subject=self.where)
-                for event in self.core.receive(chunk):
-                    if isinstance(event, DataRun):
-                        got = len(event.records)
-                        self.received += got
-                        self.skipped += max(0, len(self._data) + got - self._data.maxlen)  # type: ignore[operator]
-                        self._data.extend(event.records)
-                        self._data_event.set()
-                    elif isinstance(event, Text):
-                        log.log(LOG_LEVELS[min(event.level, 3)], "%s: %s", event.source, event.message)
-                    else:
-                        self._replies.put_nowait(event)
+                    raise self.core.closed(self.where)
+                try:
+                    events = self.core.receive(chunk)
+                except RtdeSpecError:
+                    self._dispatch(self.core.before_error)  # the packages before the fault are kept
+                    raise
+                self._dispatch(events)
         except asyncio.CancelledError:
             raise
-        except BaseException as exc:
-            self._closed = (
-                exc
-                if isinstance(exc, RtdeConnectionError)
-                else RtdeConnectionError(f"connection lost: {exc}", subject=self.where)
-            )
-            self._replies.put_nowait(self._closed)
+        except BaseException as exc:  # kept as raised: a protocol error is not a quiet close
+            self._closed = exc
+            self._replies.put_nowait(exc)
             self._data_event.set()
+
+    def _dispatch(self, events: list[Event]) -> None:
+        for event in events:
+            if isinstance(event, DataRun):
+                got = len(event.records)
+                self.received += got
+                self.skipped += max(0, len(self._data) + got - self._data.maxlen)  # type: ignore[operator]
+                self._data.extend(event.records)
+                self._data_event.set()
+            elif isinstance(event, Text):
+                log.log(LOG_LEVELS[min(event.level, 3)], "%s: %s", event.source, event.message)
+            else:
+                self._replies.put_nowait(event)

@@ -4,7 +4,9 @@ The controller drops a client that does not read; so from `connect()` a thread
 reads the socket, hands replies to the caller waiting for them, logs text
 messages, and keeps data packages in a bounded queue (oldest dropped, counted in
 `skipped`). Every blocking call has a timeout; refused and closed connections are
-errors naming host and port.
+errors naming host and port. A connection that ends inside a package, a package that
+does not decode or breaks the protocol, ends iteration with that error (a clean close
+ends it quietly).
 """
 
 from __future__ import annotations
@@ -19,8 +21,8 @@ from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any
 
 from rtde_spec._generated.constants import RTDE_PORT
-from rtde_spec.errors import ProtocolError, RtdeConnectionError, UsageError
-from rtde_spec.rtde.client_protocol import ClientBase, DataRun, InputRecipe, Reply, Text
+from rtde_spec.errors import ProtocolError, RtdeConnectionError, RtdeSpecError, UsageError
+from rtde_spec.rtde.client_protocol import ClientBase, DataRun, Event, InputRecipe, Reply, Text
 
 log = logging.getLogger("rtde_spec.client")
 LOG_LEVELS = (logging.CRITICAL, logging.ERROR, logging.WARNING, logging.INFO)  # by text-message level
@@ -165,14 +167,26 @@ class RtdeClient(ClientBase):
             raise RtdeConnectionError(f"connection lost while sending: {exc}", subject=self.where) from None
 
     def _request(self, data: bytes) -> Reply:
+        """Send a request (built by the core just before) and wait for the reply matched to it."""
+        request = self.core.last_request
+        assert request is not None
+        if self._closed is not None:
+            self.core.forget(request)
+            raise self._closed
         if self._low_mark > 1:
             self._wake_after(self._sock, 1)  # the reply must not wait for a batch
         self._write(data)
-        try:
-            reply = self._replies.get(timeout=self.timeout)
-        except queue.Empty:
-            raise TimeoutError(f"no reply from {self.where} within {self.timeout} s") from None
-        return self._checked_reply(reply)
+        deadline = time.monotonic() + self.timeout
+        while True:
+            try:
+                reply = self._replies.get(timeout=max(0.0, deadline - time.monotonic()))
+            except queue.Empty:
+                if self._closed is not None:
+                    raise self._closed from None
+                raise self.core.no_reply(request, self.timeout, self.where) from None
+            if isinstance(reply, BaseException) or reply.request is request:
+                return self._checked_reply(reply)
+            # else the late reply of a request that timed out before: not this one's
 
     def _read_loop(self) -> None:
         sock = self._sock
@@ -182,23 +196,35 @@ class RtdeClient(ClientBase):
             poller.register(sock, select.POLLIN)
         try:
             while True:
-                if self._low_mark > 1 and poller is not None:
-                    # a blocked recv keeps the low mark it started with; poll sees it lowered
-                    poller.poll()
-                chunk = sock.recv(max(65536, 2 * self._low_mark))
+                try:
+                    if self._low_mark > 1 and poller is not None:
+                        # a blocked recv keeps the low mark it started with; poll sees it lowered
+                        poller.poll()
+                    chunk = sock.recv(max(65536, 2 * self._low_mark))
+                except OSError as exc:
+                    self._finish(self.core.closed(self.where, f"connection lost: {exc.strerror or exc}"))
+                    return
                 if not chunk:
-                    raise RtdeConnectionError("the controller closed the connection", subject=self.where)
+                    self._finish(self.core.closed(self.where))
+                    return
                 self._handle(chunk)
-        except OSError as exc:
-            self._finish(RtdeConnectionError(f"connection lost: {exc.strerror or exc}", subject=self.where))
         except BaseException as exc:
             self._finish(exc)
 
     def _handle(self, chunk: bytes) -> None:
         """The events of one read, in order. A function of its own so that the read's records
-        and bytes are freed when it returns, while still in the cache, not at the next read."""
+        and bytes are freed when it returns, while still in the cache, not at the next read.
+        A faulty package ends the connection after the packages before it are handed over."""
+        try:
+            events = self.core.receive(chunk)
+        except RtdeSpecError:
+            self._dispatch(self.core.before_error)
+            raise
+        self._dispatch(events)
+
+    def _dispatch(self, events: list[Event]) -> None:
         data: list[DataRun] = []
-        for event in self.core.receive(chunk):
+        for event in events:
             if isinstance(event, DataRun):
                 data.append(event)
                 continue

@@ -5,14 +5,19 @@ negotiation, recipes, the data path) is written once. Recipes are validated
 offline against the controller's version before they are sent. Data packages of
 the output recipe skip the generic codec: those that arrive back to back in one read
 are cut out together and become records in one C loop (`RecipeCodec.decode_records`).
+
+Replies are matched to requests by package type (a reply carries its request's
+letter), never by arrival order: a reply nobody asked for is logged and dropped,
+so one extra reply from a misbehaving peer cannot shift every later answer.
 """
 
 from __future__ import annotations
 
 import collections
+import logging
 import socket
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 from rtde_spec._generated import rtde_models as gen
@@ -23,11 +28,11 @@ from rtde_spec._generated.constants import (
     RTDE_PORT,
     RTDE_PROTOCOLS,
 )
-from rtde_spec.errors import ProtocolError, RecipeError, RtdeSpecError
+from rtde_spec.errors import DecodeError, ProtocolError, RecipeError, RtdeConnectionError, RtdeSpecError
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
 from rtde_spec.recipes.encoding import PREFIX
 from rtde_spec.recipes.model import Recipe
-from rtde_spec.rtde.codec import build, decode, observe
+from rtde_spec.rtde.codec import decode, message_by_name, observe
 from rtde_spec.rtde.messages import RtdeMessage
 from rtde_spec.rtde.protocol_state import ProtocolState
 from rtde_spec.spec.catalogue import Catalogue
@@ -35,6 +40,8 @@ from rtde_spec.spec.versions import Version
 from rtde_spec.wire.framing import PackageFramer
 
 INVALID_ID = RTDE_LIMITS["invalid_recipe_id"]
+UNSOLICITED_LOGGED = 10  # unsolicited replies logged one by one; after that only counted
+log = logging.getLogger("rtde_spec.client")
 
 
 @dataclass(frozen=True)
@@ -46,12 +53,24 @@ class InputRecipe:
     codec: RecipeCodec
 
 
+@dataclass(eq=False)
+class Request:
+    """A request sent and waiting for its reply, which carries the same package type."""
+
+    name: str  # the request's spec name, e.g. "setup_outputs_v2"
+    package_type: int
+    message: RtdeMessage
+    setup: tuple[str, tuple[str, ...]] | None = None  # (direction, names) of a setup request
+    others: list[str] = field(default_factory=list)  # replies of other types that came meanwhile
+
+
 @dataclass(frozen=True)
 class Reply:
     """The controller's answer to a request (version, setup, start, pause); `error` if refused."""
 
     message: RtdeMessage
     error: RtdeSpecError | None = None
+    request: Request | None = None  # the request it answers
 
 
 @dataclass(frozen=True)
@@ -95,7 +114,12 @@ class ClientProtocol:
         self.output_recipe_id: int | None = None
         self._run: tuple[int, bytes] | None = None  # (size, leading bytes) of the output's packages
         self.inputs: dict[int, InputRecipe] = {}
-        self._requested: list[Any] = []  # setups awaiting their reply, in order
+        # requests awaiting their reply, oldest first (appended by the caller's thread, removed
+        # by the reader's: list copy, append and remove are each atomic)
+        self._pending: list[Request] = []
+        self.last_request: Request | None = None  # the request whose bytes were built last
+        self.unsolicited = 0  # replies that answered no waiting request (logged, dropped)
+        self.before_error: list[Event] = []  # see receive()
         # False when only raw bytes are taken (a recorder decoding its batches with numpy):
         # data packages are framed and checked, and no record is made
         self.want_records = True
@@ -103,31 +127,77 @@ class ClientProtocol:
     # --- requests -----------------------------------------------------------
 
     def request_protocol_version(self, version: int) -> bytes:
-        message = gen.RequestProtocolVersion(protocol_version=version)
-        observe(self.state, message)
-        return message.to_bytes()
+        return self._ask(gen.RequestProtocolVersion(protocol_version=version))
 
     def get_controller_version(self) -> bytes:
-        return build("get_urcontrol_version")
+        return self._ask(message_by_name("get_urcontrol_version")())
 
     def setup_outputs(self, names: Sequence[str], frequency: float) -> bytes:
         """Validate offline (names, direction, version, rate), then the setup request."""
         self._validate(names, "output", frequency)
-        self._requested.append(("output", tuple(names)))
+        message: RtdeMessage
         if self.state.version == 1:
-            return gen.SetupOutputsV1(variable_names=list(names)).to_bytes()
-        return gen.SetupOutputsV2(output_frequency=frequency, variable_names=list(names)).to_bytes()
+            message = gen.SetupOutputsV1(variable_names=list(names))
+        else:
+            message = gen.SetupOutputsV2(output_frequency=frequency, variable_names=list(names))
+        return self._ask(message, ("output", tuple(names)))
 
     def setup_inputs(self, names: Sequence[str]) -> bytes:
         self._validate(names, "input", None)
-        self._requested.append(("input", tuple(names)))
-        return gen.SetupInputs(variable_names=list(names)).to_bytes()
+        return self._ask(gen.SetupInputs(variable_names=list(names)), ("input", tuple(names)))
 
     def start(self) -> bytes:
-        return build("start")
+        return self._ask(message_by_name("start")())
 
     def pause(self) -> bytes:
-        return build("pause")
+        return self._ask(message_by_name("pause")())
+
+    def _ask(self, message: RtdeMessage, setup: tuple[str, tuple[str, ...]] | None = None) -> bytes:
+        """The request's bytes; its reply is awaited from now on (`last_request`)."""
+        data = message.to_bytes()
+        request = Request(message.NAME, message.PACKAGE_TYPE, message, setup)
+        self._pending.append(request)
+        self.last_request = request
+        return data
+
+    def forget(self, request: Request) -> None:
+        """Stop waiting for `request`'s reply (it timed out): a late one is then unsolicited."""
+        try:
+            self._pending.remove(request)
+        except ValueError:
+            pass  # answered meanwhile
+
+    def no_reply(self, request: Request, waited: float, where: str) -> Exception:
+        """The error of a request left without its reply: naming what came instead, if anything."""
+        self.forget(request)
+        if request.others:
+            reply = gen.BY_KEY.get((request.package_type, "controller", self.state.version))
+            return ProtocolError(
+                f"requested {request.name}, got {', '.join(request.others)} instead of its reply "
+                f"(none within {waited} s)",
+                subject=where,
+                expected=reply.NAME if reply is not None else request.name + " reply",
+                actual=request.others[0],
+            )
+        return TimeoutError(f"no reply to {request.name} from {where} within {waited} s")
+
+    def closed(self, where: str, cause: str = "the controller closed the connection") -> RtdeSpecError:
+        """The error that ends a connection; a DecodeError when it ended inside a package, whose
+        bytes are lost (so iterating clients raise it instead of ending quietly)."""
+        held = self.framer.pending
+        if not held:
+            return RtdeConnectionError(cause, subject=where)
+        try:
+            self.framer.close()
+        except DecodeError as exc:
+            return DecodeError(
+                f"connection closed inside a package: {held} of {exc.expected} ({cause})",
+                subject=where,
+                offset=exc.offset,
+                expected=exc.expected,
+                actual=exc.actual,
+            )
+        return RtdeConnectionError(cause, subject=where)
 
     def send_inputs(self, recipe: InputRecipe, values: Mapping[str, Any]) -> bytes:
         return recipe.codec.encode_package(dict(values), recipe.recipe_id)
@@ -154,7 +224,9 @@ class ClientProtocol:
     # --- incoming -------------------------------------------------------------
 
     def receive(self, data: bytes) -> list[Event]:
-        """Events for every package this data completes."""
+        """Events for every package this data completes. A package that does not decode or
+        breaks the protocol raises its error; the events of the packages before it in this
+        data are then in `before_error`."""
         output, run = self.output, self._run
         if output is not None and run is not None:
             wanted = self.want_records
@@ -169,43 +241,64 @@ class ClientProtocol:
                 if self.framer.take_run(data, *run):
                     return [DataRun(records, data, run[0])]
         events: list[Event] = []
-        for _, package in self.framer.feed(data, run):
-            if output is not None and run is not None and package[: len(run[1])] == run[1]:
-                records = output.decode_records(package) if self.want_records else []
-                events.append(DataRun(records, package, run[0]))
-                continue
-            message = decode(bytes(package), protocol_version=self.state.version, sender="controller")
-            event = self._control(message)
-            if event is not None:
-                events.append(event)
+        try:
+            for _, package in self.framer.feed(data, run):
+                if output is not None and run is not None and package[: len(run[1])] == run[1]:
+                    records = output.decode_records(package) if self.want_records else []
+                    events.append(DataRun(records, package, run[0]))
+                    continue
+                message = decode(bytes(package), protocol_version=self.state.version, sender="controller")
+                event = self._control(message)
+                if event is not None:
+                    events.append(event)
+        except RtdeSpecError:
+            self.before_error = events  # the packages before the fault: handed out, not dropped
+            raise
         return events
 
     def _control(self, message: RtdeMessage) -> Event | None:
-        if isinstance(message, gen.RequestProtocolVersionReply):
-            observe(self.state, message)
-        elif isinstance(message, gen.GetUrcontrolVersionReply):
-            self.controller_version = Version(message.major, message.minor, message.bugfix, message.build)
-        elif isinstance(message, (gen.SetupOutputsV1Reply, gen.SetupOutputsV2Reply, gen.SetupInputsReply)):
-            try:
-                self._setup_reply(message)
-            except RtdeSpecError as exc:
-                return Reply(message, exc)
-        elif isinstance(message, (gen.TextMessage, gen.TextMessageV1Controller)):
+        if isinstance(message, (gen.TextMessage, gen.TextMessageV1Controller)):
             level = getattr(message, "warning_level", getattr(message, "message_type", 3))
             return Text(level, message.message, getattr(message, "source", "controller"))
-        elif isinstance(message, gen.DataPackage):
+        if isinstance(message, gen.DataPackage):
             raise ProtocolError(
                 "data package of no recipe this client set up",
                 package="data_package",
                 field="recipe_id",
                 actual=message.recipe_id,
             )
-        return Reply(message)
+        request = self._match(message)
+        if request is None:
+            return None
+        if isinstance(message, gen.RequestProtocolVersionReply):
+            observe(self.state, request.message)  # the version this reply answers
+            observe(self.state, message)
+        elif isinstance(message, gen.GetUrcontrolVersionReply):
+            self.controller_version = Version(message.major, message.minor, message.bugfix, message.build)
+        elif request.setup is not None:
+            try:
+                self._setup_reply(message, *request.setup)
+            except RtdeSpecError as exc:
+                return Reply(message, exc, request)
+        return Reply(message, None, request)
 
-    def _setup_reply(self, message: RtdeMessage) -> None:
-        if not self._requested:
-            raise ProtocolError("setup reply without a setup request", package=message.NAME)
-        direction, names = self._requested.pop(0)
+    def _match(self, message: RtdeMessage) -> Request | None:
+        """The oldest waiting request this reply answers (same package type), now answered;
+        None for a reply nobody asked for, which is logged and changes nothing."""
+        waiting = list(self._pending)
+        for request in waiting:
+            if request.package_type == message.PACKAGE_TYPE:
+                self.forget(request)
+                return request
+        for request in waiting:
+            request.others.append(message.NAME)
+        self.unsolicited += 1
+        if self.unsolicited <= UNSOLICITED_LOGGED:
+            asked = ", ".join(r.name for r in waiting) or "nothing"
+            log.warning("ignored a %s nobody asked for (waiting for: %s)", message.NAME, asked)
+        return None
+
+    def _setup_reply(self, message: RtdeMessage, direction: str, names: tuple[str, ...]) -> None:
         types: list[str] = list(message.variable_types)  # type: ignore[attr-defined]
         recipe_id = getattr(message, "output_recipe_id", getattr(message, "input_recipe_id", 1))
         refused = [f"{n}: {t}" for n, t in zip(names, types, strict=False) if t in RTDE_ANSWERS.values()]

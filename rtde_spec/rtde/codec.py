@@ -82,6 +82,7 @@ def decode_body(cls: type[RtdeMessage], body: bytes, *, strict: bool = True) -> 
             package=cls.NAME,
             field=missing[0],
             offset=gen.HEADER_SIZE + stop,
+            expected=f"field{'s' if len(missing) > 1 else ''} {', '.join(missing)}",
             actual=f"{len(body) - stop} bytes left",
         )
     if strict and stop < len(body):
