@@ -1,0 +1,175 @@
+"""Every code block of README.md and docs/*.md runs as written, so none can rot.
+
+Blocks run in one workspace holding stand-ins for a user's files (a capture of a
+session, recipe files, a primary stream...: `docs_workspace.py`) beside the
+controller emulator on its default ports on 127.0.0.1, which is what the docs point
+commands at. The install and test commands of the README are checked against
+`.ci/run` instead of being run inside the test run they start.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+from typing import Any
+
+import pytest
+import yaml
+
+from .docs_blocks import LANGUAGES, ROOT, Block, blocks, commands, documents
+from .docs_workspace import make_workspace
+
+ALL = [b for doc in documents() for b in blocks(doc)]
+RUNNABLE = [b for b in ALL if b.language in ("python", "sh")]
+
+
+class Robot:
+    """The emulator on the default ports, as `rtde-spec serve` runs it; stopped for blocks that start one."""
+
+    def __init__(self) -> None:
+        self.thread: Any = None
+
+    def start(self) -> None:
+        from rtde_spec import EmulatorConfig, EmulatorThread
+
+        if self.thread is None:
+            self.thread = EmulatorThread(EmulatorConfig()).start()
+
+    def stop(self) -> None:
+        if self.thread is not None:
+            self.thread.stop()
+            self.thread = None
+
+
+@pytest.fixture(scope="module")
+def robot() -> Iterator[Robot]:
+    held = Robot()
+    held.start()
+    try:
+        yield held
+    finally:
+        held.stop()
+
+
+@pytest.fixture(scope="module")
+def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    folder = make_workspace(tmp_path_factory.mktemp("docs"))
+    for block in ALL:  # files the docs show first and use later
+        if "file" in block.directives:
+            (folder / block.directives["file"]).write_text(block.text, encoding="utf-8")
+    return folder
+
+
+def _env(folder: Path) -> dict[str, str]:
+    bin_dir = folder / ".bin"
+    bin_dir.mkdir(exist_ok=True)
+    python = bin_dir / "python3"
+    if not python.exists():
+        python.symlink_to(sys.executable)
+        cli = bin_dir / "rtde-spec"
+        cli.write_text(f'#!/bin/sh\nexec "{sys.executable}" -m rtde_spec "$@"\n')
+        cli.chmod(0o755)
+    env = dict(os.environ)
+    env["PATH"] = f"{bin_dir}{os.pathsep}{env.get('PATH', '')}"
+    env["MPLBACKEND"] = "Agg"
+    return env
+
+
+def test_every_block_has_a_language_the_suite_knows() -> None:
+    unknown = [f"{b.id} ({b.language or 'none'})" for b in ALL if b.language not in LANGUAGES]
+    assert not unknown, f"give these blocks a language ({', '.join(sorted(LANGUAGES))}): {unknown}"
+    assert len(RUNNABLE) >= 10
+
+
+@pytest.mark.parametrize(
+    "block", [b for b in ALL if b.language in ("yaml", "xml", "json")], ids=lambda b: b.id
+)
+def test_data_blocks_parse(block: Block) -> None:
+    if block.language == "yaml":
+        yaml.safe_load(block.text)
+    elif block.language == "json":
+        json.loads(block.text)
+    else:
+        import defusedxml.ElementTree as ET
+
+        ET.fromstring(block.text)
+
+
+def _ci_step(part: str) -> bool:
+    """The README's install and test commands: checked against .ci/run, not run here."""
+    ci = (ROOT / ".ci" / "run").read_text()
+    part = part.split(" #")[0].strip()  # the line's comment
+    if part.startswith("python3 -m pip install"):
+        assert "python3 -m pip install" in ci and ".[test]" in ci
+        return True
+    if part == "python3 -m pytest":
+        assert "\npython3 -m pytest\n" in ci, ".ci/run must run exactly the README's test command"
+        return True
+    return False
+
+
+def _run_until_stopped(command: str, folder: Path, env: dict[str, str], seconds: float) -> None:
+    proc = subprocess.Popen(
+        command, shell=True, cwd=folder, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+        start_new_session=True,
+    )  # fmt: skip
+    deadline = time.monotonic() + seconds
+    while time.monotonic() < deadline and proc.poll() is None:
+        time.sleep(0.1)
+    if proc.poll() is not None:
+        out, err = proc.communicate()
+        raise AssertionError(f"{command!r} ended early (exit {proc.returncode}): {err.decode()[-800:]}")
+    os.killpg(proc.pid, signal.SIGINT)
+    try:
+        proc.wait(20)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        raise AssertionError(f"{command!r} did not stop on Ctrl-C") from None
+    err = proc.stderr.read().decode() if proc.stderr else ""
+    assert "Traceback" not in err, err[-800:]
+
+
+@pytest.mark.parametrize("block", RUNNABLE, ids=lambda b: b.id)
+def test_block_runs(block: Block, workspace: Path, robot: Robot) -> None:
+    env = _env(workspace)
+    if "own-emulator" in block.directives:
+        robot.stop()
+        try:
+            _run(block, workspace, env)
+        finally:
+            robot.start()
+    else:
+        robot.start()
+        _run(block, workspace, env)
+
+
+def _run(block: Block, workspace: Path, env: dict[str, str]) -> None:
+    if block.language == "python":
+        result = subprocess.run(
+            [sys.executable, "-c", block.text], cwd=workspace, env=env, capture_output=True, text=True,
+            timeout=180,
+        )  # fmt: skip
+        assert result.returncode == 0, f"{block.id}:\n{result.stderr[-2000:]}"
+        return
+    until = block.directives.get("until-stopped")
+    for command in commands(block):
+        parts = [p.strip() for p in command.split(" && ")]
+        rest = " && ".join(p for p in parts if not _ci_step(p))
+        if not rest:
+            continue
+        if until is not None:
+            _run_until_stopped(rest, workspace, env, float(until))
+            continue
+        result = subprocess.run(
+            rest, shell=True, cwd=workspace, env=env, capture_output=True, text=True, timeout=180
+        )
+        expected = int(block.directives.get("exit", "0"))
+        assert result.returncode == expected, (
+            f"{block.id}: {rest!r} exit {result.returncode}:\n{result.stderr[-2000:]}"
+        )
