@@ -5,7 +5,8 @@ page: `<!-- test: file=NAME -->` writes the block to NAME in the workspace (a sc
 a recipe, a script the next block uses); `<!-- test: until-stopped=S -->` marks commands
 that run until Ctrl-C (`serve`, `watch`): each must still be running after S seconds;
 `<!-- test: own-emulator -->` runs the block with the test's emulator stopped (it starts
-its own); `<!-- test: exit=N -->` expects each command to exit N (an example of an error). Every block has a language: python and sh run, yaml/xml/json are parsed, text
+its own); `<!-- test: exit=N -->` expects each command to exit N (an example of an
+error). Every block has a language: python and sh run, yaml/xml/json are parsed, text
 is output shown to the reader and is not run.
 """
 

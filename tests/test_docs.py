@@ -123,7 +123,7 @@ def _run_until_stopped(command: str, folder: Path, env: dict[str, str], seconds:
     while time.monotonic() < deadline and proc.poll() is None:
         time.sleep(0.1)
     if proc.poll() is not None:
-        out, err = proc.communicate()
+        _, err = proc.communicate()
         raise AssertionError(f"{command!r} ended early (exit {proc.returncode}): {err.decode()[-800:]}")
     os.killpg(proc.pid, signal.SIGINT)
     try:
