@@ -2,17 +2,22 @@
 
 `struct` already refuses integers out of range and non-numbers, so a valid input
 costs one generated flatten and one pack. What `struct` would let through (a
-vector of the wrong length, a BOOL that is not 0/1) is checked inline; anything
-that fails goes through the per-value checks, which either convert it (an
-integral float for an integer) or raise EncodeError naming the field, the limit
-and the value.
+vector of the wrong length, a BOOL that is not 0/1) is checked inline; strict
+mode adds one C-level type check per wire kind (`{float, int}` for doubles,
+`{int}` for integers, `{bool}` for BOOL) over the flat tuple. Anything that
+fails goes through the per-value checks, which either convert it (an integral
+float for an integer, a subclass such as an IntEnum) or raise EncodeError naming
+the field, the limit and the value. NaN and infinities are valid doubles: the
+spec sets no range for DOUBLE fields and the controller takes IEEE 754 values.
 """
 
 from __future__ import annotations
 
 import struct
-from collections.abc import Callable, Mapping, Sequence
+import sys
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from operator import itemgetter
 from typing import Any
 
 from rtde_spec._generated.constants import BYTE_ORDER, DATA_PACKAGE_PREFIX_FORMAT, DATA_PACKAGE_TYPE
@@ -40,24 +45,81 @@ def _is_bool(value: Any) -> bool:
     return value is True or value is False or (type(value) is int and value in (0, 1))
 
 
-def _compile_flatten(items: Sequence[RecipeItem]) -> Callable[[Mapping[str, Any]], tuple[Any, ...]]:
-    """A function from a dict of values to the flat tuple `struct` packs, written once per recipe."""
-    lines = ["def flatten(v):"]
+_STRICT_TYPES = {
+    "float": frozenset({float, int}),
+    "int": frozenset({int}),
+    "bool": frozenset({bool}),
+    "vector": frozenset({list, tuple}),
+}
+"""The exact Python types strict mode takes per wire kind without a closer look."""
+_CANONICAL = {"float": float, "int": int, "bool": bool}
+"""The type a value of each wire kind usually has (what decoding gives)."""
+
+_FAST_ERRORS = (KeyError, TypeError, struct.error, OverflowError, _Refused)
+"""What the one-call path may raise; every one is explained (or converted) by `checked`."""
+
+
+def _strict_checks(
+    items: Sequence[RecipeItem], names: Sequence[str], scope: dict[str, Any], leading: int
+) -> list[str]:
+    """Source lines refusing the values unless each has a type strict mode takes for its kind.
+
+    `t` holds `leading` ints (size, type, recipe id) and then the values. First
+    one comparison for the usual case (every value of its kind's own type);
+    only if that fails, one `set(map(type, ...)) <= allowed` per kind (ints pass
+    for doubles). Each is a C loop over the values: strict costs a few calls per
+    package, not one per value.
+    """
+    scope["canon"] = [int] * leading + [_CANONICAL[i.wire.kind] for i in items for _ in range(i.wire.count)]
+    vectors = [x for x, item in zip(names, items, strict=True) if item.wire.count > 1]
+    lines = []
+    if vectors:  # lists or tuples, as the per-value checks want (not sets, arrays, strings)
+        scope["sequences"] = _STRICT_TYPES["vector"]
+        lines.append(f"    if not set(map(type, ({', '.join(vectors)},))) <= sequences: raise Refused")
+    lines.append("    if list(map(type, t)) != canon:")
+    groups: dict[str, list[str]] = {}
+    for x, item in zip(names, items, strict=True):
+        groups.setdefault(item.wire.kind, []).append(x if item.wire.count == 1 else f"*{x}")
+    for k, (kind, parts) in enumerate(sorted(groups.items())):
+        scope[f"ok{k}"] = _STRICT_TYPES[kind]
+        lines.append(f"        if not set(map(type, ({', '.join(parts)},))) <= ok{k}: raise Refused")
+    return lines
+
+
+def _compile_encode(items: Sequence[RecipeItem], packer: struct.Struct, lead: str, strict: bool) -> Any:
+    """One function from a dict of values to packed bytes, written once per recipe and mode.
+
+    `lead` names the arguments packed before the values ("" for a payload). It
+    raises `_Refused` (or KeyError, TypeError, struct.error) where the per-value
+    checks must decide. strict: every value has a type strict mode takes for its
+    kind; otherwise BOOL values are bools or 0/1. Ranges are struct's to check.
+    """
+    scope: dict[str, Any] = {"Refused": _Refused, "is_bool": _is_bool, "pack": packer.pack}
+    names = [f"x{i}" for i in range(len(items))]
+    lines = [f"def encode(v{', ' + lead if lead else ''}):"]
+    if len(items) == 1:
+        lines.append(f"    x0 = v[{items[0].name!r}]")
+    else:  # every value in one C call; a missing name raises KeyError
+        scope["get"] = itemgetter(*(item.name for item in items))
+        lines.append(f"    {', '.join(names)} = get(v)")
+    vectors = [x for x, item in zip(names, items, strict=True) if item.wire.count > 1]
+    if vectors:  # each vector's length in one C loop (struct checks only the total)
+        scope["lengths"] = [item.wire.count for item in items if item.wire.count > 1]
+        lines.append(f"    if list(map(len, ({', '.join(vectors)},))) != lengths: raise Refused")
     parts = []
-    for i, item in enumerate(items):
-        lines.append(f"    x{i} = v[{item.name!r}]")
-        if item.wire.count > 1:
-            lines.append(f"    if len(x{i}) != {item.wire.count}: raise Refused")
-            parts.append(f"*x{i}")
-        else:
-            parts.append(f"x{i}")
-        if item.wire.kind == "bool":
-            check = f"is_bool(x{i})" if item.wire.count == 1 else f"all(map(is_bool, x{i}))"
+    for x, item in zip(names, items, strict=True):
+        parts.append(x if item.wire.count == 1 else f"*{x}")
+        if item.wire.kind == "bool" and not strict:
+            check = f"is_bool({x})" if item.wire.count == 1 else f"all(map(is_bool, {x}))"
             lines.append(f"    if not {check}: raise Refused")
-    lines.append(f"    return ({', '.join(parts)},)")
-    scope: dict[str, Any] = {"Refused": _Refused, "is_bool": _is_bool}
+    values = ", ".join(([lead] if lead else []) + parts)
+    if strict:  # the arguments built once: checked, then handed to pack as they are
+        lines.append(f"    t = ({values},)")
+        lines.extend(_strict_checks(items, names, scope, lead.count(",") + 1 if lead else 0))
+        values = "*t"
+    lines.append(f"    return pack({values})")
     exec("\n".join(lines), scope)
-    return scope["flatten"]  # type: ignore[no-any-return]
+    return scope["encode"]
 
 
 class Encoder:
@@ -69,25 +131,29 @@ class Encoder:
         self.payload_struct = payload
         self.package_struct = struct.Struct(PREFIX.format + payload.format[1:])
         self.package_size = package_size
-        self._flatten = _compile_flatten(items)
+        self._count = len(self.items)
+        self._payload = tuple(_compile_encode(items, payload, "", strict) for strict in (False, True))
+        self._package = tuple(
+            _compile_encode(items, self.package_struct, "size, ptype, rid", strict)
+            for strict in (False, True)
+        )
 
     def payload(self, values: Any, strict: bool) -> bytes:
-        if not strict and type(values) is dict and len(values) == len(self.names):
+        if type(values) is dict and len(values) == self._count:
             try:
-                return self.payload_struct.pack(*self._flatten(values))
-            except (KeyError, TypeError, struct.error, _Refused):
+                return self._payload[strict](values)  # type: ignore[no-any-return]
+            except _FAST_ERRORS:
                 pass  # explained (or converted) below
         return self.payload_struct.pack(*self.checked(values, strict))
 
     def package(self, values: Any, recipe_id: int, strict: bool) -> bytes:
-        if not strict and type(values) is dict and len(values) == len(self.names):
+        if type(values) is dict and len(values) == self._count:
             try:
-                flat = self._flatten(values)
-                return self.package_struct.pack(self.package_size, DATA_PACKAGE_TYPE, recipe_id, *flat)
-            except (KeyError, TypeError, struct.error, _Refused):
+                return self._package[strict](values, self.package_size, DATA_PACKAGE_TYPE, recipe_id)  # type: ignore[no-any-return]
+            except _FAST_ERRORS:
                 pass
         try:
-            prefix = PREFIX.pack(self.package_size, DATA_PACKAGE_TYPE, recipe_id)
+            PREFIX.pack(self.package_size, DATA_PACKAGE_TYPE, recipe_id)
         except (struct.error, TypeError):
             low, high = _bounds(PREFIX.format[-1])
             raise EncodeError(
@@ -97,7 +163,8 @@ class Encoder:
                 expected=f"{low}..{high}",
                 actual=recipe_id,
             ) from None
-        return prefix + self.payload(values, strict)
+        flat = self.checked(values, strict)
+        return self.package_struct.pack(self.package_size, DATA_PACKAGE_TYPE, recipe_id, *flat)
 
     def checked(self, values: Any, strict: bool) -> list[Any]:
         """Every value checked against its wire type; the first problem raises, naming the field."""
@@ -157,7 +224,7 @@ def _checked(item: RecipeItem, value: Any, strict: bool, index: int | None) -> A
             return bool(value)
         raise fail("not a bool", "True or False" if strict else "a bool, 0 or 1")
     if wire.kind == "int":
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
+        if (strict and isinstance(value, bool)) or not isinstance(value, (int, float)):
             raise fail(f"not an integer for {wire.name}", wire.name)
         if isinstance(value, float):
             if strict or not value.is_integer():
@@ -168,6 +235,9 @@ def _checked(item: RecipeItem, value: Any, strict: bool, index: int | None) -> A
         if not low <= value <= high:
             raise fail(f"out of range for {wire.name}", f"{low}..{high}")
         return value
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
+    if (strict and isinstance(value, bool)) or not isinstance(value, (int, float)):
         raise fail(f"not a number for {wire.name}", wire.name)
-    return float(value)
+    try:
+        return float(value)
+    except OverflowError:  # an int beyond the largest double
+        raise fail(f"out of range for {wire.name}", f"|value| <= {sys.float_info.max!r}") from None
