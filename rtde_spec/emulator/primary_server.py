@@ -1,5 +1,6 @@
 """The emulator's primary and secondary ports: the Version message, then Robot State at 10 Hz
-(robot mode, joints, cartesian info, masterboard).
+with every sub-package the controller version sends (state_message.py), and on the
+primary ports the robot messages of what happened (robot_messages.py).
 
 The Robot State is built from the same model the RTDE port reads, so a client sees
 the same joint positions and modes on both. What a client sends is cut into
@@ -14,149 +15,75 @@ import logging
 from collections import deque
 from typing import TYPE_CHECKING
 
-from rtde_spec._generated.enums import (
-    AnalogIoTypes,
-    ControlMode,
-    MessageSource,
-    RobotMessageType,
-    RobotMode,
-    SafetyMode,
-)
+from rtde_spec._generated.enums import RobotMode
 from rtde_spec.emulator.guard import GuardedConnection, Port
+from rtde_spec.emulator.robot_messages import event_messages, safety_mode_message, version_message
 from rtde_spec.emulator.script import run_script
 from rtde_spec.emulator.script_framer import ScriptFramer
+from rtde_spec.emulator.state_message import RobotStateBuilder
 from rtde_spec.errors import ProtocolError
-from rtde_spec.primary import models as pm
-from rtde_spec.primary.base import RobotStateMessage
-from rtde_spec.primary.codec import encode_message
 
 if TYPE_CHECKING:
     from rtde_spec.emulator.model import ControllerModel
 
 log = logging.getLogger("rtde_spec.emulator")
-PROJECT = "URControl"
-BUILD_DATE = "emulated by rtde_spec"
 KEEP_SCRIPTS = 64  # the last scripts received, for tests and `watch` to look at
-CARTESIAN = [n for n in pm.CartesianInfo.model_fields if n not in ("extra", "missing")]
 
 
 class PrimaryHub:
-    """Connections of the primary/secondary ports and the scripts they received."""
+    """Connections of the primary/secondary ports, the scripts they received, what they are sent."""
 
     def __init__(self, model: ControllerModel) -> None:
         self.model = model
         self.connections: set[PrimaryConnection] = set()
         self.scripts: deque[tuple[int, str]] = deque(maxlen=KEEP_SCRIPTS)  # (port, script text)
+        self.state = RobotStateBuilder(model)
+        self.states = 0
+        self._safety_mode = self._robot_mode = -1
 
     def run(self, port: int, text: str) -> None:
-        """A whole script from a client: kept (the last few), its I/O calls run."""
+        """A whole script from a client: kept (the last few), run on the model."""
         self.scripts.append((port, text))
         applied = run_script(self.model, text)
         log.info("URScript on port %d: %s (%d I/O calls run)", port, text.strip()[:80], len(applied))
 
     def version_message(self) -> bytes:
-        v = self.model.version
-        return encode_message(
-            pm.VersionMessage(
-                timestamp=self._micros(),
-                source=int(MessageSource.ROBOTINTERFACE),
-                robot_message_type=int(RobotMessageType.VERSION),
-                project_name=PROJECT,
-                major_version=v.major,
-                minor_version=v.minor,
-                bugfix_version=v.bugfix,
-                build_number=v.build or 0,
-                build_date=BUILD_DATE,
-            )
-        )
+        return version_message(self.model.version, self._micros())
 
-    def robot_state(self) -> bytes:
-        values = self.model.values
-        q, q_target = values.get("actual_q", (0.0,) * 6), values.get("target_q", (0.0,) * 6)
-        qd = values.get("actual_qd", (0.0,) * 6)
-        current = values.get("actual_current", (0.0,) * 6)
-        voltage = values.get("actual_joint_voltage", (48.0,) * 6)
-        temperature = values.get("joint_temperatures", (30.0,) * 6)
-        modes = values.get("joint_mode", (0,) * 6)
-        joints = tuple(
-            pm.JointState(
-                q_actual=q[i],
-                q_target=q_target[i],
-                qd_actual=qd[i],
-                i_actual=current[i],
-                v_actual=voltage[i],
-                t_motor=temperature[i],
-                reserved=0.0,
-                joint_mode=modes[i],
-            )
-            for i in range(6)
-        )
-        mode = int(values.get("robot_mode", RobotMode.RUNNING))
-        pose = values.get("actual_TCP_pose", (0.0,) * 6)
-        offset = values.get("tcp_offset", (0.0,) * 6)
-        message = RobotStateMessage(
-            sub_packages=[
-                pm.RobotModeData(
-                    timestamp=self._micros(),
-                    is_real_robot_connected=True,
-                    is_real_robot_enabled=True,
-                    is_robot_power_on=mode >= RobotMode.POWER_ON,
-                    is_emergency_stopped=False,
-                    is_protective_stopped=False,
-                    is_program_running=False,
-                    is_program_paused=False,
-                    robot_mode=mode,
-                    control_mode=int(ControlMode.POSITION),
-                    target_speed_fraction=values.get("target_speed_fraction", 1.0),
-                    speed_scaling=values.get("speed_scaling", 1.0),
-                    target_speed_fraction_limit=1.0,
-                    reserved=0,
-                ),
-                pm.JointData(joints=joints),
-                pm.CartesianInfo(**dict(zip(CARTESIAN, (*pose, *offset), strict=True))),
-                self._masterboard(),
-            ]
-        )
-        return encode_message(message)
-
-    def _masterboard(self) -> pm.MasterboardData:
-        """I/O, supply and safety mode as the RTDE outputs have them.
-
-        The document gives no encoding of the analog ranges and domains; the emulator
-        sends 1 for voltage and 0 for current, as the bits of RTDE's analog_io_types.
-        """
-        values = self.model.values
-        types = int(values.get("analog_io_types", 0))
-        return pm.MasterboardData(
-            digital_input_bits=int(values.get("actual_digital_input_bits", 0)) & 0xFFFF,
-            digital_output_bits=int(values.get("actual_digital_output_bits", 0)) & 0xFFFF,
-            analog_input_range0=int(bool(types & AnalogIoTypes.ANALOG_INPUT_0_VOLTAGE)),
-            analog_input_range1=int(bool(types & AnalogIoTypes.ANALOG_INPUT_1_VOLTAGE)),
-            analog_input0=values.get("standard_analog_input0", 0.0),
-            analog_input1=values.get("standard_analog_input1", 0.0),
-            analog_output_domain0=int(bool(types & AnalogIoTypes.ANALOG_OUTPUT_0_VOLTAGE)),
-            analog_output_domain1=int(bool(types & AnalogIoTypes.ANALOG_OUTPUT_1_VOLTAGE)),
-            analog_output0=values.get("standard_analog_output0", 0.0),
-            analog_output1=values.get("standard_analog_output1", 0.0),
-            masterboard_temperature=35.0,
-            robot_voltage_48v=values.get("actual_robot_voltage", 48.0) or 48.0,
-            robot_current=values.get("actual_robot_current", 0.0),
-            master_io_current=values.get("io_current", 0.0),
-            safety_mode=int(values.get("safety_mode", SafetyMode.NORMAL)),
-            in_reduced_mode=False,
-            immi_interface_installed=False,
-            immi=None,
-            reserved=0,
-            operational_mode_selector_input=0,
-            three_position_enabling_device_input=False,
-            reserved_2=0,
-        )
+    def robot_state(self, first: bool = False) -> bytes:
+        """One Robot State message as a client gets it (`first`: the one after connecting)."""
+        return self.state.build(first=first)
 
     def broadcast_state(self) -> None:
-        if self.connections:
-            data = self.robot_state()
-            for conn in list(self.connections):
-                conn.send(data)
+        """Every 100 ms: robot messages since the last time (primary ports), then Robot State."""
+        values = self.model.values
+        micros = self._micros()
+        messages: list[bytes] = []
+        drain = getattr(self.model, "drain_events", None)
+        for event in drain() if drain is not None else ():
+            messages += event_messages(event, micros)
+        safety, mode = int(values.get("safety_mode", 0)), int(values.get("robot_mode", 0))
+        if safety != self._safety_mode and self._safety_mode != -1:
+            messages.append(safety_mode_message(safety, micros))
+        # leaving initialisation (powered on from off): Kinematics Info goes out again
+        kinematics = self._robot_mode != -1 and self._robot_mode < RobotMode.IDLE <= mode
+        self._safety_mode, self._robot_mode = safety, mode
+        self.states += 1
+        if not self.connections:
+            return
+        periodic = first = b""
+        burst = b"".join(messages)
+        for conn in list(self.connections):
+            if conn.fresh:
+                first = first or self.state.build(first=True)
+                data = first
+                conn.fresh = False
+            else:
+                periodic = periodic or self.state.build(
+                    kinematics=kinematics, per_second=self.states % 10 == 0
+                )
+                data = periodic
+            conn.send(burst + data if conn.messages else data)
 
     def _micros(self) -> int:
         return int(self.model.time * 1_000_000)
@@ -165,9 +92,11 @@ class PrimaryHub:
 class PrimaryConnection(GuardedConnection):
     """One client of a primary/secondary port: the Version message, Robot State, its scripts run."""
 
-    def __init__(self, hub: PrimaryHub, port: Port, number: int, read_only: bool) -> None:
+    def __init__(self, hub: PrimaryHub, port: Port, number: int, read_only: bool, messages: bool) -> None:
         super().__init__(port)
         self.hub, self.number, self.read_only = hub, number, read_only
+        self.messages = messages  # robot messages go to the primary ports only, not the secondary
+        self.fresh = True  # its first Robot State carries the once-per-connection sub-packages
         self.framer = ScriptFramer()
 
     def opened(self) -> None:

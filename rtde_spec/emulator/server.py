@@ -80,7 +80,8 @@ class Emulator:
 
     def _primary_factory(self, name: str, read_only: bool):  # type: ignore[no-untyped-def]
         port = self._port(name)
-        return lambda: PrimaryConnection(self.primary, port, self.ports[name], read_only)
+        messages = name.startswith("primary")
+        return lambda: PrimaryConnection(self.primary, port, self.ports[name], read_only, messages)
 
     async def _listen(self, name: str, port: int, factory) -> None:  # type: ignore[no-untyped-def]
         server = await asyncio.get_running_loop().create_server(factory, self.config.host, port)

@@ -1,0 +1,131 @@
+"""Robot messages a controller sends when things happen, built from the spec's models.
+
+The Version message opens every primary/secondary connection; the rest go to the
+primary ports only (30001, 30011), as the interface document says: a text message
+for `textmsg` (and popups, which the spec has no message for), a runtime exception
+with the script line and column, a key message when a program starts or stops
+(PROGRAM_XXX_STARTED / PROGRAM_XXX_STOPPED with the program's name, as controllers
+announce it) followed on start by the global variables setup message, and a safety
+mode message whenever the safety mode changes.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from rtde_spec._generated.enums import (
+    MessageSource,
+    ProgramStateMessageType,
+    ReportDataType,
+    RobotMessageType,
+)
+from rtde_spec.primary import models as pm
+from rtde_spec.primary.codec import encode_message
+from rtde_spec.spec.versions import Version
+
+PROJECT = "URControl"
+BUILD_DATE = "emulated by rtde_spec"
+PROGRAM_STARTED, PROGRAM_STOPPED = "PROGRAM_XXX_STARTED", "PROGRAM_XXX_STOPPED"
+_INTERFACE = int(MessageSource.ROBOTINTERFACE)
+_CONTROLLER = int(MessageSource.CONTROLLER)
+
+
+def version_message(version: Version, micros: int) -> bytes:
+    return encode_message(
+        pm.VersionMessage(
+            timestamp=micros,
+            source=_INTERFACE,
+            robot_message_type=int(RobotMessageType.VERSION),
+            project_name=PROJECT,
+            major_version=version.major,
+            minor_version=version.minor,
+            bugfix_version=version.bugfix,
+            build_number=version.build or 0,
+            build_date=BUILD_DATE,
+        )
+    )
+
+
+def text_message(text: str, micros: int) -> bytes:
+    return encode_message(
+        pm.TextMessage(
+            timestamp=micros,
+            source=_INTERFACE,
+            robot_message_type=int(RobotMessageType.TEXT),
+            text_message=text,
+        )
+    )
+
+
+def runtime_exception(text: str, line: int, column: int, micros: int) -> bytes:
+    return encode_message(
+        pm.RuntimeExceptionMessage(
+            timestamp=micros,
+            source=_INTERFACE,
+            robot_message_type=int(RobotMessageType.RUNTIME_EXCEPTION),
+            script_line_number=max(0, line),
+            script_column_number=max(0, column),
+            runtime_exception_text_message=text,
+        )
+    )
+
+
+def key_message(title: str, text: str, micros: int) -> bytes:
+    return encode_message(
+        pm.KeyMessage(
+            timestamp=micros,
+            source=_CONTROLLER,
+            robot_message_type=int(RobotMessageType.KEY),
+            robot_message_code=0,
+            robot_message_argument=0,
+            robot_message_title=title,
+            key_text_message=text,
+        )
+    )
+
+
+def safety_mode_message(mode: int, micros: int) -> bytes:
+    return encode_message(
+        pm.SafetyModeMessage(
+            timestamp=micros,
+            source=_CONTROLLER,
+            robot_message_type=int(RobotMessageType.SAFETY_MODE),
+            robot_message_code=0,
+            robot_message_argument=0,
+            safety_mode_type=mode,
+            report_data_type=int(ReportDataType.UINT32),
+            report_data=0,
+        )
+    )
+
+
+def global_variables_setup(names: list[str], micros: int) -> bytes:
+    return encode_message(
+        pm.GlobalVariablesSetupMessage(
+            timestamp=micros,
+            robot_message_type=int(ProgramStateMessageType.GLOBAL_VARIABLES_SETUP),
+            start_index=0,
+            variable_names=names,
+        )
+    )
+
+
+def event_messages(event: Any, micros: int) -> list[bytes]:
+    """The messages for one model event (emulator/events.py's ScriptEvent)."""
+    kind = getattr(event, "kind", "")
+    text = str(getattr(event, "text", ""))
+    if kind == "runtime_exception":
+        return [runtime_exception(text, int(event.line), int(event.column), micros)]
+    if kind == "text":
+        return [text_message(text, micros)]
+    if kind == "popup":
+        title = str(getattr(event, "title", "") or "Popup")
+        return [text_message(f"{title}: {text}", micros)]
+    if kind == "program_started":
+        return [
+            key_message(PROGRAM_STARTED, event.program or text, micros),
+            global_variables_setup([], micros),
+        ]
+    if kind == "program_stopped":
+        return [key_message(PROGRAM_STOPPED, event.program or text, micros)]
+    return []

@@ -1,0 +1,219 @@
+"""The emulator's primary ports send what a controller of the chosen version sends (issue 20, points 1 and 7).
+
+Against the e-Series reference sample (tests/data/ur5e_robot_state.hex, 13 sub-packages
+in a UR5e's order) and, for CB3, against python-urx's struct formats for 3.2+ firmware,
+which were written against real CB3 robots independently of this spec.
+"""
+
+from __future__ import annotations
+
+import itertools
+import socket
+import struct
+import time
+from collections.abc import Iterator
+
+import pytest
+
+from rtde_spec.emulator.server import EmulatorConfig, EmulatorThread
+from rtde_spec.primary.base import RobotStateMessage
+from rtde_spec.primary.codec import PrimaryStreamDecoder
+from rtde_spec.spec.arms import arm_model
+
+from .helpers import DATA
+
+
+def sample() -> bytes:
+    lines = (DATA / "ur5e_robot_state.hex").read_text().splitlines()
+    return bytes.fromhex("".join(line for line in lines if line and not line.startswith("#")))
+
+
+def shape(message: bytes) -> list[tuple[int, int]]:
+    """(type, size) of each sub-package of a Robot State, read with struct alone."""
+    out, pos = [], 5
+    while pos < len(message):
+        size, kind = struct.unpack_from(">IB", message, pos)
+        out.append((kind, size))
+        pos += size
+    return out
+
+
+def messages(port: int, count: int, timeout: float = 5.0) -> Iterator[bytes]:
+    """The first `count` whole messages a primary/secondary port sends."""
+    with socket.create_connection(("127.0.0.1", port), timeout=timeout) as sock:
+        buf = bytearray()
+        while count:
+            while len(buf) < 4 or len(buf) < struct.unpack_from(">I", buf)[0]:
+                chunk = sock.recv(65536)
+                assert chunk, "closed early"
+                buf += chunk
+            size = struct.unpack_from(">I", buf)[0]
+            yield bytes(buf[:size])
+            del buf[:size]
+            count -= 1
+
+
+def serve(version: str) -> EmulatorThread:
+    return EmulatorThread(
+        EmulatorConfig(rtde_port=None, primary_port=0, secondary_port=0, controller=version)
+    ).start()
+
+
+def robot_states(version: str, count: int, port: str = "secondary") -> tuple[bytes, list[bytes]]:
+    emu = serve(version)
+    try:
+        got = list(messages(emu.ports[port], count + 1))
+    finally:
+        emu.stop()
+    return got[0], [m for m in got[1:] if m[4] == 16]
+
+
+@pytest.mark.parametrize("version", ["5.23.0", "10.11.0"])
+def test_first_robot_state_has_the_samples_sub_packages_types_sizes_and_order(version: str) -> None:
+    first_message, states = robot_states(version, 1)
+    assert shape(states[0]) == shape(sample())
+    decoder = PrimaryStreamDecoder()
+    decoded = [m for _, m in decoder.feed(first_message + states[0])]
+    assert str(decoder.version) == version
+    state = decoded[1]
+    assert isinstance(state, RobotStateMessage)
+    reference = PrimaryStreamDecoder().feed(sample())[0][1]
+    assert [type(s) for s in state.sub_packages] == [type(s) for s in reference.sub_packages]
+    assert all(not s.missing and not s.extra for s in state.sub_packages)
+    assert decoder.warnings_for(state) == []
+
+
+def test_e_series_before_5_23_has_no_cumulative_runtime_and_later_states_only_the_periodic_ones() -> None:
+    _, states = robot_states("5.15.0", 12)
+    assert shape(states[0]) == shape(sample())[:-1]  # cumulative runtime data came in 5.23
+    periodic = {5, 6}  # kinematics info and configuration data go once after connecting
+    assert all(kind not in periodic for s in states[1:] for kind, _ in shape(s))
+    assert [k for k, _ in shape(states[1])] == [k for k, _ in shape(sample())[:-1] if k not in periodic]
+
+
+def test_cumulative_runtime_data_once_a_second() -> None:
+    _, states = robot_states("5.23.0", 21)
+    with_it = [i for i, s in enumerate(states) if 16 in [k for k, _ in shape(s)]]
+    assert with_it[0] == 0 and len(with_it) in (2, 3)  # the first, then one in each ten
+    assert all(b - a == 10 for a, b in itertools.pairwise(with_it[1:]))
+
+
+def test_cb3_layouts_match_python_urx_formats_and_its_parser() -> None:
+    from urx.ursecmon import ParserUtils
+
+    first_message, states = robot_states("3.15.8", 1)
+    sizes = dict(shape(states[0]))
+    # python-urx (urx/ursecmon.py), formats for firmware 3.2+: !IBQ???????BBddd, 6x dddffffB,
+    # iBdddddddddddd, iBbbddfBffB, iBddddddd (sizes include the 5-byte sub-package header)
+    for kind, fmt in [
+        (0, "!IBQ???????BBddd"),
+        (1, "!IB" + "dddffffB" * 6),
+        (4, "!iBdddddddddddd"),
+        (2, "!iBbbddfBffB"),
+        (7, "!iBddddddd"),
+    ]:
+        assert sizes[kind] == struct.calcsize(fmt), kind
+    assert 10 not in sizes and 11 not in sizes and 12 not in sizes  # e-Series sub-packages
+    parser = ParserUtils()
+    parsed = parser.parse(states[0])
+    assert parser.version == (3, 2)  # told by the robot mode data's size, as on a CB3 robot
+    assert parsed["RobotModeData"]["robotMode"] == 7
+    assert parsed["CartesianInfo"]["tcpOffsetZ"] == 0.0
+    decoder = PrimaryStreamDecoder()
+    decoded = [m for _, m in decoder.feed(first_message + states[0])]
+    assert str(decoder.version) == "3.15.8" and decoder.warnings_for(decoded[1]) == []
+
+
+def test_kinematics_info_and_configuration_carry_the_arms_dh_parameters() -> None:
+    first_message, states = robot_states("5.15.0", 1)
+    state = PrimaryStreamDecoder().feed(first_message + states[0])[1][1]
+    dh = arm_model("UR5e").dh
+    kin, conf = state["kinematics_info"], state["configuration_data"]
+    for message in (kin, conf):
+        assert (
+            tuple(message.dh_a) == dh.a
+            and tuple(message.dh_d) == dh.d
+            and tuple(message.dh_alpha) == dh.alpha
+        )
+    assert conf.robot_type == 1  # UR5 family
+    assert len(set(kin.checksum)) == 6
+
+
+def test_cartesian_info_is_the_models_tcp_pose_and_offset() -> None:
+    emu = serve("5.15.0")
+    try:
+        emu.call(emu.model.values.__setitem__, "tcp_offset", (0.0, 0.0, 0.15, 0.0, 0.0, 0.0))
+        got = list(messages(emu.ports["secondary"], 3))
+        pose = emu.call(lambda: tuple(emu.model.values["actual_TCP_pose"]))  # the arm is at rest
+        offset = emu.call(lambda: tuple(emu.model.values["tcp_offset"]))
+    finally:
+        emu.stop()
+    cart = PrimaryStreamDecoder().feed(b"".join(got))[2][1]["cartesian_info"]
+    assert (cart.x, cart.y, cart.z, cart.rx, cart.ry, cart.rz) == pose
+    offsets = (cart.tcp_offset_x, cart.tcp_offset_y, cart.tcp_offset_z)
+    assert (*offsets, cart.tcp_offset_rx, cart.tcp_offset_ry, cart.tcp_offset_rz) == offset
+
+
+def read_until(port: int, want: str, seconds: float = 5.0) -> list[object]:
+    """Decoded messages of a port until the Robot State after one named `want` (or the time is up)."""
+    decoder = PrimaryStreamDecoder()
+    out: list[object] = []
+    with socket.create_connection(("127.0.0.1", port), timeout=seconds) as sock:
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            for _, message in decoder.feed(sock.recv(65536)):
+                out.append(message)
+                names = [getattr(m, "NAME", "") for m in out]
+                if want in names and isinstance(message, RobotStateMessage) and names[-1] != want:
+                    return out  # the Robot State after it too
+    return out
+
+
+def test_a_safety_mode_change_is_a_message_on_the_primary_port_not_the_secondary() -> None:
+    emu = serve("5.15.0")
+    try:
+        import threading
+
+        got: dict[str, list[object]] = {}
+        readers = [
+            threading.Thread(
+                target=lambda n=n: got.__setitem__(n, read_until(emu.ports[n], "safety_mode_message", 2))
+            )
+            for n in ("primary", "secondary")
+        ]
+        for r in readers:
+            r.start()
+        time.sleep(0.5)
+        emu.call(emu.model.values.__setitem__, "safety_mode", 3)  # PROTECTIVE_STOP
+        for r in readers:
+            r.join()
+    finally:
+        emu.stop()
+    safety = [m for m in got["primary"] if getattr(m, "NAME", "") == "safety_mode_message"]
+    assert len(safety) == 1 and safety[0].safety_mode_type == 3  # type: ignore[attr-defined]
+    assert not any(getattr(m, "NAME", "") == "safety_mode_message" for m in got["secondary"])
+    last = [m for m in got["primary"] if isinstance(m, RobotStateMessage)][-1]
+    assert last["robot_mode_data"].is_protective_stopped and last["masterboard_data"].safety_mode == 3
+
+
+def test_textmsg_and_a_script_that_cannot_run_become_robot_messages_on_the_primary_port() -> None:
+    emu = serve("5.15.0")
+    try:
+        with socket.create_connection(("127.0.0.1", emu.ports["primary"]), timeout=5) as sock:
+            decoder = PrimaryStreamDecoder()
+            sock.sendall(b'textmsg("hello")\n')
+            time.sleep(0.5)
+            sock.sendall(b"foo_bar_baz()\n")
+            got: list[object] = []
+            deadline = time.monotonic() + 5
+            while time.monotonic() < deadline and "runtime_exception_message" not in [
+                getattr(m, "NAME", "") for m in got
+            ]:
+                got += [m for _, m in decoder.feed(sock.recv(65536))]
+    finally:
+        emu.stop()
+    by_name = {getattr(m, "NAME", ""): m for m in got}
+    assert by_name["text_message"].text_message == "hello"  # type: ignore[attr-defined]
+    assert by_name["key_message"].robot_message_title.startswith("PROGRAM_XXX_")  # type: ignore[attr-defined]
+    failed = by_name["runtime_exception_message"]
+    assert failed.script_line_number == 1 and "foo_bar_baz" in failed.runtime_exception_text_message  # type: ignore[attr-defined]
