@@ -3,7 +3,12 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
+import signal
 import sys
+import threading
+from collections.abc import Iterator
+from pathlib import Path
 
 from rtde_spec._generated.constants import RTDE_PORT
 from rtde_spec.cli.common import existing_file
@@ -15,7 +20,18 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "record",
         help="record outputs from a controller (or the emulator) to CSV/Parquet/JSON Lines",
         description="Columns are named as UR's recorder names them (vectors as name_0..name_5). "
-        "Ctrl-C or a dropped connection keeps every row received.",
+        "Ctrl-C, SIGTERM (timeout, kill, systemd) and SIGHUP (a closed terminal) stop the recording "
+        "cleanly: every row received is written, the file is closed readable, and the exit code is 0, "
+        "as for --duration (a second signal stops at once, keeping the rows written). A dropped "
+        "connection keeps every row received and exits 1. "
+        "Nothing is lost: -o is written beside its name (.NAME.part-PID) and an existing file is "
+        "replaced only once rows arrive, so a run that fails first (a rejected recipe, a bad "
+        "--frequency, no connection) leaves it byte-identical. A CSV or JSON Lines output is in place "
+        "from the first batch on and handed to the operating system every batch (0.2 s), so a killed "
+        "recorder (SIGKILL) loses at most the last batch, every line complete; a Parquet file needs "
+        "its footer, written at close, so a kill loses the open file: use --split. Every closed file "
+        "is synced to disk before it is renamed into place.",
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--host", required=True, help="controller address (required)")
     p.add_argument("--port", type=int, default=RTDE_PORT, help=f"RTDE port (default: {RTDE_PORT})")
@@ -32,6 +48,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "-o", "--output", required=True, metavar="FILE", help="out.csv, out.parquet or out.jsonl (required)"
     )
     p.add_argument("--format", choices=("csv", "parquet", "jsonl"), help="default: from the -o suffix")
+    p.add_argument(
+        "--split",
+        metavar="DURATION|SIZE",
+        help="write closed parts of at most this long or big (60s, 10min, 1h, 100MB, 2GiB), as rosbag2 "
+        "splits: -o run.parquet gives run_0000.parquet, run_0001.parquet, ..., each complete and "
+        "renamed into place when full, so a kill or power loss costs at most the open part. Read them "
+        "as one dataset: DuckDB read_parquet('run_*.parquet'), Polars scan_parquet('run_*.parquet'), "
+        "pyarrow.dataset.dataset(sorted(glob('run_*.parquet'))). Parts of an earlier run with the same "
+        "name are removed once this run's first part is in place (default: one file)",
+    )
     p.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for replies (default: 5)")
     p.set_defaults(run=run)
 
@@ -51,6 +77,8 @@ def names_of(args: argparse.Namespace) -> list[str]:
 
 
 def run(args: argparse.Namespace) -> int:
+    from rtde_spec.output.partfile import leftovers
+    from rtde_spec.output.split import parse_split
     from rtde_spec.output.writers import format_for, open_writer
     from rtde_spec.rtde.client import RtdeClient
     from rtde_spec.rtde.recorder import BATCH_SECONDS, record
@@ -58,13 +86,28 @@ def run(args: argparse.Namespace) -> int:
     fmt = format_for(args.output, args.format)
     if fmt not in ("csv", "parquet", "jsonl"):
         raise UsageError(f"-o {args.output}: use .csv, .parquet or .jsonl (or --format)")
+    if not 0 < args.frequency < float("inf"):  # NaN too; the controller's own limit is checked at setup
+        raise UsageError(f"--frequency {args.frequency:g}: a rate in Hz above 0")
+    split = parse_split(args.split) if args.split else None
     names = names_of(args)
+    for path in leftovers(Path(args.output)):
+        what = (
+            "a Parquet file without its footer: no reader opens it; --split bounds what a kill costs"
+            if fmt == "parquet"
+            else "its rows up to the last batch are readable"
+        )
+        print(
+            f"note: {path} was left by a recording killed before it closed this file ({what})",
+            file=sys.stderr,
+        )
     bar = _progress(args)
     # the reader wakes every ~0.1 s, half the recorder's write interval: no row waits longer
     batch = max(1, int(args.frequency * BATCH_SECONDS / 2))
-    with RtdeClient(args.host, args.port, timeout=args.timeout, batch=batch) as client:
-        writer = open_writer(fmt, args.output)
+    stop = _Stop()
+    with stop.handling(), RtdeClient(args.host, args.port, timeout=args.timeout, batch=batch) as client:
+        writer = open_writer(fmt, args.output, live=True, durable=True, split=split)
         try:
+            stop.armed = True  # from here a signal ends the recording cleanly
             result = record(
                 client,
                 names,
@@ -73,17 +116,61 @@ def run(args: argparse.Namespace) -> int:
                 duration=args.duration,
                 samples=args.samples,
                 progress=bar.update if bar is not None else None,
+                stop=stop,
             )
         finally:
             writer.close()
             if bar is not None:
                 bar.close()
-    print(
-        f"recorded {result.rows} rows of {len(names)} fields in {result.seconds:.1f} s to {args.output} "
-        f"(controller {client.controller_version}, skipped {result.skipped}, stopped by {result.stopped_by})",
-        file=sys.stderr,
-    )
+    how = result.stopped_by
+    if how == "stop" and stop.signal is not None:
+        how = signal.Signals(stop.signal).name
+    where = args.output
+    if split is not None:
+        parts = getattr(writer, "paths", [])
+        where = f"{len(parts)} parts {parts[0]} .. {parts[-1]}" if parts else "no file"
+    try:
+        print(
+            f"recorded {result.rows} rows of {len(names)} fields in {result.seconds:.1f} s to {where} "
+            f"(controller {client.controller_version}, skipped {result.skipped}, stopped by {how})",
+            file=sys.stderr,
+        )
+    except OSError:  # SIGHUP: the terminal is gone; the file is what matters
+        pass
     return 1 if result.stopped_by == "connection" else 0
+
+
+class _Stop:
+    """Set by SIGINT, SIGTERM and SIGHUP: the recorder writes what it has and closes the file.
+
+    Before `armed` (connecting) a signal stops at once; a second signal also does.
+    The handler only sets an attribute: nothing in it takes a lock the main thread may hold.
+    """
+
+    def __init__(self) -> None:
+        self.signal: int | None = None
+        self.armed = False
+
+    def is_set(self) -> bool:
+        return self.signal is not None
+
+    def _handle(self, signum: int, frame: object) -> None:
+        if not self.armed or self.signal is not None:
+            raise KeyboardInterrupt
+        self.signal = signum
+
+    @contextlib.contextmanager
+    def handling(self) -> Iterator[None]:
+        wanted = [getattr(signal, n) for n in ("SIGINT", "SIGTERM", "SIGHUP") if hasattr(signal, n)]
+        if threading.current_thread() is not threading.main_thread():  # handlers live in the main thread
+            yield
+            return
+        previous = {s: signal.signal(s, self._handle) for s in wanted}
+        try:
+            yield
+        finally:
+            for s, handler in previous.items():
+                signal.signal(s, handler)
 
 
 def _progress(args: argparse.Namespace):  # type: ignore[no-untyped-def]

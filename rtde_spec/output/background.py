@@ -70,12 +70,23 @@ class BackgroundStream(io.RawIOBase):
 
     def flush(self) -> None:
         """Wait until every queued block is written, then flush the stream below."""
-        if self.closed:
+        if self.closed or not self._thread.is_alive():  # closed, or its thread stopped: nothing queued
             return
         self._hand_over()
         self._queue.join()
         self._check()
         self.raw.flush()
+
+    def close_quietly(self) -> None:
+        """Stop the thread after an error elsewhere: queued blocks are dropped, nothing is raised."""
+        if self._thread.is_alive():
+            self._error = self._error or OSError("output abandoned")  # the thread drains without writing
+            self._small.clear()
+            self._queue.put(_STOP)
+            self._thread.join()
+        self._error = None
+        if not self.closed:
+            super().close()
 
     def close(self) -> None:
         """Write what is queued, stop the thread; the stream below stays open (its owner closes it)."""

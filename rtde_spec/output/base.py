@@ -8,6 +8,7 @@ from collections.abc import Mapping
 from typing import IO, Any
 
 from rtde_spec.output.background import BackgroundStream
+from rtde_spec.output.partfile import Part
 
 
 def plain(value: Any) -> Any:
@@ -66,12 +67,21 @@ def flat_columns(columns: Mapping[str, Any]) -> dict[str, Any]:
 
 
 class Writer:
-    """Base: counts rows; subclasses write them."""
+    """Base: counts rows; subclasses write them.
+
+    A writer of a file (`open_writer` with a path) writes it beside its name and
+    renames it into place at `close` if rows were written (see `partfile`): a run
+    that fails before its first row leaves an existing file as it was.
+    """
+
+    NEEDS_PATH = False  # True: given a file name, the writer opens the file itself (Parquet)
 
     def __init__(self, stream: IO[bytes]) -> None:
         self.stream = stream
         self.rows = 0
         self.owns_stream = False  # open_writer's own file: closed with the writer
+        self.part: Part | None = None  # the file this writer makes appear, if it is one
+        self.live = False  # a live file: in place from the first flushed row on
 
     def write(self, record: Mapping[str, Any]) -> None:
         raise NotImplementedError
@@ -79,6 +89,12 @@ class Writer:
     def flush(self) -> None:
         """Everything written so far is in the file (the recorder calls this per batch)."""
         self.stream.flush()
+        if self.live and self.rows and self.part is not None:
+            self.part.publish()
+
+    def size(self) -> int:
+        """Bytes written so far (an estimate where the format encodes later): for splitting."""
+        return int(getattr(self.stream, "written", 0))
 
     def write_columns(self, columns: Mapping[str, Any]) -> None:
         """A batch of data packages as numpy columns (same names as the rows would have)."""
@@ -88,6 +104,25 @@ class Writer:
             self.write(dict(zip(names, values, strict=True)))
 
     def close(self) -> None:
+        """Finish the output; its file appears at its name if rows were written."""
+        try:
+            self._finish()
+        except BaseException:
+            self._settle(keep=False)
+            raise
+        self._settle(keep=self.rows > 0)
+
+    def abort(self) -> None:
+        """Close without keeping anything not already in place (an existing file stays)."""
+        try:
+            self._finish()
+        except Exception:  # the output is dropped anyway
+            pass
+        finally:
+            self._settle(keep=False)
+
+    def _finish(self) -> None:
+        """Write what the format ends with and close the stream (subclasses add their end)."""
         stream = self.stream
         if isinstance(stream, BackgroundStream):
             stream.close()
@@ -95,3 +130,25 @@ class Writer:
         stream.flush()
         if self.owns_stream:
             stream.close()
+
+    def _settle(self, keep: bool) -> None:
+        part, self.part = self.part, None
+        if part is None:
+            return
+        stream = self.stream
+        if isinstance(stream, BackgroundStream):
+            stream.close_quietly()
+            stream = stream.raw
+        if self.owns_stream and not stream.closed:
+            try:
+                stream.close()
+            except OSError:
+                pass
+        if not keep:
+            part.discard()
+            return
+        try:
+            part.commit()
+        except BaseException:
+            part.discard()
+            raise

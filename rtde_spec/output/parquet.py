@@ -4,10 +4,12 @@ from __future__ import annotations
 
 import os
 from collections.abc import Mapping
+from pathlib import Path
 from typing import IO, Any
 
 from rtde_spec.errors import UsageError, require
 from rtde_spec.output.base import Writer, flat_columns, flatten
+from rtde_spec.output.partfile import Part, is_special
 from rtde_spec.output.tables import arrow_table
 
 _PARQUET_BATCH_ROWS = 16384
@@ -29,8 +31,16 @@ class ParquetWriter(Writer):
     ROW_GROUP_ROWS = 16384
     THREADED: bool | None = None  # encode row groups on a second thread; None: when a second core is ours
 
+    NEEDS_PATH = True
+
     def __init__(self, stream: IO[bytes] | str) -> None:
+        part = None
+        if isinstance(stream, (str, os.PathLike)) and not is_special(Path(stream)):
+            part = Part(stream)  # written beside the name, renamed into place when closed
+            stream = str(part.temp)
         super().__init__(stream)  # type: ignore[arg-type]  # a path: pyarrow opens the file itself
+        self.part = part
+        self._bytes = 0
         self._pa = require("pyarrow", "parquet", "Parquet output")
         self._pq = require("pyarrow.parquet", "parquet", "Parquet output")
         self._writer: Any = None
@@ -60,6 +70,7 @@ class ParquetWriter(Writer):
             table_ = self._conformed(table_)
         self._tables.append(table_)
         self._held += table_.num_rows
+        self._bytes += table_.nbytes
         if self._held >= self.ROW_GROUP_ROWS:
             self._write_held()
 
@@ -121,9 +132,13 @@ class ParquetWriter(Writer):
         self._add(arrow_table(flat))
         self.rows += len(next(iter(flat.values()))) if flat else 0
 
-    def close(self) -> None:
-        self._flush_rows()
+    def size(self) -> int:
+        """The Arrow size of the rows so far: about the file's, as float columns stay uncompressed."""
+        return self._bytes
+
+    def _finish(self) -> None:
         try:
+            self._flush_rows()
             if self._writer is not None:
                 self._write_held()
                 self._wait()
@@ -132,7 +147,7 @@ class ParquetWriter(Writer):
             if self._pool is not None:
                 self._pool.shutdown()
         if not isinstance(self.stream, str):
-            super().close()
+            super()._finish()
 
 
 def usable_cores() -> int:

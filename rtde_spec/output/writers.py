@@ -14,15 +14,19 @@ import json
 import sys
 from collections.abc import Callable, Mapping
 from pathlib import Path
-from typing import IO, Any
+from typing import IO, TYPE_CHECKING, Any
 
 from rtde_spec.errors import UsageError
 from rtde_spec.output import jsonlines
 from rtde_spec.output.background import BackgroundStream
 from rtde_spec.output.base import Writer, flat_columns, flatten, native_order, plain
 from rtde_spec.output.parquet import ParquetWriter
+from rtde_spec.output.partfile import Part, PartStream, is_special
 from rtde_spec.output.tables import arrow_table
 from rtde_spec.output.text import safe_text, table
+
+if TYPE_CHECKING:
+    from rtde_spec.output.split import SplitLimit
 
 FORMATS = ("table", "jsonl", "json", "csv", "parquet")
 TABULAR = ("csv", "parquet")
@@ -108,12 +112,12 @@ class JsonWriter(JsonLinesWriter):
     def write_columns(self, columns: Mapping[str, Any]) -> None:
         Writer.write_columns(self, columns)
 
-    def close(self) -> None:
+    def _finish(self) -> None:
         if self._held is not None:
             self.stream.write(self._held + b"\n")
         else:
             self.stream.write(b"\n]\n" if self.rows else b"[]\n")
-        super().close()
+        super()._finish()
 
 
 class CsvWriter(Writer):
@@ -122,7 +126,7 @@ class CsvWriter(Writer):
     def __init__(self, stream: IO[bytes]) -> None:
         super().__init__(stream)
         self._text = io.TextIOWrapper(stream, encoding="utf-8", newline="", write_through=True)
-        self._csv = csv.writer(self._text)
+        self._csv = csv.writer(self._text, lineterminator="\n")  # as pyarrow ends its rows: one ending
         self._header: list[str] | None = None
 
     def _start(self, names: list[str]) -> None:
@@ -154,9 +158,9 @@ class CsvWriter(Writer):
             pacsv.write_csv(arrow_table(flat), self.stream, write_options=options)
         self.rows += len(next(iter(flat.values()))) if flat else 0
 
-    def close(self) -> None:
-        self._text.detach()  # flushes the text layer and leaves the stream below to Writer.close
-        super().close()
+    def _finish(self) -> None:
+        self._text.detach()  # flushes the text layer and leaves the stream below to Writer._finish
+        super()._finish()
 
 
 _WRITERS: dict[str, type[Writer]] = {
@@ -166,6 +170,9 @@ _WRITERS: dict[str, type[Writer]] = {
     "csv": CsvWriter,
     "parquet": ParquetWriter,
 }
+# Formats a reader reads while they grow (one complete line per row): a recording's file can be
+# in place from its first batch on. A format with a header or footer to finish waits for close.
+GROWING = {"jsonl", "csv"}
 
 
 def format_for(path: str | None, fmt: str | None) -> str:
@@ -175,24 +182,60 @@ def format_for(path: str | None, fmt: str | None) -> str:
     suffix = Path(path).suffix.lower().lstrip(".") if path else ""
     return (
         {"pq": "parquet", "ndjson": "jsonl"}.get(suffix, suffix)
-        if suffix in (*FORMATS, "pq", "ndjson")
+        if suffix in (*_WRITERS, "pq", "ndjson")
         else "table"
     )
 
 
-def open_writer(fmt: str, path: str | Path | None = None, *, background: bool = False) -> Writer:
-    """A writer of `fmt` to a file (created) or to stdout.
+def open_writer(
+    fmt: str,
+    path: str | Path | None = None,
+    *,
+    background: bool = False,
+    live: bool = False,
+    durable: bool = False,
+    split: SplitLimit | None = None,
+) -> Writer:
+    """A writer of `fmt` to a file or to stdout.
 
+    A file is written beside its name and renamed into place at close if rows were
+    written; a failed run leaves an existing file as it was (see `partfile`).
+    With `live`, a growing format (CSV, JSON Lines) is in place from its first flushed
+    row on, so a killed process leaves every flushed batch. With `durable`, files are
+    synced before the rename. With `split`, the output is a series of part files
+    NAME_0000.EXT, NAME_0001.EXT..., each closed (and complete) when it reaches the limit.
     With `background`, a second thread does the file writes (for one long-running
     output such as `rtde-spec decode`; a dataset of many files keeps one thread).
     """
     if fmt not in _WRITERS:
-        raise UsageError(f"unknown output format {fmt!r}", expected=", ".join(FORMATS))
-    if fmt == "parquet" and path is None:
-        raise UsageError("Parquet output needs a file: add -o FILE.parquet")
-    if fmt == "parquet":
-        return ParquetWriter(str(path))  # pyarrow's own file: written without the GIL
-    stream: IO[bytes] = open(path, "wb") if path is not None else sys.stdout.buffer
-    writer = _WRITERS[fmt](BackgroundStream(stream) if background else stream)  # type: ignore[arg-type]
-    writer.owns_stream = path is not None
+        raise UsageError(f"unknown output format {fmt!r}", expected=", ".join(_WRITERS))
+    cls = _WRITERS[fmt]
+    if path is None:
+        if cls.NEEDS_PATH:
+            raise UsageError(f"{fmt} output needs a file: add -o FILE.{fmt}")
+        out: IO[bytes] = BackgroundStream(sys.stdout.buffer) if background else sys.stdout.buffer  # type: ignore[assignment]
+        return cls(out)
+    if split is not None:
+        from rtde_spec.output.split import SplitWriter
+
+        def one_part(target: Path) -> Writer:
+            return open_writer(fmt, target, background=background, live=live, durable=durable)
+
+        return SplitWriter(one_part, Path(path), split)
+    target = Path(path)
+    if cls.NEEDS_PATH:
+        writer = cls(str(target))  # type: ignore[arg-type]  # pyarrow's own file (written without the GIL) beside the target
+        if writer.part is not None:
+            writer.part.durable = durable
+        return writer
+    if is_special(target):  # -o /dev/null or a pipe: nothing to replace
+        writer = cls(open(target, "wb"))  # closed by the writer
+        writer.owns_stream = True
+        return writer
+    part = Part(target, durable=durable)
+    stream = PartStream(part, batched=not background)  # the background thread gathers blocks itself
+    writer = cls(BackgroundStream(stream) if background else stream)  # type: ignore[arg-type]
+    writer.owns_stream = True
+    writer.part = part
+    writer.live = live and fmt in GROWING
     return writer

@@ -2,8 +2,10 @@
 
 Data packages are collected as bytes by the client's reader thread and decoded in
 batches (`RecipeCodec.decode_many`), so recording keeps up at 500 Hz; the file is
-flushed batch by batch, and whatever arrived before Ctrl-C or a dropped
-connection is written and the file closed readable.
+flushed batch by batch (handed to the operating system, so a killed process loses
+at most the batch being collected), and whatever arrived before Ctrl-C, a `stop`
+event (the CLI sets it on SIGTERM and SIGHUP) or a dropped connection is written
+and the file closed readable.
 """
 
 from __future__ import annotations
@@ -12,6 +14,7 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 from rtde_spec.output.base import Writer
 from rtde_spec.rtde.client import RtdeClient
@@ -19,12 +22,18 @@ from rtde_spec.rtde.client import RtdeClient
 BATCH_SECONDS = 0.2
 
 
+class StopSignal(Protocol):
+    """Anything that says whether to stop: a threading.Event, or a flag a signal handler sets."""
+
+    def is_set(self) -> bool: ...
+
+
 @dataclass
 class RecordResult:
     rows: int
     seconds: float
     skipped: int
-    stopped_by: str  # "duration", "samples", "interrupt", "connection"
+    stopped_by: str  # "duration", "samples", "interrupt", "stop" (the event), "connection"
 
 
 def record(
@@ -36,8 +45,11 @@ def record(
     duration: float | None = None,
     samples: int | None = None,
     progress: Callable[[int], None] | None = None,
+    stop: StopSignal | None = None,
 ) -> RecordResult:
-    """Set up `names`, start, and write rows until the duration or sample count is reached."""
+    """Set up `names`, start, and write rows until the duration or sample count is reached,
+    Ctrl-C, or `stop` is set (a `threading.Event` from another thread; the CLI's signal
+    handlers set a plain flag, as taking the Event's lock inside a handler could deadlock)."""
     codec = client.setup_outputs(names, frequency)
     pending: list[bytes] = []
     lock = threading.Lock()
@@ -70,6 +82,9 @@ def record(
         while True:
             time.sleep(BATCH_SECONDS)
             rows += flush()
+            if stop is not None and stop.is_set():
+                stopped_by = "stop"
+                break
             if samples is not None and rows >= samples:
                 stopped_by = "samples"
                 break
