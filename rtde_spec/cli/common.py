@@ -16,7 +16,9 @@ from typing import TYPE_CHECKING
 from rtde_spec.errors import RtdeSpecError, UsageError
 
 if TYPE_CHECKING:
+    from rtde_spec.errors import DecodeError
     from rtde_spec.spec.catalogue import Catalogue
+    from rtde_spec.wire.framing import Skipped
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
 _HEX_RE = re.compile(r"^[0-9a-fA-F]*$")
@@ -109,6 +111,11 @@ def read_input(arg: str) -> bytes:
                 raise UsageError("no such file, and not hex either", subject=f"file {arg[:80]}") from None
             raise RtdeSpecError(f"{arg[:40]!r} is neither a file nor hex ({exc.reason})") from None
     reject_capture(data, arg)
+    return from_hex_text(data)
+
+
+def from_hex_text(data: bytes) -> bytes:
+    """The bytes that hex text stands for; `data` itself when it is not hex text."""
     try:
         text = data.decode("ascii")
     except UnicodeDecodeError:
@@ -117,3 +124,25 @@ def read_input(arg: str) -> bytes:
     if stripped and _HEX_RE.match(stripped) and len(stripped) % 2 == 0:
         return bytes.fromhex(stripped)
     return data
+
+
+def report_skipped(skipped: Skipped, fault: DecodeError | None, unframed: str, unit: str) -> None:
+    """What --lenient left out, on stderr: counts, bytes, the first offsets and reasons.
+
+    `unframed` says how much of the input from a framing fault on went undecoded.
+    """
+    if skipped.count:
+        print(
+            f"note: --lenient skipped {skipped.count} {unit}{'' if skipped.count == 1 else 's'} "
+            f"that did not decode ({skipped.bytes} bytes)",
+            file=sys.stderr,
+        )
+        for offset, reason in skipped.first:
+            print(f"  at byte {offset}: {reason}", file=sys.stderr)
+        if skipped.count > len(skipped.first):
+            print(f"  ... and {skipped.count - len(skipped.first)} more", file=sys.stderr)
+    if fault is not None:
+        print(
+            f"note: --lenient: the input from byte {fault.offset} on ({unframed}) was not decoded: {fault}",
+            file=sys.stderr,
+        )

@@ -1,10 +1,17 @@
-"""rtde-spec decode HEX_OR_FILE: packages to a table, JSON, JSON Lines, CSV or Parquet, streaming."""
+"""rtde-spec decode HEX_OR_FILE: packages to a table, JSON, JSON Lines, CSV or Parquet, streaming.
+
+Files and stdin are read in pieces as they come (stdin as soon as bytes arrive), so
+memory follows what has arrived, never what a size field claims. Every package
+decoded before a fault is written before the error; --lenient skips and counts what
+does not decode instead (stderr says what, and where) and exits 0.
+"""
 
 from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
+from functools import partial
 from typing import TYPE_CHECKING, Any, cast
 
 from rtde_spec._generated.constants import (
@@ -14,8 +21,14 @@ from rtde_spec._generated.constants import (
     RTDE_PROTOCOLS,
     RTDE_SENDERS,
 )
-from rtde_spec.cli.common import existing_file, read_input, reject_capture
-from rtde_spec.errors import RtdeSpecError, UsageError
+from rtde_spec.cli.common import (
+    existing_file,
+    from_hex_text,
+    read_input,
+    reject_capture,
+    report_skipped,
+)
+from rtde_spec.errors import DecodeError, RtdeSpecError, UsageError
 
 if TYPE_CHECKING:
     from rtde_spec.output.base import Writer
@@ -23,6 +36,7 @@ if TYPE_CHECKING:
     from rtde_spec.rtde.stream import Batch, Package
 
 CHUNK = 8 << 20
+HEAD = 4096  # bytes of stdin looked at to tell hex text from binary
 FORMAT_CHOICES = ("table", "jsonl", "json", "csv", "parquet")
 
 
@@ -65,7 +79,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout (default: stdout)")
     p.add_argument("--json", action="store_true", help="the same as --format json (default: off)")
     p.add_argument(
-        "--lenient", action="store_true", help="ignore bytes after the last field (default: strict)"
+        "--lenient",
+        action="store_true",
+        help="ignore bytes after the last field (and after a recipe's payload); skip and count "
+        "packages that do not decode, say so on stderr and exit 0 (default: strict, stop at the first)",
     )
     p.add_argument(
         "--recipe",
@@ -98,9 +115,12 @@ def recipe_codec(args: argparse.Namespace) -> RecipeCodec | None:
 
 
 def chunks(args: argparse.Namespace) -> Iterator[bytes]:
-    """The input in pieces: a binary file is streamed, with a progress bar on a terminal."""
+    """The input in pieces: a binary file or stdin is streamed, a file with a progress bar on a terminal."""
+    if args.data == "-":
+        yield from stdin_chunks()
+        return
     path = existing_file(args.data)
-    if path is None or args.data == "-":
+    if path is None:
         yield read_input(args.data)
         return
     with open(path, "rb") as f:
@@ -117,6 +137,34 @@ def chunks(args: argparse.Namespace) -> Iterator[bytes]:
             head = f.read(CHUNK)
         if bar is not None:
             bar.close()
+
+
+def stdin_chunks() -> Iterator[bytes]:
+    """Binary stdin in the pieces it arrives in (no waiting for its end); hex text whole."""
+    stream = sys.stdin.buffer
+    read1: Callable[[int], bytes] = getattr(stream, "read1", stream.read)  # what has arrived, up to n
+    head = b""
+    while len(head) < HEAD:
+        piece = read1(HEAD - len(head))
+        if not piece:
+            break
+        head += piece
+    reject_capture(head, "-")
+    if _is_hex_text(head):
+        yield from_hex_text(head + stream.read())
+        return
+    if head:
+        yield head
+    while piece := read1(CHUNK):
+        yield piece
+
+
+def input_left(args: argparse.Namespace, offset: int | None) -> str:
+    """How much input from `offset` on there is: known for a file, not for stdin or hex."""
+    path = existing_file(args.data)
+    if path is None or offset is None:
+        return "the rest of the input"
+    return f"{max(path.stat().st_size - offset, 0)} bytes"
 
 
 def _is_hex_text(head: bytes) -> bool:
@@ -140,7 +188,9 @@ def run(args: argparse.Namespace) -> int:
     if args.protocol == "primary":
         from rtde_spec.cli.primary_output import run_primary
 
-        return run_primary(b"".join(chunks(args)), fmt, args.output)
+        return run_primary(
+            chunks(args), fmt, args.output, lenient=args.lenient, left=partial(input_left, args)
+        )
     codec = recipe_codec(args)
     writer = open_writer(fmt, args.output, background=True)
     if fmt == "json":
@@ -164,6 +214,7 @@ def decode_into(writer: Writer, args: argparse.Namespace, codec: RecipeCodec | N
         codec=codec,
         strict=not args.lenient,
         batch=fmt != "table",
+        skip_errors=args.lenient,
     )
     skipped: dict[str, int] = {}
     tabular = fmt in ("csv", "parquet") and codec is not None
@@ -184,15 +235,21 @@ def decode_into(writer: Writer, args: argparse.Namespace, codec: RecipeCodec | N
             columns = {"offset": offsets, "recipe_id": item.array["recipe_id"], **columns}
         writer.write_columns(columns)
 
+    fault: DecodeError | None = None
     try:
         for chunk in chunks(args):
             for item in decoder.feed(chunk):
                 emit(item)
         decoder.close()
+    except DecodeError as exc:
+        if not args.lenient:
+            raise
+        fault = exc  # cannot be framed, or ends inside a package: the rest is not decodable
     finally:
         if skipped:
             kinds = ", ".join(f"{n} x{c}" for n, c in skipped.items())
             print(f"note: not in the {fmt} table of data packages: {kinds}", file=sys.stderr)
+    report_skipped(decoder.skipped, fault, input_left(args, fault.offset if fault else None), "package")
     return decoder.packages
 
 

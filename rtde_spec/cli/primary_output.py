@@ -1,17 +1,22 @@
-"""Printing decoded primary/secondary messages: a readable tree or JSON by spec names."""
+"""Printing decoded primary/secondary messages: a readable tree or JSON by spec names, as they arrive."""
 
 from __future__ import annotations
 
-from typing import Any
+from collections.abc import Callable, Iterable
+from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel
 
-from rtde_spec.errors import RtdeSpecError
+from rtde_spec.cli.common import report_skipped
+from rtde_spec.errors import DecodeError, RtdeSpecError
 from rtde_spec.output.describe import describe
 from rtde_spec.output.text import safe_text
 from rtde_spec.output.writers import open_writer
 from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
 from rtde_spec.primary.codec import PrimaryStreamDecoder
+
+if TYPE_CHECKING:
+    from rtde_spec.output.base import Writer
 
 
 def as_json(value: Any) -> Any:
@@ -70,33 +75,70 @@ def safe_text_lines(lines: list[str]) -> str:
     return "\n".join(safe_text(line) for line in lines)
 
 
-def run_primary(data: bytes, fmt: str, output: str | None) -> int:
-    """Decode a primary/secondary stream; every message before an error is printed first."""
-    if not data:
-        raise RtdeSpecError("no packages in the input")
-    decoder = PrimaryStreamDecoder()
-    messages: list[tuple[int, Any]] = []
+def run_primary(
+    chunks: Iterable[bytes],
+    fmt: str,
+    output: str | None,
+    *,
+    lenient: bool = False,
+    left: Callable[[int | None], str] = lambda offset: "the rest of the input",
+) -> int:
+    """Decode a primary/secondary stream as it arrives; every message before an error is written first.
+
+    With `lenient`, messages that do not decode are skipped and counted, and a
+    stream that cannot be framed further ends the decode with a note, not an error.
+    `left(offset)` says how much input there is from a framing fault on.
+    """
+    decoder = PrimaryStreamDecoder(skip_errors=lenient)
+    writer: Writer | None = None
+    received = 0
     error: RtdeSpecError | None = None
     try:
-        messages = decoder.feed(data)
-        decoder.close()
-    except RtdeSpecError as exc:
-        error = exc
-        messages = decoder.decoded
-    if fmt != "table":
-        writer = open_writer(fmt, output)
-        if fmt == "json":
-            writer.single = True  # type: ignore[attr-defined]
-        for offset, message in messages:
-            warnings = decoder.warnings_for(message)
-            extra = {"warnings": warnings} if warnings else {}
-            writer.write({"offset": offset, **as_json(message), **extra})
-        writer.close()
-    else:
-        _print_tree(messages, decoder)
-    if error is not None:
+        for chunk in chunks:
+            received += len(chunk)
+            try:
+                messages = decoder.feed(chunk)
+            except RtdeSpecError as exc:
+                error, messages = exc, decoder.decoded
+            if fmt == "table":
+                _print_tree(messages, decoder)
+            elif messages:
+                writer = writer or _open(fmt, output)
+                _write(writer, messages, decoder)
+            if error is not None:
+                break
+        else:
+            try:
+                decoder.close()
+            except RtdeSpecError as exc:
+                error = exc
+    finally:
+        if writer is not None:
+            writer.close()
+    if fmt == "table" and decoder.version is not None:
+        print(f"controller version (from the version message): {decoder.version}")
+    if not received:
+        raise RtdeSpecError("no packages in the input")
+    fault = error if isinstance(error, DecodeError) and lenient else None
+    if lenient:
+        report_skipped(decoder.skipped, fault, left(fault.offset if fault else None), "message")
+    if error is not None and fault is None:
         raise error
     return 0
+
+
+def _open(fmt: str, output: str | None) -> Writer:
+    writer = open_writer(fmt, output)
+    if fmt == "json":
+        writer.single = True  # type: ignore[attr-defined]
+    return writer
+
+
+def _write(writer: Writer, messages: list[tuple[int, Any]], decoder: PrimaryStreamDecoder) -> None:
+    for offset, message in messages:
+        warnings = decoder.warnings_for(message)
+        extra = {"warnings": warnings} if warnings else {}
+        writer.write({"offset": offset, **as_json(message), **extra})
 
 
 def _print_tree(messages: list[tuple[int, Any]], decoder: PrimaryStreamDecoder) -> None:
@@ -111,5 +153,3 @@ def _print_tree(messages: list[tuple[int, Any]], decoder: PrimaryStreamDecoder) 
         for warning in decoder.warnings_for(message):
             print(f"  warning: {warning}")
         print()
-    if decoder.version is not None:
-        print(f"controller version (from the version message): {decoder.version}")

@@ -33,7 +33,7 @@ from rtde_spec.primary.values import ValueTable
 from rtde_spec.spec.catalogue import Catalogue
 from rtde_spec.spec.schema import FamilySpec, Spec
 from rtde_spec.spec.versions import Version
-from rtde_spec.wire.framing import PackageFramer, check_header
+from rtde_spec.wire.framing import PackageFramer, Skipped, check_header
 from rtde_spec.wire.layout import Layout
 
 PrimaryMessage = RobotStateMessage | PrimaryPart | OpaqueMessage | UnknownMessage | UnknownMember
@@ -231,11 +231,16 @@ class PrimaryStreamDecoder:
     """Frames a TCP byte stream into messages and decodes them in order.
 
     The Version message (the first one on every port) sets `version`, the
-    controller version context for what follows.
+    controller version context for what follows. A size that cannot be framed
+    raises after the messages before it are decoded (in `decoded`); with
+    `skip_errors`, a framed message that does not decode is counted in `skipped`
+    and the stream goes on.
     """
 
-    def __init__(self, codec: PrimaryCodec | None = None) -> None:
+    def __init__(self, codec: PrimaryCodec | None = None, *, skip_errors: bool = False) -> None:
         self.codec = codec or default_codec()
+        self.skip_errors = skip_errors
+        self.skipped = Skipped()
         self.framer = PackageFramer(
             size_bytes=struct.calcsize(ORDER + self.codec.header.format[1]),
             header_size=self.codec.header.size,
@@ -248,12 +253,24 @@ class PrimaryStreamDecoder:
     def feed(self, data: bytes | bytearray | memoryview) -> list[tuple[int, PrimaryMessage]]:
         out: list[tuple[int, PrimaryMessage]] = []
         self.decoded = out
-        for offset, raw in self.framer.feed(data):
+        try:
+            framed = self.framer.feed(data)
+        except DecodeError:  # an unusable size: the messages before it still decode, then it is raised
+            self._decode_into(out, self.framer.salvaged)
+            raise
+        self._decode_into(out, framed)
+        return out
+
+    def _decode_into(self, out: list[tuple[int, PrimaryMessage]], framed: list[tuple[int, bytes]]) -> None:
+        for offset, raw in framed:
             self.count += 1
             try:
                 message = self.codec.decode_message(raw, version=self.version)
             except DecodeError as exc:
-                raise exc.in_stream(offset, self.count) from None
+                if not self.skip_errors:
+                    raise exc.in_stream(offset, self.count) from None
+                self.skipped.add(offset, len(raw), str(exc.in_stream(offset, self.count)))
+                continue
             if isinstance(message, gen.VersionMessage) and message.major_version is not None:
                 self.version = Version(
                     message.major_version,
@@ -262,7 +279,6 @@ class PrimaryStreamDecoder:
                     message.build_number,
                 )
             out.append((offset, message))
-        return out
 
     def _unexpected_missing(self, parts: list[Any]) -> list[str]:
         """Missing fields that the controller's version should have sent (by the fields' `since`)."""
@@ -318,6 +334,11 @@ class PrimaryStreamDecoder:
                     "no single firmware sends that, so these values may be wrong"
                 )
         return out
+
+    @property
+    def unframed(self) -> int:
+        """Bytes held that are not (yet) a message: after a framing fault, those from the fault on."""
+        return self.framer.pending
 
     def close(self) -> None:
         self.framer.close()

@@ -4,6 +4,11 @@ Data packages of the recipe that arrive back to back are decoded together
 (`RecipeCodec.decode_many`: one numpy view, one prefix check), everything else one
 package at a time by the generic codec; the order of the stream is kept. Offsets
 are absolute in the stream, and every error names the package it is in.
+
+Nothing decoded is lost to a later fault: a feed that meets an unusable size
+yields every package before it, then raises. With `skip_errors` (the CLI's
+--lenient), a package that is framed but does not decode (an unknown type, a
+payload shorter than the recipe) is skipped and counted in `skipped` instead.
 """
 
 from __future__ import annotations
@@ -19,7 +24,7 @@ from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
 from rtde_spec.rtde.codec import Sender, decode, observe, starting_version
 from rtde_spec.rtde.messages import RtdeMessage
 from rtde_spec.rtde.protocol_state import ProtocolState
-from rtde_spec.wire.framing import PackageFramer
+from rtde_spec.wire.framing import PackageFramer, Skipped
 
 DATA = gen.DataPackage.PACKAGE_TYPE
 _HEADER = struct.Struct(gen.HEADER_FORMAT)
@@ -53,10 +58,13 @@ class StreamDecoder:
         codec: RecipeCodec | None = None,
         strict: bool = True,
         batch: bool = True,
+        skip_errors: bool = False,
     ) -> None:
         self.sender = sender
         self.codec = codec
         self.strict = strict
+        self.skip_errors = skip_errors
+        self.skipped = Skipped()
         self.state = ProtocolState(one_sided=True)
         self._given_version = protocol_version
         self._started = False
@@ -67,45 +75,73 @@ class StreamDecoder:
         self.packages = 0
 
     def feed(self, data: bytes | bytearray | memoryview) -> Iterator[Package | Batch]:
-        """Items for every package this data completes, in stream order."""
-        for offset, chunk in self._framer.feed(data, self._run):
+        """Items for every package this data completes, in stream order.
+
+        A size that cannot be framed raises after the packages before it are yielded.
+        """
+        failure: DecodeError | None = None
+        try:
+            framed = self._framer.feed(data, self._run)
+        except DecodeError as exc:
+            framed, failure = self._framer.salvaged, exc
+        for offset, chunk in framed:
             if not self._started:
                 self.state.version = starting_version(chunk, self._given_version)
                 self._started = True
             run = self._run
             if run is not None and len(chunk) >= run[0] and bytes(chunk[: len(run[1])]) == run[1]:
-                yield self._batch_of(offset, chunk)
+                yield from self._batch_of(offset, chunk)
             else:
-                yield self._one(offset, chunk)
+                item = self._one(offset, chunk)
+                if item is not None:
+                    yield item
+        if failure is not None:
+            raise failure
+
+    @property
+    def unframed(self) -> int:
+        """Bytes held that are not (yet) a package: after a framing fault, those from the fault on."""
+        return self._framer.pending
 
     def close(self) -> None:
-        """DecodeError if the stream ended inside a package."""
+        """DecodeError if the stream ended inside a package (or could not be framed)."""
         self._framer.close()
 
-    def _batch_of(self, offset: int, run: bytes | memoryview) -> Batch:
+    def _batch_of(self, offset: int, run: bytes | memoryview) -> Iterator[Batch | Package]:
         assert self.codec is not None
         try:
             array = self.codec.decode_many(run)
         except DecodeError as exc:
-            raise exc.in_stream(offset, self.packages + 1) from None
+            if not self.skip_errors:
+                raise exc.in_stream(offset, self.packages + 1) from None
+            size = self.codec.package_size  # one at a time: the good ones kept, the bad skipped
+            for at in range(0, len(run), size):
+                item = self._one(offset + at, bytes(run[at : at + size]))
+                if item is not None:
+                    yield item
+            return
         self.packages += len(array)
-        return Batch(offset, array)
+        yield Batch(offset, array)
 
-    def _one(self, offset: int, package: bytes) -> Package:
+    def _one(self, offset: int, package: bytes) -> Package | None:
+        """The package decoded; None when it does not decode and errors are skipped."""
         self.packages += 1
         try:
             message = decode(
                 package, protocol_version=self.state.version, sender=self.sender, strict=self.strict
             )
+            values = None
+            if self.codec is not None and isinstance(message, gen.DataPackage):
+                payload = message.payload
+                if not self.strict and len(payload) > self.codec.size:  # newer firmware appended fields
+                    payload = payload[: self.codec.size]
+                values = self.codec.decode(payload)
         except DecodeError as exc:
-            raise exc.in_stream(offset, self.packages) from None
-        observe(self.state, message)
-        values = None
-        if self.codec is not None and isinstance(message, gen.DataPackage):
-            try:
-                values = self.codec.decode(message.payload)
-            except DecodeError as exc:
+            if not self.skip_errors:
                 raise exc.in_stream(offset, self.packages) from None
+            self.skipped.add(offset, len(package), str(exc.in_stream(offset, self.packages)))
+            return None
+        observe(self.state, message)
         return Package(offset, message, values)
 
 
@@ -117,4 +153,4 @@ def _has_numpy() -> bool:
     return True
 
 
-__all__ = ["PAYLOAD_OFFSET", "Batch", "Package", "StreamDecoder"]
+__all__ = ["PAYLOAD_OFFSET", "Batch", "Package", "Skipped", "StreamDecoder"]

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import struct
+from dataclasses import dataclass, field
 from typing import Any
 
 from rtde_spec._generated.rtde_models import HEADER_FORMAT, HEADER_SIZE
@@ -12,14 +13,34 @@ _HEADER = struct.Struct(HEADER_FORMAT)
 _SIZE_BYTES = struct.calcsize(HEADER_FORMAT[:2])  # the size field leads the header
 
 
+@dataclass
+class Skipped:
+    """What a lenient decoder skipped because it did not decode: how many, their bytes, the first few."""
+
+    count: int = 0
+    bytes: int = 0
+    first: list[tuple[int, str]] = field(default_factory=list)  # (stream offset, reason)
+    keep: int = 10
+
+    def add(self, offset: int, size: int, reason: str) -> None:
+        self.count += 1
+        self.bytes += size
+        if len(self.first) < self.keep:
+            self.first.append((offset, reason))
+
+
 class PackageFramer:
     """Feed it bytes as they arrive; it returns each complete package once.
 
     Works for any protocol whose packages start with a big-endian size that counts
     the whole package (RTDE: uint16, primary interface: uint32). A size below the
     header size, or above `max_size`, cannot be resynchronised from: it raises
-    DecodeError with the stream offset, and keeps raising on later feeds. Sizes
-    are checked before anything is buffered for them.
+    DecodeError with the stream offset, and keeps raising on later feeds (and on
+    close); the packages that feed completed before the fault are in `salvaged`,
+    and `pending` counts the bytes from the fault on. Sizes are checked before
+    anything is buffered for them, so a claimed size costs nothing until its bytes
+    arrive; each byte is copied into the buffer once and moved at most once (the
+    unfinished package left after a drain), so framing stays linear in the input.
     """
 
     def __init__(
@@ -32,6 +53,7 @@ class PackageFramer:
         self._start = 0  # index in _buf of the first unconsumed byte
         self._offset = 0  # stream offset of _buf[_start]
         self._broken: DecodeError | None = None
+        self.salvaged: list[tuple[int, Any]] = []  # packages of the feed that broke, before the fault
 
     @property
     def offset(self) -> int:
@@ -58,6 +80,7 @@ class PackageFramer:
         if self._broken is not None:
             raise self._broken
         out: list[tuple[int, Any]] = []
+        self.salvaged = out
         if run is not None and isinstance(data, bytes):
             data = self._run_in_place(data, run, out)
         self._buf += data
@@ -104,6 +127,7 @@ class PackageFramer:
                     expected=f">= {self._header_size}" if low else f"<= {self._max_size}",
                     actual=size,
                 )
+                self._start = start  # `pending`: the bytes from the fault on
                 raise self._broken
             if len(buf) - start < size:
                 break
@@ -139,7 +163,9 @@ class PackageFramer:
         return data[end:]
 
     def close(self) -> None:
-        """Raise DecodeError if the stream ended inside a package."""
+        """Raise DecodeError if the stream ended inside a package (or could not be framed)."""
+        if self._broken is not None:
+            raise self._broken
         if self.pending:
             need = None
             if self.pending >= self._size_bytes:
