@@ -3,6 +3,9 @@
 from __future__ import annotations
 
 import socket
+import struct
+import subprocess
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -76,6 +79,7 @@ def write(path: Path, conversations: list[Conversation], fmt: str = "pcap") -> P
         "loopback": dpkt.pcap.DLT_NULL,
     }[link]
     frames = sorted((f for c in conversations for f in c.frames), key=lambda f: f[0])
+    path.parent.mkdir(parents=True, exist_ok=True)
     with open(path, "wb") as out:
         writer = (
             dpkt.pcapng.Writer(out, linktype=linktype)
@@ -157,3 +161,205 @@ def packages_touched(packages: list[bytes], segment: int, lost: set[int]) -> set
             touched.add(i)
         start = end
     return touched
+
+
+def run_capture(*args: str, cwd: Path, stdin: bytes | None = None) -> subprocess.CompletedProcess[str]:
+    """`rtde-spec capture ARGS` in a child process, run from `cwd` (not the checkout), so the
+    package on PYTHONPATH (or installed) is the one run."""
+    done = subprocess.run(
+        [sys.executable, "-m", "rtde_spec", "capture", *args],
+        capture_output=True,
+        cwd=cwd,
+        input=stdin,
+        timeout=600,
+    )
+    out, err = (b.decode("utf-8", "replace") for b in (done.stdout, done.stderr))
+    return subprocess.CompletedProcess(done.args, done.returncode, out, err)
+
+
+def pcap_records(path: Path) -> list[tuple[int, int]]:
+    """(offset of the record header, captured length) of every record of a classic pcap file."""
+    data = path.read_bytes()
+    out, pos = [], 24
+    while pos + 16 <= len(data):
+        (caplen,) = struct.unpack_from("<I", data, pos + 8)
+        out.append((pos, caplen))
+        pos += 16 + caplen
+    return out
+
+
+# --- the capture fuzz: mutations of frames (TCP, packages) and of the file (pcap/pcapng) ---
+
+ETH_IP_TCP = 14 + 20 + 20  # where a base frame's TCP payload starts (Ethernet, IPv4, TCP, no options)
+
+
+def _fuzz_strategies():  # type: ignore[no-untyped-def]
+    from hypothesis import strategies as st
+
+    index = st.integers(0, 200)
+    u32 = st.sampled_from([0, 1, 3, 12, 13, 16, 0xFFFF, 1 << 31, (1 << 32) - 1]) | st.integers(
+        0, (1 << 32) - 1
+    )
+    frame_ops = st.one_of(
+        st.tuples(st.just("drop"), index),
+        st.tuples(st.just("dup"), index, index),
+        st.tuples(st.just("swap"), index, index),
+        st.tuples(st.just("seq"), index, st.integers(-5000, 5000)),
+        st.tuples(st.just("payload"), index, st.integers(0, 2000), st.integers(0, 255)),
+        st.tuples(st.just("size"), index, st.integers(0, 0xFFFF)),  # a package's size field
+        st.tuples(st.just("cut"), index, st.integers(0, 120)),  # the frame captured shorter
+        st.tuples(st.just("time"), index, st.sampled_from([-1.0, 0.0, 1e12, float(1 << 62)])),
+    )
+    file_ops = st.one_of(
+        st.tuples(st.just("flip"), st.integers(0, 1 << 16), st.integers(0, 255)),
+        st.tuples(st.just("truncate"), st.integers(0, 1 << 16)),
+        st.tuples(st.just("u32"), st.integers(0, 1 << 16), u32),
+        st.tuples(st.just("delete"), st.integers(0, 1 << 16), st.integers(1, 64)),
+    )
+    return frame_ops, file_ops
+
+
+FRAME_OPS, FILE_OPS = _fuzz_strategies()
+
+
+def fuzz_base() -> list[Conversation]:
+    """An RTDE session (setup, single, joined and split packages, a text message, client inputs)
+    and a primary one (robot state in two segments, a text message with a uint64 of 2^63 and
+    text that is not UTF-8, a script)."""
+    from rtde_spec import RecipeCodec, build
+    from rtde_spec._generated import primary_models as pm
+    from rtde_spec.primary.codec import default_codec
+
+    rtde = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30004))
+    rtde_setup(rtde)
+    rtde.send("client", build("setup_inputs", variable_names=list(INPUTS)))
+    rtde.send("server", build("setup_inputs_reply", input_recipe_id=1, variable_types=["INT32", "DOUBLE"]))
+    packages = rtde_packages(40)
+    for package in packages[:20]:
+        rtde.send("server", package)
+    rtde.send("server", b"".join(packages[20:25]))
+    rtde.send("server", packages[25][:30])
+    rtde.send("server", packages[25][30:] + packages[26][:3])
+    rtde.send("server", packages[26][3:])
+    rtde.send("server", build("text_message", message="stop", source="Safety", warning_level=1))
+    inputs = RecipeCodec.for_names(list(INPUTS), "input")
+    rtde.send("client", inputs.encode_package({"input_int_register_24": 5, "speed_slider_fraction": 0.5}, 1))
+    for package in packages[27:]:
+        rtde.send("server", package)
+    primary = Conversation(("10.0.0.2", 52000), ("10.0.0.10", 30001))
+    primary.handshake()
+    sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "benchmarks"))
+    from ur5e_robot_state import ur5e_robot_state_bytes
+
+    state = ur5e_robot_state_bytes()
+    for _ in range(3):
+        primary.send("server", state[:700], dt=0.05)
+        primary.send("server", state[700:], dt=0.0)
+    text = pm.TextMessage(timestamp=(1 << 63) + 1, source=-2, robot_message_type=0, text_message="x\udcff")
+    primary.send("server", default_codec().encode(text))
+    primary.send("client", b"popup(1)\n")
+    return [rtde, primary]
+
+
+def _mutate_frames(conversations: list[Conversation], ops: list[tuple]) -> list[tuple[float, bytes]]:  # type: ignore[type-arg]
+    frames = sorted((f for c in conversations for f in c.frames), key=lambda f: f[0])
+    for op in ops:
+        if not frames:
+            break
+        name, i = op[0], op[1] % len(frames)
+        time, frame = frames[i]
+        data = bytearray(frame)
+        if name == "drop":
+            del frames[i]
+            continue
+        if name == "dup":
+            frames.insert(op[2] % (len(frames) + 1), frames[i])
+            continue
+        if name == "swap":
+            j = op[2] % len(frames)
+            frames[i], frames[j] = (frames[j][0], frames[i][1]), (frames[i][0], frames[j][1])
+            continue
+        if name == "seq" and len(data) >= 42:
+            seq = (int.from_bytes(data[38:42], "big") + op[2]) % (1 << 32)
+            data[38:42] = seq.to_bytes(4, "big")
+        elif name == "payload" and len(data) > ETH_IP_TCP:
+            data[ETH_IP_TCP + op[2] % (len(data) - ETH_IP_TCP)] = op[3]
+        elif name == "size" and len(data) >= ETH_IP_TCP + 2:
+            data[ETH_IP_TCP : ETH_IP_TCP + 2] = op[2].to_bytes(2, "big")
+        elif name == "cut":
+            del data[op[2] :]
+        elif name == "time":
+            time = op[2]
+        frames[i] = (time, bytes(data))
+    return frames
+
+
+def _mutate_file(data: bytes, ops: list[tuple]) -> bytes:  # type: ignore[type-arg]
+    buf = bytearray(data)
+    for op in ops:
+        if not buf:
+            break
+        name, pos = op[0], op[1] % len(buf)
+        if name == "flip":
+            buf[pos] = op[2]
+        elif name == "truncate":
+            del buf[max(pos, 4) :]
+        elif name == "u32":
+            buf[pos : pos + 4] = op[2].to_bytes(4, "little")
+        elif name == "delete":
+            del buf[pos : pos + op[2]]
+    return bytes(buf)
+
+
+def _write_frames(path: Path, frames: list[tuple[float, bytes]], kind: str) -> None:
+    """Frames as dpkt writes them; a time dpkt cannot write goes in by struct afterwards."""
+    with open(path, "wb") as out:
+        writer = (dpkt.pcapng.Writer if kind == "pcapng" else dpkt.pcap.Writer)(
+            out, linktype=dpkt.pcap.DLT_EN10MB
+        )
+        for ts, frame in frames:
+            writer.writepkt(frame, ts=ts if 0 <= ts < 1 << 31 else 0.0)
+
+
+def decode_mutated(
+    folder: Path,
+    kind: str,
+    sink: str,
+    frame_ops: list[tuple],
+    file_ops: list[tuple],  # type: ignore[type-arg]
+) -> str | None:
+    """Decode one mutated capture; None, or the foreign exception (not an RtdeSpecError) it raised,
+    or what about the outputs cannot be read back."""
+    import csv
+    import json
+    import traceback
+
+    import pyarrow.parquet as pq
+
+    from rtde_spec.capture.decoder import capture_tables, decode_to_directory
+    from rtde_spec.errors import RtdeSpecError
+
+    path = folder / f"fuzz.{kind}"
+    _write_frames(path, _mutate_frames(fuzz_base(), frame_ops), kind)
+    path.write_bytes(_mutate_file(path.read_bytes(), file_ops))
+    try:
+        if sink == "arrow":
+            for table in capture_tables(path).values():
+                table.to_pylist()
+            return None
+        decode_to_directory(path, folder, sink)
+    except RtdeSpecError:
+        return None
+    except Exception:
+        return traceback.format_exc()
+    try:
+        for file in folder.rglob(f"*.{sink}"):
+            if sink == "parquet":
+                pq.read_table(file)
+            elif sink == "jsonl":
+                [json.loads(line) for line in file.read_text("utf-8").splitlines()]
+            else:
+                list(csv.reader(file.open(encoding="utf-8", newline="")))
+    except Exception:
+        return "unreadable output: " + traceback.format_exc()
+    return None

@@ -87,6 +87,8 @@ class RtdeConnection:
                 return WEAK
             if size <= RECIPE_ID_AT:
                 return NO
+            if at + RECIPE_ID_AT >= len(buf):  # its recipe id has not arrived yet
+                return WEAK
             codec = self.session.recipes.get((direction, buf[at + RECIPE_ID_AT]))
             if codec is None and direction == "output":
                 codec = self.given

@@ -5,12 +5,33 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.errors import UsageError
 
+if TYPE_CHECKING:
+    from rtde_spec.capture.summary import CaptureSummary
+
 SUFFIXES = (".pcap", ".pcapng", ".cap")
+EXIT_MISSING_RECIPE = 1  # data packages that need --recipe (EXIT_ERROR)
+EXIT_DAMAGED = 3  # every file read to its end, but some input was damaged and skipped
+EPILOG = """\
+Output names: each input's files are named STEM-HASH.EXT (and its recipe list
+recipes-STEM-HASH.json), HASH being 8 hex digits of the input's absolute path: a/x.pcap
+and b/x.pcap never overwrite each other, and re-running on the same file replaces only
+that file's outputs. Standard input gets the start time instead of HASH.
+
+Damage: a capture is decoded around what is damaged (records cut off, impossible
+timestamps, TCP gaps, packages cut or garbled); stderr gets one summary line per file
+(frames, packages, gaps, bytes skipped, truncated records) and a line per problem.
+Text that is not UTF-8 keeps U+FFFD in its column and the raw bytes in hex in
+NAME_raw.
+
+Exit codes: 0 every file decoded whole; 1 data packages need --recipe (or another
+error in the data); 2 usage error (no such file, not a capture); 3 decoded, but some
+input was damaged or skipped (0 with --lenient); 130 interrupted (the tables written
+so far are whole)."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -19,7 +40,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="decode pcap/pcapng captures of RTDE and primary/secondary traffic into tables",
         description="Writes one table per kind (data packages per recipe, text messages, setup "
         "exchanges, primary sub-packages) as a hive-partitioned dataset: "
-        "OUTDIR/<table>/robot=<address>/date=<day>/<capture>.<ext>.",
+        "OUTDIR/<table>/robot=<address>/date=<day>/<capture>-<hash>.<ext>.",
+        epilog=EPILOG,
+        formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument(
         "files",
@@ -45,6 +68,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help=f"primary/secondary port, repeatable (default: {', '.join(map(str, PRIMARY_PORTS.values()))})",
     )
     p.add_argument("--jobs", type=int, default=1, help="files decoded in parallel processes (default: 1)")
+    p.add_argument(
+        "--lenient",
+        action="store_true",
+        help="exit 0 when an input was damaged (the summary is printed all the same; default: exit 3)",
+    )
     p.set_defaults(run=run)
 
 
@@ -71,7 +99,7 @@ def expand(patterns: list[str]) -> list[Path]:
 def run(args: argparse.Namespace) -> int:
     from concurrent.futures import ProcessPoolExecutor
 
-    from rtde_spec.capture.decoder import CaptureInterrupted, CaptureSummary, decode_to_directory
+    from rtde_spec.capture.decoder import CaptureInterrupted, decode_to_directory
     from rtde_spec.cli.record_cmd import names_of
 
     files = expand(args.files)
@@ -106,13 +134,17 @@ def run(args: argparse.Namespace) -> int:
             finally:
                 if bar is not None:
                     bar.close()
-    problems = _report(summaries)
-    return 1 if problems else 0
+    _report(summaries)
+    if any(s.needs_recipe() for s in summaries):
+        return EXIT_MISSING_RECIPE
+    if any(s.damage() for s in summaries) and not args.lenient:
+        return EXIT_DAMAGED
+    return 0
 
 
-def _report(summaries: list) -> int:  # type: ignore[type-arg]
+def _report(summaries: list[CaptureSummary]) -> None:
+    """stdout: files, connections and tables written; stderr: each file's summary and problems."""
     tables: dict[str, int] = {}
-    problems = 0
     for s in summaries:
         for name, rows in s.tables.items():
             tables[name] = tables.get(name, 0) + rows
@@ -120,11 +152,11 @@ def _report(summaries: list) -> int:  # type: ignore[type-arg]
         for c in s.connections:
             gaps = f", {c.gaps} gaps ({c.lost_bytes} bytes lost)" if c.gaps else ""
             print(f"  {c.kind:7s} {c.name}: {c.packages} packages{gaps}")
-        for problem in s.problems():
-            problems += 1
-            print(f"  problem: {problem}", file=sys.stderr)
     print("tables: " + ", ".join(f"{name} ({rows} rows)" for name, rows in sorted(tables.items())))
-    return problems
+    for s in summaries:
+        print(f"summary {s.line()}", file=sys.stderr)
+        for problem in s.problems():
+            print(f"  problem: {problem}", file=sys.stderr)
 
 
 def _progress(path: Path):  # type: ignore[no-untyped-def]
