@@ -25,6 +25,7 @@ class Arm:
         self.state = rest(q)
         self.tcp: tuple[float, ...] = (0.0,) * 6
         self.motion: Motion | None = None
+        self.revision = 0  # counts changes of the joint state, so an arm at rest is not re-published
         self._pose_cache: tuple[tuple[float, ...], tuple[float, ...], kin.Pose] | None = None
 
     @property
@@ -38,6 +39,7 @@ class Arm:
         """Advance the motion; a finished one (not a held speed) leaves the arm at rest."""
         if self.motion is None:
             return
+        self.revision += 1
         self.state = self.motion.step(dt)
         if self.motion.done and not self.motion.holds:
             self.state = rest(self.state.q)
@@ -47,6 +49,7 @@ class Arm:
         """Stand still at once (power loss, protective stop): no deceleration."""
         self.motion = None
         self.state = rest(self.state.q)
+        self.revision += 1
 
     def stop(self, a: float = MOVEJ_A, linear: bool = False) -> None:
         """Decelerate from the current velocity (stopj, stopl, the end of a program)."""
@@ -62,6 +65,7 @@ class Arm:
         """Joints set from outside (a scenario): at rest there."""
         self.motion = None
         self.state = rest(q)
+        self.revision += 1
 
     def pose(self, q: kin.Floats | None = None) -> kin.Pose:
         """FK of q (default: the arm's joints) with the TCP offset; the last answer is cached."""
@@ -78,8 +82,8 @@ class Arm:
         state = state or self.state
         if not np.any(state.qd):
             return (0.0,) * 6
-        here = self.pose(state.q)
-        ahead = kin.forward(self.model, state.q + state.qd * SPEED_STEP, self.tcp)
-        turn = kin.mul(kin.rotvec_to_rot(ahead[3:]), kin.transpose(kin.rotvec_to_rot(here[3:])))
-        linear = ((a - h) / SPEED_STEP for a, h in zip(ahead[:3], here[:3], strict=True))
-        return (*linear, *(w / SPEED_STEP for w in kin.matrix_to_rotvec(turn)))
+        r0, p0 = kin.tcp_frame(self.model, state.q, self.tcp)
+        r1, p1 = kin.tcp_frame(self.model, state.q + state.qd * SPEED_STEP, self.tcp)
+        w = kin.matrix_to_rotvec(kin.mul(r1, kin.transpose(r0)))
+        h = SPEED_STEP
+        return ((p1[0] - p0[0]) / h, (p1[1] - p0[1]) / h, (p1[2] - p0[2]) / h, w[0] / h, w[1] / h, w[2] / h)

@@ -24,6 +24,7 @@ Floats = Sequence[float] | NDArray[np.float64]  # a list, a tuple or a numpy vec
 Pose = tuple[float, float, float, float, float, float]
 Joints = tuple[float, float, float, float, float, float]
 EPS = 1e-9
+TWO_PI = 2 * math.pi
 
 
 Rot = tuple[tuple[float, float, float], tuple[float, float, float], tuple[float, float, float]]
@@ -147,18 +148,30 @@ def matrix_to_pose(t: Matrix) -> Pose:
     return (float(t[0, 3]), float(t[1, 3]), float(t[2, 3]), rx, ry, rz)
 
 
-def forward(arm: ArmModel, q: Floats, tcp: Floats | None = None) -> Pose:
-    """The TCP pose at joints q, with `tcp` the flange -> TCP offset (zero by default)."""
+def tcp_frame(arm: ArmModel, q: Floats, tcp: Floats | None = None) -> tuple[Rot, Vec3]:
+    """Base -> TCP (rotation, position): the flange moved by the `tcp` offset."""
     rot, pos = flange_frame(arm, q)
     if tcp is not None and any(tcp):
         offset = apply(rot, tcp[:3])
         pos = (pos[0] + offset[0], pos[1] + offset[1], pos[2] + offset[2])
         rot = mul(rot, rotvec_to_rot(tcp[3:6]))
+    return rot, pos
+
+
+def forward(arm: ArmModel, q: Floats, tcp: Floats | None = None) -> Pose:
+    """The TCP pose at joints q, with `tcp` the flange -> TCP offset (zero by default)."""
+    rot, pos = tcp_frame(arm, q, tcp)
     return (pos[0], pos[1], pos[2], *matrix_to_rotvec(rot))
 
 
-def inverse_all(arm: ArmModel, pose: Floats, tcp: Floats | None = None, q6: float = 0.0) -> list[Joints]:
-    """Every closed-form solution (up to 8) reaching `pose`; q6 is used where wrist 3 is free."""
+def inverse_all(
+    arm: ArmModel, pose: Floats, tcp: Floats | None = None, q6: float = 0.0, branch: Floats | None = None
+) -> list[Joints]:
+    """Every closed-form solution (up to 8) reaching `pose`; q6 is used where wrist 3 is free.
+
+    With `branch` (joints), only the solution of the same shoulder, elbow and wrist
+    configuration is computed: what a straight-line move needs every control step.
+    """
     rot = rotvec_to_rot(pose[3:6])
     p6: Sequence[float] = [float(v) for v in pose[:3]]
     if tcp is not None and any(tcp):  # the flange is the TCP less its offset
@@ -174,7 +187,13 @@ def inverse_all(arm: ArmModel, pose: Floats, tcp: Floats | None = None, q6: floa
     psi = math.atan2(p5[1], p5[0])
     phi = math.asin(max(-1.0, min(1.0, d4 / r)))
     out: list[Joints] = []
-    for t1 in (psi + phi, psi + math.pi - phi):  # from p5 . z1 = d4, z1 = (sin t1, -cos t1, 0)
+    shoulders = [psi + phi, psi + math.pi - phi]  # from p5 . z1 = d4, z1 = (sin t1, -cos t1, 0)
+    wrist = elbow = 0
+    if branch is not None:
+        shoulders.sort(key=lambda t: abs(_wrap(t - float(branch[0]))))
+        del shoulders[1:]
+        wrist, elbow = _sign(_wrap(float(branch[4]))), _sign(_wrap(float(branch[2])))
+    for t1 in shoulders:
         s1, c1 = math.sin(t1), math.cos(t1)
         # the target in frame 1: x' = c1 x + s1 y, y' = z (- d1), z' = s1 x - c1 y
         r16 = tuple(
@@ -182,13 +201,13 @@ def inverse_all(arm: ArmModel, pose: Floats, tcp: Floats | None = None, q6: floa
         )  # columns
         p16 = (c1 * p6[0] + s1 * p6[1], p6[2] - d1, s1 * p6[0] - c1 * p6[1])
         c5 = (p16[2] - d4) / d6
-        if abs(c5) > 1 + 1e-9:
+        if abs(c5) > 1 + 1e-7:
             continue
         base5 = math.acos(max(-1.0, min(1.0, c5)))
-        for t5 in (base5, -base5):
+        for t5 in (base5, -base5) if wrist == 0 else (wrist * base5,):
             s5, c5 = math.sin(t5), math.cos(t5)
             # row z of R16 is (s5 c6, -s5 s6, c5)
-            t6 = q6 if abs(s5) < 1e-10 else math.atan2(-r16[1][2] / s5, r16[0][2] / s5)
+            t6 = q6 if abs(s5) < 1e-6 else math.atan2(-r16[1][2] / s5, r16[0][2] / s5)
             s6, c6 = math.sin(t6), math.cos(t6)
             v = (-s6 * d5, -c6 * d5, d6)  # flange -> frame 4 origin, in frame 6
             x4 = (c5 * c6, -c5 * s6, -s5)  # frame 4's x axis, in frame 6
@@ -198,46 +217,52 @@ def inverse_all(arm: ArmModel, pose: Floats, tcp: Floats | None = None, q6: floa
                 sum(r16[k][1] * x4[k] for k in range(3)), sum(r16[k][0] * x4[k] for k in range(3))
             )
             c3 = (x * x + y * y - a2 * a2 - a3 * a3) / (2 * a2 * a3)
-            if abs(c3) > 1 + 1e-9:
+            if abs(c3) > 1 + 1e-7:
                 continue
             base3 = math.acos(max(-1.0, min(1.0, c3)))
-            for t3 in (base3, -base3):
+            for t3 in (base3, -base3) if elbow == 0 else (elbow * base3,):
                 t2 = math.atan2(y, x) - math.atan2(a3 * math.sin(t3), a2 + a3 * math.cos(t3))
                 t4 = t234 - t2 - t3
                 out.append((_wrap(t1), _wrap(t2), _wrap(t3), _wrap(t4), _wrap(t5), _wrap(t6)))
     return out
 
 
-def nearest(arm: ArmModel, pose: Floats, current: Floats, tcp: Floats | None = None) -> Joints:
+def nearest(
+    arm: ArmModel, pose: Floats, current: Floats, tcp: Floats | None = None, same_branch: bool = False
+) -> Joints:
     """The solution closest to `current` (each joint shifted by whole turns within its range).
 
-    UsageError when the pose is out of reach, as a controller refuses it.
+    Closest means the smallest largest joint move; `same_branch` tries the current
+    arm configuration first (a path followed in small steps). UsageError when the pose is out of
+    reach, as a controller refuses it.
     """
-    solutions = inverse_all(arm, pose, tcp, q6=current[5])
+    here = [float(v) for v in current]
+    solutions = inverse_all(arm, pose, tcp, q6=here[5], branch=here) if same_branch else []
+    solutions = solutions or inverse_all(arm, pose, tcp, q6=here[5])
     if not solutions:
         raise UsageError(f"pose {list(pose)} is out of reach of the {arm.name}", subject="inverse kinematics")
     limits = arm.joint_limits
-    best: Joints | None = None
+    best: list[float] = []
     best_cost = math.inf
     for sol in solutions:
-        moved = tuple(_closest_turn(v, c, lim) for v, c, lim in zip(sol, current, limits, strict=True))
-        cost = max(abs(m - c) for m, c in zip(moved, current, strict=True))
+        moved, cost = [], 0.0
+        for v, c, (low, high) in zip(sol, here, limits, strict=True):
+            shifted = c + ((v - c + math.pi) % TWO_PI - math.pi)
+            if shifted > high:
+                shifted -= TWO_PI
+            elif shifted < low:
+                shifted += TWO_PI
+            moved.append(shifted)
+            cost = max(cost, abs(shifted - c))
         if cost < best_cost:
-            best, best_cost = moved, cost  # type: ignore[assignment]
-    assert best is not None
-    return best
+            best, best_cost = moved, cost
+    return (best[0], best[1], best[2], best[3], best[4], best[5])
 
 
 def _wrap(angle: float) -> float:
-    """Into (-pi, pi]."""
-    return math.atan2(math.sin(angle), math.cos(angle))
+    """Into [-pi, pi)."""
+    return (angle + math.pi) % TWO_PI - math.pi
 
 
-def _closest_turn(value: float, current: float, limit: tuple[float, float]) -> float:
-    turns = round((current - value) / (2 * math.pi))
-    shifted = value + 2 * math.pi * turns
-    if shifted > limit[1]:
-        shifted -= 2 * math.pi
-    elif shifted < limit[0]:
-        shifted += 2 * math.pi
-    return shifted
+def _sign(value: float) -> int:
+    return -1 if value < 0 else 1

@@ -101,6 +101,7 @@ class ControllerModel(RobotModes):
         self.paused = False
         self.loaded: str | None = None  # a program the dashboard loaded, run by play()
         self.events: deque[ScriptEvent] = deque(maxlen=MAX_EVENTS)
+        self._published: tuple[Any, ...] = ()
         self.step = 0
         self.time = 0.0
         self.tick(0)
@@ -141,6 +142,11 @@ class ControllerModel(RobotModes):
         """Joints, TCP pose and speed, runtime state and speed scaling into the outputs."""
         values, state = self.values, self.arm.state
         frozen = self.paused or not self.can_move()
+        slider = float(values.get("target_speed_fraction", 1.0))
+        key = (self.arm.revision, frozen, slider, self.arm.tcp)
+        if key == self._published:
+            return  # an arm at rest: its outputs are already there
+        self._published = key
         q = tuple(float(v) for v in state.q)
         qd = (0.0,) * 6 if frozen else tuple(float(v) for v in state.qd)
         qdd = (0.0,) * 6 if frozen else tuple(float(v) for v in state.qdd)
@@ -154,7 +160,7 @@ class ControllerModel(RobotModes):
             if name in values:
                 values[name] = value
         if "speed_scaling" in values:
-            values["speed_scaling"] = 0.0 if frozen else float(values.get("target_speed_fraction", 1.0))
+            values["speed_scaling"] = 0.0 if frozen else slider
 
     # --- programs -------------------------------------------------------------
 

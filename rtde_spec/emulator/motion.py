@@ -180,7 +180,7 @@ class LinearMove(Motion):
     def sample(self, t: float) -> State:
         s = self.profile.at(t)[0]
         try:
-            q = np.array(kin.nearest(self.arm, self.pose_at(s), self.q, self.tcp))
+            q = np.array(kin.nearest(self.arm, self.pose_at(s), self.q, self.tcp, same_branch=True))
         except UsageError as exc:  # a singular point on the way
             raise MotionError(f"inverse kinematics failed on the way: {exc.reason}") from exc
         previous = self.last
@@ -246,7 +246,9 @@ class LinearSpeed(Motion):
         self.pose[:3, 3] += xd[:3] * dt
         self.pose[:3, :3] = kin.rotvec_to_matrix(xd[3:] * dt) @ self.pose[:3, :3]
         try:
-            q = np.array(kin.nearest(self.arm, kin.matrix_to_pose(self.pose), self.q, self.tcp))
+            q = np.array(
+                kin.nearest(self.arm, kin.matrix_to_pose(self.pose), self.q, self.tcp, same_branch=True)
+            )
         except UsageError as exc:
             raise MotionError(f"speedl left the workspace: {exc.reason}") from exc
         qd = (q - self.q) / max(dt, 1e-9)
