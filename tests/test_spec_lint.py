@@ -39,9 +39,25 @@ def test_the_real_spec_is_clean() -> None:
 
 
 RANGE_24 = "      - {index: [24, 47], since: {cb3: 3.9.0, e-series: 5.3.0}}\n"
-NEXT = "  - name: input_double_register_{X}"
+NEXT = "    conflicts:\n"  # the first family with ranges and conflicts: inputs input_int_register_{X}
 CASES: list[tuple[str, str, str, str, str, str]] = [
     # (id, file, old text, new text, expected path fragment, expected reason fragment)
+    (
+        "conflict range outside the family",
+        "rtde/fields.yaml",
+        "        index: [0, 23]\n        document:",
+        "        index: [0, 99]\n        document:",
+        "inputs[15](input_int_register_{X}).conflicts[0].index",
+        "is outside the index [0, 47]",
+    ),
+    (
+        "conflict without a decision",
+        "rtde/fields.yaml",
+        "        sources: [e-series-guide]\n        decision: \"The e-Series guide's version cell",
+        "        sources: [e-series-guide]\n        decisoin: \"The e-Series guide's version cell",
+        "conflicts[0]",
+        "unknown key 'decisoin'",
+    ),
     (
         "unknown key",
         "rtde/fields.yaml",

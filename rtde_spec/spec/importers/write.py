@@ -86,16 +86,26 @@ def new_entry(row: DocField, doc: Document, spec: Spec) -> dict[str, Any]:
     return entry
 
 
+def _insert(entry: Any, key: str, value: Any) -> None:
+    """Set a key; a new one goes before sources and conflicts, where the spec keeps such keys."""
+    if key in entry:
+        entry[key] = value
+        return
+    tail = [k for k in ("sources", "conflicts") if k in entry]
+    entry.insert(list(entry).index(tail[0]) if tail else len(entry), key, value)
+
+
 def _set_family(entry: Any, per: dict[int, tuple[av.Since, str | None]]) -> None:
     parts = av.runs(per)
     entry["index"] = _flow([parts[0][0], parts[-1][1]])
-    for key in ("since", "ranges"):
-        if key in entry:
-            del entry[key]
     if len(parts) == 1:
-        if parts[0][2] is not None:
-            entry.insert(len(entry) - (1 if "sources" in entry else 0), "since", _flow(dict(parts[0][2])))
+        entry.pop("ranges", None)
+        if parts[0][2] is None:
+            entry.pop("since", None)
+        else:
+            _insert(entry, "since", _flow(dict(parts[0][2])))
         return
+    entry.pop("since", None)
     ranges = []
     for low, high, since, reserved in parts:
         rng: dict[str, Any] = {"index": _flow([low, high])}
@@ -104,7 +114,7 @@ def _set_family(entry: Any, per: dict[int, tuple[av.Since, str | None]]) -> None
         if reserved is not None and reserved != entry.get("reserved"):
             rng["reserved"] = reserved
         ranges.append(_flow(rng))
-    entry["ranges"] = ranges
+    _insert(entry, "ranges", ranges)
 
 
 def _apply_rtde(change: Change, data: Any, doc: Document, spec: Spec) -> None:
@@ -150,7 +160,7 @@ def _apply_rtde(change: Change, data: Any, doc: Document, spec: Spec) -> None:
         for i in range(low, high + 1):
             if i not in per:  # a new index: the document's versions for it, the edge's reserved note
                 edge = per[min(per)] if i < min(per) else per[max(per)]
-                per[i] = (av.apply(edge[0], doc_availability(row, i, doc.line, spec), lines), edge[1])
+                per[i] = (av.apply({}, doc_availability(row, i, doc.line, spec), lines), edge[1])
         _set_family(entry, {i: v for i, v in per.items() if low <= i <= high})
     elif change.what == "availability":
         if entry.get("index") is not None:
@@ -164,10 +174,8 @@ def _apply_rtde(change: Change, data: Any, doc: Document, spec: Spec) -> None:
             since = av.apply(entry.get("since"), change.new, lines)
             if since is None:
                 entry.pop("since", None)
-            elif "since" in entry:
-                entry["since"] = _flow(dict(since))
             else:
-                entry.insert(list(entry).index("type") + 1, "since", _flow(dict(since)))
+                _insert(entry, "since", _flow(dict(since)))
     _add_source(entry, doc.source)
 
 
