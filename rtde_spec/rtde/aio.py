@@ -21,7 +21,7 @@ from typing import Any
 from rtde_spec._generated.constants import RTDE_PORT
 from rtde_spec.errors import ProtocolError, RtdeConnectionError, RtdeSpecError
 from rtde_spec.rtde.client import LOG_LEVELS
-from rtde_spec.rtde.client_protocol import ClientBase, DataRun, Event, InputRecipe, Reply, Text
+from rtde_spec.rtde.client_protocol import ClientBase, DataRun, InputRecipe, Reply, Text
 
 log = logging.getLogger("rtde_spec.client")
 
@@ -145,28 +145,27 @@ class AsyncRtdeClient(ClientBase):
                     raise self.core.closed(self.where, f"connection lost: {exc.strerror or exc}") from None
                 if not chunk:
                     raise self.core.closed(self.where)
+                failed: RtdeSpecError | None = None
                 try:
                     events = self.core.receive(chunk)
-                except RtdeSpecError:
-                    self._dispatch(self.core.before_error)  # the packages before the fault are kept
-                    raise
-                self._dispatch(events)
+                except RtdeSpecError as exc:  # the packages before the fault are kept
+                    events, failed = self.core.before_error, exc
+                for event in events:
+                    if isinstance(event, DataRun):
+                        got = len(event.records)
+                        self.received += got
+                        self.skipped += max(0, len(self._data) + got - self._data.maxlen)  # type: ignore[operator]
+                        self._data.extend(event.records)
+                        self._data_event.set()
+                    elif isinstance(event, Text):
+                        log.log(LOG_LEVELS[min(event.level, 3)], "%s: %s", event.source, event.message)
+                    else:
+                        self._replies.put_nowait(event)
+                if failed is not None:
+                    raise failed
         except asyncio.CancelledError:
             raise
         except BaseException as exc:  # kept as raised: a protocol error is not a quiet close
             self._closed = exc
             self._replies.put_nowait(exc)
             self._data_event.set()
-
-    def _dispatch(self, events: list[Event]) -> None:
-        for event in events:
-            if isinstance(event, DataRun):
-                got = len(event.records)
-                self.received += got
-                self.skipped += max(0, len(self._data) + got - self._data.maxlen)  # type: ignore[operator]
-                self._data.extend(event.records)
-                self._data_event.set()
-            elif isinstance(event, Text):
-                log.log(LOG_LEVELS[min(event.level, 3)], "%s: %s", event.source, event.message)
-            else:
-                self._replies.put_nowait(event)

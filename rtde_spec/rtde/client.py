@@ -22,7 +22,7 @@ from typing import Any
 
 from rtde_spec._generated.constants import RTDE_PORT
 from rtde_spec.errors import ProtocolError, RtdeConnectionError, RtdeSpecError, UsageError
-from rtde_spec.rtde.client_protocol import ClientBase, DataRun, Event, InputRecipe, Reply, Text
+from rtde_spec.rtde.client_protocol import ClientBase, DataRun, InputRecipe, Reply, Text
 
 log = logging.getLogger("rtde_spec.client")
 LOG_LEVELS = (logging.CRITICAL, logging.ERROR, logging.WARNING, logging.INFO)  # by text-message level
@@ -215,14 +215,11 @@ class RtdeClient(ClientBase):
         """The events of one read, in order. A function of its own so that the read's records
         and bytes are freed when it returns, while still in the cache, not at the next read.
         A faulty package ends the connection after the packages before it are handed over."""
+        failed: RtdeSpecError | None = None
         try:
             events = self.core.receive(chunk)
-        except RtdeSpecError:
-            self._dispatch(self.core.before_error)
-            raise
-        self._dispatch(events)
-
-    def _dispatch(self, events: list[Event]) -> None:
+        except RtdeSpecError as exc:
+            events, failed = self.core.before_error, exc
         data: list[DataRun] = []
         for event in events:
             if isinstance(event, DataRun):
@@ -237,6 +234,8 @@ class RtdeClient(ClientBase):
                 self._replies.put(event)
         if data:
             self._deliver(data)
+        if failed is not None:
+            raise failed
 
     def _deliver(self, runs: list[DataRun]) -> None:
         """Hand over the data packages of one read: to the callbacks if there are any, else
