@@ -7,6 +7,7 @@ from rtde_spec.spec.schema import Spec
 
 from .emit_arms import emit_arms
 from .emit_constants import emit_catalogue_data, emit_constants
+from .emit_dashboard import emit_dashboard
 from .emit_data import emit_spec_data
 from .emit_docs import (
     emit_enums_doc,
@@ -47,4 +48,5 @@ def generate(spec: Spec) -> dict[str, str]:
         "docs/reference/primary.md": emit_primary_doc(spec),
         "docs/reference/rtde-types.md": emit_types_doc(spec, catalogue),
         **emit_arms(),
+        **emit_dashboard(),
     }

@@ -1,4 +1,4 @@
-"""rtde-spec serve: a controller emulator on loopback (RTDE, primary and secondary ports)."""
+"""rtde-spec serve: a controller emulator on loopback (RTDE, primary and secondary ports, dashboard)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ from rtde_spec.cli.common import controller_version
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "serve",
-        help="run a controller emulator (RTDE, primary, secondary) for tests without a robot",
+        help="run a controller emulator (RTDE, primary, secondary, dashboard) for tests without a robot",
         description="Emulate a controller from the spec. Binds to 127.0.0.1 unless told otherwise; "
         "port 0 picks a free port; the ports are printed when listening. Ctrl-C stops it.",
     )
@@ -28,6 +28,26 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
             help=f"read-only {name} port, e.g. {ro} (default: not served)",
         )
     p.add_argument(
+        "--dashboard-port",
+        type=int,
+        default=None,
+        help="dashboard server port (default: the controller's, 29999, when free; -1: not served). "
+        "PolyScope X versions have no dashboard server",
+    )
+    p.add_argument(
+        "--programs",
+        metavar="DIR",
+        help="where the dashboard's `load NAME` finds programs: NAME as URScript, or the .script "
+        "beside NAME.urp (default: none, so `load` answers File not found)",
+    )
+    p.add_argument(
+        "--max-clients",
+        type=int,
+        default=None,
+        metavar="N",
+        help="connections each port takes; a further one is closed (default: 32)",
+    )
+    p.add_argument(
         "--controller",
         metavar="VERSION",
         type=controller_version,
@@ -42,9 +62,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def run(args: argparse.Namespace) -> int:
     import asyncio
     import logging
+    from pathlib import Path
 
+    from rtde_spec.emulator.guard import ClientLimits
     from rtde_spec.emulator.scenario import Scenario, load_scenario
     from rtde_spec.emulator.server import Emulator, EmulatorConfig
+    from rtde_spec.spec.dashboard import dashboard_spec
 
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     config = EmulatorConfig(
@@ -56,7 +79,12 @@ def run(args: argparse.Namespace) -> int:
         secondary_read_only_port=args.secondary_read_only_port,
         scenario=load_scenario(args.scenario) if args.scenario else Scenario(),
         controller=args.controller,
+        dashboard_port=_dashboard_port(args.dashboard_port, dashboard_spec().port),
+        dashboard_optional=args.dashboard_port is None,  # the default port may be taken: then none
+        programs=Path(args.programs) if args.programs else None,
     )
+    if args.max_clients is not None:
+        config.limits = ClientLimits(max_clients=max(1, args.max_clients))
     emulator = Emulator(config)
 
     async def main() -> None:
@@ -73,3 +101,9 @@ def run(args: argparse.Namespace) -> int:
     except KeyboardInterrupt:
         pass
     return 0
+
+
+def _dashboard_port(given: int | None, default: int) -> int | None:
+    if given is None:
+        return default
+    return None if given < 0 else given

@@ -1,4 +1,5 @@
-"""Run the emulated controller: the RTDE port, the primary/secondary ports and the control loop.
+"""Run the emulated controller: the RTDE port, the primary/secondary ports, the dashboard server
+and the control loop.
 
 The control loop keeps real time: each step is due at start + step / base rate
 (125 Hz for CB3 versions, 500 Hz for newer); it sleeps to just before the due
@@ -14,8 +15,10 @@ import logging
 import threading
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
+from rtde_spec.emulator.dashboard import DashboardConnection, DashboardHub
 from rtde_spec.emulator.guard import ClientLimits, Port
 from rtde_spec.emulator.model import ControllerModel
 from rtde_spec.emulator.primary_server import PrimaryConnection, PrimaryHub
@@ -38,6 +41,10 @@ class EmulatorConfig:
     secondary_read_only_port: int | None = None
     scenario: Scenario = field(default_factory=Scenario)
     controller: str | None = None  # overrides the scenario's version
+    # the dashboard server (29999 on a controller) is off unless given, so parallel tests never collide
+    dashboard_port: int | None = None
+    dashboard_optional: bool = False  # a dashboard port in use is logged and skipped, not an error
+    programs: Path | None = None  # where the dashboard's `load` finds programs (none: "File not found")
     limits: ClientLimits = field(default_factory=ClientLimits)  # what one client may cost, per port
     # after falling this far behind (s, a stalled machine) the loop skips steps rather than
     # sending them late in a burst; None: every step is sent, late if need be
@@ -52,6 +59,7 @@ class Emulator:
         self.model = ControllerModel(version, cat, self.config.scenario.functions(cat))
         self.rtde = RtdeHub(self.model)
         self.primary = PrimaryHub(self.model)
+        self.dashboard = DashboardHub(self.model, self.config.programs)
         self.servers: list[asyncio.AbstractServer] = []
         self.ports: dict[str, int] = {}
         self.clients: dict[str, Port] = {}  # port name -> its connections, under the limits
@@ -72,6 +80,19 @@ class Emulator:
         ):
             if port is not None:
                 await self._listen(name, port, self._primary_factory(name, read_only))
+        if c.dashboard_port is not None:
+            if self.dashboard.available:
+                clients = self._port("dashboard")
+                try:
+                    await self._listen(
+                        "dashboard", c.dashboard_port, lambda: DashboardConnection(self.dashboard, clients)
+                    )
+                except OSError as exc:
+                    if not c.dashboard_optional:
+                        raise
+                    log.warning("no dashboard server: port %d: %s", c.dashboard_port, exc.strerror)
+            else:
+                log.info("no dashboard server: controller %s has none", self.model.version)
         self._loop_task = loop.create_task(self._control_loop())
 
     def _port(self, name: str) -> Port:
@@ -112,6 +133,7 @@ class Emulator:
             if step % state_every == 0:
                 self.primary.broadcast_state()
                 now = time.monotonic()
+                self.dashboard.observe(now)
                 for port in self.clients.values():
                     port.check(now)
 

@@ -80,7 +80,7 @@ def robot_type(arm: ArmModel) -> tuple[int, int]:
     return (int(RobotType[family]) if family in RobotType.__members__ else int(RobotType.UNDEFINED)), 0
 
 
-def _available(since: Mapping[str, str] | None, version: Version, catalogue: Catalogue) -> bool:
+def available(since: Mapping[str, str] | None, version: Version, catalogue: Catalogue) -> bool:
     """Whether a member or field with this `since` is sent by `version` (lines inherit as catalogued)."""
     if since is None:
         return True
@@ -102,11 +102,11 @@ class RobotStateBuilder:
         self.absent: dict[str, tuple[str, ...]] = {}  # fields the version does not send
         for name in ORDER[model.line.id]:
             member = members[name]
-            if not _available(member.since, model.version, catalogue):
+            if not available(member.since, model.version, catalogue):
                 continue
             self.classes[name] = next(c for c in pm.__dict__.values() if getattr(c, "NAME", None) == name)
             self.absent[name] = tuple(
-                f.name for f in member.fields if not _available(f.since, model.version, catalogue)
+                f.name for f in member.fields if not available(f.since, model.version, catalogue)
             )
         self.sent = 0
         self._values: dict[str, Callable[[], dict[str, Any]]] = {

@@ -1,0 +1,208 @@
+"""The emulator's dashboard server (port 29999): text commands that drive the same controller model.
+
+Commands and reply texts come from spec/dashboard/commands.yaml (through the generated
+table): a greeting line on connect, then one reply line per command line. `power on`,
+`brake release`, `power off`, `load`/`play`/`pause`/`stop` and `unlock protective stop`
+act through the model's mode methods, so what they do shows on RTDE and the primary
+ports too. `load NAME` reads a URScript program from the programs directory: NAME
+itself when it is a script, or the `.script` PolyScope saves beside a `.urp`.
+A command the controller version does not have gets the `unknown` reply, as a
+controller answers it. Each client is held to the port's limits (guard.py).
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+from rtde_spec._generated.enums import ProgramState, RobotMode, SafetyMode, SafetyStatus, SafetyStatusBits
+from rtde_spec.emulator.guard import GuardedConnection, Port
+from rtde_spec.emulator.robot_messages import BUILD_DATE
+from rtde_spec.emulator.state_message import arm_parameters, available, robot_type
+from rtde_spec.spec.dashboard import DashboardCommand, dashboard_spec
+
+if TYPE_CHECKING:
+    from rtde_spec.emulator.model import ControllerModel
+
+log = logging.getLogger("rtde_spec.emulator")
+SERIAL_NUMBER = "20245500001"  # UR serial numbers start with the year of make
+UNLOCK_AFTER = 5.0  # s a protective stop must last before it may be unlocked
+MAX_PROGRAM_BYTES = 1 << 20
+NO_PROGRAM = "<unnamed>"
+
+
+class DashboardHub:
+    """What the dashboard connections share: the model, the loaded program's name, the stop clock."""
+
+    def __init__(
+        self, model: ControllerModel, programs: Path | None = None, serial_number: str = SERIAL_NUMBER
+    ) -> None:
+        self.model = model
+        self.table = dashboard_spec()
+        self.programs = programs
+        self.serial_number = serial_number
+        self.program: str | None = None  # file name of the loaded program
+        self.protective_since: float | None = None
+        self.available = model.line.id in self.table.product_lines
+
+    def observe(self, now: float) -> None:
+        """Called a few times a second: when the current protective stop began."""
+        stopped = int(self.model.values.get("safety_mode", SafetyMode.NORMAL)) == SafetyMode.PROTECTIVE_STOP
+        if not stopped:
+            self.protective_since = None
+        elif self.protective_since is None:
+            self.protective_since = now
+
+    def answer(self, line: str) -> tuple[str, bool]:
+        """The reply to one command line, and whether the connection closes after it."""
+        found = self.table.find(line)
+        if found is None or not available(found[0].since, self.model.version, self.model.catalogue):
+            return self.table.unknown.format(line=line), False
+        command, argument = found
+        outcome = self._act(command, argument)
+        text = command.replies.get(outcome, command.replies["ok"])  # type: ignore[call-overload]
+        values = self.values()
+        if command.argument:
+            values[command.argument] = argument
+        return text.format(**values), command.action == "quit"
+
+    # --- what the commands do -----------------------------------------------
+
+    def _act(self, command: DashboardCommand, argument: str) -> str:
+        model: Any = self.model  # the mode methods of ControllerModel (emulator/modes.py)
+        action = command.action
+        if action == "load":
+            return self._load(argument)
+        if action == "loaded_program":
+            return "ok" if self.program else "failed"
+        if action == "log":
+            log.info("dashboard log: %s", argument)
+        elif action == "power_on":
+            model.power_on()
+        elif action in ("power_off", "shutdown"):
+            model.power_off()
+        elif action == "brake_release":
+            model.release_brakes()
+        elif action == "play":
+            return "ok" if model.play() else "failed"
+        elif action == "pause":
+            return "ok" if model.pause_program() else "failed"
+        elif action == "stop":
+            model.stop_program()
+        elif action == "unlock_protective_stop":
+            since = self.protective_since
+            if since is not None and time.monotonic() - since < UNLOCK_AFTER:
+                return "failed"
+            model.unlock_protective_stop()
+        elif action == "restart_safety":
+            model.power_off()
+            self._safety_normal()
+        return "ok"
+
+    def _load(self, name: str) -> str:
+        """Load `name` from the programs directory: a script, or the .script saved beside a .urp."""
+        if self.programs is None or not name:
+            return "not_found"
+        base = self.programs.resolve()
+        path = (base / name).resolve()
+        if path.suffix == ".urp":
+            path = path.with_suffix(".script")
+        if not path.is_relative_to(base) or not path.is_file():
+            return "not_found"
+        try:
+            if path.stat().st_size > MAX_PROGRAM_BYTES:
+                return "failed"
+            text = path.read_text(encoding="utf-8")
+        except (OSError, UnicodeDecodeError):
+            return "failed"
+        model: Any = self.model
+        model.load_program(text)
+        self.program = Path(name).name
+        return "ok"
+
+    def _safety_normal(self) -> None:
+        values = self.model.values
+        for name, value in (
+            ("safety_mode", SafetyMode.NORMAL),
+            ("safety_status", SafetyStatus.NORMAL),
+            ("safety_status_bits", SafetyStatusBits.NORMAL_MODE),
+        ):
+            if name in values:
+                values[name] = int(value)
+
+    # --- what the replies say -------------------------------------------------
+
+    def values(self) -> dict[str, str]:
+        values, version = self.model.values, self.model.version
+        mode = int(values.get("robot_mode", RobotMode.RUNNING))
+        safety = int(values.get("safety_mode", SafetyMode.NORMAL))
+        status = int(values.get("safety_status", safety))
+        runtime = int(values.get("runtime_state", ProgramState.STOPPED))
+        state = {
+            ProgramState.RUNNING: "PLAYING",
+            ProgramState.PAUSED: "PAUSED",
+            ProgramState.PAUSING: "PAUSED",
+        }
+        kind, _ = robot_type(arm_parameters(self.model))
+        return {
+            "robot_mode": _name(RobotMode, mode),
+            "safety_mode": _name(SafetyMode, safety),
+            "safety_status": _name(SafetyStatus, status),
+            "program_state": state.get(runtime, "STOPPED"),  # type: ignore[call-overload]
+            "program": self.program or NO_PROGRAM,
+            "running": "true" if runtime == ProgramState.RUNNING else "false",
+            "version": f"{version.major}.{version.minor}.{version.bugfix}.{version.build or 0}",
+            "build_date": BUILD_DATE,
+            "serial_number": self.serial_number,
+            "robot_model": _robot_model(kind),
+        }
+
+
+def _name(enum: Any, value: int) -> str:
+    try:
+        return str(enum(value).name)
+    except ValueError:
+        return str(value)
+
+
+def _robot_model(kind: int) -> str:
+    from rtde_spec._generated.enums import RobotType
+
+    return _name(RobotType, kind)
+
+
+class DashboardConnection(GuardedConnection):
+    """One dashboard client: the greeting, then a reply line per command line."""
+
+    def __init__(self, hub: DashboardHub, port: Port) -> None:
+        super().__init__(port)
+        self.hub = hub
+        self.buffer = bytearray()
+
+    def opened(self) -> None:
+        self.write(self.hub.table.greeting.encode() + b"\n")
+
+    def data_received(self, data: bytes) -> None:
+        if self.dropped:
+            return
+        self.buffer += data
+        lines = self.buffer.split(b"\n")
+        self.buffer = bytearray(lines.pop())
+        if len(self.buffer) > self.hub.table.max_line_bytes:
+            self.drop(f"a line of over {self.hub.table.max_line_bytes} bytes is no dashboard command")
+            return
+        if not self.received(len(self.buffer), len(lines)):
+            return
+        for raw in lines:
+            line = raw.decode("utf-8", "replace").strip()
+            if not line:
+                continue
+            reply, close = self.hub.answer(line)
+            log.info("dashboard %s: %r -> %r", self.peer, line[:80], reply)
+            self.write(reply.encode("utf-8", "replace") + b"\n")
+            if close:
+                assert self.transport is not None
+                self.transport.close()
+                return
