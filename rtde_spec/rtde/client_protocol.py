@@ -261,10 +261,20 @@ class ClientProtocol:
             level = getattr(message, "warning_level", getattr(message, "message_type", 3))
             return Text(level, message.message, getattr(message, "source", "controller"))
         if isinstance(message, gen.DataPackage):
+            output = self.output
+            if output is not None and message.recipe_id == self.output_recipe_id:
+                raise DecodeError(
+                    "data package of the output recipe, of another size than the recipe's",
+                    package="data_package",
+                    field="payload",
+                    expected=f"{output.package_size - PAYLOAD_OFFSET} bytes",
+                    actual=f"{len(message.payload)} bytes",
+                )
             raise ProtocolError(
                 "data package of no recipe this client set up",
                 package="data_package",
                 field="recipe_id",
+                expected="no data before setup_outputs" if output is None else self.output_recipe_id,
                 actual=message.recipe_id,
             )
         request = self._match(message)

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
+import re
 from typing import Any
 
 import pytest
@@ -110,22 +111,31 @@ def test_the_asyncio_client_ignores_unsolicited_replies_too() -> None:
     peer.close()
 
 
-BAD_PACKAGES = {
-    "data of a recipe never set up": (build("data_package", recipe_id=9, payload=b"\0" * 8), ProtocolError),
-    "an unknown package type": (bytes([0, 3, ord("Z")]), DecodeError),
+BAD_PACKAGES = {  # the bytes, the error, what its message says
+    "data of a recipe never set up": (
+        build("data_package", recipe_id=9, payload=b"\0" * 8),
+        ProtocolError,
+        "no recipe this client set up (expected 1, got 9)",
+    ),
+    "data of the recipe cut short": (
+        build("data_package", recipe_id=1, payload=b"\0" * 7),
+        DecodeError,
+        "of another size than the recipe's (expected 8 bytes, got 7 bytes)",
+    ),
+    "an unknown package type": (bytes([0, 3, ord("Z")]), DecodeError, "unknown package type 90"),
 }
 
 
 @pytest.mark.parametrize("bad", BAD_PACKAGES, ids=list(BAD_PACKAGES))
 def test_a_protocol_error_ends_iteration_with_that_error_after_the_packages_before_it(bad: str) -> None:
-    package, error = BAD_PACKAGES[bad]
+    package, error, says = BAD_PACKAGES[bad]
     peer = HostilePeer()
     got: list[float] = []
     with RtdeClient("127.0.0.1", peer.port, timeout=2.0) as client:
         client.setup_outputs(["timestamp"], 125)
         client.start()
         peer.send(peer.data(1.0) + peer.data(2.0) + package)  # one read: the good ones are kept
-        with pytest.raises(error):
+        with pytest.raises(error, match=re.escape(says)):
             for record in client:
                 got.append(record.timestamp)
         assert isinstance(client.connection_lost, error)
@@ -135,7 +145,7 @@ def test_a_protocol_error_ends_iteration_with_that_error_after_the_packages_befo
 
 @pytest.mark.parametrize("bad", BAD_PACKAGES, ids=list(BAD_PACKAGES))
 def test_the_asyncio_client_raises_a_protocol_error_instead_of_ending_quietly(bad: str) -> None:
-    package, error = BAD_PACKAGES[bad]
+    package, error, says = BAD_PACKAGES[bad]
     peer = HostilePeer()
     got: list[float] = []
 
@@ -149,7 +159,7 @@ def test_the_asyncio_client_raises_a_protocol_error_instead_of_ending_quietly(ba
             async for record in client:
                 got.append(record.timestamp)
 
-    with pytest.raises(error):  # the same error type the blocking client raises
+    with pytest.raises(error, match=re.escape(says)):  # the same error the blocking client raises
         asyncio.run(run())
     assert got == [1.0]
     peer.close()
