@@ -11,7 +11,12 @@ the key and why:
 
 A value is a constant (number, bool or list for vectors) or one function of time:
 `sine` (amplitude, period in s, phase in rad, offset; each a number or a list per
-element) or `ramp` (start, rate per second).
+element) or `ramp` (start, rate per second). `faults` schedules a protective stop,
+emergency stop, power loss, program stop or network drop at a time (faults.py):
+
+    faults:
+      - {at: 2.0, fault: protective_stop}
+      - {at: 5.0, fault: network_drop, seconds: 3}
 """
 
 from __future__ import annotations
@@ -24,7 +29,9 @@ from typing import Any
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
+from rtde_spec.emulator.faults import Fault
 from rtde_spec.errors import UsageError
+from rtde_spec.spec import safe_yaml
 from rtde_spec.spec.catalogue import Catalogue
 
 Number = float | list[float]
@@ -57,6 +64,7 @@ class RampOf(_Strict):
 class Scenario(_Strict):
     controller: str = "5.15.0"
     outputs: dict[str, bool | int | float | list[float] | SineOf | RampOf] = {}
+    faults: list[Fault] = []  # what goes wrong, when (faults.py)
 
     def functions(self, catalogue: Catalogue) -> dict[str, Callable[[float], Any]]:
         """Output name -> value at time t (s); names and lengths checked against the spec."""
@@ -119,7 +127,7 @@ def _function(
 def load_scenario(path: str | Path) -> Scenario:
     """A scenario from YAML; every problem is a UsageError naming the file and key."""
     try:
-        data = yaml.safe_load(Path(path).read_text(encoding="utf-8")) or {}
+        data = safe_yaml.load(Path(path).read_text(encoding="utf-8")) or {}
     except (OSError, yaml.YAMLError) as exc:
         raise UsageError(f"cannot read scenario: {exc}", subject=f"file {path}") from None
     try:

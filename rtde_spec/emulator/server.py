@@ -19,6 +19,7 @@ from pathlib import Path
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.emulator.dashboard import DashboardConnection, DashboardHub
+from rtde_spec.emulator.faults import FaultSchedule
 from rtde_spec.emulator.guard import ClientLimits, Port
 from rtde_spec.emulator.model import ControllerModel
 from rtde_spec.emulator.primary_server import PrimaryConnection, PrimaryHub
@@ -60,6 +61,8 @@ class Emulator:
         self.rtde = RtdeHub(self.model)
         self.primary = PrimaryHub(self.model)
         self.dashboard = DashboardHub(self.model, self.config.programs)
+        self.faults = FaultSchedule(self.config.scenario.faults, self.model)
+        self._silenced = False
         self.servers: list[asyncio.AbstractServer] = []
         self.ports: dict[str, int] = {}
         self.clients: dict[str, Port] = {}  # port name -> its connections, under the limits
@@ -129,6 +132,9 @@ class Emulator:
                 skipped = int((time.perf_counter() - start) * base) - step
                 step += max(0, skipped)
             self.model.tick(step)
+            self.faults.apply(self.model.time)
+            if self._network(self.faults.silent(self.model.time)):
+                continue  # a network drop: nothing goes out
             self.rtde.send_outputs(step)
             if step % state_every == 0:
                 self.primary.broadcast_state()
@@ -136,6 +142,18 @@ class Emulator:
                 self.dashboard.observe(now)
                 for port in self.clients.values():
                     port.check(now)
+
+    def _network(self, down: bool) -> bool:
+        """Pause or resume reading from every client as a network drop begins or ends; True while down."""
+        if down != self._silenced:
+            self._silenced = down
+            log.warning("scenario: network %s", "down" if down else "up again")
+            for port in self.clients.values():
+                for conn in port.connections:
+                    transport = conn.transport
+                    if transport is not None and not transport.is_closing():
+                        (transport.pause_reading if down else transport.resume_reading)()
+        return down
 
     async def stop(self) -> None:
         if self._loop_task is not None:
