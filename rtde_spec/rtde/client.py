@@ -40,6 +40,7 @@ class RtdeClient(ClientBase):
         self._raw_callbacks: list[Callable[[bytes], None]] = []
         self._reader: threading.Thread | None = None
         self._send_lock = threading.Lock()
+        self._closing = False  # close() was called: the end is ours, not the controller's
 
     # --- connection ---------------------------------------------------------
 
@@ -65,6 +66,7 @@ class RtdeClient(ClientBase):
         return self
 
     def close(self) -> None:
+        self._closing = True
         if self._sock is not None:
             try:
                 self._sock.shutdown(socket.SHUT_RDWR)
@@ -202,10 +204,10 @@ class RtdeClient(ClientBase):
                         poller.poll()
                     chunk = sock.recv(max(65536, 2 * self._low_mark))
                 except OSError as exc:
-                    self._finish(self.core.closed(self.where, f"connection lost: {exc.strerror or exc}"))
+                    self._finish(self._ended(f"connection lost: {exc.strerror or exc}"))
                     return
                 if not chunk:
-                    self._finish(self.core.closed(self.where))
+                    self._finish(self._ended("the controller closed the connection"))
                     return
                 self._handle(chunk)
         except BaseException as exc:
@@ -261,6 +263,11 @@ class RtdeClient(ClientBase):
         self._data.extend(records)
         if not self._bell.qsize():  # one ring is enough: the woken reader finds all in the queue
             self._bell.put(None)
+
+    def _ended(self, cause: str) -> BaseException:
+        if self._closing:
+            return RtdeConnectionError("closed by this client", subject=self.where)
+        return self.core.closed(self.where, cause)
 
     def _finish(self, exc: BaseException) -> None:
         self._closed = exc
