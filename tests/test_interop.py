@@ -159,7 +159,7 @@ def test_recorder_keeps_rows_when_the_controller_goes_away(tmp_path: Path) -> No
         stderr=subprocess.PIPE, text=True,
     )  # fmt: skip
     wait_for_client(proc)
-    time.sleep(1.0)
+    time.sleep(2.0)  # well past its setup, on a loaded machine
     proc.terminate()
     proc.wait(10)
     _, err = rec.communicate(timeout=10)
