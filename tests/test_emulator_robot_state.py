@@ -217,3 +217,17 @@ def test_textmsg_and_a_script_that_cannot_run_become_robot_messages_on_the_prima
     assert by_name["key_message"].robot_message_title.startswith("PROGRAM_XXX_")  # type: ignore[attr-defined]
     failed = by_name["runtime_exception_message"]
     assert failed.script_line_number == 1 and "foo_bar_baz" in failed.runtime_exception_text_message  # type: ignore[attr-defined]
+
+
+@pytest.mark.parametrize(
+    ("version", "arm", "expected", "kind"), [("5.15.0", "UR10e", "UR10e", 2), ("3.15.8", None, "UR5", 1)]
+)
+def test_the_kinematics_sub_package_carries_the_chosen_arm(
+    version: str, arm: str | None, expected: str, kind: int
+) -> None:
+    config = EmulatorConfig(rtde_port=None, primary_port=None, secondary_port=0, controller=version, arm=arm)
+    with EmulatorThread(config) as emu:
+        got = list(messages(emu.ports["secondary"], 2))
+    state = PrimaryStreamDecoder().feed(b"".join(got))[1][1]
+    assert tuple(state["kinematics_info"].dh_a) == arm_model(expected).dh.a
+    assert state["configuration_data"].robot_type == kind

@@ -48,6 +48,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="connections each port takes; a further one is closed (default: 32)",
     )
     p.add_argument(
+        "--model",
+        metavar="ARM",
+        help="arm model whose geometry and limits the robot has, e.g. UR5e, UR10 (spec/arms; "
+        "default: UR5 for a CB3 version, else UR5e)",
+    )
+    p.add_argument(
         "--controller",
         metavar="VERSION",
         type=controller_version,
@@ -79,6 +85,7 @@ def run(args: argparse.Namespace) -> int:
         secondary_read_only_port=args.secondary_read_only_port,
         scenario=load_scenario(args.scenario) if args.scenario else Scenario(),
         controller=args.controller,
+        arm=args.model,
         dashboard_port=_dashboard_port(args.dashboard_port, dashboard_spec().port),
         dashboard_optional=args.dashboard_port is None,  # the default port may be taken: then none
         programs=Path(args.programs) if args.programs else None,

@@ -42,6 +42,7 @@ class EmulatorConfig:
     secondary_read_only_port: int | None = None
     scenario: Scenario = field(default_factory=Scenario)
     controller: str | None = None  # overrides the scenario's version
+    arm: str | None = None  # arm model (spec/arms): default UR5 for a CB3 version, else UR5e
     # the dashboard server (29999 on a controller) is off unless given, so parallel tests never collide
     dashboard_port: int | None = None
     dashboard_optional: bool = False  # a dashboard port in use is logged and skipped, not an error
@@ -57,7 +58,8 @@ class Emulator:
         self.config = config or EmulatorConfig()
         cat = catalogue or Catalogue.default()
         version = self.config.controller or self.config.scenario.controller
-        self.model = ControllerModel(version, cat, self.config.scenario.functions(cat))
+        arm = self.config.arm or ("UR5" if cat.line_of(version).id == "cb3" else "UR5e")
+        self.model = ControllerModel(version, cat, self.config.scenario.functions(cat), model=arm)
         self.rtde = RtdeHub(self.model)
         self.primary = PrimaryHub(self.model)
         self.dashboard = DashboardHub(self.model, self.config.programs)
