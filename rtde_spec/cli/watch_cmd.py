@@ -1,4 +1,8 @@
-"""rtde-spec watch: a robot's primary/secondary stream, live, as a person or a pipe wants it."""
+"""rtde-spec watch: a robot's primary/secondary stream, live, as a person or a pipe wants it.
+
+With --foxglove, the same messages (and, over RTDE, the outputs of --rtde-fields) are
+also served to the Foxglove app over a WebSocket, with the tool's frame moving in 3D.
+"""
 
 from __future__ import annotations
 
@@ -9,13 +13,24 @@ import sys
 import time
 from typing import TYPE_CHECKING, Any
 
-from rtde_spec._generated.constants import PRIMARY_PORTS
+from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.cli.common import existing_file
 from rtde_spec.errors import RtdeConnectionError, UsageError
+from rtde_spec.output.foxglove_live import DEFAULT_PORT
 
 if TYPE_CHECKING:
+    from rtde_spec.output.foxglove_live import LivePublisher
     from rtde_spec.primary.base import RobotStateMessage
     from rtde_spec.primary.events import StateChanges
+    from rtde_spec.rtde.client import RtdeClient
+
+# What a live view is usually opened for: joints, tool pose and load, modes. Fields the
+# controller's version lacks are left out of this default (an explicit list is taken as given).
+LIVE_FIELDS = (
+    "timestamp", "actual_q", "actual_qd", "target_q", "actual_current", "joint_temperatures",
+    "actual_TCP_pose", "actual_TCP_speed", "actual_TCP_force", "speed_scaling",
+    "robot_mode", "safety_mode", "runtime_state",
+)  # fmt: skip
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -49,6 +64,32 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--timeout", type=float, default=5.0, help="seconds without a message that are an error (default: 5)"
     )
+    live = p.add_argument_group("live view in Foxglove")
+    live.add_argument(
+        "--foxglove",
+        nargs="?",
+        type=int,
+        const=DEFAULT_PORT,
+        metavar="PORT",
+        help=f"serve the messages to the Foxglove app on ws://HOST:PORT (PORT default {DEFAULT_PORT}; "
+        "0: any free port, printed) (default: off)",
+    )
+    live.add_argument(
+        "--foxglove-host",
+        default="127.0.0.1",
+        help="address the live view listens on; 0.0.0.0 for other machines (default: 127.0.0.1)",
+    )
+    live.add_argument(
+        "--rtde-fields",
+        metavar="NAMES",
+        default=",".join(LIVE_FIELDS),
+        help="with --foxglove, also subscribe these RTDE outputs (comma list; 'none': primary only) "
+        "(default: joints, TCP pose/speed/force, currents, temperatures, modes)",
+    )
+    live.add_argument("--rtde-port", type=int, default=RTDE_PORT, help=f"RTDE port (default: {RTDE_PORT})")
+    live.add_argument(
+        "--rtde-frequency", type=float, default=125.0, help="RTDE output rate in Hz (default: 125)"
+    )
     p.set_defaults(run=run)
 
 
@@ -64,24 +105,87 @@ def run(args: argparse.Namespace) -> int:
     changes = StateChanges()
     seen = 0
     deadline = time.monotonic() + args.duration if args.duration is not None else None
-    with client:
-        print(f"watching {client.where}", file=sys.stderr)
-        if script is not None:
-            client.send_script(script)
-            print(f"sent {len(script.splitlines())} line(s) of URScript", file=sys.stderr)
-        for _, message in client:
-            now = datetime.datetime.now()
-            if args.json:
-                print(json.dumps({"received": now.isoformat(), **as_json(message)}), flush=True)
-            else:
-                for kind, text in _lines(message, changes, args.every):
-                    print(f"{now:%H:%M:%S.%f}"[:-3] + f"  {kind:8s} {text}", flush=True)
-            seen += 1
-            if (args.count is not None and seen >= args.count) or (
-                deadline is not None and time.monotonic() >= deadline
-            ):
-                return 0
+    live = _live(args)
+    rtde: RtdeClient | None = None
+    try:
+        with client:
+            print(f"watching {client.where}", file=sys.stderr)
+            if live is not None:
+                rtde = _subscribe_rtde(args, live)
+            if script is not None:
+                client.send_script(script)
+                print(f"sent {len(script.splitlines())} line(s) of URScript", file=sys.stderr)
+            for _, message in client:
+                now = datetime.datetime.now()
+                if live is not None:
+                    live.publish_row(as_json(message), protocol="primary")
+                if args.json:
+                    print(json.dumps({"received": now.isoformat(), **as_json(message)}), flush=True)
+                else:
+                    for kind, text in _lines(message, changes, args.every):
+                        print(f"{now:%H:%M:%S.%f}"[:-3] + f"  {kind:8s} {text}", flush=True)
+                seen += 1
+                if (args.count is not None and seen >= args.count) or (
+                    deadline is not None and time.monotonic() >= deadline
+                ):
+                    return 0
+    finally:
+        if rtde is not None:
+            rtde.close()
+        if live is not None:
+            live.close()
     raise RtdeConnectionError("the controller closed the connection", subject=client.where)
+
+
+def _live(args: argparse.Namespace) -> LivePublisher | None:
+    """The Foxglove server of --foxglove, started (its address on stderr), or None."""
+    if args.foxglove is None:
+        return None
+    if not 0 <= args.foxglove <= 65535:
+        raise UsageError(f"--foxglove {args.foxglove}: a port 0..65535 (0: any free port)")
+    from rtde_spec.output.foxglove_live import LivePublisher
+
+    live = LivePublisher(args.foxglove, args.foxglove_host)
+    print(
+        f"live view for Foxglove on {live.url} (Foxglove: Open connection, Foxglove WebSocket)",
+        file=sys.stderr,
+    )
+    return live
+
+
+def _subscribe_rtde(args: argparse.Namespace, live: LivePublisher) -> RtdeClient | None:
+    """An RTDE client whose outputs (--rtde-fields) go to the live view from its reader thread."""
+    from rtde_spec.rtde.client import RtdeClient
+
+    names = [n.strip() for n in args.rtde_fields.split(",") if n.strip()]
+    if not names or names == ["none"]:
+        return None
+    rtde = RtdeClient(args.host, args.rtde_port, timeout=args.timeout)
+    try:
+        rtde.connect()
+        if args.rtde_fields == ",".join(LIVE_FIELDS) and rtde.controller_version is not None:
+            names = _available(names, str(rtde.controller_version))
+        rtde.setup_outputs(names, args.rtde_frequency)
+        recipe_id = rtde.core.output_recipe_id
+        rtde.on_data(lambda record: live.publish_record(record, recipe_id))
+        rtde.start()
+    except BaseException:
+        rtde.close()
+        raise
+    print(
+        f"live view: {len(names)} RTDE outputs at {args.rtde_frequency:g} Hz from {rtde.where}",
+        file=sys.stderr,
+    )
+    return rtde
+
+
+def _available(names: list[str], controller: str) -> list[str]:
+    from rtde_spec.spec.catalogue import Catalogue
+
+    cat = Catalogue.default()
+    return [
+        n for n in names if (info := cat.get(n, "output")) is not None and cat.available(info, controller)
+    ]
 
 
 def _lines(message: Any, changes: StateChanges, every: bool) -> list[tuple[str, str]]:

@@ -155,7 +155,8 @@ class Topics:
         for sub in subs:
             sub = sub if isinstance(sub, dict) else {"value": sub}
             name = str(sub.get("package", "unknown"))
-            body = {"offset": row.get("offset"), **{k: v for k, v in sub.items() if k != "package"}}
+            lead = {"offset": row["offset"]} if "offset" in row else {}
+            body = {**lead, **{k: v for k, v in sub.items() if k != "package"}}
             parts.append((name, body, js.primary_part(name)))
         when = self._row_time(row, None)
         for _, body, known in parts:
