@@ -206,3 +206,47 @@ def test_the_file_appears_complete_or_not_at_all(stream: Path, tmp_path: Path) -
     assert target.read_bytes() == b"old" and not list(tmp_path.glob(".out.mcap*"))
     decode_to_mcap(stream, target)
     assert target.read_bytes()[:8] == b"\x89MCAP0\r\n" and target.read_bytes()[-8:] == b"\x89MCAP0\r\n"
+
+
+def test_a_capture_holds_in_mcap_what_it_holds_in_parquet(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """capture to MCAP with the two lines the lead adds to capture/sink.py (the extension, and each
+    table's topic), against capture to Parquet: every value, logged at its packet's capture time."""
+    from rtde_spec.capture import sink
+    from rtde_spec.capture.decoder import decode_to_directory
+    from rtde_spec.output.topics import topic_for_table
+
+    from .capture_files import rtde_capture, rtde_packages
+
+    monkeypatch.setitem(sink.EXTENSIONS, "mcap", "mcap")
+    real_open = sink.open_writer
+
+    def open_with_topic(fmt: str, path: Path) -> Any:
+        writer = real_open(fmt, path)
+        if fmt == "mcap":
+            writer.topic = topic_for_table(Path(path).parents[2].name)  # type: ignore[attr-defined]
+        return writer
+
+    monkeypatch.setattr(sink, "open_writer", open_with_topic)
+    pcap = rtde_capture(tmp_path / "run.pcap", rtde_packages(500))
+    decode_to_directory(pcap, tmp_path / "pq", "parquet")
+    summary = decode_to_directory(pcap, tmp_path / "mc", "mcap")
+    assert summary.tables and all(p.endswith(".mcap") for p in summary.paths)
+    for table in summary.tables:
+        (parquet,) = (tmp_path / "pq" / table).rglob("*.parquet")
+        (mcap,) = (tmp_path / "mc" / table).rglob("*.mcap")
+        rows = pq.read_table(parquet).to_pylist()
+        messages, _ = read_mcap(mcap)
+        assert list(messages) == [topic_for_table(table)]
+        got = messages[topic_for_table(table)]
+        assert len(got) == len(rows) > 0
+        for row, (log_time, message) in zip(rows, got, strict=True):
+            assert log_time == round(row["capture_time"] * 1e9)
+            for name, value in row.items():
+                if name in message:
+                    assert message[name] == value, (table, name)
+                else:  # Parquet spreads vectors into name_0..name_5
+                    base, _, index = name.rpartition("_")
+                    assert message[base][int(index)] == value, (table, name)
+    assert "/rtde/outputs/1" in {topic_for_table(t) for t in summary.tables}

@@ -128,6 +128,15 @@ def primary_part(name: str) -> dict[str, dict[str, Any]]:
     return {}
 
 
+@cache
+def primary_part_names() -> frozenset[str]:
+    """Names of every primary/secondary message family and member."""
+    families = SPEC["primary"]["families"]
+    return frozenset(
+        [f["name"] for f in families] + [m["name"] for f in families for m in f.get("members", [])]
+    )
+
+
 def inferred(value: Any) -> dict[str, Any]:
     """A schema from a value, for what no layout describes."""
     if isinstance(value, bool):

@@ -99,6 +99,16 @@ class Clock:
         return out
 
 
+def topic_for_table(table: str) -> str:
+    """The topic of a capture table, named as `decode` names it: rtde_outputs_1 -> /rtde/outputs/1,
+    primary_joint_data -> /primary/joint_data, rtde_setup -> /rtde/setup."""
+    interface, _, rest = table.partition("_")
+    kind, _, number = rest.rpartition("_")
+    if interface == "rtde" and kind in ("inputs", "outputs") and number.isdigit():
+        return f"/rtde/{kind}/{number}"
+    return f"/{interface}/{rest}" if rest else f"/{table}"
+
+
 def _finite(value: Any) -> bool:
     if isinstance(value, bool) or not isinstance(value, (int, float)):
         return False
@@ -167,13 +177,16 @@ class Topics:
     def _route(self, row: Mapping[str, Any]) -> tuple[str, dict[str, dict[str, Any]]]:
         package = row.get("package")
         if self.topic is not None:
-            known = {**js.rtde_package(str(package)), **js.primary_part(str(package))} if package else {}
+            name = str(package) if package else self.topic.rpartition("/")[2]  # a capture table's part
+            known = {**js.rtde_package(name), **js.primary_part(name)}
             return self.topic, {**known, **js.recipe_fields(list(row), self._catalogue)}
         if package is None or (package == _DATA_PACKAGE and self._recipe_names(row)):
             names = self._recipe_names(row)
             return self._recipe_topic(names, row.get("recipe_id")), js.recipe_fields(names, self._catalogue)
-        rtde = self.protocol == "rtde" or (self.protocol is None and "package_type" in row)
-        if rtde and package in js.rtde_package_names():  # RTDE rows name their type letter
+        # a name both interfaces use (text_message): RTDE rows name their type letter
+        shared = package in js.primary_part_names()
+        rtde = self.protocol == "rtde" or (self.protocol is None and ("package_type" in row or not shared))
+        if rtde and package in js.rtde_package_names():
             return f"/rtde/{package}", js.rtde_package(str(package))
         return f"/primary/{package}", js.primary_part(str(package))
 
