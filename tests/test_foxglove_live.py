@@ -218,3 +218,33 @@ def test_rotation_vectors_become_unit_quaternions() -> None:
 def test_a_port_out_of_range_is_a_usage_error(capsys: pytest.CaptureFixture[str]) -> None:
     assert main(["watch", "--host", "127.0.0.1", "--foxglove", "70000"]) == 2
     assert "--foxglove 70000" in capsys.readouterr().err
+
+
+def test_the_live_view_serve_runs_against_its_own_ports(emu: EmulatorThread) -> None:
+    """LiveView, what `serve --foxglove` starts beside the emulator: RTDE outputs and the secondary
+    port's Robot State reach a subscriber; stopping it closes the server."""
+    import argparse
+
+    from rtde_spec.cli.watch_cmd import LiveView, add_live_arguments
+
+    parser = argparse.ArgumentParser()
+    add_live_arguments(parser, rtde_port=False)  # serve has its own --rtde-port: the emulator's
+    args = parser.parse_args(
+        ["--foxglove", "0", "--rtde-fields", "timestamp,actual_q", "--rtde-frequency", "25"]
+    )
+    view = LiveView("127.0.0.1", emu.ports["rtde"], emu.ports["secondary"], args).start()
+    assert view.live is not None
+    url = view.live.url
+    try:
+        wanted = {"/rtde/outputs/1": 5, "/primary/joint_data": 2}
+        _, received = asyncio.run(
+            listen(url, lambda r: all(len(r.get(t, [])) >= n for t, n in wanted.items()))
+        )
+    finally:
+        view.stop()
+    rows = [json.loads(d) for _, d in received["/rtde/outputs/1"]]
+    assert set(rows[0]) == {"recipe_id", "timestamp", "actual_q"} and rows[-1]["actual_q"] == pytest.approx(Q)
+    joints = json.loads(received["/primary/joint_data"][-1][1])["joints"]
+    assert [j["q_actual"] for j in joints] == pytest.approx(Q)
+    with pytest.raises(OSError):  # the server is gone
+        asyncio.run(asyncio.wait_for(websockets.connect(url, subprotocols=SUBPROTOCOLS), 5))  # type: ignore[arg-type]

@@ -10,6 +10,7 @@ import argparse
 import datetime
 import json
 import sys
+import threading
 import time
 from typing import TYPE_CHECKING, Any
 
@@ -64,6 +65,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--timeout", type=float, default=5.0, help="seconds without a message that are an error (default: 5)"
     )
+    add_live_arguments(p)
+    p.set_defaults(run=run)
+
+
+def add_live_arguments(p: argparse.ArgumentParser, rtde_port: bool = True) -> None:
+    """--foxglove [PORT] and what it serves (watch, and serve for its own ports: no --rtde-port)."""
     live = p.add_argument_group("live view in Foxglove")
     live.add_argument(
         "--foxglove",
@@ -86,11 +93,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="with --foxglove, also subscribe these RTDE outputs (comma list; 'none': primary only) "
         "(default: joints, TCP pose/speed/force, currents, temperatures, modes)",
     )
-    live.add_argument("--rtde-port", type=int, default=RTDE_PORT, help=f"RTDE port (default: {RTDE_PORT})")
+    if rtde_port:
+        live.add_argument(
+            "--rtde-port", type=int, default=RTDE_PORT, help=f"RTDE port (default: {RTDE_PORT})"
+        )
     live.add_argument(
         "--rtde-frequency", type=float, default=125.0, help="RTDE output rate in Hz (default: 125)"
     )
-    p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -224,3 +233,61 @@ def _script(arg: str) -> str:
     if path is None:
         raise UsageError("URScript file not found", subject=f"file {arg}")
     return path.read_text(encoding="utf-8")
+
+
+class LiveView:
+    """A controller's RTDE outputs and primary/secondary messages served to Foxglove, each read in
+    its own thread: what `serve --foxglove` runs against its own ports (start and stop it from a
+    thread other than the emulator's event loop, which must answer the handshakes meanwhile)."""
+
+    def __init__(self, host: str, rtde_port: int, primary_port: int, args: argparse.Namespace) -> None:
+        self.host, self.rtde_port, self.primary_port, self.args = host, rtde_port, primary_port, args
+        self.live: LivePublisher | None = None
+        self._rtde: RtdeClient | None = None
+        self._stop = threading.Event()
+        self._reader: threading.Thread | None = None
+        self._timeout = float(getattr(args, "timeout", 5.0))
+
+    def start(self) -> LiveView:
+        from rtde_spec.primary.client import PrimaryClient
+
+        self.live = _live(self.args)
+        if self.live is None:
+            return self
+        try:
+            own = {"host": self.host, "rtde_port": self.rtde_port, "timeout": self._timeout}
+            options = argparse.Namespace(**{**vars(self.args), **own})
+            self._rtde = _subscribe_rtde(options, self.live)
+            client = PrimaryClient(self.host, self.primary_port, timeout=self._timeout).connect()
+        except BaseException:
+            self.stop()
+            raise
+        self._reader = threading.Thread(
+            target=self._primary, args=(client,), name="live-primary", daemon=True
+        )
+        self._reader.start()
+        return self
+
+    def _primary(self, client: Any) -> None:
+        from rtde_spec.cli.primary_output import as_json
+
+        live = self.live
+        assert live is not None
+        try:
+            for _, message in client:
+                if self._stop.is_set():
+                    break
+                live.publish_row(as_json(message), protocol="primary")
+        except Exception:  # the controller went away: the view keeps what it had
+            pass
+        finally:
+            client.close()
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._rtde is not None:
+            self._rtde.close()
+        if self._reader is not None:
+            self._reader.join(2 * self._timeout)
+        if self.live is not None:
+            self.live.close()
