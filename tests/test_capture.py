@@ -85,6 +85,8 @@ def test_every_edge_case_is_decoded_or_reported(tmp_path: Path) -> None:
     assert conn.kind == "rtde" and conn.name == "10.0.0.2:51000-10.0.0.10:30004"
     assert conn.gaps == 1 and conn.lost_bytes == len(data(152))
     assert any("ends inside a controller package" in e for e in conn.errors)
+    assert conn.skipped_bytes == 0 and conn.cut_packages == 0  # the gap: one whole package
+    assert len(summary.damage()) == 2 and not summary.needs_recipe()
     table = dataset(tmp_path / "out" / "rtde_outputs_1")
     stamps = [round(t / 0.002) for t in table.column("timestamp").to_pylist()]
     assert stamps == [i for i in range(200) if i != 152]  # in order, nothing twice, only the lost one missing

@@ -139,7 +139,6 @@ def _finish(flow: _Flow) -> None:
     decoder.finish()
     for sender, framing in decoder.framings().items():
         if framing.buf:
-            framing.cut += 1
             decoder.counts.errors.append(
                 f"the capture ends inside a {sender} package ({len(framing.buf)} bytes of it)"
             )

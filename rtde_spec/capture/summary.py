@@ -23,7 +23,7 @@ class ConnectionSummary:
     errors: list[str]
     unknown_recipe_sizes: dict[int, int]
     skipped_bytes: int = 0  # in the capture, but passed over to find the next package
-    cut_packages: int = 0  # begun before a gap, or at the end of the capture, and never completed
+    cut_packages: int = 0  # begun before a gap and never completed (the end of the capture: in errors)
     lead_in_bytes: int = 0  # before the first package of a connection captured from its middle
 
 

@@ -63,11 +63,11 @@ def arrow_array(column: Any) -> Any:
 
     if column.dtype.kind == "U":  # text (connection names, robots, dates): offsets and UTF-8 bytes
         if len(column) and (column == column[0]).all():  # one value throughout (a connection's name)
-            one = str(column[0]).encode("utf-8")
+            one = str(column[0]).encode("utf-8", "replace")  # a lone surrogate becomes '?', not an error
             offsets = np.arange(len(column) + 1, dtype=np.int32) * len(one)
             buffers = [None, pa.py_buffer(offsets), pa.py_buffer(one * len(column))]
             return pa.Array.from_buffers(pa.string(), len(column), buffers)
-        encoded = [value.encode("utf-8") for value in column.tolist()]
+        encoded = [value.encode("utf-8", "replace") for value in column.tolist()]
         offsets = np.zeros(len(encoded) + 1, dtype=np.int32)
         np.cumsum([len(e) for e in encoded], out=offsets[1:])
         buffers = [None, pa.py_buffer(offsets), pa.py_buffer(b"".join(encoded))]

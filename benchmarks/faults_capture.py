@@ -1,0 +1,127 @@
+"""Capture under faults (issue 18): rows kept after N TCP gaps, and foreign exceptions in the fuzz.
+
+    python benchmarks/faults_capture.py [--cases 2500] [--json]
+
+Rows kept: RTDE sessions written with dpkt, segments left out as a capture tool drops
+them; "expected" is every package that shares no byte with a lost segment.
+Fuzz: the Hypothesis strategies of tests/faults/test_capture_foreign.py (pcap/pcapng
+structure, TCP segments, packages) for CASES cases; a foreign exception is any that is
+not an `RtdeSpecError`, or an output that does not read back.
+`rows_kept()` and `foreign_exceptions()` are what benchmarks/faults.py can import.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.append(str(ROOT))
+sys.path.append(str(ROOT / "benchmarks"))
+
+from bench_recipe_decode import UR_RTDE_DEFAULT_OUTPUTS  # noqa: E402
+
+from tests.capture_files import (  # noqa: E402
+    FILE_OPS,
+    FRAME_OPS,
+    SMALL,
+    decode_mutated,
+    packages_touched,
+    rtde_capture,
+    rtde_packages,
+)
+
+UR_RTDE = tuple(UR_RTDE_DEFAULT_OUTPUTS)  # 58 fields, 1,180-byte packages
+CASES = [  # (label, packages, lost segments as fractions of the stream, segment bytes or None, recipe)
+    ("2 gaps, 1 package per segment", 5000, (0.2, 0.9186), None, SMALL),
+    ("4 gaps, 1 package per segment", 3000, (0.13, 0.37, 0.37 + 1 / 3000, 0.999), None, SMALL),
+    ("4 gaps, 700-byte segments, 64-byte packages", 3000, (0.2, 0.4, 0.6, 0.8), 700, SMALL),
+    (
+        "4 gaps, 700-byte segments, 1180-byte packages",
+        3000,
+        (0.2, 0.4, 0.6, 0.8),
+        700,
+        UR_RTDE_DEFAULT_OUTPUTS,
+    ),
+    ("20 gaps, 1 package per segment", 3000, tuple(k / 20 + 0.01 for k in range(20)), None, SMALL),
+]
+
+
+def rows_kept() -> list[dict[str, Any]]:
+    """Per case: packages, decodable (not touched by a gap), kept, gaps counted."""
+    from rtde_spec.capture.decoder import decode_to_directory
+
+    out = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for n, (label, count, where, segment, names) in enumerate(CASES):
+            names = tuple(names)
+            packages = rtde_packages(count, names)
+            pieces = count if segment is None else -(-len(b"".join(packages)) // segment)
+            lost = {int(f * pieces) for f in where}
+            path = rtde_capture(Path(tmp) / f"c{n}.pcap", packages, lost=lost, segment=segment, names=names)
+            decodable = count - (
+                len(lost) if segment is None else len(packages_touched(packages, segment, lost))
+            )
+            summary = decode_to_directory(path, Path(tmp) / f"out{n}")
+            kept = summary.tables.get("rtde_outputs_1", 0)
+            gaps = sum(c.gaps for c in summary.connections)
+            out.append({"case": label, "packages": count, "decodable": decodable, "kept": kept, "gaps": gaps})
+    return out
+
+
+def foreign_exceptions(cases: int = 2500) -> dict[str, Any]:
+    """Run the capture fuzz for `cases` cases; count the foreign exceptions and show the first."""
+    from hypothesis import HealthCheck, given, settings
+    from hypothesis import strategies as st
+
+    found: list[str] = []
+    ran = [0]
+    with tempfile.TemporaryDirectory() as tmp:
+
+        @settings(max_examples=cases, deadline=None, database=None, suppress_health_check=list(HealthCheck))
+        @given(
+            kind=st.sampled_from(["pcap", "pcapng"]),
+            sink=st.sampled_from(["parquet", "jsonl", "csv", "arrow"]),
+            frame_ops=st.lists(FRAME_OPS, max_size=6),
+            file_ops=st.lists(FILE_OPS, max_size=4),
+        )
+        def one(kind: str, sink: str, frame_ops: list, file_ops: list) -> None:  # type: ignore[type-arg]
+            folder = Path(tempfile.mkdtemp(dir=tmp))
+            ran[0] += 1
+            foreign = decode_mutated(folder, kind, sink, frame_ops, file_ops)
+            if foreign is not None:
+                found.append(foreign)
+
+        one()
+    last_lines = [f.strip().splitlines()[-1] for f in found]
+    return {"cases": ran[0], "foreign": len(found), "kinds": sorted(set(last_lines)), "first": found[:1]}
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--cases", type=int, default=2500, help="fuzz cases (default: 2500)")
+    parser.add_argument("--json", action="store_true", help="print one JSON object (default: text)")
+    args = parser.parse_args(argv)
+    kept = rows_kept()
+    fuzz = foreign_exceptions(args.cases)
+    if args.json:
+        print(json.dumps({"rows_kept": kept, "fuzz": {k: v for k, v in fuzz.items() if k != "first"}}))
+        return 0
+    print("rows kept after TCP gaps (capture, RTDE):")
+    for row in kept:
+        print(
+            f"  {row['case']:48s} {row['kept']:>6,} of {row['decodable']:,} decodable "
+            f"({row['packages']:,} sent), {row['gaps']} gaps counted"
+        )
+    print(f"capture fuzz: {fuzz['foreign']} foreign exceptions in {fuzz['cases']:,} cases")
+    for kind in fuzz["kinds"]:
+        print(f"  {kind}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
