@@ -264,12 +264,12 @@ def test_cli_shows_version_warnings() -> None:
 
 
 def test_a_bool_byte_other_than_one_decodes_true_and_reencodes_as_one() -> None:
-    # stated in README ("Decisions"): the guide's BOOL is 0 false, anything else true
+    # stated in docs/decisions.md: the guide's BOOL is 0 false, anything else true
     message = decode(bytes.fromhex("00045602"), sender="controller")
     assert message.accepted is True  # type: ignore[attr-defined]
     assert message.to_bytes() == bytes.fromhex("00045601")
-    readme = (ROOT / "README.md").read_text()
-    assert "re-encodes as 1" in readme
+    decisions = (ROOT / "docs" / "decisions.md").read_text()
+    assert "re-encodes as 1" in decisions
 
 
 def test_key_message_without_length_round_trips_in_the_documents_form() -> None:
