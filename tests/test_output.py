@@ -151,3 +151,84 @@ def test_a_later_batch_missing_a_value_is_an_error_naming_the_column(tmp_path: P
     writer.write({"robot_mode": 7})
     with pytest.raises(UsageError, match=r"lacks the file's columns \['timestamp'\]"):
         writer.close()
+
+
+# --- nothing lost: files appear only with rows in them (issue 18.1) ----------------------------
+
+FILE_FORMATS = ["csv", "jsonl", "json", "parquet", "table"]
+
+
+def leftover_temps(folder: Path) -> list[str]:
+    return sorted(p.name for p in folder.iterdir() if ".part-" in p.name)
+
+
+@pytest.mark.parametrize("fmt", FILE_FORMATS)
+def test_a_writer_replaces_an_existing_file_only_when_it_closes_with_rows(tmp_path: Path, fmt: str) -> None:
+    from rtde_spec import open_writer
+
+    out = tmp_path / f"out.{fmt}"
+    old = b"someone's earlier results\n"
+    out.write_bytes(old)
+    array = CODEC.decode_many(packages(50))
+    columns = {name: array[name] for name in CODEC.names}
+    open_writer(fmt, out).close()  # no rows: the run produced nothing
+    assert out.read_bytes() == old and leftover_temps(tmp_path) == []
+    writer = open_writer(fmt, out)
+    writer.write_columns(columns)
+    writer.flush()
+    assert out.read_bytes() == old, "the file changed before the writer closed"
+    writer.abort()  # the caller's run failed: nothing of it appears
+    assert out.read_bytes() == old and leftover_temps(tmp_path) == []
+    writer = open_writer(fmt, out)
+    writer.write_columns(columns)
+    writer.close()
+    assert out.read_bytes() != old and leftover_temps(tmp_path) == []
+    if fmt == "parquet":
+        assert pq.read_table(out).num_rows == 50
+    elif fmt in ("csv", "jsonl"):
+        assert len(out.read_text().splitlines()) == 50 + (fmt == "csv")
+    null = open_writer(fmt, "/dev/null")  # a device is written, never replaced by a file
+    null.write_columns(columns)
+    null.close()
+    assert Path("/dev/null").is_char_device()
+
+
+def test_a_failed_decode_leaves_an_existing_output_byte_identical(tmp_path: Path) -> None:
+    garbage = tmp_path / "garbage.bin"
+    garbage.write_bytes(b"\x00\x03\x55" * 100)  # a package of size 3 and an unknown type: no rows
+    for fmt in ("csv", "jsonl", "json"):
+        out = tmp_path / f"kept.{fmt}"
+        out.write_bytes(b"yesterday's decode\n")
+        result = cli("decode", str(garbage), "--recipe", ",".join(NAMES), "-o", str(out), "--format", fmt)
+        assert result.returncode != 0 and "error" in result.stderr
+        assert out.read_bytes() == b"yesterday's decode\n", fmt
+    assert leftover_temps(tmp_path) == []
+
+
+def test_split_parts_read_as_one_dataset_and_replace_an_earlier_runs_parts(tmp_path: Path) -> None:
+    import pyarrow.dataset as ds
+
+    from rtde_spec import open_writer
+    from rtde_spec.output.split import parse_split
+
+    assert parse_split("10min").seconds == 600 and parse_split("100MB").size == 100_000_000
+    assert parse_split("2GiB").size == 2 << 30 and parse_split("1.5h").seconds == 5400
+    for bad in ("60", "10 parsecs", "0s", "1kB", "-5s"):
+        with pytest.raises(Exception, match="--split"):
+            parse_split(bad)
+    stale = tmp_path / "run_0007.parquet"
+    stale.write_bytes(b"an earlier, longer run's part")
+    unrelated = tmp_path / "run_old.parquet"
+    unrelated.write_bytes(b"not a part")
+    writer = open_writer("parquet", tmp_path / "run.parquet", split=parse_split("64kB"))
+    for start in range(0, 5000, 500):
+        array = CODEC.decode_many(packages(500, start))
+        writer.write_columns({name: array[name] for name in CODEC.names})
+        writer.flush()
+    writer.close()
+    names = sorted(p.name for p in tmp_path.glob("run_*.parquet"))
+    found = [n for n in names if n != "run_old.parquet"]
+    assert len(found) >= 3 and found == [f"run_{i:04d}.parquet" for i in range(len(found))]
+    assert unrelated.exists() and not stale.exists() and leftover_temps(tmp_path) == []
+    table = ds.dataset([str(tmp_path / n) for n in found], format="parquet").to_table()
+    assert table.column("timestamp").to_pylist() == [i * 0.002 for i in range(5000)]

@@ -14,23 +14,37 @@ from rtde_spec._generated.constants import RTDE_PORT
 from rtde_spec.cli.common import existing_file
 from rtde_spec.errors import UsageError
 
+DESCRIPTION = """\
+Columns are named as UR's recorder names them (vectors as name_0..name_5).
+
+How a recording ends:
+  Ctrl-C, SIGTERM (timeout, kill, systemd) and SIGHUP (a closed terminal) stop it
+  cleanly: every row received is written, the file is closed readable, exit code 0
+  as for --duration. A second signal stops at once (a CSV or JSON Lines file keeps
+  the batches written; a Parquet file not yet closed is lost). A dropped connection
+  keeps every row received and exits 1.
+
+Nothing lost:
+  -o is written beside its name (.NAME.part-PID) and replaces an existing file only
+  once rows arrive: a run that fails first (a refused recipe or --frequency, no
+  connection) leaves it byte-identical and no temporary file behind.
+  CSV and JSON Lines are in place from the first batch on and handed to the
+  operating system every batch (0.2 s): a killed recorder (SIGKILL) loses at most
+  the last batch, every line complete. (The trade-off: a reader may see the file
+  grow, batch by batch, as with any log; all of it is always whole lines.)
+  Parquet needs its footer, written at close: until then the file is the hidden
+  .NAME.part-PID, which a kill leaves unreadable. Use --split to close parts as you
+  go. `record` names files a killed run left when it next starts.
+  Every closed file is synced to disk before it is renamed into place, so a power
+  loss costs at most the open part.
+"""
+
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "record",
         help="record outputs from a controller (or the emulator) to CSV/Parquet/JSON Lines",
-        description="Columns are named as UR's recorder names them (vectors as name_0..name_5). "
-        "Ctrl-C, SIGTERM (timeout, kill, systemd) and SIGHUP (a closed terminal) stop the recording "
-        "cleanly: every row received is written, the file is closed readable, and the exit code is 0, "
-        "as for --duration (a second signal stops at once, keeping the rows written). A dropped "
-        "connection keeps every row received and exits 1. "
-        "Nothing is lost: -o is written beside its name (.NAME.part-PID) and an existing file is "
-        "replaced only once rows arrive, so a run that fails first (a rejected recipe, a bad "
-        "--frequency, no connection) leaves it byte-identical. A CSV or JSON Lines output is in place "
-        "from the first batch on and handed to the operating system every batch (0.2 s), so a killed "
-        "recorder (SIGKILL) loses at most the last batch, every line complete; a Parquet file needs "
-        "its footer, written at close, so a kill loses the open file: use --split. Every closed file "
-        "is synced to disk before it is renamed into place.",
+        description=DESCRIPTION,
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--host", required=True, help="controller address (required)")
@@ -91,6 +105,9 @@ def run(args: argparse.Namespace) -> int:
     split = parse_split(args.split) if args.split else None
     names = names_of(args)
     for path in leftovers(Path(args.output)):
+        if _empty(path):  # killed before its first batch reached the file: nothing to keep
+            path.unlink(missing_ok=True)
+            continue
         what = (
             "a Parquet file without its footer: no reader opens it; --split bounds what a kill costs"
             if fmt == "parquet"
@@ -138,6 +155,13 @@ def run(args: argparse.Namespace) -> int:
     except OSError:  # SIGHUP: the terminal is gone; the file is what matters
         pass
     return 1 if result.stopped_by == "connection" else 0
+
+
+def _empty(path: Path) -> bool:
+    try:
+        return path.stat().st_size == 0
+    except OSError:
+        return False
 
 
 class _Stop:

@@ -234,7 +234,12 @@ def open_writer(
         return writer
     part = Part(target, durable=durable)
     stream = PartStream(part, batched=not background)  # the background thread gathers blocks itself
-    writer = cls(BackgroundStream(stream) if background else stream)  # type: ignore[arg-type]
+    try:
+        writer = cls(BackgroundStream(stream) if background else stream)  # type: ignore[arg-type]
+    except BaseException:
+        stream.close()
+        part.discard()
+        raise
     writer.owns_stream = True
     writer.part = part
     writer.live = live and fmt in GROWING

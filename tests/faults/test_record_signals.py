@@ -50,7 +50,7 @@ def stamps_of(path: Path) -> list[float]:
 
 @pytest.mark.parametrize(
     ("sig", "suffix"),
-    [(signal.SIGTERM, ".parquet"), (SIGHUP, ".parquet"), (signal.SIGTERM, ".jsonl"), (signal.SIGINT, ".csv")],
+    [(signal.SIGTERM, ".parquet"), (SIGHUP, ".parquet"), (signal.SIGTERM, ".jsonl"), (SIGHUP, ".csv")],
 )
 def test_a_signal_ends_the_recording_with_every_row_in_a_readable_file(
     emu: EmulatorThread, tmp_path: Path, sig: int, suffix: str
