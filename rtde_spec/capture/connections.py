@@ -65,10 +65,12 @@ class RtdeConnection:
 
     def feed(self, sender: str, chunk: Chunk) -> None:
         self.last_time = chunk.time
-        self._packages(sender, self.framing[sender].feed(chunk), chunk.time)
+        framing = self.framing[sender]
+        self._packages(sender, framing.feed(chunk), framing.times, chunk.time)
 
-    def _packages(self, sender: str, packages: list[bytes], time: float) -> None:
-        for package in packages:
+    def _packages(self, sender: str, packages: list[bytes], times: list[float] | None, now: float) -> None:
+        for n, package in enumerate(packages):
+            time = now if times is None else times[n]  # a package held back: when it was completed
             self.counts.packages += 1
             if package[TYPE_AT] == DATA_PACKAGE_TYPE and len(package) > RECIPE_ID_AT:
                 codec = self._codec(sender, package)
@@ -104,7 +106,7 @@ class RtdeConnection:
     def finish(self) -> None:
         """The end of the capture: packages held back for confirmation are decoded."""
         for sender, framing in self.framing.items():
-            self._packages(sender, framing.finish(), self.last_time)
+            self._packages(sender, framing.finish(), framing.times, self.last_time)
 
     def run_codec(self, sender: str, package: bytes) -> RecipeCodec | None:
         """The codec for a run of whole data packages like `package`, one per segment, from here on.
@@ -217,18 +219,19 @@ class PrimaryConnection:
             self.sink.row("primary_scripts", self.robot, day, {**base, **text_columns("script", chunk.data)})
             return
         self.last_time = chunk.time
-        self._messages(self.framing.feed(chunk), chunk.time)
+        self._messages(self.framing.feed(chunk), self.framing.times, chunk.time)
 
     def framings(self) -> dict[str, Framing]:
         return {"controller": self.framing}
 
     def finish(self) -> None:
-        self._messages(self.framing.finish(), self.last_time)
+        self._messages(self.framing.finish(), self.framing.times, self.last_time)
 
-    def _messages(self, raws: list[bytes], time: float) -> None:
-        base = {"connection": self.name, "capture_time": time}
-        day = day_of(time)
-        for raw in raws:
+    def _messages(self, raws: list[bytes], times: list[float] | None, now: float) -> None:
+        for n, raw in enumerate(raws):
+            time = now if times is None else times[n]  # a message held back: when it was completed
+            base = {"connection": self.name, "capture_time": time}
+            day = day_of(time)
             self.counts.packages += 1
             try:
                 message = self.codec.decode_message(raw)

@@ -80,6 +80,21 @@ def test_four_lost_700_byte_segments_lose_only_the_packages_they_touch(
     assert conn.skipped_bytes == sum(len(packages[i]) for i in touched) - 4 * 700
 
 
+def test_a_value_repeated_in_every_package_is_not_taken_for_a_header(tmp_path: Path) -> None:
+    """Packages 64..66 hold the double 65.5 (40 50 60 ..) after a zero byte: `00 40 50` reads as
+    a 64-byte pause reply, at the same place in every package, so each such header is
+    confirmed by the next. Only a recipe's data package (its id and size) is trusted first."""
+    packages = rtde_packages(3000)
+    assert bytes.fromhex("004050") in packages[65]
+    lost = {5, 10, 11}  # the hole at segment 5 ends inside package 65
+    path = rtde_capture(tmp_path / "repeat.pcap", packages, lost=lost, segment=700)
+    summary = decode_to_directory(path, tmp_path / "out")
+    touched = packages_touched(packages, 700, lost)
+    assert summary.tables["rtde_outputs_1"] == 3000 - len(touched) == 2965
+    assert not summary.connections[0].errors  # no package taken for a pause reply
+    assert stamps(capture_tables(path)) == [i for i in range(3000) if i not in touched]
+
+
 def test_gaps_in_both_directions_and_on_primary_connections(tmp_path: Path) -> None:
     """Any number of gaps, anywhere: the client's input packages, the controller's outputs and
     a primary connection's robot state, each with holes."""
