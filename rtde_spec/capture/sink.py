@@ -120,7 +120,7 @@ class DirectorySink(TableSink):
         if self.recipes:
             listing = [{"table": t, "direction": d, "names": list(n)} for (d, n), t in self.recipes.items()]
             target = self.outdir / f"recipes-{self.stem}.json"
-            partial = target.with_name(f".{target.name}.{os.getpid()}.partial")
+            partial = target.with_name(f".{target.name}.part-{os.getpid()}")  # as partfile names them
             partial.write_text(json.dumps(listing, indent=2) + "\n")
             os.replace(partial, target)  # whole or not at all
 

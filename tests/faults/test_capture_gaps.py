@@ -126,6 +126,31 @@ def test_gaps_in_both_directions_and_on_primary_connections(tmp_path: Path) -> N
     assert tables["primary_joint_data"].num_rows == 40 - 3
 
 
+def test_a_message_held_back_after_a_gap_keeps_the_time_of_its_own_segment(tmp_path: Path) -> None:
+    """After a gap, a text message is only trusted once the robot state after it confirms it;
+    its row still carries the capture time of the segment that brought it."""
+    from rtde_spec._generated import primary_models as pm
+    from rtde_spec.primary.codec import default_codec
+
+    sys.path.insert(0, str(ROOT / "benchmarks"))
+    from ur5e_robot_state import ur5e_robot_state_bytes
+
+    state = ur5e_robot_state_bytes()
+    text = default_codec().encode(
+        pm.TextMessage(timestamp=5, source=-2, robot_message_type=0, text_message="hi")
+    )
+    conv = Conversation(("10.0.0.2", 52000), ("10.0.0.10", 30001))
+    conv.handshake()
+    conv.send("server", state, dt=0.1)
+    conv.send("server", state[:300], dt=0.1, keep=False)  # lost: the next segment starts mid-message
+    conv.send("server", state[300:] + text, dt=0.1)
+    text_time = conv.time
+    conv.send("server", state, dt=0.5)
+    tables = capture_tables(write(tmp_path / "held.pcap", [conv]))
+    assert tables["primary_text_message"].column("capture_time").to_pylist() == [pytest.approx(text_time)]
+    assert tables["primary_joint_data"].num_rows == 2
+
+
 def test_a_late_retransmission_within_the_hole_time_out_fills_the_hole(tmp_path: Path) -> None:
     """A segment lost on the wire is retransmitted later (after the retransmission time-out):
     its packages are kept, in order, and no gap is counted."""

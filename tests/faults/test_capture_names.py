@@ -48,3 +48,24 @@ def test_the_stem_is_stable_and_unique(tmp_path: Path) -> None:
     assert output_stem(a) == output_stem(tmp_path / "a" / ".." / "a" / "x.pcap")  # the same file
     assert output_stem(a) != output_stem(b) and output_stem(a).startswith("x-")
     assert len(output_stem(a)) == len("x-") + 8
+
+
+def test_outputs_appear_only_complete(tmp_path: Path) -> None:
+    """While a capture is decoded its files are hidden beside their names; at the end each is
+    renamed into place whole, and nothing hidden is left."""
+    from rtde_spec.capture.decoder import decode_to_directory
+
+    path = rtde_capture(tmp_path / "x.pcap", rtde_packages(300))
+    out = tmp_path / "out"
+    seen: list[list[str]] = []
+    folder = [out]
+
+    def progress(done: int) -> None:  # after each block of the file, before the tables close
+        seen.append([p.name for p in folder[0].rglob("*") if p.is_file()])
+
+    for fmt in ("csv", "parquet", "jsonl"):
+        folder[0] = out / fmt
+        summary = decode_to_directory(path, out / fmt, fmt, progress=progress)
+        assert seen and seen[-1] and all(name.startswith(".") for name in seen[-1]), seen[-1]
+        final = [p.name for p in (out / fmt).rglob("*") if p.is_file()]
+        assert not [n for n in final if n.startswith(".")] and len(final) == len(summary.paths) + 1
