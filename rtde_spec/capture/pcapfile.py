@@ -25,6 +25,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import IO, Any
 
+from rtde_spec.capture.recordsync import MAX_BLOCK, next_pcap_record, next_pcapng_block, pcap_limit
 from rtde_spec.errors import UsageError
 
 BLOCK = 8 << 20
@@ -60,7 +61,6 @@ class _Columns:
 
     def __init__(self) -> None:
         self.pieces: list[tuple[Any, Any, Any, Any]] = []
-        self.stop: int | None = None  # a block that cannot be one: its length (reading stops before it)
 
     def add(self, offsets: Any, lengths: Any, times: Any, link: int) -> None:
         import numpy as np
@@ -139,9 +139,6 @@ def _by_block(
         records = found.records(mapped, reached, stats)
         if records is not None:
             yield records
-        if found.stop is not None:
-            _stopped(stats, reached, size - reached, bad_block=found.stop)
-            return
         if reached == pos:  # no whole record in the window
             if end == size:
                 break
@@ -154,18 +151,18 @@ def _by_block(
         _stopped(stats, pos, size - pos, claimed=claim(mapped, pos))
 
 
-def _stopped(
-    stats: dict[str, int], at: int, unread: int, *, claimed: int = 0, bad_block: int | None = None
-) -> None:
-    """Reading ended `unread` bytes before the end of the file, at byte `at`."""
+def _stopped(stats: dict[str, int], at: int, unread: int, *, claimed: int = 0) -> None:
+    """Reading ended `unread` bytes before the end of the file, at byte `at` (a cut-off record)."""
     stats["stopped_at"] = at
     stats["unread_bytes"] = unread
-    if bad_block is not None:
-        stats["bad_blocks"] = 1
-        stats["bad_block_length"] = bad_block
-    else:
-        stats["truncated"] = stats.get("truncated", 0) + 1
-        stats["claimed"] = claimed
+    stats["truncated"] = stats.get("truncated", 0) + 1
+    stats["claimed"] = claimed
+
+
+def _skipped(stats: dict[str, int], count: int) -> None:
+    """`count` bytes from a record that cannot be one to the next whole record."""
+    stats["bad_records"] = stats.get("bad_records", 0) + 1
+    stats["skipped_file_bytes"] = stats.get("skipped_file_bytes", 0) + count
 
 
 def _populate(mapped: mmap.mmap, start: int, end: int) -> None:
@@ -218,9 +215,6 @@ def _read_blocks(
         records = found.records(buf, start + pos, stats)
         if records is not None:
             yield records
-        if found.stop is not None:
-            _stopped(stats, start + pos, len(buf) - pos, bad_block=found.stop)  # of a pipe: what was read
-            return
         start += pos
         carry = buf[pos:]
         want = 2 * len(carry) if pos == 0 and len(carry) >= BLOCK else 0
@@ -239,10 +233,20 @@ def _pcap(f: IO[bytes], order: str, unit: float, name: str, stats: dict[str, int
     linktype = struct.unpack(order + "I", rest[16:20])[0] & 0x0FFFFFFF  # upper bits: FCS flags
     size_at = struct.Struct(order + "I").unpack_from  # a record header's captured length, at +8
     u32 = np.dtype(order + "u4")
+    limit = pcap_limit(struct.unpack(order + "I", rest[12:16])[0])  # from the snap length
+    fractions = 1_000_000 if unit == 1e-6 else 1_000_000_000
+    last_secs: list[int] = []  # of the last whole record: where to look after damage
 
     def parse(buf: Any, pos: int, end: int, found: _Columns) -> int:
         while pos + 16 <= end:
             (caplen,) = size_at(buf, pos + 8)
+            if caplen > limit:  # no record is this long: go on at the next whole one
+                near = last_secs[-1] if last_secs else None
+                after = next_pcap_record(buf, pos + 1, end, order, limit, fractions, near)
+                resume = end - 15 if after is None else after
+                _skipped(stats, resume - pos)
+                pos = resume
+                continue
             stride = 16 + caplen
             if pos + stride > end:
                 break
@@ -250,6 +254,7 @@ def _pcap(f: IO[bytes], order: str, unit: float, name: str, stats: dict[str, int
             secs, fracs = (_strided(buf, pos + at, stride, same, u32) for at in (0, 4))
             starts = pos + 16 + np.arange(same, dtype=np.int64) * stride
             found.add(starts, np.full(same, caplen, dtype=np.int64), secs + fracs * unit, linktype)
+            last_secs[:] = [int(secs[-1])]
             pos += same * stride
         return pos
 
@@ -288,15 +293,27 @@ def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int]) -> Ite
                 order = "<" if magic == PCAPNG_BYTE_ORDER else ">"
                 interfaces = []
             btype, length = struct.unpack_from(order + "II", buf, pos)
-            if length < 12 or length % 4:  # no block: the file is damaged from here on
-                found.stop = length
-                return pos
+            if (
+                length < 12
+                or length % 4
+                or length > MAX_BLOCK
+                or (
+                    pos + length <= end
+                    and struct.unpack_from(order + "I", buf, pos + length - 4)[0] != length
+                )
+            ):  # no block: go on at the next whole one
+                after = next_pcapng_block(buf, pos + 4, end, order)
+                resume = pos + 4 + (max(0, end - 11 - pos - 4) + 3) // 4 * 4 if after is None else after
+                _skipped(stats, resume - pos)
+                pos = resume
+                continue
             if pos + length > end:
                 break
             if btype == EPB and length >= 32:
                 u32 = np.dtype(order + "u4")
                 iface = struct.unpack_from(order + "I", buf, pos + 8)[0]
                 same = _same_run(buf, pos, length, (end - pos) // length, 4, length, u32)
+                same = min(same, _same_run(buf, pos, length, same, length - 4, length, u32))  # its end
                 same = min(same, _same_run(buf, pos, length, same, 0, EPB, u32))
                 same = min(same, _same_run(buf, pos, length, same, 8, iface, u32))
                 linktype, unit = interfaces[iface] if iface < len(interfaces) else (-1, 1e-6)

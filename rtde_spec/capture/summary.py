@@ -49,10 +49,10 @@ class CaptureSummary:
             claim = f" (it claims {r['claimed']} bytes)" if r.get("claimed") else ""
             unread = f"; {r['unread_bytes']} bytes not read" if r.get("unread_bytes") else ""
             out.append(f"the last record is cut off{where}{claim}{unread}")
-        if r.get("bad_blocks"):
+        if r.get("bad_records"):
             out.append(
-                f"reading stopped at byte {r['stopped_at']}: a pcapng block of length "
-                f"{r['bad_block_length']} cannot be one; {r.get('unread_bytes', 0)} bytes not read"
+                f"{r['bad_records']} records whose length cannot be one: "
+                f"{r.get('skipped_file_bytes', 0)} bytes skipped to the next whole record"
             )
         if r.get("bad_times"):
             out.append(f"{r['bad_times']} frames with an impossible capture time (kept; date=unknown)")
@@ -91,7 +91,7 @@ class CaptureSummary:
         gaps = sum(c.gaps for c in self.connections)
         lost = sum(c.lost_bytes for c in self.connections)
         skipped = sum(c.skipped_bytes for c in self.connections)
-        truncated = self.reading.get("truncated", 0) + self.reading.get("bad_blocks", 0)
+        truncated = self.reading.get("truncated", 0) + self.reading.get("bad_records", 0)
         verdict = "damaged" if self.damage() else "ok"
         return (
             f"{self.file}: {verdict}: {self.frames} frames, {self.packages} packages, {gaps} gaps "

@@ -35,20 +35,33 @@ def test_a_truncated_pcap_keeps_what_precedes_the_cut_and_exits_3(tmp_path: Path
     assert f"cut off at byte {offset}" in result.stderr
 
 
-def test_a_record_length_of_2_to_the_31_is_reported_with_the_file_name(tmp_path: Path) -> None:
+def test_a_record_length_of_2_to_the_31_is_skipped_and_reported_with_the_file_name(tmp_path: Path) -> None:
+    """Reading goes on at the next whole record: only the damaged record's package is lost."""
     path = rtde_capture(tmp_path / "huge.pcap", rtde_packages(300))
     data = bytearray(path.read_bytes())
-    offset, _ = pcap_records(path)[SETUP_FRAMES + 150]
+    offset, caplen = pcap_records(path)[SETUP_FRAMES + 150]
     struct.pack_into("<I", data, offset + 8, 1 << 31)  # the captured length of record 150
     path.write_bytes(bytes(data))
     result = run_capture(str(path), "-o", str(tmp_path / "out"), cwd=tmp_path)
     assert result.returncode == 3, result.stderr
-    assert rows(tmp_path / "out") == list(range(150))
-    assert f"claims {(1 << 31) + 16} bytes" in result.stderr and str(path) in result.stderr
-    piped = run_capture(
-        "-", "-o", str(tmp_path / "piped"), cwd=tmp_path, stdin=bytes(data)
-    )  # the pipe reader
-    assert piped.returncode == 3 and rows(tmp_path / "piped") == list(range(150)), piped.stderr
+    assert rows(tmp_path / "out") == [i for i in range(300) if i != 150]
+    skipped = f"1 records whose length cannot be one: {16 + caplen} bytes skipped to the next whole record"
+    assert skipped in result.stderr and str(path) in result.stderr
+    piped = run_capture("-", "-o", str(tmp_path / "piped"), cwd=tmp_path, stdin=bytes(data))  # a pipe
+    assert piped.returncode == 3 and skipped in piped.stderr, piped.stderr
+    assert rows(tmp_path / "piped") == [i for i in range(300) if i != 150]
+
+
+def test_a_record_claiming_past_the_end_of_the_file_is_a_cut_off_record(tmp_path: Path) -> None:
+    path = rtde_capture(tmp_path / "last.pcap", rtde_packages(100))
+    data = bytearray(path.read_bytes())
+    offset, _ = pcap_records(path)[-1]
+    struct.pack_into("<I", data, offset + 8, 1400)  # within the snap length (1500), past the end
+    path.write_bytes(bytes(data))
+    result = run_capture(str(path), "-o", str(tmp_path / "out"), cwd=tmp_path)
+    assert result.returncode == 3, result.stderr
+    assert rows(tmp_path / "out") == list(range(99))
+    assert f"cut off at byte {offset} (it claims 1416 bytes)" in result.stderr
 
 
 def test_a_pcapng_timestamp_of_2_to_the_62_keeps_its_row_in_date_unknown(tmp_path: Path) -> None:
@@ -84,9 +97,9 @@ def test_a_stream_that_ends_inside_a_package_exits_3_and_lenient_exits_0(tmp_pat
     assert lenient.returncode == 0 and "summary" in lenient.stderr and "damaged" in lenient.stderr
 
 
-def test_a_pcapng_block_that_cannot_be_one_stops_the_file_not_the_run(tmp_path: Path) -> None:
-    """A block length that is no block (not a multiple of 4) in the middle of the file: the
-    packages before it are kept, the next file is decoded, exit 3 (was 2, and no next file)."""
+def test_a_pcapng_block_that_cannot_be_one_is_skipped_not_the_file_nor_the_run(tmp_path: Path) -> None:
+    """A block length that is no block (not a multiple of 4) in the middle of the file: only
+    its package is lost, the next file is decoded, exit 3 (was 2, and nothing after it)."""
     bad = rtde_capture(tmp_path / "a" / "bad.pcapng", rtde_packages(80), fmt="pcapng")
     data = bytearray(bad.read_bytes())
     pos, blocks = 0, []
@@ -95,13 +108,14 @@ def test_a_pcapng_block_that_cannot_be_one_stops_the_file_not_the_run(tmp_path: 
         blocks.append(pos)
         pos += length
     where = blocks[-30]  # the block of package 50
+    length = struct.unpack_from("<I", data, where + 4)[0]
     struct.pack_into("<I", data, where + 4, 13)
     bad.write_bytes(bytes(data))
     good = rtde_capture(tmp_path / "b" / "good.pcapng", rtde_packages(20), fmt="pcapng")
     result = run_capture(str(bad), str(good), "-o", str(tmp_path / "out"), cwd=tmp_path)
     assert result.returncode == 3, result.stderr
-    assert f"reading stopped at byte {where}" in result.stderr
-    assert sorted(rows(tmp_path / "out")) == sorted([*range(50), *range(20)])
+    assert f"1 records whose length cannot be one: {length} bytes skipped" in result.stderr
+    assert sorted(rows(tmp_path / "out")) == sorted([*(i for i in range(80) if i != 50), *range(20)])
     summary = decode_to_directory(good, tmp_path / "one")
     assert not summary.damage() and "ok" in summary.line()
 
