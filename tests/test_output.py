@@ -232,3 +232,15 @@ def test_split_parts_read_as_one_dataset_and_replace_an_earlier_runs_parts(tmp_p
     assert unrelated.exists() and not stale.exists() and leftover_temps(tmp_path) == []
     table = ds.dataset([str(tmp_path / n) for n in found], format="parquet").to_table()
     assert table.column("timestamp").to_pylist() == [i * 0.002 for i in range(5000)]
+
+
+def test_a_small_file_written_whole_replaces_the_old_one_or_leaves_it(tmp_path: Path) -> None:
+    from rtde_spec.output.partfile import write_whole
+
+    listing = tmp_path / "recipes-x.json"
+    listing.write_bytes(b"[old]\n")
+    with pytest.raises(TypeError):
+        write_whole(listing, "text, not bytes")  # type: ignore[arg-type]  # fails while writing
+    assert listing.read_bytes() == b"[old]\n" and leftover_temps(tmp_path) == []
+    write_whole(listing, b"[new]\n", durable=True)
+    assert listing.read_bytes() == b"[new]\n" and leftover_temps(tmp_path) == []

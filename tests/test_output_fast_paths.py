@@ -356,3 +356,33 @@ def test_a_core_that_wants_no_records_frames_counts_and_checks_as_one_that_does(
     core.want_records = False
     with pytest.raises(Exception, match="recipe"):
         core.receive(bytes(other))
+
+
+def test_a_background_written_output_appears_whole_at_close_or_not_at_all(tmp_path: Path) -> None:
+    """The decoder's writing thread writes into the hidden part file; the name shows the old
+    file until close, and an aborted run (or one whose writes fail) leaves it as it was."""
+    out = tmp_path / "decoded.jsonl"
+    out.write_bytes(b"the previous run\n")
+    array = CODEC.decode_many(data_packages(3000))
+    columns = {name: array[name] for name in CODEC.names}
+    writer = open_writer("jsonl", out, background=True)
+    writer.write_columns(columns)
+    writer.flush()  # in the part file, not yet under its name
+    assert out.read_bytes() == b"the previous run\n"
+    writer.abort()
+    assert out.read_bytes() == b"the previous run\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["decoded.jsonl"]
+    writer = open_writer("jsonl", out, background=True)
+    real, writer.stream.raw = writer.stream.raw, Failing()  # type: ignore[attr-defined]  # the disk fills up
+    with pytest.raises(OSError, match="No space left"):
+        writer.write_columns({n: np.repeat(c, 200, axis=0) for n, c in columns.items()})  # > 1 MB
+        writer.close()
+    with pytest.raises(OSError, match="No space left"):  # reported again: the output has a hole
+        writer.close()
+    real.close()
+    assert out.read_bytes() == b"the previous run\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["decoded.jsonl"]
+    writer = open_writer("jsonl", out, background=True)
+    writer.write_columns(columns)
+    writer.close()
+    assert len(out.read_bytes().splitlines()) == 3000

@@ -26,7 +26,8 @@ class BackgroundStream(io.RawIOBase):
         super().__init__()
         self.raw = stream
         self._queue: queue.Queue[bytes | None] = queue.Queue(maxsize=depth)
-        self._error: BaseException | None = None
+        self._error: BaseException | None = None  # raised once, in the caller's thread
+        self.failed: BaseException | None = None  # kept: the file has a hole, its writer drops it
         self._small = bytearray()
         self._thread = threading.Thread(target=self._run, name="rtde-spec-writer", daemon=True)
         self._thread.start()
@@ -37,10 +38,10 @@ class BackgroundStream(io.RawIOBase):
             try:
                 if block is _STOP:
                     return
-                if self._error is None:  # after a failure, drain without writing
+                if self.failed is None:  # after a failure, drain without writing
                     self.raw.write(block)
             except BaseException as exc:  # handed to the caller's thread
-                self._error = exc
+                self._error = self.failed = exc
             finally:
                 self._queue.task_done()
 
@@ -80,7 +81,7 @@ class BackgroundStream(io.RawIOBase):
     def close_quietly(self) -> None:
         """Stop the thread after an error elsewhere: queued blocks are dropped, nothing is raised."""
         if self._thread.is_alive():
-            self._error = self._error or OSError("output abandoned")  # the thread drains without writing
+            self.failed = self.failed or OSError("output abandoned")  # the thread drains without writing
             self._small.clear()
             self._queue.put(_STOP)
             self._thread.join()

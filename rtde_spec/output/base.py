@@ -110,6 +110,10 @@ class Writer:
         except BaseException:
             self._settle(keep=False)
             raise
+        failed = getattr(self.stream, "failed", None)  # a background write failed earlier: a hole
+        if failed is not None:
+            self._settle(keep=False)
+            raise failed
         self._settle(keep=self.rows > 0)
 
     def abort(self) -> None:

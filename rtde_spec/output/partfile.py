@@ -135,7 +135,8 @@ class PartStream(io.RawIOBase):
         super().__init__()
         self.part = part
         self._file = open(part.temp, "wb", buffering=0)  # closed by close()
-        self._held = bytearray()
+        self._held: list[bytes] = []  # blocks since the last flush, kept as given (no copy of bytes)
+        self._held_size = 0
         self._batched = batched
         self.written = 0  # bytes written so far (held ones included): for splitting by size
 
@@ -151,15 +152,17 @@ class PartStream(io.RawIOBase):
         if not self._batched:
             self._write_all(block)
             return size
-        self._held += block
-        if len(self._held) >= SPILL:
+        self._held.append(block if isinstance(block, bytes) else bytes(block))
+        self._held_size += size
+        if self._held_size >= SPILL:
             self._drain()
         return size
 
     def _drain(self) -> None:
         if self._held:
-            self._write_all(self._held)
-            self._held.clear()
+            held = self._held[0] if len(self._held) == 1 else b"".join(self._held)
+            self._held, self._held_size = [], 0
+            self._write_all(held)
 
     def _write_all(self, data: bytes | bytearray | memoryview) -> None:
         with memoryview(data) as view:
@@ -180,3 +183,17 @@ class PartStream(io.RawIOBase):
         finally:
             self._file.close()
             super().close()
+
+
+def write_whole(target: str | Path, data: bytes, *, durable: bool = False) -> None:
+    """A small file written at once (a listing, a summary), appearing only complete."""
+    part = Part(target, durable=durable)
+    if is_special(part.target):
+        part.target.write_bytes(data)
+        return
+    try:
+        part.temp.write_bytes(data)
+        part.commit()
+    except BaseException:
+        part.discard()
+        raise
