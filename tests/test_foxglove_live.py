@@ -45,6 +45,20 @@ def free_port() -> int:
 
 
 Received = dict[str, list[tuple[int, bytes]]]
+# foxglove-sdk 0.30.3: a channel created while a client is being connected is advertised to it, but
+# subscribing to it is answered "Unknown channel ID"; a new connection has it. So does this client.
+UNKNOWN_CHANNEL = "Unknown channel ID"
+
+
+async def connect(url: str) -> Any:
+    deadline = time.monotonic() + 30
+    while True:  # the server starts in another thread
+        try:
+            return await websockets.connect(url, subprotocols=SUBPROTOCOLS)  # type: ignore[arg-type]
+        except (OSError, websockets.InvalidHandshake, websockets.InvalidMessage, EOFError):
+            if time.monotonic() > deadline:
+                raise
+            await asyncio.sleep(0.1)
 
 
 async def listen(
@@ -52,28 +66,34 @@ async def listen(
 ) -> tuple[dict[str, dict[str, Any]], Received]:
     """Connect, subscribe to every advertised channel, collect messages until `enough` says so,
     the server closes or `seconds` pass: (channels by topic, topic -> [(log time, data)])."""
-    deadline = time.monotonic() + 30
-    while True:  # the server starts in another thread
-        try:
-            ws = await websockets.connect(url, subprotocols=SUBPROTOCOLS)  # type: ignore[arg-type]
-            break
-        except OSError:
-            if time.monotonic() > deadline:
-                raise
-            await asyncio.sleep(0.1)
     channels: dict[str, dict[str, Any]] = {}
-    by_subscription: dict[int, str] = {}
     received: Received = {}
+    end = time.monotonic() + seconds
+    while await _session(await connect(url), channels, received, enough, end):
+        pass  # reconnected after an unknown channel
+    return channels, received
+
+
+async def _session(
+    ws: Any,
+    channels: dict[str, dict[str, Any]],
+    received: Received,
+    enough: Callable[[Received], bool],
+    end: float,
+) -> bool:
+    """One connection's messages; True if it ended to reconnect."""
+    by_subscription: dict[int, str] = {}
     async with ws:
         assert ws.subprotocol in SUBPROTOCOLS
-        end = time.monotonic() + seconds
         while time.monotonic() < end and not enough(received):
             try:
                 frame = await asyncio.wait_for(ws.recv(), max(0.01, end - time.monotonic()))
             except (asyncio.TimeoutError, websockets.ConnectionClosed):
-                break
+                return False
             if isinstance(frame, str):
                 op = json.loads(frame)
+                if op["op"] == "status" and UNKNOWN_CHANNEL in op["message"]:
+                    return True
                 if op["op"] == "advertise":
                     subscriptions = []
                     for channel in op["channels"]:
@@ -85,7 +105,7 @@ async def listen(
             opcode, subscription, log_time = struct.unpack_from("<BIQ", frame)
             assert opcode == MESSAGE_DATA
             received.setdefault(by_subscription[subscription], []).append((log_time, bytes(frame[13:])))
-    return channels, received
+    return False
 
 
 def _varint(buf: bytes, i: int) -> tuple[int, int]:
