@@ -23,7 +23,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--direction", choices=("input", "output"), help="only this direction (default: both)")
     p.add_argument("--json", action="store_true", help="print JSON (default: a table)")
     p.add_argument(
-        "--primary", action="store_true", help="list primary/secondary interface fields instead (with since)"
+        "--primary",
+        action="store_true",
+        help="list primary/secondary interface fields instead, with since (default: off)",
     )
     p.add_argument(
         "--diff",

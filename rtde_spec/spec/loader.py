@@ -13,6 +13,7 @@ import yaml
 from pydantic import BaseModel, ValidationError
 
 from rtde_spec.errors import SpecError, SpecIssue
+from rtde_spec.spec import safe_yaml
 from rtde_spec.spec.lint import lint_fields_file, lint_spec
 from rtde_spec.spec.schema import (
     EnumsFile,
@@ -91,6 +92,7 @@ class _Source:
     def __init__(self, path: Path, label: str):
         self.label = label
         text = path.read_text(encoding="utf-8")
+        safe_yaml.check(text)  # extra-field files come from users: no aliases, bounded depth
         self.node = yaml.compose(text, Loader=_LOADER)
         self.data = yaml.load(text, Loader=_LOADER)  # a safe loader, C or Python
 

@@ -15,6 +15,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 import rtde_spec
 
 ROOT = Path(rtde_spec.__file__).resolve().parents[1]
@@ -102,3 +104,15 @@ def test_numbers_python_will_not_convert_are_recipe_errors(tmp_path: Path) -> No
         path.write_text(text)
         out = load_in_child(path)
         assert out.get("kind") == "RecipeError", (name, out)
+
+
+def test_an_extra_fields_file_with_an_alias_is_refused_before_it_is_expanded(tmp_path: Path) -> None:
+    from rtde_spec import Catalogue
+    from rtde_spec.errors import SpecError
+
+    bomb = tmp_path / "fields.yaml"
+    bomb.write_text(
+        "a: &a [1, 2]\n" + "".join(f"b{i}: &b{i} [*{'a' if i == 0 else f'b{i - 1}'}] \n" for i in range(3))
+    )
+    with pytest.raises(SpecError, match="aliases"):
+        Catalogue.builtin().with_extra(bomb)
