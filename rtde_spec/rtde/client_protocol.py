@@ -242,19 +242,29 @@ class ClientProtocol:
                     return [DataRun(records, data, run[0])]
         events: list[Event] = []
         try:
-            for _, package in self.framer.feed(data, run):
-                if output is not None and run is not None and package[: len(run[1])] == run[1]:
-                    records = output.decode_records(package) if self.want_records else []
-                    events.append(DataRun(records, package, run[0]))
-                    continue
-                message = decode(bytes(package), protocol_version=self.state.version, sender="controller")
-                event = self._control(message)
-                if event is not None:
-                    events.append(event)
+            try:
+                packages = self.framer.feed(data, run)
+            except RtdeSpecError:  # an unusable size: the packages before it still count
+                self._events(self.framer.salvaged, events)
+                raise
+            self._events(packages, events)
         except RtdeSpecError:
             self.before_error = events  # the packages before the fault: handed out, not dropped
             raise
         return events
+
+    def _events(self, packages: list[tuple[int, Any]], events: list[Event]) -> None:
+        """Append the event of each framed package (a fault raises, `events` keeps those before)."""
+        output, run = self.output, self._run
+        for _, package in packages:
+            if output is not None and run is not None and package[: len(run[1])] == run[1]:
+                records = output.decode_records(package) if self.want_records else []
+                events.append(DataRun(records, package, run[0]))
+                continue
+            message = decode(bytes(package), protocol_version=self.state.version, sender="controller")
+            event = self._control(message)
+            if event is not None:
+                events.append(event)
 
     def _control(self, message: RtdeMessage) -> Event | None:
         if isinstance(message, (gen.TextMessage, gen.TextMessageV1Controller)):
