@@ -18,7 +18,7 @@ from mcap.reader import make_reader
 from rtde_spec import RecipeCodec, build
 from rtde_spec.cli.decode_cmd import decode_into
 from rtde_spec.cli.primary_output import run_primary
-from rtde_spec.output.mcap import McapWriter, register
+from rtde_spec.output.mcap import McapWriter
 from rtde_spec.output.writers import open_writer
 
 from .test_cli import cli
@@ -37,11 +37,6 @@ def _values(i: int) -> dict[str, Any]:
         "output_bit_register_64": i % 2 == 0,
         "actual_digital_input_bits": 2**63 + i,  # UINT64 beyond int64
     }
-
-
-@pytest.fixture(autouse=True)
-def mcap_format() -> None:
-    register()  # what the lead's line in output/writers.py makes permanent
 
 
 @pytest.fixture
@@ -208,27 +203,13 @@ def test_the_file_appears_complete_or_not_at_all(stream: Path, tmp_path: Path) -
     assert target.read_bytes()[:8] == b"\x89MCAP0\r\n" and target.read_bytes()[-8:] == b"\x89MCAP0\r\n"
 
 
-def test_a_capture_holds_in_mcap_what_it_holds_in_parquet(
-    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
-) -> None:
-    """capture to MCAP with the two lines the lead adds to capture/sink.py (the extension, and each
-    table's topic), against capture to Parquet: every value, logged at its packet's capture time."""
-    from rtde_spec.capture import sink
+def test_a_capture_holds_in_mcap_what_it_holds_in_parquet(tmp_path: Path) -> None:
+    """capture to MCAP against capture to Parquet: every value, logged at its packet's capture time."""
     from rtde_spec.capture.decoder import decode_to_directory
     from rtde_spec.output.topics import topic_for_table
 
     from .capture_files import rtde_capture, rtde_packages
 
-    monkeypatch.setitem(sink.EXTENSIONS, "mcap", "mcap")
-    real_open = sink.open_writer
-
-    def open_with_topic(fmt: str, path: Path) -> Any:
-        writer = real_open(fmt, path)
-        if fmt == "mcap":
-            writer.topic = topic_for_table(Path(path).parents[2].name)  # type: ignore[attr-defined]
-        return writer
-
-    monkeypatch.setattr(sink, "open_writer", open_with_topic)
     pcap = rtde_capture(tmp_path / "run.pcap", rtde_packages(500))
     decode_to_directory(pcap, tmp_path / "pq", "parquet")
     summary = decode_to_directory(pcap, tmp_path / "mc", "mcap")
@@ -250,3 +231,22 @@ def test_a_capture_holds_in_mcap_what_it_holds_in_parquet(
                     base, _, index = name.rpartition("_")
                     assert message[base][int(index)] == value, (table, name)
     assert "/rtde/outputs/1" in {topic_for_table(t) for t in summary.tables}
+
+
+def test_the_commands_write_mcap_by_suffix_and_format(stream: Path, tmp_path: Path) -> None:
+    """decode (-o x.mcap), capture (--format mcap): the same messages the Python writer logs."""
+    from .capture_files import rtde_capture, rtde_packages
+    from .test_cli import cli
+
+    recipe = tmp_path / "recipe.txt"
+    recipe.write_text("\n".join(NAMES) + "\n")
+    out = tmp_path / "cli.mcap"
+    result = cli("decode", str(stream), "--from", "controller", "--recipe", str(recipe), "-o", str(out))
+    assert result.returncode == 0, result.stderr
+    messages, _ = read_mcap(out)
+    assert sum(len(m) for t, m in messages.items() if t.startswith("/rtde/outputs/")) == ROWS
+    pcap = rtde_capture(tmp_path / "run.pcap", rtde_packages(50))
+    result = cli("capture", str(pcap), "-o", str(tmp_path / "tables"), "--format", "mcap")
+    assert result.returncode == 0, result.stderr
+    files = list((tmp_path / "tables").rglob("*.mcap"))
+    assert files and all(read_mcap(f)[0] for f in files)

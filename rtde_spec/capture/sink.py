@@ -22,7 +22,7 @@ from rtde_spec.errors import require
 from rtde_spec.output.base import Writer, flat_columns, flatten
 from rtde_spec.output.writers import open_writer
 
-EXTENSIONS = {"parquet": "parquet", "csv": "csv", "jsonl": "jsonl"}
+EXTENSIONS = {"parquet": "parquet", "csv": "csv", "jsonl": "jsonl", "mcap": "mcap"}
 
 
 UNKNOWN_DAY = "unknown"  # the partition of rows whose capture time is no date (a damaged record)
@@ -99,7 +99,12 @@ class DirectorySink(TableSink):
             folder.mkdir(parents=True, exist_ok=True)
             path = folder / f"{self.stem}.{EXTENSIONS[self.fmt]}"
             self.paths.append(path)
-            self.writers[key] = open_writer(self.fmt, path)
+            writer = open_writer(self.fmt, path)
+            if self.fmt == "mcap":  # one topic per table, as decode names them
+                from rtde_spec.output.topics import topic_for_table
+
+                writer.topic = topic_for_table(table)  # type: ignore[attr-defined]
+            self.writers[key] = writer
         return self.writers[key]
 
     def _row(self, table: str, robot: str, day: str, record: Mapping[str, Any]) -> None:

@@ -53,7 +53,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("-o", "--outdir", required=True, help="output folder (required)")
     p.add_argument(
-        "--format", choices=("parquet", "csv", "jsonl"), default="parquet", help="default: parquet"
+        "--format", choices=("parquet", "csv", "jsonl", "mcap"), default="parquet", help="default: parquet"
     )
     p.add_argument(
         "--recipe", metavar="FILE", help="output recipe for captures that start after setup (default: none)"

@@ -37,7 +37,7 @@ if TYPE_CHECKING:
 
 CHUNK = 8 << 20
 HEAD = 4096  # bytes of stdin looked at to tell hex text from binary
-FORMAT_CHOICES = ("table", "jsonl", "json", "csv", "parquet")
+FORMAT_CHOICES = ("table", "jsonl", "json", "csv", "parquet", "mcap")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

@@ -59,9 +59,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     stop.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (default: Ctrl-C)")
     stop.add_argument("--samples", type=int, metavar="N", help="stop after N rows (default: Ctrl-C)")
     p.add_argument(
-        "-o", "--output", required=True, metavar="FILE", help="out.csv, out.parquet or out.jsonl (required)"
+        "-o", "--output", required=True, metavar="FILE", help="out.csv, .parquet, .jsonl or .mcap (required)"
     )
-    p.add_argument("--format", choices=("csv", "parquet", "jsonl"), help="default: from the -o suffix")
+    p.add_argument(
+        "--format", choices=("csv", "parquet", "jsonl", "mcap"), help="default: from the -o suffix"
+    )
     p.add_argument(
         "--split",
         metavar="DURATION|SIZE",
@@ -98,8 +100,8 @@ def run(args: argparse.Namespace) -> int:
     from rtde_spec.rtde.recorder import BATCH_SECONDS, record
 
     fmt = format_for(args.output, args.format)
-    if fmt not in ("csv", "parquet", "jsonl"):
-        raise UsageError(f"-o {args.output}: use .csv, .parquet or .jsonl (or --format)")
+    if fmt not in ("csv", "parquet", "jsonl", "mcap"):
+        raise UsageError(f"-o {args.output}: use .csv, .parquet, .jsonl or .mcap (or --format)")
     if not 0 < args.frequency < float("inf"):  # NaN too; the controller's own limit is checked at setup
         raise UsageError(f"--frequency {args.frequency:g}: a rate in Hz above 0")
     split = parse_split(args.split) if args.split else None

@@ -130,10 +130,3 @@ class McapWriter(Writer):
     def _finish(self) -> None:
         self._mcap.finish()  # the summary and footer: what makes the file readable
         super()._finish()
-
-
-def register() -> None:
-    """Make "mcap" a format of `open_writer` (and a -o suffix `format_for` knows)."""
-    from rtde_spec.output import writers
-
-    writers._WRITERS.setdefault("mcap", McapWriter)

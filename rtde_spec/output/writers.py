@@ -20,6 +20,7 @@ from rtde_spec.errors import UsageError
 from rtde_spec.output import jsonlines
 from rtde_spec.output.background import BackgroundStream
 from rtde_spec.output.base import Writer, flat_columns, flatten, native_order, plain
+from rtde_spec.output.mcap import McapWriter
 from rtde_spec.output.parquet import ParquetWriter
 from rtde_spec.output.partfile import Part, PartStream, is_special
 from rtde_spec.output.tables import arrow_table
@@ -28,7 +29,7 @@ from rtde_spec.output.text import safe_text, table
 if TYPE_CHECKING:
     from rtde_spec.output.split import SplitLimit
 
-FORMATS = ("table", "jsonl", "json", "csv", "parquet")
+FORMATS = ("table", "jsonl", "json", "csv", "parquet", "mcap")
 TABULAR = ("csv", "parquet")
 _JSON_SLICE_ROWS = 2048
 
@@ -169,6 +170,7 @@ _WRITERS: dict[str, type[Writer]] = {
     "json": JsonWriter,
     "csv": CsvWriter,
     "parquet": ParquetWriter,
+    "mcap": McapWriter,
 }
 # Formats a reader reads while they grow (one complete line per row): a recording's file can be
 # in place from its first batch on. A format with a header or footer to finish waits for close.
