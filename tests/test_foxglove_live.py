@@ -268,3 +268,26 @@ def test_the_live_view_serve_runs_against_its_own_ports(emu: EmulatorThread) -> 
     assert [j["q_actual"] for j in joints] == pytest.approx(Q)
     with pytest.raises(OSError):  # the server is gone
         asyncio.run(asyncio.wait_for(websockets.connect(url, subprotocols=SUBPROTOCOLS), 5))  # type: ignore[arg-type]
+
+
+def test_serve_with_foxglove_publishes_the_emulator_live() -> None:
+    """`rtde-spec serve --foxglove PORT` as a user starts it: the emulator's joints reach a subscriber."""
+    import subprocess
+    import sys
+
+    port = free_port()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "rtde_spec", "serve", "--rtde-port", "0", "--primary-port", "0",
+         "--secondary-port", "0", "--dashboard-port", "0", "--foxglove", str(port),
+         "--rtde-fields", "timestamp,actual_q", "--rtde-frequency", "25"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    )  # fmt: skip
+    try:
+        _, received = asyncio.run(
+            listen(f"ws://127.0.0.1:{port}", lambda r: len(r.get("/rtde/outputs/1", [])) >= 3)
+        )
+    finally:
+        proc.terminate()
+        proc.wait(20)
+    rows = [json.loads(d) for _, d in received["/rtde/outputs/1"]]
+    assert len(rows[-1]["actual_q"]) == 6 and rows[-1]["timestamp"] > rows[0]["timestamp"]

@@ -6,6 +6,7 @@ import argparse
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.cli.common import controller_version
+from rtde_spec.cli.watch_cmd import add_live_arguments
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -62,6 +63,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--scenario", metavar="FILE", help="YAML scenario: version and output values (default: none)"
     )
+    add_live_arguments(p, rtde_port=False)
     p.set_defaults(run=run)
 
 
@@ -98,9 +100,18 @@ def run(args: argparse.Namespace) -> int:
         await emulator.start()
         ports = ", ".join(f"{name} {port}" for name, port in emulator.ports.items())
         print(f"emulating controller {emulator.model.version} on {args.host}: {ports}", flush=True)
+        view = None
         try:
+            if args.foxglove is not None:  # off the loop: the loop answers the view's handshakes
+                from rtde_spec.cli.watch_cmd import LiveView
+
+                host = "127.0.0.1" if args.host in ("0.0.0.0", "::") else args.host
+                live = LiveView(host, emulator.ports["rtde"], emulator.ports["secondary"], args)
+                view = await asyncio.to_thread(live.start)
             await asyncio.Event().wait()
         finally:
+            if view is not None:
+                await asyncio.to_thread(view.stop)
             await emulator.stop()
 
     try:
