@@ -17,6 +17,7 @@ from .emit_docs import (
     emit_types_doc,
 )
 from .emit_enums import emit_enums
+from .emit_external import emit_external
 from .emit_lua import emit_lua
 from .emit_primary import emit_primary_models, emit_primary_structs
 from .emit_primary_docs import emit_primary_doc
@@ -49,4 +50,5 @@ def generate(spec: Spec) -> dict[str, str]:
         "docs/reference/rtde-types.md": emit_types_doc(spec, catalogue),
         **emit_arms(),
         **emit_dashboard(),
+        **emit_external({p.name: p for p in spec.primitives.primitives}),
     }

@@ -9,7 +9,7 @@ from __future__ import annotations
 import re
 from typing import Annotated, Literal
 
-from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field
+from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 
 from rtde_spec.spec.versions import Version
 
@@ -237,9 +237,16 @@ class LayoutField(StrictModel):
     fields: list[LayoutField] | None = None
     enum: str | None = None
     unit: str | None = None
+    scale: Annotated[float, Field(gt=0)] | None = None  # the wire holds value x scale (URCL's MULT_*)
     doc: str | None = None
     since: Since | None = None  # the first version per product line that sends this field
     conflicts: list[Conflict] = []  # differences a document shows, decided on purpose
+
+    @model_validator(mode="after")
+    def _scale_on_values(self) -> LayoutField:
+        if self.scale is not None and self.kind != "value":
+            raise ValueError(f"scale is for numbers; {self.name!r} is a {self.kind}")
+        return self
 
     @property
     def kind(self) -> str:

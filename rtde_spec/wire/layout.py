@@ -114,8 +114,12 @@ class Layout:
         if kind == "value":
             prim = self.prims[fld.type or ""]
             count = fld.count or 1
+            scale = fld.scale
 
-            def value_expr(i: int, count: int = count) -> tuple[str, int]:
+            def value_expr(i: int, count: int = count, scale: float | None = scale) -> tuple[str, int]:
+                if scale is not None:  # the wire holds value x scale: SI values out, one division each
+                    parts = [f"t[{j}] / {scale!r}" for j in range(i, i + count)]
+                    return (parts[0] if fld.count is None else f"({', '.join(parts)},)"), i + count
                 return (f"t[{i}]" if count == 1 else f"t[{i}:{i + count}]"), i + count
 
             return Atom(fld.name, prim.struct * count, prim.size * count, value_expr, self.order)
@@ -311,6 +315,8 @@ class Layout:
                 items = tuple(value) if fld.count else (value,)
                 if fld.count and len(items) != fld.count:
                     raise EncodeError(f"needs exactly {fld.count} values", field=name, actual=len(items))
+                if fld.scale is not None:  # SI values in, value x scale on the wire (rounded for integers)
+                    items = tuple(_scaled(v, fld.scale, prim.kind, name) for v in items)
                 return struct.pack(self.order + prim.struct * len(items), *items)
             if kind in ("string", "bytes"):
                 raw = _untext(value, fld.format) if kind == "string" else bytes(value)
@@ -345,6 +351,18 @@ class Layout:
                 actual=f"{length} bytes",
             )
         return length.to_bytes(prim.size, "big")
+
+
+def _scaled(value: Any, scale: float, kind: str, name: str) -> Any:
+    try:
+        wire = float(value) * scale
+    except (TypeError, ValueError):
+        raise EncodeError("is not a number", field=name, actual=repr(value)) from None
+    if kind != "int":
+        return wire
+    if wire != wire or wire in (float("inf"), float("-inf")):
+        raise EncodeError("is not a finite number", field=name, actual=repr(value))
+    return round(wire)
 
 
 def _case(fld: LayoutField, values: Mapping[str, Any]) -> str | CaseSpec | None:

@@ -1,0 +1,80 @@
+"""Emit _generated/external_control.py and docs/reference/external-control.md from
+spec/external_control/protocols.yaml (URCL's reverse, script sender, trajectory and
+script command protocols). The Lua dissector for them is emitted by emit_lua_external.
+"""
+
+from __future__ import annotations
+
+import pprint
+from pathlib import Path
+
+from rtde_spec.spec.external import ExternalControlFile, Variant, load_external
+from rtde_spec.spec.schema import Primitive
+
+from .render import MD_HEADER, PY_HEADER, md_table
+
+GEN = "rtde_spec/_generated"
+SPEC_ROOT = Path(__file__).resolve().parent.parent / "spec"
+
+
+def emit_external(prims: dict[str, Primitive], root: Path | str | None = None) -> dict[str, str]:
+    """Relative output path -> text for the external-control protocols below spec root `root`."""
+    spec = load_external(root if root is not None else SPEC_ROOT)
+    return {
+        f"{GEN}/external_control.py": _python(spec),
+        "docs/reference/external-control.md": _markdown(spec, prims),
+    }
+
+
+def _python(spec: ExternalControlFile) -> str:
+    literal = pprint.pformat(spec.model_dump(mode="json", exclude_defaults=True), width=100, sort_dicts=False)
+    return (
+        PY_HEADER
+        + '"""External-control protocols (URCL) of spec/external_control/protocols.yaml."""\n\n'
+        + "from typing import Any\n\n"
+        + f"EXTERNAL_CONTROL: dict[str, Any] = {literal}\n"
+    )
+
+
+def _variant_rows(variant: Variant, prims: dict[str, Primitive]) -> list[tuple[object, ...]]:
+    rows: list[tuple[object, ...]] = []
+    pos = 0
+    for f in variant.fields:
+        size = prims[f.type].size * (f.count or 1)
+        kind = f.type if f.count is None else f"{f.type}[{f.count}]"
+        scale = f"÷ {f.scale:.0f}" if f.scale else ""
+        rows.append((pos, f"`{f.name}`", kind, scale, f.unit or "", f.enum or "", f.doc or ""))
+        pos += size
+    return rows
+
+
+def _markdown(spec: ExternalControlFile, prims: dict[str, Primitive]) -> str:
+    out = [
+        MD_HEADER,
+        "# External control (UR's client library)\n\n",
+        f"The protocols between {spec.library} (the core of UR's ROS drivers) and the URScript\n",
+        "program it runs on the robot. The driver's PC listens on each port; the robot connects.\n",
+        f"Words are {spec.byte_order}-endian int32; a scaled value is sent multiplied by its scale\n",
+        f"(the table's `÷`), decoded in SI units. Source: {spec.doc_ref}.\n",
+    ]
+    headers = ["offset", "field", "type", "scale", "unit", "enum", "meaning"]
+    for p in spec.protocols:
+        out.append(f"\n## {p.name} (port {p.port})\n\n{p.doc or ''}\n\nSource: {p.source}.\n")
+        if p.request is not None:
+            out.append(f"\nThe robot sends `{p.request.strip()}` and a newline; rows go to `{p.table}`.\n")
+        for m in p.messages:
+            out.append(f"\n### {m.name}: {m.sender} → {'robot' if m.sender == 'driver' else 'driver'}, ")
+            out.append(f"{m.record_bytes} bytes\n")
+            for v in m.variants:
+                when = "default" if v.when is None else f"{m.selector} = {', '.join(map(str, v.when))}"
+                out.append(f"\n**{v.name}** ({when}; table `{v.table}`){': ' + v.doc if v.doc else ''}\n\n")
+                out.append(md_table(headers, _variant_rows(v, prims)))
+            for old in m.older:
+                out.append(f"\n**older layout {old.name}** ({old.record_bytes} bytes): {old.source}\n\n")
+                for v in old.variants:
+                    out.append(md_table(headers, _variant_rows(v, prims)))
+    out.append("\n## Enums\n")
+    for e in spec.enums:
+        out.append(f"\n### {e.name}\n\n{e.doc or ''}{' (' + e.doc_ref + ')' if e.doc_ref else ''}\n\n")
+        out.append(md_table(["value", "name", "meaning"], [(v.value, v.name, v.doc or "") for v in e.values]))
+    return "".join(out)

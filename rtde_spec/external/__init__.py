@@ -1,0 +1,1 @@
+"""URCL's external-control protocols (reverse, script sender, trajectory, script command), from the spec."""

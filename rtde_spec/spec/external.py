@@ -1,0 +1,177 @@
+"""The meta-model of spec/external_control/protocols.yaml: URCL's external-control protocols.
+
+Fixed records of int32 words, described with the same `LayoutField`s as RTDE packages
+and primary messages (plus `scale`), so the one layout engine decodes them. Checks
+that need the primitives (every type known, every variant within its record, the
+selector at the same offset in every variant) are made here, at load time; codegen
+then writes the validated file to `_generated/external_control.py`.
+"""
+
+from __future__ import annotations
+
+import re
+from functools import cache
+from pathlib import Path
+from typing import Annotated, Any, Literal
+
+import yaml
+from pydantic import Field, ValidationError, model_validator
+
+from rtde_spec.errors import SpecError, SpecIssue
+from rtde_spec.spec.schema import EnumSpec, Ident, LayoutField, StrictModel
+
+SPEC_FILE = "external_control/protocols.yaml"
+PRIMITIVES_FILE = "common/primitives.yaml"
+
+
+class Variant(StrictModel):
+    """One reading of a record: its whole layout, chosen by the selector's value (`when`)."""
+
+    name: Ident
+    when: list[int] | None = None  # None: the default, every value no other variant names
+    table: Ident
+    doc: str | None = None
+    fields: list[LayoutField]
+
+
+class OlderRecord(StrictModel):
+    """A layout older drivers send (decode on request), with the source that defines it."""
+
+    name: Ident
+    source: str
+    record_bytes: Annotated[int, Field(ge=1)]
+    selector: Ident | None = None
+    variants: Annotated[list[Variant], Field(min_length=1)]
+
+
+class RecordMessage(StrictModel):
+    name: Ident
+    sender: Literal["driver", "robot"]
+    record_bytes: Annotated[int, Field(ge=1)]
+    selector: Ident | None = None
+    doc: str | None = None
+    variants: Annotated[list[Variant], Field(min_length=1)]
+    older: list[OlderRecord] = Field(default_factory=list)
+
+
+class ExternalProtocol(StrictModel):
+    name: Ident
+    port: Annotated[int, Field(ge=1, le=65535)]
+    doc: str | None = None
+    source: str
+    messages: list[RecordMessage] = Field(default_factory=list)
+    request: str | None = None  # a text request (the script sender's), answered by the program text
+    table: Ident | None = None  # where a text exchange's rows go
+
+    @model_validator(mode="after")
+    def _one_kind(self) -> ExternalProtocol:
+        if bool(self.messages) == (self.request is not None):
+            raise ValueError(f"protocol {self.name!r}: give either messages or a text request")
+        if self.request is not None and self.table is None:
+            raise ValueError(f"protocol {self.name!r}: a text exchange needs a table")
+        return self
+
+
+class ExternalControlFile(StrictModel):
+    doc_ref: str
+    library: str
+    byte_order: Literal["big", "little"]
+    enums: list[EnumSpec]
+    protocols: list[ExternalProtocol]
+
+    def protocol(self, name: str) -> ExternalProtocol:
+        return next(p for p in self.protocols if p.name == name)
+
+
+def check(spec: ExternalControlFile, prims: dict[str, tuple[int, str]]) -> list[tuple[str, str]]:
+    """(path, reason) of every cross-reference problem; `prims`: name -> (size, kind)."""
+    issues: list[tuple[str, str]] = []
+    enums = {e.name: {v.value for v in e.values} for e in spec.enums}
+    names = [p.name for p in spec.protocols]
+    ports = [p.port for p in spec.protocols]
+    if len(set(names)) != len(names) or len(set(ports)) != len(ports):
+        issues.append(("protocols", "a protocol name or port is given twice"))
+    for p in spec.protocols:
+        for m in p.messages:
+            where = f"protocols({p.name}).messages({m.name})"
+            issues += _check_record(where, m.record_bytes, m.selector, m.variants, prims, enums)
+            for old in m.older:
+                issues += _check_record(
+                    f"{where}.older({old.name})", old.record_bytes, old.selector, old.variants, prims, enums
+                )
+    return issues
+
+
+def _check_record(
+    where: str,
+    size: int,
+    selector: str | None,
+    variants: list[Variant],
+    prims: dict[str, tuple[int, str]],
+    enums: dict[str, set[int]],
+) -> list[tuple[str, str]]:
+    issues: list[tuple[str, str]] = []
+    at: set[tuple[int, str]] = set()
+    defaults = [v.name for v in variants if v.when is None]
+    if len(defaults) > 1 or (selector is None and len(variants) > 1):
+        issues.append((where, "one default variant at most, and variants need a selector"))
+    for v in variants:
+        pos = 0
+        for f in v.fields:
+            if f.type not in prims or f.fields is not None:
+                issues.append((f"{where}.variants({v.name}).{f.name}", f"type {f.type!r} is no primitive"))
+                continue
+            if f.enum is not None and f.enum not in enums:
+                issues.append((f"{where}.variants({v.name}).{f.name}", f"unknown enum {f.enum!r}"))
+            if f.scale is not None and prims[f.type][1] not in ("int", "float"):
+                issues.append((f"{where}.variants({v.name}).{f.name}", "scale on a value that is no number"))
+            if f.name == selector:
+                at.add((pos, f.type))
+            pos += prims[f.type][0] * (f.count or 1)
+        if pos > size:
+            issues.append((f"{where}.variants({v.name})", f"{pos} bytes: longer than the {size}-byte record"))
+        if selector is not None and selector not in [f.name for f in v.fields]:
+            issues.append((f"{where}.variants({v.name})", f"lacks the selector {selector!r}"))
+    if len(at) > 1:
+        issues.append((where, f"the selector {selector!r} is not at the same offset in every variant"))
+    return issues
+
+
+def _load_yaml(path: Path, label: str) -> object:
+    from rtde_spec.spec import safe_yaml
+
+    try:
+        return safe_yaml.load(path.read_text(encoding="utf-8"))
+    except (OSError, yaml.YAMLError) as exc:
+        mark = getattr(exc, "problem_mark", None)
+        raise SpecError(
+            [SpecIssue(label, "", f"cannot read: {exc}", mark.line + 1 if mark else None)]
+        ) from None
+
+
+def load_external(root: Path | str) -> ExternalControlFile:
+    """Load, validate and check external_control/protocols.yaml below spec root `root`."""
+    root = Path(root)
+    data = _load_yaml(root / SPEC_FILE, SPEC_FILE)
+    try:
+        spec = ExternalControlFile.model_validate(data)
+    except ValidationError as exc:
+        issues = [
+            SpecIssue(SPEC_FILE, ".".join(str(p) for p in e["loc"]), re.sub(r"^Value error, ", "", e["msg"]))
+            for e in exc.errors()
+        ]
+        raise SpecError(issues) from None
+    raw: Any = _load_yaml(root / PRIMITIVES_FILE, PRIMITIVES_FILE) or {}
+    prims = {p["name"]: (int(p["size"]), str(p["kind"])) for p in raw.get("primitives", [])}
+    found = check(spec, prims)
+    if found:
+        raise SpecError([SpecIssue(SPEC_FILE, path, reason) for path, reason in found])
+    return spec
+
+
+@cache
+def external_spec() -> ExternalControlFile:
+    """The built-in external-control protocols, from the generated module."""
+    from rtde_spec._generated.external_control import EXTERNAL_CONTROL
+
+    return ExternalControlFile.model_validate(EXTERNAL_CONTROL)
