@@ -371,3 +371,42 @@ def test_decoded_models_behave_as_validated_ones_for_pydantic_operations() -> No
     assert moved.extra == b"\x01" and moved.joints == joints
     with pytest.raises(Exception, match="frozen"):
         joints[0].q_actual = 1.0  # type: ignore[misc]
+
+
+# --- the client as the README shows it (issue 21.1) ----------------------------------------------
+
+
+def test_primary_client_yields_messages_and_offsets_on_request() -> None:
+    from rtde_spec import EmulatorConfig, EmulatorThread, PrimaryClient
+    from rtde_spec.primary.events import describe_message
+
+    emu = EmulatorThread(EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0)).start()
+    try:
+        with PrimaryClient("127.0.0.1", emu.ports["secondary"], timeout=10) as robot:
+            first = next(iter(robot))
+            assert first.NAME == "version_message" and robot.last_offset == 0
+            line = describe_message(first)
+            assert line is not None and line.startswith("version  URControl") and "(" not in line[:9]
+            state = next(iter(robot))
+            assert isinstance(state, RobotStateMessage) and describe_message(state) is None
+        with PrimaryClient("127.0.0.1", emu.ports["secondary"], timeout=10) as robot:
+            pairs = robot.messages(with_offsets=True)
+            (o1, m1), (o2, m2) = next(pairs), next(pairs)
+            assert (o1, m1.NAME) == (0, "version_message") and isinstance(m2, RobotStateMessage)
+            assert o2 == len(encode_message(m1)) and robot.last_offset == o2
+    finally:
+        emu.stop()
+
+
+def test_describe_message_refuses_an_offset_message_pair() -> None:
+    from rtde_spec.errors import UsageError
+    from rtde_spec.primary.events import StateChanges, describe_message
+
+    case = next(c for c in GOLDEN if c["message"] == "version_message")
+    pair = next(iter(decode_stream(bytes.fromhex(case["hex"]))))
+    assert isinstance(pair, tuple)
+    with pytest.raises(UsageError, match=r"unpack the \(offset, message\) pairs"):
+        describe_message(pair)
+    with pytest.raises(UsageError, match=r"StateChanges\.update takes one decoded message"):
+        StateChanges().describe(pair)
+    assert describe_message(pair[1]) is not None

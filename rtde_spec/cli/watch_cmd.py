@@ -124,7 +124,7 @@ def run(args: argparse.Namespace) -> int:
             if script is not None:
                 client.send_script(script)
                 print(f"sent {len(script.splitlines())} line(s) of URScript", file=sys.stderr)
-            for _, message in client:
+            for message in client:
                 now = datetime.datetime.now()
                 if live is not None:
                     live.publish_row(as_json(message), protocol="primary")
@@ -274,7 +274,7 @@ class LiveView:
         live = self.live
         assert live is not None
         try:
-            for _, message in client:
+            for message in client:
                 if self._stop.is_set():
                     break
                 live.publish_row(as_json(message), protocol="primary")

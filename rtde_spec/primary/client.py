@@ -1,5 +1,9 @@
 """A client of the primary/secondary ports: decoded messages in, URScript out where allowed.
 
+Iterating a client yields decoded messages, as the README shows; a message's byte
+offset in the socket stream is rarely of use, so it comes only on request:
+`client.messages(with_offsets=True)` yields `(offset, message)` pairs, and
+`client.last_offset` holds the offset of the message yielded last.
 Ports 30011/30012 are read-only: sending URScript there is refused here with a
 clear error, instead of the controller silently ignoring it.
 """
@@ -8,6 +12,7 @@ from __future__ import annotations
 
 import socket
 from collections.abc import Iterator
+from typing import Literal, overload
 
 from rtde_spec._generated.constants import PRIMARY_PORTS
 from rtde_spec.errors import DecodeError, RtdeConnectionError, UsageError
@@ -17,13 +22,14 @@ READ_ONLY_PORTS = {port for name, port in PRIMARY_PORTS.items() if name.endswith
 
 
 class PrimaryClient:
-    """`with PrimaryClient(host, 30002) as c: for offset, message in c: ...`"""
+    """`with PrimaryClient(host, 30002) as c: for message in c: ...` (decoded messages)."""
 
     def __init__(self, host: str, port: int = PRIMARY_PORTS["secondary"], *, timeout: float = 5.0) -> None:
         self.host, self.port, self.timeout = host, port, timeout
         self.decoder = PrimaryStreamDecoder()
         self._sock: socket.socket | None = None
         self.read_only = port in READ_ONLY_PORTS
+        self.last_offset: int | None = None  # stream offset of the message yielded last
 
     @property
     def where(self) -> str:
@@ -36,9 +42,24 @@ class PrimaryClient:
             raise RtdeConnectionError(f"cannot connect: {exc.strerror or exc}", subject=self.where) from None
         return self
 
-    def messages(self) -> Iterator[tuple[int, PrimaryMessage]]:
+    @overload
+    def messages(self, with_offsets: Literal[False] = False) -> Iterator[PrimaryMessage]: ...
+    @overload
+    def messages(self, with_offsets: Literal[True]) -> Iterator[tuple[int, PrimaryMessage]]: ...
+
+    def messages(
+        self, with_offsets: bool = False
+    ) -> Iterator[PrimaryMessage] | Iterator[tuple[int, PrimaryMessage]]:
         """Decoded messages as they arrive, until the controller closes the connection (a close
-        inside a message raises DecodeError saying how much of it came)."""
+        inside a message raises DecodeError saying how much of it came). With `with_offsets`,
+        `(offset, message)` pairs: the offset counts bytes of the stream since connecting."""
+        pairs = self._pairs()
+        return pairs if with_offsets else (message for _, message in pairs)
+
+    def __iter__(self) -> Iterator[PrimaryMessage]:
+        return self.messages()
+
+    def _pairs(self) -> Iterator[tuple[int, PrimaryMessage]]:
         if self._sock is None:
             self.connect()
         assert self._sock is not None
@@ -53,7 +74,9 @@ class PrimaryClient:
             if not chunk:
                 self._raise_if_cut("the controller closed the connection")
                 return
-            yield from self.decoder.feed(chunk)
+            for offset, message in self.decoder.feed(chunk):
+                self.last_offset = offset
+                yield offset, message
 
     def _raise_if_cut(self, cause: str) -> None:
         """A DecodeError if the connection ended inside a message: its bytes are lost, not dropped
@@ -72,8 +95,6 @@ class PrimaryClient:
                 expected=exc.expected,
                 actual=exc.actual,
             ) from None
-
-    __iter__ = messages
 
     def send_script(self, script: str) -> None:
         """Send URScript (a program or one line); refused on the read-only ports."""

@@ -4,14 +4,19 @@ robot message, and the robot's modes only when they change (Robot State comes at
 Used by `rtde-spec watch`; usable on its own on any decoded message:
 
     changes = StateChanges()
-    for _, message in client:
+    for message in client:                     # a PrimaryClient yields decoded messages
         print(describe_message(message) or changes.describe(message) or "", end="")
+
+Both take one message; an `(offset, message)` pair (what `PrimaryStreamDecoder.feed`
+and `PrimaryClient.messages(with_offsets=True)` yield) is refused with a UsageError
+saying to unpack it, instead of being printed as a tuple.
 """
 
 from __future__ import annotations
 
 from typing import Any
 
+from rtde_spec.errors import UsageError
 from rtde_spec.output.describe import describe, enum_name
 from rtde_spec.output.text import safe_text
 from rtde_spec.primary.base import OpaqueMessage, PrimaryModel, PrimaryPart, RobotStateMessage
@@ -38,6 +43,7 @@ class StateChanges:
 
     def update(self, message: Any) -> dict[str, str]:
         """label -> described new value, for every watched field that changed (all, the first time)."""
+        _refuse_pair(message, "StateChanges.update")
         if not isinstance(message, RobotStateMessage):
             return {}
         changed: dict[str, str] = {}
@@ -66,12 +72,14 @@ def code(part: PrimaryPart) -> str:
 
 def describe_message(message: Any) -> str | None:
     """One line for a message that is not Robot State (None for Robot State); wire text escaped."""
+    _refuse_pair(message, "describe_message")
     parts = message_parts(message)
     return None if parts is None else f"{parts[0]}  {parts[1]}"
 
 
 def message_parts(message: Any) -> tuple[str, str] | None:
     """(kind, text) of a message that is not Robot State, e.g. ("key", "C1A2 Title: ...")."""
+    _refuse_pair(message, "message_parts")
     if isinstance(message, RobotStateMessage):
         return None
     name = getattr(message, "NAME", type(message).__name__)
@@ -98,6 +106,18 @@ def message_parts(message: Any) -> tuple[str, str] | None:
     else:
         text = _fields(message)
     return name.removesuffix("_message"), safe_text(text).replace("\n", "\\n")
+
+
+def _refuse_pair(value: Any, where: str) -> None:
+    """A UsageError for an (offset, message) pair given where one message belongs."""
+    if isinstance(value, tuple) and not isinstance(value, PrimaryModel):
+        kinds = ", ".join(type(v).__name__ for v in value[:3])
+        raise UsageError(
+            f"{where} takes one decoded message, not a tuple ({kinds}): unpack the "
+            "(offset, message) pairs of PrimaryStreamDecoder.feed or "
+            "PrimaryClient.messages(with_offsets=True), e.g. `for offset, message in ...`, "
+            "or iterate the PrimaryClient itself, which yields messages"
+        )
 
 
 def _enum(part: Any, field: str) -> str:

@@ -137,6 +137,8 @@ class RecipeCodec:
     # --- decoding -----------------------------------------------------------
 
     def _check(self, payload: bytes | bytearray | memoryview, offset: int) -> None:
+        """A payload of the wrong length: the error's offset counts from the start of the bytes
+        given (the payload starts at `offset`), so it is always inside them or at their end."""
         got = len(payload) - offset
         if got == self.size:
             return
@@ -148,7 +150,7 @@ class RecipeCodec:
             else "data package payload is longer than its recipe",
             package="data_package",
             field=where.name if where else None,
-            offset=PAYLOAD_OFFSET + (where.offset if where else self.size),
+            offset=min(offset + (where.offset if where else self.size), len(payload)),
             expected=f"{self.size} payload bytes",
             actual=f"{got} payload bytes",
         )
