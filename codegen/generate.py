@@ -21,6 +21,7 @@ from .emit_external import emit_external
 from .emit_lua import emit_lua
 from .emit_primary import emit_primary_models, emit_primary_structs
 from .emit_primary_docs import emit_primary_doc
+from .emit_realtime import emit_realtime
 from .emit_rtde import emit_rtde_models, emit_rtde_structs
 from .emit_types import emit_types
 from .render import PY_HEADER
@@ -50,5 +51,6 @@ def generate(spec: Spec) -> dict[str, str]:
         "docs/reference/rtde-types.md": emit_types_doc(spec, catalogue),
         **emit_arms(),
         **emit_dashboard(),
+        **emit_realtime(catalogue),
         **emit_external({p.name: p for p in spec.primitives.primitives}),
     }

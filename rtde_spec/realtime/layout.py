@@ -1,0 +1,155 @@
+"""The real-time message's layout for one controller version: compiled once, from the spec.
+
+Codegen compiled every version's field list to one struct format (`_generated/realtime.py`);
+here a version (or, with none, a message size) picks its plan. Decoding a message is
+one `struct.Struct.unpack_from` and a regrouping of the flat doubles into the fields.
+"""
+
+from __future__ import annotations
+
+import math
+import struct
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from functools import cache
+from typing import Any
+
+from rtde_spec._generated.constants import PRODUCT_LINES
+from rtde_spec._generated.realtime import LAYOUTS, REALTIME_MAX_MESSAGE_BYTES
+from rtde_spec.errors import DecodeError, EncodeError, UsageError
+from rtde_spec.spec.versions import Version
+
+HEADER = struct.Struct(">i")
+PACKAGE = "realtime message"
+
+
+@dataclass(frozen=True)
+class RealtimeLayout:
+    """The fields one controller version sends on port 30003, in order, and their struct plan."""
+
+    line: str
+    first: str  # the first version of its product line with exactly these fields
+    size: int  # bytes of the whole message, size field included
+    names: tuple[str, ...]
+    counts: tuple[int, ...]
+    integers: frozenset[str]
+    plan: struct.Struct = field(repr=False, compare=False)
+
+    def offset(self, name: str) -> int:
+        """Byte offset of a field in the message (the size field is at 0)."""
+        at = HEADER.size
+        for n, count in zip(self.names, self.counts, strict=True):
+            if n == name:
+                return at
+            at += 8 * count
+        raise KeyError(name)
+
+    def decode(self, data: bytes | bytearray | memoryview, at: int = 0) -> dict[str, Any]:
+        """The fields of the message starting at byte `at` (its size already checked)."""
+        flat = self.plan.unpack_from(data, at)
+        out: dict[str, Any] = {"message_size": flat[0]}
+        i = 1
+        integers = self.integers
+        for name, count in zip(self.names, self.counts, strict=True):
+            if count == 1:
+                value: Any = flat[i]
+                if name in integers:
+                    value = _whole(value, name, self, at)
+            else:
+                value = flat[i : i + count]
+                if name in integers:
+                    value = tuple(_whole(v, name, self, at) for v in value)
+            out[name] = value
+            i += count
+        return out
+
+    def encode(self, values: Mapping[str, Any]) -> bytes:
+        """One message of this layout; a field not given is sent as zeros."""
+        flat: list[float] = [float(self.size)]
+        try:
+            for name, count in zip(self.names, self.counts, strict=True):
+                value = values.get(name)
+                if value is None:
+                    flat.extend((0.0,) * count)
+                elif count == 1:
+                    flat.append(float(value))
+                else:
+                    items = [float(v) for v in value]
+                    if len(items) != count:
+                        raise EncodeError(
+                            "wrong number of values", package=PACKAGE, field=name, expected=count,
+                            actual=len(items),
+                        )  # fmt: skip
+                    flat.extend(items)
+            return self.plan.pack(int(flat[0]), *flat[1:])
+        except (TypeError, ValueError, struct.error) as exc:
+            if isinstance(exc, EncodeError):
+                raise
+            raise EncodeError(f"cannot encode: {exc}", package=PACKAGE) from None
+
+
+def _whole(value: float, name: str, layout: RealtimeLayout, at: int) -> int:
+    """A mode or bit field carried in a double, as the int it is."""
+    if not math.isfinite(value) or value != int(value):
+        raise DecodeError(
+            "not a whole number", package=PACKAGE, field=name, offset=at + layout.offset(name),
+            expected="a whole number in a double", actual=value,
+        )  # fmt: skip
+    return int(value)
+
+
+def _line_of(version: Version) -> str:
+    for line, majors in PRODUCT_LINES.items():
+        if version.major in majors:
+            return line
+    raise UsageError(f"controller version {version} belongs to no product line", subject="controller version")
+
+
+@cache
+def _all() -> tuple[RealtimeLayout, ...]:
+    return tuple(
+        RealtimeLayout(line, first, size, names, counts, frozenset(integers), struct.Struct(fmt))
+        for line, first, size, fmt, names, counts, integers in LAYOUTS
+    )
+
+
+@cache
+def layout_for(version: str | Version) -> RealtimeLayout:
+    """The layout a controller of `version` sends (UsageError for a version of no product line)."""
+    try:
+        parsed = Version.parse(version)
+    except ValueError as exc:
+        raise UsageError(str(exc), subject="controller version") from None
+    line = _line_of(parsed)
+    found = [p for p in _all() if p.line == line and Version.parse(p.first) <= parsed]
+    if not found:
+        first = min((p.first for p in _all() if p.line == line), key=Version.parse)
+        raise UsageError(
+            f"version {parsed} is older than {first}, the spec's first real-time layout of {line}"
+        )
+    return found[-1]
+
+
+def layout_for_size(size: int) -> RealtimeLayout | None:
+    """With no version known: the layout whose message is exactly `size` bytes, if one is."""
+    for plan in _all():
+        if plan.size == size:
+            return plan  # equal sizes on two lines carry the same fields (the spec only appends)
+    return None
+
+
+def known_sizes() -> tuple[int, ...]:
+    return tuple(sorted({p.size for p in _all()}))
+
+
+def check_size(size: int, available: int | None = None, at: int = 0) -> None:
+    """Refuse a size field no real-time message can have, before anything is buffered."""
+    if size < HEADER.size + 8 or size > REALTIME_MAX_MESSAGE_BYTES:
+        raise DecodeError(
+            "impossible message size", package=PACKAGE, field="message_size", offset=at,
+            expected=f"12..{REALTIME_MAX_MESSAGE_BYTES}", actual=size,
+        )  # fmt: skip
+    if available is not None and available < size:
+        raise DecodeError(
+            "message cut short", package=PACKAGE, offset=at, expected=f"{size} bytes", actual=available
+        )
