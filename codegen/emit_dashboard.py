@@ -41,6 +41,7 @@ def _markdown(table: DashboardFile) -> str:
         f"line. A client is greeted with `{table.greeting}`; a command the version does not have\n",
         f"gets `{table.unknown}`. Product lines: {', '.join(table.product_lines)}. ",
         f"Source: {table.doc_ref}.\n\n",
+        *(f"Replaced on {line}: {text}\n\n" for line, text in table.replaced_by.items()),
     ]
     rows = []
     for c in table.commands:

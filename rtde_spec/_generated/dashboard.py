@@ -6,6 +6,9 @@ from typing import Any
 DASHBOARD: dict[str, Any] = {'doc_ref': 'Dashboard Server e-Series, port 29999',
  'port': 29999,
  'product_lines': ['cb3', 'e-series'],
+ 'replaced_by': {'polyscope-x': 'PolyScope X has no dashboard server on 29999: its Robot API (REST '
+                                'over HTTP, the "robotapi" of PolyScope X 10.x) powers the arm, '
+                                'releases brakes and loads and runs programs instead'},
  'greeting': 'Connected: Universal Robots Dashboard Server',
  'unknown': "could not understand: '{line}'",
  'max_line_bytes': 4096,

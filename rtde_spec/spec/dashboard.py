@@ -52,6 +52,7 @@ class DashboardFile(StrictModel):
     doc_ref: str
     port: Annotated[int, Field(ge=1, le=65535)]
     product_lines: list[str]
+    replaced_by: dict[str, str] = Field(default_factory=dict)  # product line -> what it has instead
     greeting: str
     unknown: str
     max_line_bytes: Annotated[int, Field(ge=64)]
@@ -76,6 +77,15 @@ class DashboardFile(StrictModel):
             raise ValueError("the unknown reply may name only {line}")
         return self
 
+    def outcome(self, command: DashboardCommand | None, reply: str) -> str | None:
+        """Which of the command's replies `reply` is (ok, failed, not_found), "unknown" for the
+        reply to a command the server does not know, None when no pattern matches."""
+        if command is not None:
+            for outcome, text in command.replies.items():
+                if _pattern(text).fullmatch(reply):
+                    return outcome
+        return "unknown" if _pattern(self.unknown).fullmatch(reply) else None
+
     def find(self, line: str) -> tuple[DashboardCommand, str] | None:
         """The command a line is (longest command text first) and its argument."""
         for c in sorted(self.commands, key=lambda c: -len(c.command)):
@@ -84,6 +94,16 @@ class DashboardFile(StrictModel):
             if c.argument and line.startswith(c.command + " "):
                 return c, line[len(c.command) + 1 :].strip()
         return None
+
+
+@cache
+def _pattern(text: str) -> re.Pattern[str]:
+    """A reply text as a regular expression: its {placeholders} match any text."""
+    parts = [
+        re.escape(lit) + ("(.*)" if name is not None else "")
+        for lit, name, _, _ in string.Formatter().parse(text)
+    ]
+    return re.compile("".join(parts), re.S)
 
 
 def _placeholders(text: str) -> set[str]:
