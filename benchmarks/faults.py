@@ -1,0 +1,129 @@
+"""What the tools keep when things go wrong (issue "Nothing lost, nothing stalls"), in figures.
+
+- captures: rows kept after N TCP gaps, against the packages that were decodable;
+  foreign exceptions (not the library's own) in a fuzz of mutated captures;
+- recording: rows kept after SIGTERM, SIGHUP and SIGKILL of `rtde-spec record`,
+  against the rows the emulator sent before the signal;
+- hostile bytes: peak RSS and time of the bomb inputs (`faults_bombs.py`);
+- the emulator: packages missed by 4 well-behaved clients at 500 Hz beside hostile
+  ones, and the server's memory growth (the test in tests/faults/, its report).
+
+    python3 benchmarks/faults.py [--fuzz-cases 500] [--skip-emulator] [--json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import json
+import signal
+import subprocess
+import sys
+import tempfile
+from pathlib import Path
+from typing import Any
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
+
+
+def capture_figures(cases: int) -> dict[str, Any]:
+    from faults_capture import foreign_exceptions, rows_kept
+
+    return {"gaps": rows_kept(), "fuzz": foreign_exceptions(cases)}
+
+
+def bomb_figures() -> Any:
+    out = subprocess.run(
+        [sys.executable, str(ROOT / "benchmarks" / "faults_bombs.py"), "--json"],
+        capture_output=True, text=True, timeout=900, check=True,
+    )  # fmt: skip
+    return json.loads(out.stdout)
+
+
+def record_figures(seconds: float) -> list[dict[str, Any]]:
+    """Each way a recording ends: rows in the file(s) against rows sent before the signal."""
+    import pyarrow.parquet as pq
+
+    from tests.faults.record_run import HZ, SIGHUP, csv_rows, emulator, parts, record_then_signal, steps
+
+    cases = [
+        ("SIGTERM", signal.SIGTERM, "run.parquet", ()),
+        ("SIGHUP", SIGHUP, "run.parquet", ()),
+        ("SIGKILL, CSV", signal.SIGKILL, "run.csv", ()),
+        ("SIGKILL, Parquet --split 1s", signal.SIGKILL, "run.parquet", ("--split", "1s")),
+    ]
+    out = []
+    for emu in emulator():
+        for name, sig, file, extra in cases:
+            with tempfile.TemporaryDirectory() as tmp:
+                folder = Path(tmp)
+                target = folder / file
+                result, sent_until = record_then_signal(emu, target, sig, seconds, *extra)
+                if file.endswith(".csv"):
+                    stamps = [float(r[0]) for r in csv_rows(target)] if target.exists() else []
+                else:
+                    files = parts(folder, "run", ".parquet") if extra else [target]
+                    stamps = []
+                    for f in files:
+                        if f.exists():
+                            stamps += pq.read_table(f, columns=["timestamp"]).column(0).to_pylist()
+                if not stamps:
+                    out.append({"case": name, "exit": result.returncode, "rows kept": 0})
+                    continue
+                stamps.sort()
+                sent = round((sent_until - stamps[0]) * HZ) + 1  # from the recording's first row
+                out.append(
+                    {"case": name, "exit": result.returncode, "rows kept": len(stamps),
+                     "rows sent until the signal": sent, "gap-free": steps(stamps) <= {1},
+                     "seconds lost before the signal": round(max(0.0, sent_until - stamps[-1]), 3)}
+                )  # fmt: skip
+    return out
+
+
+def emulator_figures() -> str:
+    from tests.faults import test_emulator_hostile
+
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        test_emulator_hostile.test_well_behaved_clients_miss_nothing_beside_hostile_ones_and_memory_stays_bounded()
+    return printed.getvalue().strip()
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--fuzz-cases", type=int, default=500, help="mutated captures (500)")
+    parser.add_argument("--record-seconds", type=float, default=3.0, help="recording before a signal (3)")
+    parser.add_argument("--skip-emulator", action="store_true", help="leave out the 10 s emulator run")
+    parser.add_argument("--json", action="store_true", help="print JSON")
+    args = parser.parse_args()
+    figures: dict[str, Any] = {
+        "capture": capture_figures(args.fuzz_cases),
+        "record": record_figures(args.record_seconds),
+        "bombs": bomb_figures(),
+    }
+    if not args.skip_emulator:
+        figures["emulator"] = emulator_figures()
+    if args.json:
+        print(json.dumps(figures, indent=2, default=str))
+        return 0
+    print("captures: rows kept after gaps")
+    for row in figures["capture"]["gaps"]:
+        print(f"  {row['case']:58} {row['kept']:>6} of {row['decodable']:>6} decodable, {row['gaps']} gaps")
+    fuzz = figures["capture"]["fuzz"]
+    print(f"  capture fuzz: {fuzz['foreign']} foreign exceptions in {fuzz['cases']} mutated captures")
+    print("recording: what a signal leaves")
+    for row in figures["record"]:
+        print("  " + ", ".join(f"{k} {v}" for k, v in row.items()))
+    print("hostile bytes (peak RSS, time, outcome)")
+    bombs = figures["bombs"]
+    for row in bombs if isinstance(bombs, list) else bombs.get("results", [bombs]):
+        print(f"  {row}")
+    if "emulator" in figures:
+        print(f"emulator beside hostile clients: {figures['emulator']}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
