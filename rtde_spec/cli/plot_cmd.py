@@ -34,7 +34,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("-o", "--output", required=True, metavar="PNG", help="image to write (required)")
     p.add_argument("--time", help="time column (default: timestamp, else capture_time)")
-    p.add_argument("--table", dest="table_name", metavar="NAME", help="table of a capture output folder")
+    p.add_argument(
+        "--table",
+        dest="table_name",
+        metavar="NAME",
+        help="table of a capture output folder (default: the one holding the fields)",
+    )
     p.add_argument("--robot", help="only this robot of a dataset of several (default: one line each)")
     p.set_defaults(run=run)
 

@@ -17,7 +17,6 @@ import collections
 import logging
 import socket
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
 from typing import Any
 
 from rtde_spec._generated import rtde_models as gen
@@ -32,6 +31,7 @@ from rtde_spec.errors import DecodeError, ProtocolError, RecipeError, RtdeConnec
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
 from rtde_spec.recipes.encoding import PREFIX
 from rtde_spec.recipes.model import Recipe
+from rtde_spec.rtde.client_events import DataRun, Event, InputRecipe, Reply, Request, Text
 from rtde_spec.rtde.codec import decode, message_by_name, observe
 from rtde_spec.rtde.messages import RtdeMessage
 from rtde_spec.rtde.protocol_state import ProtocolState
@@ -42,66 +42,6 @@ from rtde_spec.wire.framing import PackageFramer
 INVALID_ID = RTDE_LIMITS["invalid_recipe_id"]
 UNSOLICITED_LOGGED = 10  # unsolicited replies logged one by one; after that only counted
 log = logging.getLogger("rtde_spec.client")
-
-
-@dataclass(frozen=True)
-class InputRecipe:
-    """An accepted input recipe: send values for its names with `recipe_id`."""
-
-    recipe_id: int
-    names: tuple[str, ...]
-    codec: RecipeCodec
-
-
-@dataclass(eq=False)
-class Request:
-    """A request sent and waiting for its reply, which carries the same package type."""
-
-    name: str  # the request's spec name, e.g. "setup_outputs_v2"
-    package_type: int
-    message: RtdeMessage
-    setup: tuple[str, tuple[str, ...]] | None = None  # (direction, names) of a setup request
-    others: list[str] = field(default_factory=list)  # replies of other types that came meanwhile
-
-
-@dataclass(frozen=True)
-class Reply:
-    """The controller's answer to a request (version, setup, start, pause); `error` if refused."""
-
-    message: RtdeMessage
-    error: RtdeSpecError | None = None
-    request: Request | None = None  # the request it answers
-
-
-@dataclass(frozen=True)
-class DataRun:
-    """Data packages of the output recipe that came back to back (one or more), as records
-    (an empty list when the core was told no one wants them: `ClientProtocol.want_records`)."""
-
-    records: list[Any]
-    raw: bytes | memoryview  # the packages, back to back
-    size: int  # bytes per package
-
-    @property
-    def count(self) -> int:
-        return len(self.raw) // self.size
-
-    def packages(self) -> list[bytes]:
-        """Each package's bytes."""
-        raw, size = self.raw, self.size
-        return [bytes(raw[at : at + size]) for at in range(0, len(raw), size)]
-
-
-@dataclass(frozen=True)
-class Text:
-    """A text message from the controller."""
-
-    level: int
-    message: str
-    source: str
-
-
-Event = Reply | DataRun | Text
 
 
 class ClientProtocol:
