@@ -418,9 +418,9 @@ def test_several_clients_at_once(emu: EmulatorThread) -> None:
 def test_primary_and_secondary_ports_agree_with_rtde(emu: EmulatorThread) -> None:
     with PrimaryClient("127.0.0.1", emu.ports["secondary"], timeout=2) as client:
         messages = client.messages()
-        _, version = next(messages)
+        version = next(messages)
         assert str(client.decoder.version) == "5.15.0" and version.NAME == "version_message"
-        _, state = next(messages)
+        state = next(messages)
         assert isinstance(state, RobotStateMessage)
         assert [j.q_actual for j in state["joint_data"].joints] == [0.1, 0.2, 0.3, 0.4, 0.5, 0.6]
         assert isinstance(state["robot_mode_data"], PrimaryPart) and state["robot_mode_data"].robot_mode == 7
