@@ -65,7 +65,7 @@ def rtde_values(emu: EmulatorThread, names: list[str]) -> tuple[object, ...]:
 
 def primary_state(emu: EmulatorThread) -> RobotStateMessage:
     with PrimaryClient("127.0.0.1", emu.ports["secondary"], timeout=3) as client:
-        return next(m for _, m in client if isinstance(m, RobotStateMessage))
+        return next(m for m in client if isinstance(m, RobotStateMessage))
 
 
 def test_greeting_power_and_brakes_show_on_rtde_and_primary(emu: EmulatorThread) -> None:

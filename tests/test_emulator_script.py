@@ -68,7 +68,7 @@ def test_a_script_on_the_primary_port_shows_on_rtde_and_not_from_a_read_only_por
         assert record.actual_digital_output_bits == 1 << 2  # not bit 5: read-only ports ignore scripts
         assert record.standard_analog_output0 == 0.5
         with PrimaryClient("127.0.0.1", emu.ports["secondary"], timeout=2) as client:
-            state = next(m for _, m in client if m.NAME == "robot_state")
+            state = next(m for m in client if m.NAME == "robot_state")
         board = state["masterboard_data"]
         assert board.digital_output_bits == 1 << 2 and board.analog_output0 == 0.5 and board.safety_mode == 1
     finally:

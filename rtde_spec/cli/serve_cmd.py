@@ -1,4 +1,4 @@
-"""rtde-spec serve: a controller emulator on loopback (RTDE, primary and secondary ports, dashboard)."""
+"""rtde-spec serve: a controller emulator on loopback (RTDE, primary, secondary, real-time, dashboard)."""
 
 from __future__ import annotations
 
@@ -7,12 +7,14 @@ import argparse
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.cli.common import controller_version
 from rtde_spec.cli.watch_cmd import add_live_arguments
+from rtde_spec.realtime import REALTIME_PORTS
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "serve",
-        help="run a controller emulator (RTDE, primary, secondary, dashboard) for tests without a robot",
+        help="run a controller emulator (RTDE, primary, secondary, real-time, dashboard) for tests "
+        "without a robot",
         description="Emulate a controller from the spec. Binds to 127.0.0.1 unless told otherwise; "
         "port 0 picks a free port; the ports are printed when listening. Ctrl-C stops it.",
     )
@@ -28,6 +30,20 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
             default=None,
             help=f"read-only {name} port, e.g. {ro} (default: not served)",
         )
+    rt, rt_ro = REALTIME_PORTS["realtime"], REALTIME_PORTS["realtime_read_only"]
+    p.add_argument(
+        "--realtime-port",
+        type=int,
+        default=None,
+        help=f"real-time port: the state at the control rate, URScript accepted (default: {rt} "
+        "when free; -1: not served)",
+    )
+    p.add_argument(
+        "--realtime-read-only-port",
+        type=int,
+        default=None,
+        help=f"read-only real-time port, e.g. {rt_ro} (default: not served)",
+    )
     p.add_argument(
         "--dashboard-port",
         type=int,
@@ -91,6 +107,9 @@ def run(args: argparse.Namespace) -> int:
         dashboard_port=_dashboard_port(args.dashboard_port, dashboard_spec().port),
         dashboard_optional=args.dashboard_port is None,  # the default port may be taken: then none
         programs=Path(args.programs) if args.programs else None,
+        realtime_port=_dashboard_port(args.realtime_port, REALTIME_PORTS["realtime"]),
+        realtime_read_only_port=args.realtime_read_only_port,
+        realtime_optional=args.realtime_port is None,  # the default port may be taken: then none
     )
     if args.max_clients is not None:
         config.limits = ClientLimits(max_clients=max(1, args.max_clients))
@@ -122,6 +141,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _dashboard_port(given: int | None, default: int) -> int | None:
+    """The port given, the default when none was, None when told -1 (not served)."""
     if given is None:
         return default
     return None if given < 0 else given

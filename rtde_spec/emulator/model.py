@@ -73,6 +73,13 @@ def _zero(info: FieldInfo) -> Any:
     return one if info.wire.count == 1 else (one,) * info.wire.count
 
 
+# the robot's own state, held whatever outputs the version's RTDE has (CB3 before 3.3 has no RTDE,
+# yet its primary and real-time ports show joints, pose and modes)
+STATE = (
+    "robot_mode", "safety_mode", "runtime_state", "joint_mode", "speed_scaling", "target_speed_fraction",
+    "actual_q", "target_q", "actual_qd", "target_qd", "target_qdd",
+    "actual_TCP_pose", "target_TCP_pose", "actual_TCP_speed", "target_TCP_speed",
+)  # fmt: skip
 MAX_EVENTS = 1000  # messages kept for the servers to send; the oldest go first
 NOT_READY = "The robot is not ready: power it on, release the brakes and clear any safety stop"
 SECONDARY_STEPS = 10_000  # a `sec` program runs at once; this bounds it
@@ -95,6 +102,8 @@ class ControllerModel(RobotModes):
         self.outputs = {i.name: i for i in self.catalogue.fields("output", self.version)}
         self.inputs = {i.name: i for i in self.catalogue.fields("input", self.version)}
         self.values: dict[str, Any] = {n: DEFAULTS.get(n, _zero(i)) for n, i in self.outputs.items()}
+        for name in STATE:
+            self.values.setdefault(name, DEFAULTS.get(name, (0.0,) * 6))
         self.functions = dict(functions or {})
         self.arm = Arm(arm_model(model), HOME_Q)
         self.program: Program | None = None

@@ -1,5 +1,5 @@
-"""Run the emulated controller: the RTDE port, the primary/secondary ports, the dashboard server
-and the control loop.
+"""Run the emulated controller: the RTDE port, the primary/secondary ports, the real-time
+ports, the dashboard server and the control loop.
 
 The control loop keeps real time: each step is due at start + step / base rate
 (125 Hz for CB3 versions, 500 Hz for newer); it sleeps to just before the due
@@ -23,6 +23,7 @@ from rtde_spec.emulator.faults import FaultSchedule
 from rtde_spec.emulator.guard import ClientLimits, Port
 from rtde_spec.emulator.model import ControllerModel
 from rtde_spec.emulator.primary_server import PrimaryConnection, PrimaryHub
+from rtde_spec.emulator.realtime_server import RealtimeConnection, RealtimeHub
 from rtde_spec.emulator.rtde_server import RtdeConnection, RtdeHub
 from rtde_spec.emulator.scenario import Scenario
 from rtde_spec.spec.catalogue import Catalogue
@@ -46,6 +47,10 @@ class EmulatorConfig:
     # the dashboard server (29999 on a controller) is off unless given, so parallel tests never collide
     dashboard_port: int | None = None
     dashboard_optional: bool = False  # a dashboard port in use is logged and skipped, not an error
+    # the real-time ports (30003/30013 on a controller): off unless given, as the dashboard
+    realtime_port: int | None = None
+    realtime_read_only_port: int | None = None
+    realtime_optional: bool = False  # a real-time port in use is logged and skipped, not an error
     programs: Path | None = None  # where the dashboard's `load` finds programs (none: "File not found")
     limits: ClientLimits = field(default_factory=ClientLimits)  # what one client may cost, per port
     # after falling this far behind (s, a stalled machine) the loop skips steps rather than
@@ -63,6 +68,7 @@ class Emulator:
         self.rtde = RtdeHub(self.model)
         self.primary = PrimaryHub(self.model)
         self.dashboard = DashboardHub(self.model, self.config.programs)
+        self.realtime = RealtimeHub(self.model, self.primary)
         self.faults = FaultSchedule(self.config.scenario.faults, self.model)
         self._silenced = False
         self.servers: list[asyncio.AbstractServer] = []
@@ -85,6 +91,12 @@ class Emulator:
         ):
             if port is not None:
                 await self._listen(name, port, self._primary_factory(name, read_only))
+        for name, port, read_only in (
+            ("realtime", c.realtime_port, False),
+            ("realtime_read_only", c.realtime_read_only_port, True),
+        ):
+            if port is not None:
+                await self._optional(name, port, self._realtime_factory(name, read_only), c.realtime_optional)
         if c.dashboard_port is not None:
             if self.dashboard.available:
                 clients = self._port("dashboard")
@@ -103,6 +115,20 @@ class Emulator:
     def _port(self, name: str) -> Port:
         self.clients[name] = Port(name, self.config.limits)
         return self.clients[name]
+
+    async def _optional(self, name: str, port: int, factory, optional: bool) -> None:  # type: ignore[no-untyped-def]
+        """Listen; a port in use is an error, or (optional) one log line and no such server."""
+        try:
+            await self._listen(name, port, factory)
+        except OSError as exc:
+            if not optional:
+                raise
+            self.clients.pop(name, None)
+            log.warning("no %s server: port %d: %s", name, port, exc.strerror)
+
+    def _realtime_factory(self, name: str, read_only: bool):  # type: ignore[no-untyped-def]
+        port = self._port(name)
+        return lambda: RealtimeConnection(self.realtime, port, self.ports[name], read_only)
 
     def _primary_factory(self, name: str, read_only: bool):  # type: ignore[no-untyped-def]
         port = self._port(name)
@@ -138,6 +164,7 @@ class Emulator:
             if self._network(self.faults.silent(self.model.time)):
                 continue  # a network drop: nothing goes out
             self.rtde.send_outputs(step)
+            self.realtime.send()
             if step % state_every == 0:
                 self.primary.broadcast_state()
                 now = time.monotonic()

@@ -1,0 +1,83 @@
+"""The emulator's real-time ports (30003, read-only 30013): one message per control step.
+
+The message is the controller version's layout from the spec (rtde_spec.realtime), its
+fields filled from the RTDE outputs the spec names as carrying the same quantity, so
+the three interfaces show one robot. Built once per step and only while a client is
+connected. What a client sends on 30003 is URScript, cut and run as on the primary
+ports (script_framer.py); the read-only port drops it. Clients keep guard.py's limits.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import TYPE_CHECKING, Any
+
+from rtde_spec._generated.realtime import REALTIME
+from rtde_spec.emulator.guard import GuardedConnection, Port
+from rtde_spec.emulator.script_framer import ScriptFramer
+from rtde_spec.errors import ProtocolError
+from rtde_spec.realtime import layout_for
+
+if TYPE_CHECKING:
+    from rtde_spec.emulator.model import ControllerModel
+    from rtde_spec.emulator.primary_server import PrimaryHub
+
+log = logging.getLogger("rtde_spec.emulator")
+
+
+class RealtimeHub:
+    """Connections of the real-time ports and the message each control step sends them."""
+
+    def __init__(self, model: ControllerModel, primary: PrimaryHub) -> None:
+        self.model, self.primary = model, primary
+        self.layout = layout_for(model.version)
+        sources = {f["name"]: f.get("rtde") for f in REALTIME["fields"]}
+        self.sources = [(name, sources.get(name)) for name in self.layout.names]
+        self.connections: set[RealtimeConnection] = set()
+        self.sent = 0
+
+    def values(self) -> dict[str, Any]:
+        """The message's fields by name, from the model's outputs (what is missing stays zero)."""
+        values = self.model.values
+        out = {name: values.get(source) for name, source in self.sources if source is not None}
+        out["time"] = self.model.time  # the timestamp output is not on every version (CB3 < 3.3)
+        return out
+
+    def message(self) -> bytes:
+        return self.layout.encode(self.values())
+
+    def send(self) -> None:
+        """Every control step: the message to each client (built only when one is connected)."""
+        if not self.connections:
+            return
+        data = self.message()
+        for conn in list(self.connections):
+            conn.write(data)
+        self.sent += 1
+
+
+class RealtimeConnection(GuardedConnection):
+    """One client of a real-time port: the stream of messages; on 30003 its scripts run."""
+
+    def __init__(self, hub: RealtimeHub, port: Port, number: int, read_only: bool) -> None:
+        super().__init__(port)
+        self.hub, self.number, self.read_only = hub, number, read_only
+        self.framer = ScriptFramer()
+
+    def opened(self) -> None:
+        self.hub.connections.add(self)
+
+    def closed(self) -> None:
+        self.hub.connections.discard(self)
+
+    def data_received(self, data: bytes) -> None:
+        if self.read_only or self.dropped:
+            return  # the read-only port ignores what clients send
+        try:
+            scripts = self.framer.feed(data)
+        except ProtocolError as exc:
+            self.drop(f"sent {exc}")
+            return
+        if self.received(self.framer.pending, len(scripts)):
+            for text in scripts:
+                self.hub.primary.run(self.number, text)
