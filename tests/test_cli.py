@@ -31,15 +31,35 @@ def test_decode_protocol_version_reply() -> None:
 
 def test_decode_json_keys_are_spec_field_names() -> None:
     result = cli("decode", "00045601", "--from", "controller", "--json")
-    assert json.loads(result.stdout)["accepted"] is True
+    assert json.loads(result.stdout)[0]["accepted"] is True
     result = cli("decode", "0013 76 00000005 0000000c 00000002 00002a3b", "--json")
-    record = json.loads(result.stdout)
+    (record,) = json.loads(result.stdout)
     assert (record["major"], record["minor"], record["bugfix"], record["build"]) == (
         5,
         12,
         2,
         10811,
     )
+
+
+def test_decode_json_is_one_array_whatever_the_number_of_packages() -> None:
+    """One shape for a script to rely on: a list of objects, for 0, 1 or many packages."""
+    reply = "00045601"
+    for count in (1, 2, 5):
+        for protocol, data in (("rtde", reply * count), ("primary", None)):
+            if protocol == "primary":
+                import yaml
+
+                from .helpers import DATA
+
+                golden = yaml.safe_load((DATA / "primary_golden.yaml").read_text())
+                version = next(c for c in golden if c["message"] == "version_message")["hex"]
+                data = version * count
+            result = cli("decode", "--protocol", protocol, str(data), "--format", "json")
+            assert result.returncode == 0, result.stderr
+            rows = json.loads(result.stdout)
+            assert isinstance(rows, list) and len(rows) == count and all(isinstance(r, dict) for r in rows)
+    assert "always one array" in cli("decode", "--help").stdout
 
 
 def test_decode_several_packages_from_a_binary_file(tmp_path: Path) -> None:
@@ -54,7 +74,7 @@ def test_decode_several_packages_from_a_binary_file(tmp_path: Path) -> None:
 
 def test_decode_protocol_1_layout() -> None:
     result = cli("decode", "0007 4d 01 626164", "--protocol-version", "1", "--json")
-    assert json.loads(result.stdout)["message"] == "bad"
+    assert json.loads(result.stdout)[0]["message"] == "bad"
 
 
 def test_decode_errors_exit_non_zero_with_error_line() -> None:
@@ -156,7 +176,7 @@ def test_decode_data_package_with_a_recipe() -> None:
     codec = RecipeCodec.for_names(names, "output")
     package = codec.encode_package({"timestamp": 2.5, "robot_mode": 7, "actual_q": (1.0,) * 6}, 1)
     result = cli("decode", package.hex(), "--recipe", ",".join(names), "--json")
-    record = json.loads(result.stdout)
+    (record,) = json.loads(result.stdout)
     assert (record["timestamp"], record["robot_mode"], record["actual_q"]) == (2.5, 7, [1.0] * 6)
     table = cli("decode", package.hex(), "--recipe", ",".join(names))
     assert "7 (RUNNING)" in table.stdout

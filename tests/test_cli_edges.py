@@ -48,7 +48,7 @@ def test_a_robot_state_of_1_4_kb_is_accepted_as_hex() -> None:
     assert len(text) > 2000
     result = cli("decode", "--protocol", "primary", text, "--json")
     assert result.returncode == 0, result.stderr
-    record = json.loads(result.stdout)
+    (record,) = json.loads(result.stdout)
     assert record["package"] == "robot_state" and len(record["sub_packages"]) == 13
 
 

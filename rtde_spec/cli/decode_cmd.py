@@ -74,10 +74,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--format",
         choices=FORMAT_CHOICES,
-        help="output format (default: from the -o suffix, else table)",
+        help="output format; json is always one array of objects, one per package, whatever their "
+        "number (jsonl: one object per line) (default: from the -o suffix, else table)",
     )
     p.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout (default: stdout)")
-    p.add_argument("--json", action="store_true", help="the same as --format json (default: off)")
+    p.add_argument(
+        "--json", action="store_true", help="the same as --format json: a JSON array (default: off)"
+    )
     p.add_argument(
         "--lenient",
         action="store_true",
@@ -193,8 +196,6 @@ def run(args: argparse.Namespace) -> int:
         )
     codec = recipe_codec(args)
     writer = open_writer(fmt, args.output, background=True)
-    if fmt == "json":
-        writer.single = True  # type: ignore[attr-defined]  # one package prints as one object
     try:
         total = decode_into(writer, args, codec, fmt)
     finally:

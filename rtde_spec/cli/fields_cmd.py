@@ -32,7 +32,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         nargs=2,
         metavar=("A", "B"),
         type=controller_version,
-        help="fields added and removed from controller version A to B, per interface",
+        help="fields added and removed from controller version A to B, per interface (default: off)",
     )
     p.set_defaults(run=run)
 

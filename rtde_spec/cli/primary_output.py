@@ -128,10 +128,8 @@ def run_primary(
 
 
 def _open(fmt: str, output: str | None) -> Writer:
-    writer = open_writer(fmt, output)
-    if fmt == "json":
-        writer.single = True  # type: ignore[attr-defined]
-    return writer
+    """json: one array of objects whatever the number of messages (its shape never varies)."""
+    return open_writer(fmt, output)
 
 
 def _write(writer: Writer, messages: list[tuple[int, Any]], decoder: PrimaryStreamDecoder) -> None:
