@@ -77,7 +77,9 @@ def test_urx_real_time_monitor_follows_the_model_through_a_move() -> None:
             robot.close()
 
 
-@pytest.mark.parametrize(("version", "size", "hz"), [("3.1.0", 1044, 125), ("5.4.0", 1116, 500), ("5.10.0", 1220, 500)])
+@pytest.mark.parametrize(
+    ("version", "size", "hz"), [("3.1.0", 1044, 125), ("5.4.0", 1116, 500), ("5.10.0", 1220, 500)]
+)
 def test_each_version_streams_its_size_at_its_control_rate(version: str, size: int, hz: int) -> None:
     host = "127.0.0.1"
     with EmulatorThread(config(host, version, realtime_port=0)) as emu:

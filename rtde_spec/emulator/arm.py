@@ -14,6 +14,7 @@ from rtde_spec.emulator import kinematics as kin
 from rtde_spec.emulator.motion import MOVEJ_A, LinearSpeed, Motion, State, rest, stop_joints, stop_linear
 from rtde_spec.spec.arms import ArmModel
 
+LIMIT_SLACK = 1e-9  # rad past a joint limit still counted as at it (a move that ends on it)
 SPEED_STEP = 1e-4  # s: TCP speed is the pose change over this much joint motion
 
 
@@ -60,6 +61,13 @@ class Arm:
             self.motion = stop_linear(self.model, self.tcp, self.state, a)
         else:
             self.motion = stop_joints(self.state, a)
+
+    def over_limit(self) -> int | None:
+        """The first joint past its position limit (the arm model's), if any."""
+        for i, (value, (low, high)) in enumerate(zip(self.state.q, self.model.joint_limits, strict=True)):
+            if not low - LIMIT_SLACK <= value <= high + LIMIT_SLACK:
+                return i
+        return None
 
     def place(self, q: Sequence[float]) -> None:
         """Joints set from outside (a scenario): at rest there."""

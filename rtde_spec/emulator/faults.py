@@ -6,12 +6,16 @@
       - {at: 9.0, fault: emergency_stop, seconds: 2}
       - {at: 12.0, fault: power_loss}
       - {at: 14.0, fault: program_stop}
+      - {at: 16.0, fault: joint_limit, joint: 5}
 
 `at` is controller time (s since start). A protective stop halts the arm and pauses
 its program until unlocked (dashboard `unlock protective stop`); an emergency stop
 cuts arm power and holds the safety mode until released (after `seconds`, if given;
 the arm stays powered off, as after a real one); a power loss cuts arm power; a
-program stop ends the program as a client's stop does; a network drop silences every
+program stop ends the program as a client's stop does; a joint limit hit puts `joint`
+(0 = base, default 0) at its nearer position limit (the arm model's) and reacts as when
+a motion reaches one: the arm stops there, a protective stop, a runtime exception
+message naming the joint; a network drop silences every
 port for `seconds` (nothing sent, nothing read; connections stay open, as with a
 pulled cable) and then resumes. The safety and mode changes reach RTDE, the primary
 ports (with their safety mode message) and the dashboard through the same model.
@@ -30,7 +34,9 @@ if TYPE_CHECKING:
     from rtde_spec.emulator.model import ControllerModel
 
 log = logging.getLogger("rtde_spec.emulator")
-FaultKind = Literal["protective_stop", "emergency_stop", "power_loss", "program_stop", "network_drop"]
+FaultKind = Literal[
+    "protective_stop", "emergency_stop", "power_loss", "program_stop", "network_drop", "joint_limit"
+]
 
 
 class Fault(BaseModel):
@@ -39,6 +45,7 @@ class Fault(BaseModel):
     at: float = Field(ge=0)
     fault: FaultKind
     seconds: float | None = Field(default=None, gt=0)  # how long (network drop, emergency stop)
+    joint: int = Field(default=0, ge=0, le=5)  # which joint hits its limit (joint_limit)
 
 
 class FaultSchedule:
@@ -86,6 +93,13 @@ class FaultSchedule:
                 SafetyStatusBits.ROBOT_EMERGENCY_STOPPED | SafetyStatusBits.EMERGENCY_STOPPED,
             )
             self._release_at = t + fault.seconds if fault.seconds else None
+        elif kind == "joint_limit":
+            arm = model.arm
+            low, high = arm.model.joint_limits[fault.joint]
+            q = [float(v) for v in arm.state.q]
+            q[fault.joint] = high if abs(high - q[fault.joint]) <= abs(q[fault.joint] - low) else low
+            arm.place(q)
+            model.joint_limit_hit(fault.joint)
         elif kind == "network_drop":
             self.silent_until = t + (fault.seconds or 1.0)
 

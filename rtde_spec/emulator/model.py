@@ -111,6 +111,7 @@ class ControllerModel(RobotModes):
         self.loaded: str | None = None  # a program the dashboard loaded, run by play()
         self.events: deque[ScriptEvent] = deque(maxlen=MAX_EVENTS)
         self._published: tuple[Any, ...] = ()
+        self._limits_checked = -1  # the arm revision whose joints were last checked against the limits
         self.step = 0
         self.time = 0.0
         self.tick(0)
@@ -141,11 +142,35 @@ class ControllerModel(RobotModes):
             self.arm.halt()
             if self.program is not None:
                 self.program.fail(ScriptFault(str(exc), line, 1))
+        if self.arm.motion is not None or self.arm.revision != self._limits_checked:
+            self._limits_checked = self.arm.revision
+            over = self.arm.over_limit()
+            if over is not None:
+                self.joint_limit_hit(over)
+                return
         program = self.program
         if program is not None:
             program.advance(dt)
             if program.finished:
                 self._end_program()
+
+    def joint_limit_hit(self, joint: int) -> None:
+        """A joint at its position limit: it stops there, a protective stop, a runtime exception.
+
+        The motion is dropped (the program, paused, goes on past it when played again);
+        the safety mode reaches every port, the message the primary ports.
+        """
+        low, high = self.arm.model.joint_limits[joint]
+        q = [float(v) for v in self.arm.state.q]
+        limit = high if q[joint] > high else low if q[joint] < low else q[joint]
+        q[joint] = limit
+        motion = self.arm.motion
+        line = motion.line if motion is not None else 0
+        self.arm.place(q)
+        program = self.program.name if self.program is not None else ""
+        text = f"Joint {joint} position limit violated ({limit:.4f} rad): protective stop"
+        self.emit(ScriptEvent("runtime_exception", text, line, 1 if line else 0, program=program))
+        self.protective_stop()
 
     def _publish(self) -> None:
         """Joints, TCP pose and speed, runtime state and speed scaling into the outputs."""
