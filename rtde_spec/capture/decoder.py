@@ -9,14 +9,15 @@ hole still open in a TCP stream is declared lost and everything after it decoded
 
 from __future__ import annotations
 
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from rtde_spec._generated.constants import DATA_PACKAGE_TYPE, PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.capture.bulk import SIZE_AT, SIZE_BYTES, TYPE_AT
-from rtde_spec.capture.connections import RTDE_HEADER, PrimaryConnection, RtdeConnection
+from rtde_spec.capture.classify import ROBOT_CLIENT_KINDS, connection_for, content_kind, port_kinds
+from rtde_spec.capture.connections import RTDE_HEADER
 from rtde_spec.capture.packets import FIN, RST, SYN, Segment, expand, items
 from rtde_spec.capture.sink import ArrowSink, DirectorySink, TableSink, output_stem
 from rtde_spec.capture.summary import CaptureSummary, ConnectionSummary
@@ -51,13 +52,19 @@ def decode_capture(
     primary_ports: Sequence[int] = tuple(PRIMARY_PORTS.values()),
     catalogue: Catalogue | None = None,
     progress: Callable[[int], None] | None = None,
+    port_map: Mapping[int, str] | None = None,
 ) -> CaptureSummary:
-    """Decode one capture file into the sink; the summary says what was found and what went wrong."""
+    """Decode one capture file into the sink; the summary says what was found and what went wrong.
+
+    `port_map` (port -> protocol, see classify.KINDS) adds to and overrides the spec's default ports.
+    """
     cat = catalogue or Catalogue.default()
+    ports = port_kinds(rtde_ports, primary_ports, port_map)
     stats: dict[str, int] = {}
     flows: dict[frozenset[tuple[str, int]], _Flow | None] = {}
     # (src, sport, dst, dport) -> (flow, sender, its direction): one lookup per segment
     routes: dict[tuple[str, int, str, int], Route | None] = {}
+    handshakes: dict[frozenset[tuple[str, int]], list[Segment]] = {}  # SYNs of undecided connections
     run: _Run | None = None  # data segments, one whole package each, in order: decoded together
 
     def route_of(seg: Segment) -> Route | bool | None:
@@ -69,10 +76,16 @@ def decode_capture(
         if key in flows:
             flow = flows[key]
         else:
-            flow = _classify(seg, sink, recipe, rtde_ports, primary_ports, cat)
+            flow = _classify(seg, sink, recipe, ports, cat)
             if flow is None and not seg.payload:
+                if seg.flags & SYN:  # kept: the stream starts here if its first data says what it is
+                    handshakes.setdefault(key, []).append(seg)
                 return False
             flows[key] = flow
+            for syn in handshakes.pop(key, []):
+                if flow is not None:
+                    side = "client" if (syn.src, syn.sport) == flow.client else "controller"
+                    flow.directions[side].feed(syn.time, syn.seq, b"", syn=True)
         route: Route | None = None
         if flow is not None:
             sender = "client" if (seg.src, seg.sport) == flow.client else "controller"
@@ -248,27 +261,23 @@ class _Run:
 
 
 def _classify(
-    seg: Any,
-    sink: TableSink,
-    recipe: RecipeCodec | None,
-    rtde_ports: Sequence[int],
-    primary_ports: Sequence[int],
-    cat: Catalogue,
+    seg: Any, sink: TableSink, recipe: RecipeCodec | None, ports: Mapping[int, str], cat: Catalogue
 ) -> _Flow | None:
     src, dst = (seg.src, seg.sport), (seg.dst, seg.dport)
-    if seg.dport in rtde_ports or seg.dport in primary_ports:
-        client, server = src, dst
-    elif seg.sport in rtde_ports or seg.sport in primary_ports:
-        client, server = dst, src
+    if seg.dport in ports:
+        client, server, kind = src, dst, ports[seg.dport]
+    elif seg.sport in ports:
+        client, server, kind = dst, src, ports[seg.sport]
     elif seg.payload.startswith(RTDE_VERSION_REQUEST):
-        client, server = src, dst  # RTDE on another port, recognised by its first request
+        client, server, kind = src, dst, "rtde"  # RTDE on another port, recognised by its first request
+    elif (found := content_kind(seg.payload)) is not None:
+        client, server, kind = dst, src, found  # the controller speaks first: its first message
     else:
         return None
     name = f"{client[0]}:{client[1]}-{server[0]}:{server[1]}"
-    robot = server[0]
-    if server[1] in primary_ports:
-        return _Flow(client, server, "primary", PrimaryConnection(name, robot, sink))
-    return _Flow(client, server, "rtde", RtdeConnection(name, robot, sink, recipe, cat))
+    decoder = connection_for(kind, name, client[0], server[0], sink, recipe=recipe, catalogue=cat)
+    label = f"urcl-{kind}" if kind in ROBOT_CLIENT_KINDS else kind
+    return _Flow(client, server, label if kind != "script_sender" else "urcl-script", decoder)
 
 
 def decode_to_directory(

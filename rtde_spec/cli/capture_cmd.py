@@ -67,6 +67,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         action="append",
         help=f"primary/secondary port, repeatable (default: {', '.join(map(str, PRIMARY_PORTS.values()))})",
     )
+    p.add_argument(
+        "--port-map",
+        action="append",
+        metavar="PORT=PROTOCOL[,...]",
+        help="decode PORT as PROTOCOL (rtde, primary, realtime, dashboard, reverse, script_sender, "
+        "trajectory, script_command), repeatable, e.g. 50001=reverse,50003=trajectory (default: the "
+        "spec's ports: RTDE 30004, primary 30001/30002/30011/30012, real-time 30003/30013, dashboard "
+        "29999, URCL external control 50001-50004)",
+    )
     p.add_argument("--jobs", type=int, default=1, help="files decoded in parallel processes (default: 1)")
     p.add_argument(
         "--lenient",
@@ -99,6 +108,7 @@ def expand(patterns: list[str]) -> list[Path]:
 def run(args: argparse.Namespace) -> int:
     from concurrent.futures import ProcessPoolExecutor
 
+    from rtde_spec.capture.classify import parse_port_map
     from rtde_spec.capture.decoder import CaptureInterrupted, decode_to_directory
     from rtde_spec.cli.record_cmd import names_of
 
@@ -107,6 +117,7 @@ def run(args: argparse.Namespace) -> int:
     kw: dict[str, Any] = {
         "rtde_ports": tuple(args.rtde_port or (RTDE_PORT,)),
         "primary_ports": tuple(args.primary_port or PRIMARY_PORTS.values()),
+        "port_map": parse_port_map(args.port_map or []),
     }
     summaries: list[CaptureSummary] = []
     if args.jobs > 1 and len(files) > 1:

@@ -1,0 +1,124 @@
+"""Which protocol a captured TCP connection speaks: by port (defaults from the spec, or a
+port map the user gives), else by its first bytes (an RTDE version request, a primary
+version message, a real-time message of a known size), and the connection decoder for it.
+
+Ports name the server's side: the controller's for RTDE, primary, real-time and the
+dashboard; the driver PC's for URCL's external-control protocols (the robot connects
+to it), so there the robot is the client.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from functools import cache
+from typing import Any
+
+from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
+from rtde_spec.capture.sink import TableSink
+from rtde_spec.errors import UsageError
+
+STREAM_KINDS = ("rtde", "primary", "realtime", "dashboard")  # the controller serves these
+ROBOT_CLIENT_KINDS = ("reverse", "script_sender", "trajectory", "script_command")  # the driver serves these
+KINDS = STREAM_KINDS + ROBOT_CLIENT_KINDS
+
+
+@cache
+def default_ports() -> dict[int, str]:
+    """port -> protocol, every default the spec names."""
+    from rtde_spec._generated.realtime import REALTIME_PORTS
+    from rtde_spec.spec.dashboard import dashboard_spec
+    from rtde_spec.spec.external import external_spec
+
+    ports = {RTDE_PORT: "rtde", dashboard_spec().port: "dashboard"}
+    ports.update({port: "primary" for port in PRIMARY_PORTS.values()})
+    ports.update({port: "realtime" for port in REALTIME_PORTS.values()})
+    ports.update({p.port: p.name for p in external_spec().protocols})
+    return ports
+
+
+def parse_port_map(items: Sequence[str]) -> dict[int, str]:
+    """`50001=reverse,50003=trajectory` (items may repeat) -> {50001: "reverse", ...}."""
+    out: dict[int, str] = {}
+    for item in items:
+        for pair in filter(None, (p.strip() for p in item.split(","))):
+            port_text, sep, kind = pair.partition("=")
+            if not sep or not port_text.strip().isdigit() or not 0 < int(port_text) < 65536:
+                raise UsageError(f"bad --port-map entry {pair!r}: write PORT=PROTOCOL, e.g. 50001=reverse")
+            if kind.strip() not in KINDS:
+                raise UsageError(
+                    f"unknown protocol {kind.strip()!r} in --port-map", expected=", ".join(KINDS)
+                )
+            out[int(port_text)] = kind.strip()
+    return out
+
+
+def port_kinds(
+    rtde_ports: Sequence[int], primary_ports: Sequence[int], port_map: Mapping[int, str] | None
+) -> dict[int, str]:
+    """The ports of one run: the spec's defaults with the RTDE/primary lists and the map given."""
+    ports = {p: k for p, k in default_ports().items() if k not in ("rtde", "primary")}
+    ports.update({p: "rtde" for p in rtde_ports})
+    ports.update({p: "primary" for p in primary_ports})
+    ports.update(port_map or {})
+    return ports
+
+
+@cache
+def _primary_opening() -> tuple[int, int, int]:
+    """(message type, tag offset, tag value) of the version message a primary server sends first."""
+    from rtde_spec.primary.codec import default_codec
+    from rtde_spec.spec.catalogue import Catalogue
+
+    codec = default_codec()
+    prims = {p.name: p for p in Catalogue.builtin().spec.primitives.primitives}
+    for family in codec.families.values():
+        version = next((m for m in family.spec.members if m.name == "version_message"), None)
+        if version is None or family.spec.tag is None:
+            continue
+        at = codec.header.size
+        for fld in family.spec.prefix:
+            if fld.name == family.spec.tag:
+                return family.spec.type, at, version.type
+            at += prims[fld.type].size * (fld.count or 1)
+    raise LookupError("the spec has no primary version message")
+
+
+def content_kind(payload: bytes) -> str | None:
+    """A protocol recognised from a connection's first bytes, sent by the server (None: unknown)."""
+    from rtde_spec.realtime import known_sizes
+
+    if len(payload) >= 4 and int.from_bytes(payload[:4], "big") in known_sizes():
+        return "realtime"
+    mtype, tag_at, tag = _primary_opening()
+    if len(payload) > tag_at and payload[4] == mtype and payload[tag_at] == tag:
+        size = int.from_bytes(payload[:4], "big")
+        if tag_at < size <= 4096:
+            return "primary"
+    return None
+
+
+def connection_for(kind: str, name: str, client: str, server: str, sink: TableSink, **kw: Any) -> Any:
+    """The decoder of one connection of `kind`; the robot is the server but for external control."""
+    if kind == "rtde":
+        from rtde_spec.capture.connections import RtdeConnection
+
+        return RtdeConnection(name, server, sink, kw["recipe"], kw["catalogue"])
+    if kind == "primary":
+        from rtde_spec.capture.connections import PrimaryConnection
+
+        return PrimaryConnection(name, server, sink)
+    if kind == "realtime":
+        from rtde_spec.capture.realtime import RealtimeConnection
+
+        return RealtimeConnection(name, server, sink)
+    if kind == "dashboard":
+        from rtde_spec.capture.dashboard import DashboardConnection
+
+        return DashboardConnection(name, server, sink)
+    from rtde_spec.capture.external import ExternalConnection, ScriptSenderConnection
+    from rtde_spec.spec.external import external_spec
+
+    protocol = external_spec().protocol(kind)
+    if protocol.request is not None:
+        return ScriptSenderConnection(name, client, sink, protocol)
+    return ExternalConnection(name, client, sink, protocol)

@@ -1,0 +1,187 @@
+"""Records of URCL's external-control connections: reverse, trajectory and script command
+records to one row each, the script sender's exchange to one row per program request.
+
+On these ports the driver's PC is the server and the robot the client, so the robot
+(the partition of every row) is the client's address. Variants of one message that
+share a table keep the fields they share as columns; the rest of each row goes to an
+`arguments` column as JSON (the script commands: each has its own arguments).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from typing import Any
+
+from rtde_spec.capture.connections import Counts
+from rtde_spec.capture.records import FixedFraming
+from rtde_spec.capture.rows import text_columns
+from rtde_spec.capture.sink import TableSink, day_of
+from rtde_spec.capture.tcp import Chunk
+from rtde_spec.errors import RtdeSpecError
+from rtde_spec.external.codec import RecordCodec, VariantPlan, protocol_codecs
+from rtde_spec.output.base import plain
+from rtde_spec.spec.external import ExternalProtocol
+
+SIDE = {"client": "robot", "controller": "driver"}  # the flow's sender names on a driver-served port
+MAX_SCRIPT = 16 << 20  # a program longer than this is not one: the rest is counted, not kept
+
+
+def _shared(codec: RecordCodec) -> dict[str, list[str] | None]:
+    """variant name -> the columns its table shares with the other variants there (None: all its own)."""
+    tables: dict[str, list[VariantPlan]] = {}
+    for plan in codec.variants:
+        tables.setdefault(plan.table, []).append(plan)
+    out: dict[str, list[str] | None] = {}
+    for plans in tables.values():
+        if len(plans) == 1:
+            out[plans[0].name] = None
+            continue
+        common = [n for n in plans[0].layout.names if all(n in p.layout.names for p in plans)]
+        for plan in plans:
+            out[plan.name] = common
+    return out
+
+
+class ExternalConnection:
+    """A reverse, trajectory or script command connection: fixed records both ways."""
+
+    def __init__(self, name: str, robot: str, sink: TableSink, protocol: ExternalProtocol) -> None:
+        self.name, self.robot, self.sink, self.protocol = name, robot, sink, protocol
+        self.codecs = protocol_codecs(protocol)
+        self.framing = {
+            sender: FixedFraming(c.size, c.plausible)
+            for sender, side in SIDE.items()
+            if (c := self.codecs.get(side)) is not None
+        }
+        self.shared = {side: _shared(c) for side, c in self.codecs.items()}
+        self.counts = Counts()
+        self.unexpected: dict[str, int] = {}
+        self.last_time = 0.0
+
+    def feed(self, sender: str, chunk: Chunk) -> None:
+        self.last_time = chunk.time
+        framing = self.framing.get(sender)
+        if framing is None:  # this side sends nothing in the protocol
+            self.unexpected[sender] = self.unexpected.get(sender, 0) + len(chunk.data)
+            return
+        self._records(SIDE[sender], framing.feed(chunk), chunk.time)
+
+    def _records(self, side: str, records: list[bytes], time: float) -> None:
+        codec, shared = self.codecs[side], self.shared[side]
+        day = day_of(time)
+        for record in records:
+            self.counts.packages += 1
+            try:
+                plan, values = codec.decode(record)
+            except RtdeSpecError as exc:
+                self.counts.errors.append(f"{side} record at {time:.6f}: {exc}")
+                continue
+            row: dict[str, Any] = {"connection": self.name, "capture_time": time}
+            common = shared[plan.name]
+            if common is None:
+                row.update(values)
+            else:
+                row.update({n: values[n] for n in common})
+                row["variant"] = plan.name
+                row["arguments"] = json.dumps(plain({n: v for n, v in values.items() if n not in common}))
+            self.sink.row(plan.table, self.robot, day, row)
+
+    def framings(self) -> dict[str, FixedFraming]:
+        return self.framing
+
+    def finish(self) -> None:
+        for sender, framing in self.framing.items():
+            self._records(SIDE[sender], framing.finish(), self.last_time)
+            if framing.unaligned:
+                self.counts.errors.append(
+                    f"{SIDE[sender]}: no record boundary found; decoded from the first byte"
+                )
+        for sender, count in self.unexpected.items():
+            self.counts.errors.append(
+                f"{count} bytes from the {SIDE[sender]}, which sends nothing on this port"
+            )
+
+    def close(self) -> None:
+        pass
+
+
+@dataclass
+class _Request:
+    time: float
+    line: str
+    reply: bytearray = field(default_factory=bytearray)
+    reply_time: float | None = None
+    last_time: float | None = None
+    gaps: int = 0
+    dropped: int = 0
+
+
+class ScriptSenderConnection:
+    """The script sender: the robot's request line, then the driver's program text, one row each."""
+
+    def __init__(self, name: str, robot: str, sink: TableSink, protocol: ExternalProtocol) -> None:
+        self.name, self.robot, self.sink, self.table = name, robot, sink, protocol.table or protocol.name
+        self.request = (protocol.request or "").rstrip("\n").encode()
+        self.framing = {"client": _NoFraming(), "controller": _NoFraming()}
+        self.pending = bytearray()
+        self.requests: list[_Request] = []
+        self.counts = Counts()
+
+    def feed(self, sender: str, chunk: Chunk) -> None:
+        if sender == "client":
+            self.pending += chunk.data
+            while b"\n" in self.pending:
+                line, _, rest = bytes(self.pending).partition(b"\n")
+                self.pending = bytearray(rest)
+                self.requests.append(_Request(chunk.time, line.decode("utf-8", "replace")))
+                self.counts.packages += 1
+                if line != self.request:
+                    self.counts.errors.append(
+                        f"robot line at {chunk.time:.6f} is not a program request: {line[:60]!r}"
+                    )
+            return
+        if not self.requests:  # text before any request (a capture started late)
+            self.requests.append(_Request(chunk.time, ""))
+        current = self.requests[-1]
+        current.gaps += 1 if chunk.gap_before else 0
+        current.reply_time = current.reply_time if current.reply_time is not None else chunk.time
+        current.last_time = chunk.time
+        room = MAX_SCRIPT - len(current.reply)
+        current.reply += chunk.data[:room]
+        current.dropped += max(0, len(chunk.data) - room)
+
+    def framings(self) -> dict[str, _NoFraming]:
+        return self.framing
+
+    def finish(self) -> None:
+        for req in self.requests:
+            latency = req.reply_time - req.time if req.reply_time is not None and req.line else None
+            row = {
+                "connection": self.name,
+                "capture_time": req.time,
+                "request": req.line,
+                **text_columns("script", bytes(req.reply)),
+                "script_bytes": len(req.reply) + req.dropped,
+                "reply_time": req.reply_time if req.reply_time is not None else float("nan"),
+                "latency": latency if latency is not None else float("nan"),
+                "complete": not req.gaps and not req.dropped,
+            }
+            self.sink.row(self.table, self.robot, day_of(req.time), row)
+            if req.gaps or req.dropped:
+                self.counts.errors.append(
+                    f"program sent at {req.time:.6f}: {req.gaps} gaps in its text, "
+                    f"{req.dropped} bytes over {MAX_SCRIPT}"
+                )
+        self.requests.clear()
+
+    def close(self) -> None:
+        pass
+
+
+class _NoFraming:
+    """The script sender needs no framing; the summary's attributes, all zero."""
+
+    def __init__(self) -> None:
+        self.buf = bytearray()
+        self.skipped = self.cut = self.lead_in = 0

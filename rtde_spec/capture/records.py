@@ -1,0 +1,134 @@
+"""Framing of protocols without a size header: fixed-size records (URCL's external control)
+and text lines (the dashboard server, the script sender's request).
+
+Fixed records need no search after a gap: TCP says how many bytes were lost, so the
+next record boundary is known exactly; the record the gap cut is counted (`cut`) with
+the bytes passed over (`skipped`). Only a stream captured from its middle has an
+unknown boundary: the first offset whose next records all look like records (the
+protocol's `plausible`: a known variant, enum words of known values) is taken, the
+bytes before it are `lead_in`. Lines resume after the next newline following a gap.
+The attribute names are those of `framing.Framing`, so the summary reads all alike.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+from rtde_spec.capture.tcp import Chunk
+
+CONFIRM = 3  # records that must look right at an offset before a mid-stream capture is cut there
+WINDOW = 64 << 10  # bytes held looking for that offset
+
+
+class FixedFraming:
+    """Cut one direction's bytes into records of `size` bytes."""
+
+    def __init__(self, size: int, plausible: Callable[[bytes, int], bool]) -> None:
+        self.size, self.plausible = size, plausible
+        self.buf = bytearray()
+        self.synced = True
+        self.to_skip = 0  # bytes of a record cut by a gap still to pass over
+        self.skipped = self.cut = self.lead_in = 0
+        self.unaligned = False  # no offset ever looked right: decoded from where the stream began
+        self.times: list[float] | None = None  # records are given the time of the chunk completing them
+
+    def feed(self, chunk: Chunk) -> list[bytes]:
+        if chunk.midstream:
+            self.synced = False
+        if chunk.gap_before:
+            held = len(self.buf)
+            if self.synced:
+                into = (held + chunk.gap_before) % self.size  # where in a record the data resumes
+                self.to_skip = (self.size - into) % self.size
+                self.cut += 1 if held or self.to_skip else 0
+                self.skipped += held
+                self.buf.clear()
+            # unsynced: the offset is searched in what follows; the hole just shifts it
+        data = chunk.data
+        if self.to_skip:
+            n = min(self.to_skip, len(data))
+            self.to_skip -= n
+            self.skipped += n
+            data = data[n:]
+        self.buf += data
+        if not self.synced and not self._align(final=False):
+            return []
+        return self._records()
+
+    def finish(self) -> list[bytes]:
+        """The end of the stream: a mid-stream capture too short to confirm is aligned as it can be."""
+        if self.synced or not self.buf:
+            return []
+        self._align(final=True)
+        return self._records()
+
+    def _records(self) -> list[bytes]:
+        size, buf = self.size, self.buf
+        whole = len(buf) - len(buf) % size
+        out = [bytes(buf[i : i + size]) for i in range(0, whole, size)]
+        del buf[:whole]
+        return out
+
+    def _align(self, final: bool) -> bool:
+        buf, size = self.buf, self.size
+        data = bytes(buf)
+        need = CONFIRM if not final else max(1, min(CONFIRM, len(data) // size))
+        for phase in range(min(size, max(0, len(data) - size + 1))):
+            if len(data) - phase < need * size:
+                if not final:
+                    return False  # wait for enough records at this offset
+                break
+            if all(self.plausible(data, phase + k * size) for k in range(need)):
+                self.lead_in += phase
+                del buf[:phase]
+                self.synced = True
+                return True
+        if final or len(data) >= WINDOW:
+            self.unaligned = True  # nothing looks like a record: decode from the first byte
+            self.synced = True
+            return True
+        return False
+
+
+class LineFraming:
+    """Cut one direction's bytes into lines (without their newline); `limit` bounds a line."""
+
+    def __init__(self, limit: int) -> None:
+        self.limit = limit
+        self.buf = bytearray()
+        self.resync = False  # after a gap (or an over-long line): drop bytes up to the next newline
+        self.skipped = self.cut = self.lead_in = 0
+        self.too_long = 0
+        self.times: list[float] | None = None
+
+    def feed(self, chunk: Chunk) -> list[bytes]:
+        if chunk.gap_before:  # the line the gap cut is lost; the next begins after a newline
+            self.cut += 1
+            self.skipped += len(self.buf)
+            self.buf.clear()
+            self.resync = True
+        data = chunk.data
+        if self.resync:
+            at = data.find(b"\n")
+            self.skipped += len(data) if at < 0 else at + 1
+            if at < 0:
+                return []
+            data = data[at + 1 :]
+            self.resync = False
+        self.buf += data
+        lines = self.buf.split(b"\n")
+        rest = lines.pop()
+        self.buf = bytearray(rest)
+        if len(self.buf) > self.limit:  # no line is this long: drop it up to its end
+            self.too_long += 1
+            self.skipped += len(self.buf)
+            self.buf.clear()
+            self.resync = True
+        return [bytes(line.rstrip(b"\r")) for line in lines]
+
+    def finish(self) -> list[bytes]:
+        """A last line without its newline (a reply cut by the end of the capture) is kept."""
+        if not self.buf:
+            return []
+        line, self.buf = bytes(self.buf), bytearray()
+        return [line]
