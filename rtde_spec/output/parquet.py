@@ -10,7 +10,7 @@ from typing import IO, Any
 from rtde_spec.errors import UsageError, require
 from rtde_spec.output.base import Writer, flat_columns, flatten
 from rtde_spec.output.partfile import Part, is_special
-from rtde_spec.output.tables import arrow_table
+from rtde_spec.output.tables import arrow_table, rows_table
 
 _PARQUET_BATCH_ROWS = 16384
 WHERE = "Parquet output"
@@ -126,7 +126,7 @@ class ParquetWriter(Writer):
 
     def _flush_rows(self) -> None:
         if self._rows:
-            self._add(self._pa.Table.from_pylist(self._rows))
+            self._add(rows_table(self._rows))
             self._rows = []
 
     def write_columns(self, columns: Mapping[str, Any]) -> None:
