@@ -58,6 +58,26 @@ def existing_file(arg: str) -> Path | None:
     return None
 
 
+RECIPE_FILE_HELP = (
+    "a recipe file: UR's XML (rtde_config, as record_configuration.xml), YAML, JSON, or one name per line"
+)
+
+
+def recipe_file(arg: str, option: str = "--recipe") -> Path | None:
+    """The recipe file `arg` names, or None when it is a comma list of names (field names hold
+    no '.' or '/'): a name that looks like a file but is none is a missing file, not a field."""
+    path = existing_file(arg)
+    if path is not None:
+        return path
+    if "," not in arg and ("/" in arg or os.sep in arg or "." in arg):
+        raise UsageError(
+            f"no such recipe file; give {RECIPE_FILE_HELP}, or field names as a comma list "
+            "(e.g. timestamp,actual_q)",
+            subject=f"{option} {arg[:200]}",
+        )
+    return None
+
+
 def controller_version(text: str) -> str:
     """argparse type of --controller: a version of a known product line, or exit 2."""
     from rtde_spec.spec.catalogue import Catalogue

@@ -9,10 +9,15 @@ import sys
 import threading
 from collections.abc import Iterator
 from pathlib import Path
+from typing import TYPE_CHECKING, cast
 
 from rtde_spec._generated.constants import RTDE_PORT
-from rtde_spec.cli.common import existing_file
-from rtde_spec.errors import UsageError
+from rtde_spec.cli.common import RECIPE_FILE_HELP, existing_file
+from rtde_spec.errors import RtdeConnectionError, RtdeSpecError, UsageError
+
+if TYPE_CHECKING:
+    from rtde_spec.output.base import Writer
+    from rtde_spec.rtde.client import RtdeClient
 
 DESCRIPTION = """\
 Columns are named as UR's recorder names them (vectors as name_0..name_5).
@@ -50,9 +55,21 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--host", required=True, help="controller address (required)")
     p.add_argument("--port", type=int, default=RTDE_PORT, help=f"RTDE port (default: {RTDE_PORT})")
     what = p.add_mutually_exclusive_group(required=True)
-    what.add_argument("--recipe", metavar="FILE", help="recipe file, any format (required: this or --fields)")
+    what.add_argument(
+        "--recipe",
+        "--config",
+        metavar="FILE",
+        help=f"{RECIPE_FILE_HELP}; --config as UR's record.py names it (required: this or --fields)",
+    )
     what.add_argument(
         "--fields", metavar="A,B,...", help="output names, comma-separated (required: this or --recipe)"
+    )
+    p.add_argument(
+        "--recipe-key",
+        metavar="KEY",
+        help="which recipe of a file with several (UR's record.py: --recipe-key out) (default: the only "
+        "recipe, else the only output recipe: one naming only input registers, as setp and watchdog "
+        "in UR's examples, is an input recipe)",
     )
     p.add_argument("--frequency", type=float, default=125.0, help="output rate in Hz (default: 125)")
     stop = p.add_mutually_exclusive_group()
@@ -74,22 +91,35 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "pyarrow.dataset.dataset(sorted(glob('run_*.parquet'))). Parts of an earlier run with the same "
         "name are removed once this run's first part is in place (default: one file)",
     )
+    p.add_argument(
+        "--wall-clock",
+        action="store_true",
+        help="add host_time, this host's receive time in seconds since the epoch (float64), beside "
+        "the controller's timestamp: the time each socket read returned, spaced within a read by the "
+        "controller's timestamp (default: off)",
+    )
     p.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for replies (default: 5)")
     p.set_defaults(run=run)
 
 
 def names_of(args: argparse.Namespace) -> list[str]:
+    """The output names of --fields, or of the --recipe file's recipe (--recipe-key picks one)."""
     if args.fields:
         return [n.strip() for n in args.fields.split(",") if n.strip()]
-    from rtde_spec.recipes.files import load_recipes
+    from rtde_spec.cli.common import catalogue_for
+    from rtde_spec.recipes.files import load_recipes, pick_recipe
 
     path = existing_file(args.recipe)
     if path is None:
-        raise UsageError("recipe file not found", subject=f"file {args.recipe}")
-    outputs = [r for r in load_recipes(path) if r.direction in (None, "output")]
-    if len(outputs) != 1:
-        raise UsageError("needs exactly one output recipe", subject=f"file {args.recipe}")
-    return list(outputs[0].names)
+        raise UsageError(
+            f"no such recipe file; give {RECIPE_FILE_HELP}, or the names with --fields A,B",
+            subject=f"--recipe {args.recipe}",
+        )
+    cat = catalogue_for(args)
+    inputs, outputs = set(cat.names("input")), set(cat.names("output"))
+    key = getattr(args, "recipe_key", None)
+    recipe = pick_recipe(load_recipes(path), key, "output", inputs, outputs, where=args.recipe)
+    return list(recipe.names)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -123,8 +153,17 @@ def run(args: argparse.Namespace) -> int:
     # the reader wakes every ~0.1 s, half the recorder's write interval: no row waits longer
     batch = max(1, int(args.frequency * BATCH_SECONDS / 2))
     stop = _Stop()
-    with stop.handling(), RtdeClient(args.host, args.port, timeout=args.timeout, batch=batch) as client:
+    client = RtdeClient(args.host, args.port, timeout=args.timeout, batch=batch)
+    with stop.handling():
+        _connect(client, args)
+    with stop.handling(), client:
         writer = open_writer(fmt, args.output, live=True, durable=True, split=split)
+        if args.wall_clock:
+            from rtde_spec.cli.wall_clock import ReceiveTimes, WallClockWriter
+
+            received = ReceiveTimes()
+            client.on_raw(received)  # before the recorder's own callback: times come first
+            writer = cast("Writer", WallClockWriter(writer, received))
         try:
             stop.armed = True  # from here a signal ends the recording cleanly
             result = record(
@@ -157,6 +196,20 @@ def run(args: argparse.Namespace) -> int:
     except OSError:  # SIGHUP: the terminal is gone; the file is what matters
         pass
     return 1 if result.stopped_by == "connection" else 0
+
+
+def _connect(client: RtdeClient, args: argparse.Namespace) -> None:
+    """Connect; when the handshake fails, say what listens on the port if it is not RTDE."""
+    try:
+        client.connect()
+    except (RtdeSpecError, TimeoutError) as exc:
+        client.close()
+        from rtde_spec.cli.port_probe import wrong_port
+
+        hint = wrong_port(args.host, args.port, "rtde", min(args.timeout, 2.0))
+        if hint is None:
+            raise
+        raise RtdeConnectionError(hint) from exc
 
 
 def _empty(path: Path) -> bool:

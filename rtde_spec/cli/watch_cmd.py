@@ -12,16 +12,18 @@ import json
 import sys
 import threading
 import time
+from collections.abc import Iterator
 from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.cli.common import existing_file
-from rtde_spec.errors import RtdeConnectionError, UsageError
+from rtde_spec.errors import RtdeConnectionError, RtdeSpecError, UsageError
 from rtde_spec.output.foxglove_live import DEFAULT_PORT
 
 if TYPE_CHECKING:
     from rtde_spec.output.foxglove_live import LivePublisher
     from rtde_spec.primary.base import RobotStateMessage
+    from rtde_spec.primary.client import PrimaryClient
     from rtde_spec.primary.events import StateChanges
     from rtde_spec.rtde.client import RtdeClient
 
@@ -124,7 +126,7 @@ def run(args: argparse.Namespace) -> int:
             if script is not None:
                 client.send_script(script)
                 print(f"sent {len(script.splitlines())} line(s) of URScript", file=sys.stderr)
-            for message in client:
+            for message in _first_checked(client, args):
                 now = datetime.datetime.now()
                 if live is not None:
                     live.publish_row(as_json(message), protocol="primary")
@@ -144,6 +146,26 @@ def run(args: argparse.Namespace) -> int:
         if live is not None:
             live.close()
     raise RtdeConnectionError("the controller closed the connection", subject=client.where)
+
+
+def _first_checked(client: PrimaryClient, args: argparse.Namespace) -> Iterator[Any]:
+    """The client's messages; when none comes (a time-out, bytes that are no primary message),
+    the error says what listens on the port instead if it is not the primary interface."""
+    messages = iter(client)
+    try:
+        first = next(messages)
+    except StopIteration:
+        return
+    except (RtdeSpecError, TimeoutError) as exc:
+        client.close()
+        from rtde_spec.cli.port_probe import wrong_port
+
+        hint = wrong_port(args.host, args.port, "primary", min(args.timeout, 2.0))
+        if hint is None:
+            raise
+        raise RtdeConnectionError(hint) from exc
+    yield first
+    yield from messages
 
 
 def _live(args: argparse.Namespace) -> LivePublisher | None:

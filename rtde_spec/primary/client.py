@@ -39,7 +39,12 @@ class PrimaryClient:
         try:
             self._sock = socket.create_connection((self.host, self.port), timeout=self.timeout)
         except OSError as exc:
-            raise RtdeConnectionError(f"cannot connect: {exc.strerror or exc}", subject=self.where) from None
+            ports = ", ".join(map(str, PRIMARY_PORTS.values()))
+            raise RtdeConnectionError(
+                f"cannot connect: {exc.strerror or exc}; check the address and that the port is one "
+                f"of the primary/secondary ports ({ports}) and reachable",
+                subject=self.where,
+            ) from None
         return self
 
     @overload

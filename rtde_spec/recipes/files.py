@@ -17,7 +17,7 @@ import defusedxml.ElementTree as SafeET
 import yaml
 from defusedxml import DefusedXmlException
 
-from rtde_spec.errors import RecipeError
+from rtde_spec.errors import RecipeError, UsageError
 from rtde_spec.recipes.model import FILE_FORMATS, Direction, Recipe
 from rtde_spec.spec import safe_yaml
 
@@ -287,3 +287,45 @@ def infer_direction(recipe: Recipe, inputs: set[str], outputs: set[str]) -> Dire
     only_in = sum(1 for n in names if n in inputs and n not in outputs)
     only_out = sum(1 for n in names if n in outputs and n not in inputs)
     return "input" if only_in > only_out else "output"
+
+
+def pick_recipe(
+    recipes: list[Recipe],
+    key: str | None,
+    direction: Direction,
+    inputs: set[str],
+    outputs: set[str],
+    *,
+    where: str,
+    how: str = "--recipe-key KEY",
+) -> Recipe:
+    """The recipe of a file to use, as UR's record.py picks one (`conf.get_recipe('out')`): the
+    one keyed `key` (or numbered, from 1); without a key the only recipe, else the only one of
+    `direction` (a recipe's own direction, else `infer_direction`); else a UsageError listing them.
+
+    So UR's record_configuration.xml style files (state, setp, watchdog) need no key to record
+    `state`: setp and watchdog name only input registers.
+    """
+
+    def label(number: int, recipe: Recipe) -> str:
+        kind = infer_direction(recipe, inputs, outputs)
+        size = f"{len(recipe.names)} field{'' if len(recipe.names) == 1 else 's'}"
+        return f"{recipe.key or f'#{number}'} ({kind}, {size})"
+
+    listing = ", ".join(label(n, r) for n, r in enumerate(recipes, 1))
+    if key is not None:
+        chosen = [r for r in recipes if r.key == key]
+        if not chosen and key.lstrip("#").isdigit() and 1 <= int(key.lstrip("#")) <= len(recipes):
+            chosen = [recipes[int(key.lstrip("#")) - 1]]
+        if not chosen:
+            raise UsageError(f"no recipe keyed {key!r}; its recipes: {listing}", subject=at(where))
+        return chosen[0]
+    if len(recipes) == 1:
+        return recipes[0]
+    fitting = [r for r in recipes if infer_direction(r, inputs, outputs) == direction]
+    if len(fitting) == 1:
+        return fitting[0]
+    which = f"{len(fitting)} {direction} recipes" if fitting else f"no {direction} recipe"
+    raise UsageError(
+        f"holds {len(recipes)} recipes and {which}: {listing}; pick one with {how}", subject=at(where)
+    )
