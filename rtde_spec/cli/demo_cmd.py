@@ -27,8 +27,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "demo",
         help="record from the built-in controller emulator, plot it (no robot needed)",
-        description="Starts the controller emulator on loopback, records a few seconds through the "
-        "RTDE client, writes a CSV and a PNG plot of the joint positions, prints a summary. "
+        description="Starts the controller emulator on loopback, sends it a short motion program "
+        "(movej, movel, movej home) on its primary port, records the joints through the RTDE client "
+        "meanwhile, writes a CSV and a PNG plot of the moving joints, prints a summary. "
         "--offline decodes embedded example bytes instead.",
     )
     p.add_argument("--offline", action="store_true", help="decode embedded examples only (default: online)")

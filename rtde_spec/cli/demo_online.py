@@ -1,10 +1,12 @@
-"""The main demo: emulator on loopback, our client records, a CSV and a PNG come out."""
+"""The main demo: emulator on loopback, a motion program runs, our client records, a CSV and a PNG
+come out."""
 
 from __future__ import annotations
 
 import argparse
 import csv
 import logging
+import threading
 from pathlib import Path
 
 from rtde_spec.output.text import table
@@ -17,33 +19,22 @@ DEMO_FIELDS = [
     "safety_status",
     "target_speed_fraction",
 ]
-DEMO_SCENARIO = {
-    "controller": "5.15.0",
-    "outputs": {
-        "actual_q": {
-            "sine": {
-                "amplitude": [0.8, 0.4, 0.5, 0.6, 0.9, 1.2],
-                "period": 2.5,
-                "phase": [0.0, 0.5, 1.0, 1.5, 2.0, 2.5],
-                "offset": [0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0],
-            }
-        },
-        "actual_TCP_pose": {
-            "sine": {
-                "amplitude": [0.1, 0.1, 0.05, 0, 0, 0],
-                "period": 2.5,
-                "offset": [0.3, -0.2, 0.4, 3.14, 0, 0],
-            }
-        },
-    },
-}
+# a short motion program, sent to the emulator's primary port once recording runs: the first
+# plot a new user sees is a moving arm (joint moves, a straight line of the tool, home again)
+DEMO_PROGRAM = """def demo_motion():
+  movej([0.6, -1.3, 1.3, -1.6, -1.4, 0.5], a=4.0, v=2.5)
+  movel(pose_add(get_actual_tcp_pose(), p[0.0, 0.1, 0.05, 0, 0, 0]), a=1.5, v=0.4)
+  movej([0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0], a=4.0, v=2.5)
+end
+"""
+PROGRAM_DELAY = 0.3  # s of the arm at rest before the program starts
 RATE = 125.0
 
 
 def run_online(args: argparse.Namespace) -> int:
-    from rtde_spec.emulator.scenario import Scenario
     from rtde_spec.emulator.server import EmulatorConfig, EmulatorThread
     from rtde_spec.output.writers import open_writer
+    from rtde_spec.primary.client import PrimaryClient
     from rtde_spec.rtde.client import RtdeClient
     from rtde_spec.rtde.recorder import record
 
@@ -51,21 +42,28 @@ def run_online(args: argparse.Namespace) -> int:
     out: Path = args.out
     out.mkdir(parents=True, exist_ok=True)
     csv_path, png_path = out / "joints.csv", out / "joints.png"
-    config = EmulatorConfig(
-        rtde_port=0, primary_port=0, secondary_port=0, scenario=Scenario.model_validate(DEMO_SCENARIO)
-    )
+    config = EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0)
     with EmulatorThread(config) as emulator:
-        port = emulator.ports["rtde"]
-        print(f"Controller emulator {emulator.model.version} listening on 127.0.0.1:{port} (RTDE)")
-        with RtdeClient("127.0.0.1", port) as client:
+        port, primary = emulator.ports["rtde"], emulator.ports["primary"]
+        print(
+            f"Controller emulator {emulator.model.version} listening on 127.0.0.1: RTDE {port}, "
+            f"primary {primary}"
+        )
+        with RtdeClient("127.0.0.1", port) as client, PrimaryClient("127.0.0.1", primary) as robot:
             print(
                 f"Connected: protocol {client.protocol_version}, controller {client.controller_version}; "
                 f"recording {', '.join(DEMO_FIELDS)} at {RATE:g} Hz for {args.seconds:g} s"
             )
+            print(f"Sending this URScript to the primary port after {PROGRAM_DELAY:g} s:\n")
+            print("    " + DEMO_PROGRAM.rstrip().replace("\n", "\n    ") + "\n")
+            timer = threading.Timer(PROGRAM_DELAY, robot.send_script, (DEMO_PROGRAM,))
             writer = open_writer("csv", csv_path)
             try:
+                timer.start()
                 result = record(client, DEMO_FIELDS, RATE, writer, duration=args.seconds)
             finally:
+                timer.cancel()
+                timer.join()
                 writer.close()
     print(f"\nWrote {result.rows} rows to {csv_path} (skipped {result.skipped})")
     rows = _read(csv_path)
@@ -101,7 +99,7 @@ def _plot(columns: dict[str, list[float]], path: Path) -> None:
 
     try:
         plot_columns(
-            columns, ["actual_q"], "timestamp", path, "Joint positions recorded from the controller emulator"
+            columns, ["actual_q"], "timestamp", path, "Joint positions of a motion program on the emulator"
         )
     except MissingDependencyError:
         hint = "pip install 'rtde_spec[plot]'"
