@@ -19,6 +19,7 @@ from .emit_docs import (
 from .emit_enums import emit_enums
 from .emit_external import emit_external
 from .emit_lua import emit_lua
+from .emit_lua_drivers import emit_lua_drivers
 from .emit_primary import emit_primary_models, emit_primary_structs
 from .emit_primary_docs import emit_primary_doc
 from .emit_realtime import emit_realtime
@@ -31,6 +32,7 @@ GEN = "rtde_spec/_generated"
 
 def generate(spec: Spec) -> dict[str, str]:
     catalogue = Catalogue(spec)
+    prims = {p.name: p for p in spec.primitives.primitives}
     return {
         f"{GEN}/__init__.py": PY_HEADER + '"""Code generated from spec/; import through rtde_spec."""\n',
         f"{GEN}/constants.py": emit_constants(spec),
@@ -42,7 +44,7 @@ def generate(spec: Spec) -> dict[str, str]:
         f"{GEN}/rtde_models.py": emit_rtde_models(spec),
         f"{GEN}/primary_models.py": emit_primary_models(spec),
         f"{GEN}/primary_structs.py": emit_primary_structs(spec),
-        f"{GEN}/rtde_spec.lua": emit_lua(spec, catalogue),
+        f"{GEN}/rtde_spec.lua": emit_lua(spec, catalogue) + emit_lua_drivers(prims, catalogue),
         "docs/reference/README.md": emit_index_doc(spec, catalogue),
         "docs/reference/rtde-fields.md": emit_fields_doc(spec, catalogue),
         "docs/reference/rtde-packages.md": emit_packages_doc(spec),
@@ -52,5 +54,5 @@ def generate(spec: Spec) -> dict[str, str]:
         **emit_arms(),
         **emit_dashboard(),
         **emit_realtime(catalogue),
-        **emit_external({p.name: p for p in spec.primitives.primitives}),
+        **emit_external(prims),
     }

@@ -1309,3 +1309,323 @@ function urprimary.dissector(tvb, pinfo, tree)
   end
 end
 for _, port in ipairs(PRIMARY_PORTS) do DissectorTable.get("tcp.port"):add(port, urprimary) end
+
+-- ===== UR client library (URCL) external control, dashboard, real-time =====
+local vs_urcl_UrclControlMode = { [-2] = "STOPPED", [-1] = "UNINITIALIZED", [0] = "IDLE", [1] = "SERVOJ", [2] = "SPEEDJ", [3] = "FORWARD", [4] = "SPEEDL", [5] = "POSE", [6] = "FREEDRIVE", [7] = "TOOL_IN_CONTACT", [8] = "TORQUE" }
+local vs_urcl_TrajectoryControlMessage = { [-1] = "CANCEL", [0] = "NOOP", [1] = "START", [2] = "STREAM_START", [3] = "STREAM_END" }
+local vs_urcl_FreedriveControlMessage = { [-1] = "STOP", [0] = "NOOP", [1] = "START" }
+local vs_urcl_MotionType = { [0] = "MOVEJ", [1] = "MOVEL", [2] = "MOVEP", [3] = "MOVEC", [4] = "OPTIMOVEJ", [5] = "OPTIMOVEL", [6] = "MOVEJ_POSE", [7] = "MOVEL_JOINT", [8] = "MOVEP_JOINT", [9] = "MOVEC_JOINT", [10] = "MOVEC_JOINT_POSE", [11] = "MOVEC_POSE_JOINT", [12] = "OPTIMOVEJ_POSE", [13] = "OPTIMOVEL_JOINT", [51] = "SPLINE" }
+local vs_urcl_SplineType = { [1] = "CUBIC", [2] = "QUINTIC" }
+local vs_urcl_PointType = { [0] = "JOINT_POINT", [1] = "CARTESIAN_POINT", [2] = "JOINT_SPLINE" }
+local vs_urcl_TrajectoryResult = { [0] = "SUCCESS", [1] = "CANCELED", [2] = "FAILURE" }
+local vs_urcl_ScriptCommand = { [0] = "ZERO_FTSENSOR", [1] = "SET_PAYLOAD", [2] = "SET_TOOL_VOLTAGE", [3] = "START_FORCE_MODE", [4] = "END_FORCE_MODE", [5] = "START_TOOL_CONTACT", [6] = "END_TOOL_CONTACT", [7] = "SET_FRICTION_COMPENSATION", [8] = "FT_RTDE_INPUT_ENABLE", [9] = "SET_GRAVITY", [10] = "SET_TCP_OFFSET", [11] = "SET_FRICTION_SCALES", [12] = "SET_PD_CONTROLLER_GAINS", [13] = "SET_MAX_JOINT_TORQUES" }
+local vs_urcl_ToolContactResult = { [0] = "SUCCESS", [1] = "CANCELED" }
+
+-- fixed records of int32 words; the side the port belongs to (the driver) sends REC.driver
+local function urcl_records(proto, F, REC, port, label)
+  local list = {}
+  for _, f in pairs(F) do table.insert(list, f) end
+  proto.fields = list
+  local function side(pinfo) return (pinfo.src_port == port) and "driver" or "robot" end
+  local function get_len(tvb, pinfo, offset)
+    local r = REC[side(pinfo)]
+    return r and r.size or (tvb:len() - offset)
+  end
+  local function one(tvb, pinfo, tree)
+    local r = REC[side(pinfo)]
+    pinfo.cols.protocol = label
+    if not r then
+      tree:add(proto, tvb(), label .. " bytes this side does not send")
+      return tvb:len()
+    end
+    local v = r.default
+    if r.sel_at then v = r.variants[tvb(r.sel_at, 4):int()] or r.default end
+    local sub = tree:add(proto, tvb(0, r.size), label .. " " .. (v and v.name or "record"))
+    if not v then return r.size end
+    sub:add(F["variant"], tvb(0, r.size), v.name)
+    local pos = 0
+    for _, f in ipairs(v.fields) do
+      for _ = 1, f.count do
+        local range = tvb(pos, f.size)
+        if f.scale then sub:add(F[f.f], range, range:int() / f.scale) else sub:add(F[f.f], range) end
+        pos = pos + f.size
+      end
+    end
+    return r.size
+  end
+  function proto.dissector(tvb, pinfo, tree) dissect_tcp_pdus(tvb, tree, 4, get_len, one) end
+  DissectorTable.get("tcp.port"):add(port, proto)
+end
+
+local p_urcl_reverse = Proto("urcl_reverse", "URCL reverse")
+local F_urcl_reverse = {}
+F_urcl_reverse["variant"] = ProtoField.string("urcl_reverse.variant", "variant")
+F_urcl_reverse["read_timeout"] = ProtoField.double("urcl_reverse.read_timeout", "read_timeout")
+F_urcl_reverse["target"] = ProtoField.double("urcl_reverse.target", "target")
+F_urcl_reverse["control_mode"] = ProtoField.int32("urcl_reverse.control_mode", "control_mode", base.DEC, vs_urcl_UrclControlMode)
+F_urcl_reverse["trajectory_action"] = ProtoField.int32("urcl_reverse.trajectory_action", "trajectory_action", base.DEC, vs_urcl_TrajectoryControlMessage)
+F_urcl_reverse["point_count"] = ProtoField.int32("urcl_reverse.point_count", "point_count", base.DEC)
+F_urcl_reverse["move_id"] = ProtoField.int32("urcl_reverse.move_id", "move_id", base.DEC)
+F_urcl_reverse["unused"] = ProtoField.int32("urcl_reverse.unused", "unused", base.DEC)
+F_urcl_reverse["freedrive_action"] = ProtoField.int32("urcl_reverse.freedrive_action", "freedrive_action", base.DEC, vs_urcl_FreedriveControlMessage)
+local REC_urcl_reverse = {
+  driver = { size = 32, sel_at = 28, default = { name = "motion_target", fields = { { f = "read_timeout", size = 4, count = 1, scale = 1000.0 }, { f = "target", size = 4, count = 6, scale = 1000000.0 }, { f = "control_mode", size = 4, count = 1, scale = nil } } },
+    variants = { [3] = { name = "trajectory_control", fields = { { f = "read_timeout", size = 4, count = 1, scale = 1000.0 }, { f = "trajectory_action", size = 4, count = 1, scale = nil }, { f = "point_count", size = 4, count = 1, scale = nil }, { f = "move_id", size = 4, count = 1, scale = nil }, { f = "unused", size = 4, count = 3, scale = nil }, { f = "control_mode", size = 4, count = 1, scale = nil } } }, [6] = { name = "freedrive_control", fields = { { f = "read_timeout", size = 4, count = 1, scale = 1000.0 }, { f = "freedrive_action", size = 4, count = 1, scale = nil }, { f = "unused", size = 4, count = 5, scale = nil }, { f = "control_mode", size = 4, count = 1, scale = nil } } } } },
+}
+urcl_records(p_urcl_reverse, F_urcl_reverse, REC_urcl_reverse, 50001, "URCL_REVERSE")
+
+local p_urcl_script_sender = Proto("urcl_script_sender", "URCL script sender")
+local F_urcl_script_sender = {
+  request = ProtoField.string("urcl_script_sender.request", "request"),
+  script = ProtoField.string("urcl_script_sender.script", "script text"),
+}
+p_urcl_script_sender.fields = { F_urcl_script_sender.request, F_urcl_script_sender.script }
+function p_urcl_script_sender.dissector(tvb, pinfo, tree)
+  pinfo.cols.protocol = "URCL_SCRIPT"
+  local sub = tree:add(p_urcl_script_sender, tvb(), "URCL script sender")
+  if pinfo.src_port == 50002 then sub:add(F_urcl_script_sender.script, tvb())
+  else sub:add(F_urcl_script_sender.request, tvb(), (tvb():string():gsub("\n$", ""))) end
+end
+DissectorTable.get("tcp.port"):add(50002, p_urcl_script_sender)
+
+local p_urcl_trajectory = Proto("urcl_trajectory", "URCL trajectory")
+local F_urcl_trajectory = {}
+F_urcl_trajectory["variant"] = ProtoField.string("urcl_trajectory.variant", "variant")
+F_urcl_trajectory["target"] = ProtoField.double("urcl_trajectory.target", "target")
+F_urcl_trajectory["via_or_q_near"] = ProtoField.double("urcl_trajectory.via_or_q_near", "via_or_q_near")
+F_urcl_trajectory["velocity"] = ProtoField.double("urcl_trajectory.velocity", "velocity")
+F_urcl_trajectory["acceleration"] = ProtoField.double("urcl_trajectory.acceleration", "acceleration")
+F_urcl_trajectory["mode_or_has_q_near"] = ProtoField.double("urcl_trajectory.mode_or_has_q_near", "mode_or_has_q_near")
+F_urcl_trajectory["unused"] = ProtoField.int32("urcl_trajectory.unused", "unused", base.DEC)
+F_urcl_trajectory["duration"] = ProtoField.double("urcl_trajectory.duration", "duration")
+F_urcl_trajectory["blend_radius"] = ProtoField.double("urcl_trajectory.blend_radius", "blend_radius")
+F_urcl_trajectory["motion_type"] = ProtoField.int32("urcl_trajectory.motion_type", "motion_type", base.DEC, vs_urcl_MotionType)
+F_urcl_trajectory["positions"] = ProtoField.double("urcl_trajectory.positions", "positions")
+F_urcl_trajectory["velocities"] = ProtoField.double("urcl_trajectory.velocities", "velocities")
+F_urcl_trajectory["accelerations"] = ProtoField.double("urcl_trajectory.accelerations", "accelerations")
+F_urcl_trajectory["spline_type"] = ProtoField.int32("urcl_trajectory.spline_type", "spline_type", base.DEC, vs_urcl_SplineType)
+F_urcl_trajectory["result"] = ProtoField.int32("urcl_trajectory.result", "result", base.DEC, vs_urcl_TrajectoryResult)
+local REC_urcl_trajectory = {
+  driver = { size = 84, sel_at = 80, default = { name = "motion_primitive", fields = { { f = "target", size = 4, count = 6, scale = 1000000.0 }, { f = "via_or_q_near", size = 4, count = 6, scale = 1000000.0 }, { f = "velocity", size = 4, count = 1, scale = 1000000.0 }, { f = "acceleration", size = 4, count = 1, scale = 1000000.0 }, { f = "mode_or_has_q_near", size = 4, count = 1, scale = 1000000.0 }, { f = "unused", size = 4, count = 3, scale = nil }, { f = "duration", size = 4, count = 1, scale = 1000000.0 }, { f = "blend_radius", size = 4, count = 1, scale = 1000000.0 }, { f = "motion_type", size = 4, count = 1, scale = nil } } },
+    variants = { [51] = { name = "spline_point", fields = { { f = "positions", size = 4, count = 6, scale = 1000000.0 }, { f = "velocities", size = 4, count = 6, scale = 1000000.0 }, { f = "accelerations", size = 4, count = 6, scale = 1000000.0 }, { f = "duration", size = 4, count = 1, scale = 1000000.0 }, { f = "spline_type", size = 4, count = 1, scale = nil }, { f = "motion_type", size = 4, count = 1, scale = nil } } } } },
+  robot = { size = 4, sel_at = nil, default = { name = "result", fields = { { f = "result", size = 4, count = 1, scale = nil } } },
+    variants = {  } },
+}
+urcl_records(p_urcl_trajectory, F_urcl_trajectory, REC_urcl_trajectory, 50003, "URCL_TRAJECTORY")
+
+local p_urcl_script_command = Proto("urcl_script_command", "URCL script command")
+local F_urcl_script_command = {}
+F_urcl_script_command["variant"] = ProtoField.string("urcl_script_command.variant", "variant")
+F_urcl_script_command["command"] = ProtoField.int32("urcl_script_command.command", "command", base.DEC, vs_urcl_ScriptCommand)
+F_urcl_script_command["mass"] = ProtoField.double("urcl_script_command.mass", "mass")
+F_urcl_script_command["cog"] = ProtoField.double("urcl_script_command.cog", "cog")
+F_urcl_script_command["voltage"] = ProtoField.double("urcl_script_command.voltage", "voltage")
+F_urcl_script_command["task_frame"] = ProtoField.double("urcl_script_command.task_frame", "task_frame")
+F_urcl_script_command["selection_vector"] = ProtoField.double("urcl_script_command.selection_vector", "selection_vector")
+F_urcl_script_command["wrench"] = ProtoField.double("urcl_script_command.wrench", "wrench")
+F_urcl_script_command["force_type"] = ProtoField.double("urcl_script_command.force_type", "force_type")
+F_urcl_script_command["limits"] = ProtoField.double("urcl_script_command.limits", "limits")
+F_urcl_script_command["damping_factor"] = ProtoField.double("urcl_script_command.damping_factor", "damping_factor")
+F_urcl_script_command["gain_scaling"] = ProtoField.double("urcl_script_command.gain_scaling", "gain_scaling")
+F_urcl_script_command["enabled"] = ProtoField.int32("urcl_script_command.enabled", "enabled", base.DEC)
+F_urcl_script_command["sensor_mass"] = ProtoField.double("urcl_script_command.sensor_mass", "sensor_mass")
+F_urcl_script_command["sensor_offset"] = ProtoField.double("urcl_script_command.sensor_offset", "sensor_offset")
+F_urcl_script_command["sensor_cog"] = ProtoField.double("urcl_script_command.sensor_cog", "sensor_cog")
+F_urcl_script_command["gravity"] = ProtoField.double("urcl_script_command.gravity", "gravity")
+F_urcl_script_command["offset"] = ProtoField.double("urcl_script_command.offset", "offset")
+F_urcl_script_command["viscous_scale"] = ProtoField.double("urcl_script_command.viscous_scale", "viscous_scale")
+F_urcl_script_command["coulomb_scale"] = ProtoField.double("urcl_script_command.coulomb_scale", "coulomb_scale")
+F_urcl_script_command["kp"] = ProtoField.double("urcl_script_command.kp", "kp")
+F_urcl_script_command["kd"] = ProtoField.double("urcl_script_command.kd", "kd")
+F_urcl_script_command["max_joint_torques"] = ProtoField.double("urcl_script_command.max_joint_torques", "max_joint_torques")
+F_urcl_script_command["words"] = ProtoField.int32("urcl_script_command.words", "words", base.DEC)
+F_urcl_script_command["result"] = ProtoField.int32("urcl_script_command.result", "result", base.DEC, vs_urcl_ToolContactResult)
+local REC_urcl_script_command = {
+  driver = { size = 112, sel_at = 0, default = { name = "unknown_command", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "words", size = 4, count = 27, scale = nil } } },
+    variants = { [0] = { name = "zero_ft_sensor", fields = { { f = "command", size = 4, count = 1, scale = nil } } }, [1] = { name = "set_payload", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "mass", size = 4, count = 1, scale = 1000000.0 }, { f = "cog", size = 4, count = 3, scale = 1000000.0 } } }, [2] = { name = "set_tool_voltage", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "voltage", size = 4, count = 1, scale = 1000000.0 } } }, [3] = { name = "start_force_mode", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "task_frame", size = 4, count = 6, scale = 1000000.0 }, { f = "selection_vector", size = 4, count = 6, scale = 1000000.0 }, { f = "wrench", size = 4, count = 6, scale = 1000000.0 }, { f = "force_type", size = 4, count = 1, scale = 1000000.0 }, { f = "limits", size = 4, count = 6, scale = 1000000.0 }, { f = "damping_factor", size = 4, count = 1, scale = 1000000.0 }, { f = "gain_scaling", size = 4, count = 1, scale = 1000000.0 } } }, [4] = { name = "end_force_mode", fields = { { f = "command", size = 4, count = 1, scale = nil } } }, [5] = { name = "start_tool_contact", fields = { { f = "command", size = 4, count = 1, scale = nil } } }, [6] = { name = "end_tool_contact", fields = { { f = "command", size = 4, count = 1, scale = nil } } }, [7] = { name = "set_friction_compensation", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "enabled", size = 4, count = 1, scale = nil } } }, [8] = { name = "ft_rtde_input_enable", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "enabled", size = 4, count = 1, scale = nil }, { f = "sensor_mass", size = 4, count = 1, scale = 1000000.0 }, { f = "sensor_offset", size = 4, count = 3, scale = 1000000.0 }, { f = "sensor_cog", size = 4, count = 3, scale = 1000000.0 } } }, [9] = { name = "set_gravity", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "gravity", size = 4, count = 3, scale = 1000000.0 } } }, [10] = { name = "set_tcp_offset", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "offset", size = 4, count = 6, scale = 1000000.0 } } }, [11] = { name = "set_friction_scales", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "viscous_scale", size = 4, count = 6, scale = 1000000.0 }, { f = "coulomb_scale", size = 4, count = 6, scale = 1000000.0 } } }, [12] = { name = "set_pd_controller_gains", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "kp", size = 4, count = 6, scale = 1000000.0 }, { f = "kd", size = 4, count = 6, scale = 1000000.0 } } }, [13] = { name = "set_max_joint_torques", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "max_joint_torques", size = 4, count = 6, scale = 1000000.0 } } } } },
+  robot = { size = 4, sel_at = nil, default = { name = "result", fields = { { f = "result", size = 4, count = 1, scale = nil } } },
+    variants = {  } },
+}
+urcl_records(p_urcl_script_command, F_urcl_script_command, REC_urcl_script_command, 50004, "URCL_SCRIPT_COMMAND")
+
+local DASH_PORT = 29999
+local DASH_UNKNOWN = "^could not understand: '.*'$"
+local DASH_COMMANDS = {
+  { text = "unlock protective stop", arg = false, replies = { { "ok", "^Protective stop releasing$" }, { "failed", "^Cannot unlock protective stop until 5s after occurrence%. Always inspect cause of protective stop before unlocking$" } } },
+  { text = "is in remote control", arg = false, replies = { { "ok", "^true$" } } },
+  { text = "get loaded program", arg = false, replies = { { "ok", "^Loaded program: .*$" }, { "failed", "^No program loaded$" } } },
+  { text = "close safety popup", arg = false, replies = { { "ok", "^closing safety popup$" } } },
+  { text = "get serial number", arg = false, replies = { { "ok", "^.*$" } } },
+  { text = "PolyscopeVersion", arg = false, replies = { { "ok", "^URSoftware .* %(.*%)$" } } },
+  { text = "get robot model", arg = false, replies = { { "ok", "^.*$" } } },
+  { text = "isProgramSaved", arg = false, replies = { { "ok", "^true .*$" } } },
+  { text = "restart safety", arg = false, replies = { { "ok", "^Restarting safety$" } } },
+  { text = "brake release", arg = false, replies = { { "ok", "^Brake releasing$" } } },
+  { text = "programState", arg = false, replies = { { "ok", "^.* .*$" } } },
+  { text = "safetystatus", arg = false, replies = { { "ok", "^Safetystatus: .*$" } } },
+  { text = "close popup", arg = false, replies = { { "ok", "^closing popup$" } } },
+  { text = "safetymode", arg = false, replies = { { "ok", "^Safetymode: .*$" } } },
+  { text = "robotmode", arg = false, replies = { { "ok", "^Robotmode: .*$" } } },
+  { text = "power off", arg = false, replies = { { "ok", "^Powering off$" } } },
+  { text = "shutdown", arg = false, replies = { { "ok", "^Shutting down$" } } },
+  { text = "addToLog", arg = true, replies = { { "ok", "^Added log message$" } } },
+  { text = "power on", arg = false, replies = { { "ok", "^Powering on$" } } },
+  { text = "running", arg = false, replies = { { "ok", "^Program running: .*$" } } },
+  { text = "version", arg = false, replies = { { "ok", "^.*$" } } },
+  { text = "pause", arg = false, replies = { { "ok", "^Pausing program$" }, { "failed", "^Failed to execute: pause$" } } },
+  { text = "popup", arg = true, replies = { { "ok", "^showing popup$" } } },
+  { text = "load", arg = true, replies = { { "ok", "^Loading program: .*$" }, { "not_found", "^File not found: .*$" }, { "failed", "^Error while loading program: .*$" } } },
+  { text = "play", arg = false, replies = { { "ok", "^Starting program$" }, { "failed", "^Failed to execute: play$" } } },
+  { text = "stop", arg = false, replies = { { "ok", "^Stopped$" }, { "failed", "^Failed to execute: stop$" } } },
+  { text = "quit", arg = false, replies = { { "ok", "^Disconnected$" } } },
+}
+local urdash = Proto("urdashboard", "UR dashboard server")
+local FD = {
+  request = ProtoField.string("urdashboard.request", "request"),
+  reply = ProtoField.string("urdashboard.reply", "reply"),
+  command = ProtoField.string("urdashboard.command", "command"),
+  argument = ProtoField.string("urdashboard.argument", "argument"),
+  outcome = ProtoField.string("urdashboard.outcome", "outcome"),
+}
+urdash.fields = { FD.request, FD.reply, FD.command, FD.argument, FD.outcome }
+local dash_streams, dash_frames = {}, {}
+
+local function dash_command(line)
+  for _, c in ipairs(DASH_COMMANDS) do
+    if line == c.text then return c, "" end
+    if c.arg and line:sub(1, #c.text + 1) == c.text .. " " then return c, line:sub(#c.text + 2) end
+  end
+  return nil, ""
+end
+
+local function dash_outcome(c, reply)
+  if c then for _, r in ipairs(c.replies) do if reply:match(r[2]) then return r[1] end end end
+  if reply:match(DASH_UNKNOWN) then return "unknown" end
+  return "unexpected"
+end
+
+function urdash.dissector(tvb, pinfo, tree)
+  local text = tvb():string()
+  local last = text:match(".*()\n")
+  if not last then pinfo.desegment_len = DESEGMENT_ONE_MORE_SEGMENT; return end
+  if last < #text then pinfo.desegment_offset = last; pinfo.desegment_len = DESEGMENT_ONE_MORE_SEGMENT end
+  pinfo.cols.protocol = "URDASHBOARD"
+  local key = (pinfo.src_port == DASH_PORT) and (tostring(pinfo.dst) .. ":" .. pinfo.dst_port)
+    or (tostring(pinfo.src) .. ":" .. pinfo.src_port)
+  local s = dash_streams[key]
+  if not s then s = { open = {}, greeted = false }; dash_streams[key] = s end
+  local results = dash_frames[pinfo.number]
+  if not results then
+    results = {}
+    for line in text:sub(1, last):gmatch("([^\n]*)\n") do
+      line = line:gsub("\r$", "")
+      if pinfo.src_port == DASH_PORT then
+        local c = table.remove(s.open, 1)
+        local r = { reply = line, command = "", outcome = s.greeted and "unrequested" or "greeting" }
+        if c then r.command = c.c and c.c.text or ""; r.outcome = dash_outcome(c.c, line) end
+        table.insert(results, r)
+        s.greeted = true
+      else
+        local c, arg = dash_command(line)
+        table.insert(s.open, { c = c })
+        table.insert(results, { request = line, command = c and c.text or "", argument = arg })
+      end
+    end
+    dash_frames[pinfo.number] = results
+  end
+  for _, r in ipairs(results) do
+    local sub = tree:add(urdash, tvb(0, last), "UR dashboard " .. (r.request and "request" or "reply"))
+    if r.request then
+      sub:add(FD.request, tvb(0, last), r.request)
+      sub:add(FD.argument, tvb(0, last), r.argument)
+    else
+      sub:add(FD.reply, tvb(0, last), r.reply)
+      sub:add(FD.outcome, tvb(0, last), r.outcome)
+    end
+    sub:add(FD.command, tvb(0, last), r.command)
+  end
+end
+DissectorTable.get("tcp.port"):add(DASH_PORT, urdash)
+
+local urrt = Proto("urrealtime", "UR real-time interface")
+local FRT = {}
+FRT["urrealtime.time"] = ProtoField.double("urrealtime.time", "time")
+FRT["urrealtime.q_target"] = ProtoField.double("urrealtime.q_target", "q_target")
+FRT["urrealtime.qd_target"] = ProtoField.double("urrealtime.qd_target", "qd_target")
+FRT["urrealtime.qdd_target"] = ProtoField.double("urrealtime.qdd_target", "qdd_target")
+FRT["urrealtime.i_target"] = ProtoField.double("urrealtime.i_target", "i_target")
+FRT["urrealtime.m_target"] = ProtoField.double("urrealtime.m_target", "m_target")
+FRT["urrealtime.q_actual"] = ProtoField.double("urrealtime.q_actual", "q_actual")
+FRT["urrealtime.qd_actual"] = ProtoField.double("urrealtime.qd_actual", "qd_actual")
+FRT["urrealtime.i_actual"] = ProtoField.double("urrealtime.i_actual", "i_actual")
+FRT["urrealtime.i_control"] = ProtoField.double("urrealtime.i_control", "i_control")
+FRT["urrealtime.tool_vector_actual"] = ProtoField.double("urrealtime.tool_vector_actual", "tool_vector_actual")
+FRT["urrealtime.tcp_speed_actual"] = ProtoField.double("urrealtime.tcp_speed_actual", "tcp_speed_actual")
+FRT["urrealtime.tcp_force"] = ProtoField.double("urrealtime.tcp_force", "tcp_force")
+FRT["urrealtime.tool_vector_target"] = ProtoField.double("urrealtime.tool_vector_target", "tool_vector_target")
+FRT["urrealtime.tcp_speed_target"] = ProtoField.double("urrealtime.tcp_speed_target", "tcp_speed_target")
+FRT["urrealtime.digital_input_bits"] = ProtoField.double("urrealtime.digital_input_bits", "digital_input_bits")
+FRT["urrealtime.motor_temperatures"] = ProtoField.double("urrealtime.motor_temperatures", "motor_temperatures")
+FRT["urrealtime.controller_timer"] = ProtoField.double("urrealtime.controller_timer", "controller_timer")
+FRT["urrealtime.test_value"] = ProtoField.double("urrealtime.test_value", "test_value")
+FRT["urrealtime.robot_mode"] = ProtoField.double("urrealtime.robot_mode", "robot_mode")
+FRT["urrealtime.joint_modes"] = ProtoField.double("urrealtime.joint_modes", "joint_modes")
+FRT["urrealtime.safety_mode"] = ProtoField.double("urrealtime.safety_mode", "safety_mode")
+FRT["urrealtime.reserved_1"] = ProtoField.double("urrealtime.reserved_1", "reserved_1")
+FRT["urrealtime.tool_accelerometer_values"] = ProtoField.double("urrealtime.tool_accelerometer_values", "tool_accelerometer_values")
+FRT["urrealtime.reserved_2"] = ProtoField.double("urrealtime.reserved_2", "reserved_2")
+FRT["urrealtime.speed_scaling"] = ProtoField.double("urrealtime.speed_scaling", "speed_scaling")
+FRT["urrealtime.linear_momentum_norm"] = ProtoField.double("urrealtime.linear_momentum_norm", "linear_momentum_norm")
+FRT["urrealtime.reserved_3"] = ProtoField.double("urrealtime.reserved_3", "reserved_3")
+FRT["urrealtime.reserved_4"] = ProtoField.double("urrealtime.reserved_4", "reserved_4")
+FRT["urrealtime.v_main"] = ProtoField.double("urrealtime.v_main", "v_main")
+FRT["urrealtime.v_robot"] = ProtoField.double("urrealtime.v_robot", "v_robot")
+FRT["urrealtime.i_robot"] = ProtoField.double("urrealtime.i_robot", "i_robot")
+FRT["urrealtime.v_actual"] = ProtoField.double("urrealtime.v_actual", "v_actual")
+FRT["urrealtime.digital_outputs"] = ProtoField.double("urrealtime.digital_outputs", "digital_outputs")
+FRT["urrealtime.program_state"] = ProtoField.double("urrealtime.program_state", "program_state")
+FRT["urrealtime.elbow_position"] = ProtoField.double("urrealtime.elbow_position", "elbow_position")
+FRT["urrealtime.elbow_velocity"] = ProtoField.double("urrealtime.elbow_velocity", "elbow_velocity")
+FRT["urrealtime.safety_status"] = ProtoField.double("urrealtime.safety_status", "safety_status")
+FRT["urrealtime.reserved_5"] = ProtoField.double("urrealtime.reserved_5", "reserved_5")
+FRT["urrealtime.payload_mass"] = ProtoField.double("urrealtime.payload_mass", "payload_mass")
+FRT["urrealtime.payload_cog"] = ProtoField.double("urrealtime.payload_cog", "payload_cog")
+FRT["urrealtime.payload_inertia"] = ProtoField.double("urrealtime.payload_inertia", "payload_inertia")
+local rt_list = {}
+for _, f in pairs(FRT) do table.insert(rt_list, f) end
+local RT_LAYOUTS = {
+  [1044] = { { f = "urrealtime.time", size = 8, count = 1 }, { f = "urrealtime.q_target", size = 8, count = 6 }, { f = "urrealtime.qd_target", size = 8, count = 6 }, { f = "urrealtime.qdd_target", size = 8, count = 6 }, { f = "urrealtime.i_target", size = 8, count = 6 }, { f = "urrealtime.m_target", size = 8, count = 6 }, { f = "urrealtime.q_actual", size = 8, count = 6 }, { f = "urrealtime.qd_actual", size = 8, count = 6 }, { f = "urrealtime.i_actual", size = 8, count = 6 }, { f = "urrealtime.i_control", size = 8, count = 6 }, { f = "urrealtime.tool_vector_actual", size = 8, count = 6 }, { f = "urrealtime.tcp_speed_actual", size = 8, count = 6 }, { f = "urrealtime.tcp_force", size = 8, count = 6 }, { f = "urrealtime.tool_vector_target", size = 8, count = 6 }, { f = "urrealtime.tcp_speed_target", size = 8, count = 6 }, { f = "urrealtime.digital_input_bits", size = 8, count = 1 }, { f = "urrealtime.motor_temperatures", size = 8, count = 6 }, { f = "urrealtime.controller_timer", size = 8, count = 1 }, { f = "urrealtime.test_value", size = 8, count = 1 }, { f = "urrealtime.robot_mode", size = 8, count = 1 }, { f = "urrealtime.joint_modes", size = 8, count = 6 }, { f = "urrealtime.safety_mode", size = 8, count = 1 }, { f = "urrealtime.reserved_1", size = 8, count = 6 }, { f = "urrealtime.tool_accelerometer_values", size = 8, count = 3 }, { f = "urrealtime.reserved_2", size = 8, count = 6 }, { f = "urrealtime.speed_scaling", size = 8, count = 1 }, { f = "urrealtime.linear_momentum_norm", size = 8, count = 1 }, { f = "urrealtime.reserved_3", size = 8, count = 1 }, { f = "urrealtime.reserved_4", size = 8, count = 1 }, { f = "urrealtime.v_main", size = 8, count = 1 }, { f = "urrealtime.v_robot", size = 8, count = 1 }, { f = "urrealtime.i_robot", size = 8, count = 1 }, { f = "urrealtime.v_actual", size = 8, count = 6 } },
+  [1060] = { { f = "urrealtime.time", size = 8, count = 1 }, { f = "urrealtime.q_target", size = 8, count = 6 }, { f = "urrealtime.qd_target", size = 8, count = 6 }, { f = "urrealtime.qdd_target", size = 8, count = 6 }, { f = "urrealtime.i_target", size = 8, count = 6 }, { f = "urrealtime.m_target", size = 8, count = 6 }, { f = "urrealtime.q_actual", size = 8, count = 6 }, { f = "urrealtime.qd_actual", size = 8, count = 6 }, { f = "urrealtime.i_actual", size = 8, count = 6 }, { f = "urrealtime.i_control", size = 8, count = 6 }, { f = "urrealtime.tool_vector_actual", size = 8, count = 6 }, { f = "urrealtime.tcp_speed_actual", size = 8, count = 6 }, { f = "urrealtime.tcp_force", size = 8, count = 6 }, { f = "urrealtime.tool_vector_target", size = 8, count = 6 }, { f = "urrealtime.tcp_speed_target", size = 8, count = 6 }, { f = "urrealtime.digital_input_bits", size = 8, count = 1 }, { f = "urrealtime.motor_temperatures", size = 8, count = 6 }, { f = "urrealtime.controller_timer", size = 8, count = 1 }, { f = "urrealtime.test_value", size = 8, count = 1 }, { f = "urrealtime.robot_mode", size = 8, count = 1 }, { f = "urrealtime.joint_modes", size = 8, count = 6 }, { f = "urrealtime.safety_mode", size = 8, count = 1 }, { f = "urrealtime.reserved_1", size = 8, count = 6 }, { f = "urrealtime.tool_accelerometer_values", size = 8, count = 3 }, { f = "urrealtime.reserved_2", size = 8, count = 6 }, { f = "urrealtime.speed_scaling", size = 8, count = 1 }, { f = "urrealtime.linear_momentum_norm", size = 8, count = 1 }, { f = "urrealtime.reserved_3", size = 8, count = 1 }, { f = "urrealtime.reserved_4", size = 8, count = 1 }, { f = "urrealtime.v_main", size = 8, count = 1 }, { f = "urrealtime.v_robot", size = 8, count = 1 }, { f = "urrealtime.i_robot", size = 8, count = 1 }, { f = "urrealtime.v_actual", size = 8, count = 6 }, { f = "urrealtime.digital_outputs", size = 8, count = 1 }, { f = "urrealtime.program_state", size = 8, count = 1 } },
+  [1108] = { { f = "urrealtime.time", size = 8, count = 1 }, { f = "urrealtime.q_target", size = 8, count = 6 }, { f = "urrealtime.qd_target", size = 8, count = 6 }, { f = "urrealtime.qdd_target", size = 8, count = 6 }, { f = "urrealtime.i_target", size = 8, count = 6 }, { f = "urrealtime.m_target", size = 8, count = 6 }, { f = "urrealtime.q_actual", size = 8, count = 6 }, { f = "urrealtime.qd_actual", size = 8, count = 6 }, { f = "urrealtime.i_actual", size = 8, count = 6 }, { f = "urrealtime.i_control", size = 8, count = 6 }, { f = "urrealtime.tool_vector_actual", size = 8, count = 6 }, { f = "urrealtime.tcp_speed_actual", size = 8, count = 6 }, { f = "urrealtime.tcp_force", size = 8, count = 6 }, { f = "urrealtime.tool_vector_target", size = 8, count = 6 }, { f = "urrealtime.tcp_speed_target", size = 8, count = 6 }, { f = "urrealtime.digital_input_bits", size = 8, count = 1 }, { f = "urrealtime.motor_temperatures", size = 8, count = 6 }, { f = "urrealtime.controller_timer", size = 8, count = 1 }, { f = "urrealtime.test_value", size = 8, count = 1 }, { f = "urrealtime.robot_mode", size = 8, count = 1 }, { f = "urrealtime.joint_modes", size = 8, count = 6 }, { f = "urrealtime.safety_mode", size = 8, count = 1 }, { f = "urrealtime.reserved_1", size = 8, count = 6 }, { f = "urrealtime.tool_accelerometer_values", size = 8, count = 3 }, { f = "urrealtime.reserved_2", size = 8, count = 6 }, { f = "urrealtime.speed_scaling", size = 8, count = 1 }, { f = "urrealtime.linear_momentum_norm", size = 8, count = 1 }, { f = "urrealtime.reserved_3", size = 8, count = 1 }, { f = "urrealtime.reserved_4", size = 8, count = 1 }, { f = "urrealtime.v_main", size = 8, count = 1 }, { f = "urrealtime.v_robot", size = 8, count = 1 }, { f = "urrealtime.i_robot", size = 8, count = 1 }, { f = "urrealtime.v_actual", size = 8, count = 6 }, { f = "urrealtime.digital_outputs", size = 8, count = 1 }, { f = "urrealtime.program_state", size = 8, count = 1 }, { f = "urrealtime.elbow_position", size = 8, count = 3 }, { f = "urrealtime.elbow_velocity", size = 8, count = 3 } },
+  [1116] = { { f = "urrealtime.time", size = 8, count = 1 }, { f = "urrealtime.q_target", size = 8, count = 6 }, { f = "urrealtime.qd_target", size = 8, count = 6 }, { f = "urrealtime.qdd_target", size = 8, count = 6 }, { f = "urrealtime.i_target", size = 8, count = 6 }, { f = "urrealtime.m_target", size = 8, count = 6 }, { f = "urrealtime.q_actual", size = 8, count = 6 }, { f = "urrealtime.qd_actual", size = 8, count = 6 }, { f = "urrealtime.i_actual", size = 8, count = 6 }, { f = "urrealtime.i_control", size = 8, count = 6 }, { f = "urrealtime.tool_vector_actual", size = 8, count = 6 }, { f = "urrealtime.tcp_speed_actual", size = 8, count = 6 }, { f = "urrealtime.tcp_force", size = 8, count = 6 }, { f = "urrealtime.tool_vector_target", size = 8, count = 6 }, { f = "urrealtime.tcp_speed_target", size = 8, count = 6 }, { f = "urrealtime.digital_input_bits", size = 8, count = 1 }, { f = "urrealtime.motor_temperatures", size = 8, count = 6 }, { f = "urrealtime.controller_timer", size = 8, count = 1 }, { f = "urrealtime.test_value", size = 8, count = 1 }, { f = "urrealtime.robot_mode", size = 8, count = 1 }, { f = "urrealtime.joint_modes", size = 8, count = 6 }, { f = "urrealtime.safety_mode", size = 8, count = 1 }, { f = "urrealtime.reserved_1", size = 8, count = 6 }, { f = "urrealtime.tool_accelerometer_values", size = 8, count = 3 }, { f = "urrealtime.reserved_2", size = 8, count = 6 }, { f = "urrealtime.speed_scaling", size = 8, count = 1 }, { f = "urrealtime.linear_momentum_norm", size = 8, count = 1 }, { f = "urrealtime.reserved_3", size = 8, count = 1 }, { f = "urrealtime.reserved_4", size = 8, count = 1 }, { f = "urrealtime.v_main", size = 8, count = 1 }, { f = "urrealtime.v_robot", size = 8, count = 1 }, { f = "urrealtime.i_robot", size = 8, count = 1 }, { f = "urrealtime.v_actual", size = 8, count = 6 }, { f = "urrealtime.digital_outputs", size = 8, count = 1 }, { f = "urrealtime.program_state", size = 8, count = 1 }, { f = "urrealtime.elbow_position", size = 8, count = 3 }, { f = "urrealtime.elbow_velocity", size = 8, count = 3 }, { f = "urrealtime.safety_status", size = 8, count = 1 } },
+  [1140] = { { f = "urrealtime.time", size = 8, count = 1 }, { f = "urrealtime.q_target", size = 8, count = 6 }, { f = "urrealtime.qd_target", size = 8, count = 6 }, { f = "urrealtime.qdd_target", size = 8, count = 6 }, { f = "urrealtime.i_target", size = 8, count = 6 }, { f = "urrealtime.m_target", size = 8, count = 6 }, { f = "urrealtime.q_actual", size = 8, count = 6 }, { f = "urrealtime.qd_actual", size = 8, count = 6 }, { f = "urrealtime.i_actual", size = 8, count = 6 }, { f = "urrealtime.i_control", size = 8, count = 6 }, { f = "urrealtime.tool_vector_actual", size = 8, count = 6 }, { f = "urrealtime.tcp_speed_actual", size = 8, count = 6 }, { f = "urrealtime.tcp_force", size = 8, count = 6 }, { f = "urrealtime.tool_vector_target", size = 8, count = 6 }, { f = "urrealtime.tcp_speed_target", size = 8, count = 6 }, { f = "urrealtime.digital_input_bits", size = 8, count = 1 }, { f = "urrealtime.motor_temperatures", size = 8, count = 6 }, { f = "urrealtime.controller_timer", size = 8, count = 1 }, { f = "urrealtime.test_value", size = 8, count = 1 }, { f = "urrealtime.robot_mode", size = 8, count = 1 }, { f = "urrealtime.joint_modes", size = 8, count = 6 }, { f = "urrealtime.safety_mode", size = 8, count = 1 }, { f = "urrealtime.reserved_1", size = 8, count = 6 }, { f = "urrealtime.tool_accelerometer_values", size = 8, count = 3 }, { f = "urrealtime.reserved_2", size = 8, count = 6 }, { f = "urrealtime.speed_scaling", size = 8, count = 1 }, { f = "urrealtime.linear_momentum_norm", size = 8, count = 1 }, { f = "urrealtime.reserved_3", size = 8, count = 1 }, { f = "urrealtime.reserved_4", size = 8, count = 1 }, { f = "urrealtime.v_main", size = 8, count = 1 }, { f = "urrealtime.v_robot", size = 8, count = 1 }, { f = "urrealtime.i_robot", size = 8, count = 1 }, { f = "urrealtime.v_actual", size = 8, count = 6 }, { f = "urrealtime.digital_outputs", size = 8, count = 1 }, { f = "urrealtime.program_state", size = 8, count = 1 }, { f = "urrealtime.elbow_position", size = 8, count = 3 }, { f = "urrealtime.elbow_velocity", size = 8, count = 3 }, { f = "urrealtime.safety_status", size = 8, count = 1 }, { f = "urrealtime.reserved_5", size = 8, count = 3 } },
+  [1220] = { { f = "urrealtime.time", size = 8, count = 1 }, { f = "urrealtime.q_target", size = 8, count = 6 }, { f = "urrealtime.qd_target", size = 8, count = 6 }, { f = "urrealtime.qdd_target", size = 8, count = 6 }, { f = "urrealtime.i_target", size = 8, count = 6 }, { f = "urrealtime.m_target", size = 8, count = 6 }, { f = "urrealtime.q_actual", size = 8, count = 6 }, { f = "urrealtime.qd_actual", size = 8, count = 6 }, { f = "urrealtime.i_actual", size = 8, count = 6 }, { f = "urrealtime.i_control", size = 8, count = 6 }, { f = "urrealtime.tool_vector_actual", size = 8, count = 6 }, { f = "urrealtime.tcp_speed_actual", size = 8, count = 6 }, { f = "urrealtime.tcp_force", size = 8, count = 6 }, { f = "urrealtime.tool_vector_target", size = 8, count = 6 }, { f = "urrealtime.tcp_speed_target", size = 8, count = 6 }, { f = "urrealtime.digital_input_bits", size = 8, count = 1 }, { f = "urrealtime.motor_temperatures", size = 8, count = 6 }, { f = "urrealtime.controller_timer", size = 8, count = 1 }, { f = "urrealtime.test_value", size = 8, count = 1 }, { f = "urrealtime.robot_mode", size = 8, count = 1 }, { f = "urrealtime.joint_modes", size = 8, count = 6 }, { f = "urrealtime.safety_mode", size = 8, count = 1 }, { f = "urrealtime.reserved_1", size = 8, count = 6 }, { f = "urrealtime.tool_accelerometer_values", size = 8, count = 3 }, { f = "urrealtime.reserved_2", size = 8, count = 6 }, { f = "urrealtime.speed_scaling", size = 8, count = 1 }, { f = "urrealtime.linear_momentum_norm", size = 8, count = 1 }, { f = "urrealtime.reserved_3", size = 8, count = 1 }, { f = "urrealtime.reserved_4", size = 8, count = 1 }, { f = "urrealtime.v_main", size = 8, count = 1 }, { f = "urrealtime.v_robot", size = 8, count = 1 }, { f = "urrealtime.i_robot", size = 8, count = 1 }, { f = "urrealtime.v_actual", size = 8, count = 6 }, { f = "urrealtime.digital_outputs", size = 8, count = 1 }, { f = "urrealtime.program_state", size = 8, count = 1 }, { f = "urrealtime.elbow_position", size = 8, count = 3 }, { f = "urrealtime.elbow_velocity", size = 8, count = 3 }, { f = "urrealtime.safety_status", size = 8, count = 1 }, { f = "urrealtime.reserved_5", size = 8, count = 3 }, { f = "urrealtime.payload_mass", size = 8, count = 1 }, { f = "urrealtime.payload_cog", size = 8, count = 3 }, { f = "urrealtime.payload_inertia", size = 8, count = 6 } },
+}
+local RT_PORTS = { 30003, 30013 }
+local RT_SIZE = ProtoField.int32("urrealtime.message_size", "message_size")
+table.insert(rt_list, RT_SIZE)
+urrt.fields = rt_list
+local function rt_one(tvb, pinfo, tree)
+  local size = tvb(0, 4):int()
+  pinfo.cols.protocol = "URREALTIME"
+  local sub = tree:add(urrt, tvb(0, size), "UR real-time message")
+  sub:add(RT_SIZE, tvb(0, 4))
+  local layout = RT_LAYOUTS[size]
+  if not layout then return size end
+  local pos = 4
+  for _, f in ipairs(layout) do
+    for _ = 1, f.count do
+      if pos + f.size > size then return size end
+      sub:add(FRT[f.f], tvb(pos, f.size))
+      pos = pos + f.size
+    end
+  end
+  return size
+end
+local function rt_len(tvb, pinfo, offset) return tvb(offset, 4):int() end
+local RT_FROM = {}
+for _, port in ipairs(RT_PORTS) do RT_FROM[port] = true end
+function urrt.dissector(tvb, pinfo, tree)
+  if RT_FROM[pinfo.src_port] then dissect_tcp_pdus(tvb, tree, 4, rt_len, rt_one) end
+end
+for _, port in ipairs(RT_PORTS) do DissectorTable.get("tcp.port"):add(port, urrt) end

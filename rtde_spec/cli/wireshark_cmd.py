@@ -14,8 +14,13 @@ DEFAULT_DIR = Path.home() / ".local" / "lib" / "wireshark" / "plugins"
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "wireshark",
-        help="install the Wireshark/tshark dissector generated from the spec (rtde.*, urprimary.*)",
-        description="Without --install, prints the dissector's path, for `tshark -X lua_script:PATH`.",
+        help="install the Wireshark/tshark dissector generated from the spec (rtde.*, urprimary.*, "
+        "urrealtime.*, urdashboard.*, urcl_reverse.*, urcl_trajectory.*, urcl_script_command.*, "
+        "urcl_script_sender.*)",
+        description="Without --install, prints the dissector's path, for `tshark -X lua_script:PATH`. "
+        "One Lua file holds every protocol of a driver session, each registered on its default "
+        "port (RTDE 30004, primary 30001/30002/30011/30012, real-time 30003/30013, dashboard "
+        "29999, URCL 50001-50004); for moved ports use Wireshark's Decode As.",
     )
     p.add_argument("--install", action="store_true", help="copy it to the plugins folder (default: print)")
     p.add_argument("--dir", type=Path, default=DEFAULT_DIR, help=f"plugins folder (default: {DEFAULT_DIR})")

@@ -1,0 +1,299 @@
+"""Emit the Wireshark Lua dissectors of a driver session's other ports, appended to rtde_spec.lua:
+URCL's reverse, trajectory and script command records (`urcl_reverse.*`, `urcl_trajectory.*`,
+`urcl_script_command.*`: scaled words shown in SI units), the script sender
+(`urcl_script_sender.*`), the dashboard (`urdashboard.*`: command and reply outcome from
+the spec's reply texts) and the real-time interface (`urrealtime.*`, the layout by size).
+"""
+
+from __future__ import annotations
+
+import string
+from pathlib import Path
+
+from rtde_spec.spec.catalogue import Catalogue
+from rtde_spec.spec.dashboard import load_dashboard
+from rtde_spec.spec.external import ExternalProtocol, Variant, load_external
+from rtde_spec.spec.realtime import PRIMITIVES as RT_PRIMITIVES
+from rtde_spec.spec.realtime import layouts, load_realtime
+from rtde_spec.spec.schema import Primitive
+
+from .emit_lua import LUA_FIELD, lua_str
+
+SPEC_ROOT = Path(__file__).resolve().parent.parent / "spec"
+
+
+def emit_lua_drivers(
+    prims: dict[str, Primitive], catalogue: Catalogue, root: Path | str | None = None
+) -> str:
+    base = Path(root) if root is not None else SPEC_ROOT
+    external = load_external(base)
+    out = ["\n-- ===== UR client library (URCL) external control, dashboard, real-time =====\n"]
+    for enum in external.enums:
+        pairs = ", ".join(f"[{v.value}] = {lua_str(v.name)}" for v in enum.values)
+        out.append(f"local vs_urcl_{enum.name} = {{ {pairs} }}\n")
+    out.append(_RECORDS_BODY)
+    for proto in external.protocols:
+        out.append(_script_sender(proto) if proto.request is not None else _records(proto, prims))
+    out.append(_dashboard(base))
+    out.append(_realtime(base, catalogue))
+    return "".join(out)
+
+
+def _records(proto: ExternalProtocol, prims: dict[str, Primitive]) -> str:
+    name = f"urcl_{proto.name}"
+    fields: dict[str, str] = {"variant": f'ProtoField.string("{name}.variant", "variant")'}
+    sides = []
+    for msg in proto.messages:
+        sel_at = None
+        variants, default = [], "nil"
+        for v in msg.variants:
+            body, at = _variant(name, v, prims, fields, msg.selector)
+            sel_at = at if at is not None else sel_at
+            if v.when is None:
+                default = body
+            variants += [f"[{value}] = {body}" for value in v.when or []]
+        sel = "nil" if sel_at is None else str(sel_at)
+        sides.append(
+            f"  {msg.sender} = {{ size = {msg.record_bytes}, sel_at = {sel}, default = {default},\n"
+            f"    variants = {{ {', '.join(variants)} }} }},\n"
+        )
+    lines = [f'\nlocal p_{name} = Proto("{name}", {lua_str("URCL " + proto.name.replace("_", " "))})\n']
+    lines.append(f"local F_{name} = {{}}\n")
+    lines += [f"F_{name}[{lua_str(k)}] = {v}\n" for k, v in fields.items()]
+    lines.append(f"local REC_{name} = {{\n{''.join(sides)}}}\n")
+    lines.append(f"urcl_records(p_{name}, F_{name}, REC_{name}, {proto.port}, {lua_str(name.upper())})\n")
+    return "".join(lines)
+
+
+def _variant(
+    proto: str, v: Variant, prims: dict[str, Primitive], fields: dict[str, str], selector: str | None
+) -> tuple[str, int | None]:
+    parts, pos, sel_at = [], 0, None
+    for f in v.fields:
+        prim = prims[f.type]
+        abbr = f"{proto}.{f.name}"
+        if f.scale is not None:
+            text = f"ProtoField.double({lua_str(abbr)}, {lua_str(f.name)})"
+        else:
+            vs = f", base.DEC, vs_urcl_{f.enum}" if f.enum else ", base.DEC"
+            text = f"ProtoField.{LUA_FIELD[f.type]}({lua_str(abbr)}, {lua_str(f.name)}{vs})"
+        if fields.setdefault(f.name, text) != text:
+            raise ValueError(f"{abbr}: one name, two field kinds in the variants")
+        scale = repr(f.scale) if f.scale is not None else "nil"
+        parts.append(
+            f"{{ f = {lua_str(f.name)}, size = {prim.size}, count = {f.count or 1}, scale = {scale} }}"
+        )
+        if f.name == selector:
+            sel_at = pos
+        pos += prim.size * (f.count or 1)
+    return f"{{ name = {lua_str(v.name)}, fields = {{ {', '.join(parts)} }} }}", sel_at
+
+
+_RECORDS_BODY = """
+-- fixed records of int32 words; the side the port belongs to (the driver) sends REC.driver
+local function urcl_records(proto, F, REC, port, label)
+  local list = {}
+  for _, f in pairs(F) do table.insert(list, f) end
+  proto.fields = list
+  local function side(pinfo) return (pinfo.src_port == port) and "driver" or "robot" end
+  local function get_len(tvb, pinfo, offset)
+    local r = REC[side(pinfo)]
+    return r and r.size or (tvb:len() - offset)
+  end
+  local function one(tvb, pinfo, tree)
+    local r = REC[side(pinfo)]
+    pinfo.cols.protocol = label
+    if not r then
+      tree:add(proto, tvb(), label .. " bytes this side does not send")
+      return tvb:len()
+    end
+    local v = r.default
+    if r.sel_at then v = r.variants[tvb(r.sel_at, 4):int()] or r.default end
+    local sub = tree:add(proto, tvb(0, r.size), label .. " " .. (v and v.name or "record"))
+    if not v then return r.size end
+    sub:add(F["variant"], tvb(0, r.size), v.name)
+    local pos = 0
+    for _, f in ipairs(v.fields) do
+      for _ = 1, f.count do
+        local range = tvb(pos, f.size)
+        if f.scale then sub:add(F[f.f], range, range:int() / f.scale) else sub:add(F[f.f], range) end
+        pos = pos + f.size
+      end
+    end
+    return r.size
+  end
+  function proto.dissector(tvb, pinfo, tree) dissect_tcp_pdus(tvb, tree, 4, get_len, one) end
+  DissectorTable.get("tcp.port"):add(port, proto)
+end
+"""
+
+
+def _script_sender(proto: ExternalProtocol) -> str:
+    name = f"urcl_{proto.name}"
+    return f"""
+local p_{name} = Proto("{name}", "URCL script sender")
+local F_{name} = {{
+  request = ProtoField.string("{name}.request", "request"),
+  script = ProtoField.string("{name}.script", "script text"),
+}}
+p_{name}.fields = {{ F_{name}.request, F_{name}.script }}
+function p_{name}.dissector(tvb, pinfo, tree)
+  pinfo.cols.protocol = "URCL_SCRIPT"
+  local sub = tree:add(p_{name}, tvb(), "URCL script sender")
+  if pinfo.src_port == {proto.port} then sub:add(F_{name}.script, tvb())
+  else sub:add(F_{name}.request, tvb(), (tvb():string():gsub("\\n$", ""))) end
+end
+DissectorTable.get("tcp.port"):add({proto.port}, p_{name})
+"""
+
+
+def _lua_pattern(text: str) -> str:
+    """A reply text as an anchored Lua pattern: literal parts escaped, {placeholders} any text."""
+    out = []
+    for literal, name, _, _ in string.Formatter().parse(text):
+        out.append("".join("%" + c if c in "^$()%.[]*+-?" else c for c in literal))
+        if name is not None:
+            out.append(".*")
+    return "^" + "".join(out) + "$"
+
+
+def _dashboard(root: Path) -> str:
+    table = load_dashboard(root)
+    rows = []
+    for c in sorted(table.commands, key=lambda c: -len(c.command)):
+        replies = ", ".join(f"{{ {lua_str(k)}, {lua_str(_lua_pattern(v))} }}" for k, v in c.replies.items())
+        rows.append(
+            f"  {{ text = {lua_str(c.command)}, arg = {str(c.argument is not None).lower()},"
+            f" replies = {{ {replies} }} }},\n"
+        )
+    return (
+        f"\nlocal DASH_PORT = {table.port}\nlocal DASH_UNKNOWN = {lua_str(_lua_pattern(table.unknown))}\n"
+        + "local DASH_COMMANDS = {\n"
+        + "".join(rows)
+        + "}\n"
+        + _DASHBOARD_BODY
+    )
+
+
+_DASHBOARD_BODY = """local urdash = Proto("urdashboard", "UR dashboard server")
+local FD = {
+  request = ProtoField.string("urdashboard.request", "request"),
+  reply = ProtoField.string("urdashboard.reply", "reply"),
+  command = ProtoField.string("urdashboard.command", "command"),
+  argument = ProtoField.string("urdashboard.argument", "argument"),
+  outcome = ProtoField.string("urdashboard.outcome", "outcome"),
+}
+urdash.fields = { FD.request, FD.reply, FD.command, FD.argument, FD.outcome }
+local dash_streams, dash_frames = {}, {}
+
+local function dash_command(line)
+  for _, c in ipairs(DASH_COMMANDS) do
+    if line == c.text then return c, "" end
+    if c.arg and line:sub(1, #c.text + 1) == c.text .. " " then return c, line:sub(#c.text + 2) end
+  end
+  return nil, ""
+end
+
+local function dash_outcome(c, reply)
+  if c then for _, r in ipairs(c.replies) do if reply:match(r[2]) then return r[1] end end end
+  if reply:match(DASH_UNKNOWN) then return "unknown" end
+  return "unexpected"
+end
+
+function urdash.dissector(tvb, pinfo, tree)
+  local text = tvb():string()
+  local last = text:match(".*()\\n")
+  if not last then pinfo.desegment_len = DESEGMENT_ONE_MORE_SEGMENT; return end
+  if last < #text then pinfo.desegment_offset = last; pinfo.desegment_len = DESEGMENT_ONE_MORE_SEGMENT end
+  pinfo.cols.protocol = "URDASHBOARD"
+  local key = (pinfo.src_port == DASH_PORT) and (tostring(pinfo.dst) .. ":" .. pinfo.dst_port)
+    or (tostring(pinfo.src) .. ":" .. pinfo.src_port)
+  local s = dash_streams[key]
+  if not s then s = { open = {}, greeted = false }; dash_streams[key] = s end
+  local results = dash_frames[pinfo.number]
+  if not results then
+    results = {}
+    for line in text:sub(1, last):gmatch("([^\\n]*)\\n") do
+      line = line:gsub("\\r$", "")
+      if pinfo.src_port == DASH_PORT then
+        local c = table.remove(s.open, 1)
+        local r = { reply = line, command = "", outcome = s.greeted and "unrequested" or "greeting" }
+        if c then r.command = c.c and c.c.text or ""; r.outcome = dash_outcome(c.c, line) end
+        table.insert(results, r)
+        s.greeted = true
+      else
+        local c, arg = dash_command(line)
+        table.insert(s.open, { c = c })
+        table.insert(results, { request = line, command = c and c.text or "", argument = arg })
+      end
+    end
+    dash_frames[pinfo.number] = results
+  end
+  for _, r in ipairs(results) do
+    local sub = tree:add(urdash, tvb(0, last), "UR dashboard " .. (r.request and "request" or "reply"))
+    if r.request then
+      sub:add(FD.request, tvb(0, last), r.request)
+      sub:add(FD.argument, tvb(0, last), r.argument)
+    else
+      sub:add(FD.reply, tvb(0, last), r.reply)
+      sub:add(FD.outcome, tvb(0, last), r.outcome)
+    end
+    sub:add(FD.command, tvb(0, last), r.command)
+  end
+end
+DissectorTable.get("tcp.port"):add(DASH_PORT, urdash)
+"""
+
+
+def _realtime(root: Path, catalogue: Catalogue) -> str:
+    table = load_realtime(root, catalogue)
+    by_size: dict[int, str] = {}
+    fields: dict[str, str] = {}
+    for plan in layouts(table, catalogue):
+        parts = []
+        for f in plan.fields:
+            abbr = f"urrealtime.{f.name}"
+            fields.setdefault(abbr, f"ProtoField.{LUA_FIELD[f.type]}({lua_str(abbr)}, {lua_str(f.name)})")
+            size = RT_PRIMITIVES[f.type][1]
+            parts.append(f"{{ f = {lua_str(abbr)}, size = {size}, count = {f.count or 1} }}")
+        by_size.setdefault(plan.size, "{ " + ", ".join(parts) + " }")
+    ports = ", ".join(str(p) for p in table.ports.values())
+    return (
+        '\nlocal urrt = Proto("urrealtime", "UR real-time interface")\nlocal FRT = {}\n'
+        + "".join(f"FRT[{lua_str(k)}] = {v}\n" for k, v in fields.items())
+        + "local rt_list = {}\nfor _, f in pairs(FRT) do table.insert(rt_list, f) end\n"
+        + "local RT_LAYOUTS = {\n"
+        + "".join(f"  [{size}] = {body},\n" for size, body in sorted(by_size.items()))
+        + f"}}\nlocal RT_PORTS = {{ {ports} }}\n"
+        + _REALTIME_BODY
+    )
+
+
+_REALTIME_BODY = """local RT_SIZE = ProtoField.int32("urrealtime.message_size", "message_size")
+table.insert(rt_list, RT_SIZE)
+urrt.fields = rt_list
+local function rt_one(tvb, pinfo, tree)
+  local size = tvb(0, 4):int()
+  pinfo.cols.protocol = "URREALTIME"
+  local sub = tree:add(urrt, tvb(0, size), "UR real-time message")
+  sub:add(RT_SIZE, tvb(0, 4))
+  local layout = RT_LAYOUTS[size]
+  if not layout then return size end
+  local pos = 4
+  for _, f in ipairs(layout) do
+    for _ = 1, f.count do
+      if pos + f.size > size then return size end
+      sub:add(FRT[f.f], tvb(pos, f.size))
+      pos = pos + f.size
+    end
+  end
+  return size
+end
+local function rt_len(tvb, pinfo, offset) return tvb(offset, 4):int() end
+local RT_FROM = {}
+for _, port in ipairs(RT_PORTS) do RT_FROM[port] = true end
+function urrt.dissector(tvb, pinfo, tree)
+  if RT_FROM[pinfo.src_port] then dissect_tcp_pdus(tvb, tree, 4, rt_len, rt_one) end
+end
+for _, port in ipairs(RT_PORTS) do DissectorTable.get("tcp.port"):add(port, urrt) end
+"""
