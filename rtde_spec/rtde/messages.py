@@ -23,7 +23,7 @@ if TYPE_CHECKING:
 class RtdeMessage(BaseModel):
     """One RTDE package: fields as the spec names them, plus class-level wire metadata."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True)
+    model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True)  # schemas built on first use: start-up
 
     NAME: ClassVar[str]
     PACKAGE_TYPE: ClassVar[int]
