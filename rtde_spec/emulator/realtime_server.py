@@ -10,6 +10,7 @@ ports (script_framer.py); the read-only port drops it. Clients keep guard.py's l
 from __future__ import annotations
 
 import logging
+import struct
 from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.realtime import REALTIME
@@ -33,6 +34,11 @@ class RealtimeHub:
         self.layout = layout_for(model.version)
         sources = {f["name"]: f.get("rtde") for f in REALTIME["fields"]}
         self.sources = [(name, sources.get(name)) for name in self.layout.names]
+        # the hot path: (RTDE output, value count) per field, in message order; time is the model's
+        self._plan = [
+            (None if name == "time" else source, count)
+            for (name, source), count in zip(self.sources, self.layout.counts, strict=True)
+        ]
         self.connections: set[RealtimeConnection] = set()
         self.sent = 0
 
@@ -44,7 +50,21 @@ class RealtimeHub:
         return out
 
     def message(self) -> bytes:
-        return self.layout.encode(self.values())
+        """This step's message: the model's values packed straight into the layout's struct."""
+        values = self.model.values
+        flat: list[Any] = [self.layout.size, self.model.time]
+        for source, count in self._plan[1:]:
+            value = values.get(source) if source is not None else None
+            if value is None:
+                flat.extend((0.0,) * count)
+            elif count == 1:
+                flat.append(value)
+            else:
+                flat.extend(value)
+        try:
+            return self.layout.plan.pack(*flat)
+        except struct.error:  # a value of the wrong shape: the checked path names it
+            return self.layout.encode(self.values())
 
     def send(self) -> None:
         """Every control step: the message to each client (built only when one is connected)."""

@@ -14,6 +14,7 @@ import asyncio
 import logging
 import threading
 import time
+from collections import deque
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -56,6 +57,8 @@ class EmulatorConfig:
     # after falling this far behind (s, a stalled machine) the loop skips steps rather than
     # sending them late in a burst; None: every step is sent, late if need be
     skip_after: float | None = 0.1
+    # keep how late each control step ran (s after its due time), the last this many (benchmarks)
+    step_timing: int = 0
 
 
 class Emulator:
@@ -76,6 +79,7 @@ class Emulator:
         self.clients: dict[str, Port] = {}  # port name -> its connections, under the limits
         self._loop_task: asyncio.Task[None] | None = None
         self.late_steps = 0
+        self.step_lateness: deque[float] = deque(maxlen=max(1, self.config.step_timing))
 
     async def start(self) -> None:
         loop = asyncio.get_running_loop()
@@ -159,6 +163,8 @@ class Emulator:
                 self.late_steps += 1
                 skipped = int((time.perf_counter() - start) * base) - step
                 step += max(0, skipped)
+            if self.config.step_timing:
+                self.step_lateness.append(time.perf_counter() - due)
             self.model.tick(step)
             self.faults.apply(self.model.time)
             if self._network(self.faults.silent(self.model.time)):

@@ -8,6 +8,9 @@ controller's (tests/data/ur5e_robot_state.hex). A sub-package or field the spec 
 a version does not have (`since`) is left out, so a CB3 controller sends its shorter
 layouts. The internal, bytes-only sub-packages are left out, except Safety Data
 (16 zero bytes, the size of the reference sample) which e-Series controllers send.
+Calibration Data (type 9) is not sent: the spec has only its size (bytes "used by UR
+software only"), no public client reads it, and the calibration check clients make
+(UR's C++ client library compares the checksums) reads Kinematics Info, which is sent.
 Values come from the same controller model the RTDE port reads.
 """
 
