@@ -267,3 +267,25 @@ def test_fields_primary_answers_which_firmware_added_a_field(capsys: pytest.Capt
     assert "robot_state/joint_data.joints.q_actual" in rows
     assert main(["fields", "--primary", "--controller", "5.22.0"]) == 0
     assert "robot_energy_consumed_wh" not in capsys.readouterr().out
+
+
+def test_an_installed_package_compares_with_its_own_spec_and_writes_an_overlay(
+    spec: Spec, tmp_path: Path
+) -> None:
+    """Outside a checkout (no ./spec): the report and -o against the package's built-in spec;
+    --write, which edits a spec folder, says what to do instead."""
+    guide = tmp_path / "guide.txt"
+    guide.write_text(hand_made(guide_from_spec(spec)))
+    command = [sys.executable, "-m", "rtde_spec.cli", "spec", "import", str(guide)]
+    result = subprocess.run(
+        [*command, "--json", "-o", "new.yaml"], capture_output=True, text=True, cwd=tmp_path
+    )
+    assert result.returncode == 0, result.stderr
+    assert [a["field"] for a in json.loads(result.stdout)["added"]] == ["actual_tcp_jerk"]
+    fields = subprocess.run(
+        [sys.executable, "-m", "rtde_spec.cli", "--extra-fields", "new.yaml", "fields", "--controller", "5.30"],
+        capture_output=True, text=True, cwd=tmp_path,
+    )  # fmt: skip
+    assert fields.returncode == 0 and "actual_tcp_jerk" in fields.stdout
+    refused = subprocess.run([*command, "--write"], capture_output=True, text=True, cwd=tmp_path)
+    assert refused.returncode == 2 and "-o FILE" in refused.stderr

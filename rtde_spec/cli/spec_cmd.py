@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rtde_spec.cli.common import EXIT_ERROR
+from rtde_spec.errors import UsageError
 from rtde_spec.output.text import print_json, table
 
 if TYPE_CHECKING:
@@ -29,7 +30,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "availability per product line, register range and description changes, per field.",
     )
     imp.add_argument("document", type=Path, help="the document (its form is detected from the content)")
-    imp.add_argument("--spec-dir", type=Path, default=Path("spec"), help="spec root (default: ./spec)")
+    imp.add_argument(
+        "--spec-dir",
+        type=Path,
+        help="spec root (default: ./spec when there is one, else the installed package's spec; "
+        "--write needs a spec folder)",
+    )
     imp.add_argument("--json", action="store_true", help='print {"added", "removed", "changed"} as JSON')
     imp.add_argument(
         "--show-known", action="store_true", help="also list differences the spec records as conflicts"
@@ -82,7 +88,27 @@ def run(args: argparse.Namespace) -> int:
     from rtde_spec.spec.importers.primary_diff import diff_primary
     from rtde_spec.spec.loader import load_spec
 
-    spec = load_spec(args.spec_dir)
+    if not args.document.is_file():
+        raise UsageError(
+            "no such file; give the published document (an RTDE guide or the primary interface "
+            "document) as text, Markdown or HTML",
+            subject=f"file {args.document}",
+        )
+    if args.spec_dir is None and Path("spec", "rtde").is_dir():
+        args.spec_dir = Path("spec")
+    if args.spec_dir is None and not args.write:  # an installed package: compare with its own spec
+        from rtde_spec.spec.catalogue import Catalogue
+
+        spec = Catalogue.builtin().spec
+    elif args.spec_dir is None or not (args.spec_dir / "rtde").is_dir():
+        where = args.spec_dir or Path("spec")
+        raise UsageError(
+            f"no spec here ({where.resolve()} holds no rtde/); --write edits a checkout's spec: run "
+            "from the checkout's root or give --spec-dir path/to/spec (-o FILE writes an overlay instead)",
+            subject=f"--spec-dir {where}",
+        )
+    else:
+        spec = load_spec(args.spec_dir)
     doc = read_document(args.document, spec, source=args.source, line=args.line)
     changes = diff_primary(doc, spec) if doc.interface == "primary" else diff_fields(doc, spec)
     new = [c for c in changes if c.known is None]
@@ -120,6 +146,7 @@ def run(args: argparse.Namespace) -> int:
     if args.write:
         from rtde_spec.spec.importers.write import write_changes
 
+        assert args.spec_dir is not None  # --write without a spec folder was refused above
         written = write_changes(changes, doc, spec, args.spec_dir)
         print(
             f"wrote {len(written)} of {len(new)} changes to {args.spec_dir}; run `python -m codegen`",
