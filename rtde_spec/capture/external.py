@@ -22,9 +22,11 @@ from rtde_spec.errors import RtdeSpecError
 from rtde_spec.external.codec import RecordCodec, VariantPlan, protocol_codecs
 from rtde_spec.output.base import plain
 from rtde_spec.spec.external import ExternalProtocol
+from rtde_spec.wire.columns import decode_columns, record_dtype
 
 SIDE = {"client": "robot", "controller": "driver"}  # the flow's sender names on a driver-served port
 MAX_SCRIPT = 16 << 20  # a program longer than this is not one: the rest is counted, not kept
+BATCH = 4096  # records of one variant decoded together into columns
 
 
 def _shared(codec: RecordCodec) -> dict[str, list[str] | None]:
@@ -58,6 +60,7 @@ class ExternalConnection:
         self.counts = Counts()
         self.unexpected: dict[str, int] = {}
         self.last_time = 0.0
+        self.batches: dict[str, tuple[VariantPlan, Any, list[bytes], list[float]]] = {}
 
     def feed(self, sender: str, chunk: Chunk) -> None:
         self.last_time = chunk.time
@@ -72,20 +75,48 @@ class ExternalConnection:
         day = day_of(time)
         for record in records:
             self.counts.packages += 1
+            plan = codec.variant_of(record)
+            if (
+                plan is not None and shared[plan.name] is None
+            ):  # a table of its own: decoded later, many at once
+                self._hold(plan, record, time)
+                continue
             try:
                 plan, values = codec.decode(record)
             except RtdeSpecError as exc:
                 self.counts.errors.append(f"{side} record at {time:.6f}: {exc}")
                 continue
-            row: dict[str, Any] = {"connection": self.name, "capture_time": time}
             common = shared[plan.name]
-            if common is None:
-                row.update(values)
-            else:
-                row.update({n: values[n] for n in common})
-                row["variant"] = plan.name
-                row["arguments"] = json.dumps(plain({n: v for n, v in values.items() if n not in common}))
+            assert common is not None
+            row: dict[str, Any] = {"connection": self.name, "capture_time": time}
+            row.update({n: values[n] for n in common})
+            row["variant"] = plan.name
+            row["arguments"] = json.dumps(plain({n: v for n, v in values.items() if n not in common}))
             self.sink.row(plan.table, self.robot, day, row)
+
+    def _hold(self, plan: VariantPlan, record: bytes, time: float) -> None:
+        batch = self.batches.get(plan.name)
+        if batch is None:
+            dtype = record_dtype(plan.spec.fields, plan.layout.prims, plan.layout.order, len(record))
+            batch = self.batches[plan.name] = (plan, dtype, [], [])
+        batch[2].append(record)
+        batch[3].append(time)
+        if len(batch[2]) >= BATCH:
+            self._flush(plan.name)
+
+    def _flush(self, name: str) -> None:
+        batch = self.batches.pop(name, None)
+        if batch is None or not batch[2]:
+            return
+        import numpy as np
+
+        plan, dtype, records, times = batch
+        columns: dict[str, Any] = {
+            "connection": np.full(len(times), self.name),
+            "capture_time": np.array(times),
+            **decode_columns(b"".join(records), dtype, plan.spec.fields),
+        }
+        self.sink.columns(plan.table, self.robot, day_of(times[0]), columns)
 
     def framings(self) -> dict[str, FixedFraming]:
         return self.framing
@@ -97,13 +128,15 @@ class ExternalConnection:
                 self.counts.errors.append(
                     f"{SIDE[sender]}: no record boundary found; decoded from the first byte"
                 )
+        self.close()
         for sender, count in self.unexpected.items():
             self.counts.errors.append(
                 f"{count} bytes from the {SIDE[sender]}, which sends nothing on this port"
             )
 
     def close(self) -> None:
-        pass
+        for name in list(self.batches):
+            self._flush(name)
 
 
 @dataclass
