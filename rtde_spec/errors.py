@@ -61,8 +61,12 @@ class RtdeSpecError(Exception):
         if self.offset is not None:
             where.append(f"byte offset {self.offset}")
         text = f"{', '.join(where)}: {self.reason}" if where else self.reason
-        if self.expected is not None or self.actual is not None:
+        if self.expected is not None and self.actual is not None:
             text += f" (expected {self.expected}, got {self.actual})"
+        elif self.expected is not None:  # nothing to show as got: "got None" would mislead
+            text += f" (expected {self.expected})"
+        elif self.actual is not None:
+            text += f" (got {self.actual})"
         return text
 
 

@@ -3,6 +3,8 @@
 from __future__ import annotations
 
 import argparse
+import glob
+import re
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -59,6 +61,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--recipe", metavar="FILE", help="output recipe for captures that start after setup (default: none)"
     )
     p.add_argument(
+        "--recipe-key",
+        metavar="KEY",
+        help="which recipe of a --recipe file with several (default: the only one, else the only "
+        "output recipe)",
+    )
+    p.add_argument(
         "--rtde-port", type=int, action="append", help=f"RTDE port, repeatable (default: {RTDE_PORT})"
     )
     p.add_argument(
@@ -94,14 +102,19 @@ def expand(patterns: list[str]) -> list[Path]:
         path = Path(STDIN if pattern == "-" else pattern)
         if path.is_dir():
             files += sorted(p for p in path.rglob("*") if p.suffix in SUFFIXES)
-        elif any(ch in pattern for ch in "*?["):
-            files += sorted(Path().glob(pattern))
+        elif any(ch in pattern for ch in "*?["):  # a pattern the shell left as it was
+            files += sorted(Path(f) for f in glob.glob(pattern, recursive=True))
         elif path.exists():  # a file, or a pipe (read to its end)
             files.append(path)
         else:
-            raise UsageError("no such file", subject=f"file {pattern}")
+            raise UsageError(
+                "no such file; give pcap/pcapng files, folders or globs", subject=f"file {pattern}"
+            )
     if not files:
-        raise UsageError(f"no capture files in {', '.join(patterns)}")
+        raise UsageError(
+            f"no capture files in {', '.join(patterns)} (folders are searched for "
+            f"{', '.join(SUFFIXES)}; a glob matched nothing)"
+        )
     return files
 
 
@@ -113,7 +126,10 @@ def run(args: argparse.Namespace) -> int:
     from rtde_spec.cli.record_cmd import names_of
 
     files = expand(args.files)
-    recipe = names_of(argparse.Namespace(fields=None, recipe=args.recipe)) if args.recipe else None
+    options = argparse.Namespace(
+        fields=None, recipe=args.recipe, recipe_key=args.recipe_key, extra_fields=args.extra_fields
+    )
+    recipe = names_of(options, alternative="") if args.recipe else None
     kw: dict[str, Any] = {
         "rtde_ports": tuple(args.rtde_port or (RTDE_PORT,)),
         "primary_ports": tuple(args.primary_port or PRIMARY_PORTS.values()),
@@ -166,8 +182,33 @@ def _report(summaries: list[CaptureSummary]) -> None:
     print("tables: " + ", ".join(f"{name} ({rows} rows)" for name, rows in sorted(tables.items())))
     for s in summaries:
         print(f"summary {s.line()}", file=sys.stderr)
-        for problem in s.problems():
+        for problem in distinct(s.problems()):
             print(f"  problem: {problem}", file=sys.stderr)
+
+
+_WHEN = re.compile(r" at (\d{9,}\.\d{6})(?=:)")  # a problem's capture time: " at 1700000000.002000:"
+MAX_PROBLEMS = 20  # distinct problems shown per file; the rest are counted
+
+
+def distinct(problems: list[str]) -> list[str]:
+    """One line per distinct problem: the same problem at many capture times is one line with
+    its count and the first and last time; past MAX_PROBLEMS lines, one more counts the rest."""
+    groups: dict[str, list[str]] = {}
+    for problem in problems:
+        groups.setdefault(_WHEN.sub("", problem), []).append(problem)
+    lines = []
+    for text, same in groups.items():
+        if len(same) == 1:
+            lines.append(same[0])
+            continue
+        times = [m.group(1) for p in same if (m := _WHEN.search(p))]
+        span = f", at {times[0]} .. {times[-1]}" if times else ""
+        lines.append(f"{text} ({len(same)} times{span})")
+    if len(lines) > MAX_PROBLEMS:
+        rest = sum(len(same) for same in list(groups.values())[MAX_PROBLEMS:])
+        more = len(lines) - MAX_PROBLEMS
+        lines = [*lines[:MAX_PROBLEMS], f"... and {more} more distinct problems ({rest} in all)"]
+    return lines
 
 
 def _progress(path: Path):  # type: ignore[no-untyped-def]

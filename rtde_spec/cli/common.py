@@ -37,6 +37,13 @@ def catalogue_for(args: argparse.Namespace) -> Catalogue:
 
     base = Catalogue.default()
     extra = getattr(args, "extra_fields", None)
+    for name in extra or ():
+        if existing_file(name) is None:
+            raise UsageError(
+                "no such file; --extra-fields takes a YAML file shaped like spec/rtde/fields.yaml "
+                "(outputs: / inputs: lists of name and type)",
+                subject=f"--extra-fields {name}",
+            )
     return base.with_extra(*extra) if extra else base
 
 
@@ -76,6 +83,22 @@ def recipe_file(arg: str, option: str = "--recipe") -> Path | None:
             subject=f"{option} {arg[:200]}",
         )
     return None
+
+
+def port_number(text: str) -> int:
+    """argparse type of a TCP port: 0..65535 (0: any free port where a port is listened on)."""
+    try:
+        number = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r} is not a port number (0..65535)") from None
+    if not 0 <= number <= 65535:
+        raise argparse.ArgumentTypeError(f"{number} is not a port number: give 0..65535")
+    return number
+
+
+def port_or_off(text: str) -> int:
+    """argparse type of a port that may be left out: -1 (not served) or 0..65535."""
+    return -1 if text.strip() == "-1" else port_number(text)
 
 
 def controller_version(text: str) -> str:
@@ -128,8 +151,14 @@ def read_input(arg: str) -> bytes:
             return parse_hex(arg)
         except RtdeSpecError as exc:
             if os.sep in arg or Path(arg).suffix:
-                raise UsageError("no such file, and not hex either", subject=f"file {arg[:80]}") from None
-            raise RtdeSpecError(f"{arg[:40]!r} is neither a file nor hex ({exc.reason})") from None
+                raise UsageError(
+                    "no such file, and not hex either; check the path (or give hex, or - for stdin)",
+                    subject=f"file {arg[:80]}",
+                ) from None
+            raise UsageError(
+                f"{arg[:40]!r} is neither a file nor hex ({exc.reason}); give hex (e.g. 00045601), "
+                "a file, or - for standard input"
+            ) from None
     reject_capture(data, arg)
     return from_hex_text(data)
 

@@ -25,10 +25,11 @@ from rtde_spec.cli.common import (
     existing_file,
     from_hex_text,
     read_input,
+    recipe_file,
     reject_capture,
     report_skipped,
 )
-from rtde_spec.errors import DecodeError, RtdeSpecError, UsageError
+from rtde_spec.errors import DecodeError, RtdeSpecError
 
 if TYPE_CHECKING:
     from rtde_spec.output.base import Writer
@@ -93,6 +94,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="decode data packages with this recipe: a comma list or a recipe file (default: none)",
     )
     p.add_argument(
+        "--recipe-key",
+        metavar="KEY",
+        help="which recipe of a --recipe file with several (default: the only one, else the only one "
+        "of the sender's direction: outputs from the controller, inputs from a client)",
+    )
+    p.add_argument(
         "--no-progress", action="store_true", help="no progress bar (default: shown on a terminal)"
     )
     p.set_defaults(run=run)
@@ -103,18 +110,19 @@ def recipe_codec(args: argparse.Namespace) -> RecipeCodec | None:
         return None
     from rtde_spec.cli.common import catalogue_for
     from rtde_spec.recipes.codec import RecipeCodec
-    from rtde_spec.recipes.files import load_recipes
+    from rtde_spec.recipes.files import load_recipes, pick_recipe
     from rtde_spec.recipes.model import Direction, Recipe
 
     direction = cast(Direction, RTDE_DIRECTIONS[args.sender])
-    path = existing_file(args.recipe)
+    cat = catalogue_for(args)
+    path = recipe_file(args.recipe)
     if path is not None:
-        (recipe, *rest) = load_recipes(path)
-        if rest:
-            raise UsageError("holds several recipes; give a file with one", subject=f"file {args.recipe}")
+        inputs, outputs = set(cat.names("input")), set(cat.names("output"))
+        recipes = load_recipes(path)
+        recipe = pick_recipe(recipes, args.recipe_key, direction, inputs, outputs, where=args.recipe)
     else:
         recipe = Recipe.parse(args.recipe)
-    return RecipeCodec.for_names(recipe.names, direction, catalogue_for(args))
+    return RecipeCodec.for_names(recipe.names, direction, cat)
 
 
 def chunks(args: argparse.Namespace) -> Iterator[bytes]:

@@ -156,19 +156,54 @@ def _by_time(columns: dict[str, list[Any]], time_column: str) -> dict[str, list[
     return {k: [v[i] for i in order] for k, v in columns.items()}
 
 
+def _check_output(output: Path) -> None:
+    """-o names an image format matplotlib writes, in a folder that exists: before any reading."""
+    from rtde_spec.errors import require
+
+    bases = require("matplotlib.backend_bases", "plot", "plotting")
+    kinds = bases.FigureCanvasBase.get_supported_filetypes()
+    if output.suffix.lstrip(".").lower() not in kinds:
+        raise UsageError(
+            f"cannot tell the image format from the name; end it in .png, .svg or .pdf "
+            f"(or any of {', '.join(sorted(kinds))})",
+            subject=f"-o {output}",
+        )
+    if not output.parent.is_dir():
+        raise UsageError(
+            f"the folder {output.parent} does not exist; create it or write the image elsewhere",
+            subject=f"-o {output}",
+        )
+
+
 def run(args: argparse.Namespace) -> int:
-    from rtde_spec.output.plots import plot_columns
+    from rtde_spec.output.plots import components, plot_columns
 
     path = Path(args.table)
     if not path.exists():
-        raise UsageError("no such table", subject=f"file {path}")
+        raise UsageError(
+            "no such file or folder; give a .csv, .parquet or .jsonl file, a hive dataset folder or "
+            "the folder of `rtde-spec capture -o OUT`",
+            subject=f"file {path}",
+        )
+    _check_output(Path(args.output))
     if path.is_dir():
         path = pick_table(path, args.fields, args.table_name)
     columns = load(path)
+    have = ", ".join(list(columns)[:12]) + (", ..." if len(columns) > 12 else "")
     time_column = args.time or next((c for c in TIME_COLUMNS if c in columns), None)
     if time_column is None or time_column not in columns:
-        have = ", ".join(list(columns)[:12])
-        raise UsageError(f"no time column; the table has: {have}", subject=f"file {path}")
+        which = f"no column {time_column!r}" if time_column else f"no time column ({', '.join(TIME_COLUMNS)})"
+        raise UsageError(
+            f"{which}; the table has: {have}; name the time column with --time COLUMN",
+            subject=f"file {path}",
+        )
+    missing = [f for f in args.fields if not components(columns, f)]
+    if missing:
+        raise UsageError(
+            f"no column {', '.join(map(repr, missing))} (nor NAME_0, NAME_1, ... of a vector); "
+            f"the table has: {have}",
+            subject=f"file {path}",
+        )
     per_robot = {
         robot: _by_time(cols, time_column) for robot, cols in split_robots(columns, args.robot).items()
     }

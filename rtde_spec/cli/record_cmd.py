@@ -12,7 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, cast
 
 from rtde_spec._generated.constants import RTDE_PORT
-from rtde_spec.cli.common import RECIPE_FILE_HELP, existing_file
+from rtde_spec.cli.common import RECIPE_FILE_HELP, existing_file, port_number
 from rtde_spec.errors import RtdeConnectionError, RtdeSpecError, UsageError
 
 if TYPE_CHECKING:
@@ -53,7 +53,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         formatter_class=argparse.RawDescriptionHelpFormatter,
     )
     p.add_argument("--host", required=True, help="controller address (required)")
-    p.add_argument("--port", type=int, default=RTDE_PORT, help=f"RTDE port (default: {RTDE_PORT})")
+    p.add_argument("--port", type=port_number, default=RTDE_PORT, help=f"RTDE port (default: {RTDE_PORT})")
     what = p.add_mutually_exclusive_group(required=True)
     what.add_argument(
         "--recipe",
@@ -102,7 +102,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(run=run)
 
 
-def names_of(args: argparse.Namespace) -> list[str]:
+def names_of(args: argparse.Namespace, alternative: str = ", or the names with --fields A,B") -> list[str]:
     """The output names of --fields, or of the --recipe file's recipe (--recipe-key picks one)."""
     if args.fields:
         return [n.strip() for n in args.fields.split(",") if n.strip()]
@@ -112,7 +112,7 @@ def names_of(args: argparse.Namespace) -> list[str]:
     path = existing_file(args.recipe)
     if path is None:
         raise UsageError(
-            f"no such recipe file; give {RECIPE_FILE_HELP}, or the names with --fields A,B",
+            f"no such recipe file; give {RECIPE_FILE_HELP}{alternative}",
             subject=f"--recipe {args.recipe}",
         )
     cat = catalogue_for(args)
@@ -134,6 +134,11 @@ def run(args: argparse.Namespace) -> int:
         raise UsageError(f"-o {args.output}: use .csv, .parquet, .jsonl or .mcap (or --format)")
     if not 0 < args.frequency < float("inf"):  # NaN too; the controller's own limit is checked at setup
         raise UsageError(f"--frequency {args.frequency:g}: a rate in Hz above 0")
+    for option, value in (("--duration", args.duration), ("--timeout", args.timeout)):
+        if value is not None and not 0 < value < float("inf"):
+            raise UsageError(f"{option} {value:g}: give seconds above 0")
+    if args.samples is not None and args.samples < 1:
+        raise UsageError(f"--samples {args.samples}: give a number of rows of 1 or more")
     split = parse_split(args.split) if args.split else None
     names = names_of(args)
     for path in leftovers(Path(args.output)):

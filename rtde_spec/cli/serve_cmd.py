@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import argparse
+import errno
+import re
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
-from rtde_spec.cli.common import controller_version
+from rtde_spec.cli.common import controller_version, port_number, port_or_off
 from rtde_spec.cli.watch_cmd import add_live_arguments
+from rtde_spec.errors import UsageError
 from rtde_spec.realtime import REALTIME_PORTS
 
 
@@ -19,34 +22,38 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "port 0 picks a free port; the ports are printed when listening. Ctrl-C stops it.",
     )
     p.add_argument("--host", default="127.0.0.1", help="address to bind (default: 127.0.0.1)")
-    p.add_argument("--rtde-port", type=int, default=RTDE_PORT, help=f"RTDE port (default: {RTDE_PORT})")
+    p.add_argument(
+        "--rtde-port", type=port_number, default=RTDE_PORT, help=f"RTDE port (default: {RTDE_PORT})"
+    )
     for name in ("primary", "secondary"):
         port = PRIMARY_PORTS[name]
-        p.add_argument(f"--{name}-port", type=int, default=port, help=f"{name} port (default: {port})")
+        p.add_argument(
+            f"--{name}-port", type=port_number, default=port, help=f"{name} port (default: {port})"
+        )
         ro = PRIMARY_PORTS[f"{name}_read_only"]
         p.add_argument(
             f"--{name}-read-only-port",
-            type=int,
+            type=port_number,
             default=None,
             help=f"read-only {name} port, e.g. {ro} (default: not served)",
         )
     rt, rt_ro = REALTIME_PORTS["realtime"], REALTIME_PORTS["realtime_read_only"]
     p.add_argument(
         "--realtime-port",
-        type=int,
+        type=port_or_off,
         default=None,
         help=f"real-time port: the state at the control rate, URScript accepted (default: {rt} "
         "when free; -1: not served)",
     )
     p.add_argument(
         "--realtime-read-only-port",
-        type=int,
+        type=port_number,
         default=None,
         help=f"read-only real-time port, e.g. {rt_ro} (default: not served)",
     )
     p.add_argument(
         "--dashboard-port",
-        type=int,
+        type=port_or_off,
         default=None,
         help="dashboard server port (default: the controller's, 29999, when free; -1: not served). "
         "PolyScope X versions have no dashboard server",
@@ -137,6 +144,15 @@ def run(args: argparse.Namespace) -> int:
         asyncio.run(main())
     except KeyboardInterrupt:
         pass
+    except OSError as exc:
+        if exc.errno != errno.EADDRINUSE:
+            raise
+        where = re.search(r"\('([^']*)', (\d+)\)", str(exc))
+        at = f"{where.group(1)}:{where.group(2)}" if where else args.host
+        raise UsageError(
+            f"cannot listen on {at}: address already in use; stop what listens there (another "
+            "`rtde-spec serve`?) or give that port another number (0: any free port, printed)"
+        ) from None
     return 0
 
 

@@ -7,6 +7,8 @@ import shutil
 from importlib import resources
 from pathlib import Path
 
+from rtde_spec.errors import UsageError
+
 PLUGIN = "rtde_spec.lua"
 DEFAULT_DIR = Path.home() / ".local" / "lib" / "wireshark" / "plugins"
 
@@ -36,8 +38,15 @@ def run(args: argparse.Namespace) -> int:
     if not args.install:
         print(source)
         return 0
-    args.dir.mkdir(parents=True, exist_ok=True)
     target = args.dir / PLUGIN
-    shutil.copyfile(source, target)
+    try:
+        args.dir.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(source, target)
+    except OSError as exc:
+        raise UsageError(
+            f"cannot install the dissector there: {exc.strerror or exc}; give --dir a folder you can "
+            f"write to (or load it without installing: tshark -X lua_script:{source})",
+            subject=f"--dir {args.dir}",
+        ) from None
     print(f"installed {target}; Wireshark and tshark load it at their next start")
     return 0

@@ -318,7 +318,9 @@ def pick_recipe(
         if not chosen and key.lstrip("#").isdigit() and 1 <= int(key.lstrip("#")) <= len(recipes):
             chosen = [recipes[int(key.lstrip("#")) - 1]]
         if not chosen:
-            raise UsageError(f"no recipe keyed {key!r}; its recipes: {listing}", subject=at(where))
+            raise UsageError(
+                f"no recipe keyed {key!r}; its recipes: {listing}; give one of those keys", subject=at(where)
+            )
         return chosen[0]
     if len(recipes) == 1:
         return recipes[0]
