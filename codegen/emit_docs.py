@@ -215,4 +215,9 @@ def emit_index_doc(spec: Spec, cat: Catalogue) -> str:
     members = sum(len(f.members) for f in spec.primary.families)
     out += f"- [Primary and secondary interfaces](primary.md): {len(spec.primary.families)} message "
     out += f"families, {members} sub-packages and sub-messages\n"
+    out += "- [Real-time interface](realtime.md): port 30003 (30013 read-only), layouts per version\n"
+    out += "- [Dashboard server](dashboard.md): port 29999, commands and reply texts\n"
+    out += "- [External control (UR's client library)](external-control.md): ports 50001-50004, the\n"
+    out += "  reverse, script sender, trajectory point and script command protocols\n"
+    out += "- [Arm models](arms.md): DH parameters and limits per arm\n"
     return out
