@@ -39,7 +39,7 @@ class Robot:
         from rtde_spec import EmulatorConfig, EmulatorThread
 
         if self.thread is None:
-            self.thread = EmulatorThread(EmulatorConfig()).start()
+            self.thread = EmulatorThread(EmulatorConfig(dashboard_port=29999)).start()
 
     def stop(self) -> None:
         if self.thread is not None:
