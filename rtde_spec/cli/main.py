@@ -1,9 +1,17 @@
 """rtde-spec: decode packages, list fields, validate recipes, run the demo.
 
-Exit codes: 0 success, 1 an error in the data or the result (invalid recipe, bad
-bytes), 2 a usage error (bad option, missing file, unknown controller version).
-Errors print `error: ...`; --debug shows the traceback. Subcommand modules import
-their heavy parts only when they run, so help and start-up stay fast.
+Exit codes, the same for every subcommand:
+  0    success
+  1    an error in the data or the result (invalid recipe, bad bytes, a refused or
+       dropped connection, a port that speaks another interface)
+  2    a usage error (bad option, missing file, unknown controller version)
+  3    capture read every input to its end, but some was damaged or skipped (the
+       summary on stderr says what and where; --lenient makes it 0)
+  130  interrupted (Ctrl-C); what was written so far is whole
+Errors print `error: WHAT: WHY; WHAT TO DO` on stderr; --debug shows the traceback.
+tests/test_cli_errors.py holds each error a user can cause, with its message and code.
+Subcommand modules import their heavy parts only when they run, so help and start-up
+stay fast.
 """
 
 from __future__ import annotations
@@ -49,7 +57,9 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="rtde-spec",
         description="Universal Robots RTDE and primary/secondary interfaces: spec, codec and tools.",
-        epilog="Exit codes: 0 success, 1 error in the data or result, 2 usage error.",
+        epilog="Exit codes: 0 success; 1 error in the data or result; 2 usage error; 3 capture read "
+        "every input but some was damaged or skipped (summary on stderr; --lenient gives 0); "
+        "130 interrupted.",
     )
     parser.add_argument("--version", action="version", version=f"rtde-spec {__version__}")
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors (default: off)")

@@ -8,18 +8,15 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 from typing import TYPE_CHECKING
 
-from rtde_spec.cli.common import EXIT_USAGE, controller_version, existing_file
-from rtde_spec.errors import RtdeSpecError, UsageError
+from rtde_spec.cli.common import EXIT_USAGE, controller_version, recipe_file
+from rtde_spec.errors import RtdeSpecError
 from rtde_spec.output.text import print_json, table
 from rtde_spec.recipes.model import FILE_FORMATS, Recipe
 
 if TYPE_CHECKING:
     from rtde_spec.recipes.validation import RecipeReport, ValidationReport
-
-FILE_SUFFIXES = (".xml", ".yaml", ".yml", ".json", ".txt", ".csv")
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -60,11 +57,9 @@ def collect(args: argparse.Namespace) -> list[Recipe]:
 
     recipes: list[Recipe] = []
     for arg in args.recipes:
-        path = existing_file(arg)
+        path = recipe_file(arg, "recipe")
         if path is not None:
             recipes += load_recipes(path, args.format)
-        elif "," not in arg and (Path(arg[:200]).suffix.lower() in FILE_SUFFIXES or "/" in arg):
-            raise UsageError("recipe file not found", subject=f"file {arg}")
         else:
             recipes.append(Recipe.parse(arg).with_(source="argument"))
     return recipes

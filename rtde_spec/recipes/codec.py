@@ -99,7 +99,15 @@ class RecipeCodec:
         for name in names:
             info = cat.get(name, direction)
             if info is None:
-                raise RecipeError(f"unknown {direction} field {name!r}", field=name)
+                import difflib
+
+                close = difflib.get_close_matches(name, cat.names(direction), n=3, cutoff=0.6)
+                hint = f"did you mean {', '.join(close)}? " if close else ""
+                raise RecipeError(
+                    f"unknown {direction} field {name!r}; {hint}"
+                    f"`rtde-spec fields --direction {direction}` lists them",
+                    field=name,
+                )
             items.append((name, info.wire, info))
         return cls(items)
 
