@@ -13,6 +13,7 @@ from rtde_spec.examples import primary_stream, rtde_session
 from rtde_spec.spec.catalogue import Catalogue
 
 from .capture_files import Conversation, write
+from .test_capture_driver import session as driver_session
 from .test_spec_import_write import guide_from_spec, hand_made  # a guide of a release after today's spec
 
 NAMES = ["timestamp", "actual_q", "actual_TCP_pose", "robot_mode"]
@@ -94,5 +95,6 @@ def make_workspace(folder: Path) -> Path:
     (folder / "capture_30001.bin").write_bytes(primary_stream())
     (folder / "rtde_config.xml").write_text(UR_CONFIG)
     (folder / "move.script").write_text(SCRIPT)
+    driver_session(folder)  # driver.pcap: a UR ROS driver session, every port side by side
     (folder / "rtde-guide-5.30.txt").write_text(hand_made(guide_from_spec(Catalogue.builtin().spec)))
     return folder
