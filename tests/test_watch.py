@@ -86,16 +86,23 @@ def test_json_lines_and_a_script_sent_first(
     script = tmp_path / "hello.script"
     script.write_text('textmsg("watch")\nset_digital_out(2, True)\n')
     code, lines, err = watch(
-        capsys, "--port", str(emu.ports["primary"]), "--count", "8", "--json", "--script", str(script)
+        capsys, "--port", str(emu.ports["primary"]), "--count", "30", "--json", "--script", str(script)
     )
     assert code == 0 and "sent 2 line(s) of URScript" in err
     rows = [json.loads(line) for line in lines]
-    assert rows[0]["package"] == "version_message" and len(rows) == 8
-    assert rows[0]["major_version"] == 5 and rows[0]["minor_version"] == 11 and "received" in rows[0]
-    states = [r for r in rows if r["package"] == "robot_state"]  # between them, the program's messages
-    assert states and all("received" in r for r in rows)
+    assert rows[0]["package"] == "version_message" and len(rows) == 30
+    assert rows[0]["major_version"] == 5 and rows[0]["minor_version"] == 11
+    assert all("received" in r for r in rows)
+    # Robot State at 10 Hz, and between them the robot messages the program causes, as a controller
+    # sends them: its start and stop (key messages) and its textmsg (a text message)
+    states = [r for r in rows if r["package"] == "robot_state"]
+    messages = [r for r in rows[1:] if r["package"] != "robot_state"]
+    assert len(states) >= 10
     joints = next(s for s in states[0]["sub_packages"] if s["package"] == "joint_data")["joints"]
     assert joints[5]["q_actual"] == -0.5
+    assert [r["text_message"] for r in messages if r["package"] == "text_message"] == ["watch"]
+    keys = [r["robot_message_title"] for r in messages if r["package"] == "key_message"]
+    assert keys == ["PROGRAM_XXX_STARTED", "PROGRAM_XXX_STOPPED"]
     deadline = time.monotonic() + 2
     while not emu.emulator.primary.scripts and time.monotonic() < deadline:
         time.sleep(0.05)
