@@ -10,6 +10,7 @@ Each interface gives itself away without a request, or with the cheapest one:
 
 from __future__ import annotations
 
+import functools
 import socket
 import struct
 import time
@@ -85,10 +86,11 @@ def _unprompted(head: bytes) -> PortKind:
                     f"(first: {head[:16].hex(' ')})")  # fmt: skip
 
 
+@functools.cache
 def _greeting() -> str:
-    from rtde_spec._generated.dashboard import DASHBOARD
+    from rtde_spec.spec.dashboard import dashboard_spec
 
-    return str(DASHBOARD["greeting"])
+    return dashboard_spec().greeting
 
 
 def _primary_version(head: bytes) -> str | None:

@@ -8,6 +8,7 @@ up, nothing validated twice.
 
 from __future__ import annotations
 
+import difflib
 import keyword
 import struct
 from collections.abc import Callable, Mapping, Sequence
@@ -99,15 +100,10 @@ class RecipeCodec:
         for name in names:
             info = cat.get(name, direction)
             if info is None:
-                import difflib
-
-                close = difflib.get_close_matches(name, cat.names(direction), n=3, cutoff=0.6)
-                hint = f"did you mean {', '.join(close)}? " if close else ""
-                raise RecipeError(
-                    f"unknown {direction} field {name!r}; {hint}"
-                    f"`rtde-spec fields --direction {direction}` lists them",
-                    field=name,
-                )
+                close = ", ".join(difflib.get_close_matches(name, cat.names(direction), n=3, cutoff=0.6))
+                hint = f" (did you mean {close}?)" if close else ""
+                lists = f"; `rtde-spec fields --direction {direction}` lists them"
+                raise RecipeError(f"unknown {direction} field {name!r}{hint}{lists}", field=name)
             items.append((name, info.wire, info))
         return cls(items)
 
@@ -145,8 +141,7 @@ class RecipeCodec:
     # --- decoding -----------------------------------------------------------
 
     def _check(self, payload: bytes | bytearray | memoryview, offset: int) -> None:
-        """A payload of the wrong length: the error's offset counts from the start of the bytes
-        given (the payload starts at `offset`), so it is always inside them or at their end."""
+        """Offsets count from the start of the bytes given: inside them or at their end."""
         got = len(payload) - offset
         if got == self.size:
             return
