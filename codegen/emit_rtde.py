@@ -91,7 +91,7 @@ def _model(msg: MessageSpec, spec: Spec, prims: dict[str, Primitive]) -> str:
     out.append(f"    PACKAGE_NAME: ClassVar[str] = {names[msg.type]!r}\n")
     out.append(f"    SENDERS: ClassVar[tuple[str, ...]] = {tuple(msg.senders)!r}\n")
     out.append(f"    PROTOCOLS: ClassVar[tuple[int, ...]] = {tuple(msg.protocols)!r}\n")
-    out.append(f"    STRUCT: ClassVar[Construct] = structs.{upper(msg.name)}\n")
+    out.append(f'    STRUCT: ClassVar["Construct"] = struct_of({upper(msg.name)!r})\n')
     out.append(f"    HEADER_FORMAT: ClassVar[str] = {header_format(spec)!r}\n")
     out.append(f"    MAX_SIZE: ClassVar[int] = {spec.packages.limits.package_max_bytes}\n")
     enums = {f.name: f.enum for f in msg.fields if f.enum}
@@ -116,11 +116,9 @@ def emit_rtde_models(spec: Spec) -> str:
     out = [
         PY_HEADER,
         '"""pydantic models of every RTDE package layout, and the codec\'s lookup tables."""\n\n',
-        "from typing import Annotated, ClassVar\n\n",
-        "from construct import Construct\n",
+        "from typing import TYPE_CHECKING, Annotated, ClassVar\n\n",
         "from pydantic import Field\n\n",
-        "from rtde_spec._generated import rtde_structs as structs\n",
-        "from rtde_spec.rtde.messages import RtdeMessage\n",
+        "from rtde_spec.rtde.messages import RtdeMessage, struct_of\n",
         "{model_types_import}",
         f"PORT = {pk.port}\n",
         f"HEADER_FORMAT = {header_format(spec)!r}\n",
@@ -137,7 +135,9 @@ def emit_rtde_models(spec: Spec) -> str:
     out.append(f"PROTOCOLS: tuple[int, ...] = {tuple(protocols)!r}\n")
     models = [_model(msg, spec, prims) for msg in pk.messages]
     used = [n for n in ("AsciiStr", "CsvItem", "ShortAsciiStr") if any(n in m for m in models)]
-    imports = f"from rtde_spec.wire.model_types import {', '.join(used)}\n\n" if used else "\n"
+    imports = f"from rtde_spec.wire.model_types import {', '.join(used)}\n" if used else ""
+    imports += "\nif TYPE_CHECKING:  # construct loads with the first STRUCT read\n"
+    imports += "    from construct import Construct\n\n"
     out = [part.replace("{model_types_import}", imports) for part in out]
     out += models
     out.append("\n\nMESSAGES: tuple[type[RtdeMessage], ...] = (\n")

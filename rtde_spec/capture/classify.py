@@ -24,15 +24,18 @@ KINDS = STREAM_KINDS + ROBOT_CLIENT_KINDS
 
 @cache
 def default_ports() -> dict[int, str]:
-    """port -> protocol, every default the spec names."""
-    from rtde_spec._generated.realtime import REALTIME_PORTS
-    from rtde_spec.spec.dashboard import dashboard_spec
-    from rtde_spec.spec.external import external_spec
+    """port -> protocol, every default the spec names.
 
-    ports = {RTDE_PORT: "rtde", dashboard_spec().port: "dashboard"}
+    Read from the generated tables (validated at codegen time): a capture of RTDE alone
+    builds no dashboard or external-control meta-model."""
+    from rtde_spec._generated.dashboard import DASHBOARD
+    from rtde_spec._generated.external_control import EXTERNAL_CONTROL
+    from rtde_spec._generated.realtime import REALTIME_PORTS
+
+    ports = {RTDE_PORT: "rtde", int(DASHBOARD["port"]): "dashboard"}
     ports.update({port: "primary" for port in PRIMARY_PORTS.values()})
     ports.update({port: "realtime" for port in REALTIME_PORTS.values()})
-    ports.update({p.port: p.name for p in external_spec().protocols})
+    ports.update({int(p["port"]): str(p["name"]) for p in EXTERNAL_CONTROL["protocols"]})
     return ports
 
 

@@ -29,8 +29,6 @@ from rtde_spec.capture.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
 from rtde_spec.errors import RtdeSpecError
 from rtde_spec.output.base import plain
-from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
-from rtde_spec.primary.codec import default_codec
 from rtde_spec.recipes.codec import RecipeCodec
 from rtde_spec.rtde.session import SessionDecoder
 from rtde_spec.spec.catalogue import Catalogue
@@ -204,6 +202,8 @@ class RtdeConnection:
 
 class PrimaryConnection:
     def __init__(self, name: str, robot: str, sink: TableSink) -> None:
+        from rtde_spec.primary.codec import default_codec  # primary models load with the first primary stream
+
         self.name, self.robot, self.sink = name, robot, sink
         self.codec = default_codec()
         families = {f.spec.type for f in self.codec.families.values()}
@@ -228,6 +228,8 @@ class PrimaryConnection:
         self._messages(self.framing.finish(), self.framing.times, self.last_time)
 
     def _messages(self, raws: list[bytes], times: list[float] | None, now: float) -> None:
+        from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
+
         for n, raw in enumerate(raws):
             time = now if times is None else times[n]  # a message held back: when it was completed
             base = {"connection": self.name, "capture_time": time}

@@ -23,7 +23,8 @@ if TYPE_CHECKING:
 class RtdeMessage(BaseModel):
     """One RTDE package: fields as the spec names them, plus class-level wire metadata."""
 
-    model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True)  # schemas built on first use: start-up
+    # schemas are built on first use: a capture or decode imports ~100 classes and uses a few
+    model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True)
 
     NAME: ClassVar[str]
     PACKAGE_TYPE: ClassVar[int]
@@ -74,3 +75,21 @@ class RtdeMessage(BaseModel):
 @cache
 def _header(fmt: str) -> struct.Struct:
     return struct.Struct(fmt)
+
+
+class _StructOf:
+    """`Model.STRUCT`: the package's construct struct, imported on first use (construct and the
+    generated structs cost a capture or a client ~25 ms of start-up they do not need)."""
+
+    def __init__(self, name: str) -> None:
+        self.name = name
+
+    def __get__(self, obj: object, owner: type | None = None) -> Construct:
+        from rtde_spec._generated import rtde_structs
+
+        return getattr(rtde_structs, self.name)  # type: ignore[no-any-return]
+
+
+def struct_of(name: str) -> Any:
+    """The value of a generated model's STRUCT: `rtde_structs.<name>`, imported when read."""
+    return _StructOf(name)

@@ -8,12 +8,15 @@ and scaled fields are divided by their scale, so both paths give the same SI val
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from typing import Any
 
-from rtde_spec.spec.schema import LayoutField, Primitive
+from rtde_spec.wire.fields import FieldLike, PrimitiveLike
 
 
-def record_dtype(fields: list[LayoutField], prims: dict[str, Primitive], order: str, itemsize: int) -> Any:
+def record_dtype(
+    fields: Sequence[FieldLike], prims: Mapping[str, PrimitiveLike], order: str, itemsize: int
+) -> Any:
     """A numpy structured dtype of fixed value fields, padded to `itemsize` bytes a record."""
     import numpy as np
 
@@ -28,7 +31,7 @@ def record_dtype(fields: list[LayoutField], prims: dict[str, Primitive], order: 
     return np.dtype({"names": names, "formats": formats, "offsets": offsets, "itemsize": itemsize})
 
 
-def decode_columns(data: bytes, dtype: Any, fields: list[LayoutField]) -> dict[str, Any]:
+def decode_columns(data: bytes, dtype: Any, fields: Sequence[FieldLike]) -> dict[str, Any]:
     """Columns (native order; 2-D for counted fields) of the records in `data`, scaled to SI."""
     import numpy as np
 

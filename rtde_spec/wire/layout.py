@@ -17,18 +17,19 @@ prefix past the end) is a DecodeError with the byte offset.
 from __future__ import annotations
 
 import struct
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Generic, TypeVar
 
 from rtde_spec._generated.constants import PRIMARY_BYTE_ORDER
 from rtde_spec.errors import DecodeError, EncodeError
-from rtde_spec.spec.schema import CaseSpec, LayoutField, Primitive
+from rtde_spec.wire.fields import CaseLike, FieldLike, PrimitiveLike
 
 if TYPE_CHECKING:
     from rtde_spec.primary.values import ValueTable
 
 Values = dict[str, Any]
+F = TypeVar("F", bound=FieldLike)  # the meta-model's LayoutField or the runtime's WireField
 
 
 @dataclass
@@ -66,13 +67,13 @@ class FixedStep:
         self.regroup = eval(f"lambda t: {{{', '.join(parts)}}}")
 
 
-class Layout:
+class Layout(Generic[F]):
     """Decoder and encoder of one list of layout fields."""
 
     def __init__(
         self,
-        fields: list[LayoutField],
-        prims: dict[str, Primitive],
+        fields: Sequence[F],
+        prims: Mapping[str, PrimitiveLike],
         values: ValueTable | None = None,
         *,
         order: str = PRIMARY_BYTE_ORDER,
@@ -85,8 +86,8 @@ class Layout:
         self.value_table = values
         self.names = [f.name for f in fields]
         self.group_fields = [f for f in fields if f.fields is not None]
-        self.steps: list[FixedStep | LayoutField] = []
-        self.groups: dict[str, Layout] = {}
+        self.steps: list[FixedStep | F] = []
+        self.groups: dict[str, Layout[Any]] = {}
         run: list[Atom] = []
         for fld in fields:
             if fld.fields is not None:
@@ -109,7 +110,7 @@ class Layout:
 
     # --- compilation --------------------------------------------------------
 
-    def _atom(self, fld: LayoutField) -> Atom | None:
+    def _atom(self, fld: FieldLike) -> Atom | None:
         kind = fld.kind
         if kind == "value":
             prim = self.prims[fld.type or ""]
@@ -210,7 +211,7 @@ class Layout:
         return bytes(buf[start : start + length]), start + length
 
     def _decode_field(
-        self, fld: LayoutField, buf: bytes, pos: int, end: int, values: Values, where: str
+        self, fld: FieldLike, buf: bytes, pos: int, end: int, values: Values, where: str
     ) -> tuple[bool, int]:
         name = f"{where}{fld.name}"
         kind = fld.kind
@@ -249,7 +250,7 @@ class Layout:
             if case is None:
                 values[fld.name] = None  # an unknown case: the rest stays as extra bytes
                 return True, pos
-            if isinstance(case, CaseSpec):
+            if not isinstance(case, str):  # a length-prefixed text
                 text, pos = self._prefixed(buf, pos, end, case.length or "", name)
                 if text is None:
                     return False, pos
@@ -307,7 +308,7 @@ class Layout:
                 out += self._encode_field(fld, value, values, f"{where}{fld.name}")
         return bytes(out)
 
-    def _encode_field(self, fld: LayoutField, value: Any, values: Mapping[str, Any], name: str) -> bytes:
+    def _encode_field(self, fld: FieldLike, value: Any, values: Mapping[str, Any], name: str) -> bytes:
         kind = fld.kind
         try:
             if kind == "value":
@@ -326,7 +327,7 @@ class Layout:
                 return self.value_table.encode_all(list(value), name)
             if kind == "switch":
                 case = (fld.cases or {})[values[fld.switch or ""]]
-                if isinstance(case, CaseSpec):
+                if not isinstance(case, str):  # a length-prefixed text
                     raw = str(value).encode("utf-8", "surrogateescape")
                     return self._prefix(case.length or "", len(raw), name) + raw
                 return struct.pack(self.order + self.prims[case].struct, value)
@@ -365,7 +366,7 @@ def _scaled(value: Any, scale: float, kind: str, name: str) -> Any:
     return round(wire)
 
 
-def _case(fld: LayoutField, values: Mapping[str, Any]) -> str | CaseSpec | None:
+def _case(fld: FieldLike, values: Mapping[str, Any]) -> str | CaseLike | None:
     """The switch case the already-decoded selector field picks (None: unknown)."""
     selector = values.get(fld.switch or "")
     return (fld.cases or {}).get(selector) if isinstance(selector, int) else None
