@@ -246,3 +246,20 @@ def test_exit_codes_are_documented_in_help(capsys: pytest.CaptureFixture[str]) -
     for part in ("0 success", "1 error in the data or result", "2 usage error", "3 capture read every input",
                  "--lenient gives 0", "130 interrupted"):  # fmt: skip
         assert part in text
+
+
+def test_many_distinct_problems_are_cut_to_twenty_lines_and_counted() -> None:
+    from rtde_spec.cli.capture_cmd import MAX_PROBLEMS, distinct
+
+    same = [
+        f"a:1-b:2: controller data package at 17000000{i:02d}.000000: not of the given recipe"
+        for i in range(40)
+    ]
+    others = [f"a:1-b:2: message at 1700000000.{i:06d}: problem number {i}" for i in range(30)]
+    lines = distinct(same + others)
+    assert lines[0] == (
+        "a:1-b:2: controller data package: not of the given recipe (40 times, at 1700000000.000000 .. "
+        "1700000039.000000)"
+    )
+    assert len(lines) == MAX_PROBLEMS + 1 and lines[1] == others[0]
+    assert lines[-1] == "... and 11 more distinct problems (11 in all)"

@@ -189,3 +189,24 @@ def test_probe_tells_real_time_like_streams_and_silent_ports() -> None:
     assert found["realtime"].kind == "realtime" and "1116-byte packages" in found["realtime"].detail
     assert found["silent"].kind == "silent" and "did not answer an RTDE request" in found["silent"].detail
     assert found["other"].kind == "unknown" and "53 53 48 2d" in found["other"].detail
+
+
+def test_decode_with_ur_configuration_picks_the_recipe_of_the_sender(
+    capsys: pytest.CaptureFixture[str],
+) -> None:
+    import json
+
+    from rtde_spec.recipes.codec import RecipeCodec
+
+    names = ["timestamp", "actual_q", "robot_mode", "output_int_register_0"]
+    values = {"timestamp": 1.5, "actual_q": (0.25,) * 6, "robot_mode": 7, "output_int_register_0": 42}
+    package = RecipeCodec.for_names(names, "output").encode_package(values, 1)
+    assert main(["decode", package.hex(), "--recipe", str(UR_CONFIG), "--format", "json"]) == 0
+    (row,) = json.loads(capsys.readouterr().out)
+    assert (row["timestamp"], row["output_int_register_0"]) == (1.5, 42)
+    setp = RecipeCodec.for_names(["input_double_register_24", "input_double_register_25"], "input")
+    sent = setp.encode_package({"input_double_register_24": 0.5, "input_double_register_25": -1.0}, 2)
+    argv = ["decode", sent.hex(), "--from", "client", "--recipe", str(UR_CONFIG), "--recipe-key", "setp"]
+    assert main([*argv, "--format", "json"]) == 0
+    (row,) = json.loads(capsys.readouterr().out)
+    assert (row["input_double_register_24"], row["input_double_register_25"]) == (0.5, -1.0)
