@@ -127,8 +127,12 @@ class Catalogue:
         self.lines = {row[0]: LineInfo(*row) for row in data.LINES}
         self.wire_types = {row[0]: WireTypeInfo(*row) for row in data.WIRE_TYPES}
         self._fields = {d: {} for d in DIRECTIONS}
+        parsed: dict[str, Version] = {}  # ~30 distinct versions among ~1,700 (start-up)
         for name, direction, wire, *middle, since in data.FIELDS:
-            versions = {line: Version.parse(v) for line, v in since.items()}
+            for v in since.values():
+                if v not in parsed:
+                    parsed[v] = Version.parse(v)
+            versions = {line: parsed[v] for line, v in since.items()}
             fields: tuple[Any, ...] = (name, direction, self.wire_types[wire], *middle, versions)
             info = FieldInfo(*fields)
             self._fields[direction][name] = info

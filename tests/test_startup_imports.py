@@ -1,0 +1,157 @@
+"""What each CLI path imports (issue 21.5, instant start): no path imports pandas, and
+models and the spec's meta-model are imported when first used, not up front.
+
+Each path runs as a user runs it, in a fresh interpreter, through `cli.main.main`; a
+small wrapper writes `sys.modules` when it ends. Counting imports, not timing them,
+keeps the test exact on a loaded machine (benchmarks/startup.py has the times).
+"""
+
+from __future__ import annotations
+
+import json
+import socket
+import subprocess
+import sys
+from pathlib import Path
+from typing import Any
+
+import pytest
+
+from rtde_spec.wire.fields import wire_field, wire_primitives
+from tests.capture_files import rtde_capture, rtde_packages
+
+WRAPPER = """
+import json, sys
+from rtde_spec.cli.main import main
+try:
+    code = main(sys.argv[2:])
+finally:
+    with open(sys.argv[1], "w") as f:
+        json.dump(sorted(sys.modules), f)
+raise SystemExit(code)
+"""
+
+META_MODEL = "rtde_spec.spec.schema"  # the pydantic meta-model: codegen's validator of spec/
+PRIMARY_MODELS = "rtde_spec._generated.primary_models"
+SPEC_FILES = ("yaml", "rtde_spec.spec.dashboard", "rtde_spec.spec.external")  # their meta-models
+RTDE_ONLY = (META_MODEL, PRIMARY_MODELS, "construct", *SPEC_FILES)
+
+
+def run_cli(cwd: Path, *args: str) -> tuple[int, set[str], str]:
+    """(exit code, modules loaded at exit, stderr) of `rtde-spec ARGS` in its own interpreter."""
+    out = cwd / "modules.json"
+    done = subprocess.run(
+        [sys.executable, "-c", WRAPPER, str(out), *args], cwd=cwd, capture_output=True, text=True, timeout=600
+    )
+    return done.returncode, set(json.loads(out.read_text())), done.stderr
+
+
+def closed_port() -> int:
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return int(s.getsockname()[1])
+
+
+@pytest.fixture(scope="module")
+def one_package(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """An RTDE session's setup and one data package."""
+    return rtde_capture(tmp_path_factory.mktemp("pcap") / "one.pcap", rtde_packages(1))
+
+
+def test_help_imports_no_models_numpy_or_arrow(tmp_path: Path) -> None:
+    code, modules, _ = run_cli(tmp_path, "--help")
+    assert code == 0
+    heavy = {"pandas", "pydantic", "numpy", "pyarrow", "construct", "yaml", META_MODEL}
+    assert not heavy & modules
+
+
+@pytest.mark.parametrize("fmt", ["parquet", "csv", "jsonl"])
+def test_capture_of_rtde_imports_no_pandas_meta_model_or_primary_models(
+    tmp_path: Path, one_package: Path, fmt: str
+) -> None:
+    out = str(tmp_path / "out")
+    code, modules, err = run_cli(tmp_path, "capture", str(one_package), "-o", out, "--format", fmt)
+    assert code == 0, err
+    assert list((tmp_path / "out").rglob(f"*.{fmt}")), "the tables were written"
+    assert "pandas" not in modules
+    assert "rtde_spec._generated.rtde_models" in modules  # the setup packages were decoded...
+    assert not set(RTDE_ONLY) & modules  # ...without the meta-model, primary models, construct or YAML
+
+
+def test_decode_imports_no_pandas_or_meta_model(tmp_path: Path) -> None:
+    from rtde_spec import build
+
+    hexes = build("request_protocol_version_reply", accepted=True).hex()
+    for extra in ([], ["--format", "json"], ["-o", str(tmp_path / "d.parquet")]):
+        code, modules, err = run_cli(tmp_path, "decode", "--from", "controller", *extra, hexes)
+        assert code == 0, err
+        assert not {"pandas", META_MODEL, PRIMARY_MODELS, "construct"} & modules, extra
+    assert (tmp_path / "d.parquet").stat().st_size > 0
+
+
+def test_record_reaches_the_network_without_pandas_or_meta_model(tmp_path: Path) -> None:
+    port = str(closed_port())
+    args = ["record", "--host", "127.0.0.1", "--port", port, "--fields", "timestamp", "--timeout", "2"]
+    code, modules, err = run_cli(tmp_path, *args, "-o", str(tmp_path / "r.csv"))
+    assert code == 1 and "nothing accepts connections" in err, err
+    assert not {"pandas", META_MODEL, PRIMARY_MODELS, "construct"} & modules
+
+
+def test_fields_and_validate_import_no_pandas(tmp_path: Path) -> None:
+    code, modules, err = run_cli(tmp_path, "fields", "--controller", "5.15.0")
+    assert code == 0, err
+    assert not {"pandas", "pydantic", "numpy", META_MODEL} & modules
+    code, modules, err = run_cli(tmp_path, "validate", "timestamp,actual_q", "--controller", "5.15.0")
+    assert code == 0, err
+    assert not {"pandas", META_MODEL} & modules
+
+
+def _same_field(wire: Any, model: Any, where: str) -> None:
+    """The runtime's field reads as the meta-model's, attribute by attribute, groups too."""
+    for attr in ("name", "type", "count", "length", "fallback", "format", "repeat", "when", "switch",
+                 "group", "enum", "unit", "scale", "kind"):  # fmt: skip
+        assert getattr(wire, attr) == getattr(model, attr), f"{where}.{attr}"
+    wire_cases, model_cases = wire.cases, model.cases
+    assert (wire_cases is None) == (model_cases is None), where
+    for key, case in (model_cases or {}).items():
+        other = wire_cases[key]
+        same = (
+            other == case if isinstance(case, str) else (other.type, other.length) == (case.type, case.length)
+        )
+        assert same, f"{where} case {key}"
+    wire_inner, model_inner = wire.fields, model.fields
+    assert (wire_inner is None) == (model_inner is None), where
+    assert len(wire_inner or ()) == len(model_inner or ()), where
+    for a, b in zip(wire_inner or (), model_inner or (), strict=True):
+        _same_field(a, b, f"{where}.{b.name}")
+
+
+def test_runtime_fields_read_as_the_meta_model_does() -> None:
+    """Decoding builds its layouts from the generated dicts without pydantic (wire.fields);
+    every field of every RTDE package, primary message and external-control record reads as
+    the validated spec's."""
+    from rtde_spec._generated.external_control import EXTERNAL_CONTROL
+    from rtde_spec._generated.spec_data import SPEC
+    from rtde_spec.spec.schema import LayoutField, Primitive
+
+    fields = [(m["name"], f) for m in SPEC["packages"]["messages"] for f in m.get("fields", [])]
+    for fam in SPEC["primary"]["families"]:
+        fields += [(fam["name"], f) for f in fam.get("prefix", [])]
+        for member in fam.get("members", []):
+            fields += [(member["name"], f) for f in member["fields"]]
+            fields += [(member["name"], f) for old in member.get("older", []) for f in old["fields"]]
+    for proto in EXTERNAL_CONTROL["protocols"]:
+        for msg in proto.get("messages", []):
+            for record in [msg, *msg.get("older", [])]:
+                fields += [(v["name"], f) for v in record["variants"] for f in v["fields"]]
+    assert len(fields) > 250
+    assert any("scale" in f for _, f in fields)
+    assert any("cases" in f for _, f in fields) and any("fields" in f for _, f in fields)
+    for where, data in fields:
+        _same_field(wire_field(data), LayoutField.model_validate(data), f"{where}.{data['name']}")
+    prims = SPEC["primitives"]["primitives"]
+    for name, prim in wire_primitives(prims).items():
+        model = Primitive.model_validate(next(p for p in prims if p["name"] == name))
+        assert (prim.size, prim.struct, prim.kind, prim.signed, prim.bounds) == (
+            model.size, model.struct, model.kind, model.signed, model.bounds
+        ), name  # fmt: skip
