@@ -135,7 +135,10 @@ class StreamDecoder:
                 payload = message.payload
                 if not self.strict and len(payload) > self.codec.size:  # newer firmware appended fields
                     payload = payload[: self.codec.size]
-                values = self.codec.decode(payload)
+                try:
+                    values = self.codec.decode(payload)
+                except DecodeError as exc:  # payload offsets, seen from the package's start
+                    raise exc.relocated(len(package) - len(message.payload)) from None
         except DecodeError as exc:
             if not self.skip_errors:
                 raise exc.in_stream(offset, self.packages) from None
