@@ -39,10 +39,32 @@ _SIZE_AT, TYPE_AT, RECIPE_ID_AT = DATA_PACKAGE_PREFIX_OFFSETS
 RTDE_SIZE_BYTES = TYPE_AT - _SIZE_AT  # the size field leads the header
 
 
+class Problems(list[str]):
+    """A connection's problems: the first MAX_PROBLEMS kept word for word, the rest only counted,
+    so a capture of a million bad packages costs a number, not a million strings."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.more = 0
+
+    def append(self, problem: str) -> None:
+        if len(self) < MAX_PROBLEMS:
+            super().append(problem)
+        else:
+            self.more += 1
+
+    def lines(self) -> list[str]:
+        more = [f"... {self.more} more problems of this connection, not listed"] if self.more else []
+        return [*self, *more]
+
+
+MAX_PROBLEMS = 1000
+
+
 @dataclass
 class Counts:
     packages: int = 0
-    errors: list[str] = field(default_factory=list)
+    errors: Problems = field(default_factory=Problems)
     unknown_recipe_sizes: dict[int, int] = field(default_factory=dict)  # data package size -> count
 
 
@@ -189,7 +211,10 @@ class RtdeConnection:
                 sizes = self.counts.unknown_recipe_sizes
                 sizes[len(package)] = sizes.get(len(package), 0) + 1
             else:
-                self.counts.errors.append(f"{sender} data package at {time:.6f}: not of the given recipe")
+                self.counts.errors.append(
+                    f"{sender} data package at {time:.6f}: not of the given recipe ({len(package)} bytes; "
+                    f"the recipe's packages are {self.given.package_size}): check --recipe"
+                )
         else:
             fields_json = json.dumps(plain(message.fields()))
             row = {**base, "package": message.NAME, "fields": fields_json, "note": decoded.note or ""}

@@ -170,7 +170,7 @@ def _summary(path: str | Path, stats: dict[str, int], flows: list[_Flow]) -> Cap
                 counts.packages,
                 sum(d.gaps for d in flow.directions.values()),
                 sum(d.lost_bytes for d in flow.directions.values()),
-                counts.errors,
+                counts.errors.lines(),
                 counts.unknown_recipe_sizes,
                 skipped_bytes=sum(f.skipped for f in framings),
                 cut_packages=sum(f.cut for f in framings),

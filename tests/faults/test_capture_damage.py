@@ -125,3 +125,13 @@ def test_an_undamaged_capture_exits_0_with_its_summary(tmp_path: Path) -> None:
     result = run_capture(str(path), "-o", str(tmp_path / "out"), cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     assert f"summary {path}: ok: {SETUP_FRAMES + 40} frames, 46 packages, 0 gaps" in result.stderr
+
+
+def test_a_connection_keeps_its_first_problems_word_for_word_and_counts_the_rest() -> None:
+    from rtde_spec.capture.connections import MAX_PROBLEMS, Problems
+
+    problems = Problems()
+    for i in range(MAX_PROBLEMS + 250):
+        problems.append(f"package {i}: bad")
+    assert len(problems) == MAX_PROBLEMS and problems.more == 250
+    assert problems.lines()[-1] == "... 250 more problems of this connection, not listed"
