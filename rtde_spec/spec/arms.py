@@ -15,7 +15,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from rtde_spec.errors import SpecError, SpecIssue, UsageError
+from rtde_spec.errors import UsageError
 from rtde_spec.spec.schema import StrictModel
 
 SPEC_FILE = "arms/models.yaml"
@@ -68,15 +68,9 @@ class ArmsFile(StrictModel):
 
 def load_arms(root: Path | str) -> ArmsFile:
     """Load and validate arms/models.yaml below spec root `root`; SpecError names every problem."""
-    from rtde_spec.spec.loader import _open, _validate
+    from rtde_spec.spec.loader import load_file
 
-    base = Path(root)
-    issues: list[SpecIssue] = []
-    source = _open(base / SPEC_FILE, SPEC_FILE, issues)
-    arms = _validate(source, ArmsFile, issues) if source is not None else None
-    if issues or arms is None:
-        raise SpecError(issues or [SpecIssue(SPEC_FILE, "", "no arm models")])
-    return arms  # type: ignore[no-any-return]
+    return load_file(root, SPEC_FILE, ArmsFile)
 
 
 @cache

@@ -15,10 +15,8 @@ from functools import cache
 from pathlib import Path
 from typing import Annotated, Literal
 
-import yaml
-from pydantic import Field, ValidationError, model_validator
+from pydantic import Field, model_validator
 
-from rtde_spec.errors import SpecError, SpecIssue
 from rtde_spec.spec.schema import Since, StrictModel
 
 SPEC_FILE = "dashboard/commands.yaml"
@@ -112,24 +110,9 @@ def _placeholders(text: str) -> set[str]:
 
 def load_dashboard(root: Path | str) -> DashboardFile:
     """Load and validate dashboard/commands.yaml below spec root `root`; SpecError says what is wrong."""
-    from rtde_spec.spec import safe_yaml
+    from rtde_spec.spec.loader import load_file
 
-    path = Path(root) / SPEC_FILE
-    try:
-        data = safe_yaml.load(path.read_text(encoding="utf-8"))
-    except (OSError, yaml.YAMLError) as exc:
-        mark = getattr(exc, "problem_mark", None)
-        raise SpecError(
-            [SpecIssue(SPEC_FILE, "", f"cannot read: {exc}", mark.line + 1 if mark else None)]
-        ) from None
-    try:
-        return DashboardFile.model_validate(data)
-    except ValidationError as exc:
-        issues = [
-            SpecIssue(SPEC_FILE, ".".join(str(p) for p in e["loc"]), re.sub(r"^Value error, ", "", e["msg"]))
-            for e in exc.errors()
-        ]
-        raise SpecError(issues) from None
+    return load_file(root, SPEC_FILE, DashboardFile)
 
 
 @cache

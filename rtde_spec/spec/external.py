@@ -9,13 +9,11 @@ then writes the validated file to `_generated/external_control.py`.
 
 from __future__ import annotations
 
-import re
 from functools import cache
 from pathlib import Path
-from typing import Annotated, Any, Literal
+from typing import Annotated, Literal
 
-import yaml
-from pydantic import Field, ValidationError, model_validator
+from pydantic import Field, model_validator
 
 from rtde_spec.errors import SpecError, SpecIssue
 from rtde_spec.spec.schema import EnumSpec, Ident, LayoutField, StrictModel
@@ -137,33 +135,14 @@ def _check_record(
     return issues
 
 
-def _load_yaml(path: Path, label: str) -> object:
-    from rtde_spec.spec import safe_yaml
-
-    try:
-        return safe_yaml.load(path.read_text(encoding="utf-8"))
-    except (OSError, yaml.YAMLError) as exc:
-        mark = getattr(exc, "problem_mark", None)
-        raise SpecError(
-            [SpecIssue(label, "", f"cannot read: {exc}", mark.line + 1 if mark else None)]
-        ) from None
-
-
 def load_external(root: Path | str) -> ExternalControlFile:
     """Load, validate and check external_control/protocols.yaml below spec root `root`."""
-    root = Path(root)
-    data = _load_yaml(root / SPEC_FILE, SPEC_FILE)
-    try:
-        spec = ExternalControlFile.model_validate(data)
-    except ValidationError as exc:
-        issues = [
-            SpecIssue(SPEC_FILE, ".".join(str(p) for p in e["loc"]), re.sub(r"^Value error, ", "", e["msg"]))
-            for e in exc.errors()
-        ]
-        raise SpecError(issues) from None
-    raw: Any = _load_yaml(root / PRIMITIVES_FILE, PRIMITIVES_FILE) or {}
-    prims = {p["name"]: (int(p["size"]), str(p["kind"])) for p in raw.get("primitives", [])}
-    found = check(spec, prims)
+    from rtde_spec.spec.loader import load_file
+    from rtde_spec.spec.schema import PrimitivesFile
+
+    spec = load_file(root, SPEC_FILE, ExternalControlFile)
+    primitives = load_file(root, PRIMITIVES_FILE, PrimitivesFile).primitives
+    found = check(spec, {p.name: (p.size, p.kind) for p in primitives})
     if found:
         raise SpecError([SpecIssue(SPEC_FILE, path, reason) for path, reason in found])
     return spec

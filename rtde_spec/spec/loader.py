@@ -7,7 +7,7 @@ one), the line, and the reason. All problems are collected before raising.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, TypeVar
 
 import yaml
 from pydantic import BaseModel, ValidationError
@@ -39,6 +39,7 @@ SPEC_FILES: dict[str, tuple[str, type[BaseModel]]] = {
 }
 
 Loc = tuple[str | int, ...]
+M = TypeVar("M", bound=BaseModel)
 
 #: libyaml's loader where PyYAML has it: the spec parses in a tenth of the time (codegen, spec import)
 _LOADER: Any = getattr(yaml, "CSafeLoader", yaml.SafeLoader)
@@ -137,6 +138,21 @@ def _open(path: Path, label: str, issues: list[SpecIssue]) -> _Source | None:
         line = mark.line + 1 if mark is not None else None
         issues.append(SpecIssue(label, "", f"not valid YAML: {exc}", line))
     return None
+
+
+def load_file(root: Path | str, rel: str, model: type[M]) -> M:
+    """One YAML file of spec/ (`rel` below `root`) validated by its meta-model `model`: the
+    dashboard, real-time, external-control and arm tables, each a file of its own.
+
+    Read without aliases; SpecError names the file, the path inside it (with entry names),
+    the line and the reason of every problem, as for the RTDE and primary files.
+    """
+    issues: list[SpecIssue] = []
+    source = _open(Path(root) / rel, rel, issues)
+    value = _validate(source, model, issues) if source is not None else None
+    if issues or value is None:
+        raise SpecError(issues or [SpecIssue(rel, "", "nothing to validate")])
+    return value  # type: ignore[no-any-return]
 
 
 def load_spec(root: Path | str | None = None) -> Spec:

@@ -11,14 +11,12 @@ validated file to `_generated/realtime.py`, so the installed package needs no YA
 
 from __future__ import annotations
 
-import re
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
 from typing import Annotated, Literal
 
-import yaml
-from pydantic import Field, ValidationError, model_validator
+from pydantic import Field, model_validator
 
 from rtde_spec.errors import SpecError, SpecIssue
 from rtde_spec.spec.catalogue import Catalogue, LineInfo
@@ -136,24 +134,9 @@ def load_realtime(root: Path | str, catalogue: Catalogue | None = None) -> Realt
 
     With a catalogue (its product lines), the documented message sizes are checked too.
     """
-    from rtde_spec.spec import safe_yaml
+    from rtde_spec.spec.loader import load_file
 
-    path = Path(root) / SPEC_FILE
-    try:
-        data = safe_yaml.load(path.read_text(encoding="utf-8"))
-    except (OSError, yaml.YAMLError) as exc:
-        mark = getattr(exc, "problem_mark", None)
-        raise SpecError(
-            [SpecIssue(SPEC_FILE, "", f"cannot read: {exc}", mark.line + 1 if mark else None)]
-        ) from None
-    try:
-        table = RealtimeFile.model_validate(data)
-    except ValidationError as exc:
-        issues = [
-            SpecIssue(SPEC_FILE, ".".join(str(p) for p in e["loc"]), re.sub(r"^Value error, ", "", e["msg"]))
-            for e in exc.errors()
-        ]
-        raise SpecError(issues) from None
+    table = load_file(root, SPEC_FILE, RealtimeFile)
     if catalogue is not None:
         names = set(catalogue.names("output"))
         issues = check_lengths(table, catalogue) + [

@@ -11,6 +11,7 @@ from typing import Annotated, Literal
 
 from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 
+from rtde_spec.spec.kinds import field_kind, int_bounds
 from rtde_spec.spec.versions import Version
 
 _IDENT = r"^[A-Za-z_][A-Za-z0-9_]*$"
@@ -56,12 +57,7 @@ class Primitive(StrictModel):
     @property
     def bounds(self) -> tuple[int, int] | None:
         """Inclusive integer range, derived from size and signedness."""
-        if self.kind != "int":
-            return None
-        bits = self.size * 8
-        if self.signed:
-            return (-(1 << (bits - 1)), (1 << (bits - 1)) - 1)
-        return (0, (1 << bits) - 1)
+        return int_bounds(self.kind, self.size, self.signed)
 
 
 class PrimitivesFile(StrictModel):
@@ -251,15 +247,7 @@ class LayoutField(StrictModel):
     @property
     def kind(self) -> str:
         """value | string | bytes | values | repeat | optional | switch."""
-        if self.fields is not None:
-            return "optional" if self.when is not None else "repeat"
-        if self.switch is not None:
-            return "switch"
-        if self.type in ("string", "bytes"):
-            return self.type
-        if self.type == "variable_values":
-            return "values"
-        return "value"
+        return field_kind(self.type, self.fields is not None, self.when, self.switch)
 
 
 PackageField = LayoutField  # one field model for RTDE packages and primary messages

@@ -13,6 +13,8 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
+from rtde_spec.spec.kinds import field_kind, int_bounds
+
 
 class CaseLike(Protocol):
     """A switch case that is a length-prefixed text (the meta-model's `CaseSpec`)."""
@@ -103,15 +105,7 @@ class WireField:
     @property
     def kind(self) -> str:
         """value | string | bytes | values | repeat | optional | switch."""
-        if self.fields is not None:
-            return "optional" if self.when is not None else "repeat"
-        if self.switch is not None:
-            return "switch"
-        if self.type in ("string", "bytes"):
-            return self.type
-        if self.type == "variable_values":
-            return "values"
-        return "value"
+        return field_kind(self.type, self.fields is not None, self.when, self.switch)
 
 
 @dataclass(frozen=True, slots=True)
@@ -125,12 +119,7 @@ class WirePrimitive:
     @property
     def bounds(self) -> tuple[int, int] | None:
         """Inclusive integer range, derived from size and signedness (as `Primitive.bounds`)."""
-        if self.kind != "int":
-            return None
-        bits = self.size * 8
-        if self.signed:
-            return (-(1 << (bits - 1)), (1 << (bits - 1)) - 1)
-        return (0, (1 << bits) - 1)
+        return int_bounds(self.kind, self.size, self.signed)
 
 
 def wire_field(data: Mapping[str, Any]) -> WireField:
