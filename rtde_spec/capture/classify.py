@@ -70,10 +70,9 @@ def port_kinds(
 def _primary_opening() -> tuple[int, int, int]:
     """(message type, tag offset, tag value) of the version message a primary server sends first."""
     from rtde_spec.primary.codec import default_codec
-    from rtde_spec.spec.catalogue import Catalogue
 
     codec = default_codec()
-    prims = {p.name: p for p in Catalogue.builtin().spec.primitives.primitives}
+    prims = codec.prims
     for family in codec.families.values():
         version = next((m for m in family.spec.members if m.name == "version_message"), None)
         if version is None or family.spec.tag is None:

@@ -12,7 +12,7 @@ import struct
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 from functools import cache, partial
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated import primary_models as gen
 from rtde_spec._generated.constants import PRIMARY_BYTE_ORDER as ORDER
@@ -27,34 +27,46 @@ from rtde_spec.primary.base import (
     UnknownMessage,
     UnknownSubPackage,
 )
+from rtde_spec.primary.families import FamilyView, PrimaryView, primary_view
 from rtde_spec.primary.fast_models import build, with_groups
 from rtde_spec.primary.robot_state import RobotStateReader
 from rtde_spec.primary.values import ValueTable
-from rtde_spec.spec.catalogue import Catalogue
-from rtde_spec.spec.schema import FamilySpec, Spec
 from rtde_spec.spec.versions import Version
 from rtde_spec.wire.framing import PackageFramer, Skipped, check_header
 from rtde_spec.wire.layout import Layout
+
+if TYPE_CHECKING:
+    from rtde_spec.spec.schema import Spec
 
 PrimaryMessage = RobotStateMessage | PrimaryPart | OpaqueMessage | UnknownMessage | UnknownMember
 
 
 @dataclass
 class _Family:
-    spec: FamilySpec
+    spec: FamilyView
     prefix: Layout | None
     members: dict[int, tuple[type[PrimaryPart], Layout]] = field(default_factory=dict)
     older: dict[int, list[tuple[Version, Layout]]] = field(default_factory=dict)  # oldest range first
 
 
 class PrimaryCodec:
-    """Compiled layouts of every message family of a spec."""
+    """Compiled layouts of every message family of a spec.
 
-    def __init__(self, spec: Spec) -> None:
-        pf = spec.primary
-        prims = {p.name: p for p in spec.primitives.primitives}
-        codes = {e.name: {v.name: v.value for v in e.values} for e in spec.all_enums}
-        self.values = ValueTable(pf.value_types, codes["GlobalVariableType"], prims, pf.value_separator)
+    Given no spec, the built-in one, read from the generated data without the meta-model.
+    """
+
+    def __init__(self, spec: Spec | PrimaryView | None = None) -> None:
+        if spec is None:
+            from rtde_spec._generated.spec_data import SPEC
+
+            pf = primary_view(SPEC)
+        elif isinstance(spec, PrimaryView):
+            pf = spec
+        else:  # a validated spec: its data, as codegen writes it
+            pf = primary_view(spec.model_dump(mode="json", exclude_defaults=True))
+        self.prims = prims = pf.primitives
+        codes = pf.codes["GlobalVariableType"]
+        self.values = ValueTable(list(pf.value_types), codes, prims, pf.value_separator)
         self.header = struct.Struct(ORDER + "".join(prims[h.type].struct for h in pf.header))
         self.sub_header = struct.Struct(ORDER + "".join(prims[h.type].struct for h in pf.subpackage_header))
         self.max_size = pf.max_message_bytes
@@ -215,7 +227,7 @@ class PrimaryCodec:
 
 @cache
 def default_codec() -> PrimaryCodec:
-    return PrimaryCodec(Catalogue.builtin().spec)
+    return PrimaryCodec()
 
 
 def decode_message(data: bytes | bytearray | memoryview, *, strict: bool = True) -> PrimaryMessage:
