@@ -155,3 +155,31 @@ def test_runtime_fields_read_as_the_meta_model_does() -> None:
         assert (prim.size, prim.struct, prim.kind, prim.signed, prim.bounds) == (
             model.size, model.struct, model.kind, model.signed, model.bounds
         ), name  # fmt: skip
+
+
+def test_the_primary_codec_from_generated_data_is_the_one_from_the_validated_spec() -> None:
+    """default_codec reads the generated data (no meta-model); a validated Spec gives the same codec."""
+    from rtde_spec.primary.codec import PrimaryCodec, default_codec
+    from rtde_spec.spec.catalogue import Catalogue
+
+    plain, validated = default_codec(), PrimaryCodec(Catalogue.builtin().spec)
+    assert plain.families.keys() == validated.families.keys()
+    for mtype, fam in plain.families.items():
+        other = validated.families[mtype]
+        assert (fam.spec.name, fam.spec.layout, fam.spec.tag) == (
+            other.spec.name,
+            other.spec.layout,
+            other.spec.tag,
+        )
+        assert fam.members.keys() == other.members.keys()
+        for key, (cls, layout) in fam.members.items():
+            assert cls is other.members[key][0] and layout.names == other.members[key][1].names
+            assert layout.fixed_size == other.members[key][1].fixed_size
+        assert {t: [v for v, _ in r] for t, r in fam.older.items()} == {
+            t: [v for v, _ in r] for t, r in other.older.items()
+        }
+    assert plain.field_since == validated.field_since and plain.field_since
+    assert (plain.header.format, plain.sub_header.format, plain.max_size) == (
+        validated.header.format, validated.sub_header.format, validated.max_size
+    )  # fmt: skip
+    assert plain.values.by_name.keys() == validated.values.by_name.keys()
