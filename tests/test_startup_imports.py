@@ -76,6 +76,7 @@ def test_capture_of_rtde_imports_no_pandas_meta_model_or_primary_models(
     assert "pandas" not in modules
     assert "rtde_spec._generated.rtde_models" in modules  # the setup packages were decoded...
     assert not set(RTDE_ONLY) & modules  # ...without the meta-model, primary models, construct or YAML
+    assert not [m for m in modules if m.startswith("rtde_spec.primary")]  # nor any of the primary interface
 
 
 def test_decode_imports_no_pandas_or_meta_model(tmp_path: Path) -> None:

@@ -14,12 +14,14 @@ from __future__ import annotations
 import json
 import typing
 from functools import cache
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel
 
 from rtde_spec.output.base import plain
-from rtde_spec.primary.base import PrimaryPart
+
+if TYPE_CHECKING:
+    from rtde_spec.primary.base import PrimaryPart
 
 U64_MAX = (1 << 64) - 1
 RAW = "_raw"
