@@ -119,8 +119,6 @@ def expand(patterns: list[str]) -> list[Path]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from concurrent.futures import ProcessPoolExecutor
-
     from rtde_spec.capture.classify import parse_port_map
     from rtde_spec.capture.decoder import CaptureInterrupted, decode_to_directory
     from rtde_spec.cli.record_cmd import names_of
@@ -141,6 +139,8 @@ def run(args: argparse.Namespace) -> int:
 
         if args.format == "parquet":  # imported once here: forked workers start with it loaded
             import pyarrow.parquet  # noqa: F401
+
+        from concurrent.futures import ProcessPoolExecutor  # only for several files in parallel
 
         with ProcessPoolExecutor(max_workers=args.jobs, initializer=one_core_per_process) as pool:
             futures = [

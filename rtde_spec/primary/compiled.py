@@ -15,13 +15,15 @@ from __future__ import annotations
 
 import struct
 from collections.abc import Callable
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel
 
 from rtde_spec._generated import primary_models as gen
-from rtde_spec.spec.schema import LayoutField
 from rtde_spec.wire.layout import Layout
+
+if TYPE_CHECKING:  # annotations only: the meta-model is not built at run time
+    from rtde_spec.spec.schema import LayoutField
 
 Decoder = Callable[[bytes, int, int], Any]
 

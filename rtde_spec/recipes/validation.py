@@ -8,7 +8,6 @@ use the same rules.
 
 from __future__ import annotations
 
-import difflib
 import math
 import re
 import struct
@@ -16,8 +15,8 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Literal
 
-from rtde_spec._generated.constants import RTDE_ANSWERS
-from rtde_spec._generated.rtde_models import HEADER_FORMAT, LIMITS, DataPackage
+from rtde_spec._generated.constants import DATA_PACKAGE_PREFIX_FORMAT, RTDE_ANSWERS
+from rtde_spec._generated.constants import RTDE_LIMITS as LIMITS
 from rtde_spec.recipes.files import infer_direction
 from rtde_spec.recipes.model import Direction, Recipe
 from rtde_spec.spec.catalogue import Catalogue, FieldInfo
@@ -26,7 +25,7 @@ from rtde_spec.spec.versions import Version
 Severity = Literal["error", "warning", "info"]
 NOT_FOUND = RTDE_ANSWERS["not_found"]
 # a data package: header and recipe id, then the variables
-DATA_PREFIX_BYTES = struct.calcsize(HEADER_FORMAT + DataPackage.FIXED_FORMAT[1:])
+DATA_PREFIX_BYTES = struct.calcsize(DATA_PACKAGE_PREFIX_FORMAT)  # size, type, recipe id
 
 
 @dataclass(frozen=True)
@@ -115,6 +114,8 @@ class _Checker:
         if family:
             return family
         pool = sorted(self.all_names[direction])
+        import difflib
+
         close = difflib.get_close_matches(name, pool, n=3, cutoff=0.6)
         return f"; did you mean {', '.join(close)}?" if close else ""
 
