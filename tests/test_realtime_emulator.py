@@ -55,6 +55,7 @@ def test_urx_real_time_monitor_follows_the_model_through_a_move() -> None:
     cfg = config(host, "3.15.0", arm="UR5")
     cfg.secondary_port, cfg.realtime_port = 30002, 30003
     with EmulatorThread(cfg) as emu:
+        socket.create_connection((host, 30003), timeout=5).close()  # served (urx would wait forever)
         robot = urx.Robot(host, use_rt=True)
         try:
             rt = robot.rtmon
