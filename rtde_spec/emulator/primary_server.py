@@ -16,12 +16,11 @@ from collections import deque
 from typing import TYPE_CHECKING
 
 from rtde_spec._generated.enums import RobotMode
-from rtde_spec.emulator.guard import GuardedConnection, Port
+from rtde_spec.emulator.guard import Port
 from rtde_spec.emulator.robot_messages import event_messages, safety_mode_message, version_message
 from rtde_spec.emulator.script import run_script
-from rtde_spec.emulator.script_framer import ScriptFramer
+from rtde_spec.emulator.script_framer import ScriptPort
 from rtde_spec.emulator.state_message import RobotStateBuilder
-from rtde_spec.errors import ProtocolError
 
 if TYPE_CHECKING:
     from rtde_spec.emulator.model import ControllerModel
@@ -89,7 +88,7 @@ class PrimaryHub:
         return int(self.model.time * 1_000_000)
 
 
-class PrimaryConnection(GuardedConnection):
+class PrimaryConnection(ScriptPort):
     """One client of a primary/secondary port: the Version message, Robot State, its scripts run."""
 
     def __init__(self, hub: PrimaryHub, port: Port, number: int, read_only: bool, messages: bool) -> None:
@@ -97,7 +96,6 @@ class PrimaryConnection(GuardedConnection):
         self.hub, self.number, self.read_only = hub, number, read_only
         self.messages = messages  # robot messages go to the primary ports only, not the secondary
         self.fresh = True  # its first Robot State carries the once-per-connection sub-packages
-        self.framer = ScriptFramer()
 
     def opened(self) -> None:
         self.hub.connections.add(self)
@@ -106,17 +104,8 @@ class PrimaryConnection(GuardedConnection):
     def closed(self) -> None:
         self.hub.connections.discard(self)
 
-    def data_received(self, data: bytes) -> None:
-        if self.read_only or self.dropped:
-            return  # a read-only port ignores what clients send
-        try:
-            scripts = self.framer.feed(data)
-        except ProtocolError as exc:
-            self.drop(f"sent {exc}")
-            return
-        if self.received(self.framer.pending, len(scripts)):
-            for text in scripts:
-                self.hub.run(self.number, text)
+    def run_script(self, text: str) -> None:
+        self.hub.run(self.number, text)
 
     def send(self, data: bytes) -> None:
         self.write(data)

@@ -14,9 +14,8 @@ import struct
 from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.realtime import REALTIME
-from rtde_spec.emulator.guard import GuardedConnection, Port
-from rtde_spec.emulator.script_framer import ScriptFramer
-from rtde_spec.errors import ProtocolError
+from rtde_spec.emulator.guard import Port
+from rtde_spec.emulator.script_framer import ScriptPort
 from rtde_spec.realtime import layout_for
 
 if TYPE_CHECKING:
@@ -76,13 +75,12 @@ class RealtimeHub:
         self.sent += 1
 
 
-class RealtimeConnection(GuardedConnection):
+class RealtimeConnection(ScriptPort):
     """One client of a real-time port: the stream of messages; on 30003 its scripts run."""
 
     def __init__(self, hub: RealtimeHub, port: Port, number: int, read_only: bool) -> None:
         super().__init__(port)
         self.hub, self.number, self.read_only = hub, number, read_only
-        self.framer = ScriptFramer()
 
     def opened(self) -> None:
         self.hub.connections.add(self)
@@ -90,14 +88,5 @@ class RealtimeConnection(GuardedConnection):
     def closed(self) -> None:
         self.hub.connections.discard(self)
 
-    def data_received(self, data: bytes) -> None:
-        if self.read_only or self.dropped:
-            return  # the read-only port ignores what clients send
-        try:
-            scripts = self.framer.feed(data)
-        except ProtocolError as exc:
-            self.drop(f"sent {exc}")
-            return
-        if self.received(self.framer.pending, len(scripts)):
-            for text in scripts:
-                self.hub.primary.run(self.number, text)
+    def run_script(self, text: str) -> None:
+        self.hub.primary.run(self.number, text)

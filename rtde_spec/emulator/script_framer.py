@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import re
 
+from rtde_spec.emulator.guard import GuardedConnection, Port
 from rtde_spec.errors import ProtocolError
 
 _NOT_TEXT = re.compile(rb"[\x00-\x08\x0b\x0e-\x1f\x7f]")
@@ -77,3 +78,31 @@ class ScriptFramer:
         if loose:
             out.append("\n".join(loose) + "\n")
         return out
+
+
+class ScriptPort(GuardedConnection):
+    """A client of a port that takes URScript (primary, secondary, real-time): its bytes framed
+    into scripts within the port's limits, each handed to `run_script`; read-only ports ignore
+    what clients send. Subclasses set `read_only` and `number` and say how a script runs."""
+
+    read_only: bool
+    number: int
+
+    def __init__(self, port: Port) -> None:
+        super().__init__(port)
+        self.framer = ScriptFramer()
+
+    def run_script(self, text: str) -> None:
+        raise NotImplementedError
+
+    def data_received(self, data: bytes) -> None:
+        if self.read_only or self.dropped:
+            return  # a read-only port ignores what clients send
+        try:
+            scripts = self.framer.feed(data)
+        except ProtocolError as exc:
+            self.drop(f"sent {exc}")
+            return
+        if self.received(self.framer.pending, len(scripts)):
+            for text in scripts:
+                self.run_script(text)
