@@ -198,6 +198,8 @@ def run(args: argparse.Namespace) -> int:
             f"(controller {client.controller_version}, skipped {result.skipped}, stopped by {how})",
             file=sys.stderr,
         )
+        if result.stopped_by == "connection":  # say why: a close, or a package cut off or broken
+            print(f"error: the recording ended early: {client.connection_lost}", file=sys.stderr)
     except OSError:  # SIGHUP: the terminal is gone; the file is what matters
         pass
     return 1 if result.stopped_by == "connection" else 0
