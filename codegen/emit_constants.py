@@ -47,6 +47,19 @@ def emit_constants(spec: Spec) -> str:
         f"DATA_PACKAGE_PREFIX_FIELDS: tuple[str, ...] = {prefix_names!r}\n",
         f"DATA_PACKAGE_PREFIX_OFFSETS: tuple[int, ...] = {prefix_offsets!r}\n",
         '"""Byte offset of each prefix field (size, type, recipe id) in a data package."""\n',
+        "RTDE_PACKAGE_TYPES: dict[int, str] = {\n",
+        *(f"    {ord(p.code)}: {p.name!r},  # {p.code!r}\n" for p in pk.package_types),
+        "}\n",
+        '"""Package type code -> the name the protocol document gives the type."""\n',
+        "RTDE_PACKAGES: dict[tuple[int, str, int], str] = {\n",
+        *(
+            f"    ({ord(m.type)}, {sender!r}, {proto}): {m.name!r},\n"
+            for m in pk.messages
+            for sender in m.senders
+            for proto in m.protocols
+        ),
+        "}\n",
+        '"""(type code, sender, protocol version) -> the spec name of its layout."""\n',
         "PRODUCT_LINES: dict[str, tuple[int, ...]] = {\n",
     ]
     for line in spec.product_lines.product_lines:

@@ -5,7 +5,9 @@ from __future__ import annotations
 import pytest
 
 from rtde_spec._generated import rtde_models as gen
-from rtde_spec.rtde.codec import decode, message_by_name
+from rtde_spec.errors import DecodeError
+from rtde_spec.rtde.codec import build, decode, message_by_name
+from rtde_spec.rtde.packages import decode_package, encode_package
 
 from .helpers import assert_package, expected_values, golden
 
@@ -39,3 +41,32 @@ def test_every_type_sender_protocol_has_exactly_one_layout() -> None:
 def test_protocol_1_text_message_layout_depends_on_sender() -> None:
     assert message_by_name("text_message_v1_controller").FIELDS[0] == "message_type"
     assert message_by_name("text_message_v1_client").FIELDS[0] == "message"
+
+
+@pytest.mark.parametrize("case", CASES, ids=[f"{c['package']}-{i}" for i, c in enumerate(CASES)])
+def test_the_plain_path_reads_and_writes_every_package_as_the_models_do(case: dict) -> None:
+    """Capture and the clients decode and build packages without the models (rtde.packages):
+    same name, type and values (types included) as the model, and the same bytes back."""
+    data = bytes.fromhex(case["hex"].replace(" ", ""))
+    package = decode_package(data, sender=case["sender"], protocol_version=case["protocol"])
+    message = decode(data, sender=case["sender"], protocol_version=case["protocol"])
+    assert (package.name, package.package_type) == (message.NAME, message.PACKAGE_TYPE)
+    assert package.values == message.fields()
+    assert [type(v) for v in package.values.values()] == [type(v) for v in message.fields().values()]
+    assert encode_package(package.name, package.values) == data
+    assert package.model() == message
+
+
+def test_the_plain_path_and_the_models_refuse_alike() -> None:
+    """A cut package, an unknown type, bytes after the last field: the same error either way."""
+    whole = build("setup_outputs_v2", output_frequency=125.0, variable_names=["timestamp"])
+    version = build("request_protocol_version", protocol_version=2)  # the reply's layout is shorter
+    for data, sender in ((whole[:-3], "client"), (b"\x00\x03Z", "controller"), (version, "controller")):
+        with pytest.raises(DecodeError) as plain_error:
+            decode_package(data, sender=sender)
+        with pytest.raises(DecodeError) as model_error:
+            decode(data, sender=sender)  # type: ignore[arg-type]
+        assert str(plain_error.value) == str(model_error.value)
+        assert (plain_error.value.field, plain_error.value.offset) == (
+            model_error.value.field, model_error.value.offset
+        )  # fmt: skip

@@ -34,6 +34,7 @@ raise SystemExit(code)
 META_MODEL = "rtde_spec.spec.schema"  # the pydantic meta-model: codegen's validator of spec/
 PRIMARY_MODELS = "rtde_spec._generated.primary_models"
 SPEC_FILES = ("yaml", "rtde_spec.spec.dashboard", "rtde_spec.spec.external")  # their meta-models
+RTDE_MODELS = "rtde_spec._generated.rtde_models"  # the ~100 pydantic package models
 RTDE_ONLY = (META_MODEL, PRIMARY_MODELS, "construct", *SPEC_FILES)
 
 
@@ -74,8 +75,18 @@ def test_capture_of_rtde_imports_no_pandas_meta_model_or_primary_models(
     assert code == 0, err
     assert list((tmp_path / "out").rglob(f"*.{fmt}")), "the tables were written"
     assert "pandas" not in modules
-    assert "rtde_spec._generated.rtde_models" in modules  # the setup packages were decoded...
-    assert not set(RTDE_ONLY) & modules  # ...without the meta-model, primary models, construct or YAML
+    setup = [p for p in (tmp_path / "out").rglob(f"*.{fmt}") if "rtde_setup" in str(p)]
+    assert len(setup) == 1, "the setup packages were decoded..."
+    if fmt == "parquet":
+        import pyarrow.parquet as pq
+
+        packages = pq.read_table(setup[0]).column("package").to_pylist()
+        assert "setup_outputs_v2_reply" in packages and len(packages) == 6, packages
+    else:
+        assert b"setup_outputs_v2_reply" in setup[0].read_bytes()
+    # ...by the layout engine alone: no pydantic (neither the package models nor the meta-model),
+    # no primary models, construct or YAML
+    assert not {*RTDE_ONLY, "pydantic", RTDE_MODELS} & modules
     assert not [m for m in modules if m.startswith("rtde_spec.primary")]  # nor any of the primary interface
 
 
@@ -95,7 +106,26 @@ def test_record_reaches_the_network_without_pandas_or_meta_model(tmp_path: Path)
     args = ["record", "--host", "127.0.0.1", "--port", port, "--fields", "timestamp", "--timeout", "2"]
     code, modules, err = run_cli(tmp_path, *args, "-o", str(tmp_path / "r.csv"))
     assert code == 1 and "nothing accepts connections" in err, err
-    assert not {"pandas", META_MODEL, PRIMARY_MODELS, "construct"} & modules
+    assert not {"pandas", "pydantic", RTDE_MODELS, PRIMARY_MODELS, "construct"} & modules
+
+
+def test_a_whole_recording_loads_no_pydantic(tmp_path: Path) -> None:
+    """Version, controller version, setup, start and the data, against the emulator: the client's
+    control path runs on the layout engine, so a recorder never loads pydantic."""
+    from rtde_spec import EmulatorConfig, EmulatorThread
+
+    emu = EmulatorThread(EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0)).start()
+    try:
+        port = str(emu.ports["rtde"])
+        args = ["record", "--host", "127.0.0.1", "--port", port, "--fields", "timestamp,actual_q"]
+        code, modules, err = run_cli(tmp_path, *args, "--duration", "0.3", "-o", str(tmp_path / "r.csv"))
+    finally:
+        emu.stop()
+    assert code == 0, err
+    rows = (tmp_path / "r.csv").read_text().splitlines()
+    assert rows[0].startswith("timestamp,actual_q_0") and len(rows) > 10, rows[:3]
+    assert "controller 5.15" in err or "controller" in err
+    assert not {"pandas", "pydantic", RTDE_MODELS, PRIMARY_MODELS, "construct", META_MODEL} & modules
 
 
 def test_fields_and_validate_import_no_pandas(tmp_path: Path) -> None:

@@ -22,6 +22,52 @@ DATA_PACKAGE_PREFIX_FORMAT = '>HBB'
 DATA_PACKAGE_PREFIX_FIELDS: tuple[str, ...] = ('size', 'type', 'recipe_id')
 DATA_PACKAGE_PREFIX_OFFSETS: tuple[int, ...] = (0, 2, 3)
 """Byte offset of each prefix field (size, type, recipe id) in a data package."""
+RTDE_PACKAGE_TYPES: dict[int, str] = {
+    86: 'RTDE_REQUEST_PROTOCOL_VERSION',  # 'V'
+    118: 'RTDE_GET_URCONTROL_VERSION',  # 'v'
+    77: 'RTDE_TEXT_MESSAGE',  # 'M'
+    85: 'RTDE_DATA_PACKAGE',  # 'U'
+    79: 'RTDE_CONTROL_PACKAGE_SETUP_OUTPUTS',  # 'O'
+    73: 'RTDE_CONTROL_PACKAGE_SETUP_INPUTS',  # 'I'
+    83: 'RTDE_CONTROL_PACKAGE_START',  # 'S'
+    80: 'RTDE_CONTROL_PACKAGE_PAUSE',  # 'P'
+}
+"""Package type code -> the name the protocol document gives the type."""
+RTDE_PACKAGES: dict[tuple[int, str, int], str] = {
+    (86, 'client', 1): 'request_protocol_version',
+    (86, 'client', 2): 'request_protocol_version',
+    (86, 'controller', 1): 'request_protocol_version_reply',
+    (86, 'controller', 2): 'request_protocol_version_reply',
+    (118, 'client', 1): 'get_urcontrol_version',
+    (118, 'client', 2): 'get_urcontrol_version',
+    (118, 'controller', 1): 'get_urcontrol_version_reply',
+    (118, 'controller', 2): 'get_urcontrol_version_reply',
+    (77, 'controller', 1): 'text_message_v1_controller',
+    (77, 'client', 1): 'text_message_v1_client',
+    (77, 'controller', 2): 'text_message',
+    (77, 'client', 2): 'text_message',
+    (85, 'controller', 1): 'data_package',
+    (85, 'controller', 2): 'data_package',
+    (85, 'client', 1): 'data_package',
+    (85, 'client', 2): 'data_package',
+    (79, 'client', 1): 'setup_outputs_v1',
+    (79, 'controller', 1): 'setup_outputs_v1_reply',
+    (79, 'client', 2): 'setup_outputs_v2',
+    (79, 'controller', 2): 'setup_outputs_v2_reply',
+    (73, 'client', 1): 'setup_inputs',
+    (73, 'client', 2): 'setup_inputs',
+    (73, 'controller', 1): 'setup_inputs_reply',
+    (73, 'controller', 2): 'setup_inputs_reply',
+    (83, 'client', 1): 'start',
+    (83, 'client', 2): 'start',
+    (83, 'controller', 1): 'start_reply',
+    (83, 'controller', 2): 'start_reply',
+    (80, 'client', 1): 'pause',
+    (80, 'client', 2): 'pause',
+    (80, 'controller', 1): 'pause_reply',
+    (80, 'controller', 2): 'pause_reply',
+}
+"""(type code, sender, protocol version) -> the spec name of its layout."""
 PRODUCT_LINES: dict[str, tuple[int, ...]] = {
     'cb3': (3,),
     'e-series': (5,),

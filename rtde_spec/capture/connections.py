@@ -15,13 +15,13 @@ import struct
 from dataclasses import dataclass, field
 from typing import Any
 
-from rtde_spec._generated import rtde_models as gen
 from rtde_spec._generated.constants import (
     DATA_PACKAGE_PREFIX_OFFSETS,
     DATA_PACKAGE_TYPE,
     RTDE_DIRECTIONS,
     RTDE_HEADER_FORMAT,
     RTDE_LIMITS,
+    RTDE_PACKAGE_TYPES,
 )
 from rtde_spec.capture.framing import NO, STRONG, WEAK, Check, Framing
 from rtde_spec.capture.rows import flatten_part, text_columns, wide_values
@@ -37,6 +37,7 @@ BATCH = 4096
 RTDE_HEADER = struct.calcsize(RTDE_HEADER_FORMAT)
 _SIZE_AT, TYPE_AT, RECIPE_ID_AT = DATA_PACKAGE_PREFIX_OFFSETS
 RTDE_SIZE_BYTES = TYPE_AT - _SIZE_AT  # the size field leads the header
+TEXT_MESSAGES = {"text_message", "text_message_v1_controller", "text_message_v1_client"}
 
 
 class Problems(list[str]):
@@ -74,7 +75,7 @@ class RtdeConnection:
     ) -> None:
         self.name, self.robot, self.sink, self.given = name, robot, sink, given
         self.session = SessionDecoder(catalogue=catalogue)
-        types = set(gen.PACKAGE_TYPES)
+        types = set(RTDE_PACKAGE_TYPES)
         limit = RTDE_LIMITS["package_max_bytes"]
         self.framing = {
             s: Framing(RTDE_SIZE_BYTES, RTDE_HEADER, types, limit, self._check(s)) for s in RTDE_DIRECTIONS
@@ -192,14 +193,14 @@ class RtdeConnection:
         except RtdeSpecError as exc:
             self.counts.errors.append(f"{sender} package at {time:.6f}: {exc}")
             return
-        message = decoded.message
+        message = decoded.package
         base = {"connection": self.name, "capture_time": time, "sender": sender}
-        if isinstance(message, (gen.TextMessage, gen.TextMessageV1Controller, gen.TextMessageV1Client)):
-            fields = message.fields()
+        if message.name in TEXT_MESSAGES:
+            fields = message.values
             row = {**base, "level": fields.get("warning_level", fields.get("message_type")),
                    "source": fields.get("source", ""), "message": fields["message"]}  # fmt: skip
             self.sink.row("rtde_text", self.robot, day_of(time), row)
-        elif isinstance(message, gen.DataPackage):
+        elif message.name == "data_package":
             if decoded.values is not None:
                 direction = RTDE_DIRECTIONS[sender]
                 names = tuple(decoded.values)
@@ -216,8 +217,8 @@ class RtdeConnection:
                     f"the recipe's packages are {self.given.package_size}): check --recipe"
                 )
         else:
-            fields_json = json.dumps(plain(message.fields()))
-            row = {**base, "package": message.NAME, "fields": fields_json, "note": decoded.note or ""}
+            fields_json = json.dumps(plain(message.values))
+            row = {**base, "package": message.name, "fields": fields_json, "note": decoded.note or ""}
             self.sink.row("rtde_setup", self.robot, day_of(time), row)
 
     def close(self) -> None:

@@ -23,11 +23,11 @@ from rtde_spec.capture.sink import ArrowSink, DirectorySink, TableSink, output_s
 from rtde_spec.capture.summary import CaptureSummary, ConnectionSummary
 from rtde_spec.capture.tcp import MOD, Direction
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
-from rtde_spec.rtde.codec import build
+from rtde_spec.rtde.packages import encode_package
 from rtde_spec.spec.catalogue import Catalogue
 
 # how an RTDE client opens: the header of a protocol version request (its size and type)
-RTDE_VERSION_REQUEST = build("request_protocol_version", protocol_version=2)[:RTDE_HEADER]
+RTDE_VERSION_REQUEST = encode_package("request_protocol_version", {"protocol_version": 2})[:RTDE_HEADER]
 RUN_HEAD = PAYLOAD_OFFSET  # size, type, recipe id: the bytes every data package of one run shares
 RUN_MIN, RUN_MAX = 16, 4096  # shorter runs go segment by segment; longer ones are cut
 

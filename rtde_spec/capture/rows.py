@@ -16,11 +16,11 @@ import typing
 from functools import cache
 from typing import TYPE_CHECKING, Any
 
-from pydantic import BaseModel
-
 from rtde_spec.output.base import plain
 
 if TYPE_CHECKING:
+    from pydantic import BaseModel
+
     from rtde_spec.primary.base import PrimaryPart
 
 U64_MAX = (1 << 64) - 1
@@ -62,6 +62,8 @@ def _wide(value: Any) -> Any:
 
 def flatten_part(part: PrimaryPart) -> dict[str, Any]:
     """A sub-package or message as one flat row: groups and vectors spread into numbered columns."""
+    from pydantic import BaseModel  # loaded with the primary models that reach here
+
     out: dict[str, Any] = {}
 
     def put(prefix: str, value: Any, wide: bool) -> None:

@@ -58,7 +58,7 @@ class RtdeClient(ClientBase):
         self._reader.start()
         for version in self._versions_to_try(protocol_version):
             reply = self._request(self.core.request_protocol_version(version))
-            if reply.message.accepted:  # type: ignore[attr-defined]
+            if reply.message.accepted:
                 break
         else:
             raise ProtocolError("the controller accepted no protocol version", subject=self.where)

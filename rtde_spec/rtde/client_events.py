@@ -11,7 +11,7 @@ from typing import Any
 
 from rtde_spec.errors import RtdeSpecError
 from rtde_spec.recipes.codec import RecipeCodec
-from rtde_spec.rtde.messages import RtdeMessage
+from rtde_spec.rtde.packages import Package
 
 
 @dataclass(frozen=True)
@@ -29,7 +29,7 @@ class Request:
 
     name: str  # the request's spec name, e.g. "setup_outputs_v2"
     package_type: int
-    message: RtdeMessage
+    message: Package
     setup: tuple[str, tuple[str, ...]] | None = None  # (direction, names) of a setup request
     others: list[str] = field(default_factory=list)  # replies of other types that came meanwhile
 
@@ -38,7 +38,7 @@ class Request:
 class Reply:
     """The controller's answer to a request (version, setup, start, pause); `error` if refused."""
 
-    message: RtdeMessage
+    message: Package
     error: RtdeSpecError | None = None
     request: Request | None = None  # the request it answers
 

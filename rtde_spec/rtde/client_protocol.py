@@ -19,11 +19,11 @@ import socket
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from rtde_spec._generated import rtde_models as gen
 from rtde_spec._generated.constants import (
     DATA_PACKAGE_TYPE,
     RTDE_ANSWERS,
     RTDE_LIMITS,
+    RTDE_PACKAGES,
     RTDE_PORT,
     RTDE_PROTOCOLS,
 )
@@ -32,8 +32,7 @@ from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
 from rtde_spec.recipes.encoding import PREFIX
 from rtde_spec.recipes.model import Recipe
 from rtde_spec.rtde.client_events import DataRun, Event, InputRecipe, Reply, Request, Text
-from rtde_spec.rtde.codec import decode, message_by_name, observe
-from rtde_spec.rtde.messages import RtdeMessage
+from rtde_spec.rtde.packages import TYPE_OF, Package, decode_package, encode_package, observe_package
 from rtde_spec.rtde.protocol_state import ProtocolState
 from rtde_spec.spec.catalogue import Catalogue
 from rtde_spec.spec.versions import Version
@@ -67,35 +66,39 @@ class ClientProtocol:
     # --- requests -----------------------------------------------------------
 
     def request_protocol_version(self, version: int) -> bytes:
-        return self._ask(gen.RequestProtocolVersion(protocol_version=version))
+        return self._ask("request_protocol_version", {"protocol_version": version})
 
     def get_controller_version(self) -> bytes:
-        return self._ask(message_by_name("get_urcontrol_version")())
+        return self._ask("get_urcontrol_version", {})
 
     def setup_outputs(self, names: Sequence[str], frequency: float) -> bytes:
         """Validate offline (names, direction, version, rate), then the setup request."""
         self._validate(names, "output", frequency)
-        message: RtdeMessage
         if self.state.version == 1:
-            message = gen.SetupOutputsV1(variable_names=list(names))
-        else:
-            message = gen.SetupOutputsV2(output_frequency=frequency, variable_names=list(names))
-        return self._ask(message, ("output", tuple(names)))
+            return self._ask("setup_outputs_v1", {"variable_names": list(names)}, ("output", tuple(names)))
+        values = {"output_frequency": float(frequency), "variable_names": list(names)}
+        return self._ask("setup_outputs_v2", values, ("output", tuple(names)))
 
     def setup_inputs(self, names: Sequence[str]) -> bytes:
         self._validate(names, "input", None)
-        return self._ask(gen.SetupInputs(variable_names=list(names)), ("input", tuple(names)))
+        return self._ask("setup_inputs", {"variable_names": list(names)}, ("input", tuple(names)))
 
     def start(self) -> bytes:
-        return self._ask(message_by_name("start")())
+        return self._ask("start", {})
 
     def pause(self) -> bytes:
-        return self._ask(message_by_name("pause")())
+        return self._ask("pause", {})
 
-    def _ask(self, message: RtdeMessage, setup: tuple[str, tuple[str, ...]] | None = None) -> bytes:
-        """The request's bytes; its reply is awaited from now on (`last_request`)."""
-        data = message.to_bytes()
-        request = Request(message.NAME, message.PACKAGE_TYPE, message, setup)
+    def _ask(
+        self, name: str, values: dict[str, Any], setup: tuple[str, tuple[str, ...]] | None = None
+    ) -> bytes:
+        """The request's bytes; its reply is awaited from now on (`last_request`).
+
+        Built by the layout engine from values this core checked (recipes are validated
+        offline first), without the pydantic models: a recorder starts sooner.
+        """
+        data = encode_package(name, values)
+        request = Request(name, TYPE_OF[name], Package(name, TYPE_OF[name], values), setup)
         self._pending.append(request)
         self.last_request = request
         return data
@@ -111,12 +114,12 @@ class ClientProtocol:
         """The error of a request left without its reply: naming what came instead, if anything."""
         self.forget(request)
         if request.others:
-            reply = gen.BY_KEY.get((request.package_type, "controller", self.state.version))
+            reply = RTDE_PACKAGES.get((request.package_type, "controller", self.state.version))
             return ProtocolError(
                 f"requested {request.name}, got {', '.join(request.others)} instead of its reply "
                 f"(none within {waited} s)",
                 subject=where,
-                expected=reply.NAME if reply is not None else request.name + " reply",
+                expected=reply or request.name + " reply",
                 actual=request.others[0],
             )
         return TimeoutError(f"no reply to {request.name} from {where} within {waited} s")
@@ -143,9 +146,10 @@ class ClientProtocol:
         return recipe.codec.encode_package(dict(values), recipe.recipe_id)
 
     def text_message(self, text: str, level: int, source: str = "rtde_spec") -> bytes:
-        if self.state.version == 1:
-            return gen.TextMessageV1Client(message=text, source=source, warning_level=level).to_bytes()
-        return gen.TextMessage(message=text, source=source, warning_level=level).to_bytes()
+        from rtde_spec.rtde.codec import message_by_name  # the model checks the user's text
+
+        name = "text_message_v1_client" if self.state.version == 1 else "text_message"
+        return message_by_name(name)(message=text, source=source, warning_level=level).to_bytes()
 
     def _validate(self, names: Sequence[str], direction: str, frequency: float | None) -> None:
         from rtde_spec.recipes.validation import validate_recipes
@@ -201,16 +205,17 @@ class ClientProtocol:
                 records = output.decode_records(package) if self.want_records else []
                 events.append(DataRun(records, package, run[0]))
                 continue
-            message = decode(bytes(package), protocol_version=self.state.version, sender="controller")
+            message = decode_package(package, protocol_version=self.state.version, sender="controller")
             event = self._control(message)
             if event is not None:
                 events.append(event)
 
-    def _control(self, message: RtdeMessage) -> Event | None:
-        if isinstance(message, (gen.TextMessage, gen.TextMessageV1Controller)):
-            level = getattr(message, "warning_level", getattr(message, "message_type", 3))
-            return Text(level, message.message, getattr(message, "source", "controller"))
-        if isinstance(message, gen.DataPackage):
+    def _control(self, message: Package) -> Event | None:
+        name, values = message.name, message.values
+        if name in ("text_message", "text_message_v1_controller"):
+            level = values.get("warning_level", values.get("message_type", 3))
+            return Text(level, values["message"], values.get("source", "controller"))
+        if name == "data_package":
             output = self.output
             if output is not None and message.recipe_id == self.output_recipe_id:
                 raise DecodeError(
@@ -230,11 +235,13 @@ class ClientProtocol:
         request = self._match(message)
         if request is None:
             return None
-        if isinstance(message, gen.RequestProtocolVersionReply):
-            observe(self.state, request.message)  # the version this reply answers
-            observe(self.state, message)
-        elif isinstance(message, gen.GetUrcontrolVersionReply):
-            self.controller_version = Version(message.major, message.minor, message.bugfix, message.build)
+        if name == "request_protocol_version_reply":
+            observe_package(self.state, request.name, request.message.values)  # the version it answers
+            observe_package(self.state, name, values)
+        elif name == "get_urcontrol_version_reply":
+            self.controller_version = Version(
+                values["major"], values["minor"], values["bugfix"], values["build"]
+            )
         elif request.setup is not None:
             try:
                 self._setup_reply(message, *request.setup)
@@ -242,25 +249,25 @@ class ClientProtocol:
                 return Reply(message, exc, request)
         return Reply(message, None, request)
 
-    def _match(self, message: RtdeMessage) -> Request | None:
+    def _match(self, message: Package) -> Request | None:
         """The oldest waiting request this reply answers (same package type), now answered;
         None for a reply nobody asked for, which is logged and changes nothing."""
         waiting = list(self._pending)
         for request in waiting:
-            if request.package_type == message.PACKAGE_TYPE:
+            if request.package_type == message.package_type:
                 self.forget(request)
                 return request
         for request in waiting:
-            request.others.append(message.NAME)
+            request.others.append(message.name)
         self.unsolicited += 1
         if self.unsolicited <= UNSOLICITED_LOGGED:
             asked = ", ".join(r.name for r in waiting) or "nothing"
-            log.warning("ignored a %s nobody asked for (waiting for: %s)", message.NAME, asked)
+            log.warning("ignored a %s nobody asked for (waiting for: %s)", message.name, asked)
         return None
 
-    def _setup_reply(self, message: RtdeMessage, direction: str, names: tuple[str, ...]) -> None:
-        types: list[str] = list(message.variable_types)  # type: ignore[attr-defined]
-        recipe_id = getattr(message, "output_recipe_id", getattr(message, "input_recipe_id", 1))
+    def _setup_reply(self, message: Package, direction: str, names: tuple[str, ...]) -> None:
+        types: list[str] = list(message.values["variable_types"])
+        recipe_id = message.values.get(f"{direction}_recipe_id", 1)  # protocol 1: one output recipe
         refused = [f"{n}: {t}" for n, t in zip(names, types, strict=False) if t in RTDE_ANSWERS.values()]
         if refused or recipe_id == INVALID_ID:
             reason = ", ".join(refused) or "the controller refused the recipe"

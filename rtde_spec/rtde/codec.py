@@ -10,52 +10,29 @@ from __future__ import annotations
 
 import struct
 from collections.abc import Iterator
-from typing import Any, Literal
+from typing import Any
 
 from rtde_spec._generated import rtde_models as gen
 from rtde_spec.errors import DecodeError, EncodeError
-from rtde_spec.rtde.layouts import layouts
 from rtde_spec.rtde.messages import RtdeMessage
+from rtde_spec.rtde.packages import (  # noqa: F401 (Sender, setup_names: re-exported)
+    Sender,
+    decode_package,
+    decode_values,
+    observe_package,
+    package_name,
+    setup_names,
+)
 from rtde_spec.rtde.protocol_state import INITIAL_VERSION, ProtocolState
-from rtde_spec.wire.framing import PackageFramer, check_header
+from rtde_spec.wire.framing import PackageFramer
 
-Sender = Literal["controller", "client"]
 _HEADER = struct.Struct(gen.HEADER_FORMAT)
-_TYPE_AT = struct.calcsize(gen.HEADER_FORMAT[0] + gen.HEADER_FORMAT[1])  # the type follows the size
 _BY_NAME: dict[str, type[RtdeMessage]] = {cls.NAME: cls for cls in gen.MESSAGES}
-
-
-def _type_text(code: int) -> str:
-    char = chr(code) if 32 <= code < 127 else "?"
-    return f"{code} ({char!r})"
 
 
 def message_class(package_type: int, sender: str, protocol_version: int) -> type[RtdeMessage]:
     """The model of a package type as sent by `sender` in a protocol version."""
-    if sender not in gen.SENDERS:
-        raise DecodeError(f"unknown sender {sender!r}", expected=" or ".join(gen.SENDERS))
-    if protocol_version not in gen.PROTOCOLS:
-        raise DecodeError(
-            f"unknown protocol version {protocol_version}",
-            expected=" or ".join(map(str, gen.PROTOCOLS)),
-        )
-    cls = gen.BY_KEY.get((package_type, sender, protocol_version))
-    if cls is not None:
-        return cls
-    if package_type not in gen.PACKAGE_TYPES:
-        known = ", ".join(_type_text(c) for c in gen.PACKAGE_TYPES)
-        raise DecodeError(
-            f"unknown package type {_type_text(package_type)}",
-            field="type",
-            offset=_TYPE_AT,
-            expected=known,
-            actual=package_type,
-        )
-    raise DecodeError(
-        f"{gen.PACKAGE_TYPES[package_type]} is never sent by the {sender} in protocol {protocol_version}",
-        field="type",
-        offset=_TYPE_AT,
-    )
+    return _BY_NAME[package_name(package_type, sender, protocol_version)]
 
 
 def message_by_name(name: str) -> type[RtdeMessage]:
@@ -72,31 +49,16 @@ def decode_body(cls: type[RtdeMessage], body: bytes, *, strict: bool = True) -> 
     Truncation, bad length prefixes and non-ASCII text are DecodeErrors with the
     field and the byte offset in the package.
     """
-    try:
-        values, missing, stop = layouts()[cls.NAME].decode(body, 0, len(body))
-    except DecodeError as exc:
-        raise exc.relocated(gen.HEADER_SIZE, package=cls.NAME) from None
-    if missing:
-        raise DecodeError(
-            "package ends inside this field",
-            package=cls.NAME,
-            field=missing[0],
-            offset=gen.HEADER_SIZE + stop,
-            expected=f"field{'s' if len(missing) > 1 else ''} {', '.join(missing)}",
-            actual=f"{len(body) - stop} bytes left",
-        )
-    if strict and stop < len(body):
-        raise DecodeError(
-            f"{len(body) - stop} bytes after the last field",
-            package=cls.NAME,
-            offset=gen.HEADER_SIZE + stop,
-            expected=f"package size {gen.HEADER_SIZE + stop}",
-            actual=f"package size {gen.HEADER_SIZE + len(body)}",
-        )
+    return model_of(cls.NAME, decode_values(cls.NAME, body, strict=strict))
+
+
+def model_of(name: str, values: dict[str, Any]) -> RtdeMessage:
+    """The model of a package's decoded values."""
+    cls = _BY_NAME[name]
     try:
         return cls(**values)
     except EncodeError as exc:  # a value the model refuses (unreachable for bytes the engine accepted)
-        raise DecodeError(f"does not decode: {exc.reason}", package=cls.NAME, field=exc.field) from None
+        raise DecodeError(f"does not decode: {exc.reason}", package=name, field=exc.field) from None
 
 
 def decode(
@@ -112,12 +74,8 @@ def decode(
     different layouts in each direction. With strict=False, bytes after the last
     field and after the package are ignored instead of raising.
     """
-    buf = bytes(data)
-    size, ptype = check_header(
-        buf, _HEADER, what="package", strict=strict, hint="; use decode_stream for several"
-    )
-    cls = message_class(ptype, sender, protocol_version)
-    return decode_body(cls, buf[gen.HEADER_SIZE : size], strict=strict)
+    package = decode_package(data, protocol_version=protocol_version, sender=sender, strict=strict)
+    return model_of(package.name, package.values)
 
 
 def decode_stream(
@@ -159,19 +117,7 @@ def starting_version(first_package: bytes, protocol_version: int | None) -> int:
 
 def observe(state: ProtocolState, message: RtdeMessage) -> None:
     """Move the protocol state on a version request or reply."""
-    if isinstance(message, gen.RequestProtocolVersion):
-        state.on_request(message.protocol_version)
-    elif isinstance(message, gen.RequestProtocolVersionReply):
-        state.on_reply(message.accepted)
-
-
-def setup_names(names: list[str]) -> list[str]:
-    """The variables a setup request asks for: a trailing comma's empty last name is not one.
-
-    ur_rtde ends its name lists with a comma; controllers answer types for the real
-    names only. The model keeps the empty name so the package round-trips.
-    """
-    return names[:-1] if names and names[-1] == "" else names
+    observe_package(state, message.NAME, message.fields())
 
 
 def encode(message: RtdeMessage) -> bytes:

@@ -8,24 +8,38 @@ come out as named values. The capture decoder and the demo both use this.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any
+from functools import cached_property
+from typing import TYPE_CHECKING, Any
 
-from rtde_spec._generated import rtde_models as gen
 from rtde_spec._generated.constants import RTDE_DIRECTIONS
 from rtde_spec.errors import DecodeError, RecipeError
 from rtde_spec.recipes.codec import RecipeCodec
-from rtde_spec.rtde.codec import Sender, decode, observe, setup_names
-from rtde_spec.rtde.messages import RtdeMessage
+from rtde_spec.rtde.packages import Package, Sender, decode_package, observe_package, setup_names
 from rtde_spec.rtde.protocol_state import ProtocolState
 from rtde_spec.spec.catalogue import Catalogue
+
+if TYPE_CHECKING:
+    from rtde_spec.rtde.messages import RtdeMessage
+
+_SETUP_REQUESTS = {"setup_outputs_v1": "output", "setup_outputs_v2": "output", "setup_inputs": "input"}
+_SETUP_REPLIES = {
+    "setup_outputs_v1_reply": "output",
+    "setup_outputs_v2_reply": "output",
+    "setup_inputs_reply": "input",
+}
 
 
 @dataclass
 class DecodedPackage:
     sender: Sender
-    message: RtdeMessage
+    package: Package  # name and values, from the layout engine
     values: dict[str, Any] | None = None  # data packages whose recipe is known
     note: str | None = None
+
+    @cached_property
+    def message(self) -> RtdeMessage:
+        """The package as its pydantic model (the models load with the first one asked for)."""
+        return self.package.model()
 
 
 @dataclass
@@ -38,26 +52,24 @@ class SessionDecoder:
     recipes: dict[tuple[str, int], RecipeCodec] = field(default_factory=dict)
 
     def feed(self, sender: Sender, package: bytes) -> DecodedPackage:
-        message = decode(package, protocol_version=self.state.version, sender=sender)
-        out = DecodedPackage(sender, message)
-        observe(self.state, message)
-        if isinstance(message, (gen.SetupOutputsV1, gen.SetupOutputsV2)):
-            self._pending_names["output"] = setup_names(message.variable_names)
-        elif isinstance(message, gen.SetupInputs):
-            self._pending_names["input"] = setup_names(message.variable_names)
-        elif isinstance(message, (gen.SetupOutputsV1Reply, gen.SetupOutputsV2Reply)):
-            recipe_id = getattr(message, "output_recipe_id", 1)
-            self._learn("output", recipe_id, message.variable_types, out)
-        elif isinstance(message, gen.SetupInputsReply):
-            self._learn("input", message.input_recipe_id, message.variable_types, out)
-        elif isinstance(message, gen.DataPackage):
+        decoded = decode_package(package, protocol_version=self.state.version, sender=sender)
+        name, values = decoded.name, decoded.values
+        out = DecodedPackage(sender, decoded)
+        observe_package(self.state, name, values)
+        if name in _SETUP_REQUESTS:
+            self._pending_names[_SETUP_REQUESTS[name]] = setup_names(values["variable_names"])
+        elif name in _SETUP_REPLIES:
+            direction = _SETUP_REPLIES[name]
+            recipe_id = values.get(f"{direction}_recipe_id", 1)  # protocol 1 has one output recipe
+            self._learn(direction, recipe_id, values["variable_types"], out)
+        elif name == "data_package":
             direction = RTDE_DIRECTIONS[sender]
-            codec = self.recipes.get((direction, message.recipe_id))
+            codec = self.recipes.get((direction, values["recipe_id"]))
             if codec is None:
-                out.note = f"no {direction} recipe {message.recipe_id} was set up"
+                out.note = f"no {direction} recipe {values['recipe_id']} was set up"
             else:
                 try:
-                    out.values = codec.decode(message.payload)
+                    out.values = codec.decode(values["payload"])
                 except DecodeError as exc:
                     out.note = str(exc)
         return out

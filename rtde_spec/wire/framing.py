@@ -6,11 +6,12 @@ import struct
 from dataclasses import dataclass, field
 from typing import Any
 
-from rtde_spec._generated.rtde_models import HEADER_FORMAT, HEADER_SIZE
+from rtde_spec._generated.constants import RTDE_HEADER_FORMAT as HEADER_FORMAT
 from rtde_spec.errors import DecodeError
 
 _HEADER = struct.Struct(HEADER_FORMAT)
 _SIZE_BYTES = struct.calcsize(HEADER_FORMAT[:2])  # the size field leads the header
+HEADER_SIZE = _HEADER.size
 
 
 @dataclass
