@@ -70,3 +70,21 @@ def test_the_plain_path_and_the_models_refuse_alike() -> None:
         assert (plain_error.value.field, plain_error.value.offset) == (
             model_error.value.field, model_error.value.offset
         )  # fmt: skip
+
+
+def test_the_layouts_the_decoders_act_on_are_the_specs() -> None:
+    """Capture, the session decoder and the client core pick packages by these spec names."""
+    from rtde_spec.rtde import packages
+
+    named = {
+        packages.DATA,
+        packages.VERSION_REQUEST,
+        packages.VERSION_REPLY,
+        packages.CONTROLLER_VERSION_REPLY,
+    }
+    named |= packages.TEXTS | packages.SETUP_REQUESTS.keys() | packages.SETUP_REPLIES.keys()
+    assert named <= {cls.NAME for cls in gen.MESSAGES}
+    assert {n for n in named if "text" in n} == {cls.NAME for cls in gen.MESSAGES if "text" in cls.NAME}
+    assert {n for n in named if n.startswith("setup")} == {
+        c.NAME for c in gen.MESSAGES if c.NAME.startswith("setup")
+    }

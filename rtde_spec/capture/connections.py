@@ -30,6 +30,7 @@ from rtde_spec.capture.tcp import Chunk
 from rtde_spec.errors import RtdeSpecError
 from rtde_spec.output.base import plain
 from rtde_spec.recipes.codec import RecipeCodec
+from rtde_spec.rtde.packages import DATA, TEXTS
 from rtde_spec.rtde.session import SessionDecoder
 from rtde_spec.spec.catalogue import Catalogue
 
@@ -37,7 +38,6 @@ BATCH = 4096
 RTDE_HEADER = struct.calcsize(RTDE_HEADER_FORMAT)
 _SIZE_AT, TYPE_AT, RECIPE_ID_AT = DATA_PACKAGE_PREFIX_OFFSETS
 RTDE_SIZE_BYTES = TYPE_AT - _SIZE_AT  # the size field leads the header
-TEXT_MESSAGES = {"text_message", "text_message_v1_controller", "text_message_v1_client"}
 
 
 class Problems(list[str]):
@@ -195,12 +195,12 @@ class RtdeConnection:
             return
         message = decoded.package
         base = {"connection": self.name, "capture_time": time, "sender": sender}
-        if message.name in TEXT_MESSAGES:
+        if message.name in TEXTS:
             fields = message.values
             row = {**base, "level": fields.get("warning_level", fields.get("message_type")),
                    "source": fields.get("source", ""), "message": fields["message"]}  # fmt: skip
             self.sink.row("rtde_text", self.robot, day_of(time), row)
-        elif message.name == "data_package":
+        elif message.name == DATA:
             if decoded.values is not None:
                 direction = RTDE_DIRECTIONS[sender]
                 names = tuple(decoded.values)

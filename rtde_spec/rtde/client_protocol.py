@@ -32,7 +32,18 @@ from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
 from rtde_spec.recipes.encoding import PREFIX
 from rtde_spec.recipes.model import Recipe
 from rtde_spec.rtde.client_events import DataRun, Event, InputRecipe, Reply, Request, Text
-from rtde_spec.rtde.packages import TYPE_OF, Package, decode_package, encode_package, observe_package
+from rtde_spec.rtde.packages import (
+    CONTROLLER_VERSION_REPLY,
+    DATA,
+    TEXTS,
+    TYPE_OF,
+    VERSION_REPLY,
+    VERSION_REQUEST,
+    Package,
+    decode_package,
+    encode_package,
+    observe_package,
+)
 from rtde_spec.rtde.protocol_state import ProtocolState
 from rtde_spec.spec.catalogue import Catalogue
 from rtde_spec.spec.versions import Version
@@ -66,7 +77,7 @@ class ClientProtocol:
     # --- requests -----------------------------------------------------------
 
     def request_protocol_version(self, version: int) -> bytes:
-        return self._ask("request_protocol_version", {"protocol_version": version})
+        return self._ask(VERSION_REQUEST, {"protocol_version": version})
 
     def get_controller_version(self) -> bytes:
         return self._ask("get_urcontrol_version", {})
@@ -212,22 +223,22 @@ class ClientProtocol:
 
     def _control(self, message: Package) -> Event | None:
         name, values = message.name, message.values
-        if name in ("text_message", "text_message_v1_controller"):
+        if name in TEXTS:
             level = values.get("warning_level", values.get("message_type", 3))
             return Text(level, values["message"], values.get("source", "controller"))
-        if name == "data_package":
+        if name == DATA:
             output = self.output
             if output is not None and message.recipe_id == self.output_recipe_id:
                 raise DecodeError(
                     "data package of the output recipe, of another size than the recipe's",
-                    package="data_package",
+                    package=DATA,
                     field="payload",
                     expected=f"{output.package_size - PAYLOAD_OFFSET} bytes",
                     actual=f"{len(message.payload)} bytes",
                 )
             raise ProtocolError(
                 "data package of no recipe this client set up",
-                package="data_package",
+                package=DATA,
                 field="recipe_id",
                 expected="no data before setup_outputs" if output is None else self.output_recipe_id,
                 actual=message.recipe_id,
@@ -235,10 +246,10 @@ class ClientProtocol:
         request = self._match(message)
         if request is None:
             return None
-        if name == "request_protocol_version_reply":
+        if name == VERSION_REPLY:
             observe_package(self.state, request.name, request.message.values)  # the version it answers
             observe_package(self.state, name, values)
-        elif name == "get_urcontrol_version_reply":
+        elif name == CONTROLLER_VERSION_REPLY:
             self.controller_version = Version(
                 values["major"], values["minor"], values["bugfix"], values["build"]
             )

@@ -34,6 +34,18 @@ MAX_SIZE = RTDE_LIMITS["package_max_bytes"]
 TYPE_OF: dict[str, int] = {name: key[0] for key, name in RTDE_PACKAGES.items()}
 """Spec name of a layout -> its package type code."""
 
+# the layouts the decoders act on, by their spec names (a test holds them to the spec)
+DATA = "data_package"
+TEXTS = frozenset({"text_message", "text_message_v1_controller", "text_message_v1_client"})
+SETUP_REQUESTS = {"setup_outputs_v1": "output", "setup_outputs_v2": "output", "setup_inputs": "input"}
+SETUP_REPLIES = {
+    "setup_outputs_v1_reply": "output",
+    "setup_outputs_v2_reply": "output",
+    "setup_inputs_reply": "input",
+}
+VERSION_REQUEST, VERSION_REPLY = "request_protocol_version", "request_protocol_version_reply"
+CONTROLLER_VERSION_REPLY = "get_urcontrol_version_reply"
+
 
 @dataclass(frozen=True)
 class Package:
@@ -165,9 +177,9 @@ def encode_package(name: str, values: dict[str, Any]) -> bytes:
 
 def observe_package(state: ProtocolState, name: str, values: dict[str, Any]) -> None:
     """Move the protocol state on a version request or reply."""
-    if name == "request_protocol_version":
+    if name == VERSION_REQUEST:
         state.on_request(values["protocol_version"])
-    elif name == "request_protocol_version_reply":
+    elif name == VERSION_REPLY:
         state.on_reply(values["accepted"])
 
 

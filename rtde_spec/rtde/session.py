@@ -14,19 +14,21 @@ from typing import TYPE_CHECKING, Any
 from rtde_spec._generated.constants import RTDE_DIRECTIONS
 from rtde_spec.errors import DecodeError, RecipeError
 from rtde_spec.recipes.codec import RecipeCodec
-from rtde_spec.rtde.packages import Package, Sender, decode_package, observe_package, setup_names
+from rtde_spec.rtde.packages import (
+    DATA,
+    SETUP_REPLIES,
+    SETUP_REQUESTS,
+    Package,
+    Sender,
+    decode_package,
+    observe_package,
+    setup_names,
+)
 from rtde_spec.rtde.protocol_state import ProtocolState
 from rtde_spec.spec.catalogue import Catalogue
 
 if TYPE_CHECKING:
     from rtde_spec.rtde.messages import RtdeMessage
-
-_SETUP_REQUESTS = {"setup_outputs_v1": "output", "setup_outputs_v2": "output", "setup_inputs": "input"}
-_SETUP_REPLIES = {
-    "setup_outputs_v1_reply": "output",
-    "setup_outputs_v2_reply": "output",
-    "setup_inputs_reply": "input",
-}
 
 
 @dataclass
@@ -56,13 +58,13 @@ class SessionDecoder:
         name, values = decoded.name, decoded.values
         out = DecodedPackage(sender, decoded)
         observe_package(self.state, name, values)
-        if name in _SETUP_REQUESTS:
-            self._pending_names[_SETUP_REQUESTS[name]] = setup_names(values["variable_names"])
-        elif name in _SETUP_REPLIES:
-            direction = _SETUP_REPLIES[name]
+        if name in SETUP_REQUESTS:
+            self._pending_names[SETUP_REQUESTS[name]] = setup_names(values["variable_names"])
+        elif name in SETUP_REPLIES:
+            direction = SETUP_REPLIES[name]
             recipe_id = values.get(f"{direction}_recipe_id", 1)  # protocol 1 has one output recipe
             self._learn(direction, recipe_id, values["variable_types"], out)
-        elif name == "data_package":
+        elif name == DATA:
             direction = RTDE_DIRECTIONS[sender]
             codec = self.recipes.get((direction, values["recipe_id"]))
             if codec is None:
