@@ -118,6 +118,7 @@ def emit_rtde_models(spec: Spec) -> str:
         '"""pydantic models of every RTDE package layout, and the codec\'s lookup tables."""\n\n',
         "from typing import TYPE_CHECKING, Annotated, ClassVar\n\n",
         "from pydantic import Field\n\n",
+        "from rtde_spec._generated.constants import RTDE_PACKAGE_TYPES\n",
         "from rtde_spec.rtde.messages import RtdeMessage, struct_of\n",
         "{model_types_import}",
         f"PORT = {pk.port}\n",
@@ -126,10 +127,8 @@ def emit_rtde_models(spec: Spec) -> str:
         f"HEADER_SIZE = {sum(prims[h.type].size for h in pk.header)}\n",
         f"HEADER_FIELDS: tuple[str, ...] = {tuple(h.name for h in pk.header)!r}\n",
         f"LIMITS: dict[str, int] = {pk.limits.model_dump()!r}\n",
-        "PACKAGE_TYPES: dict[int, str] = {\n",
+        "PACKAGE_TYPES = RTDE_PACKAGE_TYPES  # type code -> the document's name of the type\n",
     ]
-    out += [f"    {ord(p.code)}: {p.name!r},  # {p.code!r}\n" for p in pk.package_types]
-    out.append("}\n")
     out.append(f"SENDERS: tuple[str, ...] = {tuple(pk.senders)!r}\n")
     protocols = sorted({p for m in pk.messages for p in m.protocols})
     out.append(f"PROTOCOLS: tuple[int, ...] = {tuple(protocols)!r}\n")

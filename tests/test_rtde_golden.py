@@ -6,7 +6,7 @@ import pytest
 
 from rtde_spec._generated import rtde_models as gen
 from rtde_spec.errors import DecodeError
-from rtde_spec.rtde.codec import build, decode, message_by_name
+from rtde_spec.rtde.codec import build, decode, message_by_name, model_of
 from rtde_spec.rtde.packages import decode_package, encode_package
 
 from .helpers import assert_package, expected_values, golden
@@ -54,7 +54,7 @@ def test_the_plain_path_reads_and_writes_every_package_as_the_models_do(case: di
     assert package.values == message.fields()
     assert [type(v) for v in package.values.values()] == [type(v) for v in message.fields().values()]
     assert encode_package(package.name, package.values) == data
-    assert package.model() == message
+    assert model_of(package.name, package.values) == message
 
 
 def test_the_plain_path_and_the_models_refuse_alike() -> None:

@@ -5,6 +5,7 @@ from typing import TYPE_CHECKING, Annotated, ClassVar
 
 from pydantic import Field
 
+from rtde_spec._generated.constants import RTDE_PACKAGE_TYPES
 from rtde_spec.rtde.messages import RtdeMessage, struct_of
 from rtde_spec.wire.model_types import AsciiStr, CsvItem, ShortAsciiStr
 
@@ -17,16 +18,7 @@ HEADER_FORMAT = '>HB'
 HEADER_SIZE = 3
 HEADER_FIELDS: tuple[str, ...] = ('size', 'type')
 LIMITS: dict[str, int] = {'setup_names_max_bytes': 2048, 'input_recipes_max': 255, 'invalid_recipe_id': 0, 'package_max_bytes': 65535}
-PACKAGE_TYPES: dict[int, str] = {
-    86: 'RTDE_REQUEST_PROTOCOL_VERSION',  # 'V'
-    118: 'RTDE_GET_URCONTROL_VERSION',  # 'v'
-    77: 'RTDE_TEXT_MESSAGE',  # 'M'
-    85: 'RTDE_DATA_PACKAGE',  # 'U'
-    79: 'RTDE_CONTROL_PACKAGE_SETUP_OUTPUTS',  # 'O'
-    73: 'RTDE_CONTROL_PACKAGE_SETUP_INPUTS',  # 'I'
-    83: 'RTDE_CONTROL_PACKAGE_START',  # 'S'
-    80: 'RTDE_CONTROL_PACKAGE_PAUSE',  # 'P'
-}
+PACKAGE_TYPES = RTDE_PACKAGE_TYPES  # type code -> the document's name of the type
 SENDERS: tuple[str, ...] = ('controller', 'client')
 PROTOCOLS: tuple[int, ...] = (1, 2)
 

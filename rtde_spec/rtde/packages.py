@@ -51,7 +51,8 @@ CONTROLLER_VERSION_REPLY = "get_urcontrol_version_reply"
 class Package:
     """One decoded package: its layout's spec name, type code and field values in wire order.
 
-    Fields read as attributes too (`reply.accepted`), as on the models.
+    Fields read as attributes too (`reply.accepted`), as on the models;
+    `rtde.codec.model_of(name, values)` makes the model.
     """
 
     name: str
@@ -66,12 +67,6 @@ class Package:
 
     def fields(self) -> dict[str, Any]:
         return self.values
-
-    def model(self) -> Any:
-        """The package as its pydantic model (the models load on the first call)."""
-        from rtde_spec.rtde.codec import model_of
-
-        return model_of(self.name, self.values)
 
 
 def _type_text(code: int) -> str:

@@ -41,7 +41,9 @@ class DecodedPackage:
     @cached_property
     def message(self) -> RtdeMessage:
         """The package as its pydantic model (the models load with the first one asked for)."""
-        return self.package.model()
+        from rtde_spec.rtde.codec import model_of
+
+        return model_of(self.package.name, self.package.values)
 
 
 @dataclass
