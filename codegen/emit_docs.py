@@ -7,6 +7,7 @@ from itertools import groupby
 from rtde_spec.spec.catalogue import Catalogue, FieldInfo
 from rtde_spec.spec.schema import FieldSpec, MessageSpec, Spec
 
+from .conflict_docs import conflict_rows, conflicts_section
 from .layout_docs import header_rows, layout_rows
 from .render import MD_HEADER, md_table
 
@@ -112,6 +113,8 @@ def emit_fields_doc(spec: Spec, cat: Catalogue) -> str:
     )
     out += "\n" + _fields_section("Inputs (client → controller)", "input", spec.fields.inputs, cat)
     out += "\n" + _fields_section("Outputs (controller → client)", "output", spec.fields.outputs, cat)
+    entries = [*spec.fields.inputs, *spec.fields.outputs]
+    out += conflicts_section([row for e in entries for row in conflict_rows(e.name, e.conflicts)])
     return out
 
 

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from rtde_spec.spec.schema import Spec
 
+from .conflict_docs import conflict_rows, conflicts_section
 from .layout_docs import field_size, header_rows, layout_rows
 from .render import MD_HEADER, md_table
 
@@ -67,4 +68,10 @@ def emit_primary_doc(spec: Spec) -> str:
         for v in pf.value_types
     ]
     out += md_table(["Type", "Kind", "Data", "Length prefix"], vrows)
+    rows = []
+    for fam in pf.families:
+        for m in fam.members:
+            rows += conflict_rows(m.name, m.conflicts)
+            rows += [r for f in m.fields for r in conflict_rows(f"{m.name}.{f.name}", f.conflicts)]
+    out += conflicts_section(rows)
     return out

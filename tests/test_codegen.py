@@ -90,3 +90,24 @@ def test_docs_list_every_field() -> None:
     text = (ROOT / "docs/reference/rtde-fields.md").read_text()
     for info in Catalogue.builtin().fields():
         assert f"`{info.name}`" in text, info.name
+
+
+def test_docs_list_every_recorded_conflict_with_its_decision() -> None:
+    """Each `conflicts:` entry of spec/ is a row of the reference's 'Where the documents differ'."""
+    from codegen.render import md_cell
+
+    spec = load_spec(ROOT / "spec")
+    rtde = [(e.name, c) for e in [*spec.fields.inputs, *spec.fields.outputs] for c in e.conflicts]
+    primary = []
+    for fam in spec.primary.families:
+        for m in fam.members:
+            primary += [(m.name, c) for c in m.conflicts]
+            primary += [(f"{m.name}.{f.name}", c) for f in m.fields for c in f.conflicts]
+    assert rtde and primary
+    for doc, conflicts in (("rtde-fields.md", rtde), ("primary.md", primary)):
+        text = (ROOT / "docs/reference" / doc).read_text()
+        section = text.split("## Where the documents differ", 1)[1]
+        rows = [line for line in section.splitlines() if line.startswith("| `")]
+        assert len(rows) == len(conflicts), doc
+        for where, conflict in conflicts:
+            assert any(f"`{where}`" in row and md_cell(conflict.decision) in row for row in rows), where
