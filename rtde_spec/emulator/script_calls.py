@@ -43,6 +43,7 @@ DIGITAL = {
 }
 ANALOG = {"set_standard_analog_out": 2, "set_analog_out": 2}
 MOVES = {"movej", "movel", "movep", "servoj", "speedj", "speedl"}
+WAITS = MOVES | {"stopj", "stopl", "sleep", "sync", "halt"}  # the commands a program waits on
 
 
 class Pose(list[float]):
