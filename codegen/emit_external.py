@@ -8,7 +8,7 @@ from __future__ import annotations
 import pprint
 from pathlib import Path
 
-from rtde_spec.spec.external import ExternalControlFile, Variant, load_external
+from rtde_spec.spec.external import Detect, ExternalControlFile, Variant, load_external
 from rtde_spec.spec.schema import Primitive
 
 from .render import MD_HEADER, PY_HEADER, md_table
@@ -48,6 +48,28 @@ def _variant_rows(variant: Variant, prims: dict[str, Primitive]) -> list[tuple[o
     return rows
 
 
+def _variant_head(selector: str | None, v: Variant) -> str:
+    when = "default" if v.when is None else f"{selector} = {', '.join(map(str, v.when))}"
+    return f"\n**{v.name}** ({when}; table `{v.table}`){': ' + v.doc if v.doc else ''}\n\n"
+
+
+def _detect(detect: Detect | None) -> str:
+    """How capture recognises a layout in the program the driver sent, as a sentence."""
+    if detect is None:
+        return "."
+    lines = ", ".join(f"`{line}`" for line in detect.script_lines)
+    sent = "the program sent to the script sender"
+    return f". Capture picks it when {sent} has the lines {lines} ({detect.source})."
+
+
+def _choice_note() -> str:
+    return (
+        "\nWithout the program in the capture, `rtde-spec capture` keeps the layouts the records "
+        "themselves allow (segments of whole records of its size, every enum word a known value): "
+        "one left is taken, else the newest of them; its summary names the layout and why.\n"
+    )
+
+
 def _markdown(spec: ExternalControlFile, prims: dict[str, Primitive]) -> str:
     out = [
         MD_HEADER,
@@ -65,14 +87,19 @@ def _markdown(spec: ExternalControlFile, prims: dict[str, Primitive]) -> str:
         for m in p.messages:
             out.append(f"\n### {m.name}: {m.sender} → {'robot' if m.sender == 'driver' else 'driver'}, ")
             out.append(f"{m.record_bytes} bytes\n")
+            if m.layout is not None:
+                out.append(f"\nThe newest layout, `{m.layout}`{_detect(m.detect)}\n")
             for v in m.variants:
-                when = "default" if v.when is None else f"{m.selector} = {', '.join(map(str, v.when))}"
-                out.append(f"\n**{v.name}** ({when}; table `{v.table}`){': ' + v.doc if v.doc else ''}\n\n")
+                out.append(_variant_head(m.selector, v))
                 out.append(md_table(headers, _variant_rows(v, prims)))
             for old in m.older:
-                out.append(f"\n**older layout {old.name}** ({old.record_bytes} bytes): {old.source}\n\n")
+                out.append(f"\n**older layout {old.name}** ({old.record_bytes} bytes): {old.source}")
+                out.append(f"{_detect(old.detect)}\n")
                 for v in old.variants:
+                    out.append(_variant_head(old.selector, v) if len(old.variants) > 1 else "\n")
                     out.append(md_table(headers, _variant_rows(v, prims)))
+            if m.older:
+                out.append(_choice_note())
     out.append("\n## Enums\n")
     for e in spec.enums:
         out.append(f"\n### {e.name}\n\n{e.doc or ''}{' (' + e.doc_ref + ')' if e.doc_ref else ''}\n\n")

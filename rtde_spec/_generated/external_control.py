@@ -219,6 +219,22 @@ EXTERNAL_CONTROL: dict[str, Any] = {'doc_ref': 'Universal_Robots_Client_Library 
                               'sender': 'driver',
                               'record_bytes': 84,
                               'selector': 'motion_type',
+                              'layout': 'motion_type_us',
+                              'detect': {'source': 'resources/external_control.urscript at '
+                                                   '00468670 (MOTION_TYPE_MOVEJ_POSE and the other '
+                                                   'pose/joint motion types: URCL pull request '
+                                                   '491, 2026-04-24, which also moved velocity and '
+                                                   'acceleration to words 12 and 13); '
+                                                   'doc/architecture/trajectory_point_interface.rst '
+                                                   'at 01292bdf (MULT_TIME 1000000: pull request '
+                                                   '482, 2026-04-10); src/ur/ur_driver.cpp writes '
+                                                   'TrajectoryPointInterface::MULT_TIME for '
+                                                   '{{TIME_REPLACE}} and '
+                                                   'ReverseInterface::MULT_JOINTSTATE for '
+                                                   '{{JOINT_STATE_REPLACE}}',
+                                         'script_lines': ['MOTION_TYPE_MOVEJ_POSE = 6',
+                                                          'MULT_time = 1000000',
+                                                          'MULT_jointstate = 1000000']},
                               'variants': [{'name': 'motion_primitive',
                                             'table': 'urcl_trajectory_points',
                                             'fields': [{'name': 'target',
@@ -279,9 +295,12 @@ EXTERNAL_CONTROL: dict[str, Any] = {'doc_ref': 'Universal_Robots_Client_Library 
                                                         'unit': 'rad/s',
                                                         'scale': 1000000.0,
                                                         'doc': 'MULT_JOINTSTATE as the script at '
-                                                               '00468670 reads them (a newer '
-                                                               'script may scale by MULT_VEL_ACC, '
-                                                               '1e8)'},
+                                                               '00468670 reads them (URCL pull '
+                                                               'request 559, 2026-08, scales them '
+                                                               'by MULT_VEL_ACC, 1e8, when the '
+                                                               'program sets that multiplier: such '
+                                                               'a program matches no detect '
+                                                               'entry)'},
                                                        {'name': 'accelerations',
                                                         'type': 'int32',
                                                         'count': 6,
@@ -298,12 +317,117 @@ EXTERNAL_CONTROL: dict[str, Any] = {'doc_ref': 'Universal_Robots_Client_Library 
                                                        {'name': 'motion_type',
                                                         'type': 'int32',
                                                         'enum': 'MotionType'}]}],
-                              'older': [{'name': 'point_type_21',
+                              'older': [{'name': 'motion_type_ms',
+                                         'source': 'src/control/trajectory_point_interface.cpp and '
+                                                   'include/ur_client_library/control/trajectory_point_interface.h '
+                                                   'of the motion-type URCL before pull request '
+                                                   '482 (writeMotionPrimitive: MOVEJ, MOVEL, MOVEP '
+                                                   'and OPTIMOVE* fill words 6-11 with the '
+                                                   'velocity and 12-17 with the acceleration; '
+                                                   'MOVEC: via pose, then acceleration, velocity, '
+                                                   'arc mode; MULT_TIME 1000), '
+                                                   'resources/external_control.urscript at '
+                                                   '0b21a189 (trajectoryThread reads them so)',
+                                         'detect': {'source': 'resources/external_control.urscript '
+                                                              'at 0b21a189 (MOTION_TYPE_SPLINE = '
+                                                              '51, no MOTION_TYPE_MOVEJ_POSE); '
+                                                              "MULT_time is the library's "
+                                                              'TrajectoryPointInterface::MULT_TIME, '
+                                                              '1000 until pull request 482',
+                                                    'script_lines': ['MOTION_TYPE_SPLINE = 51',
+                                                                     'MULT_time = 1000',
+                                                                     'MULT_jointstate = 1000000']},
+                                         'record_bytes': 84,
+                                         'selector': 'motion_type',
+                                         'variants': [{'name': 'motion_primitive',
+                                                       'table': 'urcl_trajectory_points_v2',
+                                                       'fields': [{'name': 'target',
+                                                                   'type': 'int32',
+                                                                   'count': 6,
+                                                                   'scale': 1000000.0,
+                                                                   'doc': 'Joint positions [rad] '
+                                                                          '(MOVEJ, OPTIMOVEJ) or '
+                                                                          'pose [m, rad], by '
+                                                                          'motion_type'},
+                                                                  {'name': 'velocity_or_via',
+                                                                   'type': 'int32',
+                                                                   'count': 6,
+                                                                   'scale': 1000000.0,
+                                                                   'doc': 'MOVEC: the via pose; '
+                                                                          'the other motion types: '
+                                                                          'the velocity in every '
+                                                                          'word'},
+                                                                  {'name': 'acceleration_or_movec',
+                                                                   'type': 'int32',
+                                                                   'count': 6,
+                                                                   'scale': 1000000.0,
+                                                                   'doc': 'MOVEC: acceleration, '
+                                                                          'velocity, arc mode, '
+                                                                          'then zeros; the other '
+                                                                          'motion types: the '
+                                                                          'acceleration in every '
+                                                                          'word'},
+                                                                  {'name': 'duration',
+                                                                   'type': 'int32',
+                                                                   'unit': 's',
+                                                                   'scale': 1000.0,
+                                                                   'doc': 'Segment time '
+                                                                          '(MULT_TIME: '
+                                                                          'milliseconds on the '
+                                                                          'wire); 0 = by speed'},
+                                                                  {'name': 'blend_radius',
+                                                                   'type': 'int32',
+                                                                   'unit': 'm',
+                                                                   'scale': 1000.0},
+                                                                  {'name': 'motion_type',
+                                                                   'type': 'int32',
+                                                                   'enum': 'MotionType'}]},
+                                                      {'name': 'spline_point',
+                                                       'when': [51],
+                                                       'table': 'urcl_trajectory_splines',
+                                                       'fields': [{'name': 'positions',
+                                                                   'type': 'int32',
+                                                                   'count': 6,
+                                                                   'unit': 'rad',
+                                                                   'scale': 1000000.0},
+                                                                  {'name': 'velocities',
+                                                                   'type': 'int32',
+                                                                   'count': 6,
+                                                                   'unit': 'rad/s',
+                                                                   'scale': 1000000.0},
+                                                                  {'name': 'accelerations',
+                                                                   'type': 'int32',
+                                                                   'count': 6,
+                                                                   'unit': 'rad/s^2',
+                                                                   'scale': 1000000.0,
+                                                                   'doc': 'QUINTIC only'},
+                                                                  {'name': 'duration',
+                                                                   'type': 'int32',
+                                                                   'unit': 's',
+                                                                   'scale': 1000.0,
+                                                                   'doc': 'Milliseconds on the '
+                                                                          'wire'},
+                                                                  {'name': 'spline_type',
+                                                                   'type': 'int32',
+                                                                   'enum': 'SplineType'},
+                                                                  {'name': 'motion_type',
+                                                                   'type': 'int32',
+                                                                   'enum': 'MotionType'}]}]},
+                                        {'name': 'point_type_21',
                                          'source': 'src/control/trajectory_point_interface.cpp at '
                                                    'commit '
                                                    '00d568be9e5beb7237d61e5310cc93b9f3257391 (URCL '
                                                    "1.3.3 on: 'spline interpolation with end point "
                                                    "velocities'; MULT_TIME 1000)",
+                                         'detect': {'source': 'resources/external_control.urscript '
+                                                              'at 00d568be '
+                                                              '(TRAJECTORY_POINT_JOINT_SPLINE = 2, '
+                                                              'TRAJECTORY_DATA_DIMENSION = 3*6 + '
+                                                              '1: a 21-word read)',
+                                                    'script_lines': ['TRAJECTORY_POINT_JOINT_SPLINE '
+                                                                     '= 2',
+                                                                     'MULT_time = 1000',
+                                                                     'MULT_jointstate = 1000000']},
                                          'record_bytes': 84,
                                          'variants': [{'name': 'point',
                                                        'table': 'urcl_trajectory_points_v1',
@@ -335,6 +459,16 @@ EXTERNAL_CONTROL: dict[str, Any] = {'doc_ref': 'Universal_Robots_Client_Library 
                                                    'commit '
                                                    '22a5c7bfd04483708733cb3b2d5ee992727f2789 (URCL '
                                                    '0.3.0, 2021-06-18, to 1.3.2; MULT_TIME 1000)',
+                                         'detect': {'source': 'resources/external_control.urscript '
+                                                              'at 93800a58 '
+                                                              '(TRAJECTORY_DATA_DIMENSION = 7: '
+                                                              'jointTrajectoryThread reads 7+1+1 '
+                                                              'words; TRAJECTORY_POINT_JOINT and '
+                                                              '_CARTESIAN only)',
+                                                    'script_lines': ['TRAJECTORY_DATA_DIMENSION = '
+                                                                     '7',
+                                                                     'MULT_time = 1000',
+                                                                     'MULT_jointstate = 1000000']},
                                          'record_bytes': 36,
                                          'variants': [{'name': 'point',
                                                        'table': 'urcl_trajectory_points_v0',

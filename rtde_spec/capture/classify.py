@@ -121,6 +121,7 @@ def connection_for(kind: str, name: str, client: str, server: str, sink: TableSi
     from rtde_spec.spec.external import external_spec
 
     protocol = external_spec().protocol(kind)
+    session = kw.get("session")  # shared by a capture file's connections: the programs sent to each robot
     if protocol.request is not None:
-        return ScriptSenderConnection(name, client, sink, protocol)
-    return ExternalConnection(name, client, sink, protocol)
+        return ScriptSenderConnection(name, client, sink, protocol, session)
+    return ExternalConnection(name, client, sink, protocol, session)

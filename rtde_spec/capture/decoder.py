@@ -30,6 +30,7 @@ from rtde_spec.spec.catalogue import Catalogue
 RTDE_VERSION_REQUEST = encode_package("request_protocol_version", {"protocol_version": 2})[:RTDE_HEADER]
 RUN_HEAD = PAYLOAD_OFFSET  # size, type, recipe id: the bytes every data package of one run shares
 RUN_MIN, RUN_MAX = 16, 4096  # shorter runs go segment by segment; longer ones are cut
+SCRIPT_KIND = "urcl-script"  # the script sender's connections: finished first (their programs are read)
 
 
 @dataclass
@@ -61,6 +62,7 @@ def decode_capture(
     cat = catalogue or Catalogue.default()
     ports = port_kinds(rtde_ports, primary_ports, port_map)
     stats: dict[str, int] = {}
+    session: dict[str, Any] = {}  # what this file's connections share (capture/external.py: URCL programs)
     flows: dict[frozenset[tuple[str, int]], _Flow | None] = {}
     # (src, sport, dst, dport) -> (flow, sender, its direction): one lookup per segment
     routes: dict[tuple[str, int, str, int], Route | None] = {}
@@ -76,7 +78,7 @@ def decode_capture(
         if key in flows:
             flow = flows[key]
         else:
-            flow = _classify(seg, sink, recipe, ports, cat)
+            flow = _classify(seg, sink, recipe, ports, cat, session)
             if flow is None and not seg.payload:
                 if seg.flags & SYN:  # kept: the stream starts here if its first data says what it is
                     handshakes.setdefault(key, []).append(seg)
@@ -138,7 +140,7 @@ def decode_capture(
     if run is not None:
         run.flush()
     live = [f for f in flows.values() if f is not None]
-    for flow in live:
+    for flow in sorted(live, key=lambda f: f.kind != SCRIPT_KIND):  # programs whole before their readers
         _finish(flow)
     return _summary(path, stats, live)
 
@@ -175,6 +177,7 @@ def _summary(path: str | Path, stats: dict[str, int], flows: list[_Flow]) -> Cap
                 skipped_bytes=sum(f.skipped for f in framings),
                 cut_packages=sum(f.cut for f in framings),
                 lead_in_bytes=sum(f.lead_in for f in framings),
+                notes=list(getattr(flow.decoder, "notes", ())),
             )
         )
     return summary
@@ -261,7 +264,12 @@ class _Run:
 
 
 def _classify(
-    seg: Any, sink: TableSink, recipe: RecipeCodec | None, ports: Mapping[int, str], cat: Catalogue
+    seg: Any,
+    sink: TableSink,
+    recipe: RecipeCodec | None,
+    ports: Mapping[int, str],
+    cat: Catalogue,
+    session: dict[str, Any],
 ) -> _Flow | None:
     src, dst = (seg.src, seg.sport), (seg.dst, seg.dport)
     if seg.dport in ports:
@@ -275,9 +283,11 @@ def _classify(
     else:
         return None
     name = f"{client[0]}:{client[1]}-{server[0]}:{server[1]}"
-    decoder = connection_for(kind, name, client[0], server[0], sink, recipe=recipe, catalogue=cat)
+    decoder = connection_for(
+        kind, name, client[0], server[0], sink, recipe=recipe, catalogue=cat, session=session
+    )
     label = f"urcl-{kind}" if kind in ROBOT_CLIENT_KINDS else kind
-    return _Flow(client, server, label if kind != "script_sender" else "urcl-script", decoder)
+    return _Flow(client, server, label if kind != "script_sender" else SCRIPT_KIND, decoder)
 
 
 def decode_to_directory(

@@ -5,6 +5,13 @@ On these ports the driver's PC is the server and the robot the client, so the ro
 (the partition of every row) is the client's address. Variants of one message that
 share a table keep the fields they share as columns; the rest of each row goes to an
 `arguments` column as JSON (the script commands: each has its own arguments).
+
+A message URCL versions send in different layouts (the trajectory point) is held, as
+it arrived, until its layout is chosen (external/layouts.py): at its first bytes when
+the program its robot was sent before the connection names one (the usual order of a
+session), else at the end of the capture. The programs are those of the same capture
+file (`session`, shared by its connections), so the choice depends on the file alone,
+not on the order files are decoded in; the connection's `notes` say what was chosen.
 """
 
 from __future__ import annotations
@@ -19,7 +26,8 @@ from rtde_spec.capture.rows import text_columns
 from rtde_spec.capture.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
 from rtde_spec.errors import RtdeSpecError
-from rtde_spec.external.codec import RecordCodec, VariantPlan, protocol_codecs
+from rtde_spec.external.codec import RecordCodec, VariantPlan, protocol_codecs, record_codec
+from rtde_spec.external.layouts import Choice, LayoutChooser, Programs
 from rtde_spec.output.base import plain
 from rtde_spec.spec.external import ExternalProtocol
 from rtde_spec.wire.columns import decode_columns, record_dtype
@@ -27,6 +35,12 @@ from rtde_spec.wire.columns import decode_columns, record_dtype
 SIDE = {"client": "robot", "controller": "driver"}  # the flow's sender names on a driver-served port
 MAX_SCRIPT = 16 << 20  # a program longer than this is not one: the rest is counted, not kept
 BATCH = 4096  # records of one variant decoded together into columns
+MAX_HELD = 4 << 20  # bytes held waiting for a layout; past that it is chosen from what is known
+
+
+def programs_of(session: dict[str, Any] | None) -> Programs | None:
+    """The programs of one capture file, shared by its connections (None: decoded alone)."""
+    return None if session is None else session.setdefault("urcl_programs", Programs())
 
 
 def _shared(codec: RecordCodec) -> dict[str, list[str] | None]:
@@ -48,7 +62,14 @@ def _shared(codec: RecordCodec) -> dict[str, list[str] | None]:
 class ExternalConnection:
     """A reverse, trajectory or script command connection: fixed records both ways."""
 
-    def __init__(self, name: str, robot: str, sink: TableSink, protocol: ExternalProtocol) -> None:
+    def __init__(
+        self,
+        name: str,
+        robot: str,
+        sink: TableSink,
+        protocol: ExternalProtocol,
+        session: dict[str, Any] | None = None,
+    ) -> None:
         self.name, self.robot, self.sink, self.protocol = name, robot, sink, protocol
         self.codecs = protocol_codecs(protocol)
         self.framing = {
@@ -60,15 +81,53 @@ class ExternalConnection:
         self.counts = Counts()
         self.unexpected: dict[str, int] = {}
         self.last_time = 0.0
+        self.start: float | None = None  # capture time of the connection's first bytes
         self.batches: dict[str, tuple[VariantPlan, Any, list[bytes], list[float]]] = {}
+        programs = programs_of(session)
+        self.choosers = {  # sender -> the chooser of its message's layout, until chosen
+            sender: LayoutChooser(protocol.name, m, robot, programs)
+            for sender, side in SIDE.items()
+            for m in protocol.messages
+            if m.sender == side and m.older
+        }
+        self.held: dict[str, list[Chunk]] = {sender: [] for sender in self.choosers}
+        self.held_bytes = 0
+        self.notes: list[str] = []  # what was chosen, and why: the summary shows them
 
     def feed(self, sender: str, chunk: Chunk) -> None:
         self.last_time = chunk.time
+        self.start = chunk.time if self.start is None else self.start
         framing = self.framing.get(sender)
         if framing is None:  # this side sends nothing in the protocol
             self.unexpected[sender] = self.unexpected.get(sender, 0) + len(chunk.data)
             return
+        if sender in self.choosers:
+            held = self.held[sender]
+            held.append(chunk)
+            self.held_bytes += len(chunk.data)
+            if len(held) == 1 or self.held_bytes > MAX_HELD:  # the program sent before, else the end decides
+                self._choose(sender, final=self.held_bytes > MAX_HELD)
+            return
         self._records(SIDE[sender], framing.feed(chunk), chunk.time)
+
+    def _choose(self, sender: str, final: bool) -> None:
+        """Choose the layout of what `sender` sends if its program (or, when `final`, anything) says;
+        then decode what was held as if it had been known from the first byte."""
+        held = self.held[sender]
+        if not held:
+            return
+        choice = self.choosers[sender].choose(self.start or 0.0, [c.data for c in held], final)
+        if choice is not None:
+            self._use(sender, choice)
+
+    def _use(self, sender: str, choice: Choice) -> None:
+        side, chooser = SIDE[sender], self.choosers.pop(sender)
+        codec = record_codec(self.protocol.name, chooser.message.name, choice.layout)
+        self.codecs[side], self.shared[side] = codec, _shared(codec)
+        framing = self.framing[sender] = FixedFraming(codec.size, codec.plausible)
+        self.notes.append(f"{self.protocol.name} layout {choice.name} ({choice.why})")
+        for chunk in self.held.pop(sender):
+            self._records(side, framing.feed(chunk), chunk.time)
 
     def _records(self, side: str, records: list[bytes], time: float) -> None:
         codec, shared = self.codecs[side], self.shared[side]
@@ -122,6 +181,8 @@ class ExternalConnection:
         return self.framing
 
     def finish(self) -> None:
+        for sender in list(self.choosers):
+            self._choose(sender, final=True)
         for sender, framing in self.framing.items():
             self._records(SIDE[sender], framing.finish(), self.last_time)
             if framing.unaligned:
@@ -135,6 +196,8 @@ class ExternalConnection:
             )
 
     def close(self) -> None:
+        for sender in list(self.choosers):  # an interrupted capture: what was held reaches the tables
+            self._choose(sender, final=True)
         for name in list(self.batches):
             self._flush(name)
 
@@ -153,13 +216,27 @@ class _Request:
 class ScriptSenderConnection:
     """The script sender: the robot's request line, then the driver's program text, one row each."""
 
-    def __init__(self, name: str, robot: str, sink: TableSink, protocol: ExternalProtocol) -> None:
+    def __init__(
+        self,
+        name: str,
+        robot: str,
+        sink: TableSink,
+        protocol: ExternalProtocol,
+        session: dict[str, Any] | None = None,
+    ) -> None:
         self.name, self.robot, self.sink, self.table = name, robot, sink, protocol.table or protocol.name
         self.request = (protocol.request or "").rstrip("\n").encode()
         self.framing = {"client": _NoFraming(), "controller": _NoFraming()}
         self.pending = bytearray()
         self.requests: list[_Request] = []
         self.counts = Counts()
+        self.programs = programs_of(session)
+        self.port = name.rpartition(":")[2]  # the server's (driver's) port: the name ends with it
+
+    def _new(self, request: _Request) -> None:
+        self.requests.append(request)
+        if self.programs is not None:  # the text grows in place: readers see what has arrived
+            self.programs.add(self.robot, self.port, request)
 
     def feed(self, sender: str, chunk: Chunk) -> None:
         if sender == "client":
@@ -167,7 +244,7 @@ class ScriptSenderConnection:
             while b"\n" in self.pending:
                 line, _, rest = bytes(self.pending).partition(b"\n")
                 self.pending = bytearray(rest)
-                self.requests.append(_Request(chunk.time, line.decode("utf-8", "replace")))
+                self._new(_Request(chunk.time, line.decode("utf-8", "replace")))
                 self.counts.packages += 1
                 if line != self.request:
                     self.counts.errors.append(
@@ -175,7 +252,7 @@ class ScriptSenderConnection:
                     )
             return
         if not self.requests:  # text before any request (a capture started late)
-            self.requests.append(_Request(chunk.time, ""))
+            self._new(_Request(chunk.time, ""))
         current = self.requests[-1]
         current.gaps += 1 if chunk.gap_before else 0
         current.reply_time = current.reply_time if current.reply_time is not None else chunk.time

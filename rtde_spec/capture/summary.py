@@ -25,6 +25,7 @@ class ConnectionSummary:
     skipped_bytes: int = 0  # in the capture, but passed over to find the next package
     cut_packages: int = 0  # begun before a gap and never completed (the end of the capture: in errors)
     lead_in_bytes: int = 0  # before the first package of a connection captured from its middle
+    notes: list[str] = field(default_factory=list)  # choices made decoding it (a URCL layout), not damage
 
 
 @dataclass
@@ -86,14 +87,24 @@ class CaptureSummary:
     def problems(self) -> list[str]:
         return self.needs_recipe() + self.damage()
 
+    def notes(self) -> list[str]:
+        """The connections' notes, one line each: a note several connections share is counted."""
+        named: dict[str, list[str]] = {}
+        for c in self.connections:
+            for note in c.notes:
+                named.setdefault(note, []).append(c.name)
+        return [f"{names[0]}: {note}" if len(names) == 1 else f"{note} ({len(names)} connections)"
+                for note, names in named.items()]  # fmt: skip
+
     def line(self) -> str:
-        """One line: frames, packages, gaps, bytes skipped, records cut off."""
+        """One line: frames, packages, gaps, bytes skipped, records cut off; then the notes."""
         gaps = sum(c.gaps for c in self.connections)
         lost = sum(c.lost_bytes for c in self.connections)
         skipped = sum(c.skipped_bytes for c in self.connections)
         truncated = self.reading.get("truncated", 0) + self.reading.get("bad_records", 0)
         verdict = "damaged" if self.damage() else "ok"
+        notes = "".join(f"; {note}" for note in self.notes())
         return (
             f"{self.file}: {verdict}: {self.frames} frames, {self.packages} packages, {gaps} gaps "
-            f"({lost} bytes lost), {skipped} bytes skipped, {truncated} truncated records"
+            f"({lost} bytes lost), {skipped} bytes skipped, {truncated} truncated records{notes}"
         )

@@ -178,7 +178,8 @@ def _report(summaries: list[CaptureSummary]) -> None:
         print(f"{s.file}: {s.frames} frames, {len(s.connections)} connections")
         for c in s.connections:
             gaps = f", {c.gaps} gaps ({c.lost_bytes} bytes lost)" if c.gaps else ""
-            print(f"  {c.kind:7s} {c.name}: {c.packages} packages{gaps}")
+            notes = "".join(f"; {note}" for note in c.notes)
+            print(f"  {c.kind:7s} {c.name}: {c.packages} packages{gaps}{notes}")
     print("tables: " + ", ".join(f"{name} ({rows} rows)" for name, rows in sorted(tables.items())))
     for s in summaries:
         print(f"summary {s.line()}", file=sys.stderr)

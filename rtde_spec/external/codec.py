@@ -41,7 +41,8 @@ class VariantPlan:
 class RecordCodec:
     """One message of one protocol (a reverse command, a trajectory point, ...), all its variants.
 
-    `layout` picks an older layout by name (the spec's `older` entries); default: the newest.
+    `layout` picks a layout by name (the spec's `older` entries, or the newest's `layout`
+    name); default: the newest.
     """
 
     def __init__(
@@ -59,10 +60,12 @@ class RecordCodec:
         if msg is None:
             raise KeyError(f"protocol {protocol} has no message {message}")
         self.protocol, self.message, self.sender = protocol, message, msg.sender
-        record = msg if layout is None else next((o for o in msg.older if o.name == layout), None)
+        newest = layout is None or layout == msg.layout
+        record = msg if newest else next((o for o in msg.older if o.name == layout), None)
         if record is None:
             known = ", ".join(o.name for o in msg.older) or "none"
             raise KeyError(f"message {message} has no older layout {layout} (known: {known})")
+        self.layout = msg.layout if newest else layout  # the layout's name (None: a message of one layout)
         order = ORDER[spec.byte_order]
         enum_values = {e.name: frozenset(v.value for v in e.values) for e in spec.enums}
         self.size = record.record_bytes

@@ -32,11 +32,29 @@ class Variant(StrictModel):
     fields: list[LayoutField]
 
 
+class Detect(StrictModel):
+    """How a capture recognises a layout: lines of the program the driver sent (script sender)."""
+
+    source: str
+    script_lines: Annotated[list[str], Field(min_length=1)]
+
+    @property
+    def lines(self) -> frozenset[str]:
+        """The lines as a program is compared with them: whitespace and `#` comments removed."""
+        return frozenset(program_line(line) for line in self.script_lines)
+
+
+def program_line(line: str) -> str:
+    """A URScript line as `detect` compares it: no comment, no whitespace."""
+    return "".join(line.split("#", 1)[0].split())
+
+
 class OlderRecord(StrictModel):
     """A layout older drivers send (decode on request), with the source that defines it."""
 
     name: Ident
     source: str
+    detect: Detect | None = None
     record_bytes: Annotated[int, Field(ge=1)]
     selector: Ident | None = None
     variants: Annotated[list[Variant], Field(min_length=1)]
@@ -48,8 +66,15 @@ class RecordMessage(StrictModel):
     record_bytes: Annotated[int, Field(ge=1)]
     selector: Ident | None = None
     doc: str | None = None
+    layout: Ident | None = None  # the newest layout's name (the one `variants` give), beside `older`
+    detect: Detect | None = None
     variants: Annotated[list[Variant], Field(min_length=1)]
     older: list[OlderRecord] = Field(default_factory=list)
+
+    def layouts(self) -> list[tuple[str | None, str, Detect | None, int]]:
+        """(`layout` argument of the codec: None for the newest, name, detect, record bytes), newest first."""
+        newest = (None, self.layout or "newest", self.detect, self.record_bytes)
+        return [newest, *((o.name, o.name, o.detect, o.record_bytes) for o in self.older)]
 
 
 class ExternalProtocol(StrictModel):
@@ -97,6 +122,26 @@ def check(spec: ExternalControlFile, prims: dict[str, tuple[int, str]]) -> list[
                 issues += _check_record(
                     f"{where}.older({old.name})", old.record_bytes, old.selector, old.variants, prims, enums
                 )
+            issues += _check_layouts(where, m)
+    return issues
+
+
+def _check_layouts(where: str, message: RecordMessage) -> list[tuple[str, str]]:
+    """Layout names unique; detect lines that can tell the layouts apart."""
+    issues: list[tuple[str, str]] = []
+    layouts = message.layouts()
+    names = [name for _, name, _, _ in layouts]
+    if len(set(names)) != len(names):
+        issues.append((where, "a layout name is given twice (`layout` and the `older` names)"))
+    if any(d is not None for _, _, d, _ in layouts) and message.layout is None:
+        issues.append((where, "layouts with `detect` need `layout`, the newest's name, to report it by"))
+    found = [(name, d.lines) for _, name, d, _ in layouts if d is not None]
+    for i, (a, lines_a) in enumerate(found):
+        if any(not line for line in lines_a):
+            issues.append((f"{where}.detect({a})", "an empty script line"))
+        for b, lines_b in found[i + 1 :]:
+            if lines_a <= lines_b or lines_b <= lines_a:
+                issues.append((where, f"the detect lines of {a} and {b} cannot tell them apart"))
     return issues
 
 

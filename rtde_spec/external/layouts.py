@@ -1,0 +1,140 @@
+"""Which layout of a URCL message a session sends, and why: capture's choice for a message
+with `older` layouts in the spec (the trajectory point).
+
+The program the driver sent to the robot (the script sender's reply) says it best: each
+layout's `detect` lines (spec/external_control/protocols.yaml) are lines of the program,
+the multipliers the driver writes into it included. Without that program (a capture
+started late, a program no layout's lines name) the records themselves rule layouts
+out, and only where the wire leaves no doubt: URCL writes each record with one write of
+the whole record, so the TCP segments of a layout hold whole records of its size; and a
+record of a layout carries only the enum values that layout has. What no segment and no
+record rules out stays: one layout left is taken, else the newest of them (the spec's
+order, newest first), and the reason says it was assumed.
+"""
+
+from __future__ import annotations
+
+import re
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+from rtde_spec.external.codec import record_codec
+from rtde_spec.spec.external import RecordMessage, program_line
+
+MULTIPLIER = re.compile(r"MULT_\w*=")  # a multiplier the program sets (a line as program_line gives it)
+
+
+class ProgramText(Protocol):
+    """A program request as the script sender's decoder keeps it: its time, the text so far."""
+
+    time: float
+    reply: bytearray
+
+
+@dataclass
+class Program:
+    port: str  # the script sender's port, as the capture saw it
+    request: ProgramText
+
+
+class Programs:
+    """The programs one capture saw sent to each robot, in capture order.
+
+    One per capture file, shared by its connections: the script sender adds what it
+    sees, a connection with layouts to choose from reads its robot's programs.
+    """
+
+    def __init__(self) -> None:
+        self.by_robot: dict[str, list[Program]] = {}
+
+    def add(self, robot: str, port: str, request: ProgramText) -> None:
+        self.by_robot.setdefault(robot, []).append(Program(port, request))
+
+    def around(self, robot: str, start: float) -> tuple[Program | None, Program | None]:
+        """The robot's last program requested at or before `start`, and its first one after."""
+        before = after = None
+        for program in self.by_robot.get(robot, []):
+            if program.request.time <= start:
+                before = program
+            elif after is None:
+                after = program
+        return before, after
+
+
+@dataclass(frozen=True)
+class Choice:
+    layout: str | None  # the codec's `layout` argument: None for the newest
+    name: str
+    why: str
+
+
+def named_by(message: RecordMessage, text: bytes) -> list[str]:
+    """Names of the layouts whose detect lines the program has, unless it sets a multiplier they
+    do not name (scales the spec does not know)."""
+    lines = {program_line(line) for line in text.decode("utf-8", "replace").splitlines()}
+    multipliers = {line for line in lines if MULTIPLIER.match(line)}
+    return [
+        name
+        for _, name, detect, _ in message.layouts()
+        if detect is not None and detect.lines <= lines and multipliers <= detect.lines
+    ]
+
+
+def fitting(protocol: str, message: RecordMessage, segments: Sequence[bytes]) -> list[str]:
+    """Names of the layouts (newest first) every segment is whole records of, each record
+    holding only enum values its layout knows."""
+    data = [s for s in segments if s]
+    out: list[str] = []
+    for layout, name, _, size in message.layouts():
+        if not data or any(len(s) % size for s in data):
+            continue
+        codec = record_codec(protocol, message.name, layout)
+        if all(codec.plausible(s, at) for s in data for at in range(0, len(s), size)):
+            out.append(name)
+    return out
+
+
+class LayoutChooser:
+    """The layout of one connection's `message` records: from its robot's program, else its records."""
+
+    def __init__(self, protocol: str, message: RecordMessage, robot: str, programs: Programs | None) -> None:
+        self.protocol, self.message, self.robot = protocol, message, robot
+        self.programs = programs or Programs()
+        self.args = {name: layout for layout, name, _, _ in message.layouts()}
+
+    def choose(self, start: float, segments: Sequence[bytes], final: bool) -> Choice | None:
+        """The choice for a connection that began at `start`; None: wait for more (never when `final`).
+
+        Before the end only the program requested before the connection can decide (it is
+        normally whole by then); at the end a later program of the same robot may (the
+        capture began after the session's request), then the records.
+        """
+        before, after = self.programs.around(self.robot, start)
+        seen = before if before is not None or not final else after
+        named: list[str] = []
+        if seen is not None:
+            named = named_by(self.message, bytes(seen.request.reply))
+            if len(named) == 1:
+                which = "the script" if seen is before else "a later script"
+                return self._choice(named[0], f"from {which} on {seen.port}")
+        if not final:
+            return None
+        if seen is None:
+            about = "no script seen"
+        elif named:
+            about = f"the script on {seen.port} names several: {', '.join(named)}"
+        else:
+            about = f"the script on {seen.port} names none"
+        fits = fitting(self.protocol, self.message, segments)
+        if len(fits) == 1:
+            return self._choice(fits[0], f"from the records: no other layout fits them; {about}")
+        if fits:
+            return self._choice(
+                fits[0], f"assumed: newest of the layouts the records fit, {', '.join(fits)}; {about}"
+            )
+        newest = self.message.layouts()[0][1]
+        return self._choice(newest, f"assumed: newest; the records fit no layout; {about}")
+
+    def _choice(self, name: str, why: str) -> Choice:
+        return Choice(self.args[name], name, why)
