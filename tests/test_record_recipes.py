@@ -210,3 +210,21 @@ def test_decode_with_ur_configuration_picks_the_recipe_of_the_sender(
     assert main([*argv, "--format", "json"]) == 0
     (row,) = json.loads(capsys.readouterr().out)
     assert (row["input_double_register_24"], row["input_double_register_25"]) == (0.5, -1.0)
+
+
+@pytest.mark.parametrize("frequency", ["125", "500"])
+def test_a_duration_is_that_many_seconds_of_the_controllers_rows(
+    emu: EmulatorThread, capsys: pytest.CaptureFixture[str], tmp_path: Path, frequency: str
+) -> None:
+    """--duration 1 at 125 Hz is 125 rows, not the ~25 more a clock checked once a batch let in
+    (UR's record.py with --samples is the comparison: it stops at the count)."""
+    out = tmp_path / "d.csv"
+    args = ["--fields", "timestamp", "--frequency", frequency, "--duration", "1", "-o", str(out)]
+    code, err = record(capsys, emu, *args)
+    assert code == 0, err
+    with open(out, newline="") as f:
+        stamps = [float(r["timestamp"]) for r in csv.DictReader(f)]
+    assert len(stamps) == int(frequency), err
+    step = 1 / int(frequency)
+    assert all(abs(b - a - step) < 1e-6 for a, b in itertools.pairwise(stamps))  # none lost
+    assert f"recorded {frequency} rows" in err and "stopped by duration" in err

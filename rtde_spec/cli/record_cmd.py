@@ -73,7 +73,12 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--frequency", type=float, default=125.0, help="output rate in Hz (default: 125)")
     stop = p.add_mutually_exclusive_group()
-    stop.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (default: Ctrl-C)")
+    stop.add_argument(
+        "--duration",
+        type=float,
+        metavar="S",
+        help="record S seconds of the controller's data: S x frequency rows (default: until Ctrl-C)",
+    )
     stop.add_argument("--samples", type=int, metavar="N", help="stop after N rows (default: Ctrl-C)")
     p.add_argument(
         "-o", "--output", required=True, metavar="FILE", help="out.csv, .parquet, .jsonl or .mcap (required)"

@@ -20,6 +20,7 @@ from rtde_spec.output.base import Writer
 from rtde_spec.rtde.client import RtdeClient
 
 BATCH_SECONDS = 0.2
+LATE_SECONDS = 1.0  # how long past --duration to wait for packages the controller still owes
 
 
 class StopSignal(Protocol):
@@ -62,13 +63,18 @@ def record(
     client.start()
     start = time.monotonic()
     rows, stopped_by = 0, "duration"
+    # a duration is the controller's time: its packages come `frequency` a second, so S seconds
+    # are S x frequency rows (checking the clock once a batch would overshoot by up to a batch)
+    by_duration = max(1, round(duration * frequency)) if duration is not None else None
+    limits = [n for n in (samples, by_duration) if n is not None]
+    limit = min(limits) if limits else None
 
     def flush() -> int:
         nonlocal pending
         with lock:
             batch, pending = pending, []
-        if samples is not None:
-            batch = batch[: max(0, samples - rows)]
+        if limit is not None:
+            batch = batch[: max(0, limit - rows)]
         if not batch:
             return 0
         array = codec.decode_many(b"".join(batch))
@@ -85,11 +91,11 @@ def record(
             if stop is not None and stop.is_set():
                 stopped_by = "stop"
                 break
-            if samples is not None and rows >= samples:
-                stopped_by = "samples"
+            if limit is not None and rows >= limit:
+                stopped_by = "samples" if limit == samples else "duration"
                 break
-            if duration is not None and time.monotonic() - start >= duration:
-                break
+            if duration is not None and time.monotonic() - start >= duration + LATE_SECONDS:
+                break  # the controller sent fewer packages than its rate promises: stop anyway
             if client.connection_lost is not None:
                 stopped_by = "connection"
                 break
