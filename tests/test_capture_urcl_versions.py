@@ -306,3 +306,21 @@ def test_every_layout_of_the_trajectory_point_has_detect_lines_and_a_table() -> 
     assert all(detect is not None and detect.source for _, _, detect, _ in layouts)
     tables = {v.table for o in message.older for v in o.variants}
     assert {"urcl_trajectory_points_v2", "urcl_trajectory_points_v1", "urcl_trajectory_points_v0"} <= tables
+
+
+def test_headless_mode_reads_the_program_sent_to_the_primary_port(tmp_path: Path) -> None:
+    """A driver in headless mode sends its program to the robot's 30002 instead of serving it on
+    50002: that text names the layout just as well."""
+    text = program(V1_LINES, 1000)
+    sent = Conversation((PC, 45002), (ROBOT, 30002), time=1_700_000_000.0)
+    sent.handshake()
+    half = len(text) // 2
+    sent.send("client", text[:half], dt=0.0005)
+    sent.send("client", text[half:], dt=0.0005)
+    records = v1_points()
+    convs = [sent, trajectory(records, 1_700_000_001.0), reverse_start(len(records), 1_700_000_001.5)]
+    tables, err = capture(tmp_path, write(tmp_path / "headless.pcap", convs))
+    assert trajectory_tables(tables) == {"urcl_trajectory_points_v1"}
+    assert [p["duration"] for p in tables["urcl_trajectory_points_v1"]] == [0.5, 2.0]
+    assert "trajectory layout point_type_21 (from the script on 30002)" in err
+    assert len(tables["primary_scripts"]) == 2  # the program's text is kept as before

@@ -108,7 +108,7 @@ def connection_for(kind: str, name: str, client: str, server: str, sink: TableSi
     if kind == "primary":
         from rtde_spec.capture.connections import PrimaryConnection
 
-        return PrimaryConnection(name, server, sink)
+        return PrimaryConnection(name, server, sink, kw.get("session"))
     if kind == "realtime":
         from rtde_spec.capture.realtime import RealtimeConnection
 

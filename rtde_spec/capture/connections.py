@@ -28,6 +28,7 @@ from rtde_spec.capture.rows import flatten_part, text_columns, wide_values
 from rtde_spec.capture.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
 from rtde_spec.errors import RtdeSpecError
+from rtde_spec.external.programs import MAX_PROGRAM_BYTES, ProgramSent, programs_of
 from rtde_spec.output.base import plain
 from rtde_spec.recipes.codec import RecipeCodec
 from rtde_spec.rtde.packages import DATA, TEXTS
@@ -227,10 +228,13 @@ class RtdeConnection:
 
 
 class PrimaryConnection:
-    def __init__(self, name: str, robot: str, sink: TableSink) -> None:
+    def __init__(self, name: str, robot: str, sink: TableSink, session: dict[str, Any] | None = None) -> None:
         from rtde_spec.primary.codec import default_codec  # primary models load with the first primary stream
 
         self.name, self.robot, self.sink = name, robot, sink
+        # a driver in headless mode sends its program here, not on 50002: it tells the URCL version too
+        self.programs = programs_of(session)
+        self.program: ProgramSent | None = None
         self.codec = default_codec()
         families = {f.spec.type for f in self.codec.families.values()}
         codec = self.codec
@@ -243,12 +247,23 @@ class PrimaryConnection:
         day = day_of(chunk.time)
         if sender == "client":  # URScript (or anything else a client sends)
             self.sink.row("primary_scripts", self.robot, day, {**base, **text_columns("script", chunk.data)})
+            self._program(chunk)
             return
         self.last_time = chunk.time
         self._messages(self.framing.feed(chunk), self.framing.times, chunk.time)
 
     def framings(self) -> dict[str, Framing]:
         return {"controller": self.framing}
+
+    def _program(self, chunk: Chunk) -> None:
+        """Keep the text a client sends as the robot's program (a new one at each `def`/`sec`)."""
+        if self.programs is None:
+            return
+        if self.program is None or chunk.data.lstrip()[:4] in (b"def ", b"sec "):
+            self.program = ProgramSent(chunk.time, bytearray())
+            self.programs.add(self.robot, self.name.rpartition(":")[2], self.program)
+        room = MAX_PROGRAM_BYTES - len(self.program.reply)
+        self.program.reply += chunk.data[: max(0, room)]
 
     def finish(self) -> None:
         self._messages(self.framing.finish(), self.framing.times, self.last_time)

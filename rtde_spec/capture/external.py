@@ -27,20 +27,16 @@ from rtde_spec.capture.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
 from rtde_spec.errors import RtdeSpecError
 from rtde_spec.external.codec import RecordCodec, VariantPlan, protocol_codecs, record_codec
-from rtde_spec.external.layouts import Choice, LayoutChooser, Programs
+from rtde_spec.external.layouts import Choice, LayoutChooser
+from rtde_spec.external.programs import MAX_PROGRAM_BYTES, programs_of
 from rtde_spec.output.base import plain
 from rtde_spec.spec.external import ExternalProtocol
 from rtde_spec.wire.columns import decode_columns, record_dtype
 
 SIDE = {"client": "robot", "controller": "driver"}  # the flow's sender names on a driver-served port
-MAX_SCRIPT = 16 << 20  # a program longer than this is not one: the rest is counted, not kept
+MAX_SCRIPT = MAX_PROGRAM_BYTES
 BATCH = 4096  # records of one variant decoded together into columns
 MAX_HELD = 4 << 20  # bytes held waiting for a layout; past that it is chosen from what is known
-
-
-def programs_of(session: dict[str, Any] | None) -> Programs | None:
-    """The programs of one capture file, shared by its connections (None: decoded alone)."""
-    return None if session is None else session.setdefault("urcl_programs", Programs())
 
 
 def _shared(codec: RecordCodec) -> dict[str, list[str] | None]:

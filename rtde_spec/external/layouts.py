@@ -17,49 +17,12 @@ from __future__ import annotations
 import re
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Protocol
 
 from rtde_spec.external.codec import record_codec
+from rtde_spec.external.programs import Programs
 from rtde_spec.spec.external import RecordMessage, program_line
 
 MULTIPLIER = re.compile(r"MULT_\w*=")  # a multiplier the program sets (a line as program_line gives it)
-
-
-class ProgramText(Protocol):
-    """A program request as the script sender's decoder keeps it: its time, the text so far."""
-
-    time: float
-    reply: bytearray
-
-
-@dataclass
-class Program:
-    port: str  # the script sender's port, as the capture saw it
-    request: ProgramText
-
-
-class Programs:
-    """The programs one capture saw sent to each robot, in capture order.
-
-    One per capture file, shared by its connections: the script sender adds what it
-    sees, a connection with layouts to choose from reads its robot's programs.
-    """
-
-    def __init__(self) -> None:
-        self.by_robot: dict[str, list[Program]] = {}
-
-    def add(self, robot: str, port: str, request: ProgramText) -> None:
-        self.by_robot.setdefault(robot, []).append(Program(port, request))
-
-    def around(self, robot: str, start: float) -> tuple[Program | None, Program | None]:
-        """The robot's last program requested at or before `start`, and its first one after."""
-        before = after = None
-        for program in self.by_robot.get(robot, []):
-            if program.request.time <= start:
-                before = program
-            elif after is None:
-                after = program
-        return before, after
 
 
 @dataclass(frozen=True)
