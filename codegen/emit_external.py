@@ -67,6 +67,11 @@ def _choice_note() -> str:
         "\nWithout the program in the capture, `rtde-spec capture` keeps the layouts the records "
         "themselves allow (segments of whole records of its size, every enum word a known value): "
         "one left is taken, else the newest of them; its summary names the layout and why.\n"
+        "\nThe Wireshark dissector (`rtde-spec wireshark`) chooses the same way from a program it "
+        "has seen earlier in the capture (else the newest), or as its preference "
+        "`urcl_trajectory.layout` says (`-o urcl_trajectory.layout:point_type_21`); each record "
+        "shows `urcl_trajectory.layout` and `urcl_trajectory.layout_reason`, and an older "
+        "layout's fields are `urcl_trajectory.<layout>.<field>`.\n"
     )
 
 

@@ -1,8 +1,7 @@
 """Emit the Wireshark Lua dissectors of a driver session's other ports, appended to rtde_spec.lua:
-URCL's reverse, trajectory and script command records (`urcl_reverse.*`, `urcl_trajectory.*`,
-`urcl_script_command.*`: scaled words shown in SI units), the script sender
-(`urcl_script_sender.*`), the dashboard (`urdashboard.*`: command and reply outcome from
-the spec's reply texts) and the real-time interface (`urrealtime.*`, the layout by size).
+URCL's external control ports (emit_lua_external.py), the dashboard (`urdashboard.*`: command
+and reply outcome from the spec's reply texts) and the real-time interface (`urrealtime.*`,
+the layout by size).
 """
 
 from __future__ import annotations
@@ -12,12 +11,13 @@ from pathlib import Path
 
 from rtde_spec.spec.catalogue import Catalogue
 from rtde_spec.spec.dashboard import load_dashboard
-from rtde_spec.spec.external import ExternalProtocol, Variant, load_external
+from rtde_spec.spec.external import load_external
 from rtde_spec.spec.realtime import PRIMITIVES as RT_PRIMITIVES
 from rtde_spec.spec.realtime import layouts, load_realtime
 from rtde_spec.spec.schema import Primitive
 
 from .emit_lua import LUA_FIELD, lua_str
+from .emit_lua_external import emit_lua_external
 
 SPEC_ROOT = Path(__file__).resolve().parent.parent / "spec"
 
@@ -26,125 +26,11 @@ def emit_lua_drivers(
     prims: dict[str, Primitive], catalogue: Catalogue, root: Path | str | None = None
 ) -> str:
     base = Path(root) if root is not None else SPEC_ROOT
-    external = load_external(base)
     out = ["\n-- ===== UR client library (URCL) external control, dashboard, real-time =====\n"]
-    for enum in external.enums:
-        pairs = ", ".join(f"[{v.value}] = {lua_str(v.name)}" for v in enum.values)
-        out.append(f"local vs_urcl_{enum.name} = {{ {pairs} }}\n")
-    out.append(_RECORDS_BODY)
-    for proto in external.protocols:
-        out.append(_script_sender(proto) if proto.request is not None else _records(proto, prims))
+    out.append(emit_lua_external(load_external(base), prims))
     out.append(_dashboard(base))
     out.append(_realtime(base, catalogue))
     return "".join(out)
-
-
-def _records(proto: ExternalProtocol, prims: dict[str, Primitive]) -> str:
-    name = f"urcl_{proto.name}"
-    fields: dict[str, str] = {"variant": f'ProtoField.string("{name}.variant", "variant")'}
-    sides = []
-    for msg in proto.messages:
-        sel_at = None
-        variants, default = [], "nil"
-        for v in msg.variants:
-            body, at = _variant(name, v, prims, fields, msg.selector)
-            sel_at = at if at is not None else sel_at
-            if v.when is None:
-                default = body
-            variants += [f"[{value}] = {body}" for value in v.when or []]
-        sel = "nil" if sel_at is None else str(sel_at)
-        sides.append(
-            f"  {msg.sender} = {{ size = {msg.record_bytes}, sel_at = {sel}, default = {default},\n"
-            f"    variants = {{ {', '.join(variants)} }} }},\n"
-        )
-    lines = [f'\nlocal p_{name} = Proto("{name}", {lua_str("URCL " + proto.name.replace("_", " "))})\n']
-    lines.append(f"local F_{name} = {{}}\n")
-    lines += [f"F_{name}[{lua_str(k)}] = {v}\n" for k, v in fields.items()]
-    lines.append(f"local REC_{name} = {{\n{''.join(sides)}}}\n")
-    lines.append(f"urcl_records(p_{name}, F_{name}, REC_{name}, {proto.port}, {lua_str(name.upper())})\n")
-    return "".join(lines)
-
-
-def _variant(
-    proto: str, v: Variant, prims: dict[str, Primitive], fields: dict[str, str], selector: str | None
-) -> tuple[str, int | None]:
-    parts, pos, sel_at = [], 0, None
-    for f in v.fields:
-        prim = prims[f.type]
-        abbr = f"{proto}.{f.name}"
-        if f.scale is not None:
-            text = f"ProtoField.double({lua_str(abbr)}, {lua_str(f.name)})"
-        else:
-            vs = f", base.DEC, vs_urcl_{f.enum}" if f.enum else ", base.DEC"
-            text = f"ProtoField.{LUA_FIELD[f.type]}({lua_str(abbr)}, {lua_str(f.name)}{vs})"
-        if fields.setdefault(f.name, text) != text:
-            raise ValueError(f"{abbr}: one name, two field kinds in the variants")
-        scale = repr(f.scale) if f.scale is not None else "nil"
-        parts.append(
-            f"{{ f = {lua_str(f.name)}, size = {prim.size}, count = {f.count or 1}, scale = {scale} }}"
-        )
-        if f.name == selector:
-            sel_at = pos
-        pos += prim.size * (f.count or 1)
-    return f"{{ name = {lua_str(v.name)}, fields = {{ {', '.join(parts)} }} }}", sel_at
-
-
-_RECORDS_BODY = """
--- fixed records of int32 words; the side the port belongs to (the driver) sends REC.driver
-local function urcl_records(proto, F, REC, port, label)
-  local list = {}
-  for _, f in pairs(F) do table.insert(list, f) end
-  proto.fields = list
-  local function side(pinfo) return (pinfo.src_port == port) and "driver" or "robot" end
-  local function get_len(tvb, pinfo, offset)
-    local r = REC[side(pinfo)]
-    return r and r.size or (tvb:len() - offset)
-  end
-  local function one(tvb, pinfo, tree)
-    local r = REC[side(pinfo)]
-    pinfo.cols.protocol = label
-    if not r then
-      tree:add(proto, tvb(), label .. " bytes this side does not send")
-      return tvb:len()
-    end
-    local v = r.default
-    if r.sel_at then v = r.variants[tvb(r.sel_at, 4):int()] or r.default end
-    local sub = tree:add(proto, tvb(0, r.size), label .. " " .. (v and v.name or "record"))
-    if not v then return r.size end
-    sub:add(F["variant"], tvb(0, r.size), v.name)
-    local pos = 0
-    for _, f in ipairs(v.fields) do
-      for _ = 1, f.count do
-        local range = tvb(pos, f.size)
-        if f.scale then sub:add(F[f.f], range, range:int() / f.scale) else sub:add(F[f.f], range) end
-        pos = pos + f.size
-      end
-    end
-    return r.size
-  end
-  function proto.dissector(tvb, pinfo, tree) dissect_tcp_pdus(tvb, tree, 4, get_len, one) end
-  DissectorTable.get("tcp.port"):add(port, proto)
-end
-"""
-
-
-def _script_sender(proto: ExternalProtocol) -> str:
-    name = f"urcl_{proto.name}"
-    return f"""
-local p_{name} = Proto("{name}", "URCL script sender")
-local F_{name} = {{
-  request = ProtoField.string("{name}.request", "request"),
-  script = ProtoField.string("{name}.script", "script text"),
-}}
-p_{name}.fields = {{ F_{name}.request, F_{name}.script }}
-function p_{name}.dissector(tvb, pinfo, tree)
-  pinfo.cols.protocol = "URCL_SCRIPT"
-  local sub = tree:add(p_{name}, tvb(), "URCL script sender")
-  if pinfo.src_port == {proto.port} then sub:add(F_{name}.script, tvb())
-  else sub:add(F_{name}.request, tvb(), (tvb():string():gsub("\\n$", ""))) end
-end
-DissectorTable.get("tcp.port"):add({proto.port}, p_{name})
-"""
 
 
 def _lua_pattern(text: str) -> str:

@@ -1320,16 +1320,102 @@ local vs_urcl_PointType = { [0] = "JOINT_POINT", [1] = "CARTESIAN_POINT", [2] = 
 local vs_urcl_TrajectoryResult = { [0] = "SUCCESS", [1] = "CANCELED", [2] = "FAILURE" }
 local vs_urcl_ScriptCommand = { [0] = "ZERO_FTSENSOR", [1] = "SET_PAYLOAD", [2] = "SET_TOOL_VOLTAGE", [3] = "START_FORCE_MODE", [4] = "END_FORCE_MODE", [5] = "START_TOOL_CONTACT", [6] = "END_TOOL_CONTACT", [7] = "SET_FRICTION_COMPENSATION", [8] = "FT_RTDE_INPUT_ENABLE", [9] = "SET_GRAVITY", [10] = "SET_TCP_OFFSET", [11] = "SET_FRICTION_SCALES", [12] = "SET_PD_CONTROLLER_GAINS", [13] = "SET_MAX_JOINT_TORQUES" }
 local vs_urcl_ToolContactResult = { [0] = "SUCCESS", [1] = "CANCELED" }
+local URCL_SCRIPT_PORT = 50002
 
--- fixed records of int32 words; the side the port belongs to (the driver) sends REC.driver
+-- The program text the driver sent each robot on the script sender port, first pass, in
+-- capture order: robot address -> { port = the robot's port, chunks = {}, frames = {}, version = n }.
+local urcl_programs = {}
+
+local function urcl_program_add(robot, port, number, text)
+  local p = urcl_programs[robot]
+  if not p or p.port ~= port then
+    p = { port = port, chunks = {}, frames = {}, version = 0 }
+    urcl_programs[robot] = p
+  end
+  if p.frames[number] then return end
+  p.frames[number] = true
+  table.insert(p.chunks, text)
+  p.version = p.version + 1
+end
+
+-- The layouts whose detect lines a program has, unless it sets a multiplier (MULT_...) they do
+-- not name: lines compared without whitespace and `#` comments; a last line without its
+-- newline is not read yet (it may be cut short).
+local function urcl_named(layouts, text)
+  local lines, mult = {}, {}
+  local last = text:find("\n[^\n]*$")
+  for line in text:sub(1, last or 0):gmatch("([^\n]*)\n") do
+    line = line:gsub("#.*", ""):gsub("%s", "")
+    lines[line] = true
+    if line:match("^MULT_[%w_]*=") then mult[line] = true end
+  end
+  local named = {}
+  for _, l in ipairs(layouts) do
+    local ok = l.detect ~= nil
+    for _, line in ipairs(l.detect or {}) do ok = ok and lines[line] == true end
+    for line in pairs(mult) do ok = ok and l.detect_set[line] == true end
+    if ok then table.insert(named, l.name) end
+  end
+  return named
+end
+
+-- fixed records of int32 words; the side the port belongs to (the driver) sends REC.driver.
+-- A side with `layouts` (newest first) is read with the one the preference names or, in
+-- auto, the one the robot's program names (chosen per robot address), else the newest.
 local function urcl_records(proto, F, REC, port, label)
   local list = {}
   for _, f in pairs(F) do table.insert(list, f) end
   proto.fields = list
+  local chosen, frame_layout = {}, {}  -- robot address -> program choice; frame -> { layout, why }
+  for _, r in pairs(REC) do
+    if r.layouts then
+      local choices = { { 1, "auto", 0 } }
+      for i, l in ipairs(r.layouts) do
+        table.insert(choices, { i + 1, l.name, i })
+        l.detect_set = {}
+        for _, line in ipairs(l.detect or {}) do l.detect_set[line] = true end
+      end
+      proto.prefs.layout = Pref.enum(r.pref, 0,
+        "auto: the layout the program sent on the script sender port names, else the newest", choices, false)
+    end
+  end
+  function proto.init()
+    chosen, frame_layout = {}, {}
+  end
   local function side(pinfo) return (pinfo.src_port == port) and "driver" or "robot" end
+  local function from_program(r, robot)
+    local p = urcl_programs[robot]
+    if not p then return { r.layouts[1], "no program seen: newest" } end
+    local c = chosen[robot]
+    if c and c.program == p and c.version == p.version then return c.choice end
+    local named = urcl_named(r.layouts, table.concat(p.chunks))
+    local choice = { r.layouts[1], "the program on " .. URCL_SCRIPT_PORT .. " names none: newest" }
+    if #named == 1 then
+      for _, l in ipairs(r.layouts) do
+        if l.name == named[1] then choice = { l, "from the program on " .. URCL_SCRIPT_PORT } end
+      end
+    elseif #named > 1 then
+      local which = table.concat(named, ", ")
+      choice[2] = "the program on " .. URCL_SCRIPT_PORT .. " names several (" .. which .. "): newest"
+    end
+    chosen[robot] = { program = p, version = p.version, choice = choice }
+    return choice
+  end
+  -- the layout of this frame's records and why; the first pass decides for later visits
+  local function layout_of(r, pinfo)
+    if not r.layouts then return r, nil end
+    if proto.prefs.layout ~= 0 then return r.layouts[proto.prefs.layout], "preference" end
+    local c = frame_layout[pinfo.number]
+    if not c then
+      c = from_program(r, tostring(pinfo.dst))
+      frame_layout[pinfo.number] = c
+    end
+    return c[1], c[2]
+  end
   local function get_len(tvb, pinfo, offset)
     local r = REC[side(pinfo)]
-    return r and r.size or (tvb:len() - offset)
+    if not r then return tvb:len() - offset end
+    return (layout_of(r, pinfo)).size
   end
   local function one(tvb, pinfo, tree)
     local r = REC[side(pinfo)]
@@ -1338,11 +1424,17 @@ local function urcl_records(proto, F, REC, port, label)
       tree:add(proto, tvb(), label .. " bytes this side does not send")
       return tvb:len()
     end
-    local v = r.default
-    if r.sel_at then v = r.variants[tvb(r.sel_at, 4):int()] or r.default end
-    local sub = tree:add(proto, tvb(0, r.size), label .. " " .. (v and v.name or "record"))
-    if not v then return r.size end
-    sub:add(F["variant"], tvb(0, r.size), v.name)
+    local l, why = layout_of(r, pinfo)
+    local v = l.default
+    if l.sel_at then v = l.variants[tvb(l.sel_at, 4):int()] or l.default end
+    local title = label .. " " .. (v and v.name or "record") .. (why and (" (" .. l.name .. ")") or "")
+    local sub = tree:add(proto, tvb(0, l.size), title)
+    if why then
+      sub:add(F["layout"], tvb(0, l.size), l.name):set_generated()
+      sub:add(F["layout_reason"], tvb(0, l.size), why):set_generated()
+    end
+    if not v then return l.size end
+    sub:add(F["variant"], tvb(0, l.size), v.name)
     local pos = 0
     for _, f in ipairs(v.fields) do
       for _ = 1, f.count do
@@ -1351,7 +1443,7 @@ local function urcl_records(proto, F, REC, port, label)
         pos = pos + f.size
       end
     end
-    return r.size
+    return l.size
   end
   function proto.dissector(tvb, pinfo, tree) dissect_tcp_pdus(tvb, tree, 4, get_len, one) end
   DissectorTable.get("tcp.port"):add(port, proto)
@@ -1380,10 +1472,15 @@ local F_urcl_script_sender = {
   script = ProtoField.string("urcl_script_sender.script", "script text"),
 }
 p_urcl_script_sender.fields = { F_urcl_script_sender.request, F_urcl_script_sender.script }
+function p_urcl_script_sender.init() urcl_programs = {} end
 function p_urcl_script_sender.dissector(tvb, pinfo, tree)
   pinfo.cols.protocol = "URCL_SCRIPT"
   local sub = tree:add(p_urcl_script_sender, tvb(), "URCL script sender")
-  if pinfo.src_port == 50002 then sub:add(F_urcl_script_sender.script, tvb())
+  if pinfo.src_port == 50002 then
+    sub:add(F_urcl_script_sender.script, tvb())
+    if not pinfo.visited then
+      urcl_program_add(tostring(pinfo.dst), pinfo.dst_port, pinfo.number, tvb:raw())
+    end
   else sub:add(F_urcl_script_sender.request, tvb(), (tvb():string():gsub("\n$", ""))) end
 end
 DissectorTable.get("tcp.port"):add(50002, p_urcl_script_sender)
@@ -1391,6 +1488,8 @@ DissectorTable.get("tcp.port"):add(50002, p_urcl_script_sender)
 local p_urcl_trajectory = Proto("urcl_trajectory", "URCL trajectory")
 local F_urcl_trajectory = {}
 F_urcl_trajectory["variant"] = ProtoField.string("urcl_trajectory.variant", "variant")
+F_urcl_trajectory["layout"] = ProtoField.string("urcl_trajectory.layout", "layout")
+F_urcl_trajectory["layout_reason"] = ProtoField.string("urcl_trajectory.layout_reason", "layout reason")
 F_urcl_trajectory["target"] = ProtoField.double("urcl_trajectory.target", "target")
 F_urcl_trajectory["via_or_q_near"] = ProtoField.double("urcl_trajectory.via_or_q_near", "via_or_q_near")
 F_urcl_trajectory["velocity"] = ProtoField.double("urcl_trajectory.velocity", "velocity")
@@ -1404,10 +1503,37 @@ F_urcl_trajectory["positions"] = ProtoField.double("urcl_trajectory.positions", 
 F_urcl_trajectory["velocities"] = ProtoField.double("urcl_trajectory.velocities", "velocities")
 F_urcl_trajectory["accelerations"] = ProtoField.double("urcl_trajectory.accelerations", "accelerations")
 F_urcl_trajectory["spline_type"] = ProtoField.int32("urcl_trajectory.spline_type", "spline_type", base.DEC, vs_urcl_SplineType)
+F_urcl_trajectory["motion_type_ms.target"] = ProtoField.double("urcl_trajectory.motion_type_ms.target", "target")
+F_urcl_trajectory["motion_type_ms.velocity_or_via"] = ProtoField.double("urcl_trajectory.motion_type_ms.velocity_or_via", "velocity_or_via")
+F_urcl_trajectory["motion_type_ms.acceleration_or_movec"] = ProtoField.double("urcl_trajectory.motion_type_ms.acceleration_or_movec", "acceleration_or_movec")
+F_urcl_trajectory["motion_type_ms.duration"] = ProtoField.double("urcl_trajectory.motion_type_ms.duration", "duration")
+F_urcl_trajectory["motion_type_ms.blend_radius"] = ProtoField.double("urcl_trajectory.motion_type_ms.blend_radius", "blend_radius")
+F_urcl_trajectory["motion_type_ms.motion_type"] = ProtoField.int32("urcl_trajectory.motion_type_ms.motion_type", "motion_type", base.DEC, vs_urcl_MotionType)
+F_urcl_trajectory["motion_type_ms.positions"] = ProtoField.double("urcl_trajectory.motion_type_ms.positions", "positions")
+F_urcl_trajectory["motion_type_ms.velocities"] = ProtoField.double("urcl_trajectory.motion_type_ms.velocities", "velocities")
+F_urcl_trajectory["motion_type_ms.accelerations"] = ProtoField.double("urcl_trajectory.motion_type_ms.accelerations", "accelerations")
+F_urcl_trajectory["motion_type_ms.spline_type"] = ProtoField.int32("urcl_trajectory.motion_type_ms.spline_type", "spline_type", base.DEC, vs_urcl_SplineType)
+F_urcl_trajectory["point_type_21.positions"] = ProtoField.double("urcl_trajectory.point_type_21.positions", "positions")
+F_urcl_trajectory["point_type_21.velocities"] = ProtoField.double("urcl_trajectory.point_type_21.velocities", "velocities")
+F_urcl_trajectory["point_type_21.accelerations"] = ProtoField.double("urcl_trajectory.point_type_21.accelerations", "accelerations")
+F_urcl_trajectory["point_type_21.duration"] = ProtoField.double("urcl_trajectory.point_type_21.duration", "duration")
+F_urcl_trajectory["point_type_21.blend_radius"] = ProtoField.double("urcl_trajectory.point_type_21.blend_radius", "blend_radius")
+F_urcl_trajectory["point_type_21.point_type"] = ProtoField.int32("urcl_trajectory.point_type_21.point_type", "point_type", base.DEC, vs_urcl_PointType)
+F_urcl_trajectory["cartesian_flag_9.positions"] = ProtoField.double("urcl_trajectory.cartesian_flag_9.positions", "positions")
+F_urcl_trajectory["cartesian_flag_9.duration"] = ProtoField.double("urcl_trajectory.cartesian_flag_9.duration", "duration")
+F_urcl_trajectory["cartesian_flag_9.blend_radius"] = ProtoField.double("urcl_trajectory.cartesian_flag_9.blend_radius", "blend_radius")
+F_urcl_trajectory["cartesian_flag_9.cartesian"] = ProtoField.int32("urcl_trajectory.cartesian_flag_9.cartesian", "cartesian", base.DEC)
 F_urcl_trajectory["result"] = ProtoField.int32("urcl_trajectory.result", "result", base.DEC, vs_urcl_TrajectoryResult)
 local REC_urcl_trajectory = {
-  driver = { size = 84, sel_at = 80, default = { name = "motion_primitive", fields = { { f = "target", size = 4, count = 6, scale = 1000000.0 }, { f = "via_or_q_near", size = 4, count = 6, scale = 1000000.0 }, { f = "velocity", size = 4, count = 1, scale = 1000000.0 }, { f = "acceleration", size = 4, count = 1, scale = 1000000.0 }, { f = "mode_or_has_q_near", size = 4, count = 1, scale = 1000000.0 }, { f = "unused", size = 4, count = 3, scale = nil }, { f = "duration", size = 4, count = 1, scale = 1000000.0 }, { f = "blend_radius", size = 4, count = 1, scale = 1000000.0 }, { f = "motion_type", size = 4, count = 1, scale = nil } } },
+  driver = { pref = "Trajectory point layout", layouts = {
+    { name = "motion_type_us", detect = { "MOTION_TYPE_MOVEJ_POSE=6", "MULT_jointstate=1000000", "MULT_time=1000000" }, size = 84, sel_at = 80, default = { name = "motion_primitive", fields = { { f = "target", size = 4, count = 6, scale = 1000000.0 }, { f = "via_or_q_near", size = 4, count = 6, scale = 1000000.0 }, { f = "velocity", size = 4, count = 1, scale = 1000000.0 }, { f = "acceleration", size = 4, count = 1, scale = 1000000.0 }, { f = "mode_or_has_q_near", size = 4, count = 1, scale = 1000000.0 }, { f = "unused", size = 4, count = 3, scale = nil }, { f = "duration", size = 4, count = 1, scale = 1000000.0 }, { f = "blend_radius", size = 4, count = 1, scale = 1000000.0 }, { f = "motion_type", size = 4, count = 1, scale = nil } } },
     variants = { [51] = { name = "spline_point", fields = { { f = "positions", size = 4, count = 6, scale = 1000000.0 }, { f = "velocities", size = 4, count = 6, scale = 1000000.0 }, { f = "accelerations", size = 4, count = 6, scale = 1000000.0 }, { f = "duration", size = 4, count = 1, scale = 1000000.0 }, { f = "spline_type", size = 4, count = 1, scale = nil }, { f = "motion_type", size = 4, count = 1, scale = nil } } } } },
+    { name = "motion_type_ms", detect = { "MOTION_TYPE_SPLINE=51", "MULT_jointstate=1000000", "MULT_time=1000" }, size = 84, sel_at = 80, default = { name = "motion_primitive", fields = { { f = "motion_type_ms.target", size = 4, count = 6, scale = 1000000.0 }, { f = "motion_type_ms.velocity_or_via", size = 4, count = 6, scale = 1000000.0 }, { f = "motion_type_ms.acceleration_or_movec", size = 4, count = 6, scale = 1000000.0 }, { f = "motion_type_ms.duration", size = 4, count = 1, scale = 1000.0 }, { f = "motion_type_ms.blend_radius", size = 4, count = 1, scale = 1000.0 }, { f = "motion_type_ms.motion_type", size = 4, count = 1, scale = nil } } },
+    variants = { [51] = { name = "spline_point", fields = { { f = "motion_type_ms.positions", size = 4, count = 6, scale = 1000000.0 }, { f = "motion_type_ms.velocities", size = 4, count = 6, scale = 1000000.0 }, { f = "motion_type_ms.accelerations", size = 4, count = 6, scale = 1000000.0 }, { f = "motion_type_ms.duration", size = 4, count = 1, scale = 1000.0 }, { f = "motion_type_ms.spline_type", size = 4, count = 1, scale = nil }, { f = "motion_type_ms.motion_type", size = 4, count = 1, scale = nil } } } } },
+    { name = "point_type_21", detect = { "MULT_jointstate=1000000", "MULT_time=1000", "TRAJECTORY_POINT_JOINT_SPLINE=2" }, size = 84, sel_at = nil, default = { name = "point", fields = { { f = "point_type_21.positions", size = 4, count = 6, scale = 1000000.0 }, { f = "point_type_21.velocities", size = 4, count = 6, scale = 1000000.0 }, { f = "point_type_21.accelerations", size = 4, count = 6, scale = 1000000.0 }, { f = "point_type_21.duration", size = 4, count = 1, scale = 1000.0 }, { f = "point_type_21.blend_radius", size = 4, count = 1, scale = 1000.0 }, { f = "point_type_21.point_type", size = 4, count = 1, scale = nil } } },
+    variants = {  } },
+    { name = "cartesian_flag_9", detect = { "MULT_jointstate=1000000", "MULT_time=1000", "TRAJECTORY_DATA_DIMENSION=7" }, size = 36, sel_at = nil, default = { name = "point", fields = { { f = "cartesian_flag_9.positions", size = 4, count = 6, scale = 1000000.0 }, { f = "cartesian_flag_9.duration", size = 4, count = 1, scale = 1000.0 }, { f = "cartesian_flag_9.blend_radius", size = 4, count = 1, scale = 1000.0 }, { f = "cartesian_flag_9.cartesian", size = 4, count = 1, scale = nil } } },
+    variants = {  } } } },
   robot = { size = 4, sel_at = nil, default = { name = "result", fields = { { f = "result", size = 4, count = 1, scale = nil } } },
     variants = {  } },
 }
