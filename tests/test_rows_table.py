@@ -56,3 +56,25 @@ def test_making_a_table_of_rows_imports_no_pandas() -> None:
     )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "False"
+
+
+def test_texts_keep_trailing_nul_characters_and_nulls() -> None:
+    """numpy's text arrays drop trailing NULs ('a\\x00' -> 'a'): texts do not go through them."""
+    table = rows_table([{"t": "a\x00"}, {"t": None}, {"t": "\x00"}, {"u": 1}])
+    assert table.column("t").to_pylist() == ["a\x00", None, "\x00", None]
+    table.validate(full=True)
+
+
+def test_numpy_scalars_keep_their_type_without_pandas() -> None:
+    """A primary message's UINT64 arrives as a numpy scalar; pyarrow would import pandas for it."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, numpy as np; from rtde_spec.output.tables import rows_table; "
+        "t = rows_table([{'v': np.uint64(2**64 - 1)}, {'v': None}, {'v': np.uint64(3)}]); "
+        "assert str(t.schema.field('v').type) == 'uint64', t.schema; "
+        "assert t.column('v').to_pylist() == [2**64 - 1, None, 3]; "
+        "assert 'pandas' not in sys.modules"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=120)

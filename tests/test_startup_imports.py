@@ -214,3 +214,21 @@ def test_the_primary_codec_from_generated_data_is_the_one_from_the_validated_spe
         validated.header.format, validated.sub_header.format, validated.max_size
     )  # fmt: skip
     assert plain.values.by_name.keys() == validated.values.by_name.keys()
+
+
+@pytest.mark.parametrize("fmt", ["parquet", "csv", "jsonl"])
+def test_capture_of_the_primary_interface_imports_no_pandas(tmp_path: Path, fmt: str) -> None:
+    """Primary messages carry UINT64s (numpy scalars in the rows), which pyarrow's own
+    conversion would read by importing pandas: the table builder must not hand them to it."""
+    from rtde_spec.examples import primary_stream
+    from tests.capture_files import Conversation, write
+
+    conv = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30001))
+    conv.handshake()
+    conv.send("server", primary_stream())
+    pcap = write(tmp_path / "primary.pcap", [conv])
+    code, modules, err = run_cli(tmp_path, "capture", str(pcap), "-o", str(tmp_path / "out"), "--format", fmt)
+    assert code == 0, err
+    tables = {p.parent.parent.parent.name for p in (tmp_path / "out").rglob(f"*.{fmt}")}
+    assert len(tables) > 10 and "primary_robot_mode_data" in tables, tables
+    assert "pandas" not in modules

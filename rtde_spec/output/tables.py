@@ -67,11 +67,7 @@ def arrow_array(column: Any) -> Any:
             offsets = np.arange(len(column) + 1, dtype=np.int32) * len(one)
             buffers = [None, pa.py_buffer(offsets), pa.py_buffer(one * len(column))]
             return pa.Array.from_buffers(pa.string(), len(column), buffers)
-        encoded = [value.encode("utf-8", "replace") for value in column.tolist()]
-        offsets = np.zeros(len(encoded) + 1, dtype=np.int32)
-        np.cumsum([len(e) for e in encoded], out=offsets[1:])
-        buffers = [None, pa.py_buffer(offsets), pa.py_buffer(b"".join(encoded))]
-        return pa.Array.from_buffers(pa.string(), len(encoded), buffers)
+        return _strings([value.encode("utf-8", "replace") for value in column.tolist()])
     if column.dtype.kind not in "biuf":  # objects: pyarrow's own conversion
         return pa.array(column)
     if column.dtype.kind == "b":
@@ -79,6 +75,17 @@ def arrow_array(column: Any) -> Any:
         return pa.Array.from_buffers(pa.bool_(), len(column), [None, pa.py_buffer(bits)])
     column = np.ascontiguousarray(column)
     return pa.Array.from_buffers(pa.from_numpy_dtype(column.dtype), len(column), [None, pa.py_buffer(column)])
+
+
+def _strings(encoded: list[bytes], valid: Any = None) -> Any:
+    """UTF-8 texts as an Arrow string array (`valid`: its validity bitmap, if any are null)."""
+    import numpy as np
+    import pyarrow as pa
+
+    offsets = np.zeros(len(encoded) + 1, dtype=np.int32)
+    np.cumsum([len(e) for e in encoded], out=offsets[1:])
+    buffers = [valid, pa.py_buffer(offsets), pa.py_buffer(b"".join(encoded))]
+    return pa.Array.from_buffers(pa.string(), len(encoded), buffers)
 
 
 def arrow_table(columns: Mapping[str, Any]) -> Any:
@@ -116,16 +123,30 @@ def _column_of_values(values: list[Any]) -> Any:
             dtype = np.int64  # else beyond 64 bits: pyarrow's conversion says so
     elif kinds and kinds <= {int, float} and float in kinds:
         dtype = np.float64
-    elif kinds == {str}:
-        dtype = str
+    elif kinds == {str}:  # not through numpy, whose texts lose trailing NUL characters
+        texts = [b"" if v is None else v.encode("utf-8", "replace") for v in values]
+        return _strings(texts, None if len(present) == len(values) else _validity(values))
+    elif (
+        len(kinds) == 1
+        and issubclass(kind := next(iter(kinds)), np.generic)
+        and np.dtype(kind).kind in "biuf"
+    ):
+        dtype = kind  # numpy scalars of one type (a UINT64 of a primary message); pa.array imports pandas
     if dtype is None:
         return pa.array(values)  # nested lists, bytes, mixed kinds: pyarrow's rules (and its errors)
-    fill = {np.bool_: False, str: ""}.get(dtype, 0)
+    fill = False if dtype is np.bool_ else 0
     array = arrow_array(np.array([fill if v is None else v for v in values], dtype=dtype))
     if len(present) == len(values):
         return array
-    valid = np.packbits(np.array([v is not None for v in values]), bitorder="little")
-    return pa.Array.from_buffers(array.type, len(values), [pa.py_buffer(valid), *array.buffers()[1:]])
+    return pa.Array.from_buffers(array.type, len(values), [_validity(values), *array.buffers()[1:]])
+
+
+def _validity(values: list[Any]) -> Any:
+    """Arrow's validity bitmap of a column of Python values: None is null."""
+    import numpy as np
+    import pyarrow as pa
+
+    return pa.py_buffer(np.packbits(np.array([v is not None for v in values]), bitorder="little"))
 
 
 def rows_table(rows: Sequence[Mapping[str, Any]]) -> Any:
