@@ -1,7 +1,8 @@
 """Start-up of each CLI path, as whole processes, against `python -c pass` in the same rounds.
 
 What a user waits for before anything happens: `--help`, a one-package capture to
-Parquet (pyarrow, no pandas), `record` reaching the network (a closed port on
+Parquet (pyarrow, no pandas, no pydantic), a capture of two primary-interface messages
+(no target: its typed models load pydantic), `record` reaching the network (a closed port on
 loopback: the time to the refused connection is the time to the first SYN), and
 `fields`. Rows are sampled in turn, round by round, so the machine's drift shifts
 them alike; the figure is the median over rounds of (command - `python -c pass`).
@@ -54,6 +55,17 @@ def one_package_pcap(folder: Path) -> Path:
     return write(folder / "one.pcap", [conv])
 
 
+def primary_pcap(folder: Path) -> Path:
+    """A Version message and a Robot State message from a controller's primary port."""
+    from rtde_spec.examples import primary_stream
+    from tests.capture_files import Conversation, write
+
+    conv = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30001))
+    conv.handshake()
+    conv.send("server", primary_stream())
+    return write(folder / "primary.pcap", [conv])
+
+
 RECORD_ARGS = ["--fields", "timestamp", "--timeout", "2", "-o"]
 
 
@@ -90,12 +102,14 @@ def main() -> int:
         env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
         env["PYTHONPYCACHEPREFIX"] = str(folder / "pycache")
         pcap = one_package_pcap(folder)
+        primary = primary_pcap(folder)  # no target: the typed primary models load (pydantic)
         port = str(closed_port())
         rows: dict[str, tuple[list[str], tuple[int, ...]]] = {
             "python -c pass": ([py, "-c", "pass"], (0,)),
             "--help": ([*cli, "--help"], (0,)),
             "fields --controller 5.15": ([*cli, "fields", "--controller", "5.15.0"], (0,)),
             "capture 1 package -> parquet": ([*cli, "capture", str(pcap), "-o", str(folder / "out")], (0,)),
+            "capture primary -> parquet": ([*cli, "capture", str(primary), "-o", str(folder / "pout")], (0,)),
             "record -> network": (
                 [*cli, "record", "--host", "127.0.0.1", "--port", port, *RECORD_ARGS, str(folder / "r.csv")],
                 (1,),
