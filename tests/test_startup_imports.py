@@ -232,3 +232,14 @@ def test_capture_of_the_primary_interface_imports_no_pandas(tmp_path: Path, fmt:
     tables = {p.parent.parent.parent.name for p in (tmp_path / "out").rglob(f"*.{fmt}")}
     assert len(tables) > 10 and "primary_robot_mode_data" in tables, tables
     assert "pandas" not in modules
+
+
+def test_plot_of_a_capture_folder_imports_no_pandas(tmp_path: Path, one_package: Path) -> None:
+    """pyarrow.dataset imports pandas; a hive folder of our own is read without it (output/hive.py)."""
+    out = tmp_path / "out"
+    code, _, err = run_cli(tmp_path, "capture", str(one_package), "-o", str(out))
+    assert code == 0, err
+    code, modules, err = run_cli(tmp_path, "plot", str(out), "timestamp", "-o", str(tmp_path / "p.png"))
+    assert code == 0, err
+    assert (tmp_path / "p.png").stat().st_size > 1000
+    assert "pandas" not in modules and "pyarrow._dataset" not in modules

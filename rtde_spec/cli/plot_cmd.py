@@ -54,10 +54,9 @@ def tables_in(folder: Path) -> list[str]:
 
 
 def _schema_names(folder: Path) -> set[str]:
-    from rtde_spec.errors import require
+    from rtde_spec.output.hive import schema_names
 
-    dataset = require("pyarrow.dataset", "parquet", "plotting Parquet")
-    return set(dataset.dataset(folder, format="parquet", partitioning="hive").schema.names)
+    return schema_names(folder)
 
 
 def pick_table(folder: Path, fields: list[str], name: str | None) -> Path:
@@ -88,21 +87,12 @@ def pick_table(folder: Path, fields: list[str], name: str | None) -> Path:
     )
 
 
-def _read_dataset(path: Path) -> Any:
-    from rtde_spec.errors import require
-
-    dataset = require("pyarrow.dataset", "parquet", "plotting Parquet")
-    pa = require("pyarrow", "parquet", "plotting Parquet")
-    try:
-        return dataset.dataset(path, format="parquet", partitioning="hive").to_table()
-    except (pa.ArrowInvalid, pa.ArrowTypeError, OSError) as exc:
-        raise DecodeError(f"not a readable Parquet table or dataset: {exc}", subject=f"{path}") from exc
-
-
 def load(path: Path) -> dict[str, list[Any]]:
     """The table's columns as lists (pyarrow reads Parquet; JSON Lines and CSV are read here)."""
     if path.is_dir() or path.suffix in (".parquet", ".pq"):
-        table = _read_dataset(path)
+        from rtde_spec.output.hive import read_table
+
+        table = read_table(path)
         return {name: table.column(name).to_pylist() for name in table.column_names}
     if path.suffix in (".jsonl", ".ndjson"):
         import json
