@@ -32,7 +32,7 @@ from rtde_spec.emulator.arm import Arm
 from rtde_spec.emulator.events import ScriptEvent
 from rtde_spec.emulator.modes import RobotModes
 from rtde_spec.emulator.motion import MotionError
-from rtde_spec.emulator.program import Program
+from rtde_spec.emulator.program import PROGRAM_ERRORS, Program, runtime_text
 from rtde_spec.emulator.urscript import ScriptFault, parse
 from rtde_spec.spec.arms import arm_model
 from rtde_spec.spec.catalogue import Catalogue, FieldInfo
@@ -137,7 +137,7 @@ class ControllerModel(RobotModes):
         slider = float(self.values.get("target_speed_fraction", 1.0))
         try:
             self.arm.step(dt * slider)
-        except MotionError as exc:
+        except (MotionError, ArithmeticError, ValueError) as exc:
             line = self.arm.motion.line if self.arm.motion is not None else 0
             self.arm.halt()
             if self.program is not None:
@@ -209,6 +209,9 @@ class ControllerModel(RobotModes):
             program = Program(script, self)
         except ScriptFault as fault:
             self.emit(ScriptEvent("runtime_exception", fault.text, fault.line, fault.column))
+            return None
+        except PROGRAM_ERRORS as exc:  # nested past Python's limits, a number of 5,000 digits
+            self.emit(ScriptEvent("runtime_exception", f"syntax_error: {runtime_text(exc)}", 0, 0))
             return None
         if script.secondary:
             for _ in range(SECONDARY_STEPS):

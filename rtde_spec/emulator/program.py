@@ -25,8 +25,25 @@ from rtde_spec.emulator.motion import MotionError
 from rtde_spec.emulator.urscript import Branch, Expr, Function, Script, ScriptFault, Stmt
 from rtde_spec.errors import RtdeSpecError
 
+PROGRAM_ERRORS = (ArithmeticError, ValueError, TypeError, IndexError, KeyError, RecursionError, MemoryError)
+"""What a statement's Python may raise on a program's values (huge numbers, deep nesting): the
+program's runtime exception, never the end of the emulator's control loop."""
+
 STEP_BUDGET = 10_000  # statements (and loop turns) one control step may run without waiting
 MAX_CALL_DEPTH = 64  # user functions calling user functions; deeper is a runaway recursion
+
+
+def runtime_text(exc: BaseException) -> str:
+    """The runtime exception's text for a Python error a program's values caused."""
+    if isinstance(exc, RecursionError):
+        return "the program nests too deeply (calls, blocks or values)"
+    if isinstance(exc, ZeroDivisionError):
+        return "Division by zero"
+    if isinstance(exc, OverflowError):
+        return "Number too large"
+    if isinstance(exc, MemoryError):
+        return "out of memory"
+    return f"runtime error: {exc}"[:200]
 
 
 class _Flow(Enum):
@@ -86,6 +103,8 @@ class Program:
             self.finished = True
         except ScriptFault as fault:
             self.fail(fault)
+        except PROGRAM_ERRORS as exc:  # out of no statement (resuming a chain nested past the limit)
+            self.fail(ScriptFault(runtime_text(exc), 0, 0))
 
     def fail(self, fault: ScriptFault) -> None:
         self.finished, self.fault = True, fault
@@ -108,6 +127,8 @@ class Program:
                 raise ScriptFault(str(exc), stmt.line, 1) from exc
             except RtdeSpecError as exc:
                 raise ScriptFault(exc.reason, stmt.line, 1) from exc
+            except PROGRAM_ERRORS as exc:  # whatever a program does, it faults; the control step goes on
+                raise ScriptFault(runtime_text(exc), stmt.line, 1) from None
             if signal is not None:
                 return signal
         return None

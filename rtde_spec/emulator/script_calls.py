@@ -56,6 +56,10 @@ def make_pose(values: list[Any], line: int, column: int) -> Pose:
     return Pose(float(v) for v in values)
 
 
+INT_MIN, INT_MAX = -(1 << 31), (1 << 31) - 1  # URScript's int is 32 bits
+MAX_TEXT = 1 << 20  # characters of one string (a program doubling a text must not take the memory)
+
+
 def arithmetic(op: str, left: Any, right: Any, line: int, column: int) -> Any:
     if _is_number(left) and _is_number(right):
         if op in "/%" and right == 0:
@@ -67,8 +71,16 @@ def arithmetic(op: str, left: Any, right: Any, line: int, column: int) -> Any:
             "/": lambda x, y: x / y,
             "%": lambda x, y: x % y,
         }
-        return ops[op](left, right)
+        try:
+            result = ops[op](left, right)
+        except OverflowError:
+            raise ScriptFault("Number too large", line, column) from None
+        if isinstance(result, int) and not isinstance(result, bool) and not INT_MIN <= result <= INT_MAX:
+            raise ScriptFault("Integer overflow: URScript's int is 32 bits", line, column)
+        return result
     if op == "+" and isinstance(left, str) and isinstance(right, str):
+        if len(left) + len(right) > MAX_TEXT:
+            raise ScriptFault(f"String too long (over {MAX_TEXT} characters)", line, column)
         return left + right
     raise ScriptFault(f"Type error: {type_name(left)} {op} {type_name(right)}", line, column)
 
@@ -288,15 +300,34 @@ COMMANDS: dict[str, Command] = {
 
 
 def to_str(value: Any) -> str:
-    if isinstance(value, bool):
-        return "True" if value else "False"
-    if isinstance(value, Pose):
-        return "p[" + ", ".join(f"{v:.6g}" for v in value) + "]"
+    """The text URScript shows for a value; a list nested past 64 levels or a text past MAX_TEXT
+    is a ValueError (a runtime exception of the statement), not a recursion or memory fault."""
+    parts: list[str] = []
+    _text_of(value, parts, [MAX_TEXT], 0)
+    return "".join(parts)
+
+
+def _text_of(value: Any, parts: list[str], left: list[int], depth: int) -> None:
+    if depth > 64:
+        raise ValueError("to_str: a list nested more than 64 levels")
     if isinstance(value, list):
-        return "[" + ", ".join(to_str(v) for v in value) + "]"
-    if isinstance(value, float):
-        return f"{value:.6g}"
-    return str(value)
+        parts.append("[")
+        for i, item in enumerate(value):
+            if i:
+                parts.append(", ")
+            _text_of(item, parts, left, depth + 1)
+        parts.append("]")
+    elif isinstance(value, bool):
+        parts.append("True" if value else "False")
+    elif isinstance(value, Pose):
+        parts.append("p[" + ", ".join(f"{v:.6g}" for v in value) + "]")
+    elif isinstance(value, float):
+        parts.append(f"{value:.6g}")
+    else:
+        parts.append(str(value))
+    left[0] -= len(parts[-1]) + 2
+    if left[0] < 0:
+        raise ValueError(f"to_str: text over {MAX_TEXT} characters")
 
 
 def _pose_op(fn: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> Callable[[Any, Any], Pose]:
@@ -342,7 +373,7 @@ def call_function(program: Runner, stmt: Stmt, name: str, args: Args, kwargs: Kw
         raise ScriptFault(f"compile_error_name_not_found:{name}", stmt.line, 1)
     try:
         return fn()
-    except (IndexError, TypeError, ValueError) as exc:
+    except (IndexError, TypeError, ValueError, ArithmeticError) as exc:
         raise ScriptFault(f"{name}: bad arguments ({exc})", stmt.line, 1) from exc
 
 
