@@ -209,9 +209,12 @@ class ClientProtocol:
         return events
 
     def _events(self, packages: list[tuple[int, Any]], events: list[Event]) -> None:
-        """Append the event of each framed package (a fault raises, `events` keeps those before)."""
-        output, run = self.output, self._run
+        """Append the event of each framed package (a fault raises, `events` keeps those before).
+
+        The output recipe is read per package: a setup reply earlier in the same read sets it,
+        and the data after it (a pipelined setup and start) are of that recipe."""
         for _, package in packages:
+            output, run = self.output, self._run
             if output is not None and run is not None and package[: len(run[1])] == run[1]:
                 records = output.decode_records(package) if self.want_records else []
                 events.append(DataRun(records, package, run[0]))
