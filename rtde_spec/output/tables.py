@@ -122,6 +122,8 @@ def _column_of_values(values: list[Any]) -> Any:
         elif -(1 << 63) <= low and high < (1 << 63):
             dtype = np.int64  # else beyond 64 bits: pyarrow's conversion says so
     elif kinds and kinds <= {int, float} and float in kinds:
+        if any(type(v) is int and abs(v) > 1 << 53 for v in present):
+            raise ValueError("integers too large for the floats beside them (kept exactly only to 2^53)")
         dtype = np.float64
     elif kinds == {str}:  # not through numpy, whose texts lose trailing NUL characters
         texts = [b"" if v is None else v.encode("utf-8", "replace") for v in values]
@@ -130,9 +132,15 @@ def _column_of_values(values: list[Any]) -> Any:
         len(kinds) == 1
         and issubclass(kind := next(iter(kinds)), np.generic)
         and np.dtype(kind).kind in "biuf"
+        and np.dtype(kind).itemsize <= 8  # not long double: Arrow has no such type
     ):
         dtype = kind  # numpy scalars of one type (a UINT64 of a primary message); pa.array imports pandas
     if dtype is None:
+        if any(isinstance(v, np.generic) for v in present):  # numpy scalars mixed with others:
+            plain = [v.item() if isinstance(v, np.generic) else v for v in values]  # as Python values
+            if any(isinstance(v, np.generic) for v in plain):  # long double: no Python (nor Arrow) type
+                raise TypeError(f"no Arrow type for numpy {type(present[0]).__name__}")
+            return _column_of_values(plain)
         return pa.array(values)  # nested lists, bytes, mixed kinds: pyarrow's rules (and its errors)
     fill = False if dtype is np.bool_ else 0
     array = arrow_array(np.array([fill if v is None else v for v in values], dtype=dtype))
@@ -155,6 +163,13 @@ def rows_table(rows: Sequence[Mapping[str, Any]]) -> Any:
     lost), and no pandas is imported (a third of a second at every capture's start)."""
     import pyarrow as pa
 
+    from rtde_spec.errors import EncodeError
+
     names = list(dict.fromkeys(key for row in rows for key in row))
-    arrays = [_column_of_values([row.get(name) for row in rows]) for name in names]
+    arrays = []
+    for name in names:
+        try:
+            arrays.append(_column_of_values([row.get(name) for row in rows]))
+        except (pa.ArrowException, OverflowError, ValueError, TypeError, UnicodeError) as exc:
+            raise EncodeError(f"no table column can hold these values: {exc}", field=name) from None
     return pa.Table.from_arrays(arrays, names=names)
