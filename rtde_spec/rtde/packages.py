@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import struct
 from dataclasses import dataclass
-from functools import cache
 from typing import Any, Literal
 
 from rtde_spec._generated.constants import (
@@ -122,14 +121,6 @@ def decode_values(name: str, body: bytes, *, strict: bool = True) -> dict[str, A
             expected=f"field{'s' if len(missing) > 1 else ''} {', '.join(missing)}",
             actual=f"{len(body) - stop} bytes left",
         )
-    if strict and name in _bools() and (at := _bad_bool(name, values, body)) is not None:
-        raise DecodeError(
-            "a BOOL byte that is neither 0 nor 1",
-            package=name,
-            offset=HEADER_SIZE + at,
-            expected="0 or 1",
-            actual=body[at],
-        )
     if strict and stop < len(body):
         raise DecodeError(
             f"{len(body) - stop} bytes after the last field",
@@ -139,24 +130,6 @@ def decode_values(name: str, body: bytes, *, strict: bool = True) -> dict[str, A
             actual=f"package size {HEADER_SIZE + len(body)}",
         )
     return values
-
-
-@cache
-def _bools() -> frozenset[str]:
-    """Layouts with a BOOL field: struct reads any nonzero byte as True, strict decoding does not."""
-    return frozenset(
-        name
-        for name, layout in layouts().items()
-        if any(layout.prims[f.type].kind == "bool" for f in layout.fields if f.type in layout.prims)
-    )
-
-
-def _bad_bool(name: str, values: dict[str, Any], body: bytes) -> int | None:
-    """The offset of a BOOL byte other than 0 or 1 (the values re-encoded differ there), or None."""
-    again = layouts()[name].encode(values)
-    if body.startswith(again):
-        return None
-    return next(i for i, (a, b) in enumerate(zip(again, body, strict=False)) if a != b)
 
 
 def decode_package(
