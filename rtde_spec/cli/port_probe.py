@@ -15,6 +15,7 @@ import socket
 import struct
 import time
 from dataclasses import dataclass
+from typing import Any
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 
@@ -172,3 +173,16 @@ def wrong_port(host: str, port: int, wanted: str, timeout: float = 2.0) -> str |
     if found.kind == "closed":
         return f"{host}:{port}: {found.detail}; check --host and --port: {where}"
     return f"{host}:{port} does not speak {NAMES[wanted]}: {found.detail}; {where}"
+
+
+def handshake_error(args: Any, wanted: str, exc: BaseException) -> BaseException:
+    """What `record`/`watch` raise when connecting to --host/--port failed: the port's real
+    protocol when it speaks another one (an RtdeConnectionError), else the failure itself."""
+    from rtde_spec.errors import RtdeConnectionError
+
+    hint = wrong_port(args.host, args.port, wanted, min(args.timeout, 2.0))
+    if hint is None:
+        return exc
+    error = RtdeConnectionError(hint)
+    error.__cause__ = exc
+    return error

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, cast
 
 from rtde_spec._generated.constants import RTDE_PORT
 from rtde_spec.cli.common import RECIPE_FILE_HELP, existing_file, port_number
-from rtde_spec.errors import RtdeConnectionError, RtdeSpecError, UsageError
+from rtde_spec.errors import RtdeSpecError, UsageError
 
 if TYPE_CHECKING:
     from rtde_spec.output.base import Writer
@@ -216,12 +216,9 @@ def _connect(client: RtdeClient, args: argparse.Namespace) -> None:
         client.connect()
     except (RtdeSpecError, TimeoutError) as exc:
         client.close()
-        from rtde_spec.cli.port_probe import wrong_port
+        from rtde_spec.cli.port_probe import handshake_error
 
-        hint = wrong_port(args.host, args.port, "rtde", min(args.timeout, 2.0))
-        if hint is None:
-            raise
-        raise RtdeConnectionError(hint) from exc
+        raise handshake_error(args, "rtde", exc)  # noqa: B904 (the cause is set)
 
 
 def _empty(path: Path) -> bool:

@@ -158,12 +158,9 @@ def _first_checked(client: PrimaryClient, args: argparse.Namespace) -> Iterator[
         return
     except (RtdeSpecError, TimeoutError) as exc:
         client.close()
-        from rtde_spec.cli.port_probe import wrong_port
+        from rtde_spec.cli.port_probe import handshake_error
 
-        hint = wrong_port(args.host, args.port, "primary", min(args.timeout, 2.0))
-        if hint is None:
-            raise
-        raise RtdeConnectionError(hint) from exc
+        raise handshake_error(args, "primary", exc)  # noqa: B904 (the cause is set)
     yield first
     yield from messages
 
