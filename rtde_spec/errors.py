@@ -90,6 +90,14 @@ class RtdeConnectionError(RtdeSpecError, ConnectionError):
     """Connecting to a controller failed, or it closed the connection; names host and port."""
 
 
+class OutputError(RtdeSpecError, OSError):
+    """An output that could not be written (a full disk): names the file, what was kept, errno kept."""
+
+    def __init__(self, reason: str, *, errno: int | None = None, subject: str | None = None) -> None:
+        super().__init__(reason, subject=subject)
+        self.errno = errno
+
+
 class UsageError(RtdeSpecError):
     """The command line or call asks for something unusable: a missing file, an unknown version."""
 

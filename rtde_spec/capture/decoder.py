@@ -22,6 +22,7 @@ from rtde_spec.capture.packets import FIN, RST, SYN, Segment, expand, items
 from rtde_spec.capture.sink import ArrowSink, DirectorySink, TableSink, output_stem
 from rtde_spec.capture.summary import CaptureSummary, ConnectionSummary
 from rtde_spec.capture.tcp import MOD, Direction
+from rtde_spec.errors import OutputError
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
 from rtde_spec.rtde.packages import encode_package
 from rtde_spec.spec.catalogue import Catalogue
@@ -306,13 +307,27 @@ def decode_to_directory(
         sink.close()
         stop.summary.tables, stop.summary.paths = dict(sink.rows), [str(p) for p in sink.paths]
         raise
+    except OutputError as exc:  # a full disk: no table of this capture is kept half-written
+        sink.abort()
+        raise dropped_tables(exc, path) from exc
     except BaseException:
         sink.close()
         raise
-    sink.close()
+    try:
+        sink.close()
+    except OutputError as exc:
+        sink.abort()
+        raise dropped_tables(exc, path) from exc
     summary.tables = dict(sink.rows)
     summary.paths = [str(p) for p in sink.paths]
     return summary
+
+
+def dropped_tables(exc: OutputError, path: str | Path) -> OutputError:
+    """A write error of one table, said for the whole capture: none of its tables was kept."""
+    reason = exc.reason.split("; ")[0]
+    kept = f"no table of {path} was kept; files of earlier runs are as they were"
+    return OutputError(f"{reason}; {kept}", errno=exc.errno, subject=exc.subject)
 
 
 def capture_tables(path: str | Path, recipe: Sequence[str] | None = None, **kw: Any) -> dict[str, Any]:

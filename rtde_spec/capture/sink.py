@@ -113,11 +113,24 @@ class DirectorySink(TableSink):
     def _columns(self, table: str, robot: str, day: str, columns: Mapping[str, Any]) -> None:
         self._writer(table, robot, day).write_columns(columns)
 
+    def abort(self) -> None:
+        """Drop every table of this capture: files of earlier runs stay as they were."""
+        for writer in self.writers.values():
+            writer.abort()
+        self.writers.clear()
+
     def close(self) -> None:
+        """Every table finished first, then all put in place: a write error keeps none of them."""
+        try:
+            for writer in self.writers.values():
+                writer.prepare()
+        except BaseException:
+            self.abort()
+            raise
         failed: BaseException | None = None
-        for writer in self.writers.values():  # every table closed, even after one fails
+        for writer in self.writers.values():  # every table put in place, even after one fails
             try:
-                writer.close()
+                writer.commit()
             except Exception as exc:
                 failed = failed or exc
         if failed is not None:

@@ -7,6 +7,7 @@ import json
 from collections.abc import Mapping
 from typing import IO, Any
 
+from rtde_spec.errors import OutputError
 from rtde_spec.output.background import BackgroundStream
 from rtde_spec.output.partfile import Part
 
@@ -104,17 +105,51 @@ class Writer:
             self.write(dict(zip(names, values, strict=True)))
 
     def close(self) -> None:
-        """Finish the output; its file appears at its name if rows were written."""
+        """Finish the output; its file appears at its name if rows were written.
+
+        After a failed write (a full disk) nothing of this run is committed: an existing
+        file stays as it was, and the error names the file and what was kept.
+        """
+        self.prepare()
+        self.commit()
+
+    def prepare(self) -> None:
+        """The first half of `close`: the file is finished beside its name, not yet in place.
+
+        A dataset of many files prepares them all first, so a full disk while finishing
+        the last one leaves none of them half in place.
+        """
+        part = self.part
         try:
             self._finish()
-        except BaseException:
+        except BaseException as exc:
             self._settle(keep=False)
-            raise
-        failed = getattr(self.stream, "failed", None)  # a background write failed earlier: a hole
-        if failed is not None:
+            failure = self._failure(part)
+            if failure is None:
+                raise
+            raise failure from exc
+        failed: BaseException | None = self._failure(part) or getattr(self.stream, "failed", None)
+        if failed is not None:  # a write failed earlier (in the background too): the file has a hole
             self._settle(keep=False)
             raise failed
+
+    def commit(self) -> None:
+        """The second half of `close`: a prepared file goes in place if rows were written."""
         self._settle(keep=self.rows > 0)
+
+    @staticmethod
+    def _failure(part: Part | None) -> OutputError | None:
+        """The write error of `part`, with what it leaves at its name."""
+        if part is None or part.failed is None:
+            return None
+        if part.published:
+            kept = f"it keeps the first {part.kept} bytes, whole rows up to the last batch written"
+        elif part.replaces:
+            kept = "none of its rows were kept; the file that was there is as it was"
+        else:
+            kept = "none of its rows were kept"
+        failed = part.failed
+        return OutputError(f"{failed.reason}; {kept}", errno=failed.errno, subject=failed.subject)
 
     def abort(self) -> None:
         """Close without keeping anything not already in place (an existing file stays)."""

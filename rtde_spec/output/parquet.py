@@ -9,7 +9,7 @@ from typing import IO, Any
 
 from rtde_spec.errors import UsageError, require
 from rtde_spec.output.base import Writer, flat_columns, flatten
-from rtde_spec.output.partfile import Part, is_special
+from rtde_spec.output.partfile import Part, is_special, write_failed
 from rtde_spec.output.tables import arrow_table, rows_table
 
 _PARQUET_BATCH_ROWS = 16384
@@ -56,12 +56,11 @@ class ParquetWriter(Writer):
         discrete = [f.name for f in schema if not pa.types.is_floating(f.type)]
         stats = [*discrete, *(["timestamp"] if "timestamp" in schema.names else [])]
         compression = {f.name: "snappy" if f.name in discrete else "none" for f in schema}
+        self._written(self._create, schema, discrete or False, stats or False, compression)
+
+    def _create(self, schema: Any, dictionary: Any, stats: Any, compression: Any) -> None:
         self._writer = self._pq.ParquetWriter(
-            self.stream,
-            schema,
-            use_dictionary=discrete or False,
-            write_statistics=stats or False,
-            compression=compression,
+            self.stream, schema, use_dictionary=dictionary, write_statistics=stats, compression=compression
         )
 
     def _add(self, table_: Any) -> None:
@@ -101,13 +100,28 @@ class ParquetWriter(Writer):
         self._tables, self._held = [], 0
         self._wait()
         if not (self.THREADED if self.THREADED is not None else usable_cores() > 1):
-            self._writer.write_table(group, row_group_size=group.num_rows)
+            self._written(self._writer.write_table, group, row_group_size=group.num_rows)
             return
         if self._pool is None:
             from concurrent.futures import ThreadPoolExecutor
 
             self._pool = ThreadPoolExecutor(max_workers=1, thread_name_prefix="parquet")
-        self._pending = self._pool.submit(self._writer.write_table, group, row_group_size=group.num_rows)
+        self._pending = self._pool.submit(
+            self._written, self._writer.write_table, group, row_group_size=group.num_rows
+        )
+
+    def _written(self, write: Any, *args: Any, **kwargs: Any) -> None:
+        """Run a write of pyarrow's; its error (a full disk) marks the file failed and names it."""
+        part = self.part
+        if part is not None and part.failed is not None:
+            raise part.failed
+        try:
+            write(*args, **kwargs)
+        except OSError as exc:
+            if part is None:
+                raise
+            part.failed = write_failed(exc, part.target)
+            raise part.failed from exc
 
     def flush(self) -> None:
         """Wait for the row group in flight; held rows wait for a whole group (or close)."""
@@ -126,8 +140,8 @@ class ParquetWriter(Writer):
 
     def _flush_rows(self) -> None:
         if self._rows:
-            self._add(rows_table(self._rows))
-            self._rows = []
+            rows, self._rows = self._rows, []
+            self._add(rows_table(rows))
 
     def write_columns(self, columns: Mapping[str, Any]) -> None:
         self._flush_rows()
@@ -145,7 +159,7 @@ class ParquetWriter(Writer):
             if self._writer is not None:
                 self._write_held()
                 self._wait()
-                self._writer.close()
+                self._written(self._writer.close)
         finally:
             if self._pool is not None:
                 self._pool.shutdown()

@@ -6,7 +6,11 @@ closes after rows were written. A run that fails before its first row leaves an
 existing file byte-identical and no temporary file behind. A *live* file (a
 recording's CSV or JSON Lines) is renamed into place as soon as its first batch is
 on disk and then grows batch by batch, so a killed recorder leaves every batch but
-the one being collected under the name asked for.
+the one being collected under the name asked for — unless a file is already there:
+then the new one stays beside it until complete (a kill leaves both).
+
+A write that fails (a full disk) ends the file: it is never committed, and a live file
+already in place is cut back to its last whole batch, so no reader meets a torn line.
 """
 
 from __future__ import annotations
@@ -16,6 +20,8 @@ import os
 import stat
 from collections.abc import Callable
 from pathlib import Path
+
+from rtde_spec.errors import OutputError
 
 PART_MARK = ".part-"
 SPILL = 8 << 20  # held bytes handed to the file before a flush, so memory stays bounded
@@ -68,7 +74,11 @@ def _alive(pid: int) -> bool:
 
 
 class Part:
-    """A target file and the temporary file it is written as; `commit` or `discard` ends it."""
+    """A target file and the temporary file it is written as; `commit` or `discard` ends it.
+
+    `failed` holds the first write error (a full disk): such a part is never committed,
+    and a live one already in place keeps only whole batches (see `PartStream`).
+    """
 
     def __init__(self, target: str | Path, *, durable: bool = False) -> None:
         path = Path(target)
@@ -79,16 +89,25 @@ class Part:
         self.durable = durable  # fsync before the rename: a closed file survives a power loss
         self.published = False
         self.placed: Callable[[], None] | None = None  # called once when the target holds our data
+        self.failed: OutputError | None = None  # the write error that ended this file, if one did
+        self.kept = 0  # bytes of a live file in place when it failed (whole batches only)
+        # a live file goes in place early only where nothing is there to lose: an existing
+        # file stays as it was until this one is complete
+        self.replaces = path.exists()
 
     def publish(self) -> None:
-        """Rename into place now; later writes go on through the open file (a live file)."""
-        if not self.published:
+        """Rename into place now; later writes go on through the open file (a live file).
+
+        Not while it would replace an existing file, nor after a failed write."""
+        if not self.published and not self.replaces and self.failed is None:
             os.replace(self.temp, self.target)
             self.published = True
             self._placed()
 
     def commit(self) -> None:
         """The written file becomes the target (synced first when `durable`)."""
+        if self.failed is not None:
+            raise self.failed
         if self.durable:
             _fsync(self.target if self.published else self.temp)
         if not self.published:
@@ -139,6 +158,7 @@ class PartStream(io.RawIOBase):
         self._held_size = 0
         self._batched = batched
         self.written = 0  # bytes written so far (held ones included): for splitting by size
+        self.on_disk = 0  # bytes the file holds for sure: whole batches
 
     def writable(self) -> bool:
         return True
@@ -165,10 +185,24 @@ class PartStream(io.RawIOBase):
             self._write_all(held)
 
     def _write_all(self, data: bytes | bytearray | memoryview) -> None:
+        """All of `data`, or the file cut back to what it held before and the error kept."""
+        part = self.part
+        if part.failed is not None:
+            raise part.failed
         with memoryview(data) as view:
             done = 0
-            while done < len(view):
-                done += self._file.write(view[done:]) or 0
+            try:
+                while done < len(view):
+                    done += self._file.write(view[done:]) or 0
+            except OSError as exc:
+                part.failed = write_failed(exc, part.target)
+                part.kept = self.on_disk if part.published else 0
+                try:  # no torn line: the file ends where the last whole batch ended
+                    os.ftruncate(self._file.fileno(), self.on_disk)
+                except OSError:
+                    pass
+                raise part.failed from exc
+        self.on_disk += len(data)
 
     def flush(self) -> None:
         """Everything written so far is handed to the operating system."""
@@ -181,8 +215,26 @@ class PartStream(io.RawIOBase):
         try:
             self._drain()
         finally:
-            self._file.close()
+            try:
+                self._file.close()
+            except OSError as exc:  # the last buffered bytes did not fit either
+                if self.part.failed is None:
+                    self.part.failed = write_failed(exc, self.part.target)
             super().close()
+
+
+def write_failed(exc: BaseException, target: Path) -> OutputError:
+    """The error of a write to `target`, naming the file and, for a full disk, saying so."""
+    import errno
+
+    code = getattr(exc, "errno", None)
+    if code in (errno.ENOSPC, errno.EDQUOT) or "No space left" in str(exc):
+        code, why = code or errno.ENOSPC, "the disk is full"
+    elif code == errno.EFBIG:
+        why = "the file is larger than the file system allows"
+    else:
+        why = getattr(exc, "strerror", None) or str(exc)
+    return OutputError(f"writing failed: {why}", errno=code, subject=f"file {target}")
 
 
 def write_whole(target: str | Path, data: bytes, *, durable: bool = False) -> None:

@@ -10,14 +10,15 @@ JSON Lines parts likewise (`read_csv('run_*.csv')`).
 
 from __future__ import annotations
 
+import contextlib
 import re
 import time
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from rtde_spec.errors import UsageError
+from rtde_spec.errors import OutputError, UsageError
 from rtde_spec.output.base import Writer
 
 _UNITS = {
@@ -95,20 +96,35 @@ class SplitWriter(Writer):
         return self._current
 
     def write(self, record: Mapping[str, Any]) -> None:
-        self._writer().write(record)
-        self.rows += 1
-        self._roll()
+        with self._naming_parts():
+            self._writer().write(record)
+            self.rows += 1
+            self._roll()
 
     def write_columns(self, columns: Mapping[str, Any]) -> None:
-        writer = self._writer()
-        before = writer.rows
-        writer.write_columns(columns)
-        self.rows += writer.rows - before
-        self._roll()
+        with self._naming_parts():
+            writer = self._writer()
+            before = writer.rows
+            writer.write_columns(columns)
+            self.rows += writer.rows - before
+            self._roll()
 
     def flush(self) -> None:
         if self._current is not None:
-            self._current.flush()
+            with self._naming_parts():
+                self._current.flush()
+
+    @contextlib.contextmanager
+    def _naming_parts(self) -> Iterator[None]:
+        """A part that could not be written (a full disk) says which closed parts are complete."""
+        try:
+            yield
+        except OutputError as exc:
+            if not self.paths:
+                raise
+            first, last = self.paths[0].name, self.paths[-1].name
+            kept = f"the {len(self.paths)} closed parts {first} .. {last} are complete"
+            raise OutputError(f"{exc.reason}; {kept}", errno=exc.errno, subject=exc.subject) from exc
 
     def size(self) -> int:
         return self._current.size() if self._current is not None else 0
@@ -145,7 +161,8 @@ class SplitWriter(Writer):
                 path.unlink(missing_ok=True)
 
     def close(self) -> None:
-        self._close_part()
+        with self._naming_parts():
+            self._close_part()
 
     def abort(self) -> None:
         writer, self._current = self._current, None
