@@ -14,6 +14,7 @@ import json
 import os
 import stat
 import time
+from collections import OrderedDict
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -85,27 +86,62 @@ class TableSink:
         pass
 
 
+def descriptor_budget() -> int:
+    """Files a dataset keeps open at once: an eighth of this process's descriptor limit, 8 to 64."""
+    try:
+        import resource
+
+        soft = resource.getrlimit(resource.RLIMIT_NOFILE)[0]
+    except (ImportError, OSError, ValueError):
+        return 32
+    if soft == getattr(resource, "RLIM_INFINITY", -1) or soft <= 0:
+        return 64
+    return max(8, min(64, soft // 8))
+
+
 class DirectorySink(TableSink):
-    def __init__(self, outdir: str | Path, fmt: str, stem: str) -> None:
+    """One file per table, robot and day; at most `budget` of them hold a descriptor at once.
+
+    A capture of hundreds of robots over many days has thousands of tables: the least
+    recently written give back their descriptor (`Writer.suspend`) and reopen at their
+    end when written again. Parquet files beyond the first `budget // 2` are written
+    through our own file object, so they can be suspended too.
+    """
+
+    def __init__(self, outdir: str | Path, fmt: str, stem: str, budget: int | None = None) -> None:
         super().__init__()
         self.outdir, self.fmt, self.stem = Path(outdir), fmt, stem
         self.writers: dict[tuple[str, str, str], Writer] = {}
         self.paths: list[Path] = []
+        self.budget = budget or descriptor_budget()
+        self._pinned = self.budget // 2 if fmt == "parquet" else 0  # pyarrow's own files: fastest
+        self._pinned_keys: set[tuple[str, str, str]] = set()
+        self._open: OrderedDict[tuple[str, str, str], Writer] = OrderedDict()  # suspendable, by last use
 
     def _writer(self, table: str, robot: str, day: str) -> Writer:
         key = (table, robot, day)
-        if key not in self.writers:
+        writer = self.writers.get(key)
+        if writer is None:
             folder = self.outdir / table / f"robot={robot.replace(':', '_')}" / f"date={day}"
             folder.mkdir(parents=True, exist_ok=True)
             path = folder / f"{self.stem}.{EXTENSIONS[self.fmt]}"
             self.paths.append(path)
-            writer = open_writer(self.fmt, path)
+            pinned = len(self._pinned_keys) < self._pinned
+            writer = open_writer(self.fmt, path, suspendable=not pinned)
             if self.fmt == "mcap":  # one topic per table, as decode names them
                 from rtde_spec.output.topics import topic_for_table
 
                 writer.topic = topic_for_table(table)  # type: ignore[attr-defined]
             self.writers[key] = writer
-        return self.writers[key]
+            if pinned:
+                self._pinned_keys.add(key)
+        if key in self._pinned_keys:
+            return writer
+        self._open[key] = writer
+        self._open.move_to_end(key)
+        while len(self._open) > self.budget - len(self._pinned_keys):
+            self._open.popitem(last=False)[1].suspend()
+        return writer
 
     def _row(self, table: str, robot: str, day: str, record: Mapping[str, Any]) -> None:
         self._writer(table, robot, day).write(record)

@@ -93,6 +93,15 @@ class Writer:
         if self.live and self.rows and self.part is not None:
             self.part.publish()
 
+    def suspend(self) -> None:
+        """Give back the file's descriptor until the next write (a dataset of many files)."""
+        stream = self.stream
+        if isinstance(stream, BackgroundStream):
+            stream.flush()
+            stream = stream.raw
+        if hasattr(stream, "suspend"):
+            stream.suspend()
+
     def size(self) -> int:
         """Bytes written so far (an estimate where the format encodes later): for splitting."""
         return int(getattr(self.stream, "written", 0))

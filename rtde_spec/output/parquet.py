@@ -7,7 +7,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import IO, Any
 
-from rtde_spec.errors import UsageError, require
+from rtde_spec.errors import OutputError, UsageError, require
 from rtde_spec.output.base import Writer, flat_columns, flatten
 from rtde_spec.output.partfile import Part, is_special, write_failed
 from rtde_spec.output.tables import arrow_table, rows_table
@@ -34,7 +34,7 @@ class ParquetWriter(Writer):
     NEEDS_PATH = True
 
     def __init__(self, stream: IO[bytes] | str) -> None:
-        part = None
+        part = getattr(stream, "part", None)  # a PartStream: written through it (it can give back its fd)
         if isinstance(stream, (str, os.PathLike)) and not is_special(Path(stream)):
             part = Part(stream)  # written beside the name, renamed into place when closed
             stream = str(part.temp)
@@ -117,6 +117,8 @@ class ParquetWriter(Writer):
             raise part.failed
         try:
             write(*args, **kwargs)
+        except OutputError:  # our own file said it already (a PartStream under pyarrow)
+            raise
         except OSError as exc:
             if part is None:
                 raise
@@ -165,6 +167,12 @@ class ParquetWriter(Writer):
                 self._pool.shutdown()
         if not isinstance(self.stream, str):
             super()._finish()
+
+    def suspend(self) -> None:
+        """Only a file written through a `PartStream` gives back its descriptor (pyarrow's own holds it)."""
+        if not isinstance(self.stream, str):
+            self._wait()  # the row group in flight is written through the file first
+            super().suspend()
 
 
 def usable_cores() -> int:

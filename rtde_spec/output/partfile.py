@@ -153,7 +153,7 @@ class PartStream(io.RawIOBase):
     def __init__(self, part: Part, *, batched: bool = True) -> None:
         super().__init__()
         self.part = part
-        self._file = open(part.temp, "wb", buffering=0)  # closed by close()
+        self._file: io.FileIO | None = open(part.temp, "wb", buffering=0)  # closed by close()
         self._held: list[bytes] = []  # blocks since the last flush, kept as given (no copy of bytes)
         self._held_size = 0
         self._batched = batched
@@ -164,7 +164,23 @@ class PartStream(io.RawIOBase):
         return True
 
     def fileno(self) -> int:
-        return self._file.fileno()
+        return self._opened().fileno()
+
+    def tell(self) -> int:
+        return self.written
+
+    def suspend(self) -> None:
+        """Hand back the file's descriptor until the next write (many files, few descriptors):
+        the file is append-only, so reopening it at its end goes on where it stopped."""
+        if not self.closed and self._file is not None:
+            self._drain()
+            file, self._file = self._file, None
+            file.close()
+
+    def _opened(self) -> io.FileIO:
+        if self._file is None:
+            self._file = open(self.part.temp, "ab", buffering=0)
+        return self._file
 
     def write(self, block: bytes | bytearray | memoryview) -> int:  # type: ignore[override]
         size = len(block)
@@ -192,13 +208,15 @@ class PartStream(io.RawIOBase):
         with memoryview(data) as view:
             done = 0
             try:
+                file = self._opened()
                 while done < len(view):
-                    done += self._file.write(view[done:]) or 0
+                    done += file.write(view[done:]) or 0
             except OSError as exc:
                 part.failed = write_failed(exc, part.target)
                 part.kept = self.on_disk if part.published else 0
                 try:  # no torn line: the file ends where the last whole batch ended
-                    os.ftruncate(self._file.fileno(), self.on_disk)
+                    if self._file is not None:
+                        os.ftruncate(self._file.fileno(), self.on_disk)
                 except OSError:
                     pass
                 raise part.failed from exc
@@ -216,7 +234,8 @@ class PartStream(io.RawIOBase):
             self._drain()
         finally:
             try:
-                self._file.close()
+                if self._file is not None:
+                    self._file.close()
             except OSError as exc:  # the last buffered bytes did not fit either
                 if self.part.failed is None:
                     self.part.failed = write_failed(exc, self.part.target)

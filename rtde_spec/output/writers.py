@@ -197,6 +197,7 @@ def open_writer(
     live: bool = False,
     durable: bool = False,
     split: SplitLimit | None = None,
+    suspendable: bool = False,
 ) -> Writer:
     """A writer of `fmt` to a file or to stdout.
 
@@ -208,6 +209,8 @@ def open_writer(
     NAME_0000.EXT, NAME_0001.EXT..., each closed (and complete) when it reaches the limit.
     With `background`, a second thread does the file writes (for one long-running
     output such as `rtde-spec decode`; a dataset of many files keeps one thread).
+    With `suspendable`, every format writes through our own file, so `Writer.suspend`
+    can give back its descriptor (Parquet too, instead of pyarrow opening the path).
     """
     if fmt not in _WRITERS:
         raise UsageError(f"unknown output format {fmt!r}", expected=", ".join(_WRITERS))
@@ -225,7 +228,7 @@ def open_writer(
 
         return SplitWriter(one_part, Path(path), split)
     target = Path(path)
-    if cls.NEEDS_PATH:
+    if cls.NEEDS_PATH and not (suspendable and not is_special(target)):
         writer = cls(str(target))  # type: ignore[arg-type]  # pyarrow's own file (written without the GIL) beside the target
         if writer.part is not None:
             writer.part.durable = durable
@@ -235,7 +238,8 @@ def open_writer(
         writer.owns_stream = True
         return writer
     part = Part(target, durable=durable)
-    stream = PartStream(part, batched=not background)  # the background thread gathers blocks itself
+    # the background thread gathers blocks itself; pyarrow writes whole pages
+    stream = PartStream(part, batched=not (background or cls.NEEDS_PATH))
     try:
         writer = cls(BackgroundStream(stream) if background else stream)  # type: ignore[arg-type]
     except BaseException:
