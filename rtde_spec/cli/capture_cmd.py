@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.errors import UsageError
+from rtde_spec.printable import safe_text
 
 if TYPE_CHECKING:
     from rtde_spec.capture.summary import CaptureSummary
@@ -175,16 +176,16 @@ def _report(summaries: list[CaptureSummary]) -> None:
     for s in summaries:
         for name, rows in s.tables.items():
             tables[name] = tables.get(name, 0) + rows
-        print(f"{s.file}: {s.frames} frames, {len(s.connections)} connections")
+        print(safe_text(f"{s.file}: {s.frames} frames, {len(s.connections)} connections"))
         for c in s.connections:
             gaps = f", {c.gaps} gaps ({c.lost_bytes} bytes lost)" if c.gaps else ""
             notes = "".join(f"; {note}" for note in c.notes)
-            print(f"  {c.kind:7s} {c.name}: {c.packages} packages{gaps}{notes}")
+            print(safe_text(f"  {c.kind:7s} {c.name}: {c.packages} packages{gaps}{notes}"))
     print("tables: " + ", ".join(f"{name} ({rows} rows)" for name, rows in sorted(tables.items())))
-    for s in summaries:
-        print(f"summary {s.line()}", file=sys.stderr)
+    for s in summaries:  # names, notes and problems quote the wire: escaped, never obeyed
+        print(safe_text(f"summary {s.line()}"), file=sys.stderr)
         for problem in distinct(s.problems()):
-            print(f"  problem: {problem}", file=sys.stderr)
+            print(safe_text(f"  problem: {problem}"), file=sys.stderr)
 
 
 _WHEN = re.compile(r" at (\d{9,}\.\d{6})(?=:)")  # a problem's capture time: " at 1700000000.002000:"

@@ -37,6 +37,7 @@ from rtde_spec.cli import (
 )
 from rtde_spec.cli.common import EXIT_ERROR, EXIT_USAGE
 from rtde_spec.errors import RtdeSpecError, UsageError
+from rtde_spec.printable import safe_text
 
 COMMANDS = (
     demo_cmd,
@@ -93,12 +94,12 @@ def main(argv: list[str] | None = None) -> int:
     except UsageError as exc:
         if args.debug:
             raise
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {safe_text(str(exc))}", file=sys.stderr)
         return EXIT_USAGE
     except (RtdeSpecError, OSError, ValueError) as exc:
         if args.debug:
             raise
-        print(f"error: {exc}", file=sys.stderr)
+        print(f"error: {safe_text(str(exc))}", file=sys.stderr)  # errors quote the wire: escaped
         return EXIT_ERROR
 
 

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, cast
 from rtde_spec._generated.constants import RTDE_PORT
 from rtde_spec.cli.common import RECIPE_FILE_HELP, existing_file, port_number
 from rtde_spec.errors import RtdeSpecError, UsageError
+from rtde_spec.printable import safe_text
 
 if TYPE_CHECKING:
     from rtde_spec.output.base import Writer
@@ -204,7 +205,8 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
         if result.stopped_by == "connection":  # say why: a close, or a package cut off or broken
-            print(f"error: the recording ended early: {client.connection_lost}", file=sys.stderr)
+            lost = safe_text(str(client.connection_lost))  # may quote the controller's words
+            print(f"error: the recording ended early: {lost}", file=sys.stderr)
     except OSError:  # SIGHUP: the terminal is gone; the file is what matters
         pass
     return 1 if result.stopped_by == "connection" else 0

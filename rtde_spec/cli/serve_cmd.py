@@ -98,9 +98,12 @@ def run(args: argparse.Namespace) -> int:
     from rtde_spec.emulator.guard import ClientLimits
     from rtde_spec.emulator.scenario import Scenario, load_scenario
     from rtde_spec.emulator.server import Emulator, EmulatorConfig
+    from rtde_spec.printable import SafeFormatter
     from rtde_spec.spec.dashboard import dashboard_spec
 
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
+    for handler in logging.getLogger().handlers:  # what clients send is logged, never obeyed
+        handler.setFormatter(SafeFormatter("%(asctime)s %(message)s"))
     config = EmulatorConfig(
         host=args.host,
         rtde_port=args.rtde_port,

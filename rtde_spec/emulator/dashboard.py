@@ -61,7 +61,11 @@ class DashboardHub:
         if found is None or not available(found[0].since, self.model.version, self.model.catalogue):
             return self.table.unknown.format(line=line), False
         command, argument = found
-        outcome = self._act(command, argument)
+        try:
+            outcome = self._act(command, argument)
+        except Exception as exc:  # whatever a command meets is its failure reply, never a closed socket
+            log.warning("dashboard %r failed: %s", line[:80], exc)
+            outcome = "failed"
         text = command.replies.get(outcome, command.replies["ok"])  # type: ignore[call-overload]
         values = self.values()
         if command.argument:
@@ -102,20 +106,28 @@ class DashboardHub:
         return "ok"
 
     def _load(self, name: str) -> str:
-        """Load `name` from the programs directory: a script, or the .script saved beside a .urp."""
-        if self.programs is None or not name:
-            return "not_found"
-        base = self.programs.resolve()
-        path = (base / name).resolve()
-        if path.suffix == ".urp":
-            path = path.with_suffix(".script")
-        if not path.is_relative_to(base) or not path.is_file():
+        """Load `name` from the programs directory: a script, or the .script saved beside a .urp.
+
+        The name is transformed first (.urp to .script), then resolved (symlinks followed),
+        then checked to be inside the folder: one check on the path that is opened.
+        A name the file system refuses (a NUL byte, too long) is a file not found.
+        """
+        if self.programs is None or not name or "\0" in name:
             return "not_found"
         try:
+            base = self.programs.resolve(strict=True)
+            wanted = Path(name)
+            if wanted.suffix == ".urp":
+                wanted = wanted.with_suffix(".script")
+            path = (base / wanted).resolve(strict=True)  # every link followed, to the file itself
+            if not path.is_relative_to(base) or not path.is_file():
+                return "not_found"
             if path.stat().st_size > MAX_PROGRAM_BYTES:
                 return "failed"
             text = path.read_text(encoding="utf-8")
-        except (OSError, UnicodeDecodeError):
+        except (OSError, ValueError, RuntimeError):  # missing, a loop of links, a name too long
+            return "not_found"
+        except UnicodeDecodeError:
             return "failed"
         model: Any = self.model
         model.load_program(text)

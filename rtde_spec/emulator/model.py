@@ -12,6 +12,7 @@ methods of `RobotModes`. Enum values and bit positions come from the generated t
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from collections.abc import Callable, Mapping
 from typing import Any
@@ -135,11 +136,16 @@ class ControllerModel(RobotModes):
     def _advance(self, dt: float) -> None:
         """One control step of motion (slowed by the speed slider) and of the program."""
         slider = float(self.values.get("target_speed_fraction", 1.0))
+        before = [float(v) for v in self.arm.state.q]
         try:
             self.arm.step(dt * slider)
+            if not all(math.isfinite(float(v)) for v in self.arm.state.q):
+                raise ValueError("the motion gave a joint position that is not a number")
         except (MotionError, ArithmeticError, ValueError) as exc:
             line = self.arm.motion.line if self.arm.motion is not None else 0
             self.arm.halt()
+            if not all(math.isfinite(float(v)) for v in self.arm.state.q):
+                self.arm.place(before)  # the arm stays where it was: never NaN for good
             if self.program is not None:
                 self.program.fail(ScriptFault(str(exc), line, 1))
         if self.arm.motion is not None or self.arm.revision != self._limits_checked:
@@ -262,15 +268,18 @@ class ControllerModel(RobotModes):
             if mask:
                 self._set_digital(group, mask, inputs.get(f"{group}_digital_output", 0))
         if inputs.get("speed_slider_mask") and "speed_slider_fraction" in inputs:
-            values["target_speed_fraction"] = float(inputs["speed_slider_fraction"])
+            slider = fraction(inputs["speed_slider_fraction"])  # NaN and inf ignored, the rest clamped
+            if slider is not None:
+                values["target_speed_fraction"] = slider
         mask = inputs.get("standard_analog_output_mask")
         if mask:
             types = inputs.get("standard_analog_output_type", 0)
             io_types = values.get("analog_io_types", 0)
             for i, select in enumerate(_ANALOG_OUT_SELECT):
                 if mask & select:
-                    if f"standard_analog_output_{i}" in inputs:
-                        values[f"standard_analog_output{i}"] = float(inputs[f"standard_analog_output_{i}"])
+                    level = fraction(inputs.get(f"standard_analog_output_{i}"))
+                    if level is not None:
+                        values[f"standard_analog_output{i}"] = level
                     voltage = _ANALOG_OUT_VOLTAGE[i]
                     io_types = (io_types | voltage) if types & select else (io_types & ~voltage)
             values["analog_io_types"] = int(io_types)
@@ -282,3 +291,12 @@ class ControllerModel(RobotModes):
         self.values["actual_digital_output_bits"] = updated
         if group == "configurable" and "actual_configurable_digital_output_bits" in self.values:
             self.values["actual_configurable_digital_output_bits"] = updated >> shift & 0xFF
+
+
+def fraction(value: Any) -> float | None:
+    """An RTDE input meant as a fraction: clamped to [0, 1] as the controller does; NaN or inf ignored."""
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        return None
+    return min(1.0, max(0.0, number)) if math.isfinite(number) else None

@@ -3,20 +3,14 @@
 from __future__ import annotations
 
 import json
-import re
 import sys
 from collections.abc import Sequence
 from typing import Any
 
 from rtde_spec.output.base import plain
+from rtde_spec.printable import safe_text
 
-# C0 controls (but not through them tab/newline in a cell), DEL and C1 controls
-_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f]")
-
-
-def safe_text(text: str) -> str:
-    """Control characters as visible escapes (ESC -> \\x1b), so wire text cannot drive the terminal."""
-    return _CONTROL.sub(lambda m: f"\\x{ord(m.group()):02x}", text)
+__all__ = ["print_json", "safe_text", "table"]
 
 
 def print_json(value: Any) -> None:

@@ -22,6 +22,7 @@ from typing import Any
 
 from rtde_spec._generated.constants import RTDE_PORT
 from rtde_spec.errors import ProtocolError, RtdeConnectionError, RtdeSpecError, UsageError
+from rtde_spec.printable import safe_text
 from rtde_spec.rtde.client_protocol import ClientBase, DataRun, InputRecipe, Reply, Text
 
 log = logging.getLogger("rtde_spec.client")
@@ -231,7 +232,8 @@ class RtdeClient(ClientBase):
                 self._deliver(data)
                 data = []
             if isinstance(event, Text):
-                log.log(LOG_LEVELS[min(event.level, 3)], "%s: %s", event.source, event.message)
+                level = LOG_LEVELS[min(event.level, 3)]  # the controller's words, never its escapes
+                log.log(level, "%s: %s", safe_text(str(event.source)), safe_text(str(event.message)))
             else:
                 self._replies.put(event)
         if data:
