@@ -125,6 +125,8 @@ class Framing:
         return out
 
     def _resync(self, final: bool) -> bool:
+        if not self.found_start and self._fills_exactly():
+            return self._synced_at(0)  # a stream captured from its middle, its segments whole packages
         strong = self._find_strong()
         if strong is not None:
             for at in range(strong):  # a candidate before it counts if its headers lead onto it
@@ -151,6 +153,21 @@ class Framing:
                 unfinished = at
         self.scan_from = max(0, last + 1) if unfinished is None else unfinished
         return None
+
+    def _fills_exactly(self) -> bool:
+        """Whether the held bytes are whole packages from the first byte to the last.
+
+        A capture that starts after the handshake starts at a segment, and senders write
+        packages whole: headers that chain from the first byte exactly to the end are the
+        boundary, so the setup exchange a client sends is decoded when it comes, not held
+        for a window it never fills (its replies' data would wait for it, unknown)."""
+        at, end = 0, len(self.buf)
+        while at < end:
+            size = self.plausible(at)
+            if size is None or at + size > end or self.check(self.buf, at, size) == NO:
+                return False
+            at += size
+        return end > 0
 
     def _leads_to(self, at: int, strong: int) -> bool:
         while at < strong:
