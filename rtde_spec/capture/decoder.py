@@ -10,39 +10,24 @@ hole still open in a TCP stream is declared lost and everything after it decoded
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from rtde_spec._generated.constants import DATA_PACKAGE_TYPE, PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.capture.bulk import SIZE_AT, SIZE_BYTES, TYPE_AT
-from rtde_spec.capture.classify import ROBOT_CLIENT_KINDS, connection_for, content_kind, port_kinds
-from rtde_spec.capture.connections import RTDE_HEADER
+from rtde_spec.capture.classify import port_kinds
+from rtde_spec.capture.flows import SCRIPT_KIND, Flow, FlowTable, Route, classify
 from rtde_spec.capture.packets import FIN, RST, SYN, Segment, expand, items
 from rtde_spec.capture.sink import ArrowSink, DirectorySink, TableSink, output_stem
-from rtde_spec.capture.summary import CaptureSummary, ConnectionSummary
-from rtde_spec.capture.tcp import MOD, Direction
+from rtde_spec.capture.summary import CaptureSummary
+from rtde_spec.capture.tcp import MOD, RECENT
 from rtde_spec.errors import OutputError
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
-from rtde_spec.rtde.packages import encode_package
 from rtde_spec.spec.catalogue import Catalogue
 
-# how an RTDE client opens: the header of a protocol version request (its size and type)
-RTDE_VERSION_REQUEST = encode_package("request_protocol_version", {"protocol_version": 2})[:RTDE_HEADER]
 RUN_HEAD = PAYLOAD_OFFSET  # size, type, recipe id: the bytes every data package of one run shares
 RUN_MIN, RUN_MAX = 16, 4096  # shorter runs go segment by segment; longer ones are cut
-SCRIPT_KIND = "urcl-script"  # the script sender's connections: finished first (their programs are read)
-
-
-@dataclass
-class _Flow:
-    client: tuple[str, int]
-    server: tuple[str, int]
-    kind: str
-    decoder: Any
-    directions: dict[str, Direction] = field(
-        default_factory=lambda: {"client": Direction(), "controller": Direction()}
-    )
 
 
 def decode_capture(
@@ -64,44 +49,14 @@ def decode_capture(
     ports = port_kinds(rtde_ports, primary_ports, port_map)
     stats: dict[str, int] = {}
     session: dict[str, Any] = {}  # what this file's connections share (capture/external.py: URCL programs)
-    flows: dict[frozenset[tuple[str, int]], _Flow | None] = {}
-    # (src, sport, dst, dport) -> (flow, sender, its direction): one lookup per segment
-    routes: dict[tuple[str, int, str, int], Route | None] = {}
-    handshakes: dict[frozenset[tuple[str, int]], list[Segment]] = {}  # SYNs of undecided connections
+    table = FlowTable(lambda seg: classify(seg, sink, recipe, ports, cat, session))
     run: _Run | None = None  # data segments, one whole package each, in order: decoded together
-
-    def route_of(seg: Segment) -> Route | bool | None:
-        """The segment's route; False: a handshake on an unknown port, decided on the first data."""
-        route_key = (seg.src, seg.sport, seg.dst, seg.dport)
-        if route_key in routes:
-            return routes[route_key]
-        key = frozenset({(seg.src, seg.sport), (seg.dst, seg.dport)})
-        if key in flows:
-            flow = flows[key]
-        else:
-            flow = _classify(seg, sink, recipe, ports, cat, session)
-            if flow is None and not seg.payload:
-                if seg.flags & SYN:  # kept: the stream starts here if its first data says what it is
-                    handshakes.setdefault(key, []).append(seg)
-                return False
-            flows[key] = flow
-            for syn in handshakes.pop(key, []):
-                if flow is not None:
-                    side = "client" if (syn.src, syn.sport) == flow.client else "controller"
-                    flow.directions[side].feed(syn.time, syn.seq, b"", syn=True)
-        route: Route | None = None
-        if flow is not None:
-            sender = "client" if (seg.src, seg.sport) == flow.client else "controller"
-            route = (flow, sender, flow.directions[sender])
-        routes[route_key] = route
-        return route
 
     def one(seg: Segment) -> None:
         nonlocal run
-        route = route_of(seg)
-        if route is None or route is False:
+        route = table.route_of(seg)
+        if route is None:
             return
-        assert not isinstance(route, bool)
         if run is not None:
             if run.takes(route, seg):
                 return
@@ -110,6 +65,8 @@ def decode_capture(
         run = _Run.start(route, seg)
         if run is None:
             _feed(route, seg)
+        if table.due(seg.time):
+            table.sweep(seg.time, _finish)
 
     try:
         for item in items(path, stats, progress):
@@ -117,36 +74,35 @@ def decode_capture(
                 one(item)
                 continue
             first = next(expand(item))
-            route = route_of(first)
+            route = table.route_of(first)
             if run is not None:  # segments held first, so the direction is where this run starts
                 run.flush()
                 run = None
-            whole = _Run.start(route, first) if isinstance(route, tuple) else None
+            whole = _Run.start(route, first) if route is not None else None
             if whole is None:
                 for seg in expand(item):  # not a run this connection can take whole: segment by segment
                     one(seg)
                 continue
             flow, sender, direction = whole.route
-            direction.advance(item.rows.size)
+            flow.last = float(item.times[-1])
+            direction.advance(item.rows.size, item.rows[-(RECENT // item.rows.shape[1] + 1) :].tobytes())
             flow.decoder.feed_run(sender, whole.codec, item.rows, item.times)
     except BaseException as exc:  # Ctrl-C on a live pipe, a read error: what was decoded reaches the tables
         if run is not None:
             run.flush()
-        live = [f for f in flows.values() if f is not None]
-        for flow in live:
+        for flow in table.live():
             flow.decoder.close()
         if isinstance(exc, KeyboardInterrupt):
-            raise CaptureInterrupted(_summary(path, stats, live)) from exc
+            raise CaptureInterrupted(_summary(path, stats, table)) from exc
         raise
     if run is not None:
         run.flush()
-    live = [f for f in flows.values() if f is not None]
-    for flow in sorted(live, key=lambda f: f.kind != SCRIPT_KIND):  # programs whole before their readers
+    for flow in sorted(table.live(), key=lambda f: f.kind != SCRIPT_KIND):  # programs whole before readers
         _finish(flow)
-    return _summary(path, stats, live)
+    return _summary(path, stats, table)
 
 
-def _finish(flow: _Flow) -> None:
+def _finish(flow: Flow) -> None:
     """The end of the capture: every hole still open is lost; what follows it is decoded."""
     decoder = flow.decoder
     for sender, direction in flow.directions.items():
@@ -161,26 +117,9 @@ def _finish(flow: _Flow) -> None:
     decoder.close()
 
 
-def _summary(path: str | Path, stats: dict[str, int], flows: list[_Flow]) -> CaptureSummary:
+def _summary(path: str | Path, stats: dict[str, int], table: FlowTable) -> CaptureSummary:
     summary = CaptureSummary(str(path), stats.get("frames", 0), reading=dict(stats))
-    for flow in flows:
-        counts = flow.decoder.counts
-        framings = flow.decoder.framings().values()
-        summary.connections.append(
-            ConnectionSummary(
-                flow.decoder.name,
-                flow.kind,
-                counts.packages,
-                sum(d.gaps for d in flow.directions.values()),
-                sum(d.lost_bytes for d in flow.directions.values()),
-                counts.errors.lines(),
-                counts.unknown_recipe_sizes,
-                skipped_bytes=sum(f.skipped for f in framings),
-                cut_packages=sum(f.cut for f in framings),
-                lead_in_bytes=sum(f.lead_in for f in framings),
-                notes=list(getattr(flow.decoder, "notes", ())),
-            )
-        )
+    summary.connections = table.summaries()
     return summary
 
 
@@ -193,7 +132,6 @@ class CaptureInterrupted(KeyboardInterrupt):
         self.summary = summary
 
 
-Route = tuple[_Flow, str, Direction]  # the flow, who sends, and that sender's direction
 _NOT_DATA = SYN | FIN | RST
 
 
@@ -259,36 +197,9 @@ class _Run:
         import numpy as np
 
         data = b"".join(s.payload for s in self.segments)
-        direction.advance(len(data))
+        direction.advance(len(data), data[-RECENT:])
         rows = np.frombuffer(data, dtype=np.uint8).reshape(len(self.segments), -1)
         flow.decoder.feed_run(sender, self.codec, rows, np.array([s.time for s in self.segments]))
-
-
-def _classify(
-    seg: Any,
-    sink: TableSink,
-    recipe: RecipeCodec | None,
-    ports: Mapping[int, str],
-    cat: Catalogue,
-    session: dict[str, Any],
-) -> _Flow | None:
-    src, dst = (seg.src, seg.sport), (seg.dst, seg.dport)
-    if seg.dport in ports:
-        client, server, kind = src, dst, ports[seg.dport]
-    elif seg.sport in ports:
-        client, server, kind = dst, src, ports[seg.sport]
-    elif seg.payload.startswith(RTDE_VERSION_REQUEST):
-        client, server, kind = src, dst, "rtde"  # RTDE on another port, recognised by its first request
-    elif (found := content_kind(seg.payload)) is not None:
-        client, server, kind = dst, src, found  # the controller speaks first: its first message
-    else:
-        return None
-    name = f"{client[0]}:{client[1]}-{server[0]}:{server[1]}"
-    decoder = connection_for(
-        kind, name, client[0], server[0], sink, recipe=recipe, catalogue=cat, session=session
-    )
-    label = f"urcl-{kind}" if kind in ROBOT_CLIENT_KINDS else kind
-    return _Flow(client, server, label if kind != "script_sender" else SCRIPT_KIND, decoder)
 
 
 def decode_to_directory(

@@ -36,6 +36,8 @@ from rtde_spec.wire.columns import decode_columns, record_dtype
 SIDE = {"client": "robot", "controller": "driver"}  # the flow's sender names on a driver-served port
 MAX_SCRIPT = MAX_PROGRAM_BYTES
 BATCH = 4096  # records of one variant decoded together into columns
+MAX_LINE = 4096  # a robot's request line is a word or two: longer ones are cut, counted and reported
+MAX_REQUESTS = 1000  # requests kept per connection (the robot asks once per program start)
 MAX_HELD = 4 << 20  # bytes held waiting for a layout; past that it is chosen from what is known
 
 
@@ -228,27 +230,28 @@ class ScriptSenderConnection:
         self.counts = Counts()
         self.programs = programs_of(session)
         self.port = name.rpartition(":")[2]  # the server's (driver's) port: the name ends with it
+        self.extra_requests = 0  # requests past MAX_REQUESTS: counted, not kept
+        self.over = 0  # bytes of replies to those
+        self.cut_bytes = 0  # bytes of robot lines past MAX_LINE
 
     def _new(self, request: _Request) -> None:
+        """A request (a row at the end); past MAX_REQUESTS only counted: memory stays bounded."""
+        if len(self.requests) >= MAX_REQUESTS:
+            self.extra_requests += 1
+            return
         self.requests.append(request)
         if self.programs is not None:  # the text grows in place: readers see what has arrived
             self.programs.add(self.robot, self.port, request)
 
     def feed(self, sender: str, chunk: Chunk) -> None:
         if sender == "client":
-            self.pending += chunk.data
-            while b"\n" in self.pending:
-                line, _, rest = bytes(self.pending).partition(b"\n")
-                self.pending = bytearray(rest)
-                self._new(_Request(chunk.time, line.decode("utf-8", "replace")))
-                self.counts.packages += 1
-                if line != self.request:
-                    self.counts.errors.append(
-                        f"robot line at {chunk.time:.6f} is not a program request: {line[:60]!r}"
-                    )
+            self._lines(chunk)
             return
         if not self.requests:  # text before any request (a capture started late)
             self._new(_Request(chunk.time, ""))
+        if self.extra_requests:  # replies to requests past the bound: counted
+            self.over += len(chunk.data)
+            return
         current = self.requests[-1]
         current.gaps += 1 if chunk.gap_before else 0
         current.reply_time = current.reply_time if current.reply_time is not None else chunk.time
@@ -257,10 +260,46 @@ class ScriptSenderConnection:
         current.reply += chunk.data[:room]
         current.dropped += max(0, len(chunk.data) - room)
 
+    def _lines(self, chunk: Chunk) -> None:
+        """The robot's request lines: each new byte looked at once; a line is at most MAX_LINE."""
+        data, pos = chunk.data, 0
+        if self.extra_requests:  # past the bound: lines are only counted, all of this chunk's at once
+            lines = data.count(b"\n")
+            if lines:
+                self.counts.packages += lines
+                self.extra_requests += lines
+                self.pending.clear()
+                pos = data.rindex(b"\n") + 1
+        while (end := data.find(b"\n", pos)) != -1:
+            piece = data[pos : min(end, pos + MAX_LINE - len(self.pending))]
+            line = bytes(self.pending) + piece if self.pending else bytes(piece)
+            self.cut_bytes += (end - pos) - len(piece)
+            self.pending.clear()
+            pos = end + 1
+            self.counts.packages += 1
+            self._new(_Request(chunk.time, line.decode("utf-8", "replace")))
+            if line != self.request:
+                self.counts.errors.append(
+                    f"robot line at {chunk.time:.6f} is not a program request: {line[:60]!r}"
+                )
+        rest = data[pos:]
+        room = max(0, MAX_LINE - len(self.pending))
+        self.pending += rest[:room]
+        self.cut_bytes += len(rest) - min(room, len(rest))
+
     def framings(self) -> dict[str, _NoFraming]:
         return self.framing
 
     def finish(self) -> None:
+        if self.pending:
+            self.counts.errors.append(f"the robot's last line has no end ({len(self.pending)} bytes)")
+        if self.cut_bytes:
+            self.counts.errors.append(f"{self.cut_bytes} bytes of robot lines over {MAX_LINE} bytes cut")
+        if self.extra_requests or self.over:
+            self.counts.errors.append(
+                f"{self.extra_requests} requests past the first {MAX_REQUESTS} of this connection "
+                f"counted, not kept ({self.over} bytes of their replies)"
+            )
         for req in self.requests:
             latency = req.reply_time - req.time if req.reply_time is not None and req.line else None
             row = {

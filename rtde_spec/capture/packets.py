@@ -1,7 +1,7 @@
 """TCP segments out of pcap and pcapng files, headers read with `struct`.
 
 Link types: Ethernet (with 802.1Q/802.1ad tags), Linux cooked (SLL and SLL2), BSD
-loopback/null and raw IP; IPv4 (not fragmented) and IPv6 (hop-by-hop, routing and
+loopback/null and raw IP; IPv4 (fragments put back together) and IPv6 (hop-by-hop, routing and
 destination options skipped). Anything else is counted, not decoded.
 """
 
@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 from rtde_spec.capture.bulk import DataRun, run_of, runs
+from rtde_spec.capture.ipfrag import Addresses
 from rtde_spec.capture.pcapfile import blocks
 
 FIN, SYN, RST = 0x01, 0x02, 0x04
@@ -54,8 +55,9 @@ def _ip_start(linktype: int, frame: bytes) -> tuple[int, int] | None:
     return None
 
 
-def _tcp_of(linktype: int, frame: bytes, addresses: dict[bytes, str]) -> tuple[str, str, int, int] | None:
-    """(src, dst, TCP header offset, end of the TCP segment); None when the frame is not TCP."""
+def _tcp_of(linktype: int, frame: bytes, book: Addresses) -> tuple[str, str, int, int, bytes] | None:
+    """(src, dst, TCP header offset, end of the TCP segment, the frame they are in); None when the
+    frame is not TCP, or a fragment of a datagram not yet whole."""
     start = _ip_start(linktype, frame)
     if start is None:
         return None
@@ -66,7 +68,8 @@ def _tcp_of(linktype: int, frame: bytes, addresses: dict[bytes, str]) -> tuple[s
         if frame[at + 9] != TCP:
             return None
         if int.from_bytes(frame[at + 6 : at + 8], "big") & 0x3FFF:  # more fragments, or an offset
-            return None
+            whole = book.fragments.add(frame, at)
+            return None if whole is None else _tcp_of(1, whole, book)
         end = min(len(frame), at + int.from_bytes(frame[at + 2 : at + 4], "big"))  # not the padding
         src, dst, family = frame[at + 12 : at + 16], frame[at + 16 : at + 20], socket.AF_INET
         tcp = at + (frame[at] & 0x0F) * 4
@@ -84,25 +87,30 @@ def _tcp_of(linktype: int, frame: bytes, addresses: dict[bytes, str]) -> tuple[s
         return None
     if tcp + 20 > end:
         return None
+    names = book.names
     for raw in (src, dst):
-        if raw not in addresses:
-            addresses[raw] = socket.inet_ntop(family, raw)
-    return addresses[src], addresses[dst], tcp, end
+        if raw not in names:
+            if len(names) >= book.MAX:
+                names.clear()
+            names[raw] = socket.inet_ntop(family, raw)
+    return names[src], names[dst], tcp, end, frame
 
 
 def _segment(
-    ts: float, linktype: int, frame: bytes, addresses: dict[bytes, str], counts: dict[str, int]
+    ts: float, linktype: int, frame: bytes, book: Addresses, counts: dict[str, int]
 ) -> Segment | None:
     """The TCP segment in one frame; None (counted) when it is not one."""
+    fragments = counts.get("ip_fragments", 0)
     try:
-        found = _tcp_of(linktype, frame, addresses)
+        found = _tcp_of(linktype, frame, book)
     except (IndexError, ValueError, OSError):
         counts["undecodable"] = counts.get("undecodable", 0) + 1
         return None
     if found is None:
-        counts["not_tcp"] = counts.get("not_tcp", 0) + 1
+        if counts.get("ip_fragments", 0) == fragments:  # a fragment waiting for the rest is not "not TCP"
+            counts["not_tcp"] = counts.get("not_tcp", 0) + 1
         return None
-    src, dst, at, end = found
+    src, dst, at, end, frame = found
     sport, dport, seq, offset, flags = _TCP.unpack_from(frame, at)
     data = at + (offset >> 4) * 4
     if data > end:
@@ -121,7 +129,7 @@ def items(
     """
     counts = stats if stats is not None else {}
     counts.setdefault("frames", 0)
-    addresses: dict[bytes, str] = {}  # raw address -> text, converted once per address
+    book = Addresses(counts)  # raw address -> text, converted once per address; IPv4 fragments
     with open(path, "rb") as f:
         for records in blocks(f, str(path), counts):
             buf = records.buf
@@ -132,7 +140,7 @@ def items(
             for first, end in [*runs(records), (len(offsets), len(offsets))]:
                 for k in range(done, first):
                     frame = buf[offsets[k] : offsets[k] + lengths[k]]
-                    seg = _segment(times[k], links[k], frame, addresses, counts)
+                    seg = _segment(times[k], links[k], frame, book, counts)
                     if seg is not None:
                         yield seg
                 if first < end:

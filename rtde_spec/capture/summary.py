@@ -26,6 +26,9 @@ class ConnectionSummary:
     cut_packages: int = 0  # begun before a gap and never completed (the end of the capture: in errors)
     lead_in_bytes: int = 0  # before the first package of a connection captured from its middle
     notes: list[str] = field(default_factory=list)  # choices made decoding it (a URCL layout), not damage
+    conflicts: int = 0  # retransmissions whose bytes differ from the copy decoded
+    conflict_bytes: int = 0
+    folded: int = 0  # how many connections this line stands for, past the ones listed (0: itself)
 
 
 @dataclass
@@ -66,6 +69,11 @@ class CaptureSummary:
                 out.append(
                     f"{c.name}: {c.skipped_bytes} bytes skipped to find the next package "
                     f"({c.cut_packages} packages cut)"
+                )
+            if c.conflicts:
+                out.append(
+                    f"{c.name}: {c.conflicts} retransmissions with other bytes than the first copy "
+                    f"({c.conflict_bytes} bytes; the first copy was decoded)"
                 )
             out += [f"{c.name}: {e}" for e in c.errors]
         return out

@@ -1,23 +1,33 @@
 """TCP streams: reassembly of one direction of one connection (the layer after packets).
 
 In order: data is delivered at once. Retransmitted and overlapping segments deliver
-only the bytes not seen yet. Out-of-order segments wait behind the hole before them
-for its retransmission, which a sender makes within its retransmission time-out
-(200 ms and up). When the hole has waited HOLE_SECONDS of capture time, or more than
-MAX_WAITING bytes wait, it is declared lost: it is counted as a gap of so many bytes
-and delivery resumes after it; the framing above then looks for the next package.
-At the end of the capture every hole still open is declared lost (`drain`), so data
-after any number of holes is delivered. This module knows nothing of the protocols.
+only the bytes not seen yet; where they overlap bytes seen recently (the last
+`RECENT` delivered, or a segment waiting at the same place) with other bytes, the
+difference is counted as a conflict (the first copy is kept). Out-of-order segments
+wait behind the hole before them for its retransmission, which a sender makes within
+its retransmission time-out (200 ms and up). When the hole has waited HOLE_SECONDS of
+capture time, or more than MAX_WAITING bytes wait, it is declared lost: it is counted
+as a gap of so many bytes and delivery resumes after it; the framing above then looks
+for the next package. At the end of the capture every hole still open is declared
+lost (`drain`), so data after any number of holes is delivered.
+
+Every segment costs O(log n) in the segments waiting (a heap of their places, a queue
+of their arrival times), whatever the pattern of holes: sequence numbers are unwrapped
+to absolute stream positions, so ordering never scans. This module knows nothing of
+the protocols.
 """
 
 from __future__ import annotations
 
+import heapq
+from collections import deque
 from dataclasses import dataclass, field
 
 MOD = 1 << 32
 HALF = MOD // 2
 MAX_WAITING = 1 << 20  # bytes held behind a hole before it is declared lost: bounds memory
 HOLE_SECONDS = 2.0  # capture seconds a hole waits for its retransmission (TCP's RTO is 0.2 s to ~1 s)
+RECENT = 16 << 10  # delivered bytes kept to compare retransmissions with
 
 
 @dataclass
@@ -30,95 +40,145 @@ class Chunk:
 
 @dataclass
 class Direction:
-    next_seq: int | None = None
-    waiting: dict[int, tuple[float, bytes]] = field(default_factory=dict)
+    base: int | None = None  # the sequence number of stream position 0
+    pos: int = 0  # stream position of the next byte expected (sequence numbers unwrapped)
+    waiting: dict[int, tuple[float, bytes]] = field(default_factory=dict)  # position -> (time, bytes)
     waiting_bytes: int = 0
-    waiting_since: float = 0.0  # capture time of the oldest segment waiting
     gaps: int = 0
     lost_bytes: int = 0
+    conflicts: int = 0  # retransmissions whose bytes differ from the copy kept
+    conflict_bytes: int = 0
     midstream: bool = False  # no SYN seen: the next chunk delivered is the first, from mid-stream
+    _starts: list[int] = field(default_factory=list)  # heap of waiting positions
+    _arrivals: deque[tuple[float, int]] = field(default_factory=deque)  # (time, position), oldest first
+    _recent: bytearray = field(default_factory=bytearray)  # the last delivered bytes, ending at `pos`
+
+    @property
+    def next_seq(self) -> int | None:
+        return None if self.base is None else (self.base + self.pos) % MOD
+
+    def _at(self, seq: int) -> int:
+        """The stream position of sequence number `seq` (the nearest one to where the stream is)."""
+        assert self.base is not None
+        rel = (seq - self.base - self.pos) % MOD
+        return self.pos + (rel - MOD if rel >= HALF else rel)
 
     def feed(self, time: float, seq: int, payload: bytes, syn: bool = False) -> list[Chunk]:
         if syn:
-            self.next_seq = (seq + 1) % MOD
+            self.base, self.pos = (seq + 1) % MOD, 0
             return []
         if not payload:
             return []
-        out: list[Chunk] = []
-        if self.next_seq is None:  # a capture that starts mid-stream
-            self.next_seq = seq
+        if self.base is None:  # a capture that starts mid-stream
+            self.base, self.pos = seq, 0
             self.midstream = True
-        offset = (seq - self.next_seq) % MOD
-        if offset >= HALF:  # at or before next_seq: a retransmission, maybe overlapping
-            already = (self.next_seq - seq) % MOD
-            if already >= len(payload):
-                return out
-            payload = payload[already:]
-            offset = 0
-        if offset == 0:
+        start = self._at(seq)
+        end = start + len(payload)
+        if start < self.pos:  # a retransmission, maybe overlapping new bytes
+            self._compare_recent(start, payload)
+            if end <= self.pos:
+                return []
+            payload = payload[self.pos - start :]
+            start = self.pos
+        out: list[Chunk] = []
+        if start == self.pos:
             out.append(Chunk(time, payload, midstream=self.midstream))
             self.midstream = False
-            self.next_seq = (self.next_seq + len(payload)) % MOD
+            self._delivered(payload)
             if self.waiting:
                 out += self._drain()
             return out
-        held = self.waiting.get(seq)
+        held = self.waiting.get(start)
+        if held is not None:
+            self._compare(held[1], payload)
         if held is None or len(held[1]) < len(payload):  # a longer retransmission replaces a shorter
-            if not self.waiting:
-                self.waiting_since = time
-            self.waiting[seq] = (time, payload)
+            if held is None:
+                heapq.heappush(self._starts, start)
+            self.waiting[start] = (time, payload)
+            self._arrivals.append((time, start))
             self.waiting_bytes += len(payload) - (len(held[1]) if held else 0)
-        while self.waiting and (self.waiting_bytes > MAX_WAITING or time - self.waiting_since > HOLE_SECONDS):
+        while self.waiting and (self.waiting_bytes > MAX_WAITING or time - self._oldest() > HOLE_SECONDS):
             out += self.skip_gap()
         return out
 
+    def _oldest(self) -> float:
+        """Capture time of the oldest segment still waiting (queue entries of gone ones dropped)."""
+        arrivals, waiting = self._arrivals, self.waiting
+        while arrivals:
+            time, start = arrivals[0]
+            held = waiting.get(start)
+            if held is not None and held[0] == time:
+                return time
+            arrivals.popleft()
+        return 0.0
+
+    def _delivered(self, data: bytes) -> None:
+        self.pos += len(data)
+        recent = self._recent
+        recent += data[-RECENT:]
+        if len(recent) > 2 * RECENT:
+            del recent[: len(recent) - RECENT]
+
+    def _compare(self, kept: bytes, other: bytes) -> None:
+        n = min(len(kept), len(other))
+        if kept[:n] != other[:n]:
+            self.conflicts += 1
+            self.conflict_bytes += n
+
+    def _compare_recent(self, start: int, payload: bytes) -> None:
+        """A retransmission of delivered bytes: compared where they are still known."""
+        known_from = self.pos - len(self._recent)
+        lo = max(start, known_from)
+        hi = min(start + len(payload), self.pos)
+        if lo < hi:
+            kept = bytes(self._recent[lo - known_from : hi - known_from])
+            self._compare(kept, payload[lo - start : hi - start])
+
     def _drain(self) -> list[Chunk]:
-        """Deliver what waits from next_seq on, until the next hole."""
+        """Deliver what waits from `pos` on, until the next hole."""
         out: list[Chunk] = []
-        waiting = self.waiting
-        while waiting:
-            assert self.next_seq is not None
-            found = waiting.pop(self.next_seq, None)
-            if found is not None:  # the usual case: the segment that follows exactly
-                time, payload = found
-                self.waiting_bytes -= len(payload)
-                out.append(Chunk(time, payload))
-                self.next_seq = (self.next_seq + len(payload)) % MOD
+        starts, waiting = self._starts, self.waiting
+        while starts and starts[0] <= self.pos:
+            start = heapq.heappop(starts)
+            found = waiting.pop(start, None)
+            if found is None:
                 continue
-            nxt = self.next_seq
-            ready = [s for s in waiting if (s - nxt) % MOD >= HALF]  # starting before next_seq
-            if not ready:
-                break
-            for s in sorted(ready, key=lambda s: (s - nxt) % MOD):
-                time, payload = waiting.pop(s)
-                self.waiting_bytes -= len(payload)
-                already = (self.next_seq - s) % MOD
-                if already < HALF and already < len(payload):
-                    out.append(Chunk(time, payload[already:]))
-                    self.next_seq = (self.next_seq + len(payload) - already) % MOD
-        if waiting:
-            self.waiting_since = min(t for t, _ in waiting.values())
+            time, payload = found
+            self.waiting_bytes -= len(payload)
+            if start < self.pos:
+                self._compare_recent(start, payload)
+                if start + len(payload) <= self.pos:
+                    continue
+                payload = payload[self.pos - start :]
+            out.append(Chunk(time, payload))
+            self._delivered(payload)
         return out
 
     def in_order_at(self, seq: int) -> bool:
         """Whether a segment at `seq` would be delivered as it is: next in order, nothing waiting."""
         return self.next_seq == seq and not self.waiting
 
-    def advance(self, size: int) -> None:
-        """Account for `size` bytes delivered in order outside `feed` (a run of whole packages)."""
-        assert self.next_seq is not None
-        self.next_seq = (self.next_seq + size) % MOD
+    def advance(self, size: int, tail: bytes = b"") -> None:
+        """Account for `size` bytes delivered in order outside `feed` (a run of whole packages);
+        `tail`, the last of them, is kept to compare retransmissions with."""
+        assert self.base is not None
+        if len(tail) < size:
+            self._recent.clear()  # what comes before the tail is not known here
+        self.pos += size - len(tail)
+        self._delivered(tail)
 
     def skip_gap(self) -> list[Chunk]:
         """Declare the hole before the earliest waiting segment lost; deliver up to the next hole."""
-        if not self.waiting or self.next_seq is None:
+        starts, waiting = self._starts, self.waiting
+        while starts and starts[0] not in waiting:
+            heapq.heappop(starts)
+        if not starts or self.base is None:
             return []
-        nxt = self.next_seq
-        first = min(self.waiting, key=lambda s: (s - nxt) % MOD)
-        lost = (first - nxt) % MOD
+        lost = starts[0] - self.pos
         self.gaps += 1
         self.lost_bytes += lost
-        self.next_seq = first
+        self.pos = starts[0]
+        self._recent.clear()  # the bytes before the hole are no longer next to these
         chunks = self._drain()
         if chunks:
             chunks[0].gap_before = lost

@@ -23,7 +23,7 @@ class Program:
     request: ProgramText
 
 
-MAX_PROGRAM_BYTES = 16 << 20  # a program longer than this is not one: the rest is counted, not kept
+MAX_PROGRAM_BYTES = 4 << 20  # a program longer than this is not one (URCL's is 50 kB): the rest is counted
 
 
 @dataclass
