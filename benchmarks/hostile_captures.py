@@ -51,16 +51,18 @@ def syn_flood(path: Path, count: int) -> Path:
     def frames() -> Iterator[tuple[float, bytes]]:
         dst = _ip(0x010101)
         for i in range(count):
-            yield 1_700_000_000 + i * 1e-5, _frame(_ip(i + 2), 1024 + i % 60000, dst, 1 + i % 1000, i, SYN, b"")
+            yield (
+                1_700_000_000 + i * 1e-5,
+                _frame(_ip(i + 2), 1024 + i % 60000, dst, 1 + i % 1000, i, SYN, b""),
+            )
 
     return write(path, frames())
 
 
 def rtde_connections(path: Path, count: int, packages: int = 4) -> Path:
     """`count` RTDE sessions one after another: handshake, setup, data, FIN both ways."""
-    from tests.capture_files import SMALL, rtde_packages
-
     from rtde_spec import Catalogue, build
+    from tests.capture_files import SMALL, rtde_packages
 
     cat = Catalogue.builtin()
     types = [cat.get(n, "output").type for n in SMALL]  # type: ignore[union-attr]
@@ -114,7 +116,12 @@ def holes(path: Path, count: int) -> Path:
         yield t, _frame(server, 30004, client, 51000, 4999, SYN | ACK, b"")
         for i in range(count):
             t += 1e-4
-            yield t, _frame(server, 30004, client, 51000, 5000 + 2 * i + 1, ACK | PSH, stream[2 * i + 1 : 2 * i + 2])
+            yield (
+                t,
+                _frame(
+                    server, 30004, client, 51000, 5000 + 2 * i + 1, ACK | PSH, stream[2 * i + 1 : 2 * i + 2]
+                ),
+            )
 
     return write(path, frames())
 
@@ -125,7 +132,9 @@ def script_stream(path: Path, size: int, newlines: bool, from_robot: bool = True
 
     def frames() -> Iterator[tuple[float, bytes]]:
         robot, driver = _ip(10), _ip(2)
-        src, sport, dst, dport = (robot, 40000, driver, 50002) if from_robot else (driver, 50002, robot, 40000)
+        src, sport, dst, dport = (
+            (robot, 40000, driver, 50002) if from_robot else (driver, 50002, robot, 40000)
+        )
         t = 1_700_000_000.0
         yield t, _frame(robot, 40000, driver, 50002, 999, SYN, b"")
         yield t, _frame(driver, 50002, robot, 40000, 4999, SYN | ACK, b"")

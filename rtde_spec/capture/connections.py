@@ -221,6 +221,8 @@ class RtdeConnection:
             fields_json = json.dumps(plain(message.values))
             row = {**base, "package": message.name, "fields": fields_json, "note": decoded.note or ""}
             self.sink.row("rtde_setup", self.robot, day_of(time), row)
+            if decoded.problem:
+                self.counts.errors.append(f"{sender} {message.name} at {time:.6f}: {decoded.problem}")
 
     def close(self) -> None:
         for key in list(self.batches):

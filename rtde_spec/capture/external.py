@@ -291,15 +291,17 @@ class ScriptSenderConnection:
         return self.framing
 
     def finish(self) -> None:
+        bounds = []  # first in the list: never lost among a flood's own problems
         if self.pending:
-            self.counts.errors.append(f"the robot's last line has no end ({len(self.pending)} bytes)")
+            bounds.append(f"the robot's last line has no end ({len(self.pending)} bytes)")
         if self.cut_bytes:
-            self.counts.errors.append(f"{self.cut_bytes} bytes of robot lines over {MAX_LINE} bytes cut")
+            bounds.append(f"{self.cut_bytes} bytes of robot lines over {MAX_LINE} bytes cut")
         if self.extra_requests or self.over:
-            self.counts.errors.append(
+            bounds.append(
                 f"{self.extra_requests} requests past the first {MAX_REQUESTS} of this connection "
                 f"counted, not kept ({self.over} bytes of their replies)"
             )
+        self.counts.errors[:0] = bounds
         for req in self.requests:
             latency = req.reply_time - req.time if req.reply_time is not None and req.line else None
             row = {

@@ -144,9 +144,13 @@ class FlowTable:
 
     def summaries(self) -> list[ConnectionSummary]:
         """Every connection's summary: finished ones, folded ones, then those still open."""
+        for flow in self.flows.values():  # at the end: those still open count like the finished
+            self._keep(connection_summary(flow))
+        self.flows.clear()
+        self.routes.clear()
         for kind, folded in self.folded.items():
             folded.name = f"{folded.folded} more {kind} connections"
-        return [*self.finished, *self.folded.values(), *(connection_summary(f) for f in self.flows.values())]
+        return [*self.finished, *self.folded.values()]
 
     def live(self) -> list[Flow]:
         return list(self.flows.values())

@@ -286,7 +286,13 @@ class ClientProtocol:
         if refused or recipe_id == INVALID_ID:
             reason = ", ".join(refused) or "the controller refused the recipe"
             raise RecipeError(f"{direction} recipe refused by the controller: {reason}")
-        codec = RecipeCodec.for_types(list(names), types[: len(names)], self.catalogue)
+        if len(types) != len(names):  # a reply for another request, or broken: never read half of it
+            raise RecipeError(
+                f"{direction} setup reply lists {len(types)} types for the {len(names)} names requested",
+                expected=len(names),
+                actual=len(types),
+            )
+        codec = RecipeCodec.for_types(list(names), types, self.catalogue)
         if direction == "output":
             self.output, self.output_recipe_id = codec, recipe_id
             # size, type and recipe id: a package of another recipe is never read as this one

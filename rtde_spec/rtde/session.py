@@ -38,6 +38,7 @@ class DecodedPackage:
     package: Package  # name and values, from the layout engine
     values: dict[str, Any] | None = None  # data packages whose recipe is known
     note: str | None = None
+    problem: str | None = None  # a package that breaks the protocol (a setup reply that fits no request)
 
     @cached_property
     def message(self) -> RtdeMessage:
@@ -91,7 +92,7 @@ class SessionDecoder:
         try:
             self.recipes[(direction, recipe_id)] = shared_codec(names, types, self.catalogue)
         except RecipeError as exc:
-            out.note = str(exc)
+            out.note = out.problem = str(exc)
 
 
 _CODECS: dict[tuple[int, tuple[str, ...], tuple[str, ...]], tuple[Any, RecipeCodec]] = {}
