@@ -4,6 +4,8 @@
   foreign exceptions (not the library's own) in a fuzz of mutated captures;
 - recording: rows kept after SIGTERM, SIGHUP and SIGKILL of `rtde-spec record`,
   against the rows the emulator sent before the signal;
+- hostile captures: holes, floods, endless streams, 50k connections: time at two sizes, peak RSS;
+- a full disk under `record`, and a 280-file capture under `ulimit -n 256`;
 - hostile bytes: peak RSS and time of the bomb inputs (`faults_bombs.py`);
 - the emulator: packages missed by 4 well-behaved clients at 500 Hz beside hostile
   ones, and the server's memory growth (the test in tests/faults/, its report).
@@ -28,10 +30,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
 
 
-def capture_figures(cases: int) -> dict[str, Any]:
-    from faults_capture import foreign_exceptions, rows_kept
+def capture_figures(cases: int, scale: float = 1.0) -> dict[str, Any]:
+    from faults_capture import foreign_exceptions, hostile_figures, rows_kept
 
-    return {"gaps": rows_kept(), "fuzz": foreign_exceptions(cases)}
+    return {"gaps": rows_kept(), "fuzz": foreign_exceptions(cases), "hostile": hostile_figures(scale)}
 
 
 def bomb_figures() -> Any:
@@ -82,6 +84,64 @@ def record_figures(seconds: float) -> list[dict[str, Any]]:
     return out
 
 
+def full_disk_figures() -> list[dict[str, Any]]:
+    """`record` over a good recording on a 384 kB tmpfs that fills: was the old file kept, and said?"""
+    import hashlib
+    import os
+
+    from tests.faults.record_run import emulator, run
+
+    rows: list[dict[str, Any]] = []
+    with tempfile.TemporaryDirectory() as tmp:
+        disk = Path(tmp) / "disk"
+        disk.mkdir()
+        if subprocess.run(["mount", "-t", "tmpfs", "-o", "size=384k", "bench", str(disk)]).returncode:
+            return [{"format": "all", "outcome": "not measured: this process may not mount a tmpfs"}]
+        emu_iter = emulator()
+        emu = next(emu_iter)
+        try:
+            for fmt in ("parquet", "csv", "jsonl", "mcap"):
+                for old in disk.iterdir():
+                    old.unlink()
+                out = disk / f"run.{fmt}"
+                run(emu, out, "--samples", "200")
+                before = hashlib.sha256(out.read_bytes()).hexdigest()
+                stat = os.statvfs(disk)
+                (disk / "filler").write_bytes(b"\0" * max(0, stat.f_bavail * stat.f_frsize - 60_000))
+                result = run(emu, out, "--samples", "20000")
+                kept = hashlib.sha256(out.read_bytes()).hexdigest() == before
+                said = result.stderr.strip().splitlines()[-1] if result.stderr.strip() else ""
+                rows.append({"format": fmt, "exit": result.returncode, "old file kept": kept, "said": said})
+        finally:
+            emu.stop()
+            subprocess.run(["umount", "-l", str(disk)])
+    return rows
+
+
+def open_file_figures() -> list[dict[str, Any]]:
+    """A 70-robot, 2-day capture (280 files) under `ulimit -n 256`, every format."""
+    import resource
+    import time
+
+    from tests.faults.test_open_files import ROBOTS, fleet
+
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        pcap = fleet(Path(tmp) / "fleet.pcap")
+        for fmt in ("parquet", "csv", "jsonl", "mcap"):
+            out = Path(tmp) / fmt
+            start = time.perf_counter()
+            done = subprocess.run(
+                [sys.executable, "-m", "rtde_spec", "capture", str(pcap), "-o", str(out), "--format", fmt],
+                capture_output=True, text=True, cwd=ROOT,
+                preexec_fn=lambda: resource.setrlimit(resource.RLIMIT_NOFILE, (256, 256)),
+            )  # fmt: skip
+            files = sum(1 for p in out.rglob("*") if p.is_file() and not p.name.startswith("recipes-"))
+            rows.append({"format": fmt, "exit": done.returncode, "files": f"{files} of {ROBOTS * 4}",
+                         "seconds": round(time.perf_counter() - start, 2)})  # fmt: skip
+    return rows
+
+
 def emulator_figures() -> str:
     from tests.faults import test_emulator_hostile
 
@@ -95,13 +155,16 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--fuzz-cases", type=int, default=500, help="mutated captures (500)")
     parser.add_argument("--record-seconds", type=float, default=3.0, help="recording before a signal (3)")
+    parser.add_argument("--hostile-scale", type=float, default=1.0, help="size of the hostile captures (1)")
     parser.add_argument("--skip-emulator", action="store_true", help="leave out the 10 s emulator run")
     parser.add_argument("--json", action="store_true", help="print JSON")
     args = parser.parse_args()
     figures: dict[str, Any] = {
-        "capture": capture_figures(args.fuzz_cases),
+        "capture": capture_figures(args.fuzz_cases, args.hostile_scale),
         "record": record_figures(args.record_seconds),
         "bombs": bomb_figures(),
+        "full disk": full_disk_figures(),
+        "open files": open_file_figures(),
     }
     if not args.skip_emulator:
         figures["emulator"] = emulator_figures()
@@ -113,8 +176,17 @@ def main() -> int:
         print(f"  {row['case']:58} {row['kept']:>6} of {row['decodable']:>6} decodable, {row['gaps']} gaps")
     fuzz = figures["capture"]["fuzz"]
     print(f"  capture fuzz: {fuzz['foreign']} foreign exceptions in {fuzz['cases']} mutated captures")
+    from faults_capture import print_hostile
+
+    print_hostile(figures["capture"]["hostile"])
     print("recording: what a signal leaves")
     for row in figures["record"]:
+        print("  " + ", ".join(f"{k} {v}" for k, v in row.items()))
+    print("full disk: record over a good recording on a filling 384 kB tmpfs")
+    for row in figures["full disk"]:
+        print("  " + ", ".join(f"{k} {v}" for k, v in row.items()))
+    print("open files: a 70-robot, 2-day capture under ulimit -n 256")
+    for row in figures["open files"]:
         print("  " + ", ".join(f"{k} {v}" for k, v in row.items()))
     print("hostile bytes (peak RSS, time, outcome)")
     bombs = figures["bombs"]

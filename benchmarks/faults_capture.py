@@ -1,6 +1,7 @@
-"""Capture under faults (issue 18): rows kept after N TCP gaps, and foreign exceptions in the fuzz.
+"""Capture under faults (issues 18, 31): rows kept after N TCP gaps, foreign exceptions in the fuzz,
+and hostile captures (holes, floods, endless streams, many connections) in linear time and bounded memory.
 
-    python benchmarks/faults_capture.py [--cases 2500] [--json]
+    python benchmarks/faults_capture.py [--cases 2500] [--scale 1.0] [--json]
 
 Rows kept: RTDE sessions written with dpkt, segments left out as a capture tool drops
 them; "expected" is every package that shares no byte with a lost segment.
@@ -101,16 +102,75 @@ def foreign_exceptions(cases: int = 2500) -> dict[str, Any]:
     return {"cases": ran[0], "foreign": len(found), "kinds": sorted(set(last_lines)), "first": found[:1]}
 
 
+_MEASURE = """
+import json, resource, sys, time
+from rtde_spec.cli.main import main
+start = time.perf_counter()
+code = main(["capture", sys.argv[1], "-o", sys.argv[2]])
+print(json.dumps({"code": code, "seconds": time.perf_counter() - start,
+                  "peak_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
+"""
+
+
+def _capture_run(path: Path, out: Path) -> dict[str, Any]:
+    """`rtde-spec capture` of one file in its own process: exit code, seconds, peak RSS."""
+    import subprocess
+
+    done = subprocess.run(
+        [sys.executable, "-c", _MEASURE, str(path), str(out)], capture_output=True, text=True, timeout=3600
+    )
+    figures: dict[str, Any] = json.loads(done.stdout.strip().splitlines()[-1])
+    return figures
+
+
+HOSTILE = [  # (label, writer, full size; half size runs too, to show time grows linearly)
+    ("1-byte segments, each after a 1-byte hole", "holes", 80_000),
+    ("50002 stream of newlines (bytes)", "newlines", 30_000_000),
+    ("50002 stream without a newline (bytes)", "no_newline", 30_000_000),
+    ("SYNs to ports nobody decodes", "syns", 1_500_000),
+    ("RTDE connections one after another", "connections", 50_000),
+]
+
+
+def hostile_figures(scale: float = 1.0) -> list[dict[str, Any]]:
+    """Per hostile capture: half and full size, seconds and peak RSS each, and the time ratio."""
+    import hostile_captures as hc
+
+    writers = {
+        "holes": hc.holes,
+        "newlines": lambda path, n: hc.script_stream(path, n, newlines=True),
+        "no_newline": lambda path, n: hc.script_stream(path, n, newlines=False),
+        "syns": hc.syn_flood,
+        "connections": hc.rtde_connections,
+    }
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for label, kind, full in HOSTILE:
+            runs = []
+            for size in (int(full * scale) // 2, int(full * scale)):
+                path = writers[kind](Path(tmp) / f"{kind}-{size}.pcap", size)
+                runs.append({"size": size, **_capture_run(path, Path(tmp) / f"out-{kind}-{size}")})
+                path.unlink()
+            half, whole = runs
+            ratio = whole["seconds"] / max(half["seconds"], 1e-9)
+            rows.append({"case": label, "half": half, "full": whole, "time_ratio": ratio})
+    return rows
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", type=int, default=2500, help="fuzz cases (default: 2500)")
     parser.add_argument("--json", action="store_true", help="print one JSON object (default: text)")
+    parser.add_argument("--scale", type=float, default=1.0, help="size of the hostile captures (1.0: full)")
     args = parser.parse_args(argv)
     kept = rows_kept()
     fuzz = foreign_exceptions(args.cases)
+    hostile = hostile_figures(args.scale)
     if args.json:
-        print(json.dumps({"rows_kept": kept, "fuzz": {k: v for k, v in fuzz.items() if k != "first"}}))
+        fuzzed = {k: v for k, v in fuzz.items() if k != "first"}
+        print(json.dumps({"rows_kept": kept, "fuzz": fuzzed, "hostile": hostile}))
         return 0
+    print_hostile(hostile)
     print("rows kept after TCP gaps (capture, RTDE):")
     for row in kept:
         print(
@@ -125,3 +185,14 @@ def main(argv: list[str] | None = None) -> int:
 
 if __name__ == "__main__":
     sys.exit(main())
+
+
+def print_hostile(rows: list[dict[str, Any]]) -> None:
+    print("hostile captures (half size, full size: seconds, peak RSS, exit code; time ratio ~2 is linear):")
+    for row in rows:
+        half, full = row["half"], row["full"]
+        print(
+            f"  {row['case']:44s} {half['size']:>11,}: {half['seconds']:6.1f} s {half['peak_mb']:4.0f} MB  "
+            f"{full['size']:>11,}: {full['seconds']:6.1f} s {full['peak_mb']:4.0f} MB exit {full['code']}  "
+            f"x{row['time_ratio']:.2f}"
+        )
