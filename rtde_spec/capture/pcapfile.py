@@ -272,11 +272,21 @@ def _strided(buf: Any, start: int, stride: int, count: int, dtype: Any) -> Any:
 
 
 def _same_run(buf: Any, pos: int, stride: int, count: int, at: int, value: int, dtype: Any) -> int:
-    """How many records of `stride` bytes from `pos` on hold `value` at offset `at` (at least 1)."""
+    """How many records of `stride` bytes from `pos` on hold `value` at offset `at` (at least 1).
+
+    Looked at in windows growing 4x (16, 64, 256, ...), so finding a run costs its length,
+    not the rest of the block: short runs of many sizes (many small connections) stay linear."""
     if count <= 1:
         return 1
-    differs = _strided(buf, pos + at, stride, count, dtype) != value
-    return int(differs.argmax()) if differs.any() else count
+    done, window = 0, 16
+    while done < count:
+        n = min(window, count - done)
+        differs = _strided(buf, pos + done * stride + at, stride, n, dtype) != value
+        if differs.any():
+            return max(1, done + int(differs.argmax()))
+        done += n
+        window *= 4
+    return count
 
 
 def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int]) -> Iterator[Records]:
