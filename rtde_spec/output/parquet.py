@@ -70,6 +70,8 @@ class ParquetWriter(Writer):
             table_ = self._conformed(table_)
         self._tables.append(table_)
         self._held += table_.num_rows
+        if len(self._tables) >= 256:  # many small batches (short connections): each costs its own buffers
+            self._tables = [self._pa.concat_tables(self._tables).combine_chunks()]
         if self._row_bytes is None and table_.num_rows:  # measured once: a buffer walk costs ~0.5 ms
             self._row_bytes = table_.get_total_buffer_size() / table_.num_rows
         self._bytes += int(table_.num_rows * (self._row_bytes or 0))
