@@ -19,8 +19,9 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from rtde_spec.errors import require
+from rtde_spec.errors import OutputError, require
 from rtde_spec.output.base import Writer, flat_columns, flatten
+from rtde_spec.output.partfile import write_failed, write_whole
 from rtde_spec.output.writers import open_writer
 
 EXTENSIONS = {"parquet": "parquet", "csv": "csv", "jsonl": "jsonl", "mcap": "mcap"}
@@ -123,11 +124,16 @@ class DirectorySink(TableSink):
         writer = self.writers.get(key)
         if writer is None:
             folder = self.outdir / table / f"robot={robot.replace(':', '_')}" / f"date={day}"
-            folder.mkdir(parents=True, exist_ok=True)
             path = folder / f"{self.stem}.{EXTENSIONS[self.fmt]}"
-            self.paths.append(path)
             pinned = len(self._pinned_keys) < self._pinned
-            writer = open_writer(self.fmt, path, suspendable=not pinned)
+            try:  # a folder or file that cannot be made (no inode left: a full disk) ends the run
+                folder.mkdir(parents=True, exist_ok=True)
+                writer = open_writer(self.fmt, path, suspendable=not pinned)
+            except OutputError:
+                raise
+            except OSError as exc:
+                raise write_failed(exc, path) from exc
+            self.paths.append(path)
             if self.fmt == "mcap":  # one topic per table, as decode names them
                 from rtde_spec.output.topics import topic_for_table
 
@@ -174,9 +180,14 @@ class DirectorySink(TableSink):
         if self.recipes:
             listing = [{"table": t, "direction": d, "names": list(n)} for (d, n), t in self.recipes.items()]
             target = self.outdir / f"recipes-{self.stem}.json"
-            partial = target.with_name(f".{target.name}.part-{os.getpid()}")  # as partfile names them
-            partial.write_text(json.dumps(listing, indent=2) + "\n")
-            os.replace(partial, target)  # whole or not at all
+            try:
+                write_whole(target, (json.dumps(listing, indent=2) + "\n").encode())  # whole or not at all
+            except OSError as exc:
+                failed = write_failed(exc, target)
+                kept = "the tables are in place; this listing of their recipes is not"
+                raise OutputError(
+                    f"{failed.reason}; {kept}", errno=failed.errno, subject=failed.subject
+                ) from exc
 
 
 class ArrowSink(TableSink):

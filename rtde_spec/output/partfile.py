@@ -153,7 +153,11 @@ class PartStream(io.RawIOBase):
     def __init__(self, part: Part, *, batched: bool = True) -> None:
         super().__init__()
         self.part = part
-        self._file: io.FileIO | None = open(part.temp, "wb", buffering=0)  # closed by close()
+        try:  # no room for one more file (no inode, no block for its entry) is a full disk too
+            self._file: io.FileIO | None = open(part.temp, "wb", buffering=0)  # closed by close()
+        except OSError as exc:
+            part.failed = write_failed(exc, part.target)
+            raise part.failed from exc
         self._held: list[bytes] = []  # blocks since the last flush, kept as given (no copy of bytes)
         self._held_size = 0
         self._batched = batched

@@ -16,7 +16,7 @@ from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
-from rtde_spec.errors import UsageError
+from rtde_spec.errors import OutputError, UsageError
 from rtde_spec.output import jsonlines
 from rtde_spec.output.background import BackgroundStream
 from rtde_spec.output.base import Writer, flat_columns, flatten, native_order, plain
@@ -238,8 +238,10 @@ def open_writer(
         writer.owns_stream = True
         return writer
     part = Part(target, durable=durable)
-    # the background thread gathers blocks itself; pyarrow writes whole pages
-    stream = PartStream(part, batched=not (background or cls.NEEDS_PATH))
+    try:  # the background thread gathers blocks itself; pyarrow writes whole pages
+        stream = PartStream(part, batched=not (background or cls.NEEDS_PATH))
+    except OutputError as exc:  # not even the file could be made (a full disk): say what stays
+        raise (Writer._failure(part) or exc) from exc
     try:
         writer = cls(BackgroundStream(stream) if background else stream)  # type: ignore[arg-type]
     except BaseException:
