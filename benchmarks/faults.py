@@ -6,6 +6,8 @@
   against the rows the emulator sent before the signal;
 - hostile captures: holes, floods, endless streams, 50k connections: time at two sizes, peak RSS;
 - a full disk under `record`, and a 280-file capture under `ulimit -n 256`;
+- a full disk (bytes, inodes) under `decode -o` and `capture`, and a 480-file capture with
+  no limit, `ulimit -n 256` and `ulimit -n 64`: time ratio, peak descriptors (`faults_output.py`);
 - hostile bytes: peak RSS and time of the bomb inputs (`faults_bombs.py`);
 - the emulator: packages missed by 4 well-behaved clients at 500 Hz beside hostile
   ones, and the server's memory growth (the test in tests/faults/, its report).
@@ -165,6 +167,14 @@ def check_figures() -> dict[str, str]:
     return out
 
 
+def output_figures() -> dict[str, Any]:
+    """decode -o and capture on a full disk; a 480-file capture under descriptor limits (faults_output.py)."""
+    from faults_output import full_disk_figures as outputs_on_a_full_disk
+    from faults_output import open_file_figures as fleet_under_limits
+
+    return {"full disk outputs": outputs_on_a_full_disk(), "open files, 480": fleet_under_limits()}
+
+
 def emulator_figures() -> str:
     from tests.faults import test_emulator_hostile
 
@@ -189,6 +199,7 @@ def main() -> int:
         "full disk": full_disk_figures(),
         "open files": open_file_figures(),
         "checks": check_figures(),
+        **output_figures(),
     }
     if not args.skip_emulator:
         figures["emulator"] = emulator_figures()
@@ -215,6 +226,9 @@ def main() -> int:
     print("held by tests (tests/faults/):")
     for what, outcome in figures["checks"].items():
         print(f"  {what}: {outcome}")
+    from faults_output import print_figures
+
+    print_figures(figures)
     print("hostile bytes (peak RSS, time, outcome)")
     bombs = figures["bombs"]
     for row in bombs if isinstance(bombs, list) else bombs.get("results", [bombs]):

@@ -33,17 +33,38 @@ def fleet_capture(path: Path, robots: int, days: int = 3, per_day: int = 4) -> P
 
 
 LIMITED = """\
-import resource, sys
+import json, os, resource, sys, threading, time
 limit = int(sys.argv[1])
-resource.setrlimit(resource.RLIMIT_NOFILE, (limit, limit))
+if limit:
+    resource.setrlimit(resource.RLIMIT_NOFILE, (limit, limit))
+peak = [0]
+def sample():
+    while True:
+        peak[0] = max(peak[0], len(os.listdir("/proc/self/fd")) - 1)  # less the listing's own
+        time.sleep(0.001)
+if os.path.isdir("/proc/self/fd"):
+    threading.Thread(target=sample, daemon=True).start()
 from rtde_spec.cli.main import main
-sys.exit(main(sys.argv[2:]))
+code = main(sys.argv[2:])
+print(json.dumps({"peak_descriptors": peak[0]}), file=sys.stderr)
+sys.exit(code)
 """
+
+PEAK = '{"peak_descriptors": '
 
 
 def run_limited(limit: int, *args: str, cwd: Path) -> subprocess.CompletedProcess[str]:
-    """`rtde-spec ARGS` in a child whose descriptor limit (soft and hard) is `limit`."""
+    """`rtde-spec ARGS` in a child whose descriptor limit (soft and hard) is `limit` (0: as it is);
+    its last stderr line is the most descriptors it held at once (sampled every millisecond)."""
     return subprocess.run(
         [sys.executable, "-c", LIMITED, str(limit), *args],
         capture_output=True, text=True, cwd=cwd, timeout=600,
     )  # fmt: skip
+
+
+def peak_descriptors(stderr: str) -> int | None:
+    """The figure `run_limited`'s child printed last, if it got that far."""
+    import json
+
+    lines = [line for line in stderr.splitlines() if line.startswith(PEAK)]
+    return int(json.loads(lines[-1])["peak_descriptors"]) if lines else None
