@@ -9,7 +9,7 @@ from typing import IO, Any
 
 from rtde_spec.errors import OutputError, UsageError, require
 from rtde_spec.output.base import Writer, flat_columns, flatten
-from rtde_spec.output.partfile import Part, is_special, write_failed
+from rtde_spec.output.partfile import Part, device_failed, is_special, write_failed
 from rtde_spec.output.tables import arrow_table, rows_table
 
 _PARQUET_BATCH_ROWS = 16384
@@ -122,8 +122,8 @@ class ParquetWriter(Writer):
         except OutputError:  # our own file said it already (a PartStream under pyarrow)
             raise
         except OSError as exc:
-            if part is None:
-                raise
+            if part is None:  # a device written directly (-o /dev/full): a full disk is named
+                raise device_failed(exc, Path(str(self.stream))) from exc
             part.failed = write_failed(exc, part.target)
             raise part.failed from exc
 

@@ -246,6 +246,42 @@ class PartStream(io.RawIOBase):
             super().close()
 
 
+class DeviceStream(io.RawIOBase):
+    """A device or pipe given as the output (`-o /dev/full`, a FIFO), written directly: a full
+    disk behind it is an OutputError naming it; a closed pipe stays a BrokenPipeError."""
+
+    def __init__(self, target: Path) -> None:
+        super().__init__()
+        self.target = target
+        self._file = open(target, "wb", buffering=0)  # closed by close()
+
+    def writable(self) -> bool:
+        return True
+
+    def write(self, block: bytes | bytearray | memoryview) -> int:  # type: ignore[override]
+        with memoryview(block) as view:
+            size, done = len(view), 0
+            while done < size:
+                try:
+                    done += self._file.write(view[done:]) or 0
+                except OSError as exc:
+                    raise device_failed(exc, self.target) from exc
+        return size
+
+    def close(self) -> None:
+        if not self.closed:
+            self._file.close()
+            super().close()
+
+
+def device_failed(exc: OSError, target: Path) -> OSError:
+    """A write error of a file written directly: a full disk named as one, anything else as it was."""
+    import errno
+
+    failed = write_failed(exc, target)
+    return failed if failed.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO) else exc
+
+
 def write_failed(exc: BaseException, target: Path) -> OutputError:
     """The error of a write to `target`, naming the file and, for a full disk, saying so."""
     import errno

@@ -22,7 +22,7 @@ from rtde_spec.output.background import BackgroundStream
 from rtde_spec.output.base import Writer, flat_columns, flatten, native_order, plain
 from rtde_spec.output.mcap import McapWriter
 from rtde_spec.output.parquet import ParquetWriter
-from rtde_spec.output.partfile import Part, PartStream, is_special
+from rtde_spec.output.partfile import DeviceStream, Part, PartStream, is_special
 from rtde_spec.output.tables import arrow_table
 from rtde_spec.output.text import safe_text, table
 
@@ -234,7 +234,7 @@ def open_writer(
             writer.part.durable = durable
         return writer
     if is_special(target):  # -o /dev/null or a pipe: nothing to replace
-        writer = cls(open(target, "wb"))  # closed by the writer
+        writer = cls(DeviceStream(target))  # type: ignore[arg-type]  # closed by the writer
         writer.owns_stream = True
         return writer
     part = Part(target, durable=durable)
