@@ -197,6 +197,9 @@ class Writer:
             return
         try:
             part.commit()
-        except BaseException:
+        except BaseException as exc:
             part.discard()
-            raise
+            failure = self._failure(part)  # no room for its name: a full disk, said with what stays
+            if failure is None:
+                raise
+            raise failure from exc

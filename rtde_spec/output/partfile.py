@@ -100,7 +100,7 @@ class Part:
 
         Not while it would replace an existing file, nor after a failed write."""
         if not self.published and not self.replaces and self.failed is None:
-            os.replace(self.temp, self.target)
+            self._rename()
             self.published = True
             self._placed()
 
@@ -111,11 +111,19 @@ class Part:
         if self.durable:
             _fsync(self.target if self.published else self.temp)
         if not self.published:
-            os.replace(self.temp, self.target)
+            self._rename()
             self.published = True
             self._placed()
         if self.durable:
             _fsync_dir(self.target.parent)
+
+    def _rename(self) -> None:
+        """The temporary file to its name (a new directory entry can need a block: a full disk too)."""
+        try:
+            os.replace(self.temp, self.target)
+        except OSError as exc:
+            self.failed = write_failed(exc, self.target)
+            raise self.failed from exc
 
     def discard(self) -> None:
         """Remove the temporary file; an existing target stays as it was."""

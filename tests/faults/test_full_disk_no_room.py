@@ -20,6 +20,7 @@ import uuid
 from collections.abc import Iterator
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from rtde_spec.capture.decoder import decode_to_directory
@@ -186,3 +187,29 @@ def test_injected_no_room_for_a_capture_table_keeps_the_earlier_run(
     assert "the disk is full" in str(failed.value) and "no table of" in str(failed.value)
     assert digests(out) == before, "a table of the failed run was put in place"
     assert [p for p in out.rglob("*") if ".part-" in p.name] == []
+
+
+@pytest.mark.parametrize("fmt", ["csv", "parquet"])
+def test_injected_no_room_for_the_name_keeps_the_existing_file(
+    monkeypatch: pytest.MonkeyPatch, tmp_path: Path, fmt: str
+) -> None:
+    """The rename into place can need a new directory block: ENOSPC there is the same full disk."""
+    out = tmp_path / f"run.{fmt}"
+    out.write_bytes(b"the old recording\n")
+    writer = open_writer(fmt, out)
+    writer.write_columns({"timestamp": np.arange(100, dtype=float)})
+    real = partfile.os.replace
+
+    def no_room(source: object, target: object) -> None:
+        if Path(str(target)) == out:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        real(source, target)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(partfile.os, "replace", no_room)
+    with pytest.raises(OutputError) as failed:
+        writer.close()
+    assert failed.value.errno == errno.ENOSPC
+    kept = "none of its rows were kept; the file that was there is as it was"
+    assert str(failed.value) == f"file {out}: writing failed: the disk is full; {kept}"
+    assert out.read_bytes() == b"the old recording\n"
+    assert temp_files(tmp_path) == []
