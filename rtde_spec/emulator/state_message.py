@@ -21,6 +21,7 @@ from __future__ import annotations
 import struct
 import zlib
 from collections.abc import Callable, Mapping
+from functools import cache
 from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.enums import (
@@ -35,7 +36,7 @@ from rtde_spec._generated.enums import (
 )
 from rtde_spec.primary import models as pm
 from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
-from rtde_spec.primary.codec import encode_message
+from rtde_spec.primary.codec import decode_message, encode_message
 from rtde_spec.spec.arms import ArmModel, arm_model
 from rtde_spec.spec.catalogue import Catalogue
 from rtde_spec.spec.versions import Version
@@ -88,6 +89,22 @@ def robot_type(arm: ArmModel) -> tuple[int, int]:
     return (int(RobotType[family]) if family in RobotType.__members__ else int(RobotType.UNDEFINED)), 0
 
 
+@cache
+def _internal_part(kind: int, size: int) -> PrimaryPart:
+    body = struct.pack(">IB", 5 + size, kind) + bytes(size)
+    state = decode_message(struct.pack(">IB", 5 + len(body), 16) + body)
+    part = state.sub_packages[0]  # type: ignore[union-attr]
+    assert isinstance(part, PrimaryPart)
+    return part
+
+
+def _internal(kind: int, size: int) -> dict[str, Any]:
+    """A sub-package UR software uses only, `size` zero bytes as the spec's fields read them
+    (one `data` field today; whatever fields the spec gives it, the bytes stay the same)."""
+    part = _internal_part(kind, size)
+    return {name: getattr(part, name) for name in type(part).model_fields if name not in ("extra", "missing")}
+
+
 def available(since: Mapping[str, str] | None, version: Version, catalogue: Catalogue) -> bool:
     """Whether a member or field with this `since` is sent by `version` (lines inherit as catalogued)."""
     if since is None:
@@ -134,8 +151,8 @@ class RobotStateBuilder:
                 "is_freedrive_io_pressed": False,
                 "tp_type": int(TeachPendantType.STANDARD),
             },
-            "calibration_data": lambda: {"data": bytes(CALIBRATION_DATA_BYTES)},
-            "safety_data": lambda: {"data": bytes(SAFETY_DATA_BYTES)},
+            "calibration_data": lambda: _internal(9, CALIBRATION_DATA_BYTES),
+            "safety_data": lambda: _internal(10, SAFETY_DATA_BYTES),
             "tool_comm_info": lambda: {
                 "tool_communication_is_enabled": False,
                 "baud_rate": 115200,
