@@ -71,9 +71,14 @@ def test_urcls_power_cycle_on_the_primary_port_moves_the_robot_mode_without_a_sc
         client.send("power off")
         client.wait_state(lambda s: mode(s) == RobotMode.POWER_OFF)
         assert emu.call(lambda: emu.model.robot_mode) == RobotMode.POWER_OFF  # the model the dashboard drives
-        client.send("set robotmode run")  # brakes stay on while powered off, as on a controller
+        client.send("brake release")  # brakes stay on while powered off
         client.send("power on")
         client.wait_state(lambda s: mode(s) == RobotMode.IDLE)
+        client.send("set robotmode run")
+        client.wait_state(lambda s: mode(s) == RobotMode.RUNNING)
+        client.send("power off")
+        client.wait_state(lambda s: mode(s) == RobotMode.POWER_OFF)
+        # from power off too, as URCL's tests against URSim expect (tests/test_primary_client.cpp)
         client.send("set robotmode run")
         client.wait_state(lambda s: mode(s) == RobotMode.RUNNING)
         time.sleep(0.3)

@@ -2,11 +2,12 @@
 
 Drivers send these as lines of their own, outside any program: UR's C++ client library
 (URCL, src/primary/primary_client.cpp) sends `power on`, `power off`, `set robotmode run`
-(brake release), `set unlock protective stop` and `stop program`; its driver starts with
-`stop program`. The controller acts on them at once and does not parse them as URScript,
-so they are taken out of what a client sends before the interpreter sees it. They act
-on the same model as the dashboard's commands (modes.py); they have no reply, a client
-watches the Robot State (robot mode, protective stop, program running) instead.
+(brake release, powering the arm first if need be), `set unlock protective stop` and
+`stop program`; its driver starts with `stop program`. The controller acts on them at
+once and does not parse them as URScript, so they are taken out of what a client sends
+before the interpreter sees it. They act on the same model as the dashboard's commands
+(modes.py); they have no reply, a client watches the Robot State (robot mode, protective
+stop, program running) instead.
 """
 
 from __future__ import annotations
@@ -27,6 +28,12 @@ def _brake_release(model: ControllerModel) -> bool:
     return model.release_brakes()
 
 
+def _run(model: ControllerModel) -> bool:
+    """`set robotmode run`: from power off too, the arm is powered and its brakes released (URCL's
+    tests against URSim, tests/test_primary_client.cpp, power off and then expect RUNNING)."""
+    return model.power_on() and model.release_brakes()
+
+
 def _noop(model: ControllerModel) -> bool:
     return True  # popups are not shown by the emulator: there is nothing to close
 
@@ -36,7 +43,7 @@ COMMANDS: dict[str, Callable[[ControllerModel], bool]] = {
     "power on": lambda m: m.power_on(),
     "power off": lambda m: m.power_off(),
     "brake release": _brake_release,
-    "set robotmode run": _brake_release,
+    "set robotmode run": _run,
     "stop program": lambda m: m.stop_program(),
     "unlock protective stop": lambda m: m.unlock_protective_stop(),
     "set unlock protective stop": lambda m: m.unlock_protective_stop(),
@@ -67,5 +74,5 @@ def take_commands(model: ControllerModel, text: str) -> str:
             rest.append(line)
             continue
         accepted = action(model)
-        log.info("primary command %r %s", line.strip(), "done" if accepted else "refused by the state")
+        log.info("primary command %r %s", line.strip(), "done" if accepted else "had no effect in this state")
     return "\n".join(rest) + "\n" if any(r.strip() for r in rest) else ""
