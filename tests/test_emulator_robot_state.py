@@ -1,8 +1,8 @@
 """The emulator's primary ports send what a controller of the chosen version sends (issue 20, points 1 and 7).
 
-Against the e-Series reference sample (tests/data/ur5e_robot_state.hex, 13 sub-packages
-in a UR5e's order) and, for CB3, against python-urx's struct formats for 3.2+ firmware,
-which were written against real CB3 robots independently of this spec.
+Against URSim's layout for e-Series (URSIM_5_8_UR5E below, issue 26 point 5) and, for CB3,
+against python-urx's struct formats for 3.2+ firmware, which were written against real CB3
+robots independently of this spec.
 """
 
 from __future__ import annotations
@@ -19,13 +19,6 @@ from rtde_spec.emulator.server import EmulatorConfig, EmulatorThread
 from rtde_spec.primary.base import RobotStateMessage
 from rtde_spec.primary.codec import PrimaryStreamDecoder
 from rtde_spec.spec.arms import arm_model
-
-from .helpers import DATA
-
-
-def sample() -> bytes:
-    lines = (DATA / "ur5e_robot_state.hex").read_text().splitlines()
-    return bytes.fromhex("".join(line for line in lines if line and not line.startswith("#")))
 
 
 def shape(message: bytes) -> list[tuple[int, int]]:
@@ -68,27 +61,45 @@ def robot_states(version: str, count: int, port: str = "secondary") -> tuple[byt
     return got[0], [m for m in got[1:] if m[4] == 16]
 
 
+# (type, size) of each sub-package of the first Robot State a URSim 5.8 UR5e sends: the capture in UR's
+# C++ client library's tests (UniversalRobots/Universal_Robots_Client_Library,
+# tests/test_primary_parser.cpp, "First RobotState of UR5e from URSim v5.8"), 1,386 bytes in all
+URSIM_5_8_UR5E = [
+    (0, 47), (1, 251), (4, 101), (5, 225), (9, 53), (3, 75), (2, 37),
+    (6, 445), (7, 61), (8, 9), (10, 43), (11, 26), (12, 8),
+]  # fmt: skip
+ONCE = {5, 9, 6}  # kinematics info, calibration data, configuration data: after connecting
+
+
+def test_first_robot_state_of_5_8_is_ursims_sub_packages_order_and_sizes() -> None:
+    first_message, states = robot_states("5.8.0", 1)
+    assert shape(states[0]) == URSIM_5_8_UR5E
+    assert len(states[0]) == 1386 == 5 + sum(size for _, size in URSIM_5_8_UR5E)
+    decoder = PrimaryStreamDecoder()
+    state = [m for _, m in decoder.feed(first_message + states[0])][1]
+    assert isinstance(state, RobotStateMessage)
+    assert all(not s.missing and not s.extra for s in state.sub_packages)
+    assert decoder.warnings_for(state) == []
+
+
 @pytest.mark.parametrize("version", ["5.23.0", "10.11.0"])
-def test_first_robot_state_has_the_samples_sub_packages_types_sizes_and_order(version: str) -> None:
+def test_later_versions_add_cumulative_runtime_data_after_ursims_layout(version: str) -> None:
     first_message, states = robot_states(version, 1)
-    assert shape(states[0]) == shape(sample())
+    assert shape(states[0]) == [*URSIM_5_8_UR5E, (16, 21)]
     decoder = PrimaryStreamDecoder()
     decoded = [m for _, m in decoder.feed(first_message + states[0])]
     assert str(decoder.version) == version
     state = decoded[1]
     assert isinstance(state, RobotStateMessage)
-    reference = PrimaryStreamDecoder().feed(sample())[0][1]
-    assert [type(s) for s in state.sub_packages] == [type(s) for s in reference.sub_packages]
     assert all(not s.missing and not s.extra for s in state.sub_packages)
     assert decoder.warnings_for(state) == []
 
 
 def test_e_series_before_5_23_has_no_cumulative_runtime_and_later_states_only_the_periodic_ones() -> None:
     _, states = robot_states("5.15.0", 12)
-    assert shape(states[0]) == shape(sample())[:-1]  # cumulative runtime data came in 5.23
-    periodic = {5, 6}  # kinematics info and configuration data go once after connecting
-    assert all(kind not in periodic for s in states[1:] for kind, _ in shape(s))
-    assert [k for k, _ in shape(states[1])] == [k for k, _ in shape(sample())[:-1] if k not in periodic]
+    assert shape(states[0]) == URSIM_5_8_UR5E  # cumulative runtime data came in 5.23
+    assert all(kind not in ONCE for s in states[1:] for kind, _ in shape(s))
+    assert shape(states[1]) == [(k, n) for k, n in URSIM_5_8_UR5E if k not in ONCE]
 
 
 def test_cumulative_runtime_data_once_a_second() -> None:

@@ -31,6 +31,7 @@ SERIAL_NUMBER = "20245500001"  # UR serial numbers start with the year of make
 UNLOCK_AFTER = 5.0  # s a protective stop must last before it may be unlocked
 MAX_PROGRAM_BYTES = 1 << 20
 NO_PROGRAM = "<unnamed>"
+USER_ROLES = ("PROGRAMMER", "OPERATOR", "NONE", "LOCKED", "RESTRICTED")
 
 
 class DashboardHub:
@@ -45,6 +46,10 @@ class DashboardHub:
         self.serial_number = serial_number
         self.program: str | None = None  # file name of the loaded program
         self.protective_since: float | None = None
+        self.installation = "default.installation"
+        self.user_role = "PROGRAMMER"  # CB3's setUserRole
+        self.operational_mode = "NONE"  # e-Series: no client controls it until `set operational mode`
+        self.reports = 0
         self.available = model.line.id in self.table.product_lines
 
     def observe(self, now: float) -> None:
@@ -79,9 +84,25 @@ class DashboardHub:
         action = command.action
         if action == "load":
             return self._load(argument)
-        if action == "loaded_program":
+        if action == "load_installation":
+            found = self._find(argument)
+            if isinstance(found, Path):
+                self.installation = found.name
+                return "ok"
+            return found
+        if action == "set_user_role":
+            if argument.upper() not in USER_ROLES:
+                return "failed"
+            self.user_role = argument.upper()
+        elif action == "set_operational_mode":
+            if argument.upper() not in ("MANUAL", "AUTOMATIC"):
+                return "failed"
+            self.operational_mode = argument.upper()
+        elif action == "clear_operational_mode":
+            self.operational_mode = "NONE"
+        elif action == "loaded_program":
             return "ok" if self.program else "failed"
-        if action == "log":
+        elif action == "log":
             log.info("dashboard log: %s", argument)
         elif action == "power_on":
             model.power_on()
@@ -105,10 +126,10 @@ class DashboardHub:
             self._safety_normal()
         return "ok"
 
-    def _load(self, name: str) -> str:
-        """Load `name` from the programs directory: a script, or the .script saved beside a .urp.
+    def _find(self, name: str, suffix: str | None = None) -> Path | str:
+        """The file `name` is in the programs directory, else the outcome ("not_found").
 
-        The name is transformed first (.urp to .script), then resolved (symlinks followed),
+        The name is transformed first (.urp to `suffix`), then resolved (symlinks followed),
         then checked to be inside the folder: one check on the path that is opened.
         A name the file system refuses (a NUL byte, too long) is a file not found.
         """
@@ -117,15 +138,25 @@ class DashboardHub:
         try:
             base = self.programs.resolve(strict=True)
             wanted = Path(name)
-            if wanted.suffix == ".urp":
-                wanted = wanted.with_suffix(".script")
+            if suffix is not None and wanted.suffix == ".urp":
+                wanted = wanted.with_suffix(suffix)
             path = (base / wanted).resolve(strict=True)  # every link followed, to the file itself
             if not path.is_relative_to(base) or not path.is_file():
                 return "not_found"
+        except (OSError, ValueError, RuntimeError):  # missing, a loop of links, a name too long
+            return "not_found"
+        return path
+
+    def _load(self, name: str) -> str:
+        """Load `name` from the programs directory: a script, or the .script saved beside a .urp."""
+        path = self._find(name, ".script")
+        if not isinstance(path, Path):
+            return path
+        try:
             if path.stat().st_size > MAX_PROGRAM_BYTES:
                 return "failed"
             text = path.read_text(encoding="utf-8")
-        except (OSError, ValueError, RuntimeError):  # missing, a loop of links, a name too long
+        except OSError:
             return "not_found"
         except UnicodeDecodeError:
             return "failed"
@@ -158,13 +189,25 @@ class DashboardHub:
             ProgramState.PAUSING: "PAUSED",
         }
         kind, _ = robot_type(arm_parameters(self.model))
+        cb3 = self.model.line.id == "cb3"  # CB3 says True/False, e-Series true/false
+
+        def boolean(value: bool) -> str:
+            text = "true" if value else "false"
+            return text.capitalize() if cb3 else text
+
         return {
             "robot_mode": _name(RobotMode, mode),
             "safety_mode": _name(SafetyMode, safety),
             "safety_status": _name(SafetyStatus, status),
             "program_state": state.get(runtime, "STOPPED"),  # type: ignore[call-overload]
             "program": self.program or NO_PROGRAM,
-            "running": "true" if runtime == ProgramState.RUNNING else "false",
+            "running": boolean(runtime == ProgramState.RUNNING),
+            "saved": boolean(True),
+            "installation": self.installation,
+            "user_role": self.user_role,
+            "operational_mode": self.operational_mode,
+            "report_id": str(self.reports),
+            "support_file": f"ur_{self.serial_number}_support_file.zip",
             "version": f"{version.major}.{version.minor}.{version.bugfix}.{version.build or 0}",
             "build_date": BUILD_DATE,
             "serial_number": self.serial_number,

@@ -110,6 +110,7 @@ class ControllerModel(RobotModes):
         self.program: Program | None = None
         self.paused = False
         self.loaded: str | None = None  # a program the dashboard loaded, run by play()
+        self.calibrated = True  # the arm's kinematics calibration (a scenario may say it has none)
         self.events: deque[ScriptEvent] = deque(maxlen=MAX_EVENTS)
         self._published: tuple[Any, ...] = ()
         self._limits_checked = -1  # the arm revision whose joints were last checked against the limits

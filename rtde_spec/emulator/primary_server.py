@@ -4,8 +4,9 @@ primary ports the robot messages of what happened (robot_messages.py).
 
 The Robot State is built from the same model the RTDE port reads, so a client sees
 the same joint positions and modes on both. What a client sends is cut into
-scripts (a line, or a `def ... end` program; script_framer.py), the last few kept, their
-I/O calls run (`script.py`); read-only ports drop what they get, as a controller does.
+scripts (a line, or a `def ... end` program; script_framer.py), the last few kept, the
+plain commands drivers send (`power on`, `stop program`; primary_commands.py) done,
+the rest run as URScript (`script.py`); read-only ports drop what they get, as a controller does.
 Each client is held to the port's limits (guard.py).
 """
 
@@ -17,6 +18,7 @@ from typing import TYPE_CHECKING
 
 from rtde_spec._generated.enums import RobotMode
 from rtde_spec.emulator.guard import Port
+from rtde_spec.emulator.primary_commands import take_commands
 from rtde_spec.emulator.robot_messages import event_messages, safety_mode_message, version_message
 from rtde_spec.emulator.script import run_script
 from rtde_spec.emulator.script_framer import ScriptPort
@@ -41,8 +43,12 @@ class PrimaryHub:
         self._safety_mode = self._robot_mode = -1
 
     def run(self, port: int, text: str) -> None:
-        """A whole script from a client: kept (the last few), run on the model."""
+        """A whole script from a client: kept (the last few), its plain commands (`power on`, ...;
+        primary_commands.py) done, the URScript left run on the model."""
         self.scripts.append((port, text))
+        text = take_commands(self.model, text)
+        if not text:
+            return
         applied = run_script(self.model, text)
         log.info("URScript on port %d: %s (%d I/O calls run)", port, text.strip()[:80], len(applied))
 

@@ -5,12 +5,14 @@ primary ports only (30001, 30011), as the interface document says: a text messag
 for `textmsg` (and popups, which the spec has no message for), a runtime exception
 with the script line and column, a key message when a program starts or stops
 (PROGRAM_XXX_STARTED / PROGRAM_XXX_STOPPED with the program's name, as controllers
-announce it) followed on start by the global variables setup message, and a safety
-mode message whenever the safety mode changes.
+announce it: the name runs to the end of the message, see key_message) followed on
+start by the global variables setup message, and a safety mode message whenever the
+safety mode changes.
 """
 
 from __future__ import annotations
 
+import struct
 from typing import Any
 
 from rtde_spec._generated.enums import (
@@ -71,7 +73,10 @@ def runtime_exception(text: str, line: int, column: int, micros: int) -> bytes:
 
 
 def key_message(title: str, text: str, micros: int) -> bytes:
-    return encode_message(
+    """A key message as controllers send it: the text runs to the end of the message, with no
+    length before it (UR's C++ client library reads it so and matches the program's name against
+    it; the spec's decoder takes this form as its fallback, see key_text_message in the spec)."""
+    head = encode_message(
         pm.KeyMessage(
             timestamp=micros,
             source=_CONTROLLER,
@@ -79,9 +84,11 @@ def key_message(title: str, text: str, micros: int) -> bytes:
             robot_message_code=0,
             robot_message_argument=0,
             robot_message_title=title,
-            key_text_message=text,
+            key_text_message="",
         )
-    )
+    )[:-2]  # the document's uint16 length of an empty text
+    body = head[4:] + text.encode("utf-8")
+    return struct.pack(">I", 4 + len(body)) + body
 
 
 def safety_mode_message(mode: int, micros: int) -> bytes:

@@ -17,6 +17,9 @@ emergency stop, power loss, program stop or network drop at a time (faults.py):
     faults:
       - {at: 2.0, fault: protective_stop}
       - {at: 5.0, fault: network_drop, seconds: 3}
+
+`calibrated: false` makes the arm report no kinematics calibration (Kinematics Info's
+calibration status 0, as a URSim reports), for testing a driver's calibration check.
 """
 
 from __future__ import annotations
@@ -65,6 +68,7 @@ class Scenario(_Strict):
     controller: str = "5.15.0"
     outputs: dict[str, bool | int | float | list[float] | SineOf | RampOf] = {}
     faults: list[Fault] = []  # what goes wrong, when (faults.py)
+    calibrated: bool = True  # False: Kinematics Info says the arm has no calibration (as URSim's)
 
     def functions(self, catalogue: Catalogue) -> dict[str, Callable[[float], Any]]:
         """Output name -> value at time t (s); names and lengths checked against the spec."""

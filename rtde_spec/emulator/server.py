@@ -68,6 +68,7 @@ class Emulator:
         version = self.config.controller or self.config.scenario.controller
         arm = self.config.arm or ("UR5" if cat.line_of(version).id == "cb3" else "UR5e")
         self.model = ControllerModel(version, cat, self.config.scenario.functions(cat), model=arm)
+        self.model.calibrated = self.config.scenario.calibrated
         self.rtde = RtdeHub(self.model)
         self.primary = PrimaryHub(self.model)
         self.dashboard = DashboardHub(self.model, self.config.programs)

@@ -2,16 +2,18 @@
 
 Which sub-packages go out, and when, follows the interface document: every message
 carries the periodic ones; Configuration Data goes once after a client connects and
-Kinematics Info then too (and again when the arm leaves initialisation, i.e. is
-powered on); Cumulative Runtime Data once a second. The order is the e-Series
-controller's (tests/data/ur5e_robot_state.hex). A sub-package or field the spec says
+Kinematics Info with its Calibration Data then too (and again when the arm leaves
+initialisation, i.e. is powered on); Cumulative Runtime Data once a second. The
+e-Series order and sizes are URSim's: the first Robot State of a URSim 5.8 UR5e (the
+capture in UR's C++ client library, Universal_Robots_Client_Library
+tests/test_primary_parser.cpp) has sub-packages 0,1,4,5,9,3,2,6,7,8,10,11,12 in 1,386
+bytes, Calibration Data a 48-byte body and Safety Data a 38-byte one (both "used by UR
+software only": sent as zeros of their real size). A sub-package or field the spec says
 a version does not have (`since`) is left out, so a CB3 controller sends its shorter
-layouts. The internal, bytes-only sub-packages are left out, except Safety Data
-(16 zero bytes, the size of the reference sample) which e-Series controllers send.
-Calibration Data (type 9) is not sent: the spec has only its size (bytes "used by UR
-software only"), no public client reads it, and the calibration check clients make
-(UR's C++ client library compares the checksums) reads Kinematics Info, which is sent.
-Values come from the same controller model the RTDE port reads.
+layouts. Kinematics Info reports a calibrated arm (calibration status 2, linearised,
+what UR's calibration check wants); an uncalibrated one (a scenario's `calibrated:
+false`) reports 0 and all-ones checksums, as URSim does. Values come from the same
+controller model the RTDE port reads.
 """
 
 from __future__ import annotations
@@ -19,6 +21,7 @@ from __future__ import annotations
 import struct
 import zlib
 from collections.abc import Callable, Mapping
+from functools import cache
 from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.enums import (
@@ -33,7 +36,7 @@ from rtde_spec._generated.enums import (
 )
 from rtde_spec.primary import models as pm
 from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
-from rtde_spec.primary.codec import encode_message
+from rtde_spec.primary.codec import decode_message, encode_message
 from rtde_spec.spec.arms import ArmModel, arm_model
 from rtde_spec.spec.catalogue import Catalogue
 from rtde_spec.spec.versions import Version
@@ -48,15 +51,18 @@ ORDER = {
         "masterboard_data", "tool_data", "force_mode_data", "additional_info",
     ],
     "e-series": [
-        "robot_mode_data", "joint_data", "cartesian_info", "kinematics_info", "configuration_data",
-        "masterboard_data", "tool_data", "force_mode_data", "additional_info", "safety_data",
-        "tool_comm_info", "tool_mode_info", "cumulative_runtime_data",
+        "robot_mode_data", "joint_data", "cartesian_info", "kinematics_info", "calibration_data",
+        "masterboard_data", "tool_data", "configuration_data", "force_mode_data", "additional_info",
+        "safety_data", "tool_comm_info", "tool_mode_info", "cumulative_runtime_data",
     ],
 }  # fmt: skip
 ORDER["polyscope-x"] = ORDER["e-series"]
-ON_CONNECT = {"configuration_data", "kinematics_info"}  # not in every message: see the docstring
+ON_CONNECT = {"configuration_data", "kinematics_info", "calibration_data"}  # see the docstring
+WITH_KINEMATICS = {"kinematics_info", "calibration_data"}  # again when the arm leaves initialisation
 PER_SECOND = {"cumulative_runtime_data"}
-SAFETY_DATA_BYTES = 16
+SAFETY_DATA_BYTES = 38  # URSim 5.8's Safety Data body (43 bytes with its header)
+CALIBRATION_DATA_BYTES = 48  # URSim 5.8's Calibration Data body (53 bytes with its header)
+CALIBRATED, UNCALIBRATED = 2, 0  # calibration_status: 2 is "linearised", what UR's calibration check wants
 EMERGENCY = {
     SafetyMode.ROBOT_EMERGENCY_STOP,
     SafetyMode.SYSTEM_EMERGENCY_STOP,
@@ -81,6 +87,22 @@ def robot_type(arm: ArmModel) -> tuple[int, int]:
     """(robotType, robotSubType): the arm's family by name (UR7e is a UR5e, UR12e a UR10e)."""
     family = {"UR7E": "UR5", "UR12E": "UR10"}.get(arm.name.upper(), arm.name.upper().removesuffix("E"))
     return (int(RobotType[family]) if family in RobotType.__members__ else int(RobotType.UNDEFINED)), 0
+
+
+@cache
+def _internal_part(kind: int, size: int) -> PrimaryPart:
+    body = struct.pack(">IB", 5 + size, kind) + bytes(size)
+    state = decode_message(struct.pack(">IB", 5 + len(body), 16) + body)
+    part = state.sub_packages[0]  # type: ignore[union-attr]
+    assert isinstance(part, PrimaryPart)
+    return part
+
+
+def _internal(kind: int, size: int) -> dict[str, Any]:
+    """A sub-package UR software uses only, `size` zero bytes as the spec's fields read them
+    (one `data` field today; whatever fields the spec gives it, the bytes stay the same)."""
+    part = _internal_part(kind, size)
+    return {name: getattr(part, name) for name in type(part).model_fields if name not in ("extra", "missing")}
 
 
 def available(since: Mapping[str, str] | None, version: Version, catalogue: Catalogue) -> bool:
@@ -129,7 +151,8 @@ class RobotStateBuilder:
                 "is_freedrive_io_pressed": False,
                 "tp_type": int(TeachPendantType.STANDARD),
             },
-            "safety_data": lambda: {"data": bytes(SAFETY_DATA_BYTES)},
+            "calibration_data": lambda: _internal(9, CALIBRATION_DATA_BYTES),
+            "safety_data": lambda: _internal(10, SAFETY_DATA_BYTES),
             "tool_comm_info": lambda: {
                 "tool_communication_is_enabled": False,
                 "baud_rate": 115200,
@@ -154,7 +177,7 @@ class RobotStateBuilder:
         """One Robot State: `first` after a client connects (all of them), else the periodic ones."""
         parts = []
         for name, cls in self.classes.items():
-            if name in ON_CONNECT and not (first or (kinematics and name == "kinematics_info")):
+            if name in ON_CONNECT and not (first or (kinematics and name in WITH_KINEMATICS)):
                 continue
             if name in PER_SECOND and not (first or per_second):
                 continue
@@ -219,17 +242,20 @@ class RobotStateBuilder:
 
     def _kinematics(self) -> dict[str, Any]:
         dh = arm_parameters(self.model).dh
+        calibrated = bool(getattr(self.model, "calibrated", True))
         rows = zip(dh.a, dh.d, dh.alpha, strict=True)
-        checksum = tuple(
-            zlib.crc32(struct.pack(">4d", 0.0, *row)) for row in rows
-        )  # per joint, of its DH row
+        checksum = (
+            tuple(zlib.crc32(struct.pack(">4d", 0.0, *row)) for row in rows)  # per joint, of its DH row
+            if calibrated
+            else (0xFFFFFFFF,) * 6
+        )
         return {
             "checksum": checksum,
             "dh_theta": (0.0,) * 6,
             "dh_a": tuple(dh.a),
             "dh_d": tuple(dh.d),
             "dh_alpha": tuple(dh.alpha),
-            "calibration_status": 0,
+            "calibration_status": CALIBRATED if calibrated else UNCALIBRATED,
         }
 
     def _configuration(self) -> dict[str, Any]:

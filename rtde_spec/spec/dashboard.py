@@ -23,6 +23,7 @@ SPEC_FILE = "dashboard/commands.yaml"
 Action = Literal[
     "query", "none", "log", "load", "loaded_program", "play", "stop", "pause", "quit", "shutdown",
     "power_on", "power_off", "brake_release", "unlock_protective_stop", "restart_safety",
+    "load_installation", "set_user_role", "set_operational_mode", "clear_operational_mode",
 ]  # fmt: skip
 Outcome = Literal["ok", "failed", "not_found"]
 

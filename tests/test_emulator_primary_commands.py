@@ -1,0 +1,142 @@
+"""The plain commands drivers send to the script ports act on the robot (issue 26, point 4).
+
+UR's C++ client library (URCL, src/primary/primary_client.cpp) sends `power off`, `power on`,
+`set robotmode run`, `set unlock protective stop` and `stop program` to the primary port as
+lines of their own and then watches the Robot State; a controller acts on them and never
+answers them with a URScript error. Each test talks to the emulator over real sockets.
+"""
+
+from __future__ import annotations
+
+import socket
+import time
+from collections.abc import Callable
+
+import pytest
+
+from rtde_spec._generated.enums import RobotMode, SafetyMode
+from rtde_spec.emulator.server import EmulatorConfig, EmulatorThread
+from rtde_spec.primary.base import RobotStateMessage
+from rtde_spec.primary.codec import PrimaryStreamDecoder
+
+
+def serve() -> EmulatorThread:
+    return EmulatorThread(
+        EmulatorConfig(rtde_port=None, primary_port=0, secondary_port=0, realtime_port=0, controller="5.15.0")
+    ).start()
+
+
+class Primary:
+    """A client of the primary port: sends lines, reads messages as they come."""
+
+    def __init__(self, port: int) -> None:
+        self.sock = socket.create_connection(("127.0.0.1", port), timeout=5)
+        self.decoder = PrimaryStreamDecoder()
+        self.seen: list[object] = []
+
+    def send(self, line: str) -> None:
+        self.sock.sendall(line.encode() + b"\n")
+
+    def wait_state(
+        self, test: Callable[[RobotStateMessage], bool], seconds: float = 3.0
+    ) -> RobotStateMessage:
+        deadline = time.monotonic() + seconds
+        while time.monotonic() < deadline:
+            for _, message in self.decoder.feed(self.sock.recv(65536)):
+                self.seen.append(message)
+                if isinstance(message, RobotStateMessage) and test(message):
+                    return message
+        raise AssertionError("the Robot State never showed it")
+
+    def errors(self) -> list[str]:
+        return [
+            str(getattr(m, "runtime_exception_text_message", ""))
+            for m in self.seen
+            if getattr(m, "NAME", "") == "runtime_exception_message"
+        ]
+
+    def close(self) -> None:
+        self.sock.close()
+
+
+def mode(state: RobotStateMessage) -> int:
+    return int(state["robot_mode_data"].robot_mode)
+
+
+def test_urcls_power_cycle_on_the_primary_port_moves_the_robot_mode_without_a_script_error() -> None:
+    emu = serve()
+    client = Primary(emu.ports["primary"])
+    try:
+        client.wait_state(lambda s: mode(s) == RobotMode.RUNNING)
+        client.send("power off")
+        client.wait_state(lambda s: mode(s) == RobotMode.POWER_OFF)
+        assert emu.call(lambda: emu.model.robot_mode) == RobotMode.POWER_OFF  # the model the dashboard drives
+        client.send("brake release")  # brakes stay on while powered off
+        client.send("power on")
+        client.wait_state(lambda s: mode(s) == RobotMode.IDLE)
+        client.send("set robotmode run")
+        client.wait_state(lambda s: mode(s) == RobotMode.RUNNING)
+        client.send("power off")
+        client.wait_state(lambda s: mode(s) == RobotMode.POWER_OFF)
+        # from power off too, as URCL's tests against URSim expect (tests/test_primary_client.cpp)
+        client.send("set robotmode run")
+        client.wait_state(lambda s: mode(s) == RobotMode.RUNNING)
+        time.sleep(0.3)
+        client.wait_state(lambda s: True)
+        assert client.errors() == []
+    finally:
+        client.close()
+        emu.stop()
+
+
+def test_unlock_protective_stop_and_stop_program_on_the_primary_port() -> None:
+    emu = serve()
+    client = Primary(emu.ports["primary"])
+    try:
+        client.send("def spin():\n  while True:\n    sleep(0.1)\n  end\nend")
+        client.wait_state(lambda s: s["robot_mode_data"].is_program_running)
+        client.send("stop program")
+        client.wait_state(lambda s: not s["robot_mode_data"].is_program_running)
+        emu.call(emu.model.protective_stop)
+        client.wait_state(lambda s: s["robot_mode_data"].is_protective_stopped)
+        client.send("set unlock protective stop")
+        state = client.wait_state(lambda s: not s["robot_mode_data"].is_protective_stopped)
+        assert state["masterboard_data"].safety_mode == SafetyMode.NORMAL
+        assert client.errors() == []
+    finally:
+        client.close()
+        emu.stop()
+
+
+@pytest.mark.parametrize("port", ["secondary", "realtime"])
+def test_the_secondary_and_real_time_ports_take_them_too(port: str) -> None:
+    emu = serve()
+    watcher = Primary(emu.ports["primary"])
+    try:
+        with socket.create_connection(("127.0.0.1", emu.ports[port]), timeout=5) as sock:
+            sock.sendall(b"power off  # a comment after the command\n")
+            watcher.wait_state(lambda s: mode(s) == RobotMode.POWER_OFF)
+            sock.sendall(b"power on\nbrake release\n")
+            watcher.wait_state(lambda s: mode(s) == RobotMode.RUNNING)
+        assert watcher.errors() == []
+    finally:
+        watcher.close()
+        emu.stop()
+
+
+def test_commands_beside_urscript_lines_run_and_the_urscript_still_runs() -> None:
+    emu = serve()
+    client = Primary(emu.ports["primary"])
+    try:
+        client.send('close popup\nclose safety popup\ntextmsg("after the commands")')
+        client.wait_state(
+            lambda s: any(getattr(m, "text_message", "") == "after the commands" for m in client.seen)
+        )
+        client.send("power of")  # not a command: URScript, and the controller's error for it
+        deadline = time.monotonic() + 3
+        while not client.errors() and time.monotonic() < deadline:
+            client.wait_state(lambda s: True)
+        assert client.errors() and mode(client.wait_state(lambda s: True)) == RobotMode.RUNNING
+    finally:
+        client.close()
+        emu.stop()
