@@ -34,7 +34,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     p.add_argument("--offline", action="store_true", help="decode embedded examples only (default: online)")
     p.add_argument("--seconds", type=float, default=3.0, help="how long to record (default: 3)")
-    p.add_argument("--out", type=Path, default=Path("rtde-demo"), help="output folder (default: ./rtde-demo)")
+    p.add_argument(
+        "-o", "--output", type=Path, metavar="FOLDER",
+        help="folder for joints.csv and joints.png (default: a new temporary folder, printed)",
+    )  # fmt: skip
+    p.add_argument("--out", type=Path, dest="output", help=argparse.SUPPRESS)  # deprecated spelling
     p.add_argument(
         "--session", type=Path, help="with --offline: a session file of your own (default: the embedded one)"
     )

@@ -39,8 +39,7 @@ def run_online(args: argparse.Namespace) -> int:
     from rtde_spec.rtde.recorder import record
 
     logging.getLogger("rtde_spec").setLevel(logging.WARNING)
-    out: Path = args.out
-    out.mkdir(parents=True, exist_ok=True)
+    out = demo_folder(args.output)
     csv_path, png_path = out / "joints.csv", out / "joints.png"
     config = EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0)
     with EmulatorThread(config) as emulator:
@@ -74,6 +73,20 @@ def run_online(args: argparse.Namespace) -> int:
     return 0
 
 
+def demo_folder(given: Path | None) -> Path:
+    """The folder -o names (made if missing; a file is refused), else a new temporary one:
+    the demo never leaves files in the folder it was started from."""
+    import tempfile
+
+    from rtde_spec.cli.conventions import output_folder
+
+    if given is None:
+        return Path(tempfile.mkdtemp(prefix="rtde-demo-"))
+    out = output_folder(str(given))
+    out.mkdir(parents=True, exist_ok=True)
+    return out
+
+
 def _read(path: Path) -> dict[str, list[float]]:
     with open(path, newline="") as f:
         reader = csv.DictReader(f)
@@ -94,7 +107,7 @@ def _summary(columns: dict[str, list[float]]) -> None:
 
 
 def _plot(columns: dict[str, list[float]], path: Path) -> None:
-    from rtde_spec.errors import MissingDependencyError
+    from rtde_spec.errors import MissingDependencyError, install_hint
     from rtde_spec.output.plots import plot_columns
 
     try:
@@ -102,7 +115,7 @@ def _plot(columns: dict[str, list[float]], path: Path) -> None:
             columns, ["actual_q"], "timestamp", path, "Joint positions of a motion program on the emulator"
         )
     except MissingDependencyError:
-        hint = "pip install 'rtde_spec[plot]'"
+        hint = install_hint("plot")
         print(f"\nNo plot: matplotlib is not installed ({hint}), then run again for {path}")
         return
     print(f"\nPlot: {path}")

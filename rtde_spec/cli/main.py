@@ -26,6 +26,7 @@ from rtde_spec.cli import (
     capture_cmd,
     decode_cmd,
     demo_cmd,
+    examples_cmd,
     fields_cmd,
     plot_cmd,
     record_cmd,
@@ -36,9 +37,11 @@ from rtde_spec.cli import (
     wireshark_cmd,
 )
 from rtde_spec.cli.common import EXIT_ERROR, EXIT_USAGE
+from rtde_spec.cli.conventions import GLOBAL_AFTER, add_global_options, leaf_parsers
 from rtde_spec.errors import RtdeSpecError, UsageError
 
 COMMANDS = (
+    examples_cmd,
     demo_cmd,
     decode_cmd,
     fields_cmd,
@@ -74,12 +77,15 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
     for module in COMMANDS:
         module.add_parser(sub)
+    for _words, leaf in leaf_parsers(parser):
+        add_global_options(leaf)  # `rtde-spec fields --extra-fields x.yaml` works as well
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.extra_fields = [*args.extra_fields, *getattr(args, GLOBAL_AFTER, [])]
     run: Callable[[argparse.Namespace], int] = args.run
     try:
         return run(args)
