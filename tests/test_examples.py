@@ -30,7 +30,9 @@ def test_the_shipped_files_are_what_the_generator_makes(tmp_path: Path) -> None:
             assert (SHIPPED / name).read_bytes() == (made / name).read_bytes(), f"regenerate {name}"
 
 
-def test_examples_writes_every_file_and_the_captures_decode(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:
+def test_examples_writes_every_file_and_the_captures_decode(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
     assert main(["examples", str(tmp_path / "ex")]) == 0
     assert "wrote 13 example files" in capsys.readouterr().out
     for name, _ in shipped():

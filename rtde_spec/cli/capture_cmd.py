@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
+from rtde_spec.cli.conventions import describe
 from rtde_spec.errors import UsageError
 
 if TYPE_CHECKING:
@@ -40,12 +41,19 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "capture",
         help="decode pcap/pcapng captures of RTDE and primary/secondary traffic into tables",
-        description="Writes one table per kind (data packages per recipe, text messages, setup "
-        "exchanges, primary sub-packages) as a hive-partitioned dataset: "
-        "OUTDIR/<table>/robot=<address>/date=<day>/<capture>-<hash>.<ext>.",
-        epilog=EPILOG,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        **describe(
+            "Decodes pcap/pcapng captures (files, folders, globs or - for a pipe) of RTDE, primary/"
+            "secondary, real-time, dashboard and UR ROS driver traffic into one table per kind, written "
+            "as a hive-partitioned dataset: "
+            "FOLDER/<table>/robot=<address>/date=<day>/<capture>-<hash>.<ext>. "
+            "Ports are recognised from the spec or by content (--port-map for moved ones).",
+            "rtde-spec capture robot.pcapng -o tables/",
+            "rtde-spec capture captures/ -o fleet/ --jobs 2 --format csv",
+            "rtde-spec capture late.pcap -o late/ --recipe outputs.txt",
+            "tcpdump -w - port 30004 | rtde-spec capture - -o tables/",
+        ),
     )
+    p.epilog = f"{p.epilog}\n\n{EPILOG}"
     p.add_argument(
         "files",
         nargs="+",
@@ -53,7 +61,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="capture files, folders of them, globs, or - for standard input "
         "(tcpdump -w - ... | rtde-spec capture - -o OUT) (required)",
     )
-    p.add_argument("-o", "--outdir", required=True, help="output folder (required)")
+    p.add_argument(
+        "-o", "--output", dest="outdir", required=True, type=output_folder_arg, metavar="FOLDER",
+        help="output folder, made when missing (required)",
+    )  # fmt: skip
+    p.add_argument("--outdir", dest="outdir", type=output_folder_arg, help=argparse.SUPPRESS)  # old -o
     p.add_argument(
         "--format", choices=("parquet", "csv", "jsonl", "mcap"), default="parquet", help="default: parquet"
     )
@@ -67,12 +79,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "output recipe)",
     )
     p.add_argument(
-        "--rtde-port", type=int, action="append", help=f"RTDE port, repeatable (default: {RTDE_PORT})"
+        "--rtde-port",
+        type=int,
+        action="append",
+        metavar="PORT",
+        help=f"RTDE port, repeatable (default: {RTDE_PORT})",
     )
     p.add_argument(
         "--primary-port",
         type=int,
         action="append",
+        metavar="PORT",
         help=f"primary/secondary port, repeatable (default: {', '.join(map(str, PRIMARY_PORTS.values()))})",
     )
     p.add_argument(
@@ -84,13 +101,36 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "spec's ports: RTDE 30004, primary 30001/30002/30011/30012, real-time 30003/30013, dashboard "
         "29999, URCL external control 50001-50004)",
     )
-    p.add_argument("--jobs", type=int, default=1, help="files decoded in parallel processes (default: 1)")
+    p.add_argument(
+        "--jobs",
+        type=int,
+        default=1,
+        metavar="PROCESSES",
+        help="files decoded in parallel processes (default: 1)",
+    )
     p.add_argument(
         "--lenient",
         action="store_true",
         help="exit 0 when an input was damaged (the summary is printed all the same; default: exit 3)",
     )
     p.set_defaults(run=run)
+
+
+def output_folder_arg(text: str) -> str:
+    """-o of capture is a folder: an existing file, or a name with a table file's suffix that is
+    not a folder yet (-o out.parquet), is refused rather than made into a folder silently."""
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise argparse.ArgumentTypeError(
+            f"{text} is a file, but capture writes a folder (one table per kind); give a folder, e.g. "
+            f"{path.stem or 'tables'}/"
+        )
+    if not path.exists() and path.suffix.lower() in (".parquet", ".csv", ".jsonl", ".mcap"):
+        raise argparse.ArgumentTypeError(
+            f"{text} names a file, but capture writes a folder (one table per kind, --format "
+            f"{path.suffix[1:].lower()}); give a folder, e.g. {path.stem}/"
+        )
+    return text
 
 
 STDIN = "/dev/stdin"  # `-`: a capture piped in (read to its end; Linux and macOS)

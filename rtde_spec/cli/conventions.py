@@ -31,7 +31,8 @@ def describe(paragraph: str, *examples: str) -> dict[str, Any]:
 
 
 def add_global_options(parser: argparse.ArgumentParser) -> None:
-    """--debug and --extra-fields after the subcommand as well as before it (hidden: the top help has them)."""
+    """--debug and --extra-fields after the subcommand as well as before it (hidden: the top help
+    has them)."""
     parser.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
     parser.add_argument(
         "--extra-fields", action="append", dest=GLOBAL_AFTER, default=argparse.SUPPRESS, metavar="YAML",
