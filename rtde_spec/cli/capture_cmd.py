@@ -10,8 +10,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
-from rtde_spec.cli.conventions import describe
-from rtde_spec.errors import UsageError
+from rtde_spec.cli.conventions import describe, plural
+from rtde_spec.errors import RtdeSpecError, UsageError
 
 if TYPE_CHECKING:
     from rtde_spec.capture.summary import CaptureSummary
@@ -204,9 +204,51 @@ def run(args: argparse.Namespace) -> int:
     _report(summaries)
     if any(s.needs_recipe() for s in summaries):
         return EXIT_MISSING_RECIPE
-    if any(s.damage() for s in summaries) and not args.lenient:
+    if any(s.damage() or empty(s) for s in summaries) and not args.lenient:
         return EXIT_DAMAGED
     return 0
+
+
+def verdict(s: CaptureSummary) -> str:
+    """'ok' only when nothing went wrong: else what did (the summary line's second word)."""
+    if s.damage():
+        return "damaged"
+    if s.needs_recipe():
+        return "needs --recipe"
+    return "nothing decoded" if empty(s) else "ok"
+
+
+def empty(s: CaptureSummary) -> bool:
+    """No rows at all, and not for want of --recipe or for damage (each its own problem)."""
+    return not any(s.tables.values()) and not s.needs_recipe() and not s.damage()
+
+
+def ports_seen(path: str, most: int = 8) -> str:
+    """The TCP ports of a capture's connections, most segments first (a file read again)."""
+    from collections import Counter
+
+    from rtde_spec.capture.packets import segments
+
+    counts: Counter[int] = Counter()
+    try:
+        for seg in segments(path):
+            counts[min(seg.sport, seg.dport)] += 1  # the lower port: the server's, mostly
+    except (OSError, RtdeSpecError):
+        return "unknown (the input cannot be read again)"
+    if not counts:
+        return "none: the capture holds no TCP segments"
+    shown = ", ".join(f"{port} ({n} segment{'' if n == 1 else 's'})" for port, n in counts.most_common(most))
+    return shown + (f" and {len(counts) - most} more" if len(counts) > most else "")
+
+
+def nothing_found(s: CaptureSummary) -> str:
+    """Why a capture gave no rows, naming the ports it holds and --port-map."""
+    ports = ports_seen(s.file) if s.file != STDIN else "unknown (standard input)"
+    what = "no RTDE, primary, real-time, dashboard or driver connection" if not s.connections else "no rows"
+    return (
+        f"{what} found; TCP ports seen: {ports}. If one of them is a UR interface on a moved port, "
+        "name it with --port-map PORT=PROTOCOL (e.g. --port-map 8080=rtde)"
+    )
 
 
 def _report(summaries: list[CaptureSummary]) -> None:
@@ -215,15 +257,20 @@ def _report(summaries: list[CaptureSummary]) -> None:
     for s in summaries:
         for name, rows in s.tables.items():
             tables[name] = tables.get(name, 0) + rows
-        print(f"{s.file}: {s.frames} frames, {len(s.connections)} connections")
+        print(f"{s.file}: {plural(s.frames, 'frame')}, {plural(len(s.connections), 'connection')}")
         for c in s.connections:
             gaps = f", {c.gaps} gaps ({c.lost_bytes} bytes lost)" if c.gaps else ""
             notes = "".join(f"; {note}" for note in c.notes)
-            print(f"  {c.kind:7s} {c.name}: {c.packages} packages{gaps}{notes}")
-    print("tables: " + ", ".join(f"{name} ({rows} rows)" for name, rows in sorted(tables.items())))
+            print(f"  {c.kind:7s} {c.name}: {plural(c.packages, 'package')}{gaps}{notes}")
+    listed = ", ".join(f"{name} ({plural(rows, 'row')})" for name, rows in sorted(tables.items()))
+    print(f"tables: {listed or 'none'}")
     for s in summaries:
-        print(f"summary {s.line()}", file=sys.stderr)
-        for problem in distinct(s.problems()):
+        line = s.line()
+        if line.startswith(f"{s.file}: ok: "):
+            line = f"{s.file}: {verdict(s)}: " + line[len(f"{s.file}: ok: ") :]
+        print(f"summary {line}", file=sys.stderr)
+        problems = s.problems() + ([nothing_found(s)] if empty(s) else [])
+        for problem in distinct(problems):
             print(f"  problem: {problem}", file=sys.stderr)
 
 

@@ -38,7 +38,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "folder", nargs="?", metavar="FOLDER", help="where to write them (default: ./rtde-examples)"
     )
-    p.add_argument("-o", "--output", metavar="FOLDER", help="the same as FOLDER")
+    p.add_argument("-o", "--output", metavar="FOLDER", help="the same as FOLDER (default: ./rtde-examples)")
     p.add_argument("--force", action="store_true", help="overwrite files of the same names (default: refuse)")
     p.set_defaults(run=run)
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
-from rtde_spec.cli.common import catalogue_for, controller_version
+from rtde_spec.cli.common import catalogue_for, controller_version, release_version
 from rtde_spec.cli.conventions import describe
 from rtde_spec.output.text import print_json, table
 
@@ -43,7 +43,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--diff",
         nargs=2,
         metavar=("A", "B"),
-        type=controller_version,
+        type=release_version,
         help="fields added and removed from controller version A to B, per interface (default: off)",
     )
     p.set_defaults(run=run)

@@ -122,6 +122,17 @@ def run(args: argparse.Namespace) -> int:
     from rtde_spec.spec.dashboard import dashboard_spec
 
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
+    scenario = load_scenario(args.scenario) if args.scenario else Scenario()
+    if (
+        args.controller
+        and "controller" in scenario.model_fields_set
+        and scenario.controller != args.controller
+    ):
+        raise UsageError(
+            f"--controller {args.controller} and the scenario's controller: {scenario.controller} disagree; "
+            "give the version once (leave out --controller, or change the scenario)",
+            subject=f"--scenario {args.scenario}",
+        )
     config = EmulatorConfig(
         host=args.host,
         rtde_port=args.rtde_port,
@@ -129,7 +140,7 @@ def run(args: argparse.Namespace) -> int:
         secondary_port=args.secondary_port,
         primary_read_only_port=args.primary_read_only_port,
         secondary_read_only_port=args.secondary_read_only_port,
-        scenario=load_scenario(args.scenario) if args.scenario else Scenario(),
+        scenario=scenario,
         controller=args.controller,
         arm=args.model,
         dashboard_port=_dashboard_port(args.dashboard_port, dashboard_spec().port),

@@ -188,14 +188,22 @@ def run(args: argparse.Namespace) -> int:
 
 
 class ProgramEnd:
-    """With --script and no other end: done once the program has run and stopped (Robot
-    State's is_program_running went true, then false), so the output of the whole program shows."""
+    """With --script and no other end: done once the program has stopped (the key message
+    PROGRAM_XXX_STOPPED, a runtime exception, or Robot State's is_program_running going true,
+    then false), so the output of the whole program shows."""
 
     def __init__(self, waits: bool) -> None:
         self.waits = waits
         self.running = False
 
     def ended(self, message: Any) -> bool:
+        if not self.waits:
+            return False
+        name = getattr(message, "NAME", "")
+        if name == "runtime_exception_message" or (
+            name == "key_message" and getattr(message, "robot_message_title", "") == "PROGRAM_XXX_STOPPED"
+        ):
+            return True  # the controller says so (a program can start and stop between two states)
         mode = message.get("robot_mode_data") if hasattr(message, "get") else None
         running = getattr(mode, "is_program_running", None)
         if not self.waits or running is None:
