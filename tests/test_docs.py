@@ -25,6 +25,9 @@ import yaml
 
 from .docs_blocks import LANGUAGES, ROOT, Block, blocks, commands, documents
 
+# one process holds the emulator on the default ports: every test here runs in it (pytest-xdist)
+pytestmark = pytest.mark.xdist_group("default-ports")
+
 ALL = [b for doc in documents() for b in blocks(doc)]
 RUNNABLE = [b for b in ALL if b.language in ("python", "sh")]
 

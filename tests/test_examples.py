@@ -75,3 +75,11 @@ def test_every_input_file_the_readme_names_is_shipped() -> None:
     assert named and named <= shipped_names
     for name in ("outputs.txt", "moving.yaml", GUIDE):
         assert name in text and name in shipped_names
+
+
+def test_the_spec_format_lists_every_spec_file() -> None:
+    text = (ROOT / "docs" / "spec-format.md").read_text()
+    files = sorted(str(p.relative_to(ROOT)) for p in (ROOT / "spec").rglob("*.yaml"))
+    assert files and [f for f in files if f not in text] == []
+    for word in ("repeat:", "when:", "switch:", "length: rest", "count: N", "scale:"):
+        assert word in text, f"docs/spec-format.md: the layout language's {word}"

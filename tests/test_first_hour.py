@@ -111,3 +111,17 @@ def test_the_demo_writes_to_a_temp_folder_or_the_one_named(tmp_path: Path) -> No
     (tmp_path / "afile").write_text("x")
     with pytest.raises(UsageError, match="is a file, but this output is a folder"):
         demo_folder(tmp_path / "afile")
+
+
+def test_an_emulator_thread_serves_the_ports_serve_does_each_on_a_free_one() -> None:
+    import socket
+
+    from rtde_spec import EmulatorConfig, EmulatorThread
+
+    with EmulatorThread(EmulatorConfig.free_ports()) as emu:
+        assert set(emu.ports) >= {"rtde", "primary", "secondary", "realtime", "dashboard"}
+        assert all(port > 0 for port in emu.ports.values())
+        with socket.create_connection(("127.0.0.1", emu.ports["dashboard"]), timeout=5) as dashboard:
+            assert dashboard.makefile("r").readline().startswith("Connected: Universal Robots Dashboard")
+    with EmulatorThread(EmulatorConfig.free_ports(dashboard_port=None)) as emu:
+        assert "dashboard" not in emu.ports and "realtime" in emu.ports
