@@ -83,3 +83,11 @@ def test_the_spec_format_lists_every_spec_file() -> None:
     assert files and [f for f in files if f not in text] == []
     for word in ("repeat:", "when:", "switch:", "length: rest", "count: N", "scale:"):
         assert word in text, f"docs/spec-format.md: the layout language's {word}"
+
+
+def test_the_readme_says_tf_is_live_only() -> None:
+    from rtde_spec.output import mcap
+
+    text = (ROOT / "README.md").read_text()
+    assert '"/tf"' not in Path(mcap.__file__).read_text()  # the MCAP writer has no /tf channel...
+    assert "in the live view only (`--foxglove`; a recorded `.mcap` has no `/tf`)" in text  # ...and says so

@@ -125,3 +125,65 @@ def test_an_emulator_thread_serves_the_ports_serve_does_each_on_a_free_one() -> 
             assert dashboard.makefile("r").readline().startswith("Connected: Universal Robots Dashboard")
     with EmulatorThread(EmulatorConfig.free_ports(dashboard_port=None)) as emu:
         assert "dashboard" not in emu.ports and "realtime" in emu.ports
+
+
+def test_a_host_name_that_does_not_resolve_is_said_so() -> None:
+    import socket
+
+    from rtde_spec.cli.port_probe import unreachable
+
+    # the resolver's own error (no lookup is made here: the tests stay on 127.0.0.1)
+    found = unreachable("robot.local", socket.gaierror(socket.EAI_NONAME, "Name or service not known"))
+    assert found.kind == "unresolved"
+    assert (
+        "the name 'robot.local' does not resolve to an address" in found.detail
+        and "IP address" in found.detail
+    )
+    refused = unreachable("127.0.0.1", ConnectionRefusedError(111, "Connection refused"))
+    assert refused.kind == "closed" and "nothing accepts connections there" in refused.detail
+
+
+def test_record_checks_the_xml_types_as_validate_does(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    xml = tmp_path / "config.xml"
+    xml.write_text(
+        '<?xml version="1.0"?>\n<rtde_config>\n  <recipe key="out">\n'
+        '    <field name="timestamp" type="DOUBLE"/>\n    <field name="robot_mode" type="UINT32"/>\n'
+        "  </recipe>\n</rtde_config>\n"
+    )
+    code, _, err = run(capsys, "validate", str(xml))
+    assert code == 1 and "the recipe says UINT32, the spec says INT32" in err + _
+    target = tmp_path / "r.csv"
+    code, _, err = run(
+        capsys, "record", "--host", "127.0.0.1", "--port", "9", "--config", str(xml), "-o", str(target)
+    )
+    assert code == 1 and not target.exists()
+    (line,) = [x for x in err.splitlines() if x.startswith("error:")]  # one message, before connecting
+    assert f"--recipe {xml} (recipe out): robot_mode: the recipe says UINT32, the spec says INT32" in line
+
+
+@pytest.mark.parametrize(
+    ("output", "says"),
+    [
+        ("nodir/sub/r.csv", "the folder nodir/sub does not exist; make it first (mkdir -p nodir/sub)"),
+        ("afile/r.csv", "afile is a file, not a folder"),
+        ("adir/", "is a folder, but this output is one file"),
+    ],
+)
+def test_file_outputs_name_the_path_given_in_plain_words(
+    tmp_path: Path,
+    capsys: pytest.CaptureFixture[str],
+    monkeypatch: pytest.MonkeyPatch,
+    output: str,
+    says: str,
+) -> None:
+    monkeypatch.chdir(tmp_path)
+    (tmp_path / "afile").write_text("x")
+    (tmp_path / "adir").mkdir()
+    for argv in (
+        ["record", "--host", "127.0.0.1", "--port", "9", "--fields", "timestamp", "-o", output],
+        ["decode", "00045601", "-o", output],
+    ):
+        code, _, err = run(capsys, *argv)
+        assert code == 2 and f"error: -o {output}: {says}" in err and "Errno" not in err, argv

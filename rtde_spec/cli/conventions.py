@@ -68,6 +68,27 @@ def output_folder(text: str, option: str = "-o") -> Path:
     return path
 
 
+def output_file(text: str, option: str = "-o") -> Path:
+    """A file output: its folder must exist (and be a folder); a folder is refused. Checked before
+    anything connects or is read, so the error names the path the user gave, in plain words."""
+    path = Path(text)
+    if names_folder(text):
+        raise UsageError(
+            "is a folder, but this output is one file; give a file name", subject=f"{option} {text}"
+        )
+    parent = path.parent
+    if parent.exists() and not parent.is_dir():
+        raise UsageError(
+            f"{parent} is a file, not a folder; give a path in a folder", subject=f"{option} {text}"
+        )
+    if not parent.exists():
+        raise UsageError(
+            f"the folder {parent} does not exist; make it first (mkdir -p {parent}) or give another path",
+            subject=f"{option} {text}",
+        )
+    return path
+
+
 def names_folder(text: str) -> bool:
     """-o names a folder when it ends in / or is an existing folder."""
     return text.endswith(("/", "\\")) or Path(text).is_dir()

@@ -29,7 +29,7 @@ from rtde_spec.cli.common import (
     reject_capture,
     report_skipped,
 )
-from rtde_spec.cli.conventions import describe
+from rtde_spec.cli.conventions import describe, output_file
 from rtde_spec.errors import DecodeError, RtdeSpecError
 
 if TYPE_CHECKING:
@@ -209,6 +209,8 @@ def _progress(total: int, args: argparse.Namespace) -> Any:
 def run(args: argparse.Namespace) -> int:
     from rtde_spec.output.writers import format_for, open_writer
 
+    if args.output:
+        output_file(args.output)
     fmt = "json" if args.json and not args.format else format_for(args.output, args.format)
     if args.protocol == "primary":
         from rtde_spec.cli.primary_output import run_primary

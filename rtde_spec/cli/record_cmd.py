@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, cast
 
 from rtde_spec._generated.constants import RTDE_PORT
 from rtde_spec.cli.common import RECIPE_FILE_HELP, existing_file, port_number
-from rtde_spec.cli.conventions import describe
+from rtde_spec.cli.conventions import describe, output_file
 from rtde_spec.errors import RtdeSpecError, UsageError
 
 if TYPE_CHECKING:
@@ -144,6 +144,23 @@ def names_of(args: argparse.Namespace, alternative: str = ", or the names with -
     inputs, outputs = set(cat.names("input")), set(cat.names("output"))
     key = getattr(args, "recipe_key", None)
     recipe = pick_recipe(load_recipes(path), key, "output", inputs, outputs, where=args.recipe)
+    # the types a file declares (UR's XML) are checked as `validate` checks them: one message
+    wrong = [
+        f"{name}: the recipe says {declared}, the spec says {info.type}"
+        for name in recipe.names
+        if (declared := recipe.declared_types.get(name)) is not None
+        and (info := cat.get(name, "output")) is not None
+        and declared != info.type
+    ]
+    if wrong:
+        from rtde_spec.errors import RecipeError
+
+        which = f" (recipe {recipe.key})" if recipe.key else ""
+        raise RecipeError(
+            f"{'; '.join(wrong)}; correct the type{'' if len(wrong) == 1 else 's'} in the file "
+            f"(`rtde-spec validate {args.recipe}` reports every problem)",
+            subject=f"--recipe {args.recipe}{which}",
+        )
     return list(recipe.names)
 
 
@@ -154,6 +171,7 @@ def run(args: argparse.Namespace) -> int:
     from rtde_spec.rtde.client import RtdeClient
     from rtde_spec.rtde.recorder import BATCH_SECONDS, record
 
+    output_file(args.output)
     fmt = format_for(args.output, args.format)
     if fmt not in ("csv", "parquet", "jsonl", "mcap"):
         raise UsageError(f"-o {args.output}: use .csv, .parquet, .jsonl or .mcap (or --format)")
