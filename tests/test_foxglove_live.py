@@ -149,6 +149,7 @@ def frame_transform(data: bytes) -> dict[str, Any]:
     }
 
 
+@pytest.mark.slow  # long end to end: CI runs it (RTDE_SPEC_SLOW=1), the fast loop does not
 def test_watch_serves_rtde_outputs_primary_messages_and_the_tool_frame(emu: EmulatorThread) -> None:
     port = free_port()
     argv = ["watch", "--host", "127.0.0.1", "--port", str(emu.ports["secondary"]), "--count", "80",
