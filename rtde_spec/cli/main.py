@@ -5,8 +5,9 @@ Exit codes, the same for every subcommand:
   1    an error in the data or the result (invalid recipe, bad bytes, a refused or
        dropped connection, a port that speaks another interface)
   2    a usage error (bad option, missing file, unknown controller version)
-  3    capture read every input to its end, but some was damaged or skipped (the
-       summary on stderr says what and where; --lenient makes it 0)
+  3    capture read every input to its end, but some was damaged or skipped, or
+       nothing decoded (the summary on stderr says what and where, and the TCP ports
+       seen; --lenient makes it 0)
   130  interrupted (Ctrl-C); what was written so far is whole
 Errors print `error: WHAT: WHY; WHAT TO DO` on stderr; --debug shows the traceback.
 tests/test_cli_errors.py holds each error a user can cause, with its message and code.
@@ -61,8 +62,8 @@ def build_parser() -> argparse.ArgumentParser:
         prog="rtde-spec",
         description="Universal Robots RTDE and primary/secondary interfaces: spec, codec and tools.",
         epilog="Exit codes: 0 success; 1 error in the data or result; 2 usage error; 3 capture read "
-        "every input but some was damaged or skipped (summary on stderr; --lenient gives 0); "
-        "130 interrupted.",
+        "every input but some was damaged or skipped, or nothing decoded (summary on stderr; --lenient "
+        "gives 0); 130 interrupted. Start with `rtde-spec examples DIR`: the files the README uses.",
     )
     parser.add_argument("--version", action="version", version=f"rtde-spec {__version__}")
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors (default: off)")
