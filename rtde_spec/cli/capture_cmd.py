@@ -33,8 +33,9 @@ NAME_raw.
 
 Exit codes: 0 every file decoded whole; 1 data packages need --recipe (or another
 error in the data); 2 usage error (no such file, not a capture); 3 decoded, but some
-input was damaged or skipped (0 with --lenient); 130 interrupted (the tables written
-so far are whole)."""
+input was damaged or skipped, or nothing was decoded: no UR connection, the TCP
+ports seen named (--port-map for moved ones) (0 with --lenient); 130 interrupted (the
+tables written so far are whole)."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
