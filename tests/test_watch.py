@@ -109,7 +109,7 @@ def test_json_lines_and_a_script_sent_first(
     code, lines, err = watch(
         capsys, "--port", str(emu.ports["primary"]), "--count", "30", "--json", "--script", str(script)
     )
-    assert code == 0 and "sent 2 line(s) of URScript" in err
+    assert code == 0 and "sent 2 lines of URScript" in err
     rows = [json.loads(line) for line in lines]
     assert rows[0]["package"] == "version_message" and len(rows) == 30
     assert rows[0]["major_version"] == 5 and rows[0]["minor_version"] == 11

@@ -9,6 +9,7 @@ import logging
 import threading
 from pathlib import Path
 
+from rtde_spec.cli.conventions import plural
 from rtde_spec.output.text import table
 
 DEMO_FIELDS = [
@@ -64,7 +65,7 @@ def run_online(args: argparse.Namespace) -> int:
                 timer.cancel()
                 timer.join()
                 writer.close()
-    print(f"\nWrote {result.rows} rows to {csv_path} (skipped {result.skipped})")
+    print(f"\nWrote {plural(result.rows, 'row')} to {csv_path} (skipped {result.skipped})")
     rows = _read(csv_path)
     _summary(rows)
     _plot(rows, png_path)

@@ -13,7 +13,7 @@ from typing import TYPE_CHECKING, cast
 
 from rtde_spec._generated.constants import RTDE_PORT
 from rtde_spec.cli.common import RECIPE_FILE_HELP, existing_file, port_number
-from rtde_spec.cli.conventions import describe, output_file
+from rtde_spec.cli.conventions import describe, output_file, plural
 from rtde_spec.errors import RtdeSpecError, UsageError
 
 if TYPE_CHECKING:
@@ -237,7 +237,8 @@ def run(args: argparse.Namespace) -> int:
         where = f"{len(parts)} parts {parts[0]} .. {parts[-1]}" if parts else "no file"
     try:
         print(
-            f"recorded {result.rows} rows of {len(names)} fields in {result.seconds:.1f} s to {where} "
+            f"recorded {plural(result.rows, 'row')} of {plural(len(names), 'field')} in "
+            f"{result.seconds:.1f} s to {where} "
             f"(controller {client.controller_version}, skipped {result.skipped}, stopped by {how})",
             file=sys.stderr,
         )

@@ -11,7 +11,7 @@ import sys
 from typing import TYPE_CHECKING
 
 from rtde_spec.cli.common import EXIT_USAGE, controller_version, recipe_file
-from rtde_spec.cli.conventions import describe
+from rtde_spec.cli.conventions import describe, plural
 from rtde_spec.errors import RtdeSpecError
 from rtde_spec.output.text import print_json, table
 from rtde_spec.recipes.model import FILE_FORMATS, Recipe
@@ -107,7 +107,7 @@ def print_report(report: ValidationReport) -> None:
         target = "the controller version each recipe names"
     else:
         target = "no controller version given: availability by version not checked"
-    print(f"Validating {len(report.recipes)} recipe(s) for {target}\n")
+    print(f"Validating {plural(len(report.recipes), 'recipe')} for {target}\n")
     for r in report.recipes:
         state = "valid" if r.valid else "INVALID"
         extra = f", every {r.rate_divisor} cycles = {r.effective_frequency:.4g} Hz" if r.rate_divisor else ""
@@ -132,7 +132,8 @@ def print_report(report: ValidationReport) -> None:
         print(p)
     errors = sum(p.severity == "error" for p in report.all_problems)
     warnings = sum(p.severity == "warning" for p in report.all_problems)
-    print(f"{'valid' if report.valid else 'invalid'}: {errors} error(s), {warnings} warning(s)")
+    verdict = "valid" if report.valid else "invalid"
+    print(f"{verdict}: {plural(errors, 'error')}, {plural(warnings, 'warning')}")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.cli.common import existing_file
-from rtde_spec.cli.conventions import describe
+from rtde_spec.cli.conventions import describe, plural
 from rtde_spec.errors import RtdeConnectionError, RtdeSpecError, UsageError
 from rtde_spec.output.foxglove_live import DEFAULT_PORT
 
@@ -158,7 +158,7 @@ def run(args: argparse.Namespace) -> int:
                 rtde = _subscribe_rtde(args, live)
             if script is not None:
                 client.send_script(script)
-                print(f"sent {len(script.splitlines())} line(s) of URScript", file=sys.stderr)
+                print(f"sent {plural(len(script.splitlines()), 'line')} of URScript", file=sys.stderr)
             for message in _first_checked(client, args):
                 now = datetime.datetime.now()
                 if live is not None:
