@@ -106,6 +106,18 @@ class MissingDependencyError(UsageError, ImportError):
     """An optional dependency is not installed; the message names the extra that brings it."""
 
 
+def install_hint(extra: str) -> str:
+    """How to install an extra: from the checkout this package runs from (an editable
+    install: `pip install -e ".[x]"` there), else the distribution from the index."""
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parents[1]
+    if (root / "pyproject.toml").is_file() and (root / "spec").is_dir():
+        where = "" if Path.cwd().resolve() == root else f" in {root}"
+        return f'pip install -e ".[{extra}]"{where}'
+    return f"pip install 'rtde_spec[{extra}]'"
+
+
 def require(module: str, extra: str, what: str) -> Any:
     """Import an optional dependency, or raise MissingDependencyError naming the extra to install."""
     import importlib
@@ -114,7 +126,7 @@ def require(module: str, extra: str, what: str) -> Any:
         return importlib.import_module(module)
     except ImportError:
         raise MissingDependencyError(
-            f"{what} needs {module.split('.')[0]}, which is not installed: pip install 'rtde_spec[{extra}]'"
+            f"{what} needs {module.split('.')[0]}, which is not installed: {install_hint(extra)}"
         ) from None
 
 

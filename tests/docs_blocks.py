@@ -6,7 +6,8 @@ a recipe, a script the next block uses); `<!-- test: until-stopped=S -->` marks 
 that run until Ctrl-C (`serve`, `watch`): each must still be running after S seconds;
 `<!-- test: own-emulator -->` runs the block with the test's emulator stopped (it starts
 its own); `<!-- test: exit=N -->` expects each command to exit N (an example of an
-error). Every block has a language: python and sh run, yaml/xml/json are parsed, text
+error); `<!-- test: prints=TEXT -->` expects a python block to print TEXT (`+` for a
+space). Every block has a language: python and sh run, yaml/xml/json are parsed, text
 is output shown to the reader and is not run.
 """
 

@@ -1,7 +1,10 @@
-"""Stand-ins for the files a user's commands in the docs name: captures, recipes, streams.
+"""The example files the docs' commands name: captures, recipes, streams, a script, a scenario.
 
-The captures are written with dpkt (tests/capture_files.py), the byte files from the
-package's embedded examples; names match what README.md and docs/ use.
+They ship in the package (`rtde_spec/examples/files/`, written by `rtde-spec examples DIR`);
+this module makes them: the captures are written with dpkt (tests/capture_files.py), an
+implementation independent of ours, the byte files from the package's embedded examples.
+Regenerate the shipped copies with `PYTHONPATH=. python3 -m tests.docs_workspace`;
+tests/test_examples.py holds them equal.
 """
 
 from __future__ import annotations
@@ -73,6 +76,15 @@ def _primary(conv: Conversation) -> None:
         conv.send("server", stream[start : start + 500], dt=0.1)
 
 
+SCENARIO = """controller: 5.15.0
+outputs:
+  actual_q: {sine: {amplitude: 0.5, period: 4.0, offset: [0, -1.57, 1.57, 0, 0, 0]}}
+  output_double_register_24: {ramp: {start: 0, rate: 0.1}}
+  robot_mode: 7
+"""
+SHIPPED = Path(__file__).resolve().parents[1] / "rtde_spec" / "examples" / "files"
+
+
 def make_workspace(folder: Path) -> Path:
     codec = RecipeCodec.for_names(NAMES, "output")
     rtde = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30004))
@@ -95,6 +107,16 @@ def make_workspace(folder: Path) -> Path:
     (folder / "capture_30001.bin").write_bytes(primary_stream())
     (folder / "rtde_config.xml").write_text(UR_CONFIG)
     (folder / "move.script").write_text(SCRIPT)
+    (folder / "moving.yaml").write_text(SCENARIO)
     driver_session(folder)  # driver.pcap: a UR ROS driver session, every port side by side
     (folder / "rtde-guide-5.30.txt").write_text(hand_made(guide_from_spec(Catalogue.builtin().spec)))
     return folder
+
+
+if __name__ == "__main__":
+    import shutil
+
+    shutil.rmtree(SHIPPED, ignore_errors=True)
+    SHIPPED.mkdir(parents=True)
+    make_workspace(SHIPPED)
+    print(f"wrote {SHIPPED}")

@@ -354,4 +354,4 @@ def test_ctrl_c_on_a_piped_capture_reports_what_was_kept(tmp_path: Path) -> None
     assert proc.returncode == 130, err.decode()
     rows = dataset(tmp_path / "out" / "rtde_outputs_1").num_rows
     assert 0 < rows < 300 and f"rtde_outputs_1 ({rows} rows)".encode() in out
-    assert b"1 connections" in out and b"written whole" in err
+    assert b"1 connection\n" in out and b"written whole" in err

@@ -241,7 +241,7 @@ def test_cli_decodes_a_capture_piped_to_standard_input(tmp_path: Path) -> None:
         timeout=60,
     )
     assert result.returncode == 0, result.stderr.decode()
-    assert b"/dev/stdin: 5 frames, 1 connections" in result.stdout and b": 5 packages" in result.stdout
+    assert b"/dev/stdin: 5 frames, 1 connection" in result.stdout and b": 5 packages" in result.stdout
     assert (out / "rtde_setup").is_dir()  # the requests, as a table
 
 

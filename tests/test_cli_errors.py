@@ -165,8 +165,8 @@ CASES: list[Case] = [
     c(2, "spec", "import", "guide.txt", "--write", "--spec-dir", "nowhere", "--", "--spec-dir nowhere",
       "no spec here", "give --spec-dir path/to/spec"),
     c(2, "spec", "import", "guide.txt", "--", "cannot tell the document's form", "expected an RTDE guide"),
-    c(2, "wireshark", "--install", "--dir", "afile/plugins", "--", "--dir afile/plugins",
-      "cannot install the dissector there", "give --dir a folder you can write to"),
+    c(2, "wireshark", "--install", "-o", "afile/plugins", "--", "-o afile/plugins",
+      "cannot install the dissector there", "give -o a folder you can write to"),
 ]  # fmt: skip
 
 

@@ -1,9 +1,10 @@
 """Every code block of README.md and docs/*.md runs as written, so none can rot.
 
-Blocks run in one workspace holding stand-ins for a user's files (a capture of a
-session, recipe files, a primary stream...: `docs_workspace.py`) beside the
-controller emulator on its default ports on 127.0.0.1, which is what the docs point
-commands at. The install and test commands of the README are checked against
+Blocks run as a user runs them: in the folder `rtde-spec examples DIR` writes (the
+example files the package ships: captures, recipes, a script, a scenario...), with
+`python3` and `rtde-spec` on the PATH being this interpreter (a venv's too), beside
+the controller emulator on its default ports on 127.0.0.1, which is what the docs
+point commands at. The install and test commands of the README are checked against
 `.ci/run` instead of being run inside the test run they start.
 """
 
@@ -23,7 +24,9 @@ import pytest
 import yaml
 
 from .docs_blocks import LANGUAGES, ROOT, Block, blocks, commands, documents
-from .docs_workspace import make_workspace
+
+# one process holds the emulator on the default ports: every test here runs in it (pytest-xdist)
+pytestmark = pytest.mark.xdist_group("default-ports")
 
 ALL = [b for doc in documents() for b in blocks(doc)]
 RUNNABLE = [b for b in ALL if b.language in ("python", "sh")]
@@ -59,7 +62,10 @@ def robot() -> Iterator[Robot]:
 
 @pytest.fixture(scope="module")
 def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
-    folder = make_workspace(tmp_path_factory.mktemp("docs"))
+    folder = tmp_path_factory.mktemp("docs") / "rtde-examples"
+    env = _env(folder.parent)
+    made = subprocess.run(["rtde-spec", "examples", str(folder)], env=env, capture_output=True, text=True)
+    assert made.returncode == 0, made.stderr
     for block in ALL:  # files the docs show first and use later
         if "file" in block.directives:
             (folder / block.directives["file"]).write_text(block.text, encoding="utf-8")
@@ -67,14 +73,18 @@ def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
 
 
 def _env(folder: Path) -> dict[str, str]:
+    """PATH with `python3` and `rtde-spec` running this interpreter.
+
+    Scripts, not a symlink: Python finds its venv from the path it was started by, so a
+    link to a venv's python elsewhere starts the base Python without the venv's packages.
+    """
     bin_dir = folder / ".bin"
     bin_dir.mkdir(exist_ok=True)
-    python = bin_dir / "python3"
-    if not python.exists():
-        python.symlink_to(sys.executable)
-        cli = bin_dir / "rtde-spec"
-        cli.write_text(f'#!/bin/sh\nexec "{sys.executable}" -m rtde_spec "$@"\n')
-        cli.chmod(0o755)
+    for name, tail in (("python3", ""), ("rtde-spec", " -m rtde_spec")):
+        script = bin_dir / name
+        if not script.exists():
+            script.write_text(f'#!/bin/sh\nexec "{sys.executable}"{tail} "$@"\n')
+            script.chmod(0o755)
     env = dict(os.environ)
     env["PATH"] = f"{bin_dir}{os.pathsep}{env.get('PATH', '')}"
     env["MPLBACKEND"] = "Agg"
@@ -156,6 +166,10 @@ def _run(block: Block, workspace: Path, env: dict[str, str]) -> None:
             timeout=180,
         )  # fmt: skip
         assert result.returncode == 0, f"{block.id}:\n{result.stderr[-2000:]}"
+        if "prints" in block.directives:  # what the reader is told the block shows
+            wanted = block.directives["prints"].replace("+", " ")
+            assert wanted in result.stdout, f"{block.id} should print {wanted!r}:\n{result.stdout[-2000:]}"
+            assert "\nNone\n" not in f"\n{result.stdout}", f"{block.id} prints None:\n{result.stdout}"
         return
     until = block.directives.get("until-stopped")
     for command in commands(block):

@@ -38,6 +38,10 @@ def command() -> list[str]:
     return [exe] if exe else [sys.executable, "-m", "rtde_spec"]
 
 
+# the dashboard and real-time ports left out: tests/test_docs.py holds 29999 in another process
+NO_FIXED_PORTS = ("--dashboard-port", "-1", "--realtime-port", "-1")
+
+
 def serve(args: list[str]) -> subprocess.Popen[str]:
     """`rtde-spec serve ARGS` in its own process; its RTDE port is in `.rtde_port`."""
     proc = subprocess.Popen(
@@ -125,7 +129,7 @@ def test_ur_rtde_io_writes_show_up_in_outputs_and_in_our_client(emulator: subpro
 
 
 def test_recorder_interrupted_keeps_its_rows(tmp_path: Path) -> None:
-    proc = serve(["--rtde-port", "0", "--primary-port", "0", "--secondary-port", "0"])
+    proc = serve(["--rtde-port", "0", "--primary-port", "0", "--secondary-port", "0", *NO_FIXED_PORTS])
     out = tmp_path / "rec.csv"
     try:
         port = str(proc.rtde_port)  # type: ignore[attr-defined]
@@ -150,7 +154,7 @@ def test_recorder_interrupted_keeps_its_rows(tmp_path: Path) -> None:
 
 
 def test_recorder_keeps_rows_when_the_controller_goes_away(tmp_path: Path) -> None:
-    proc = serve(["--rtde-port", "0", "--primary-port", "0", "--secondary-port", "0"])
+    proc = serve(["--rtde-port", "0", "--primary-port", "0", "--secondary-port", "0", *NO_FIXED_PORTS])
     out = tmp_path / "rec.parquet"
     port = str(proc.rtde_port)  # type: ignore[attr-defined]
     rec = subprocess.Popen(

@@ -49,7 +49,7 @@ def monotone(values: list[float]) -> bool:
 
 def test_demo_records_a_moving_arm_in_seconds(tmp_path: Path) -> None:
     started = time.monotonic()
-    result = subprocess.run([*command(), "demo", "--out", str(tmp_path)], capture_output=True, text=True)
+    result = subprocess.run([*command(), "demo", "-o", str(tmp_path)], capture_output=True, text=True)
     elapsed = time.monotonic() - started
     assert result.returncode == 0, result.stderr
     assert "movej" in result.stdout and "Plot:" in result.stdout

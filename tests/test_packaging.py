@@ -10,6 +10,7 @@ from fnmatch import fnmatch
 from importlib import resources
 from pathlib import Path
 
+import pytest
 import setuptools
 
 from .helpers import ROOT
@@ -38,6 +39,7 @@ def test_examples_are_package_data() -> None:
         assert any(fnmatch(f"examples/{name}", pattern) for pattern in patterns), name
 
 
+@pytest.mark.slow  # long end to end: CI runs it (RTDE_SPEC_SLOW=1), the fast loop does not
 def test_wheel_ships_the_license_without_deprecation_warnings(tmp_path: Path) -> None:
     result = subprocess.run(
         [sys.executable, "-m", "pip", "wheel", "--no-deps", "-w", str(tmp_path), str(ROOT)],

@@ -284,7 +284,7 @@ def test_an_installed_package_compares_with_its_own_spec_and_writes_an_overlay(
     assert [a["field"] for a in json.loads(result.stdout)["added"]] == ["actual_tcp_jerk"]
     cli = [sys.executable, "-m", "rtde_spec.cli"]
     fields = subprocess.run(
-        [*cli, "--extra-fields", "new.yaml", "fields", "--controller", "5.30"],
+        [*cli, "--extra-fields", "new.yaml", "fields", "--controller", "5.30.0"],
         capture_output=True, text=True, cwd=tmp_path,
     )  # fmt: skip
     assert fields.returncode == 0 and "actual_tcp_jerk" in fields.stdout

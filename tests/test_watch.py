@@ -43,10 +43,10 @@ def watch(capsys: pytest.CaptureFixture[str], *args: str) -> tuple[int, list[str
 def test_version_then_modes_once_then_only_changes(
     emu: EmulatorThread, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    code, lines, err = watch(capsys, "--port", str(emu.ports["secondary"]), "--count", "5")
+    code, lines, err = watch(capsys, "--port", str(emu.ports["secondary"]), "--duration", "1")
     assert code == 0 and f"watching 127.0.0.1:{emu.ports['secondary']}" in err
     kinds = [line.split()[1] for line in lines]
-    assert kinds == ["version", "state"]  # four Robot States, the modes did not change after the first
+    assert kinds == ["version", "state"]  # ten Robot States, the modes did not change after the first
     assert "URControl 5.11.2" in lines[0]
     assert "robot mode 7 (RUNNING)" in lines[1] and "speed slider 1.0" in lines[1]
     assert "safety mode 1 (NORMAL)" in lines[1]
@@ -74,10 +74,31 @@ def test_a_speed_slider_set_over_rtde_shows_as_a_change(
 def test_every_robot_state_with_joints_and_pose(
     emu: EmulatorThread, capsys: pytest.CaptureFixture[str]
 ) -> None:
-    code, lines, _ = watch(capsys, "--port", str(emu.ports["secondary"]), "--count", "4", "--every")
+    code, lines, _ = watch(capsys, "--port", str(emu.ports["secondary"]), "--count", "5", "--every")
     poses = [line for line in lines if line.split()[1] == "pose"]
-    assert code == 0 and len(poses) == 3
+    assert code == 0 and len(lines) == 5 and len(poses) == 3  # version, modes, and a pose per state
     assert "q [rad] 0.5000 0.0000 0.0000 0.0000 0.0000 -0.5000" in poses[0]
+
+
+@pytest.mark.parametrize("count", [1, 2])
+def test_count_is_the_lines_printed(
+    emu: EmulatorThread, capsys: pytest.CaptureFixture[str], count: int
+) -> None:
+    code, lines, _ = watch(capsys, "--port", str(emu.ports["secondary"]), "--count", str(count))
+    assert code == 0 and [line.split()[1] for line in lines] == ["version", "state"][:count]
+
+
+def test_a_script_is_watched_to_the_programs_end(
+    emu: EmulatorThread, capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    script = tmp_path / "move.script"
+    script.write_text('def move():\n  sleep(0.5)\n  textmsg("done")\nend\n')
+    started = time.monotonic()
+    code, lines, err = watch(capsys, "--port", str(emu.ports["primary"]), "--script", str(script))
+    assert code == 0 and "the program ended" in err
+    assert time.monotonic() - started >= 0.5
+    assert any("[ROBOTINTERFACE] done" in line for line in lines)
+    assert "PROGRAM_XXX_STOPPED" in lines[-1]
 
 
 def test_json_lines_and_a_script_sent_first(
@@ -88,7 +109,7 @@ def test_json_lines_and_a_script_sent_first(
     code, lines, err = watch(
         capsys, "--port", str(emu.ports["primary"]), "--count", "30", "--json", "--script", str(script)
     )
-    assert code == 0 and "sent 2 line(s) of URScript" in err
+    assert code == 0 and "sent 2 lines of URScript" in err
     rows = [json.loads(line) for line in lines]
     assert rows[0]["package"] == "version_message" and len(rows) == 30
     assert rows[0]["major_version"] == 5 and rows[0]["minor_version"] == 11

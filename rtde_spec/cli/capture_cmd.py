@@ -10,7 +10,8 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
-from rtde_spec.errors import UsageError
+from rtde_spec.cli.conventions import describe, plural
+from rtde_spec.errors import RtdeSpecError, UsageError
 from rtde_spec.printable import safe_text
 
 if TYPE_CHECKING:
@@ -33,20 +34,28 @@ NAME_raw.
 
 Exit codes: 0 every file decoded whole; 1 data packages need --recipe (or another
 error in the data); 2 usage error (no such file, not a capture); 3 decoded, but some
-input was damaged or skipped (0 with --lenient); 130 interrupted (the tables written
-so far are whole)."""
+input was damaged or skipped, or nothing was decoded: no UR connection, the TCP
+ports seen named (--port-map for moved ones) (0 with --lenient); 130 interrupted (the
+tables written so far are whole)."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "capture",
         help="decode pcap/pcapng captures of RTDE and primary/secondary traffic into tables",
-        description="Writes one table per kind (data packages per recipe, text messages, setup "
-        "exchanges, primary sub-packages) as a hive-partitioned dataset: "
-        "OUTDIR/<table>/robot=<address>/date=<day>/<capture>-<hash>.<ext>.",
-        epilog=EPILOG,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        **describe(
+            "Decodes pcap/pcapng captures (files, folders, globs or - for a pipe) of RTDE, primary/"
+            "secondary, real-time, dashboard and UR ROS driver traffic into one table per kind, written "
+            "as a hive-partitioned dataset: "
+            "FOLDER/<table>/robot=<address>/date=<day>/<capture>-<hash>.<ext>. "
+            "Ports are recognised from the spec or by content (--port-map for moved ones).",
+            "rtde-spec capture robot.pcapng -o tables/",
+            "rtde-spec capture captures/ -o fleet/ --jobs 2 --format csv",
+            "rtde-spec capture late.pcap -o late/ --recipe outputs.txt",
+            "tcpdump -w - port 30004 | rtde-spec capture - -o tables/",
+        ),
     )
+    p.epilog = f"{p.epilog}\n\n{EPILOG}"
     p.add_argument(
         "files",
         nargs="+",
@@ -54,7 +63,11 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="capture files, folders of them, globs, or - for standard input "
         "(tcpdump -w - ... | rtde-spec capture - -o OUT) (required)",
     )
-    p.add_argument("-o", "--outdir", required=True, help="output folder (required)")
+    p.add_argument(
+        "-o", "--output", dest="outdir", required=True, type=output_folder_arg, metavar="FOLDER",
+        help="output folder, made when missing (required)",
+    )  # fmt: skip
+    p.add_argument("--outdir", dest="outdir", type=output_folder_arg, help=argparse.SUPPRESS)  # old -o
     p.add_argument(
         "--format", choices=("parquet", "csv", "jsonl", "mcap"), default="parquet", help="default: parquet"
     )
@@ -68,12 +81,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "output recipe)",
     )
     p.add_argument(
-        "--rtde-port", type=int, action="append", help=f"RTDE port, repeatable (default: {RTDE_PORT})"
+        "--rtde-port",
+        type=int,
+        action="append",
+        metavar="PORT",
+        help=f"RTDE port, repeatable (default: {RTDE_PORT})",
     )
     p.add_argument(
         "--primary-port",
         type=int,
         action="append",
+        metavar="PORT",
         help=f"primary/secondary port, repeatable (default: {', '.join(map(str, PRIMARY_PORTS.values()))})",
     )
     p.add_argument(
@@ -85,13 +103,36 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "spec's ports: RTDE 30004, primary 30001/30002/30011/30012, real-time 30003/30013, dashboard "
         "29999, URCL external control 50001-50004)",
     )
-    p.add_argument("--jobs", type=int, default=1, help="files decoded in parallel processes (default: 1)")
+    p.add_argument(
+        "--jobs",
+        type=int,
+        default=1,
+        metavar="PROCESSES",
+        help="files decoded in parallel processes (default: 1)",
+    )
     p.add_argument(
         "--lenient",
         action="store_true",
         help="exit 0 when an input was damaged (the summary is printed all the same; default: exit 3)",
     )
     p.set_defaults(run=run)
+
+
+def output_folder_arg(text: str) -> str:
+    """-o of capture is a folder: an existing file, or a name with a table file's suffix that is
+    not a folder yet (-o out.parquet), is refused rather than made into a folder silently."""
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise argparse.ArgumentTypeError(
+            f"{text} is a file, but capture writes a folder (one table per kind); give a folder, e.g. "
+            f"{path.stem or 'tables'}/"
+        )
+    if not path.exists() and path.suffix.lower() in (".parquet", ".csv", ".jsonl", ".mcap"):
+        raise argparse.ArgumentTypeError(
+            f"{text} names a file, but capture writes a folder (one table per kind, --format "
+            f"{path.suffix[1:].lower()}); give a folder, e.g. {path.stem}/"
+        )
+    return text
 
 
 STDIN = "/dev/stdin"  # `-`: a capture piped in (read to its end; Linux and macOS)
@@ -165,9 +206,51 @@ def run(args: argparse.Namespace) -> int:
     _report(summaries)
     if any(s.needs_recipe() for s in summaries):
         return EXIT_MISSING_RECIPE
-    if any(s.damage() for s in summaries) and not args.lenient:
+    if any(s.damage() or empty(s) for s in summaries) and not args.lenient:
         return EXIT_DAMAGED
     return 0
+
+
+def verdict(s: CaptureSummary) -> str:
+    """'ok' only when nothing went wrong: else what did (the summary line's second word)."""
+    if s.damage():
+        return "damaged"
+    if s.needs_recipe():
+        return "needs --recipe"
+    return "nothing decoded" if empty(s) else "ok"
+
+
+def empty(s: CaptureSummary) -> bool:
+    """No rows at all, and not for want of --recipe or for damage (each its own problem)."""
+    return not any(s.tables.values()) and not s.needs_recipe() and not s.damage()
+
+
+def ports_seen(path: str, most: int = 8) -> str:
+    """The TCP ports of a capture's connections, most segments first (a file read again)."""
+    from collections import Counter
+
+    from rtde_spec.capture.packets import segments
+
+    counts: Counter[int] = Counter()
+    try:
+        for seg in segments(path):
+            counts[min(seg.sport, seg.dport)] += 1  # the lower port: the server's, mostly
+    except (OSError, RtdeSpecError):
+        return "unknown (the input cannot be read again)"
+    if not counts:
+        return "none: the capture holds no TCP segments"
+    shown = ", ".join(f"{port} ({n} segment{'' if n == 1 else 's'})" for port, n in counts.most_common(most))
+    return shown + (f" and {len(counts) - most} more" if len(counts) > most else "")
+
+
+def nothing_found(s: CaptureSummary) -> str:
+    """Why a capture gave no rows, naming the ports it holds and --port-map."""
+    ports = ports_seen(s.file) if s.file != STDIN else "unknown (standard input)"
+    what = "no RTDE, primary, real-time, dashboard or driver connection" if not s.connections else "no rows"
+    return (
+        f"{what} found; TCP ports seen: {ports}. If one of them is a UR interface on a moved port, "
+        "name it with --port-map PORT=PROTOCOL (e.g. --port-map 8080=rtde)"
+    )
 
 
 def _report(summaries: list[CaptureSummary]) -> None:
@@ -176,15 +259,20 @@ def _report(summaries: list[CaptureSummary]) -> None:
     for s in summaries:
         for name, rows in s.tables.items():
             tables[name] = tables.get(name, 0) + rows
-        print(safe_text(f"{s.file}: {s.frames} frames, {len(s.connections)} connections"))
+        print(safe_text(f"{s.file}: {plural(s.frames, 'frame')}, {plural(len(s.connections), 'connection')}"))
         for c in s.connections:
             gaps = f", {c.gaps} gaps ({c.lost_bytes} bytes lost)" if c.gaps else ""
             notes = "".join(f"; {note}" for note in c.notes)
-            print(safe_text(f"  {c.kind:7s} {c.name}: {c.packages} packages{gaps}{notes}"))
-    print("tables: " + ", ".join(f"{name} ({rows} rows)" for name, rows in sorted(tables.items())))
+            print(safe_text(f"  {c.kind:7s} {c.name}: {plural(c.packages, 'package')}{gaps}{notes}"))
+    listed = ", ".join(f"{name} ({plural(rows, 'row')})" for name, rows in sorted(tables.items()))
+    print(f"tables: {listed or 'none'}")
     for s in summaries:  # names, notes and problems quote the wire: escaped, never obeyed
-        print(safe_text(f"summary {s.line()}"), file=sys.stderr)
-        for problem in distinct(s.problems()):
+        line = s.line()
+        if line.startswith(f"{s.file}: ok: "):
+            line = f"{s.file}: {verdict(s)}: " + line[len(f"{s.file}: ok: ") :]
+        print(safe_text(f"summary {line}"), file=sys.stderr)
+        problems = s.problems() + ([nothing_found(s)] if empty(s) else [])
+        for problem in distinct(problems):
             print(safe_text(f"  problem: {problem}"), file=sys.stderr)
 
 

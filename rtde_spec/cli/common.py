@@ -101,8 +101,28 @@ def port_or_off(text: str) -> int:
     return -1 if text.strip() == "-1" else port_number(text)
 
 
+_FULL_VERSION = re.compile(r"^\d+\.\d+\.\d+(\.\d+)?$")
+
+
 def controller_version(text: str) -> str:
-    """argparse type of --controller: a version of a known product line, or exit 2."""
+    """argparse type of --controller: MAJOR.MINOR.BUGFIX of a known product line, or exit 2.
+
+    A release outside what the spec knows (newer than its newest, older than the line's
+    first) is taken, with a warning naming the nearest known release.
+    """
+    if not _FULL_VERSION.match(text.strip()):
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a controller version: give MAJOR.MINOR.BUGFIX, e.g. 5.12.2 or 3.15.8"
+        )
+    release_version(text)
+    note = unknown_release(text)
+    if note:
+        print(f"warning: --controller {text}: {note}", file=sys.stderr)
+    return text
+
+
+def release_version(text: str) -> str:
+    """argparse type of a release (MAJOR.MINOR allowed, as in `fields --diff 5.10 5.11`)."""
     from rtde_spec.spec.catalogue import Catalogue
 
     try:
@@ -110,6 +130,30 @@ def controller_version(text: str) -> str:
     except RtdeSpecError as exc:
         raise argparse.ArgumentTypeError(exc.reason) from None
     return text
+
+
+def unknown_release(text: str) -> str | None:
+    """Why the spec may not describe this release (None when it is within what it knows: from the
+    line's first release to one minor release past the newest any field names)."""
+    from rtde_spec.spec.catalogue import Catalogue
+    from rtde_spec.spec.versions import Version
+
+    catalogue = Catalogue.builtin()
+    version = Version.parse(text)
+    line = catalogue.line_of(version)
+    known = {Version.parse(line.first_version)}
+    known |= {v for info in catalogue.fields() for ln, v in info.since.items() if ln == line.id}
+    newest, first = max(known), min(known)
+    # the newest release naming a field may precede the newest without new fields (CB3's 3.15
+    # added none): one minor release past it is taken as known
+    if (version.major, version.minor) > (newest.major, newest.minor + 1):
+        return (
+            f"newer than the newest {line.name} release the spec knows ({newest}): fields added "
+            f"since are missing (nearest known: {newest}; `rtde-spec spec import` reads a newer guide)"
+        )
+    if version < first:
+        return f"older than the first {line.name} release with RTDE ({first}; nearest known: {first})"
+    return None
 
 
 def parse_hex(text: str) -> bytes:

@@ -29,6 +29,7 @@ from rtde_spec.cli.common import (
     reject_capture,
     report_skipped,
 )
+from rtde_spec.cli.conventions import describe, output_file
 from rtde_spec.errors import DecodeError, RtdeSpecError
 
 if TYPE_CHECKING:
@@ -46,7 +47,16 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "decode",
         help="decode RTDE or primary/secondary messages from hex or a file",
-        description="Decode packages; output streams, so files of any size decode in constant memory.",
+        **describe(
+            "Decodes RTDE or primary/secondary packages from hex, a file of bytes (or hex text) or standard "
+            "input, into a table, JSON (--json: one array), JSON Lines (--jsonl), CSV, Parquet or MCAP "
+            "(-o FILE, the format from its suffix). The output streams, so files of any size decode in "
+            "constant memory; a fault stops with its byte offset after every package before it.",
+            "rtde-spec decode 00045601 --from controller",
+            "rtde-spec decode session.bin --from client --jsonl",
+            "rtde-spec decode data.bin --recipe outputs.txt -o data.parquet",
+            "rtde-spec decode --protocol primary capture_30001.bin --json",
+        ),
     )
     p.add_argument(
         "data", metavar="HEX_OR_FILE", help="hex string, file (binary or hex text), or - for stdin"
@@ -82,6 +92,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--json", action="store_true", help="the same as --format json: a JSON array (default: off)"
     )
+    p.add_argument(
+        "--jsonl", action="store_const", const="jsonl", dest="format",
+        help="the same as --format jsonl: one JSON object per line, streamed (default: off)",
+    )  # fmt: skip
     p.add_argument(
         "--lenient",
         action="store_true",
@@ -195,6 +209,8 @@ def _progress(total: int, args: argparse.Namespace) -> Any:
 def run(args: argparse.Namespace) -> int:
     from rtde_spec.output.writers import format_for, open_writer
 
+    if args.output:
+        output_file(args.output)
     fmt = "json" if args.json and not args.format else format_for(args.output, args.format)
     if args.protocol == "primary":
         from rtde_spec.cli.primary_output import run_primary

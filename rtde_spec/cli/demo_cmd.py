@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from rtde_spec.cli.common import catalogue_for, parse_hex
+from rtde_spec.cli.conventions import describe
 from rtde_spec.output.text import table
 
 if TYPE_CHECKING:
@@ -27,16 +28,30 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "demo",
         help="record from the built-in controller emulator, plot it (no robot needed)",
-        description="Starts the controller emulator on loopback, sends it a short motion program "
-        "(movej, movel, movej home) on its primary port, records the joints through the RTDE client "
-        "meanwhile, writes a CSV and a PNG plot of the moving joints, prints a summary. "
-        "--offline decodes embedded example bytes instead.",
+        **describe(
+            "Starts the controller emulator on loopback, sends it a short motion program (movej, movel, "
+            "movej home) on its primary port, records the joints through the RTDE client meanwhile, "
+            "writes a CSV and a PNG plot of the moving joints (in a new temporary folder, or -o), prints "
+            "a summary. --offline decodes embedded example bytes instead.",
+            "rtde-spec demo",
+            "rtde-spec demo -o my-demo/ --seconds 5",
+            "rtde-spec demo --offline",
+        ),
     )
     p.add_argument("--offline", action="store_true", help="decode embedded examples only (default: online)")
-    p.add_argument("--seconds", type=float, default=3.0, help="how long to record (default: 3)")
-    p.add_argument("--out", type=Path, default=Path("rtde-demo"), help="output folder (default: ./rtde-demo)")
     p.add_argument(
-        "--session", type=Path, help="with --offline: a session file of your own (default: the embedded one)"
+        "--seconds", type=float, default=3.0, metavar="SECONDS", help="how long to record (default: 3)"
+    )
+    p.add_argument(
+        "-o", "--output", type=Path, metavar="FOLDER",
+        help="folder for joints.csv and joints.png (default: a new temporary folder, printed)",
+    )  # fmt: skip
+    p.add_argument("--out", type=Path, dest="output", help=argparse.SUPPRESS)  # deprecated spelling
+    p.add_argument(
+        "--session",
+        type=Path,
+        metavar="FILE",
+        help="with --offline: a session file of your own (default: the embedded one)",
     )
     p.set_defaults(run=run)
 

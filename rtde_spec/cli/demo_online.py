@@ -9,6 +9,7 @@ import logging
 import threading
 from pathlib import Path
 
+from rtde_spec.cli.conventions import plural
 from rtde_spec.output.text import table
 
 DEMO_FIELDS = [
@@ -39,8 +40,7 @@ def run_online(args: argparse.Namespace) -> int:
     from rtde_spec.rtde.recorder import record
 
     logging.getLogger("rtde_spec").setLevel(logging.WARNING)
-    out: Path = args.out
-    out.mkdir(parents=True, exist_ok=True)
+    out = demo_folder(args.output)
     csv_path, png_path = out / "joints.csv", out / "joints.png"
     config = EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0)
     with EmulatorThread(config) as emulator:
@@ -65,13 +65,27 @@ def run_online(args: argparse.Namespace) -> int:
                 timer.cancel()
                 timer.join()
                 writer.close()
-    print(f"\nWrote {result.rows} rows to {csv_path} (skipped {result.skipped})")
+    print(f"\nWrote {plural(result.rows, 'row')} to {csv_path} (skipped {result.skipped})")
     rows = _read(csv_path)
     _summary(rows)
     _plot(rows, png_path)
     print("\nNext: rtde-spec serve (a controller for your own tests), rtde-spec record --host ROBOT ...,")
     print("      rtde-spec demo --offline (decoding without sockets), rtde-spec decode --help")
     return 0
+
+
+def demo_folder(given: Path | None) -> Path:
+    """The folder -o names (made if missing; a file is refused), else a new temporary one:
+    the demo never leaves files in the folder it was started from."""
+    import tempfile
+
+    from rtde_spec.cli.conventions import output_folder
+
+    if given is None:
+        return Path(tempfile.mkdtemp(prefix="rtde-demo-"))
+    out = output_folder(str(given))
+    out.mkdir(parents=True, exist_ok=True)
+    return out
 
 
 def _read(path: Path) -> dict[str, list[float]]:
@@ -94,7 +108,7 @@ def _summary(columns: dict[str, list[float]]) -> None:
 
 
 def _plot(columns: dict[str, list[float]], path: Path) -> None:
-    from rtde_spec.errors import MissingDependencyError
+    from rtde_spec.errors import MissingDependencyError, install_hint
     from rtde_spec.output.plots import plot_columns
 
     try:
@@ -102,7 +116,7 @@ def _plot(columns: dict[str, list[float]], path: Path) -> None:
             columns, ["actual_q"], "timestamp", path, "Joint positions of a motion program on the emulator"
         )
     except MissingDependencyError:
-        hint = "pip install 'rtde_spec[plot]'"
+        hint = install_hint("plot")
         print(f"\nNo plot: matplotlib is not installed ({hint}), then run again for {path}")
         return
     print(f"\nPlot: {path}")

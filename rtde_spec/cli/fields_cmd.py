@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
-from rtde_spec.cli.common import catalogue_for, controller_version
+from rtde_spec.cli.common import catalogue_for, controller_version, release_version
+from rtde_spec.cli.conventions import describe
 from rtde_spec.output.text import print_json, table
 
 if TYPE_CHECKING:
@@ -13,7 +14,18 @@ if TYPE_CHECKING:
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("fields", help="list RTDE fields (register families expanded)")
+    p = sub.add_parser(
+        "fields",
+        help="list RTDE fields (register families expanded)",
+        **describe(
+            "Lists the RTDE fields the spec knows, register families expanded, with type, unit, direction "
+            "and the version each product line has had them since; --controller keeps those a version "
+            "offers, --diff A B shows what a release added or removed, --json prints one JSON document.",
+            "rtde-spec fields --controller 5.12.2 --direction output",
+            "rtde-spec fields --diff 5.10 5.11",
+            "rtde-spec fields --extra-fields my_fields.yaml --controller 5.25.0 --json",
+        ),
+    )
     p.add_argument(
         "--controller",
         metavar="VERSION",
@@ -31,7 +43,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--diff",
         nargs=2,
         metavar=("A", "B"),
-        type=controller_version,
+        type=release_version,
         help="fields added and removed from controller version A to B, per interface (default: off)",
     )
     p.set_defaults(run=run)

@@ -5,8 +5,9 @@ Exit codes, the same for every subcommand:
   1    an error in the data or the result (invalid recipe, bad bytes, a refused or
        dropped connection, a port that speaks another interface)
   2    a usage error (bad option, missing file, unknown controller version)
-  3    capture read every input to its end, but some was damaged or skipped (the
-       summary on stderr says what and where; --lenient makes it 0)
+  3    capture read every input to its end, but some was damaged or skipped, or
+       nothing decoded (the summary on stderr says what and where, and the TCP ports
+       seen; --lenient makes it 0)
   130  interrupted (Ctrl-C); what was written so far is whole
 Errors print `error: WHAT: WHY; WHAT TO DO` on stderr; --debug shows the traceback.
 tests/test_cli_errors.py holds each error a user can cause, with its message and code.
@@ -26,6 +27,7 @@ from rtde_spec.cli import (
     capture_cmd,
     decode_cmd,
     demo_cmd,
+    examples_cmd,
     fields_cmd,
     plot_cmd,
     record_cmd,
@@ -36,10 +38,12 @@ from rtde_spec.cli import (
     wireshark_cmd,
 )
 from rtde_spec.cli.common import EXIT_ERROR, EXIT_USAGE
+from rtde_spec.cli.conventions import GLOBAL_AFTER, add_global_options, leaf_parsers
 from rtde_spec.errors import RtdeSpecError, UsageError
 from rtde_spec.printable import safe_text
 
 COMMANDS = (
+    examples_cmd,
     demo_cmd,
     decode_cmd,
     fields_cmd,
@@ -59,8 +63,8 @@ def build_parser() -> argparse.ArgumentParser:
         prog="rtde-spec",
         description="Universal Robots RTDE and primary/secondary interfaces: spec, codec and tools.",
         epilog="Exit codes: 0 success; 1 error in the data or result; 2 usage error; 3 capture read "
-        "every input but some was damaged or skipped (summary on stderr; --lenient gives 0); "
-        "130 interrupted.",
+        "every input but some was damaged or skipped, or nothing decoded (summary on stderr; --lenient "
+        "gives 0); 130 interrupted. Start with `rtde-spec examples DIR`: the files the README uses.",
     )
     parser.add_argument("--version", action="version", version=f"rtde-spec {__version__}")
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors (default: off)")
@@ -75,12 +79,15 @@ def build_parser() -> argparse.ArgumentParser:
     sub.required = True
     for module in COMMANDS:
         module.add_parser(sub)
+    for _words, leaf in leaf_parsers(parser):
+        add_global_options(leaf)  # `rtde-spec fields --extra-fields x.yaml` works as well
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    args.extra_fields = [*args.extra_fields, *getattr(args, GLOBAL_AFTER, [])]
     run: Callable[[argparse.Namespace], int] = args.run
     try:
         return run(args)

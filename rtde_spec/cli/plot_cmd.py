@@ -11,6 +11,7 @@ import argparse
 from pathlib import Path
 from typing import Any
 
+from rtde_spec.cli.conventions import describe
 from rtde_spec.errors import DecodeError, UsageError
 
 TIME_COLUMNS = ("timestamp", "capture_time")
@@ -21,8 +22,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "plot",
         help="plot fields of a recorded or decoded table (CSV, Parquet, JSON Lines, or a dataset folder)",
-        description="Needs matplotlib: pip install 'rtde_spec[plot]'. TABLE: a file, a table folder of "
-        "`capture -o OUT` (OUT/rtde_outputs_1), or OUT itself (the table with the fields is found).",
+        **describe(
+            "Plots fields of a table against time, one line per vector component, units from the spec. "
+            "TABLE: a .csv, .parquet or .jsonl file, a table folder of `capture -o OUT` "
+            "(OUT/rtde_outputs_1), or OUT itself (the table with the fields is found); several robots "
+            "are plotted one line each. Needs matplotlib (the plot extra).",
+            "rtde-spec plot run.parquet actual_q -o run.png",
+            "rtde-spec plot tables/ actual_q robot_mode -o q.png",
+            "rtde-spec plot tables/rtde_outputs_1 actual_q --robot 10.0.0.10 -o q.png",
+        ),
     )
     p.add_argument(
         "table",
@@ -32,15 +40,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "fields", nargs="+", metavar="FIELD", help="fields to plot; a vector plots all its components"
     )
-    p.add_argument("-o", "--output", required=True, metavar="PNG", help="image to write (required)")
-    p.add_argument("--time", help="time column (default: timestamp, else capture_time)")
+    p.add_argument("-o", "--output", required=True, metavar="FILE.png", help="image to write (required)")
+    p.add_argument("--time", metavar="COLUMN", help="time column (default: timestamp, else capture_time)")
     p.add_argument(
         "--table",
         dest="table_name",
         metavar="NAME",
         help="table of a capture output folder (default: the one holding the fields)",
     )
-    p.add_argument("--robot", help="only this robot of a dataset of several (default: one line each)")
+    p.add_argument(
+        "--robot", metavar="ADDRESS", help="only this robot of a dataset of several (default: one line each)"
+    )
     p.set_defaults(run=run)
 
 

@@ -24,7 +24,8 @@ FIRST_BYTES_WAIT = 1.0  # seconds a port may take to speak first (a Version mess
 
 @dataclass(frozen=True)
 class PortKind:
-    """kind: rtde, primary, dashboard, realtime, closed, silent or unknown; detail: what showed it."""
+    """kind: rtde, primary, dashboard, realtime, closed, unresolved, silent or unknown; detail: what
+    showed it."""
 
     kind: str
     detail: str
@@ -35,12 +36,23 @@ def probe(host: str, port: int, timeout: float = 2.0) -> PortKind:
     try:
         sock = socket.create_connection((host, port), timeout=min(timeout, 3.0))
     except OSError as exc:
-        return PortKind("closed", f"nothing accepts connections there ({exc.strerror or exc})")
+        return unreachable(host, exc)
     with sock:
         head = _read_for(sock, min(timeout, FIRST_BYTES_WAIT))
         if head:
             return _unprompted(head)
         return _rtde_answer(sock, min(timeout, 3.0))
+
+
+def unreachable(host: str, exc: OSError) -> PortKind:
+    """Why connecting failed, in plain words: a name that does not resolve is not a closed port."""
+    if isinstance(exc, socket.gaierror):
+        return PortKind(
+            "unresolved",
+            f"the name {host!r} does not resolve to an address ({exc.strerror or exc}); check its "
+            "spelling, or give the controller's IP address to --host",
+        )
+    return PortKind("closed", f"nothing accepts connections there ({exc.strerror or exc})")
 
 
 def _read_for(sock: socket.socket, seconds: float, limit: int = 8192) -> bytes:
@@ -170,6 +182,8 @@ def wrong_port(host: str, port: int, wanted: str, timeout: float = 2.0) -> str |
     where = _where_rtde() if wanted == "rtde" else _where_primary()
     if found.kind in NAMES:
         return f"{host}:{port} speaks {NAMES[found.kind]} ({found.detail}), not {NAMES[wanted]}: {where}"
+    if found.kind == "unresolved":
+        return f"--host {host}: {found.detail}"
     if found.kind == "closed":
         return f"{host}:{port}: {found.detail}; check --host and --port: {where}"
     return f"{host}:{port} does not speak {NAMES[wanted]}: {found.detail}; {where}"

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, cast
 
 from rtde_spec._generated.constants import RTDE_PORT
 from rtde_spec.cli.common import RECIPE_FILE_HELP, existing_file, port_number
+from rtde_spec.cli.conventions import describe, output_file, plural
 from rtde_spec.errors import RtdeSpecError, UsageError
 from rtde_spec.printable import safe_text
 
@@ -21,8 +22,6 @@ if TYPE_CHECKING:
     from rtde_spec.rtde.client import RtdeClient
 
 DESCRIPTION = """\
-Columns are named as UR's recorder names them (vectors as name_0..name_5).
-
 How a recording ends:
   Ctrl-C, SIGTERM (timeout, kill, systemd) and SIGHUP (a closed terminal) stop it
   cleanly: every row received is written, the file is closed readable, exit code 0
@@ -50,11 +49,24 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "record",
         help="record outputs from a controller (or the emulator) to CSV/Parquet/JSON Lines",
-        description=DESCRIPTION,
-        formatter_class=argparse.RawDescriptionHelpFormatter,
+        **describe(
+            "Records a controller's outputs over RTDE to CSV, Parquet, JSON Lines or MCAP (-o, the format "
+            "from its suffix), columns named as UR's recorder names them (vectors as name_0..name_5), "
+            "until --duration, --samples or Ctrl-C. Nothing is lost: see 'How a recording ends' below.",
+            "rtde-spec record --host 127.0.0.1 --fields timestamp,actual_q --duration 2 -o run.parquet",
+            "rtde-spec record --host 127.0.0.1 --recipe rtde_config.xml --samples 100 -o run.csv",
+            "rtde-spec record --host 127.0.0.1 --recipe outputs.txt --split 10min -o parts.parquet",
+        ),
     )
-    p.add_argument("--host", required=True, help="controller address (required)")
-    p.add_argument("--port", type=port_number, default=RTDE_PORT, help=f"RTDE port (default: {RTDE_PORT})")
+    p.epilog = f"{p.epilog}\n\n{DESCRIPTION}"
+    p.add_argument("--host", required=True, metavar="ADDRESS", help="controller address (required)")
+    p.add_argument(
+        "--port",
+        type=port_number,
+        default=RTDE_PORT,
+        metavar="PORT",
+        help=f"RTDE port (default: {RTDE_PORT})",
+    )
     what = p.add_mutually_exclusive_group(required=True)
     what.add_argument(
         "--recipe",
@@ -72,15 +84,17 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "recipe, else the only output recipe: one naming only input registers, as setp and watchdog "
         "in UR's examples, is an input recipe)",
     )
-    p.add_argument("--frequency", type=float, default=125.0, help="output rate in Hz (default: 125)")
+    p.add_argument(
+        "--frequency", type=float, default=125.0, metavar="HZ", help="output rate in Hz (default: 125)"
+    )
     stop = p.add_mutually_exclusive_group()
     stop.add_argument(
         "--duration",
         type=float,
-        metavar="S",
-        help="record S seconds of the controller's data: S x frequency rows (default: until Ctrl-C)",
+        metavar="SECONDS",
+        help="record SECONDS seconds of the controller's data: S x frequency rows (default: until Ctrl-C)",
     )
-    stop.add_argument("--samples", type=int, metavar="N", help="stop after N rows (default: Ctrl-C)")
+    stop.add_argument("--samples", type=int, metavar="ROWS", help="stop after ROWS rows (default: Ctrl-C)")
     p.add_argument(
         "-o", "--output", required=True, metavar="FILE", help="out.csv, .parquet, .jsonl or .mcap (required)"
     )
@@ -104,7 +118,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "the controller's timestamp: the time each socket read returned, spaced within a read by the "
         "controller's timestamp (default: off)",
     )
-    p.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for replies (default: 5)")
+    p.add_argument(
+        "--timeout",
+        type=float,
+        default=5.0,
+        metavar="SECONDS",
+        help="seconds to wait for replies (default: 5)",
+    )
     p.set_defaults(run=run)
 
 
@@ -125,6 +145,23 @@ def names_of(args: argparse.Namespace, alternative: str = ", or the names with -
     inputs, outputs = set(cat.names("input")), set(cat.names("output"))
     key = getattr(args, "recipe_key", None)
     recipe = pick_recipe(load_recipes(path), key, "output", inputs, outputs, where=args.recipe)
+    # the types a file declares (UR's XML) are checked as `validate` checks them: one message
+    wrong = [
+        f"{name}: the recipe says {declared}, the spec says {info.type}"
+        for name in recipe.names
+        if (declared := recipe.declared_types.get(name)) is not None
+        and (info := cat.get(name, "output")) is not None
+        and declared != info.type
+    ]
+    if wrong:
+        from rtde_spec.errors import RecipeError
+
+        which = f" (recipe {recipe.key})" if recipe.key else ""
+        raise RecipeError(
+            f"{'; '.join(wrong)}; correct the type{'' if len(wrong) == 1 else 's'} in the file "
+            f"(`rtde-spec validate {args.recipe}` reports every problem)",
+            subject=f"--recipe {args.recipe}{which}",
+        )
     return list(recipe.names)
 
 
@@ -135,6 +172,7 @@ def run(args: argparse.Namespace) -> int:
     from rtde_spec.rtde.client import RtdeClient
     from rtde_spec.rtde.recorder import BATCH_SECONDS, record
 
+    output_file(args.output)
     fmt = format_for(args.output, args.format)
     if fmt not in ("csv", "parquet", "jsonl", "mcap"):
         raise UsageError(f"-o {args.output}: use .csv, .parquet, .jsonl or .mcap (or --format)")
@@ -200,7 +238,8 @@ def run(args: argparse.Namespace) -> int:
         where = f"{len(parts)} parts {parts[0]} .. {parts[-1]}" if parts else "no file"
     try:
         print(
-            f"recorded {result.rows} rows of {len(names)} fields in {result.seconds:.1f} s to {where} "
+            f"recorded {plural(result.rows, 'row')} of {plural(len(names), 'field')} in "
+            f"{result.seconds:.1f} s to {where} "
             f"(controller {client.controller_version}, skipped {result.skipped}, stopped by {how})",
             file=sys.stderr,
         )

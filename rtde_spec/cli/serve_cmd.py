@@ -8,6 +8,7 @@ import re
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.cli.common import controller_version, port_number, port_or_off
+from rtde_spec.cli.conventions import describe
 from rtde_spec.cli.watch_cmd import add_live_arguments
 from rtde_spec.errors import UsageError
 from rtde_spec.realtime import REALTIME_PORTS
@@ -18,23 +19,40 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "serve",
         help="run a controller emulator (RTDE, primary, secondary, real-time, dashboard) for tests "
         "without a robot",
-        description="Emulate a controller from the spec. Binds to 127.0.0.1 unless told otherwise; "
-        "port 0 picks a free port; the ports are printed when listening. Ctrl-C stops it.",
+        **describe(
+            "Emulates a controller from the spec: RTDE, primary, secondary, real-time and the dashboard "
+            "server, an arm that runs URScript, outputs a scenario file sets. Binds to 127.0.0.1 unless told "
+            "otherwise; port 0 picks a free port; the ports are printed when listening. Ctrl-C stops it.",
+            "rtde-spec serve",
+            "rtde-spec serve --model UR10 --scenario moving.yaml",
+            "rtde-spec serve --controller 3.15.8 --rtde-port 0 --primary-port 0 --secondary-port 0",
+        ),
     )
-    p.add_argument("--host", default="127.0.0.1", help="address to bind (default: 127.0.0.1)")
     p.add_argument(
-        "--rtde-port", type=port_number, default=RTDE_PORT, help=f"RTDE port (default: {RTDE_PORT})"
+        "--host", default="127.0.0.1", metavar="ADDRESS", help="address to bind (default: 127.0.0.1)"
+    )
+    p.add_argument(
+        "--rtde-port",
+        type=port_number,
+        metavar="PORT",
+        default=RTDE_PORT,
+        help=f"RTDE port (default: {RTDE_PORT})",
     )
     for name in ("primary", "secondary"):
         port = PRIMARY_PORTS[name]
         p.add_argument(
-            f"--{name}-port", type=port_number, default=port, help=f"{name} port (default: {port})"
+            f"--{name}-port",
+            type=port_number,
+            default=port,
+            metavar="PORT",
+            help=f"{name} port (default: {port})",
         )
         ro = PRIMARY_PORTS[f"{name}_read_only"]
         p.add_argument(
             f"--{name}-read-only-port",
             type=port_number,
             default=None,
+            metavar="PORT",
             help=f"read-only {name} port, e.g. {ro} (default: not served)",
         )
     rt, rt_ro = REALTIME_PORTS["realtime"], REALTIME_PORTS["realtime_read_only"]
@@ -42,6 +60,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--realtime-port",
         type=port_or_off,
         default=None,
+        metavar="PORT",
         help=f"real-time port: the state at the control rate, URScript accepted (default: {rt} "
         "when free; -1: not served)",
     )
@@ -49,12 +68,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--realtime-read-only-port",
         type=port_number,
         default=None,
+        metavar="PORT",
         help=f"read-only real-time port, e.g. {rt_ro} (default: not served)",
     )
     p.add_argument(
         "--dashboard-port",
         type=port_or_off,
         default=None,
+        metavar="PORT",
         help="dashboard server port (default: the controller's, 29999, when free; -1: not served). "
         "PolyScope X versions have no dashboard server",
     )
@@ -84,7 +105,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="controller version to report (default: the scenario's, else 5.15.0)",
     )
     p.add_argument(
-        "--scenario", metavar="FILE", help="YAML scenario: version and output values (default: none)"
+        "--scenario", metavar="YAML", help="YAML scenario: version and output values (default: none)"
     )
     add_live_arguments(p, rtde_port=False)
     p.set_defaults(run=run)
@@ -104,6 +125,17 @@ def run(args: argparse.Namespace) -> int:
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     for handler in logging.getLogger().handlers:  # what clients send is logged, never obeyed
         handler.setFormatter(SafeFormatter("%(asctime)s %(message)s"))
+    scenario = load_scenario(args.scenario) if args.scenario else Scenario()
+    if (
+        args.controller
+        and "controller" in scenario.model_fields_set
+        and scenario.controller != args.controller
+    ):
+        raise UsageError(
+            f"--controller {args.controller} and the scenario's controller: {scenario.controller} disagree; "
+            "give the version once (leave out --controller, or change the scenario)",
+            subject=f"--scenario {args.scenario}",
+        )
     config = EmulatorConfig(
         host=args.host,
         rtde_port=args.rtde_port,
@@ -111,7 +143,7 @@ def run(args: argparse.Namespace) -> int:
         secondary_port=args.secondary_port,
         primary_read_only_port=args.primary_read_only_port,
         secondary_read_only_port=args.secondary_read_only_port,
-        scenario=load_scenario(args.scenario) if args.scenario else Scenario(),
+        scenario=scenario,
         controller=args.controller,
         arm=args.model,
         dashboard_port=_dashboard_port(args.dashboard_port, dashboard_spec().port),

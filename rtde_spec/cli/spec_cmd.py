@@ -12,6 +12,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rtde_spec.cli.common import EXIT_ERROR
+from rtde_spec.cli.conventions import describe
 from rtde_spec.errors import UsageError
 from rtde_spec.output.text import print_json, table
 
@@ -26,13 +27,21 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     imp = inner.add_parser(
         "import",
         help="read an RTDE guide (text, Markdown, HTML) or the primary interface document; report changes",
-        description="Compare a published document with the spec: added, removed, type, direction, "
-        "availability per product line, register range and description changes, per field.",
+        **describe(
+            "Compares a published document (an RTDE guide as text, Markdown or HTML, or the primary "
+            "interface document) with the spec: added, removed, type, direction, availability per product "
+            "line, register range and description changes, per field. --write edits spec/ in place; "
+            "-o writes the added fields as an --extra-fields overlay.",
+            "rtde-spec spec import rtde-guide-5.30.txt",
+            "rtde-spec spec import rtde-guide-5.30.txt -o new_fields.yaml",
+            "rtde-spec spec import rtde-guide-5.30.txt --json --check",
+        ),
     )
     imp.add_argument("document", type=Path, help="the document (its form is detected from the content)")
     imp.add_argument(
         "--spec-dir",
         type=Path,
+        metavar="FOLDER",
         help="spec root (default: ./spec when there is one, else the installed package's spec; "
         "--write needs a spec folder)",
     )
@@ -42,9 +51,13 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     imp.add_argument("--write", action="store_true", help="apply the differences to the spec YAML in place")
     imp.add_argument(
-        "-o", "--overlay", type=Path, metavar="FILE", help="write the added fields as an --extra-fields file"
+        "-o", "--output", type=Path, dest="overlay", metavar="FILE.yaml",
+        help="write the added fields as an --extra-fields overlay file (default: none)",
+    )  # fmt: skip
+    imp.add_argument("--overlay", type=Path, dest="overlay", help=argparse.SUPPRESS)  # the old spelling
+    imp.add_argument(
+        "--source", metavar="ID", help="document id recorded in `sources` (default: from the document's form)"
     )
-    imp.add_argument("--source", help="document id recorded in `sources` (default: from the document's form)")
     imp.add_argument(
         "--line",
         choices=("cb3", "e-series", "polyscope-x"),

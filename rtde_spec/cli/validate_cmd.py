@@ -11,6 +11,7 @@ import sys
 from typing import TYPE_CHECKING
 
 from rtde_spec.cli.common import EXIT_USAGE, controller_version, recipe_file
+from rtde_spec.cli.conventions import describe, plural
 from rtde_spec.errors import RtdeSpecError
 from rtde_spec.output.text import print_json, table
 from rtde_spec.recipes.model import FILE_FORMATS, Recipe
@@ -23,8 +24,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "validate",
         help="validate recipes offline for a controller version",
-        description="Validate recipes offline. Exit codes: 0 valid (warnings allowed), 1 invalid, "
-        "2 usage error (missing or unreadable file, unknown controller version, bad option).",
+        **describe(
+            "Validates recipes offline, every problem at once: unknown names (with did-you-mean), direction, "
+            "availability on a controller version, types that disagree with the spec, duplicates, the "
+            "setup size limit, the frequency range, reserved registers. Exit codes: 0 valid (warnings "
+            "allowed), 1 invalid, 2 usage error (missing or unreadable file, unknown version, bad option).",
+            "rtde-spec validate timestamp,actual_q,safety_status --controller 5.4.0 --frequency 200",
+            "rtde-spec validate rtde_config.xml --controller 5.12.2 --json",
+            "rtde-spec validate recipe.txt --input-format lines --direction output",
+        ),
     )
     p.add_argument(
         "recipes",
@@ -47,7 +55,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         choices=("input", "output"),
         help="default: the file's, else inferred from the names",
     )
-    p.add_argument("--format", choices=FILE_FORMATS, help="recipe file format (default: detect)")
+    p.add_argument(
+        "--input-format", dest="format", choices=FILE_FORMATS, help="recipe file format (default: detect)"
+    )
+    p.add_argument("--format", choices=FILE_FORMATS, help=argparse.SUPPRESS)  # the old --input-format
     p.add_argument("--json", action="store_true", help="print the report as JSON (default: a table)")
     p.set_defaults(run=run)
 
@@ -96,7 +107,7 @@ def print_report(report: ValidationReport) -> None:
         target = "the controller version each recipe names"
     else:
         target = "no controller version given: availability by version not checked"
-    print(f"Validating {len(report.recipes)} recipe(s) for {target}\n")
+    print(f"Validating {plural(len(report.recipes), 'recipe')} for {target}\n")
     for r in report.recipes:
         state = "valid" if r.valid else "INVALID"
         extra = f", every {r.rate_divisor} cycles = {r.effective_frequency:.4g} Hz" if r.rate_divisor else ""
@@ -121,7 +132,8 @@ def print_report(report: ValidationReport) -> None:
         print(p)
     errors = sum(p.severity == "error" for p in report.all_problems)
     warnings = sum(p.severity == "warning" for p in report.all_problems)
-    print(f"{'valid' if report.valid else 'invalid'}: {errors} error(s), {warnings} warning(s)")
+    verdict = "valid" if report.valid else "invalid"
+    print(f"{verdict}: {plural(errors, 'error')}, {plural(warnings, 'warning')}")
 
 
 def run(args: argparse.Namespace) -> int:

@@ -17,6 +17,7 @@ from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.cli.common import existing_file
+from rtde_spec.cli.conventions import describe, plural
 from rtde_spec.errors import RtdeConnectionError, RtdeSpecError, UsageError
 from rtde_spec.output.foxglove_live import DEFAULT_PORT
 
@@ -40,19 +41,30 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "watch",
         help="watch a controller's primary/secondary port live: messages, mode changes, URScript",
-        description="One line per robot message (version, errors, safety, text, runtime exceptions) "
-        "and the robot's modes whenever they change; --json for every message as a JSON line. "
-        "Ctrl-C stops it.",
+        **describe(
+            "One line per robot message (version, errors, safety, text, runtime exceptions) and the "
+            "robot's modes whenever they change; --jsonl for every message as a JSON line. Ctrl-C stops "
+            "it, or --count LINES, --duration SECONDS; with --script, the program's end does. --foxglove "
+            "serves the same to the Foxglove app.",
+            "rtde-spec watch --host 127.0.0.1 --count 3",
+            "rtde-spec watch --host 127.0.0.1 --port 30001 --script move.script",
+            "rtde-spec watch --host 127.0.0.1 --jsonl --duration 10 > messages.jsonl",
+            "rtde-spec watch --host 127.0.0.1 --foxglove 8765",
+        ),
     )
-    p.add_argument("--host", required=True, help="controller address (required)")
+    p.add_argument("--host", required=True, metavar="ADDRESS", help="controller address (required)")
     secondary = PRIMARY_PORTS["secondary"]
     p.add_argument(
         "--port",
         type=int,
         default=secondary,
+        metavar="PORT",
         help=f"primary/secondary port: {', '.join(map(str, PRIMARY_PORTS.values()))} (default: {secondary})",
     )
-    p.add_argument("--json", action="store_true", help="every message as a JSON line (default: text)")
+    p.add_argument(
+        "--jsonl", action="store_true", dest="json", help="every message as a JSON line (default: text)"
+    )
+    p.add_argument("--json", action="store_true", help=argparse.SUPPRESS)  # the old spelling of --jsonl
     p.add_argument(
         "--every", action="store_true", help="also a line per Robot State: joints, TCP pose (default: off)"
     )
@@ -62,11 +74,22 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="send this URScript file ('-': stdin) once connected, primary/secondary ports (default: none)",
     )
     stop = p.add_mutually_exclusive_group()
-    stop.add_argument("--duration", type=float, metavar="S", help="stop after S seconds (default: Ctrl-C)")
-    stop.add_argument("--count", type=int, metavar="N", help="stop after N messages (default: Ctrl-C)")
-    p.add_argument(
-        "--timeout", type=float, default=5.0, help="seconds without a message that are an error (default: 5)"
+    stop.add_argument(
+        "--duration", type=float, metavar="SECONDS", help="stop after SECONDS seconds (default: Ctrl-C)"
     )
+    stop.add_argument(
+        "--count", type=int, metavar="LINES",
+        help="stop after printing LINES lines (with --jsonl: messages) (default: Ctrl-C; with --script: "
+        "the program's end)",
+    )  # fmt: skip
+    stop.add_argument(
+        "--until-stopped", action="store_true",
+        help="with --script, go on after the program ends, until Ctrl-C (default: stop at its end)",
+    )  # fmt: skip
+    p.add_argument(
+        "--timeout", type=float, default=5.0, metavar="SECONDS",
+        help="seconds without a message that are an error (default: 5)",
+    )  # fmt: skip
     add_live_arguments(p)
     p.set_defaults(run=run)
 
@@ -86,6 +109,7 @@ def add_live_arguments(p: argparse.ArgumentParser, rtde_port: bool = True) -> No
     live.add_argument(
         "--foxglove-host",
         default="127.0.0.1",
+        metavar="ADDRESS",
         help="address the live view listens on; 0.0.0.0 for other machines (default: 127.0.0.1)",
     )
     live.add_argument(
@@ -97,10 +121,18 @@ def add_live_arguments(p: argparse.ArgumentParser, rtde_port: bool = True) -> No
     )
     if rtde_port:
         live.add_argument(
-            "--rtde-port", type=int, default=RTDE_PORT, help=f"RTDE port (default: {RTDE_PORT})"
+            "--rtde-port",
+            type=int,
+            default=RTDE_PORT,
+            metavar="PORT",
+            help=f"RTDE port (default: {RTDE_PORT})",
         )
     live.add_argument(
-        "--rtde-frequency", type=float, default=125.0, help="RTDE output rate in Hz (default: 125)"
+        "--rtde-frequency",
+        type=float,
+        default=125.0,
+        metavar="HZ",
+        help="RTDE output rate in Hz (default: 125)",
     )
 
 
@@ -114,6 +146,7 @@ def run(args: argparse.Namespace) -> int:
     if script is not None and client.read_only:
         client.send_script(script)  # raises the read-only error before connecting
     changes = StateChanges()
+    program = ProgramEnd(waits=args.count is None and args.duration is None and not args.until_stopped)
     seen = 0
     deadline = time.monotonic() + args.duration if args.duration is not None else None
     live = _live(args)
@@ -125,20 +158,26 @@ def run(args: argparse.Namespace) -> int:
                 rtde = _subscribe_rtde(args, live)
             if script is not None:
                 client.send_script(script)
-                print(f"sent {len(script.splitlines())} line(s) of URScript", file=sys.stderr)
+                print(f"sent {plural(len(script.splitlines()), 'line')} of URScript", file=sys.stderr)
             for message in _first_checked(client, args):
                 now = datetime.datetime.now()
                 if live is not None:
                     live.publish_row(as_json(message), protocol="primary")
                 if args.json:
                     print(json.dumps({"received": now.isoformat(), **as_json(message)}), flush=True)
-                else:
+                    seen += 1
+                else:  # --count counts the lines printed, not the Robot States that print none
                     for kind, text in _lines(message, changes, args.every):
                         print(f"{now:%H:%M:%S.%f}"[:-3] + f"  {kind:8s} {text}", flush=True)
-                seen += 1
+                        seen += 1
+                        if args.count is not None and seen >= args.count:
+                            break
                 if (args.count is not None and seen >= args.count) or (
                     deadline is not None and time.monotonic() >= deadline
                 ):
+                    return 0
+                if script is not None and program.ended(message):
+                    print("the program ended", file=sys.stderr)
                     return 0
     finally:
         if rtde is not None:
@@ -146,6 +185,31 @@ def run(args: argparse.Namespace) -> int:
         if live is not None:
             live.close()
     raise RtdeConnectionError("the controller closed the connection", subject=client.where)
+
+
+class ProgramEnd:
+    """With --script and no other end: done once the program has stopped (the key message
+    PROGRAM_XXX_STOPPED, a runtime exception, or Robot State's is_program_running going true,
+    then false), so the output of the whole program shows."""
+
+    def __init__(self, waits: bool) -> None:
+        self.waits = waits
+        self.running = False
+
+    def ended(self, message: Any) -> bool:
+        if not self.waits:
+            return False
+        name = getattr(message, "NAME", "")
+        if name == "runtime_exception_message" or (
+            name == "key_message" and getattr(message, "robot_message_title", "") == "PROGRAM_XXX_STOPPED"
+        ):
+            return True  # the controller says so (a program can start and stop between two states)
+        mode = message.get("robot_mode_data") if hasattr(message, "get") else None
+        running = getattr(mode, "is_program_running", None)
+        if not self.waits or running is None:
+            return False
+        was, self.running = self.running, bool(running)
+        return was and not self.running
 
 
 def _first_checked(client: PrimaryClient, args: argparse.Namespace) -> Iterator[Any]:

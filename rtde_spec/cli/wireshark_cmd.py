@@ -7,6 +7,7 @@ import shutil
 from importlib import resources
 from pathlib import Path
 
+from rtde_spec.cli.conventions import describe
 from rtde_spec.errors import UsageError
 
 PLUGIN = "rtde_spec.lua"
@@ -19,13 +20,22 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="install the Wireshark/tshark dissector generated from the spec (rtde.*, urprimary.*, "
         "urrealtime.*, urdashboard.*, urcl_reverse.*, urcl_trajectory.*, urcl_script_command.*, "
         "urcl_script_sender.*)",
-        description="Without --install, prints the dissector's path, for `tshark -X lua_script:PATH`. "
-        "One Lua file holds every protocol of a driver session, each registered on its default "
-        "port (RTDE 30004, primary 30001/30002/30011/30012, real-time 30003/30013, dashboard "
-        "29999, URCL 50001-50004); for moved ports use Wireshark's Decode As.",
+        **describe(
+            "Without --install, prints the dissector's path, for `tshark -X lua_script:PATH`. One Lua file "
+            "holds every protocol of a driver session, each registered on its default port (RTDE 30004, "
+            "primary 30001/30002/30011/30012, real-time 30003/30013, dashboard 29999, URCL 50001-50004); "
+            "for moved ports use Wireshark's Decode As. --install copies it to the plugins folder (or -o).",
+            "rtde-spec wireshark",
+            "rtde-spec wireshark --install",
+            "rtde-spec wireshark --install -o wireshark-plugins/",
+        ),
     )
     p.add_argument("--install", action="store_true", help="copy it to the plugins folder (default: print)")
-    p.add_argument("--dir", type=Path, default=DEFAULT_DIR, help=f"plugins folder (default: {DEFAULT_DIR})")
+    p.add_argument(
+        "-o", "--output", type=Path, default=DEFAULT_DIR, dest="dir", metavar="FOLDER",
+        help=f"plugins folder to install into (default: {DEFAULT_DIR})",
+    )  # fmt: skip
+    p.add_argument("--dir", type=Path, dest="dir", help=argparse.SUPPRESS)  # the old spelling of -o
     p.set_defaults(run=run)
 
 
@@ -44,9 +54,9 @@ def run(args: argparse.Namespace) -> int:
         shutil.copyfile(source, target)
     except OSError as exc:
         raise UsageError(
-            f"cannot install the dissector there: {exc.strerror or exc}; give --dir a folder you can "
+            f"cannot install the dissector there: {exc.strerror or exc}; give -o a folder you can "
             f"write to (or load it without installing: tshark -X lua_script:{source})",
-            subject=f"--dir {args.dir}",
+            subject=f"-o {args.dir}",
         ) from None
     print(f"installed {target}; Wireshark and tshark load it at their next start")
     return 0

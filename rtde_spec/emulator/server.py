@@ -60,6 +60,19 @@ class EmulatorConfig:
     # keep how late each control step ran (s after its due time), the last this many (benchmarks)
     step_timing: int = 0
 
+    @classmethod
+    def free_ports(cls, **kw: object) -> EmulatorConfig:
+        """Every port `rtde-spec serve` serves (RTDE, primary, secondary, real-time, dashboard),
+        each on a free port (`emu.ports` names them); a keyword moves or drops one (None).
+
+        The plain defaults serve RTDE, primary and secondary on the controller's ports and leave
+        real-time and the dashboard off, so tests running side by side never collide on them.
+        """
+        ports: dict[str, object] = {
+            "rtde_port": 0, "primary_port": 0, "secondary_port": 0, "realtime_port": 0, "dashboard_port": 0,
+        }  # fmt: skip
+        return cls(**{**ports, **kw})  # type: ignore[arg-type]
+
 
 class Emulator:
     def __init__(self, config: EmulatorConfig | None = None, catalogue: Catalogue | None = None) -> None:

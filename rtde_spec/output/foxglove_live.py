@@ -46,7 +46,7 @@ class LivePublisher:
     """
 
     def __init__(self, port: int = DEFAULT_PORT, host: str = "127.0.0.1", name: str = "rtde-spec") -> None:
-        foxglove = require("foxglove", "foxglove-sdk", "the Foxglove live view")
+        foxglove = require("foxglove", "foxglove", "the Foxglove live view")
         from foxglove.channels import FrameTransformChannel
 
         from rtde_spec.output.topics import Topics

@@ -71,6 +71,7 @@ def test_a_uint64_of_2_to_the_63_lands_in_a_uint64_column(tmp_path: Path) -> Non
     assert capture_tables(path)["primary_text_message"].column("timestamp").to_pylist() == [BIG]
 
 
+@pytest.mark.slow  # long end to end: CI runs it (RTDE_SPEC_SLOW=1), the fast loop does not
 @settings(
     max_examples=120,
     deadline=None,

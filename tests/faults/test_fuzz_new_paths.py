@@ -192,6 +192,7 @@ def _feed(core: ClientProtocol, chunks: list[bytes]) -> tuple[list[Any], str | N
     return got, None
 
 
+@pytest.mark.slow  # long end to end: CI runs it (RTDE_SPEC_SLOW=1), the fast loop does not
 @settings(max_examples=250, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(controller_streams(), st.booleans())
 def test_the_client_core_raises_only_library_errors_on_any_controller_bytes(
@@ -201,6 +202,7 @@ def test_the_client_core_raises_only_library_errors_on_any_controller_bytes(
     _feed(_client(version_reply_first), chunks)  # anything but an RtdeSpecError fails the test
 
 
+@pytest.mark.slow  # long end to end: CI runs it (RTDE_SPEC_SLOW=1), the fast loop does not
 @settings(max_examples=250, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(controller_streams(), st.booleans())
 @example((SETUP_REPLY + DATA + bytes(56), [SETUP_REPLY + DATA + bytes(56)]), True)  # found by the campaign
@@ -473,6 +475,7 @@ def urcl_sessions(draw: Any) -> tuple[bytes | None, list[bytes], list[int]]:
     return text, records, segments
 
 
+@pytest.mark.slow  # long end to end: CI runs it (RTDE_SPEC_SLOW=1), the fast loop does not
 @settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(urcl_sessions(), st.booleans())
 def test_urcl_capture_of_any_program_and_records_raises_only_library_errors(

@@ -15,6 +15,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pytest
+
 import rtde_spec
 
 ROOT = Path(rtde_spec.__file__).resolve().parents[1]
@@ -90,6 +92,7 @@ def test_a_count_whose_elements_cannot_fit_names_count_and_bytes_left() -> None:
     assert out["actual"] == "6 bytes left", out
 
 
+@pytest.mark.slow  # long end to end: CI runs it (RTDE_SPEC_SLOW=1), the fast loop does not
 def test_empty_rows_of_many_small_matrices_stay_within_the_message_size() -> None:
     """Each matrix's rows fit its own bytes left, but together they would be quadratic:
     12,000 matrices of 60,000 empty rows are refused by the message's budget."""
@@ -120,6 +123,7 @@ def test_empty_rows_of_many_small_matrices_stay_within_the_message_size() -> Non
     assert decode_in_child(values).get("count") == 4
 
 
+@pytest.mark.slow  # long end to end: CI runs it (RTDE_SPEC_SLOW=1), the fast loop does not
 def test_small_values_cost_a_small_multiple_of_their_bytes() -> None:
     """The cheapest elements on the wire: a 1 MB list of NONE values (one byte each) and
     of INT values (five bytes each) decode at under 30x / 80x their bytes (490x before)."""

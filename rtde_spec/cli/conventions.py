@@ -1,0 +1,94 @@
+"""The conventions every subcommand follows, in one place (docs/cli.md has the table).
+
+-o/--output names every output (a folder when it ends in / or is one); --format is an
+output format only (--input-format for inputs); --json prints one JSON document and
+--jsonl a stream; the global options are accepted after the subcommand too; every
+--help has a one-paragraph description and 2-4 examples. tests/test_cli_conventions.py
+checks each subcommand's parser against them.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+from rtde_spec.errors import UsageError
+
+GLOBAL_AFTER = "extra_fields_after"  # --extra-fields given after the subcommand, merged in main
+
+
+def describe(paragraph: str, *examples: str) -> dict[str, Any]:
+    """add_parser() keywords: the description paragraph and an 'examples:' epilog, kept as written."""
+    if not 2 <= len(examples) <= 4:
+        raise ValueError("give 2-4 examples")
+    epilog = "examples:\n" + "\n".join(f"  {line}" for line in examples)
+    return {
+        "description": paragraph,
+        "epilog": epilog,
+        "formatter_class": argparse.RawDescriptionHelpFormatter,
+    }
+
+
+def add_global_options(parser: argparse.ArgumentParser) -> None:
+    """--debug and --extra-fields after the subcommand as well as before it (hidden: the top help
+    has them)."""
+    parser.add_argument("--debug", action="store_true", default=argparse.SUPPRESS, help=argparse.SUPPRESS)
+    parser.add_argument(
+        "--extra-fields", action="append", dest=GLOBAL_AFTER, default=argparse.SUPPRESS, metavar="YAML",
+        help=argparse.SUPPRESS,
+    )  # fmt: skip
+
+
+def leaf_parsers(parser: argparse.ArgumentParser) -> list[tuple[str, argparse.ArgumentParser]]:
+    """(command words, parser) of every subcommand that runs, nested ones (spec import) included."""
+    out: list[tuple[str, argparse.ArgumentParser]] = []
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, child in action.choices.items():
+                nested = leaf_parsers(child)
+                out += [(f"{name} {words}", p) for words, p in nested] if nested else [(name, child)]
+    return out
+
+
+def plural(count: int, word: str, many: str | None = None) -> str:
+    """'1 connection', '2 connections' ('1 row', '0 rows')."""
+    return f"{count} {word if count == 1 else many or word + 's'}"
+
+
+def output_folder(text: str, option: str = "-o") -> Path:
+    """A folder output: refused when it names an existing file (a folder is made when missing)."""
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise UsageError(
+            "is a file, but this output is a folder (one file per table); give a folder, e.g. "
+            f"{path.stem or 'out'}/",
+            subject=f"{option} {text}",
+        )
+    return path
+
+
+def output_file(text: str, option: str = "-o") -> Path:
+    """A file output: its folder must exist (and be a folder); a folder is refused. Checked before
+    anything connects or is read, so the error names the path the user gave, in plain words."""
+    path = Path(text)
+    if names_folder(text):
+        raise UsageError(
+            "is a folder, but this output is one file; give a file name", subject=f"{option} {text}"
+        )
+    parent = path.parent
+    if parent.exists() and not parent.is_dir():
+        raise UsageError(
+            f"{parent} is a file, not a folder; give a path in a folder", subject=f"{option} {text}"
+        )
+    if not parent.exists():
+        raise UsageError(
+            f"the folder {parent} does not exist; make it first (mkdir -p {parent}) or give another path",
+            subject=f"{option} {text}",
+        )
+    return path
+
+
+def names_folder(text: str) -> bool:
+    """-o names a folder when it ends in / or is an existing folder."""
+    return text.endswith(("/", "\\")) or Path(text).is_dir()

@@ -1,0 +1,24 @@
+"""Slow end-to-end tests (`@pytest.mark.slow`) are left out of a plain `pytest`, so the
+contributor's loop stays short; CI runs them (`.ci/run` sets RTDE_SPEC_SLOW=1), and so does
+`RTDE_SPEC_SLOW=1 python3 -m pytest` or any `-m` expression that selects them (`-m slow`)."""
+
+from __future__ import annotations
+
+import os
+
+import pytest
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    if os.environ.get("RTDE_SPEC_SLOW") == "1" or config.getoption("markexpr"):
+        return
+    slow = [item for item in items if item.get_closest_marker("slow") is not None]
+    if slow:
+        items[:] = [item for item in items if item.get_closest_marker("slow") is None]
+        config.hook.pytest_deselected(items=slow)
+
+
+def pytest_report_header(config: pytest.Config) -> str:
+    if os.environ.get("RTDE_SPEC_SLOW") == "1" or config.getoption("markexpr"):
+        return "slow tests: included"
+    return "slow tests: left out (RTDE_SPEC_SLOW=1 or -m slow runs them; CI does)"
