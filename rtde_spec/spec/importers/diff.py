@@ -14,11 +14,10 @@ from collections import defaultdict
 from rtde_spec.spec.importers.cells import words
 from rtde_spec.spec.importers.changes import Availability, Change, mark_known, resolve
 from rtde_spec.spec.importers.model import DocField, Document, VersionNote
+from rtde_spec.spec.importers.scope import in_scope
 from rtde_spec.spec.schema import FieldSpec, ProductLine, Spec
 from rtde_spec.spec.versions import Version
 
-#: sources that are not documents a guide would be expected to repeat
-_UNDOCUMENTED = {"third-party", "user"}
 _OTHER = {"input": "output", "output": "input"}
 
 
@@ -123,13 +122,8 @@ def _compare(row: DocField, entry: FieldSpec, doc: Document, spec: Spec) -> list
 
 
 def _expected(entry: FieldSpec, doc: Document, spec: Spec) -> bool:
-    """Whether the document should list a spec field: a documented field its line has."""
-    if entry.sources and set(entry.sources) <= _UNDOCUMENTED:
-        return False
-    indices: list[int | None] = (
-        [None] if entry.index is None else list(range(entry.index[0], entry.index[1] + 1))
-    )
-    return any(spec_availability(entry, i, [doc.line], spec).get(doc.line) for i in indices)
+    """Whether the document should list a spec field: a documented field of its line and edition."""
+    return in_scope(entry, doc, spec)
 
 
 def diff_fields(doc: Document, spec: Spec) -> list[Change]:

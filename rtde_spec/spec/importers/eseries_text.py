@@ -8,7 +8,7 @@ a name cell is followed by a type cell, not every fourth line.
 
 from __future__ import annotations
 
-from rtde_spec.spec.importers.tables import Table, is_heading
+from rtde_spec.spec.importers.tables import Table, check_rows, is_heading
 
 
 def _cells(line: str) -> list[str] | None:
@@ -52,6 +52,7 @@ def read_tables(text: str, is_type: object = None) -> list[Table]:
             cells = []
             continue
         cells.extend((number, c) for c in got)
+        check_rows(len(cells) // 4, number)
     if in_table:
         close()
     return tables

@@ -2,23 +2,43 @@
 
 from __future__ import annotations
 
+import re
 from collections import Counter
 
 from rtde_spec.spec.importers.cells import Lines, parse_name, parse_versions, spans_in, versions_in_text
-from rtde_spec.spec.importers.model import DocField
+from rtde_spec.spec.importers.model import DocField, TableReport
 from rtde_spec.spec.importers.tables import Table
 
+#: a row standing for rows left out ("…", "... and more fields ...", "etc."): never a field
+_PLACEHOLDER = re.compile(r"…|\.\.\.|\band more\b|\betc\.?$|^\W*$", re.I)
 
-def field_rows(tables: list[Table], lines: Lines) -> list[DocField]:
+
+def is_placeholder(name_cell: str) -> bool:
+    """Whether a name cell holds no field name but a note that rows were left out."""
+    word = name_cell.strip()
+    return bool(_PLACEHOLDER.search(word)) or not re.match(r"[A-Za-z_]", word)
+
+
+def field_rows(tables: list[Table], lines: Lines, reports: list[TableReport] | None = None) -> list[DocField]:
+    """Every field row of the field tables; per table, what was read and skipped goes to `reports`."""
     out: list[DocField] = []
     for table in tables:
         direction = table.direction
         if not table.is_field_table or direction is None:
             continue
+        report = TableReport(table.heading, direction, table.line)
         for line, cells in table.rows:
             if len(cells) < 2 or not cells[0].strip():
                 continue
+            report.rows += 1
+            if is_placeholder(cells[0]):
+                report.skipped.append((line, cells[0].strip()[:60]))
+                continue
             out.append(_field(cells, direction, line, lines))
+            report.fields += 1
+            report.names.append(out[-1].name)
+        if reports is not None:
+            reports.append(report)
     return out
 
 
