@@ -156,6 +156,8 @@ def run(args: argparse.Namespace) -> int:
             "line": doc.line,
             "edition": doc.edition,
             "tables": [_table_record(t, spec, doc) for t in doc.tables],
+            "unlisted": doc.unlisted,
+            "remarks": doc.remarks,
             "added": [c.record() for c in new if c.kind == "added"],
             "removed": [c.record() for c in new if c.kind == "removed"],
             "changed": [c.record() for c in new if c.kind == "changed"],
@@ -176,6 +178,13 @@ def run(args: argparse.Namespace) -> int:
             )
             for line, cell in t.skipped:
                 print(f"    skipped line {line}: {cell!r} (a placeholder, not a field)")
+        for direction, names in doc.unlisted.items():
+            print(
+                f"  {len(names)} spec {direction}s not listed: the {direction} table stops early "
+                "(a placeholder row), so they are not reported as removed"
+            )
+        for remark in doc.remarks:
+            print(f"  {remark}: not a change for {doc.line}")
         if new:
             print(table(head, _rows(new)))
         if args.show_known and known:

@@ -85,6 +85,9 @@ class Document:
     members: list[DocMember] = field(default_factory=list)
     tables: list[TableReport] = field(default_factory=list)
     edition: str | None = None  # the newest version the document speaks of (its text, or --edition)
+    #: spec fields a table that stops early (a placeholder row) leaves out: direction -> names
+    unlisted: dict[str, list[str]] = field(default_factory=dict)
+    remarks: list[str] = field(default_factory=list)  # what was read but is no change (blank/CB3-only cells)
 
     @property
     def interface(self) -> str:

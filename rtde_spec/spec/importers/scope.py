@@ -55,3 +55,13 @@ def in_scope(entry: FieldSpec, doc: Document, spec: Spec) -> bool:
 def expected_names(spec: Spec, doc: Document, direction: str) -> list[str]:
     entries = spec.fields.inputs if direction == "input" else spec.fields.outputs
     return [e.name for e in entries if in_scope(e, doc, spec)]
+
+
+def stops_early(doc: Document) -> set[str]:
+    """Directions whose table has a placeholder row ("… and more"): it does not list them all."""
+    return {t.direction for t in doc.tables if t.skipped}
+
+
+def directions(doc: Document) -> set[str]:
+    """The directions the document has a field table for: it says nothing of the others."""
+    return {t.direction for t in doc.tables} or {f.direction for f in doc.fields}
