@@ -125,9 +125,8 @@ def read_document(
                 and (lines.type_name(type_) in lines.types.values())
             )
 
-        tables = [eseries_text.split_rows(t, starts_row) for t in eseries_text.read_tables(text)]
-    elif kind == "rendered-text":
-        tables = [eseries_text.split_rows(t, starts_row) for t in rendered_text.read_tables(text)]
+        reader = rendered_text if kind == "rendered-text" else eseries_text
+        tables = [eseries_text.split_rows(t, starts_row) for t in reader.read_tables(text)]
     elif kind == "markdown":
         tables = markdown.read_tables(text)
     else:

@@ -28,7 +28,9 @@ def field_rows(tables: list[Table], lines: Lines, reports: list[TableReport] | N
             continue
         report = TableReport(table.heading, direction, table.line)
         for line, cells in table.rows:
-            if len(cells) < 2 or not cells[0].strip():
+            if not cells or not cells[0].strip():
+                continue
+            if len(cells) < 2 and not is_placeholder(cells[0]):
                 continue
             report.rows += 1
             if is_placeholder(cells[0]):
@@ -42,10 +44,24 @@ def field_rows(tables: list[Table], lines: Lines, reports: list[TableReport] | N
     return out
 
 
+_VERSION_TOKEN = r"(\[\s*\d+\s*\.\.\s*\d+\s*\]|\d+\.\d+(\.\d+)*|/|,|;|and|cb3|e-series|polyscope[- ]x|sw)"
+_VERSIONISH = re.compile(rf"\s*({_VERSION_TOKEN}\s*)*", re.I)
+
+
+def _version_start(cells: list[str]) -> int:
+    """Where the version cells begin: the trailing cells that hold only versions (a comment of
+    several paragraphs comes as several cells in the text forms); at least after the comment."""
+    split = len(cells)
+    while split > 3 and _VERSIONISH.fullmatch(cells[split - 1]):
+        split -= 1
+    return max(split, min(len(cells), 3))
+
+
 def _field(cells: list[str], direction: str, line: int, lines: Lines) -> DocField:
     name, span, family = parse_name(cells[0])
-    comment = cells[2].strip() if len(cells) > 2 else ""
-    version = " ".join(c.strip() for c in cells[3:] if c.strip())
+    split = _version_start(cells)
+    comment = " ".join(c.strip() for c in cells[2:split] if c.strip())
+    version = " ".join(c.strip() for c in cells[split:] if c.strip())
     notes, rest = parse_versions(version, lines) if version else ([], "")
     if not version and comment:
         # an earlier edition merged the columns, or a cell is missing (e-Series safety_status)

@@ -16,6 +16,7 @@ from typing import Any
 from rtde_spec.errors import UsageError
 from rtde_spec.spec.importers.cells import Lines
 from rtde_spec.spec.importers.model import Document
+from rtde_spec.spec.importers.rows import is_placeholder
 from rtde_spec.spec.importers.tables import MAX_BYTES, Table, check_rows
 from rtde_spec.spec.schema import Spec
 
@@ -41,6 +42,9 @@ def sheet_tables(title: str, rows: list[list[str]], count: int = 0) -> tuple[lis
         if head in _HEADERS:
             current = Table(heading, cells, number)
             tables.append(current)
+            continue
+        if current is not None and is_placeholder(cells[0]):
+            current.rows.append((number, cells))
             continue
         if len([c for c in cells if c]) == 1 and cells[0] and len(cells[0]) <= 60:
             heading = cells[0]
