@@ -65,7 +65,7 @@ def _mode_for(path: Path) -> int:
 
 def replace_text(path: Path, text: str) -> None:
     """Write beside `path` and rename into place, keeping its mode; a read-only file is refused."""
-    if path.exists() and not os.access(path, os.W_OK):
+    if path.exists() and (not os.access(path, os.W_OK) or not path.stat().st_mode & stat.S_IWUSR):
         raise UsageError(f"{path} is read-only; nothing written")
     mode = _mode_for(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
