@@ -262,3 +262,26 @@ def test_hostile_html_is_refused_or_read_quickly_never_a_traceback(tmp_path: Pat
     )
     with pytest.raises(UsageError, match="table rows"):
         read_tables(many)
+
+
+def test_a_recorded_conflict_hides_only_its_own_documents_change(spec: Spec, tmp_path: Path) -> None:
+    """joint_position_deviation_ratio's removal is a known conflict of the crate README (its table
+    stops early); the same removal in UR's own guide is a real change and is reported."""
+    rows = [
+        f"| {e.name.replace('{X}', 'X')} | {e.type} | {e.doc or 'x'} | |"
+        for e in spec.fields.outputs
+        if e.name != "joint_position_deviation_ratio"
+    ]
+    path = tmp_path / "outputs.md"
+    path.write_text(HEAD_OUT + "\n".join(rows) + "\n")
+    common = (str(path), "--spec-dir", str(ROOT / "spec"), "--line", "e-series", "--edition", "5.99")
+    crate = _json(*common, "--source", "universal-robot-rust-crate-readme", "--show-known")
+    assert "joint_position_deviation_ratio" not in {c["field"] for c in crate["removed"]}
+    assert "joint_position_deviation_ratio" in {c["field"] for c in crate["known"]}
+    guide = _json(*common, "--source", "e-series-guide")
+    assert "joint_position_deviation_ratio" in {c["field"] for c in guide["removed"]}
+
+
+HEAD_OUT = (
+    "## Robot Controller Outputs\n\n| Name | Type | Comment | Introduced in version |\n|---|---|---|---|\n"
+)

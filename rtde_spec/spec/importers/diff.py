@@ -163,7 +163,7 @@ def diff_fields(doc: Document, spec: Spec) -> list[Change]:
     for row in doc.fields:
         entry = entries[row.direction].get(row.name)
         if entry is not None:
-            changes += [mark_known(c, entry.conflicts) for c in _compare(row, entry, doc, spec)]
+            changes += [mark_known(c, entry.conflicts, doc.source) for c in _compare(row, entry, doc, spec)]
             continue
         other = entries[_OTHER[row.direction]].get(row.name)
         if other is not None and row.name not in listed[_OTHER[row.direction]]:
@@ -177,7 +177,7 @@ def diff_fields(doc: Document, spec: Spec) -> list[Change]:
                 row.line,
             )
             change.extra["row"] = row
-            changes.append(mark_known(change, other.conflicts))
+            changes.append(mark_known(change, other.conflicts, doc.source))
             continue
         change = Change("added", "added", row.name, row.direction, None, row.type, row.line, row.index)
         change.extra["row"] = row
@@ -197,7 +197,7 @@ def diff_fields(doc: Document, spec: Spec) -> list[Change]:
                 continue
             if _expected(entry, doc, spec):
                 change = Change("removed", "removed", name, direction, entry.type, None, None, None)
-                changes.append(mark_known(change, entry.conflicts))
+                changes.append(mark_known(change, entry.conflicts, doc.source))
     return changes
 
 
