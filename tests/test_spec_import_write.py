@@ -245,7 +245,7 @@ def test_fields_diff_between_versions(capsys: pytest.CaptureFixture[str]) -> Non
         {
             "name": "payload_inertia",
             "type": "VECTOR6D",
-            "since": {"cb3": "3.3.0", "e-series": "5.11.0", "polyscope-x": "10.0.0"},
+            "since": {"cb3": "3.15.0", "e-series": "5.11.0", "polyscope-x": "10.0.0"},
         }
     ]
     assert out["rtde_inputs"] == {"added": [], "removed": []} and out["rtde_outputs"]["removed"] == []

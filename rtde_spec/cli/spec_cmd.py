@@ -169,6 +169,9 @@ def run(args: argparse.Namespace) -> int:
         head = ["change", "field", "where", "what", "index", "spec", "document", "line"]
         edition = f" {doc.edition}" if doc.edition else ""
         print(f"{args.document}: {doc.format}, {doc.source}, written for {doc.line}{edition}")
+        if doc.members:
+            fields = sum(len(m.fields) for m in doc.members)
+            print(f"  {len(doc.members)} message tables read, {fields} field rows")
         for t in doc.tables:
             r = _table_record(t, spec, doc)
             print(
