@@ -3,11 +3,11 @@
 
 from typing import Any
 
-# (id, name, majors, first_version, inherits, rtde_max_frequency)
+# (id, name, majors, first_version, inherits, rtde_max_frequency, setup_names_max_bytes)
 LINES: tuple[tuple[Any, ...], ...] = (
-    ('cb3', 'CB3 (PolyScope 3.x)', (3,), '3.3.0', None, 125),
-    ('e-series', 'e-Series (PolyScope 5.x)', (5,), '5.0.0', None, 500),
-    ('polyscope-x', 'PolyScope X (10.x)', (10,), '10.0.0', 'e-series', 500),
+    ('cb3', 'CB3 (PolyScope 3.x)', (3,), '3.3.0', None, 125, 2048),
+    ('e-series', 'e-Series (PolyScope 5.x)', (5,), '5.0.0', None, 500, None),
+    ('polyscope-x', 'PolyScope X (10.x)', (10,), '10.0.0', 'e-series', 500, None),
 )
 
 # (name, size, count, element, struct, kind, bounds)
