@@ -285,3 +285,47 @@ def test_a_recorded_conflict_hides_only_its_own_documents_change(spec: Spec, tmp
 HEAD_OUT = (
     "## Robot Controller Outputs\n\n| Name | Type | Comment | Introduced in version |\n|---|---|---|---|\n"
 )
+
+
+LISTING = """Client Interfaces
+int messageSize
+unsigned char messageType = ROBOT_STATE = 16
+
+Joint data
+int packageSize
+unsigned char packageType = JOINT_DATA = 1
+for each joint:
+double q_actual
+double q_target
+double qd_actual
+float I_actual
+float V_actual
+float T_motor
+float T_micro
+unsigned char jointMode
+end
+
+Cartesian info
+int packageSize
+unsigned char packageType = CARTESIAN_INFO = 4
+double X
+double Y
+double Z
+double Rx
+double Ry
+double Rz
+"""
+
+
+def test_docs_site_listing_with_for_each_joint_blocks(tmp_path: Path) -> None:
+    """The docs site's C-like form: "for each joint: ... end" is the 6-times group, no version column."""
+    path = tmp_path / "client-interfaces.txt"
+    path.write_text(LISTING)
+    out = _json(str(path), "--spec-dir", str(ROOT / "spec"))
+    assert out["format"] == "primary-text"
+    # the joint rows are read inside the repeated group: no "double in repeat 6 -> double" changes
+    assert not [c for c in out["changed"] if c["what"] == "type"]
+    assert [(c["field"], c["new"]) for c in out["added"]] == [("T_micro", "float in repeat 6")]
+    removed = {c["field"] for c in out["removed"]}
+    assert "joints.reserved" in removed and "tcp_offset_x" in removed  # fields newer than this listing
+    assert not {f for f in removed if f.split(".")[-1] in {"q_actual", "jointmode", "joint_mode", "x", "rz"}}

@@ -37,6 +37,10 @@ def detect_format(text: str) -> str:
         return "html"
     if "ROBOT_STATE_PACKAGE_TYPE" in text or "Sub Package of Robot State" in text:
         return "primary-text"
+    from rtde_spec.spec.importers.primary_listing import SIGN
+
+    if SIGN.search(text):
+        return "primary-text"
     if re.search(r"^\s*\|\s*Name\s*\|", text, re.MULTILINE):
         return "markdown"
     if re.search(r"^\s*Name\s*\|\s*$", text, re.MULTILINE):
@@ -105,6 +109,10 @@ def read_document(
         from rtde_spec.spec.importers.primary_text import read_members
 
         doc.members = read_members(text, lines)
+        if not doc.members:  # the docs site's C-like listing ("for each joint: ... end")
+            from rtde_spec.spec.importers.primary_listing import read_listing
+
+            doc.members = read_listing(text)
         doc.line = line or "e-series"
         doc.edition = edition
         if not doc.members:
