@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from rtde_spec.errors import SpecError
-from rtde_spec.spec.loader import load_spec
+from rtde_spec.spec.bundle import load_bundle
 
 from .generate import GEN, generate
 
@@ -21,11 +21,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", type=Path, default=ROOT, help="repository root to write into")
     args = parser.parse_args(argv)
     try:
-        spec = load_spec(args.spec)
+        bundle = load_bundle(args.spec)
     except SpecError as exc:
         print(f"error: {exc}", file=sys.stderr)
         return 1
-    files = generate(spec)
+    files = generate(bundle)
     drift = []
     for rel, text in files.items():
         path = args.out / rel

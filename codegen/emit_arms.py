@@ -7,31 +7,24 @@ wire), so it has its own meta-model (rtde_spec.spec.arms) and its own emitter.
 from __future__ import annotations
 
 import math
-import pprint
-from pathlib import Path
 
-from rtde_spec.spec.arms import ArmsFile, load_arms
+from rtde_spec.spec.arms import ArmsFile
 
-from .render import MD_HEADER, PY_HEADER, md_table
+from .render import MD_HEADER, literal_module, md_table
 
 GEN = "rtde_spec/_generated"
-SPEC_ROOT = Path(__file__).resolve().parent.parent / "spec"
 
 
-def emit_arms(root: Path | str | None = None) -> dict[str, str]:
-    """Relative output path -> text, for the arm models below spec root `root`."""
-    arms = load_arms(root if root is not None else SPEC_ROOT)
+def emit_arms(arms: ArmsFile) -> dict[str, str]:
+    """Relative output path -> text, for the arm models of the loaded spec."""
     return {f"{GEN}/arms.py": _python(arms), "docs/reference/arms.md": _markdown(arms)}
 
 
 def _python(arms: ArmsFile) -> str:
-    data = arms.model_dump(mode="json")
-    literal = pprint.pformat(data, width=100, sort_dicts=False)
-    return (
-        PY_HEADER
-        + '"""UR arm models of spec/arms/models.yaml: nominal DH rows, limits, payload, reach."""\n\n'
-        + "from typing import Any\n\n"
-        + f"ARMS: dict[str, Any] = {literal}\n"
+    return literal_module(
+        "UR arm models of spec/arms/models.yaml: nominal DH rows, limits, payload, reach.",
+        "ARMS",
+        arms.model_dump(mode="json"),
     )
 
 

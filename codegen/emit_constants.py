@@ -75,7 +75,7 @@ def emit_catalogue_data(catalogue: Catalogue) -> str:
         PY_HEADER,
         '"""The field catalogue as plain rows (see rtde_spec.spec.catalogue.Catalogue.builtin)."""\n\n',
         "from typing import Any\n\n",
-        "# (id, name, majors, first_version, inherits, rtde_max_frequency)\n",
+        "# (id, name, majors, first_version, inherits, rtde_max_frequency, setup_names_max_bytes)\n",
         "LINES: tuple[tuple[Any, ...], ...] = (\n",
         *(f"    {row!r},\n" for row in rows["LINES"]),
         ")\n\n# (name, size, count, element, struct, kind, bounds)\n",

@@ -6,30 +6,23 @@ has its own meta-model (rtde_spec.spec.dashboard) and its own emitter.
 
 from __future__ import annotations
 
-import pprint
-from pathlib import Path
+from rtde_spec.spec.dashboard import DashboardFile
 
-from rtde_spec.spec.dashboard import DashboardFile, load_dashboard
-
-from .render import MD_HEADER, PY_HEADER, md_table
+from .render import MD_HEADER, literal_module, md_table
 
 GEN = "rtde_spec/_generated"
-SPEC_ROOT = Path(__file__).resolve().parent.parent / "spec"
 
 
-def emit_dashboard(root: Path | str | None = None) -> dict[str, str]:
-    """Relative output path -> text, for the dashboard table below spec root `root`."""
-    table = load_dashboard(root if root is not None else SPEC_ROOT)
+def emit_dashboard(table: DashboardFile) -> dict[str, str]:
+    """Relative output path -> text, for the dashboard table of the loaded spec."""
     return {f"{GEN}/dashboard.py": _python(table), "docs/reference/dashboard.md": _markdown(table)}
 
 
 def _python(table: DashboardFile) -> str:
-    literal = pprint.pformat(table.model_dump(mode="json"), width=100, sort_dicts=False)
-    return (
-        PY_HEADER
-        + '"""Dashboard server commands and replies of spec/dashboard/commands.yaml."""\n\n'
-        + "from typing import Any\n\n"
-        + f"DASHBOARD: dict[str, Any] = {literal}\n"
+    return literal_module(
+        "Dashboard server commands and replies of spec/dashboard/commands.yaml.",
+        "DASHBOARD",
+        table.model_dump(mode="json"),
     )
 
 

@@ -6,19 +6,14 @@ YAML files and answers exactly what spec/ said at generation time.
 
 from __future__ import annotations
 
-import pprint
-
 from rtde_spec.spec.schema import Spec
 
-from .render import PY_HEADER
+from .render import literal_module
 
 
 def emit_spec_data(spec: Spec) -> str:
-    data = spec.model_dump(mode="json", exclude_defaults=True)
-    literal = pprint.pformat(data, width=100, sort_dicts=False)
-    return (
-        PY_HEADER
-        + '"""The spec of spec/ as data: the runtime catalogue is built from it."""\n\n'
-        + "from typing import Any\n\n"
-        + f"SPEC: dict[str, Any] = {literal}\n"
+    return literal_module(
+        "The spec of spec/ as data: the runtime catalogue is built from it.",
+        "SPEC",
+        spec.model_dump(mode="json", exclude_defaults=True),
     )

@@ -5,21 +5,16 @@ script command protocols). The Lua dissector for them is emitted by emit_lua_ext
 
 from __future__ import annotations
 
-import pprint
-from pathlib import Path
-
-from rtde_spec.spec.external import Detect, ExternalControlFile, Variant, load_external
+from rtde_spec.spec.external import Detect, ExternalControlFile, Variant
 from rtde_spec.spec.schema import Primitive
 
-from .render import MD_HEADER, PY_HEADER, md_table
+from .render import MD_HEADER, literal_module, md_table
 
 GEN = "rtde_spec/_generated"
-SPEC_ROOT = Path(__file__).resolve().parent.parent / "spec"
 
 
-def emit_external(prims: dict[str, Primitive], root: Path | str | None = None) -> dict[str, str]:
-    """Relative output path -> text for the external-control protocols below spec root `root`."""
-    spec = load_external(root if root is not None else SPEC_ROOT)
+def emit_external(spec: ExternalControlFile, prims: dict[str, Primitive]) -> dict[str, str]:
+    """Relative output path -> text for the external-control protocols of the loaded spec."""
     return {
         f"{GEN}/external_control.py": _python(spec),
         "docs/reference/external-control.md": _markdown(spec, prims),
@@ -27,12 +22,10 @@ def emit_external(prims: dict[str, Primitive], root: Path | str | None = None) -
 
 
 def _python(spec: ExternalControlFile) -> str:
-    literal = pprint.pformat(spec.model_dump(mode="json", exclude_defaults=True), width=100, sort_dicts=False)
-    return (
-        PY_HEADER
-        + '"""External-control protocols (URCL) of spec/external_control/protocols.yaml."""\n\n'
-        + "from typing import Any\n\n"
-        + f"EXTERNAL_CONTROL: dict[str, Any] = {literal}\n"
+    return literal_module(
+        "External-control protocols (URCL) of spec/external_control/protocols.yaml.",
+        "EXTERNAL_CONTROL",
+        spec.model_dump(mode="json", exclude_defaults=True),
     )
 
 

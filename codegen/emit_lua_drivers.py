@@ -7,29 +7,22 @@ the layout by size).
 from __future__ import annotations
 
 import string
-from pathlib import Path
 
+from rtde_spec.spec.bundle import SpecBundle
 from rtde_spec.spec.catalogue import Catalogue
-from rtde_spec.spec.dashboard import load_dashboard
-from rtde_spec.spec.external import load_external
+from rtde_spec.spec.dashboard import DashboardFile
 from rtde_spec.spec.realtime import PRIMITIVES as RT_PRIMITIVES
-from rtde_spec.spec.realtime import layouts, load_realtime
-from rtde_spec.spec.schema import Primitive
+from rtde_spec.spec.realtime import RealtimeFile, layouts
 
 from .emit_lua import LUA_FIELD, lua_str
 from .emit_lua_external import emit_lua_external
 
-SPEC_ROOT = Path(__file__).resolve().parent.parent / "spec"
 
-
-def emit_lua_drivers(
-    prims: dict[str, Primitive], catalogue: Catalogue, root: Path | str | None = None
-) -> str:
-    base = Path(root) if root is not None else SPEC_ROOT
+def emit_lua_drivers(bundle: SpecBundle) -> str:
     out = ["\n-- ===== UR client library (URCL) external control, dashboard, real-time =====\n"]
-    out.append(emit_lua_external(load_external(base), prims))
-    out.append(_dashboard(base))
-    out.append(_realtime(base, catalogue))
+    out.append(emit_lua_external(bundle.external, bundle.primitives))
+    out.append(_dashboard(bundle.dashboard))
+    out.append(_realtime(bundle.realtime, bundle.catalogue))
     return "".join(out)
 
 
@@ -43,8 +36,7 @@ def _lua_pattern(text: str) -> str:
     return "^" + "".join(out) + "$"
 
 
-def _dashboard(root: Path) -> str:
-    table = load_dashboard(root)
+def _dashboard(table: DashboardFile) -> str:
     rows = []
     for c in sorted(table.commands, key=lambda c: -len(c.command)):
         replies = ", ".join(f"{{ {lua_str(k)}, {lua_str(_lua_pattern(v))} }}" for k, v in c.replies.items())
@@ -131,8 +123,7 @@ DissectorTable.get("tcp.port"):add(DASH_PORT, urdash)
 """
 
 
-def _realtime(root: Path, catalogue: Catalogue) -> str:
-    table = load_realtime(root, catalogue)
+def _realtime(table: RealtimeFile, catalogue: Catalogue) -> str:
     by_size: dict[int, str] = {}
     fields: dict[str, str] = {}
     for plan in layouts(table, catalogue):

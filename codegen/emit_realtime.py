@@ -7,21 +7,16 @@ runtime decoder picks a plan by version and unpacks with one `struct.Struct` cal
 
 from __future__ import annotations
 
-import pprint
-from pathlib import Path
-
 from rtde_spec.spec.catalogue import Catalogue
-from rtde_spec.spec.realtime import LayoutPlan, RealtimeFile, layouts, load_realtime
+from rtde_spec.spec.realtime import LayoutPlan, RealtimeFile, layouts
 
-from .render import MD_HEADER, PY_HEADER, md_table
+from .render import MD_HEADER, literal_module, md_table
 
 GEN = "rtde_spec/_generated"
-SPEC_ROOT = Path(__file__).resolve().parent.parent / "spec"
 
 
-def emit_realtime(catalogue: Catalogue, root: Path | str | None = None) -> dict[str, str]:
-    """Relative output path -> text, for the real-time interface below spec root `root`."""
-    table = load_realtime(root if root is not None else SPEC_ROOT, catalogue)
+def emit_realtime(table: RealtimeFile, catalogue: Catalogue) -> dict[str, str]:
+    """Relative output path -> text, for the real-time interface of the loaded spec."""
     plans = layouts(table, catalogue)
     return {
         f"{GEN}/realtime.py": _python(table, plans),
@@ -30,9 +25,6 @@ def emit_realtime(catalogue: Catalogue, root: Path | str | None = None) -> dict[
 
 
 def _python(table: RealtimeFile, plans: list[LayoutPlan]) -> str:
-    literal = pprint.pformat(
-        table.model_dump(mode="json", exclude_defaults=True), width=100, sort_dicts=False
-    )
     rows = []
     for p in plans:
         names = tuple(f.name for f in p.fields)
@@ -40,18 +32,20 @@ def _python(table: RealtimeFile, plans: list[LayoutPlan]) -> str:
         integers = tuple(f.name for f in p.fields if f.integer)
         rows.append(f"    ({p.line!r}, {p.first!r}, {p.size}, {p.format!r},\n     {names!r},\n")
         rows.append(f"     {counts!r},\n     {integers!r}),\n")
-    return (
-        PY_HEADER
-        + '"""The real-time interface (port 30003) of spec/realtime/interface.yaml and its layouts."""\n\n'
-        + "from typing import Any\n\n"
-        + f"REALTIME_PORTS: dict[str, int] = {dict(table.ports)!r}\n"
+    prelude = (
+        f"REALTIME_PORTS: dict[str, int] = {dict(table.ports)!r}\n"
         + f"REALTIME_MAX_MESSAGE_BYTES = {table.max_message_bytes}\n"
         + "# (product line, first version, message size, struct format, field names, value counts,\n"
         + "#  fields carrying a whole number in a double)\n"
         + "LAYOUTS: tuple[tuple[Any, ...], ...] = (\n"
         + "".join(rows)
         + ")\n\n"
-        + f"REALTIME: dict[str, Any] = {literal}\n"
+    )
+    return literal_module(
+        "The real-time interface (port 30003) of spec/realtime/interface.yaml and its layouts.",
+        "REALTIME",
+        table.model_dump(mode="json", exclude_defaults=True),
+        prelude,
     )
 
 

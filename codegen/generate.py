@@ -1,9 +1,14 @@
-"""Run every emitter over one spec: relative output path -> file text."""
+"""Run every emitter over one loaded spec bundle: relative output path -> file text.
+
+Emitters get their part of the bundle and never open files, so what is generated is
+exactly what the bundle (one spec root, or an edited copy in memory) says.
+"""
 
 from __future__ import annotations
 
-from rtde_spec.spec.catalogue import Catalogue
-from rtde_spec.spec.schema import Spec
+from collections.abc import Callable
+
+from rtde_spec.spec.bundle import SpecBundle
 
 from .emit_arms import emit_arms
 from .emit_constants import emit_catalogue_data, emit_constants
@@ -30,9 +35,8 @@ from .render import PY_HEADER
 GEN = "rtde_spec/_generated"
 
 
-def generate(spec: Spec) -> dict[str, str]:
-    catalogue = Catalogue(spec)
-    prims = {p.name: p for p in spec.primitives.primitives}
+def _protocol(b: SpecBundle) -> dict[str, str]:
+    spec, catalogue = b.spec, b.catalogue
     return {
         f"{GEN}/__init__.py": PY_HEADER + '"""Code generated from spec/; import through rtde_spec."""\n',
         f"{GEN}/constants.py": emit_constants(spec),
@@ -44,15 +48,29 @@ def generate(spec: Spec) -> dict[str, str]:
         f"{GEN}/rtde_models.py": emit_rtde_models(spec),
         f"{GEN}/primary_models.py": emit_primary_models(spec),
         f"{GEN}/primary_structs.py": emit_primary_structs(spec),
-        f"{GEN}/rtde_spec.lua": emit_lua(spec, catalogue) + emit_lua_drivers(prims, catalogue),
+        f"{GEN}/rtde_spec.lua": emit_lua(spec, catalogue) + emit_lua_drivers(b),
         "docs/reference/README.md": emit_index_doc(spec, catalogue),
         "docs/reference/rtde-fields.md": emit_fields_doc(spec, catalogue),
         "docs/reference/rtde-packages.md": emit_packages_doc(spec),
         "docs/reference/enums.md": emit_enums_doc(spec),
         "docs/reference/primary.md": emit_primary_doc(spec),
         "docs/reference/rtde-types.md": emit_types_doc(spec, catalogue),
-        **emit_arms(),
-        **emit_dashboard(),
-        **emit_realtime(catalogue),
-        **emit_external(prims),
     }
+
+
+#: one entry per emitter family: bundle -> {relative path: text}; a new emitter is one line here
+EMITTERS: tuple[Callable[[SpecBundle], dict[str, str]], ...] = (
+    _protocol,
+    lambda b: emit_arms(b.arms),
+    lambda b: emit_dashboard(b.dashboard),
+    lambda b: emit_realtime(b.realtime, b.catalogue),
+    lambda b: emit_external(b.external, b.primitives),
+)
+
+
+def generate(bundle: SpecBundle) -> dict[str, str]:
+    """Every generated file of `bundle`, by path relative to the repository root."""
+    files: dict[str, str] = {}
+    for emit in EMITTERS:
+        files.update(emit(bundle))
+    return files

@@ -88,9 +88,23 @@ def test_names_over_2048_bytes() -> None:
         f"output_int_register_{i}" for i in range(48)
     ]
     names += [f"output_bit_register_{i}" for i in range(64, 128)]
-    report = validate_recipes([Recipe(tuple(names), direction="output")], controller="5.12.2")
-    assert "names-too-long" in codes(report)
     assert len(",".join(names)) > 2048
+    report = validate_recipes([Recipe(tuple(names), direction="output")], controller="3.15.8")
+    assert "names-too-long" in codes(report) and not report.valid
+    assert "CB3" in next(p.message for p in report.all_problems if p.code == "names-too-long")
+    # e-Series documents no such limit (URCL sets up 9,173 bytes against URSim 5.x): valid there
+    eseries = validate_recipes([Recipe(tuple(names), direction="output")], controller="5.15.0")
+    assert "names-too-long" not in codes(eseries) and eseries.valid
+
+
+def test_urcl_sized_name_list_is_valid_on_e_series_only() -> None:
+    names = [f"output_double_register_{i % 48}" for i in range(360)]
+    assert 9173 <= len(",".join(names)) < 65532  # URCL's size, well within a setup package
+    recipe = Recipe(tuple(names), direction="output")
+    on_cb3 = validate_recipe(recipe, controller="3.15.8")
+    on_e = validate_recipe(recipe, controller="5.15.0")
+    assert "names-too-long" in codes(on_cb3)
+    assert "names-too-long" not in codes(on_e)
 
 
 @pytest.mark.parametrize(

@@ -3,11 +3,11 @@
 
 from typing import Any
 
-# (id, name, majors, first_version, inherits, rtde_max_frequency)
+# (id, name, majors, first_version, inherits, rtde_max_frequency, setup_names_max_bytes)
 LINES: tuple[tuple[Any, ...], ...] = (
-    ('cb3', 'CB3 (PolyScope 3.x)', (3,), '3.3.0', None, 125),
-    ('e-series', 'e-Series (PolyScope 5.x)', (5,), '5.0.0', None, 500),
-    ('polyscope-x', 'PolyScope X (10.x)', (10,), '10.0.0', 'e-series', 500),
+    ('cb3', 'CB3 (PolyScope 3.x)', (3,), '3.3.0', None, 125, 2048),
+    ('e-series', 'e-Series (PolyScope 5.x)', (5,), '5.0.0', None, 500, None),
+    ('polyscope-x', 'PolyScope X (10.x)', (10,), '10.0.0', 'e-series', 500, None),
 )
 
 # (name, size, count, element, struct, kind, bounds)
@@ -602,9 +602,9 @@ FIELDS: tuple[tuple[Any, ...], ...] = (
     ('ft_raw_wrench', 'output', 'VECTOR6D', 'Raw force and torque measurement in the tool flange frame, not compensated for the payload', 'N, Nm', None, None, None, None, ('cb3-guide', 'e-series-guide'), None, None, {'e-series': '5.9.0', 'polyscope-x': '10.0.0'}),
     ('wrench_calc_from_currents', 'output', 'VECTOR6D', 'The forces and torques derived from the joint currents', 'N, Nm', None, None, None, None, ('e-series-guide',), None, None, {'e-series': '5.0.0', 'polyscope-x': '10.0.0'}),
     ('target_base_wrench', 'output', 'VECTOR6D', 'Target wrench in the base frame', 'N, Nm', None, None, None, None, ('third-party',), None, None, {'e-series': '5.0.0', 'polyscope-x': '10.0.0'}),
-    ('payload', 'output', 'DOUBLE', 'Payload mass', 'kg', None, None, None, None, ('cb3-guide', 'e-series-guide'), None, None, {'cb3': '3.3.0', 'e-series': '5.0.0', 'polyscope-x': '10.0.0'}),
-    ('payload_cog', 'output', 'VECTOR3D', 'Payload center of gravity (CoGx, CoGy, CoGz)', 'm', None, None, None, None, ('cb3-guide', 'e-series-guide'), None, None, {'cb3': '3.3.0', 'e-series': '5.5.0', 'polyscope-x': '10.0.0'}),
-    ('payload_inertia', 'output', 'VECTOR6D', 'Payload inertia matrix elements (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)', 'kg·m²', None, None, None, None, ('cb3-guide', 'e-series-guide'), None, None, {'cb3': '3.3.0', 'e-series': '5.11.0', 'polyscope-x': '10.0.0'}),
+    ('payload', 'output', 'DOUBLE', 'Payload mass', 'kg', None, None, None, None, ('cb3-guide', 'e-series-guide', 'rtde-guide-current'), None, None, {'cb3': '3.11.0', 'e-series': '5.0.0', 'polyscope-x': '10.0.0'}),
+    ('payload_cog', 'output', 'VECTOR3D', 'Payload center of gravity (CoGx, CoGy, CoGz)', 'm', None, None, None, None, ('cb3-guide', 'e-series-guide', 'rtde-guide-current'), None, None, {'cb3': '3.11.0', 'e-series': '5.5.0', 'polyscope-x': '10.0.0'}),
+    ('payload_inertia', 'output', 'VECTOR6D', 'Payload inertia matrix elements (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)', 'kg·m²', None, None, None, None, ('cb3-guide', 'e-series-guide', 'rtde-guide-current'), None, None, {'cb3': '3.15.0', 'e-series': '5.11.0', 'polyscope-x': '10.0.0'}),
     ('script_control_line', 'output', 'UINT32', "Script line number in control of the robot while one of the script's threads has it locked; 0 when no thread is locking the robot. Not the program tree line number PolyScope displays", None, None, None, None, None, ('cb3-guide', 'e-series-guide'), None, None, {'cb3': '3.14.0', 'e-series': '5.9.0', 'polyscope-x': '10.0.0'}),
     ('time_scale_source', 'output', 'INT32', 'Cause of time scaling', None, 'TimeScaleSource', None, None, None, ('e-series-guide',), None, None, {'e-series': '5.17.0', 'polyscope-x': '10.0.0'}),
     ('target_gravity', 'output', 'VECTOR3D', 'Active gravity, set on the PolyScope mounting screen or with set_gravity()', 'm/s²', None, None, None, None, ('e-series-guide',), None, None, {'e-series': '5.26.0', 'polyscope-x': '10.12.0'}),

@@ -7,7 +7,7 @@ RTDE_SENDERS: tuple[str, ...] = ('controller', 'client')
 PRIMARY_PORTS: dict[str, int] = {'primary': 30001, 'secondary': 30002, 'primary_read_only': 30011, 'secondary_read_only': 30012}
 RTDE_HEADER_FORMAT = '>HB'
 RTDE_HEADER_FIELDS: tuple[str, ...] = ('size', 'type')
-RTDE_LIMITS: dict[str, int] = {'setup_names_max_bytes': 2048, 'input_recipes_max': 255, 'invalid_recipe_id': 0, 'package_max_bytes': 65535}
+RTDE_LIMITS: dict[str, int] = {'input_recipes_max': 255, 'invalid_recipe_id': 0, 'package_max_bytes': 65535}
 RTDE_ANSWERS: dict[str, str] = {'not_found': 'NOT_FOUND', 'in_use': 'IN_USE'}
 """Words a setup reply puts in its type list instead of a type."""
 RTDE_DIRECTIONS: dict[str, str] = {'controller': 'output', 'client': 'input'}

@@ -17,7 +17,7 @@ HEADER_FORMAT = '>HB'
 """struct format of the header (size, type)."""
 HEADER_SIZE = 3
 HEADER_FIELDS: tuple[str, ...] = ('size', 'type')
-LIMITS: dict[str, int] = {'setup_names_max_bytes': 2048, 'input_recipes_max': 255, 'invalid_recipe_id': 0, 'package_max_bytes': 65535}
+LIMITS: dict[str, int] = {'input_recipes_max': 255, 'invalid_recipe_id': 0, 'package_max_bytes': 65535}
 PACKAGE_TYPES = RTDE_PACKAGE_TYPES  # type code -> the document's name of the type
 SENDERS: tuple[str, ...] = ('controller', 'client')
 PROTOCOLS: tuple[int, ...] = (1, 2)

@@ -64,6 +64,21 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="product line the document is for (default: detected)",
     )
     imp.add_argument(
+        "--form",
+        choices=("cb3-text", "e-series-text", "rendered-text", "markdown", "html", "xlsx", "primary-text"),
+        help="the document's form (default: detected from its content)",
+    )
+    imp.add_argument(
+        "--edition",
+        help="the controller version the document is written for (default: the newest its version "
+        "cells name); fields newer than it are not reported removed",
+    )
+    imp.add_argument(
+        "--allow-removals",
+        action="store_true",
+        help="let --write remove fields the document leaves out (never applied without it)",
+    )
+    imp.add_argument(
         "--check", action="store_true", help="exit 1 when there are differences the spec does not record"
     )
     imp.set_defaults(run=run)
@@ -95,6 +110,24 @@ def _rows(changes: list[Change]) -> list[list[Any]]:
     return rows
 
 
+def _table_record(t: Any, spec: Any, doc: Any) -> dict[str, Any]:
+    """Per table: rows read, fields, those the spec knows, and the spec's count for that edition."""
+    from rtde_spec.spec.importers.scope import expected_names
+
+    entries = spec.fields.inputs if t.direction == "input" else spec.fields.outputs
+    names = {e.name for e in entries}
+    return {
+        "heading": t.heading,
+        "line": t.line,
+        "direction": t.direction,
+        "rows": t.rows,
+        "fields": t.fields,
+        "matched": len(set(t.names) & names),
+        "spec": len(expected_names(spec, doc, t.direction)),
+        "skipped": [{"line": n, "cell": c} for n, c in t.skipped],
+    }
+
+
 def run(args: argparse.Namespace) -> int:
     from rtde_spec.spec.importers import read_document
     from rtde_spec.spec.importers.diff import diff_fields
@@ -122,7 +155,9 @@ def run(args: argparse.Namespace) -> int:
         )
     else:
         spec = load_spec(args.spec_dir)
-    doc = read_document(args.document, spec, source=args.source, line=args.line)
+    doc = read_document(
+        args.document, spec, source=args.source, line=args.line, fmt=args.form, edition=args.edition
+    )
     changes = diff_primary(doc, spec) if doc.interface == "primary" else diff_fields(doc, spec)
     new = [c for c in changes if c.known is None]
     known = [c for c in changes if c.known is not None]
@@ -132,6 +167,10 @@ def run(args: argparse.Namespace) -> int:
             "format": doc.format,
             "source": doc.source,
             "line": doc.line,
+            "edition": doc.edition,
+            "tables": [_table_record(t, spec, doc) for t in doc.tables],
+            "unlisted": doc.unlisted,
+            "remarks": doc.remarks,
             "added": [c.record() for c in new if c.kind == "added"],
             "removed": [c.record() for c in new if c.kind == "removed"],
             "changed": [c.record() for c in new if c.kind == "changed"],
@@ -141,7 +180,27 @@ def run(args: argparse.Namespace) -> int:
         print_json(out)
     else:
         head = ["change", "field", "where", "what", "index", "spec", "document", "line"]
-        print(f"{args.document}: {doc.format}, {doc.source}, written for {doc.line}")
+        edition = f" {doc.edition}" if doc.edition else ""
+        print(f"{args.document}: {doc.format}, {doc.source}, written for {doc.line}{edition}")
+        if doc.members:
+            fields = sum(len(m.fields) for m in doc.members)
+            print(f"  {len(doc.members)} message tables read, {fields} field rows")
+        for t in doc.tables:
+            r = _table_record(t, spec, doc)
+            print(
+                f"  table {r['heading']!r} (line {r['line']}, {r['direction']}s): {r['rows']} rows read, "
+                f"{r['fields']} fields, {r['matched']} matched the spec, the spec has {r['spec']}"
+                + (f"; {len(t.skipped)} placeholder rows skipped" if t.skipped else "")
+            )
+            for line, cell in t.skipped:
+                print(f"    skipped line {line}: {cell!r} (a placeholder, not a field)")
+        for direction, names in doc.unlisted.items():
+            print(
+                f"  {len(names)} spec {direction}s not listed: the {direction} table stops early "
+                "(a placeholder row), so they are not reported as removed"
+            )
+        for remark in doc.remarks:
+            print(f"  {remark}: not a change for {doc.line}")
         if new:
             print(table(head, _rows(new)))
         if args.show_known and known:
@@ -160,9 +219,11 @@ def run(args: argparse.Namespace) -> int:
         from rtde_spec.spec.importers.write import write_changes
 
         assert args.spec_dir is not None  # --write without a spec folder was refused above
-        written = write_changes(changes, doc, spec, args.spec_dir)
+        result = write_changes(changes, doc, spec, args.spec_dir, allow_removals=args.allow_removals)
+        for change, why in result.held:
+            print(f"not written: {change.field} ({change.where}) removed: {why}", file=sys.stderr)
         print(
-            f"wrote {len(written)} of {len(new)} changes to {args.spec_dir}; run `python -m codegen`",
+            f"wrote {len(result.written)} of {len(new)} changes to {args.spec_dir}; run `python -m codegen`",
             file=sys.stderr,
         )
     if args.overlay is not None:

@@ -33,7 +33,7 @@ if TYPE_CHECKING:
 log = logging.getLogger("rtde_spec.emulator")
 NOT_FOUND, IN_USE = RTDE_ANSWERS["not_found"], RTDE_ANSWERS["in_use"]
 INVALID_ID = RTDE_LIMITS["invalid_recipe_id"]
-MAX_NAMES = RTDE_LIMITS["setup_names_max_bytes"]
+MAX_PACKAGE = RTDE_LIMITS["package_max_bytes"]
 MAX_INPUT_RECIPES = RTDE_LIMITS["input_recipes_max"]
 SOURCE = "rtde_spec emulator"
 ERROR, EXCEPTION = TextMessageLevel.ERROR_MESSAGE, TextMessageLevel.EXCEPTION_MESSAGE
@@ -149,8 +149,9 @@ class RtdeConnection(GuardedConnection):
     def _names(self, names: list[str]) -> tuple[list[str], bool]:
         """The requested names (a trailing comma's empty name dropped), and whether they fit the limit."""
         names = setup_names(names)
-        if len(",".join(names).encode()) > MAX_NAMES:
-            self._text(f"setup refused: names exceed {MAX_NAMES} bytes", ERROR)
+        limit = self.hub.model.catalogue.setup_names_limit(self.hub.model.version)[0] or MAX_PACKAGE
+        if len(",".join(names).encode()) > limit:  # the CB3 guide's 2048; e-Series takes URCL's 9,173
+            self._text(f"setup refused: names exceed {limit} bytes", ERROR)
             return names, False
         return names, bool(names)
 

@@ -246,13 +246,24 @@ def validate_recipe(
         what = "the controller needs at least one output" if dirn == "output" else "no variables"
         problems.append(Problem("error", "empty-recipe", f"empty {dirn} recipe: {what}"))
     text_bytes = len(recipe.wire_text.encode("utf-8"))
-    limit = LIMITS["setup_names_max_bytes"]
-    if text_bytes > limit:
+    limit, line_name = cat.setup_names_limit(checker.controller)
+    bound = LIMITS["package_max_bytes"] - DATA_PREFIX_BYTES  # the uint16 size field, on every line
+    if text_bytes > bound:
         problems.append(
             Problem(
                 "error",
                 "names-too-long",
-                f"the comma-joined names take {text_bytes} bytes; the limit is {limit}",
+                f"the comma-joined names take {text_bytes} bytes; a setup package holds at most {bound}",
+            )
+        )
+    elif limit is not None and text_bytes > limit:
+        # an error on the line that documents the limit; without a controller version, a warning
+        severity: Severity = "error" if checker.controller else "warning"
+        problems.append(
+            Problem(
+                severity,
+                "names-too-long",
+                f"the comma-joined names take {text_bytes} bytes; the limit on {line_name} is {limit}",
             )
         )
     payload = sum(row.size or 0 for row in rows)

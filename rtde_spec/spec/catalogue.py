@@ -48,6 +48,7 @@ class LineInfo:
     first_version: str
     inherits: str | None
     rtde_max_frequency: int
+    setup_names_max_bytes: int | None = None
 
 
 @dataclass(frozen=True)
@@ -88,7 +89,15 @@ class Catalogue:
         self._spec: Spec | None = spec
         self.extra = tuple(extra)
         self.lines = {
-            p.id: LineInfo(p.id, p.name, tuple(p.majors), p.first_version, p.inherits, p.rtde_max_frequency)
+            p.id: LineInfo(
+                p.id,
+                p.name,
+                tuple(p.majors),
+                p.first_version,
+                p.inherits,
+                p.rtde_max_frequency,
+                p.rtde_setup_names_max_bytes,
+            )
             for p in spec.product_lines.product_lines
         }
         self.wire_types = _wire_types(spec)
@@ -211,6 +220,20 @@ class Catalogue:
         return resolved
 
     # --- questions ------------------------------------------------------------
+
+    def setup_names_limit(self, version: str | Version | None) -> tuple[int | None, str]:
+        """The documented byte limit of a setup's names on this version's line, and whose it is.
+
+        Only the CB3 guide documents one (2048); other lines have none (None), and with no
+        version the strictest documented limit applies, named as that line's.
+        """
+        if version is not None:
+            line = self.line_of(version)
+            return line.setup_names_max_bytes, line.name
+        documented = [
+            (p.setup_names_max_bytes, p.name) for p in self.lines.values() if p.setup_names_max_bytes
+        ]
+        return min(documented) if documented else (None, "")
 
     def line_of(self, version: str | Version) -> LineInfo:
         """The product line a controller version belongs to."""

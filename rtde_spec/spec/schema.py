@@ -71,6 +71,8 @@ class ProductLine(StrictModel):
     first_version: VersionStr
     inherits: str | None = None
     rtde_max_frequency: Annotated[int, Field(ge=1)]
+    #: the documented limit of a setup's comma-joined names; None: only the package size bounds it
+    rtde_setup_names_max_bytes: Annotated[int, Field(ge=1)] | None = None
     doc: str | None = None
 
 
@@ -272,7 +274,6 @@ class MessageSpec(StrictModel):
 
 
 class Limits(StrictModel):
-    setup_names_max_bytes: int
     input_recipes_max: int
     invalid_recipe_id: int
     package_max_bytes: int

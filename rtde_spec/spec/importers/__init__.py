@@ -9,13 +9,20 @@ import re
 from pathlib import Path
 
 from rtde_spec.errors import UsageError
-from rtde_spec.spec.importers import cb3_text, eseries_text, html_doc, markdown
+from rtde_spec.spec.importers import cb3_text, eseries_text, html_doc, markdown, rendered_text
 from rtde_spec.spec.importers.cells import Lines, parse_name
 from rtde_spec.spec.importers.model import Document
 from rtde_spec.spec.importers.rows import field_rows, main_line
+from rtde_spec.spec.importers.tables import MAX_BYTES
 from rtde_spec.spec.schema import Spec
+from rtde_spec.spec.versions import Version
 
-FORMATS = ("cb3-text", "e-series-text", "markdown", "html", "primary-text")
+FORMATS = ("cb3-text", "e-series-text", "rendered-text", "markdown", "html", "xlsx", "primary-text")
+#: what a document must hold to be read, for the error when none is found
+LOOKED_FOR = (
+    "an RTDE field table (header cells Name, Type, Comment[, Introduced in version] under a heading "
+    "naming inputs or outputs)"
+)
 _DEFAULT_SOURCE = {
     "cb3-text": "cb3-guide",
     "e-series-text": "e-series-guide",
@@ -30,15 +37,22 @@ def detect_format(text: str) -> str:
         return "html"
     if "ROBOT_STATE_PACKAGE_TYPE" in text or "Sub Package of Robot State" in text:
         return "primary-text"
+    from rtde_spec.spec.importers.primary_listing import SIGN
+
+    if SIGN.search(text):
+        return "primary-text"
     if re.search(r"^\s*\|\s*Name\s*\|", text, re.MULTILINE):
         return "markdown"
     if re.search(r"^\s*Name\s*\|\s*$", text, re.MULTILINE):
         return "e-series-text"
     if re.search(r"^\s*Name\tType\t", text, re.MULTILINE):
         return "cb3-text"
+    if rendered_text.HEADER.search(text):
+        return "rendered-text"
     raise UsageError(
         "cannot tell the document's form: expected an RTDE guide (tab-separated text, "
-        "pipe-terminated text, Markdown or HTML tables) or the primary interface document"
+        "pipe-terminated text, rendered text with a cell per line, Markdown or HTML tables, the "
+        "client-interface .xlsx) or the primary interface document; --form names the form"
     )
 
 
@@ -46,17 +60,48 @@ def _slug(path: Path) -> str:
     return re.sub(r"[^a-z0-9]+", "-", path.stem.lower()).strip("-") or "document"
 
 
-def read_document(
-    path: Path | str, spec: Spec, source: str | None = None, line: str | None = None, fmt: str | None = None
-) -> Document:
-    """Read a document in any supported form into the common model."""
-    path = Path(path)
+def edition_of(doc: Document) -> str | None:
+    """The newest version of the document's own line that its version cells name: the document is
+    at least that edition, and cannot speak of fields introduced after it."""
+    found = [
+        Version.parse(v)
+        for f in doc.fields
+        for note in f.notes
+        for line, v in note.versions.items()
+        if line == doc.line and v
+    ]
+    return str(max(found)) if found else None
+
+
+def _text(path: Path) -> str:
     try:
-        text = path.read_text(encoding="utf-8", errors="replace")
+        size = path.stat().st_size
+        if size > MAX_BYTES:
+            raise UsageError(f"{path}: {size} bytes; UR's documents are under {MAX_BYTES} bytes")
+        return path.read_text(encoding="utf-8", errors="replace")
     except FileNotFoundError:
         raise UsageError(f"no such document: {path}") from None
     except IsADirectoryError:
         raise UsageError(f"{path} is a directory, not a document") from None
+
+
+def read_document(
+    path: Path | str,
+    spec: Spec,
+    source: str | None = None,
+    line: str | None = None,
+    fmt: str | None = None,
+    edition: str | None = None,
+) -> Document:
+    """Read a document in any supported form into the common model."""
+    path = Path(path)
+    if fmt not in (None, *FORMATS):
+        raise UsageError(f"unknown form {fmt!r}; one of {', '.join(FORMATS)}")
+    if fmt == "xlsx" or (fmt is None and path.suffix.lower() in (".xlsx", ".xlsm")):
+        from rtde_spec.spec.importers.workbook import read_workbook
+
+        return read_workbook(path, spec, source, line, edition)
+    text = _text(path)
     kind = fmt or detect_format(text)
     lines = Lines.of(spec)
     doc = Document(str(path), kind, source or _DEFAULT_SOURCE.get(kind) or _slug(path))
@@ -64,11 +109,21 @@ def read_document(
         from rtde_spec.spec.importers.primary_text import read_members
 
         doc.members = read_members(text, lines)
+        if not doc.members:  # the docs site's C-like listing ("for each joint: ... end")
+            from rtde_spec.spec.importers.primary_listing import read_listing
+
+            doc.members = read_listing(text)
         doc.line = line or "e-series"
+        doc.edition = edition
+        if not doc.members:
+            raise UsageError(
+                f"{path}: no message table read; looked for the primary interface's sub-package "
+                "tables (a title naming the package type, then Name/Type/Comment rows)"
+            )
         return doc
     if kind == "cb3-text":
         tables = cb3_text.read_tables(text)
-    elif kind == "e-series-text":
+    elif kind in ("e-series-text", "rendered-text"):
 
         def starts_row(name: str, type_: str) -> bool:
             word, _, _ = parse_name(name)
@@ -78,14 +133,23 @@ def read_document(
                 and (lines.type_name(type_) in lines.types.values())
             )
 
-        tables = [eseries_text.split_rows(t, starts_row) for t in eseries_text.read_tables(text)]
+        reader = rendered_text if kind == "rendered-text" else eseries_text
+        tables = [eseries_text.split_rows(t, starts_row) for t in reader.read_tables(text)]
     elif kind == "markdown":
         tables = markdown.read_tables(text)
     else:
         tables = html_doc.read_tables(text)
-    doc.fields = field_rows(tables, lines)
+    return finish(doc, tables, lines, line, edition, "cb3" if kind == "cb3-text" else "e-series")
+
+
+def finish(
+    doc: Document, tables: list, lines: Lines, line: str | None, edition: str | None, default: str
+) -> Document:
+    """Fields of the tables into `doc`, its line and edition; exit 2 when no field table is read."""
+    doc.fields = field_rows(tables, lines, doc.tables)
     if not doc.fields:
-        raise UsageError(f"{path}: no RTDE field table (Name, Type, Comment, Introduced in version) found")
-    default = "cb3" if kind == "cb3-text" else "e-series"
+        seen = f" ({len(tables)} other tables seen)" if tables else ""
+        raise UsageError(f"{doc.path} ({doc.format}): no field read{seen}; looked for {LOOKED_FOR}")
     doc.line = line or main_line(doc.fields, default)
+    doc.edition = str(Version.parse(edition)) if edition else edition_of(doc)
     return doc

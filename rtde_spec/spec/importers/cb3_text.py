@@ -2,13 +2,14 @@
 
 from __future__ import annotations
 
-from rtde_spec.spec.importers.tables import Table, is_heading
+from rtde_spec.spec.importers.tables import Table, check_rows, is_heading
 
 
 def read_tables(text: str) -> list[Table]:
     tables: list[Table] = []
     heading = ""
     current: Table | None = None
+    count = 0
     for number, raw in enumerate(text.splitlines(), start=1):
         line = raw.rstrip("\r\n")
         if not line.strip():
@@ -27,4 +28,6 @@ def read_tables(text: str) -> list[Table]:
             tables.append(current)
         else:
             current.rows.append((number, cells))
+            count += 1
+            check_rows(count, number)
     return tables

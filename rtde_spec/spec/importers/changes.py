@@ -65,8 +65,17 @@ def matches(conflict: Conflict, change: Change) -> bool:
     return conflict.document is None or conflict.document == change.document_value
 
 
-def mark_known(change: Change, conflicts: list[Conflict]) -> Change:
+def same_family(a: str, b: str) -> bool:
+    """Document ids of one family: equal, or one an edition of the other (e-series-guide-5.9)."""
+    return a == b or a.startswith(b + "-") or b.startswith(a + "-")
+
+
+def mark_known(change: Change, conflicts: list[Conflict], source: str | None = None) -> Change:
+    """Mark the change known when a conflict recorded for this document (family) covers it exactly:
+    a conflict recorded because one document stops early never hides another's real change."""
     for conflict in conflicts:
+        if source is not None and not any(same_family(s, source) for s in conflict.sources):
+            continue
         if matches(conflict, change):
             change.known = conflict
             break

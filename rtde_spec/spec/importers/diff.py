@@ -14,11 +14,10 @@ from collections import defaultdict
 from rtde_spec.spec.importers.cells import words
 from rtde_spec.spec.importers.changes import Availability, Change, mark_known, resolve
 from rtde_spec.spec.importers.model import DocField, Document, VersionNote
+from rtde_spec.spec.importers.scope import directions, in_scope, stops_early
 from rtde_spec.spec.schema import FieldSpec, ProductLine, Spec
 from rtde_spec.spec.versions import Version
 
-#: sources that are not documents a guide would be expected to repeat
-_UNDOCUMENTED = {"third-party", "user"}
 _OTHER = {"input": "output", "output": "input"}
 
 
@@ -30,9 +29,22 @@ def _notes_for(row: DocField, index: int | None) -> list[VersionNote]:
     return [n for n in row.notes if n.span is None or (index is not None and n.span[0] <= index <= n.span[1])]
 
 
+def older_only(row: DocField, index: int | None, doc_line: str, lines: list[ProductLine]) -> bool:
+    """A version cell naming only lines older than the document's ("3.3" read for e-Series): it says
+    nothing of the document's own line, unlike a cell naming only a newer line (the CB3 guide's
+    ft_raw_wrench, 5.9.0), which says the older line lacks the field."""
+    named = {line for note in _notes_for(row, index) for line in note.versions}
+    order = [p.id for p in lines]
+    if not named or doc_line in named or doc_line not in order:
+        return False
+    return all(order.index(n) < order.index(doc_line) for n in named if n in order)
+
+
 def covered_lines(row: DocField, index: int | None, doc_line: str, lines: list[ProductLine]) -> list[str]:
     """The lines a row speaks of for one index: the document's own and those its versions name."""
-    named = {doc_line} | {line for note in _notes_for(row, index) for line in note.versions}
+    named = {line for note in _notes_for(row, index) for line in note.versions}
+    if not older_only(row, index, doc_line, lines):
+        named.add(doc_line)
     for line in lines:
         if line.inherits in named:
             named.add(line.id)
@@ -89,7 +101,13 @@ def _availability_changes(row: DocField, entry: FieldSpec, doc: Document, spec: 
     last: tuple[Availability, Availability] | None = None
 
     def flush() -> None:
-        if last is not None and last[0] != last[1] and run:
+        if last is not None and last[0] != last[1] and run and not row.notes:
+            # a blank version cell is read as "since the line's first version"; where the spec says
+            # otherwise the cell is reported, not taken as a change
+            note = f"line {row.line}: {entry.name}: blank version cell (the spec has {last[0]})"
+            if note not in doc.remarks:
+                doc.remarks.append(note)
+        elif last is not None and last[0] != last[1] and run:
             first, last_index = run[0], run[-1]
             span = None if first is None or last_index is None else (first, last_index)
             out.append(
@@ -97,6 +115,11 @@ def _availability_changes(row: DocField, entry: FieldSpec, doc: Document, spec: 
             )
 
     for index in indices:
+        if older_only(row, index, doc.line, lines):
+            cell = row.version_text
+            note = f"line {row.line}: {entry.name}: the version cell {cell!r} names only older lines"
+            if note not in doc.remarks:
+                doc.remarks.append(note)
         covered = covered_lines(row, index, doc.line, lines)
         pair = (spec_availability(entry, index, covered, spec), doc_availability(row, index, doc.line, spec))
         if pair != last or (index is not None and run and run[-1] is not None and index != run[-1] + 1):
@@ -123,13 +146,8 @@ def _compare(row: DocField, entry: FieldSpec, doc: Document, spec: Spec) -> list
 
 
 def _expected(entry: FieldSpec, doc: Document, spec: Spec) -> bool:
-    """Whether the document should list a spec field: a documented field its line has."""
-    if entry.sources and set(entry.sources) <= _UNDOCUMENTED:
-        return False
-    indices: list[int | None] = (
-        [None] if entry.index is None else list(range(entry.index[0], entry.index[1] + 1))
-    )
-    return any(spec_availability(entry, i, [doc.line], spec).get(doc.line) for i in indices)
+    """Whether the document should list a spec field: a documented field of its line and edition."""
+    return in_scope(entry, doc, spec)
 
 
 def diff_fields(doc: Document, spec: Spec) -> list[Change]:
@@ -145,7 +163,7 @@ def diff_fields(doc: Document, spec: Spec) -> list[Change]:
     for row in doc.fields:
         entry = entries[row.direction].get(row.name)
         if entry is not None:
-            changes += [mark_known(c, entry.conflicts) for c in _compare(row, entry, doc, spec)]
+            changes += [mark_known(c, entry.conflicts, doc.source) for c in _compare(row, entry, doc, spec)]
             continue
         other = entries[_OTHER[row.direction]].get(row.name)
         if other is not None and row.name not in listed[_OTHER[row.direction]]:
@@ -159,20 +177,27 @@ def diff_fields(doc: Document, spec: Spec) -> list[Change]:
                 row.line,
             )
             change.extra["row"] = row
-            changes.append(mark_known(change, other.conflicts))
+            changes.append(mark_known(change, other.conflicts, doc.source))
             continue
         change = Change("added", "added", row.name, row.direction, None, row.type, row.line, row.index)
         change.extra["row"] = row
         changes.append(change)
+    partial = stops_early(doc)
+    tabled = directions(doc)
     for direction, by_name in entries.items():
+        if direction not in tabled:
+            continue
         for name, entry in by_name.items():
             if name in listed[direction] or (
                 name in listed[_OTHER[direction]] and name not in entries[_OTHER[direction]]
             ):
                 continue
+            if direction in partial and _expected(entry, doc, spec):
+                doc.unlisted.setdefault(direction, []).append(name)  # not a removal: left out
+                continue
             if _expected(entry, doc, spec):
                 change = Change("removed", "removed", name, direction, entry.type, None, None, None)
-                changes.append(mark_known(change, entry.conflicts))
+                changes.append(mark_known(change, entry.conflicts, doc.source))
     return changes
 
 

@@ -8,7 +8,12 @@ a name cell is followed by a type cell, not every fourth line.
 
 from __future__ import annotations
 
-from rtde_spec.spec.importers.tables import Table, is_heading
+import re
+
+from rtde_spec.spec.importers.tables import Table, check_rows, is_heading
+
+#: a paragraph standing for left-out rows
+_ELLIPSIS = re.compile(r"^\s*(…|\.\.\.)|\band more\b", re.I)
 
 
 def _cells(line: str) -> list[str] | None:
@@ -52,6 +57,7 @@ def read_tables(text: str, is_type: object = None) -> list[Table]:
             cells = []
             continue
         cells.extend((number, c) for c in got)
+        check_rows(len(cells) // 4, number)
     if in_table:
         close()
     return tables
@@ -64,10 +70,16 @@ def split_rows(table: Table, starts_row: object) -> Table:
     out = Table(table.heading, table.header, table.line)
     i = 0
     while i < len(flat):
-        if i + 1 < len(flat) and starts_row(flat[i][1], flat[i + 1][1]):
+        if _ELLIPSIS.search(flat[i][1]) and len(flat[i][1]) <= 60:
+            out.rows.append((flat[i][0], [flat[i][1]]))  # "… and more": a row of its own, reported
+            i += 1
+        elif i + 1 < len(flat) and starts_row(flat[i][1], flat[i + 1][1]):
             line, cells = flat[i][0], [flat[i][1], flat[i + 1][1]]
             i += 2
-            while i < len(flat) and not (i + 1 < len(flat) and starts_row(flat[i][1], flat[i + 1][1])):
+            while i < len(flat) and not (
+                (i + 1 < len(flat) and starts_row(flat[i][1], flat[i + 1][1]))
+                or (_ELLIPSIS.search(flat[i][1]) and len(flat[i][1]) <= 60)
+            ):
                 cells.append(flat[i][1])
                 i += 1
             out.rows.append((line, cells))

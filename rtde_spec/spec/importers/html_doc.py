@@ -1,14 +1,22 @@
 """The guide as an HTML page: tables read with the standard library's HTML parser.
 
 Headings (h1-h6) before a table say which direction it lists; a row's line is the
-line of its <tr> in the page source.
+line of its <tr> in the page source. The page is first reduced, in one linear pass, to
+the tags that matter here (every other tag, comment and stray `<` dropped), because
+html.parser rescans unclosed markup: `<table>` and 200k `<a` took two minutes, and
+`<![` ended in its own AssertionError.
 """
 
 from __future__ import annotations
 
+import re
 from html.parser import HTMLParser
 
-from rtde_spec.spec.importers.tables import Table
+from rtde_spec.errors import UsageError
+from rtde_spec.spec.importers.tables import Table, check_rows
+
+_KEEP = re.compile(r"</?(?:table|tr|td|th|h[1-6]|br|p|li|div)\b[^<>]*>", re.I)
+_TAG = re.compile(r"<[^<>]*>")
 
 _HEADINGS = {"h1", "h2", "h3", "h4", "h5", "h6"}
 
@@ -24,6 +32,7 @@ class _Reader(HTMLParser):
         self._row_line = 0
         self._cell: list[str] | None = None
         self._depth = 0  # nested tables are read as text of their cell
+        self._count = 0
 
     def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
         if tag in _HEADINGS:
@@ -69,6 +78,8 @@ class _Reader(HTMLParser):
                 self._table.header = self._row
             elif any(self._row):
                 self._table.rows.append((self._row_line, self._row))
+                self._count += 1
+                check_rows(self._count, self._row_line)
         self._row = None
 
     def handle_data(self, data: str) -> None:
@@ -78,8 +89,54 @@ class _Reader(HTMLParser):
             self._cell.append(data)
 
 
+def _drop_comments(text: str) -> str:
+    """Comments and CDATA/declarations out, newlines kept (lines stay right); linear in the text."""
+    out: list[str] = []
+    pos = 0
+    while True:
+        start = text.find("<!", pos)
+        if start < 0:
+            out.append(text[pos:])
+            return "".join(out)
+        out.append(text[pos:start])
+        end_mark = "-->" if text.startswith("<!--", start) else ">"
+        end = text.find(end_mark, start + 2)
+        stop = len(text) if end < 0 else end + len(end_mark)
+        out.append("\n" * text.count("\n", start, stop))
+        pos = stop
+
+
+def simplify(text: str) -> str:
+    """Only the tags a table reader needs, each well formed; other markup removed, lines kept."""
+
+    def tag(m: re.Match[str]) -> str:
+        if _KEEP.fullmatch(m.group(0)):
+            return m.group(0)
+        return "\n" * m.group(0).count("\n")
+
+    body = _TAG.sub(tag, _drop_comments(text))
+    return _escape(body)
+
+
+def _escape(body: str) -> str:
+    """A `<` that starts no kept tag is text."""
+    out: list[str] = []
+    pos = 0
+    for m in _KEEP.finditer(body):
+        out.append(body[pos : m.start()].replace("<", "&lt;"))
+        out.append(m.group(0))
+        pos = m.end()
+    out.append(body[pos:].replace("<", "&lt;"))
+    return "".join(out)
+
+
 def read_tables(text: str) -> list[Table]:
     reader = _Reader()
-    reader.feed(text)
-    reader.close()
+    try:
+        reader.feed(simplify(text))
+        reader.close()
+    except UsageError:
+        raise
+    except Exception as exc:  # html.parser's own assertion on markup it cannot read
+        raise UsageError(f"the HTML could not be read: {type(exc).__name__}: {exc}") from None
     return reader.tables

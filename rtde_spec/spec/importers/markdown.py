@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import re
 
-from rtde_spec.spec.importers.tables import Table
+from rtde_spec.spec.importers.tables import Table, check_rows
 
 _RULER = re.compile(r"^\s*\|?\s*:?-{3,}:?\s*(\|\s*:?-{3,}:?\s*)*\|?\s*$")
 
@@ -24,6 +24,7 @@ def read_tables(text: str) -> list[Table]:
     heading = ""
     lines = text.splitlines()
     current: Table | None = None
+    count = 0
     for number, line in enumerate(lines, start=1):
         stripped = line.strip()
         if stripped.startswith("#"):
@@ -41,4 +42,6 @@ def read_tables(text: str) -> list[Table]:
             tables.append(current)
         elif current is not None:
             current.rows.append((number, _split(stripped)))
+            count += 1
+            check_rows(count, number)
     return tables

@@ -61,6 +61,19 @@ class DocMember:
 
 
 @dataclass
+class TableReport:
+    """What one table of the document gave: rows read, fields kept, placeholder rows skipped."""
+
+    heading: str
+    direction: str
+    line: int
+    rows: int = 0
+    fields: int = 0
+    skipped: list[tuple[int, str]] = field(default_factory=list)  # (line, cell) of placeholder rows
+    names: list[str] = field(default_factory=list)  # the fields read from it
+
+
+@dataclass
 class Document:
     """A document as read: its format, the product line it speaks for, and its tables."""
 
@@ -70,6 +83,11 @@ class Document:
     line: str = ""  # the product line whose versions the document lists first
     fields: list[DocField] = field(default_factory=list)
     members: list[DocMember] = field(default_factory=list)
+    tables: list[TableReport] = field(default_factory=list)
+    edition: str | None = None  # the newest version the document speaks of (its text, or --edition)
+    #: spec fields a table that stops early (a placeholder row) leaves out: direction -> names
+    unlisted: dict[str, list[str]] = field(default_factory=dict)
+    remarks: list[str] = field(default_factory=list)  # what was read but is no change (blank/CB3-only cells)
 
     @property
     def interface(self) -> str:

@@ -101,6 +101,7 @@ def _member_changes(
             mark_known(
                 Change("changed", "availability", spec_member.name, where, ours, theirs, member.line),
                 spec_member.conflicts,
+                doc.source,
             )
         )
     leaves = _leaves(spec_member.fields)
@@ -110,7 +111,7 @@ def _member_changes(
         if match is None:
             change = Change("added", "added", row.name, where, None, _doc_type(row), row.line)
             change.extra["row"] = row
-            out.append(mark_known(change, spec_member.conflicts))
+            out.append(mark_known(change, spec_member.conflicts, doc.source))
             continue
         used.add(match)
         leaf = leaves[match]
@@ -127,13 +128,14 @@ def _member_changes(
             )
         for change in found:
             change.extra["row"] = row
-            out.append(mark_known(change, leaf.field.conflicts))
+            out.append(mark_known(change, leaf.field.conflicts, doc.source))
     for i, leaf in enumerate(leaves):
         if i not in used:
             out.append(
                 mark_known(
                     Change("removed", "removed", leaf.path, where, leaf.type, None, None),
                     leaf.field.conflicts,
+                    doc.source,
                 )
             )
     return out

@@ -2,30 +2,66 @@
 
 from __future__ import annotations
 
+import re
 from collections import Counter
 
 from rtde_spec.spec.importers.cells import Lines, parse_name, parse_versions, spans_in, versions_in_text
-from rtde_spec.spec.importers.model import DocField
+from rtde_spec.spec.importers.model import DocField, TableReport
 from rtde_spec.spec.importers.tables import Table
 
+#: a row standing for rows left out ("…", "... and more fields ...", "etc."): never a field
+_PLACEHOLDER = re.compile(r"…|\.\.\.|\band more\b|\betc\.?$|^\W*$", re.I)
 
-def field_rows(tables: list[Table], lines: Lines) -> list[DocField]:
+
+def is_placeholder(name_cell: str) -> bool:
+    """Whether a name cell holds no field name but a note that rows were left out."""
+    word = name_cell.strip()
+    return bool(_PLACEHOLDER.search(word)) or not re.match(r"[A-Za-z_]", word)
+
+
+def field_rows(tables: list[Table], lines: Lines, reports: list[TableReport] | None = None) -> list[DocField]:
+    """Every field row of the field tables; per table, what was read and skipped goes to `reports`."""
     out: list[DocField] = []
     for table in tables:
         direction = table.direction
         if not table.is_field_table or direction is None:
             continue
+        report = TableReport(table.heading, direction, table.line)
         for line, cells in table.rows:
-            if len(cells) < 2 or not cells[0].strip():
+            if not cells or not cells[0].strip():
+                continue
+            if len(cells) < 2 and not is_placeholder(cells[0]):
+                continue
+            report.rows += 1
+            if is_placeholder(cells[0]):
+                report.skipped.append((line, cells[0].strip()[:60]))
                 continue
             out.append(_field(cells, direction, line, lines))
+            report.fields += 1
+            report.names.append(out[-1].name)
+        if reports is not None:
+            reports.append(report)
     return out
+
+
+_VERSION_TOKEN = r"(\[\s*\d+\s*\.\.\s*\d+\s*\]|\d+\.\d+(\.\d+)*|/|,|;|and|cb3|e-series|polyscope[- ]x|sw)"
+_VERSIONISH = re.compile(rf"\s*({_VERSION_TOKEN}\s*)*", re.I)
+
+
+def _version_start(cells: list[str]) -> int:
+    """Where the version cells begin: the trailing cells that hold only versions (a comment of
+    several paragraphs comes as several cells in the text forms); at least after the comment."""
+    split = len(cells)
+    while split > 3 and _VERSIONISH.fullmatch(cells[split - 1]):
+        split -= 1
+    return max(split, min(len(cells), 3))
 
 
 def _field(cells: list[str], direction: str, line: int, lines: Lines) -> DocField:
     name, span, family = parse_name(cells[0])
-    comment = cells[2].strip() if len(cells) > 2 else ""
-    version = " ".join(c.strip() for c in cells[3:] if c.strip())
+    split = _version_start(cells)
+    comment = " ".join(c.strip() for c in cells[2:split] if c.strip())
+    version = " ".join(c.strip() for c in cells[split:] if c.strip())
     notes, rest = parse_versions(version, lines) if version else ([], "")
     if not version and comment:
         # an earlier edition merged the columns, or a cell is missing (e-Series safety_status)

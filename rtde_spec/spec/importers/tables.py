@@ -4,6 +4,21 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
+from rtde_spec.errors import UsageError
+
+#: a guide has a few hundred rows; more is not a guide, and is refused before it costs memory
+MAX_ROWS = 20_000
+#: bytes of a document read at most (UR's largest published pages are well under 2 MB)
+MAX_BYTES = 16 * 1024 * 1024
+
+
+def check_rows(count: int, line: int) -> None:
+    """Refuse a document once it has more table rows than any guide has."""
+    if count > MAX_ROWS:
+        raise UsageError(
+            f"more than {MAX_ROWS} table rows (at line {line}): not one of UR's interface documents"
+        )
+
 
 @dataclass
 class Table:

@@ -2,17 +2,24 @@
 
 ruamel.yaml's round-trip mode edits the parsed document and writes it back; only
 the entries an import changes are touched. Each changed entry gets the document
-in `sources`. Files are written beside the target and renamed into place.
+in `sources`. The edited text is first put into a copy of the spec tree, which must
+load, lint and generate (in memory); only then is the file replaced, atomically, with
+its mode kept. Removals are applied only when asked for.
 """
 
 from __future__ import annotations
 
+import io
 import os
 import re
+import shutil
+import stat
 import tempfile
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from rtde_spec.errors import RtdeSpecError, UsageError
 from rtde_spec.spec.importers import availability as av
 from rtde_spec.spec.importers.changes import Change
 from rtde_spec.spec.importers.model import DocField, DocLayoutField, Document
@@ -37,15 +44,73 @@ def _flow(data: dict[str, Any] | list[Any]) -> Any:
     return node
 
 
-def _replace(path: Path, yaml: Any, data: Any) -> None:
+#: more removals than this from one document is a document that does not cover the spec
+HANDFUL = 5
+
+
+def _dump(yaml: Any, data: Any) -> str:
+    buf = io.StringIO()
+    yaml.dump(data, buf)
+    return buf.getvalue()
+
+
+def _mode_for(path: Path) -> int:
+    """The file's own mode; for a new file, what the umask gives (mkstemp would make it 0600)."""
+    if path.exists():
+        return stat.S_IMODE(path.stat().st_mode)
+    mask = os.umask(0)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
+def replace_text(path: Path, text: str) -> None:
+    """Write beside `path` and rename into place, keeping its mode; a read-only file is refused."""
+    if path.exists() and (not os.access(path, os.W_OK) or not path.stat().st_mode & stat.S_IWUSR):
+        raise UsageError(f"{path} is read-only; nothing written")
+    mode = _mode_for(path)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
     try:
         with os.fdopen(fd, "w", encoding="utf-8") as out:
-            yaml.dump(data, out)
+            out.write(text)
+        os.chmod(tmp, mode)
         os.replace(tmp, path)
     except BaseException:
         Path(tmp).unlink(missing_ok=True)
         raise
+
+
+def check_tree(spec_dir: Path, rel: str, text: str) -> None:
+    """Load, lint and generate a copy of the spec tree with `rel` replaced by `text`; raise if any fails."""
+    from rtde_spec.spec.bundle import load_bundle
+
+    with tempfile.TemporaryDirectory(prefix="rtde-spec-import-") as tmp:
+        copy = Path(tmp) / "spec"
+        shutil.copytree(spec_dir, copy, ignore=shutil.ignore_patterns(".*"))
+        (copy / rel).write_text(text, encoding="utf-8")
+        try:
+            bundle = load_bundle(copy)
+            try:
+                from codegen.generate import generate
+            except ImportError:  # an installed package without the generator: loading and lint only
+                return
+            generate(bundle)
+        except RtdeSpecError as exc:
+            raise UsageError(
+                f"the import would leave a spec that does not load; nothing written:\n{exc}"
+            ) from None
+        except Exception as exc:
+            raise UsageError(
+                f"the import would leave a spec codegen cannot generate; nothing written: "
+                f"{type(exc).__name__}: {exc}"
+            ) from None
+
+
+@dataclass
+class WriteResult:
+    """What --write did: the changes written, and the removals held back (and why)."""
+
+    written: list[Change] = field(default_factory=list)
+    held: list[tuple[Change, str]] = field(default_factory=list)
 
 
 def _add_source(entry: Any, source: str) -> None:
@@ -229,25 +294,41 @@ def _apply_primary(change: Change, data: Any, doc: Document, spec: Spec) -> bool
     return True
 
 
-def write_changes(changes: list[Change], doc: Document, spec: Spec, spec_dir: Path) -> list[Change]:
-    """Apply the changes that are not known conflicts; return those written."""
+def write_changes(
+    changes: list[Change], doc: Document, spec: Spec, spec_dir: Path, allow_removals: bool = False
+) -> WriteResult:
+    """Apply the changes that are not known conflicts to a copy, check it, then replace the file.
+
+    Removals need `allow_removals`; more than HANDFUL of them without it refuses the whole write.
+    """
     rel = "primary/interface.yaml" if doc.interface == "primary" else "rtde/fields.yaml"
     path = spec_dir / rel
+    result = WriteResult()
+    removals = [c for c in changes if c.known is None and c.kind == "removed"]
+    if removals and not allow_removals:
+        if len(removals) > HANDFUL:
+            raise UsageError(
+                f"the document would remove {len(removals)} fields (more than {HANDFUL}): it does not "
+                "cover the spec (an abridged copy, a table that stops early, another edition); nothing "
+                "written. Pass --allow-removals if it really drops them"
+            )
+        result.held += [(c, "a removal: pass --allow-removals to apply it") for c in removals]
     yaml = _yaml()
     data = yaml.load(path.read_text(encoding="utf-8"))
-    written = []
     for change in changes:
-        if change.known is not None:
+        if change.known is not None or (change.kind == "removed" and not allow_removals):
             continue
         if doc.interface == "primary":
             if _apply_primary(change, data, doc, spec):
-                written.append(change)
+                result.written.append(change)
         else:
             _apply_rtde(change, data, doc, spec)
-            written.append(change)
-    if written:
-        _replace(path, yaml, data)
-    return written
+            result.written.append(change)
+    if result.written:
+        text = _dump(yaml, data)
+        check_tree(spec_dir, rel, text)
+        replace_text(path, text)
+    return result
 
 
 def write_overlay(changes: list[Change], doc: Document, spec: Spec, path: Path) -> int:
@@ -264,8 +345,23 @@ def write_overlay(changes: list[Change], doc: Document, spec: Spec, path: Path) 
 
     out = CommentedMap(data)
     out.yaml_set_start_comment(f"Fields {doc.path} adds to the built-in spec (rtde-spec spec import -o)")
+    text = _dump(yaml, out)
+    _check_overlay(text, spec)
     path.parent.mkdir(parents=True, exist_ok=True)
-    if not path.exists():
-        path.touch()
-    _replace(path, yaml, out)
+    replace_text(path, text)
     return count
+
+
+def _check_overlay(text: str, spec: Spec) -> None:
+    """The overlay must load as --extra-fields loads it; checked before anything is written."""
+    from rtde_spec.spec.loader import load_fields_file
+
+    with tempfile.TemporaryDirectory(prefix="rtde-spec-overlay-") as tmp:
+        probe = Path(tmp) / "overlay.yaml"
+        probe.write_text(text, encoding="utf-8")
+        try:
+            load_fields_file(probe, spec, spec.fields)
+        except RtdeSpecError as exc:
+            raise UsageError(
+                f"the overlay would not load with --extra-fields; nothing written:\n{exc}"
+            ) from None

@@ -1,0 +1,101 @@
+"""spec import --write and -o cannot damage the spec: checked copy first, atomic replace, modes kept,
+removals only when asked, overlays that load with --extra-fields."""
+
+from __future__ import annotations
+
+import difflib
+import json
+import os
+import shutil
+import stat
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+HEAD = "## Robot Controller Outputs\n\n| Name | Type | Comment | Introduced in version |\n|---|---|---|---|\n"
+
+
+def _cli(*args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [sys.executable, "-m", "rtde_spec.cli", *args], capture_output=True, text=True, cwd=ROOT, timeout=300
+    )
+
+
+@pytest.fixture
+def tree(tmp_path: Path) -> Path:
+    spec = tmp_path / "spec"
+    shutil.copytree(ROOT / "spec", spec)
+    return spec
+
+
+def _doc(tmp_path: Path, rows: str, placeholder: bool = True) -> Path:
+    path = tmp_path / "guide.md"
+    path.write_text(HEAD + rows + ("| … and more fields … | | | |\n" if placeholder else ""))
+    return path
+
+
+def test_write_keeps_mode_and_touches_only_what_changed(tree: Path, tmp_path: Path) -> None:
+    fields = tree / "rtde/fields.yaml"
+    os.chmod(fields, 0o644)
+    before = fields.read_text()
+    doc = _doc(tmp_path, "| actual_tcp_jerk | VECTOR6D | Actual TCP jerk | 5.30.0 |\n")
+    result = _cli("spec", "import", str(doc), "--spec-dir", str(tree), "--write")
+    assert result.returncode == 0, result.stderr
+    assert "wrote 1 of 1 changes" in result.stderr
+    assert stat.S_IMODE(fields.stat().st_mode) == 0o644  # was 0600 after the temp-file rename
+    diff = [d for d in difflib.ndiff(before.splitlines(), fields.read_text().splitlines()) if d[:1] in "+-"]
+    assert diff and all(d.startswith("+ ") for d in diff), diff  # nothing else edited or lost
+    assert any("actual_tcp_jerk" in d for d in diff)
+    assert not list(tree.rglob(".fields.yaml.*"))  # no temp file left
+
+
+def test_a_read_only_spec_file_is_refused(tree: Path, tmp_path: Path) -> None:
+    fields = tree / "rtde/fields.yaml"
+    os.chmod(fields, 0o444)
+    before = fields.read_bytes()
+    doc = _doc(tmp_path, "| actual_tcp_jerk | VECTOR6D | Actual TCP jerk | 5.30.0 |\n")
+    result = _cli("spec", "import", str(doc), "--spec-dir", str(tree), "--write")
+    assert result.returncode == 2 and "read-only" in result.stderr
+    assert fields.read_bytes() == before
+
+
+def test_an_edit_that_would_break_the_spec_writes_nothing(tree: Path, tmp_path: Path) -> None:
+    fields = tree / "rtde/fields.yaml"
+    before = fields.read_bytes()
+    doc = _doc(tmp_path, "| mystery_field | QUATERNION | A type no spec knows | 5.30.0 |\n")
+    result = _cli("spec", "import", str(doc), "--spec-dir", str(tree), "--write")
+    assert result.returncode == 2, result.stderr
+    assert "would leave a spec that does not load" in result.stderr and "QUATERNION" in result.stderr
+    assert "Traceback" not in result.stderr
+    assert fields.read_bytes() == before
+
+
+def test_many_removals_are_refused_without_allow_removals(tree: Path, tmp_path: Path) -> None:
+    fields = tree / "rtde/fields.yaml"
+    before = fields.read_bytes()
+    rows = "| timestamp | DOUBLE | Time elapsed since the controller was started [s] | |\n"
+    doc = _doc(tmp_path, rows, placeholder=False)  # a 2-row table that claims to be the whole list
+    result = _cli("spec", "import", str(doc), "--spec-dir", str(tree), "--write")
+    assert result.returncode == 2 and "would remove" in result.stderr and "--allow-removals" in result.stderr
+    assert fields.read_bytes() == before
+    # with a placeholder row the table says it stops early: nothing is removed, the rest is written
+    doc = _doc(tmp_path, rows)
+    result = _cli("spec", "import", str(doc), "--spec-dir", str(tree), "--write")
+    assert result.returncode == 0 and "wrote 0 of 0 changes" in result.stderr
+
+
+def test_overlay_loads_with_extra_fields_and_has_an_ordinary_mode(tmp_path: Path) -> None:
+    doc = _doc(tmp_path, "| actual_tcp_jerk | VECTOR6D | Actual TCP jerk | 5.30.0 |\n")
+    overlay = tmp_path / "overlay.yaml"
+    result = _cli("spec", "import", str(doc), "--spec-dir", str(ROOT / "spec"), "-o", str(overlay))
+    assert result.returncode == 0, result.stderr
+    mask = os.umask(0)
+    os.umask(mask)
+    assert stat.S_IMODE(overlay.stat().st_mode) == 0o666 & ~mask
+    listed = _cli("--extra-fields", str(overlay), "fields", "--controller", "5.30.0", "--json")
+    assert listed.returncode == 0, listed.stderr
+    names = {f["name"] for f in json.loads(listed.stdout)}
+    assert "actual_tcp_jerk" in names
