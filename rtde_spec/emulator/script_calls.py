@@ -42,7 +42,7 @@ DIGITAL = {
     "set_tool_digital_out": ("tool", 2),
 }
 ANALOG = {"set_standard_analog_out": 2, "set_analog_out": 2}
-MOVES = {"movej", "movel", "movep", "servoj", "speedj", "speedl"}
+MOVES = {"movej", "movel", "movep", "movec", "servoj", "servoc", "speedj", "speedl"}
 WAITS = MOVES | {"stopj", "stopl", "sleep", "sync", "halt"}  # the commands a program waits on
 
 
@@ -277,6 +277,7 @@ COMMANDS: dict[str, Command] = {
     "movej": movej,
     "movel": movel,
     "movep": movel,
+    "servoc": movel,  # a blended linear move to the pose, as movep
     "speedj": speedj,
     "speedl": speedl,
     "servoj": servoj,
