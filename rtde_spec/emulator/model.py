@@ -234,6 +234,8 @@ class ControllerModel(RobotModes):
 
     def _end_program(self) -> None:
         program, self.program = self.program, None
+        if program is not None:
+            program.stop()  # its threads and sockets end with it
         motion = self.arm.motion
         if motion is not None and (motion.holds or program is None or program.fault is not None):
             self.arm.stop(getattr(motion, "a", 1.4))  # a held speed or a failed move decelerates

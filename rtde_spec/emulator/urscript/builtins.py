@@ -17,6 +17,7 @@ from rtde_spec.emulator import kinematics as kin
 from rtde_spec.emulator import script_calls
 from rtde_spec.emulator.interfaces import Runner
 from rtde_spec.emulator.script_calls import Pose, number, six, type_name
+from rtde_spec.emulator.urscript import sockets
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
 from rtde_spec.errors import RtdeSpecError
 
@@ -24,6 +25,8 @@ Args = list[Any]
 Kwargs = dict[str, Any]
 Builtin = Callable[[Runner, Stmt, Args, Kwargs], Any]
 BUILTINS: dict[str, Builtin] = {}
+WAITING: dict[str, Callable[[Runner, Stmt, Args, Kwargs], sockets.Waiting]] = dict(sockets.READERS)
+WAITING["socket_open"] = sockets.socket_open
 
 
 def builtin(*names: str) -> Callable[[Builtin], Builtin]:
@@ -37,7 +40,7 @@ def builtin(*names: str) -> Callable[[Builtin], Builtin]:
 
 def names() -> set[str]:
     """Every name a program may call without defining it."""
-    return set(BUILTINS) | set(script_calls.COMMANDS) | set(script_calls.FUNCTIONS)
+    return set(BUILTINS) | set(WAITING) | set(script_calls.COMMANDS) | set(script_calls.FUNCTIONS)
 
 
 def call(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
@@ -119,6 +122,25 @@ def _watchdog(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
 @builtin("get_steptime")
 def _steptime(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> float:
     return 1.0 / float(getattr(runner.robot, "base_hz", 500))
+
+
+# --- motions the emulator approximates ---------------------------------------------------------
+
+
+def movec(program: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> script_calls.WaitFactory:
+    """movec: approximated as a linear move to pose_to (the arc through pose_via is not modelled)."""
+    arm = program.robot.arm
+    target = _arg(stmt, args, kwargs, 1, "pose_to")
+    a = number(stmt, _arg(stmt, args, kwargs, 2, "a", script_calls.MOVEL_A), "a")
+    v = number(stmt, _arg(stmt, args, kwargs, 3, "v", script_calls.MOVEL_V), "v")
+    r = number(stmt, _arg(stmt, args, kwargs, 4, "r", 0.0), "r")
+    pose = target if isinstance(target, Pose) else kin.forward(arm.model, six(stmt, target, "q"), arm.tcp)
+    return script_calls._start(
+        program, stmt, script_calls.LinearMove(arm.model, arm.tcp, arm.state, pose, a, v, 0.0), r
+    )
+
+
+script_calls.COMMANDS["movec"] = movec
 
 
 # --- poses ------------------------------------------------------------------------------------
@@ -203,6 +225,13 @@ def _history(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
     return Pose(arm.pose()) if stmt.name == "get_target_waypoint" else [float(v) for v in arm.state.q]
 
 
+BUILTINS.update(sockets.SENDERS)
+BUILTINS["socket_close"] = sockets.socket_close
+BUILTINS["get_joint_positions"] = lambda runner, stmt, args, kwargs: [
+    float(v) for v in runner.robot.arm.state.q
+]
+
+
 @builtin("is_steady")
 def _steady(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> bool:
     arm = runner.robot.arm
@@ -270,26 +299,15 @@ def _math(fn: Callable[..., Any], count: int) -> Builtin:
 
 for _name, _fn, _count in (
     ("pow", math.pow, 2), ("acos", math.acos, 1), ("asin", math.asin, 1), ("atan", math.atan, 1),
-    ("log", math.log, 2), ("fabs", math.fabs, 1), ("floor", math.floor, 1),
-    ("ceil", math.ceil, 1), ("round", round, 1),
+    ("log", lambda b, f: math.log(f, b), 2), ("floor", math.floor, 1), ("ceil", math.ceil, 1),
 ):  # fmt: skip
     BUILTINS[_name] = _math(_fn, _count)
 
 
-@builtin("abs")
-def _abs(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
-    value = args[0]
-    return (
-        abs(value)
-        if isinstance(value, int) and not isinstance(value, bool)
-        else abs(number(stmt, value, "x"))
-    )
-
-
-@builtin("get_list_length", "length")
+@builtin("get_list_length")
 def _length(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> int:
     value = args[0]
-    if not isinstance(value, (list, str)):
+    if not isinstance(value, list):
         raise ScriptFault(f"{stmt.name}: not a list", stmt.line, 1)
     return len(value)
 

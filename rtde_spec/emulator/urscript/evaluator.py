@@ -154,6 +154,10 @@ class Evaluator:
             if function is not None:
                 result = yield from self.invoke(function, values, expr)
                 return result.value if isinstance(result, Return) else None
+            waiting = builtins.WAITING.get(expr.value)
+            if waiting is not None:
+                stmt = Stmt("call", expr.line, "", expr.value, expr, expr.column)
+                return (yield from waiting(self, stmt, values, kwargs))  # type: ignore[arg-type]
             command = script_calls.COMMANDS.get(expr.value)
             if command is not None:
                 stmt = Stmt("call", expr.line, "", expr.value, expr, expr.column)
@@ -235,6 +239,10 @@ class Evaluator:
             wait = command(self, stmt, values, kwargs)  # type: ignore[arg-type]
             if wait is not None:
                 yield from wait(blends_into_move(following))
+            return None
+        waiting = builtins.WAITING.get(stmt.name)
+        if waiting is not None:
+            yield from waiting(self, stmt, values, kwargs)  # type: ignore[arg-type]
             return None
         builtins.call(self, stmt, values, kwargs)  # type: ignore[arg-type]
         return None

@@ -24,7 +24,7 @@ from rtde_spec.emulator import script_calls
 from rtde_spec.emulator.events import ScriptEvent
 from rtde_spec.emulator.interfaces import Robot, Wait
 from rtde_spec.emulator.motion import MotionError
-from rtde_spec.emulator.urscript import builtins
+from rtde_spec.emulator.urscript import builtins, sockets
 from rtde_spec.emulator.urscript.checker import check
 from rtde_spec.emulator.urscript.evaluator import Evaluator, Frame, Return, Steps, runtime_text
 from rtde_spec.emulator.urscript.nodes import Script, ScriptFault, Stmt
@@ -75,7 +75,7 @@ class Program(Evaluator):
         self.steps_run = 0
         self._epoch = 0
         self._deadline = 0.0
-        check(script, builtins.names(), script_calls.WAITS)
+        check(script, builtins.names(), script_calls.WAITS | set(builtins.WAITING))
         main = _Thread(0, self.name, self._main())
         self.threads: dict[int, _Thread] = {0: main}
         self.current = main
@@ -121,7 +121,13 @@ class Program(Evaluator):
             ScriptEvent("runtime_exception", fault.text, fault.line, fault.column, program=self.name)
         )
 
+    def stop(self) -> None:
+        """End the program and its threads (stop program, a new program, the end of main)."""
+        self.finished = True
+        self._end_threads()
+
     def _end_threads(self) -> None:
+        sockets.close_all(self)
         for thread in list(self.threads.values()):
             if thread is not self.current:
                 _close(thread)
