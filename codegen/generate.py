@@ -25,6 +25,7 @@ from .emit_primary_docs import emit_primary_doc
 from .emit_realtime import emit_realtime
 from .emit_rtde import emit_rtde_models, emit_rtde_structs
 from .emit_types import emit_types
+from .emit_urscript import emit_urscript
 from .render import PY_HEADER
 
 GEN = "rtde_spec/_generated"
@@ -55,4 +56,5 @@ def generate(spec: Spec) -> dict[str, str]:
         **emit_dashboard(),
         **emit_realtime(catalogue),
         **emit_external(prims),
+        **emit_urscript(),
     }
