@@ -88,7 +88,7 @@ def test_a_thread_that_never_waits_is_the_controllers_runtime_error() -> None:
     _, events = run(f"def prog():\n{busy}  run busy()\n  while True:\n    sync()\n  end\nend")
     [(text, line, _)] = faults(events)
     assert "Runtime is too much behind" in text and line == 4
-    assert time.perf_counter() - started < 2
+    assert time.perf_counter() - started < 10  # steps, not minutes
 
 
 def test_the_register_functions_are_the_rtde_servers_registers() -> None:
@@ -167,7 +167,7 @@ def test_programs_that_would_take_the_machine_end_in_a_runtime_error_at_once(scr
     model, events = run(script, steps=100)
     [(got, _, _)] = faults(events)
     assert text in got and model.program is None
-    assert time.perf_counter() - started < 2
+    assert time.perf_counter() - started < 10  # steps, not minutes
 
 
 def test_parsing_is_linear_and_a_huge_program_is_refused() -> None:
@@ -177,8 +177,9 @@ def test_parsing_is_linear_and_a_huge_program_is_refused() -> None:
         parse(text)
         return time.perf_counter() - started
 
-    small, large = call_over(8_000), call_over(64_000)
-    assert large < 2.0 and large < small * 16  # 8x the lines, not 64x the time
+    small = min(call_over(8_000) for _ in range(3))
+    large = min(call_over(64_000) for _ in range(3))
+    assert large < small * 20  # 8x the lines: about 8x the time, where quadratic parsing took 64x
     with pytest.raises(ScriptFault, match="syntax_error_on_line:1:program over"):
         parse("x = 1\n" * (2 << 20))
 

@@ -8,6 +8,7 @@ ScriptFaults at the line, so a program a controller would refuse is refused here
 from __future__ import annotations
 
 import math
+import operator
 from collections.abc import Callable
 from typing import Any
 
@@ -60,19 +61,21 @@ INT_MIN, INT_MAX = -(1 << 31), (1 << 31) - 1  # URScript's int is 32 bits
 MAX_TEXT = 1 << 20  # characters of one string (a program doubling a text must not take the memory)
 
 
+_OPS: dict[str, Callable[[Any, Any], Any]] = {
+    "+": operator.add,
+    "-": operator.sub,
+    "*": operator.mul,
+    "/": operator.truediv,
+    "%": operator.mod,
+}
+
+
 def arithmetic(op: str, left: Any, right: Any, line: int, column: int) -> Any:
     if _is_number(left) and _is_number(right):
         if op in "/%" and right == 0:
             raise ScriptFault("Division by zero", line, column)
-        ops: dict[str, Callable[[Any, Any], Any]] = {
-            "+": lambda x, y: x + y,
-            "-": lambda x, y: x - y,
-            "*": lambda x, y: x * y,
-            "/": lambda x, y: x / y,
-            "%": lambda x, y: x % y,
-        }
         try:
-            result = ops[op](left, right)
+            result = _OPS[op](left, right)
         except OverflowError:
             raise ScriptFault("Number too large", line, column) from None
         if isinstance(result, int) and not isinstance(result, bool) and not INT_MIN <= result <= INT_MAX:

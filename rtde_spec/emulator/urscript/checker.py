@@ -18,8 +18,48 @@ def check(script: Script, builtins: Collection[str], waits: Collection[str] = ()
     """Raise the first compile error of `script`, in program order. `waits`: built-ins that may
     wait (motions, sleep, sync), marked as a user call is."""
     checker = _Checker(script, builtins, waits)
+    checker.waiting = _waiting_functions(script, waits)
     for body in [script.main, *(f.body for f in script.functions.values())]:
         checker.body(body)
+
+
+def _waiting_functions(script: Script, waits: Collection[str]) -> set[str]:
+    """The user functions that may wait: calling a waiting built-in, join, halt, or one of these."""
+    calls: dict[str, set[str]] = {}
+    waiting: set[str] = set()
+    for name, function in script.functions.items():
+        found: set[str] = set()
+        if _walk(function.body, found, waits):
+            waiting.add(name)
+        calls[name] = found
+    changed = True
+    while changed:  # to a fixed point over the call graph: linear in functions x rounds
+        changed = False
+        for name, called in calls.items():
+            if name not in waiting and called & waiting:
+                waiting.add(name)
+                changed = True
+    return waiting
+
+
+def _walk(body: list[Stmt], found: set[str], waits: Collection[str]) -> bool:
+    """Collect the names `body` calls into `found`; True if it calls a waiting built-in itself."""
+    direct = False
+    for stmt in body:
+        if stmt.kind in ("join", "halt"):
+            direct = True
+        exprs = [stmt.expr, *stmt.index, *(b.cond for b in stmt.branches)]
+        stack = [e for e in exprs if e is not None]
+        while stack:
+            expr = stack.pop()
+            if expr.kind == "call":
+                found.add(expr.value)
+                direct = direct or expr.value in waits
+            stack.extend(expr.items)
+            stack.extend(e for _, e in expr.kwargs)
+        for branch in stmt.branches:
+            direct = _walk(branch.body, found, waits) or direct
+    return direct
 
 
 class _Checker:
@@ -27,6 +67,7 @@ class _Checker:
         self.functions = script.functions
         self.builtins = builtins
         self.waits = waits
+        self.waiting: set[str] = set()  # user functions that may wait
 
     def body(self, body: list[Stmt]) -> None:
         for stmt in body:
@@ -39,7 +80,7 @@ class _Checker:
                 self.body(branch.body)
 
     def expr(self, expr: Expr, line: int) -> bool:
-        """Check `expr` and everything in it; True (and marked) if it may call a user function."""
+        """Check `expr` and everything in it; True (and marked) if evaluating it may wait."""
         user = False
         for item in expr.items:
             user = self.expr(item, line) or user
@@ -57,7 +98,7 @@ class _Checker:
                         where,
                         expr.column,
                     )
-                user = True
+                user = user or expr.value in self.waiting
             elif expr.value not in self.builtins:
                 raise ScriptFault(f"compile_error_name_not_found:{expr.value}", where, expr.column)
             else:

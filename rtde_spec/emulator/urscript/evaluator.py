@@ -201,7 +201,13 @@ class Evaluator:
             return builtins.field(values[0], expr.value, line, column)
         if kind == "call":
             function = self.script.functions.get(expr.value)
-            if function is not None:  # reached only from `value` for a call the checker did not mark
+            if function is not None:  # one that never waits (the checker says): run to its end now
+                steps = self.invoke(function, values, expr)
+                try:
+                    next(steps)
+                except StopIteration as done:
+                    return done.value.value if isinstance(done.value, Return) else None
+                steps.close()
                 raise ScriptFault(f"{expr.value}() waits: not in this expression", line, column)
             stmt = Stmt("call", line, "", expr.value, expr, column)
             return builtins.call(self, stmt, values, kwargs)  # type: ignore[arg-type]
@@ -222,6 +228,22 @@ class Evaluator:
             return (yield from self.block(function.body, frame))
         finally:
             self._depth -= 1
+
+    def call_now(self, stmt: Stmt, frame: Frame) -> None:
+        """A call as a statement that cannot wait (the checker says): a user function, a command
+        such as textmsg, or a function whose value nobody keeps."""
+        expr = stmt.expr
+        assert expr is not None
+        values = [self.value(e, frame) for e in expr.items]
+        kwargs = {k: self.value(e, frame) for k, e in expr.kwargs}
+        command = script_calls.COMMANDS.get(stmt.name)
+        if command is not None and stmt.name not in self.script.functions:
+            command(self, stmt, values, kwargs)  # type: ignore[arg-type]
+            return
+        if stmt.name in self.script.functions:
+            self.combine(expr, values, kwargs)
+            return
+        builtins.call(self, stmt, values, kwargs)  # type: ignore[arg-type]
 
     def call_statement(self, stmt: Stmt, frame: Frame, following: Stmt | None) -> Steps:
         """A call as a statement: a user function, a command that may wait, or a value dropped."""

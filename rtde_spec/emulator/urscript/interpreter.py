@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 from enum import Enum
 from typing import Any
 
-from rtde_spec.emulator import script_calls
+from rtde_spec.emulator import script_calls, urscript_ops
 from rtde_spec.emulator.events import ScriptEvent
 from rtde_spec.emulator.interfaces import Robot, Wait
 from rtde_spec.emulator.motion import MotionError
@@ -71,7 +71,7 @@ class Program(Evaluator):
         self.clock = 0.0
         self.finished = False
         self.fault: ScriptFault | None = None
-        self.cpu = 0.0  # interpreter seconds spent, all steps (benchmarks report it per step)
+        self.cpu = 0.0  # interpreter CPU seconds (its thread's), all steps: benchmarks report it per step
         self.steps_run = 0
         self._epoch = 0
         self._deadline = 0.0
@@ -86,7 +86,7 @@ class Program(Evaluator):
     def advance(self, dt: float = 0.0) -> None:
         if self.finished:
             return
-        started = time.perf_counter()
+        started, cpu = time.perf_counter(), time.thread_time()
         self.clock += dt
         self._epoch += 1
         self.steps_run += 1
@@ -112,7 +112,7 @@ class Program(Evaluator):
                 self._end_threads()
             for key in [k for k, t in self.threads.items() if t.done]:
                 del self.threads[key]
-            self.cpu += time.perf_counter() - started
+            self.cpu += time.thread_time() - cpu
 
     def fail(self, fault: ScriptFault) -> None:
         self.finished, self.fault = True, fault
@@ -172,6 +172,13 @@ class Program(Evaluator):
         for i, stmt in enumerate(body):
             self._count(stmt)
             try:
+                expr = stmt.expr
+                if stmt.kind == "assign" and expr is not None and not expr.user:  # the common case, at once
+                    self.assign(stmt, frame, self.value(expr, frame))
+                    continue
+                if stmt.kind == "call" and expr is not None and expr.kind == "call" and not expr.user:
+                    self.call_now(stmt, frame)  # a call that cannot wait, at once
+                    continue
                 signal = yield from self._statement(stmt, frame, body[i + 1] if i + 1 < len(body) else None)
             except (ScriptFault, _Killed, GeneratorExit):
                 raise
@@ -212,7 +219,15 @@ class Program(Evaluator):
             return None
         if kind == "if":
             for branch in stmt.branches:
-                if branch.cond is None or (yield from self.condition(branch, frame)):
+                cond = branch.cond
+                if cond is None:
+                    return (yield from self._block(branch.body, frame))
+                if not cond.user:
+                    value = self.value(cond, frame)
+                    taken = urscript_ops.truth(value, "a condition", branch.line, branch.column)
+                else:
+                    taken = yield from self.condition(branch, frame)
+                if taken:
                     return (yield from self._block(branch.body, frame))
             return None
         if kind == "while":
