@@ -120,9 +120,7 @@ def run(seconds: float) -> bool:
         emu.wait(10)
     missed = sum(r["missed"] for r in rows)
     reader_p99 = max(r["p99_ms"] for r in rows)
-    print(
-        f"ur_rtde control script in the emulator: servoJ at 500 Hz + 4 RTDE readers x 58 fields, {seconds:g} s"
-    )
+    print(f"ur_rtde's control script in the emulator: servoJ at 500 Hz + 4 RTDE readers, {seconds:g} s")
     print(f"  servoJ commands sent: {stream['sent']} ({stream['rate']:.0f}/s); last target followed to "
           f"{stream['error']:.2e} rad")  # fmt: skip
     print(f"  program running at the end: {stats['running']}, with {stats['threads']} threads")
