@@ -190,3 +190,22 @@ def test_continuation_lines_and_statements_side_by_side_as_ur_rtde_sends_them() 
         '  c = a +\n    b[1] * 3\n  p = p[1, 2, 3, 0, 0, 0]\n  p[0] = p[0] + 1\n  textmsg(c, " ", p[0])\nend'
     )
     assert not faults(events) and said(events) == ["6 2"]
+
+
+@pytest.mark.parametrize(("action", "paused", "stopped"), [("stop", False, True), ("pause", True, False)])
+def test_rtde_set_watchdog_acts_when_the_client_goes_silent(action: str, paused: bool, stopped: bool) -> None:
+    model = ControllerModel("5.15.0")
+    model.run_script(
+        f'rtde_set_watchdog("input_int_register_24", 10, "{action}")\nwhile True:\n  sync()\nend'
+    )
+    for step in range(200):  # 0.4 s with the client writing every 20 ms: nothing happens
+        if step % 10 == 0:
+            model.apply_inputs({"input_int_register_24": step})
+        model.tick(model.step + 1)
+    assert model.program is not None and not model.paused
+    for _ in range(60):  # then silence: past 0.1 s the watchdog acts
+        model.tick(model.step + 1)
+    events = [(e.kind, e.text) for e in model.drain_events()]
+    assert model.paused is paused and (model.program is None) is stopped
+    text = "RTDE input watchdog: input_int_register_24 not written at 10 Hz"
+    assert (("runtime_exception", text) in events) is stopped

@@ -535,8 +535,7 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'since': {'cb3': '3.3.0', 'e-series': '5.0.0'},
                 'checked': False,
                 'doc': 'Act (ignore, pause, stop) when an RTDE input is not written at '
-                       'min_frequency',
-                'emulation': 'recorded; the action is not yet taken'},
+                       'min_frequency'},
                {'name': 'socket_open',
                 'section': 'interfaces',
                 'params': [{'name': 'address'},

@@ -110,6 +110,7 @@ class ControllerModel(RobotModes):
         self.paused = False
         self.loaded: str | None = None  # a program the dashboard loaded, run by play()
         self.events: deque[ScriptEvent] = deque(maxlen=MAX_EVENTS)
+        self.inputs_seen: dict[str, float] = {}  # RTDE input name -> model time it was last written
         self._published: tuple[Any, ...] = ()
         self._limits_checked = -1  # the arm revision whose joints were last checked against the limits
         self.step = 0
@@ -256,6 +257,8 @@ class ControllerModel(RobotModes):
     def apply_inputs(self, inputs: Mapping[str, Any]) -> None:
         """A data package from a client: read-backs, then what the outputs reflect."""
         values = self.values
+        for name in inputs:
+            self.inputs_seen[name] = self.time  # for a program's rtde_set_watchdog
         for name, value in inputs.items():
             if name in values and name not in self.functions:
                 values[name] = value  # input registers and the like read back as outputs

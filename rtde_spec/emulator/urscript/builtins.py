@@ -116,7 +116,13 @@ def _watchdog(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
     action = _arg(stmt, args, kwargs, 2, "action", "pause")
     if not isinstance(name, str) or action not in ("ignore", "pause", "stop"):
         raise ScriptFault(f"{stmt.name}: needs an input name and ignore, pause or stop", stmt.line, 1)
-    runner.robot.values.setdefault("_watchdogs", {})[name] = (hz, action)
+    if hz <= 0:
+        raise ScriptFault(f"{stmt.name}: min_frequency must be above 0", stmt.line, 1)
+    settings_of(runner).setdefault("watchdogs", {})[name] = (
+        hz,
+        action,
+        float(getattr(runner.robot, "time", 0.0)),
+    )
 
 
 @builtin("get_steptime")
@@ -188,9 +194,19 @@ def _interpolate(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose
 # --- the arm's state, settings and modes --------------------------------------------------------
 
 
+def settings_of(runner: Runner) -> dict[str, Any]:
+    """What a program set that no RTDE output shows (modes, watchdogs): kept with the program."""
+    settings = getattr(runner, "settings", None)
+    if settings is None:
+        settings = {}
+        runner.settings = settings  # type: ignore[attr-defined]
+    return settings
+
+
 def _values(name: str, default: Any) -> Builtin:
     def read(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
-        value = runner.robot.values.get(name, default)
+        where = settings_of(runner) if name.startswith("_") else runner.robot.values
+        value = where.get(name, default)
         return [float(v) for v in value] if isinstance(value, (tuple, list)) else value
 
     return read
@@ -259,7 +275,7 @@ def _contact(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> int:
 
 def _mode(name: str, value: Any) -> Builtin:
     def set_mode(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
-        runner.robot.values[name] = value
+        settings_of(runner)[name] = value
         if name == "_freedrive" and value:
             runner.robot.arm.halt()
 

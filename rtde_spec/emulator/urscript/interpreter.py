@@ -92,6 +92,7 @@ class Program(Evaluator):
         self.steps_run += 1
         self._deadline = started + STEP_SECONDS
         try:
+            self._watchdogs()
             for thread in list(self.threads.values()):
                 if thread.done:
                     continue
@@ -113,6 +114,25 @@ class Program(Evaluator):
             for key in [k for k, t in self.threads.items() if t.done]:
                 del self.threads[key]
             self.cpu += time.thread_time() - cpu
+
+    def _watchdogs(self) -> None:
+        """rtde_set_watchdog: an RTDE input not written within 1/min_frequency s pauses or stops."""
+        watchdogs = getattr(self, "settings", {}).get("watchdogs")
+        if not watchdogs or self.finished:
+            return
+        now = float(getattr(self.robot, "time", 0.0))
+        seen = getattr(self.robot, "inputs_seen", {})
+        for name, (hz, action, since) in watchdogs.items():
+            if action == "ignore" or now - max(seen.get(name, since), since) <= 1.0 / hz:
+                continue
+            text = f"RTDE input watchdog: {name} not written at {hz:g} Hz"
+            if action == "stop":
+                raise ScriptFault(text, 0, 0)
+            pause = getattr(self.robot, "pause_program", None)
+            if pause is not None:
+                self.robot.emit(ScriptEvent("text", text, 0, program=self.name))
+                watchdogs[name] = (hz, action, now)  # once per silence
+                pause()
 
     def fail(self, fault: ScriptFault) -> None:
         self.finished, self.fault = True, fault
