@@ -14,10 +14,10 @@ from typing import Any
 import numpy as np
 
 from rtde_spec.emulator import kinematics as kin
-from rtde_spec.emulator import script_calls
 from rtde_spec.emulator.interfaces import Runner
-from rtde_spec.emulator.script_calls import Pose, number, six, type_name
+from rtde_spec.emulator.urscript import calls as script_calls
 from rtde_spec.emulator.urscript import sockets
+from rtde_spec.emulator.urscript.calls import Pose, number, six, type_name
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
 from rtde_spec.errors import RtdeSpecError
 

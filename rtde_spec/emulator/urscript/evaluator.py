@@ -13,9 +13,10 @@ from collections.abc import Generator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from rtde_spec.emulator import script_calls, urscript_ops
 from rtde_spec.emulator.interfaces import Robot
 from rtde_spec.emulator.urscript import builtins
+from rtde_spec.emulator.urscript import calls as script_calls
+from rtde_spec.emulator.urscript import values as urscript_ops
 from rtde_spec.emulator.urscript.nodes import Branch, Expr, Function, Script, ScriptFault, Stmt
 
 if TYPE_CHECKING:

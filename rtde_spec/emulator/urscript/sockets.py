@@ -19,7 +19,7 @@ from collections.abc import Callable, Generator
 from typing import Any
 
 from rtde_spec.emulator.interfaces import Runner
-from rtde_spec.emulator.script_calls import arg, number, type_name
+from rtde_spec.emulator.urscript.calls import arg, number, type_name
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
 
 MAX_BUFFER = 1 << 20  # bytes a socket keeps unread
@@ -145,7 +145,7 @@ def _int(stmt: Stmt, value: Any) -> bytes:
 
 
 def _text(stmt: Stmt, value: Any) -> bytes:
-    from rtde_spec.emulator.script_calls import to_str
+    from rtde_spec.emulator.urscript.calls import to_str
 
     return (to_str(value) + ("\n" if stmt.name == "socket_send_line" else "")).encode()
 

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 from typing import Any
 
-from rtde_spec.emulator.script_calls import Pose, make_pose, type_name
-from rtde_spec.emulator.urscript import ScriptFault
+from rtde_spec.emulator.urscript.calls import Pose, make_pose, type_name
+from rtde_spec.emulator.urscript.nodes import ScriptFault
 
 
 def _is_number(value: Any) -> bool:

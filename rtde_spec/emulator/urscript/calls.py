@@ -29,7 +29,7 @@ from rtde_spec.emulator.motion import (
     Motion,
     Servo,
 )
-from rtde_spec.emulator.urscript import ScriptFault, Stmt
+from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
 
 Args = list[Any]
 Kwargs = dict[str, Any]
