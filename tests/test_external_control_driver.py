@@ -82,19 +82,19 @@ def test_the_arm_follows_servoj_targets_streamed_on_the_reverse_port() -> None:
                 for i in range(steps + 1):  # 0.5 s at 500 Hz, a straight ramp to the target
                     q = [h + (t - h) * i / steps for h, t in zip(HOME_Q, target, strict=True)]
                     robot.sendall(
-                        codec.encode("motion_target", {"read_timeout": 0.1, "target": q, "control_mode": 1})
+                        codec.encode("motion_target", {"read_timeout": 2.0, "target": q, "control_mode": 1})
                     )
                     time.sleep(0.002)
                 deadline = time.monotonic() + 5
                 while emu.call(lambda: list(emu.model.values["actual_q"])) != pytest.approx(target, abs=1e-5):
                     robot.sendall(
                         codec.encode(
-                            "motion_target", {"read_timeout": 0.1, "target": target, "control_mode": 1}
+                            "motion_target", {"read_timeout": 2.0, "target": target, "control_mode": 1}
                         )
                     )
                     time.sleep(0.01)
                     assert time.monotonic() < deadline, "the arm did not follow"
-                stop = {"read_timeout": 0.1, "target": [0.0] * 6, "control_mode": -2}
+                stop = {"read_timeout": 2.0, "target": [0.0] * 6, "control_mode": -2}
                 robot.sendall(codec.encode("motion_target", stop))
                 deadline = time.monotonic() + 5
                 while emu.call(lambda: emu.model.program) is not None:

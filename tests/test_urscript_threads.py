@@ -209,3 +209,28 @@ def test_rtde_set_watchdog_acts_when_the_client_goes_silent(action: str, paused:
     assert model.paused is paused and (model.program is None) is stopped
     text = "RTDE input watchdog: input_int_register_24 not written at 10 Hz"
     assert (("runtime_exception", text) in events) is stopped
+
+
+def test_the_program_defs_variables_are_the_globals_its_threads_see_and_join_of_0_returns() -> None:
+    """As URCL's external control program: `control_mode = ...` in the program def, read by threads;
+    `join thread_move` while no thread was started (0)."""
+    _, events = run(
+        """def program():
+  mode = 0
+  worker = 0
+  thread watcher():
+    while mode == 1:
+      sync()
+    end
+    textmsg("watcher saw mode ", mode)
+  end
+  join worker
+  mode = 1
+  worker = run watcher()
+  sleep(0.02)
+  mode = 2
+  join worker
+  textmsg("joined")
+end"""
+    )
+    assert not faults(events) and said(events) == ["watcher saw mode 2", "joined"]

@@ -173,10 +173,10 @@ class Program(Evaluator):
         _close(thread)
 
     def _main(self) -> Wait:
-        frame: Frame = {}
         if self.script.wrapped:  # the program def's own variables are the program's globals
-            frame = self.globals
-        yield from self._block(self.script.main, frame)
+            yield from self._block(self.script.functions[self.script.name].body, self.globals)
+        else:  # top-level statements: their variables are the globals too
+            yield from self._block(self.script.main, self.globals)
 
     def _thread_body(self, body: list[Stmt]) -> Wait:
         try:
@@ -270,7 +270,9 @@ class Program(Evaluator):
             if kind == "kill":
                 self._kill(handle)
             else:
-                yield from self.wait_for(lambda: not isinstance(handle, int) or handle not in self.threads)
+                yield from self.wait_for(
+                    lambda: not isinstance(handle, int) or not handle or handle not in self.threads
+                )
             return None
         if kind == "halt":
             self.finished = True
