@@ -71,3 +71,16 @@ def test_a_malformed_table_names_the_file_and_the_problem(tmp_path: Path, change
     with pytest.raises(SpecError, match=re.escape("urscript/functions.yaml")) as caught:
         load_urscript(tmp_path)
     assert message in str(caught.value)
+
+
+@pytest.mark.parametrize(
+    ("version", "refused"),
+    [("5.4.0", True), ("5.10.0", False), ("3.15.0", True)],  # get_target_payload: e-Series 5.10 on
+)
+def test_a_function_the_controller_version_lacks_is_a_compile_error(version: str, refused: bool) -> None:
+    from rtde_spec.emulator.model import ControllerModel
+
+    model = ControllerModel(version)
+    model.run_script("m = get_target_payload()")
+    events = [(e.kind, e.text) for e in model.drain_events()]
+    assert (("runtime_exception", "compile_error_name_not_found:get_target_payload") in events) is refused

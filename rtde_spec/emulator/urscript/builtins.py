@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
+from functools import cache
 from typing import Any
 
 import numpy as np
@@ -41,6 +42,22 @@ def builtin(*names: str) -> Callable[[Builtin], Builtin]:
 def names() -> set[str]:
     """Every name a program may call without defining it."""
     return set(BUILTINS) | set(WAITING) | set(script_calls.COMMANDS) | set(script_calls.FUNCTIONS)
+
+
+@cache
+def names_for(line: str, version: str) -> frozenset[str]:
+    """The built-ins a controller of this product line and version has (spec/urscript's `since`);
+    a line the table does not cover (PolyScope X) gets every one the emulator runs."""
+    from rtde_spec.spec.urscript import urscript_functions
+    from rtde_spec.spec.versions import Version
+
+    table = urscript_functions()
+    if line not in table.product_lines:
+        return frozenset(names())
+    have = Version.parse(version)
+    return frozenset(
+        f.name for f in table.functions if line in f.since and Version.parse(f.since[line]) <= have
+    )
 
 
 def call(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:

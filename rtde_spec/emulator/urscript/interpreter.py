@@ -76,7 +76,9 @@ class Program(Evaluator):
         self.steps_run = 0
         self._epoch = 0
         self._deadline = 0.0
-        check(script, builtins.names(), script_calls.WAITS | set(builtins.WAITING))
+        line, version = getattr(robot, "line", None), getattr(robot, "version", None)
+        known = builtins.names_for(line.id, str(version)) if line is not None else builtins.names()
+        check(script, known, script_calls.WAITS | set(builtins.WAITING))  # as this version compiles
         main = _Thread(0, self.name, self._main())
         self.threads: dict[int, _Thread] = {0: main}
         self.current = main
