@@ -234,3 +234,18 @@ def test_the_program_defs_variables_are_the_globals_its_threads_see_and_join_of_
 end"""
     )
     assert not faults(events) and said(events) == ["watcher saw mode 2", "joined"]
+
+
+def test_a_long_program_is_read_off_the_control_loop() -> None:
+    """A call spread over 64,000 lines (about 190 KB) is parsed in a worker thread: the control
+    steps go on meanwhile, and the program starts in a later step."""
+    model = ControllerModel("5.15.0")
+    model.run_script("textmsg(1" + ",\n1" * 64_000 + ")\n")
+    assert model.program is None  # not started yet: being read
+    steps = 0
+    while not model.events and steps < 20_000:
+        model.tick(model.step + 1)
+        steps += 1
+        time.sleep(0.0005)
+    kinds = [e.kind for e in model.drain_events()]
+    assert kinds[:2] == ["program_started", "text"] and steps > 1
