@@ -9,7 +9,8 @@ MAX_NESTING deep (a matrix of poses), so no value a program builds can make a co
 
 from __future__ import annotations
 
-from collections.abc import Generator
+import operator
+from collections.abc import Callable, Generator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
@@ -25,6 +26,13 @@ if TYPE_CHECKING:
 Frame = dict[str, Any]
 MAX_CALL_DEPTH = 64  # user functions calling user functions; deeper is a runaway recursion
 MAX_NESTING = 3  # lists in lists in lists (an array of poses is 2)
+
+
+_NUMBERS = (int, float)  # exact types: a bool is no number here
+_COMPARE: dict[str, Callable[[Any, Any], bool]] = {
+    "==": operator.eq, "!=": operator.ne, "<": operator.lt,
+    "<=": operator.le, ">": operator.gt, ">=": operator.ge,
+}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -116,7 +124,15 @@ class Evaluator:
         if kind in ("num", "str", "bool"):
             return expr.value
         if kind == "name":
+            name = expr.value
+            if name in frame:
+                return frame[name]
             return self.lookup(expr, frame)
+        if kind == "compare":  # numbers compare at once; anything else goes through the type checks
+            left, right = self.value(expr.items[0], frame), self.value(expr.items[1], frame)
+            if type(left) in _NUMBERS and type(right) in _NUMBERS:
+                return _COMPARE[expr.value](left, right)
+            return urscript_ops.compare(expr.value, left, right, expr.line, expr.column)
         if kind in ("logic", "not"):
             left = self._operand(self.value(expr.items[0], frame), expr, 0)
             if kind == "not":
