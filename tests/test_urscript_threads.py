@@ -249,3 +249,11 @@ def test_a_long_program_is_read_off_the_control_loop() -> None:
         time.sleep(0.0005)
     kinds = [e.kind for e in model.drain_events()]
     assert kinds[:2] == ["program_started", "text"] and steps > 1
+
+
+def test_arrays_of_numbers_add_and_scale_element_by_element() -> None:
+    """URCL's extrapolate(): `cmd_servo_q + (get_target_joint_speeds() * steptime)`."""
+    _, events = run('textmsg([1, 2] + [0.5, 1] * 2, " ", [1, 2] - 1, " ", [4, 8] / 2)\nx = [1, 2] + [1]')
+    assert said(events) == ["[2, 4] [0, 1] [2, 4]"]
+    [(text, line, _)] = faults(events)
+    assert "arrays of 2 and 1 elements" in text and line == 2

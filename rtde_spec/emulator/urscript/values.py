@@ -9,10 +9,72 @@ another variable that holds the same list.
 
 from __future__ import annotations
 
+import operator
+from collections.abc import Callable
 from typing import Any
 
-from rtde_spec.emulator.urscript.calls import Pose, make_pose, type_name
 from rtde_spec.emulator.urscript.nodes import ScriptFault
+
+
+class Pose(list[float]):
+    """A p[...] value: six numbers, told apart from a joint list by movej/movel."""
+
+
+def make_pose(values: list[Any], line: int, column: int) -> Pose:
+    if len(values) != 6 or not all(_is_number(v) for v in values):
+        raise ScriptFault("a pose needs six numbers: p[x, y, z, rx, ry, rz]", line, column)
+    return Pose(float(v) for v in values)
+
+
+INT_MIN, INT_MAX = -(1 << 31), (1 << 31) - 1  # URScript's int is 32 bits
+MAX_TEXT = 1 << 20  # characters of one string (a program doubling a text must not take the memory)
+
+
+_OPS: dict[str, Callable[[Any, Any], Any]] = {
+    "+": operator.add,
+    "-": operator.sub,
+    "*": operator.mul,
+    "/": operator.truediv,
+    "%": operator.mod,
+}
+
+
+def arithmetic(op: str, left: Any, right: Any, line: int, column: int) -> Any:
+    if _is_number(left) and _is_number(right):
+        if op in "/%" and right == 0:
+            raise ScriptFault("Division by zero", line, column)
+        try:
+            result = _OPS[op](left, right)
+        except OverflowError:
+            raise ScriptFault("Number too large", line, column) from None
+        if isinstance(result, int) and not isinstance(result, bool) and not INT_MIN <= result <= INT_MAX:
+            raise ScriptFault("Integer overflow: URScript's int is 32 bits", line, column)
+        return result
+    if op == "+" and isinstance(left, str) and isinstance(right, str):
+        if len(left) + len(right) > MAX_TEXT:
+            raise ScriptFault(f"String too long (over {MAX_TEXT} characters)", line, column)
+        return left + right
+    if op in "+-*/" and (isinstance(left, list) or isinstance(right, list)):
+        return _elementwise(op, left, right, line, column)
+    raise ScriptFault(f"Type error: {type_name(left)} {op} {type_name(right)}", line, column)
+
+
+def _elementwise(op: str, left: Any, right: Any, line: int, column: int) -> list[Any]:
+    """Arrays of numbers element by element (`q + qd * t`), a number applying to every element."""
+    size = len(left) if isinstance(left, list) else len(right)
+    if isinstance(left, list) and isinstance(right, list) and len(left) != len(right):
+        raise ScriptFault(f"Type error: arrays of {len(left)} and {len(right)} elements", line, column)
+    lefts = left if isinstance(left, list) else [left] * size
+    rights = right if isinstance(right, list) else [right] * size
+    if not all(_is_number(v) for v in (*lefts, *rights)):
+        raise ScriptFault(f"Type error: {type_name(left)} {op} {type_name(right)}", line, column)
+    return [arithmetic(op, a, b, line, column) for a, b in zip(lefts, rights, strict=True)]
+
+
+def type_name(value: Any) -> str:
+    return {Pose: "pose", list: "array", bool: "bool", int: "int", float: "float", str: "string"}.get(
+        type(value), type(value).__name__
+    )
 
 
 def _is_number(value: Any) -> bool:
