@@ -21,7 +21,10 @@
 Targets: no missed packages, p99 lateness <= 1 ms; ours <= 8 µs/package and >= 10x
 less than the UR-client-style loop.
 
-    python benchmarks/bench_emulator.py [--seconds 10] [--motion]
+4. With --control-script, only this: ur_rtde's control program with a servoJ stream at 500 Hz
+   and four readers (bench_control_script.py).
+
+    python benchmarks/bench_emulator.py [--seconds 10] [--motion | --control-script]
 """
 
 from __future__ import annotations
@@ -321,7 +324,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--motion", action="store_true", help="only the run with a motion program and eight clients"
     )
+    parser.add_argument(
+        "--control-script", action="store_true", help="only ur_rtde's control script with a servoJ stream"
+    )
     args = parser.parse_args(argv)
+    if args.control_script:
+        from bench_control_script import run as control_script_run
+
+        ok = control_script_run(args.seconds)
+        return 0 if ok or not args.assert_targets else 1
     if args.motion:
         ok = motion_run(args.seconds)
         return 0 if ok or not args.assert_targets else 1

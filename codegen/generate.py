@@ -30,6 +30,7 @@ from .emit_primary_docs import emit_primary_doc
 from .emit_realtime import emit_realtime
 from .emit_rtde import emit_rtde_models, emit_rtde_structs
 from .emit_types import emit_types
+from .emit_urscript import emit_urscript
 from .render import PY_HEADER
 
 GEN = "rtde_spec/_generated"
@@ -65,6 +66,7 @@ EMITTERS: tuple[Callable[[SpecBundle], dict[str, str]], ...] = (
     lambda b: emit_dashboard(b.dashboard),
     lambda b: emit_realtime(b.realtime, b.catalogue),
     lambda b: emit_external(b.external, b.primitives),
+    lambda b: emit_urscript(b.urscript),
 )
 
 

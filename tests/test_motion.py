@@ -161,7 +161,7 @@ def test_power_brakes_and_protective_stop_gate_motion() -> None:
         ("def prog():\n  movej([0, -1.57, 1.57, -1.57, -1.57, 0], v=fast)\nend", "name_not_found:fast", 2),
         ("movel(p[2, 2, 2, 0, 3.14, 0])", "out of reach of the UR5e", 1),
         ("movej([0, -1.57, 7.0, -1.57, -1.57, 0])", "outside the UR5e's range", 1),
-        ("thread t():\n  sleep(1)\nend", "not supported by the emulator: thread", 1),
+        ("def prog():\n  x = 1\n  t = run mover()\nend", "compile_error_name_not_found:mover", 3),
         ("movej([0, 0, 0, 0, 0, 0]", "syntax_error_on_line:1:", 1),
         ("set_standard_digital_out(9, True)", "no output 9", 1),
     ],

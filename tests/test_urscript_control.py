@@ -297,7 +297,8 @@ def test_operators_follow_python_precedence() -> None:
     assert said(events) == ["True", "True", "True", "False", "False", "True", "True"]
 
 
-def test_a_function_that_waits_cannot_give_a_value_and_nothing_of_it_moves() -> None:
+def test_a_function_that_waits_gives_its_value_when_its_motion_has_ended() -> None:
+    """As on the controller (ur_rtde's `keep_running = process_cmd(cmd)` runs a movej inside)."""
     model, events = run(
         f"""def there():
   movej({A})
@@ -306,14 +307,14 @@ end
 def prog():
   textmsg("before")
   x = 2 * there()
+  textmsg(x, " ", get_actual_joint_positions()[0])
 end
 prog()
 """
     )
-    [(text, line, column)] = faults(events)
-    assert "there() waits (movej on line 2)" in text and (line, column) == (7, 11)
-    assert said(events) == ["before"]
-    assert model.values["actual_q"] == pytest.approx(HOME_Q)  # the move never started
+    assert not faults(events)
+    assert said(events) == ["before", f"2 {A[0]:.6g}"]
+    assert model.values["actual_q"] == pytest.approx(A)
 
 
 # --- faults with their lines ---------------------------------------------------------------

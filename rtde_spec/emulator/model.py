@@ -15,6 +15,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from collections.abc import Callable, Mapping
+from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any
 
 from rtde_spec._generated.enums import (
@@ -83,6 +84,10 @@ STATE = (
 )  # fmt: skip
 MAX_EVENTS = 1000  # messages kept for the servers to send; the oldest go first
 NOT_READY = "The robot is not ready: power it on, release the brakes and clear any safety stop"
+BACKGROUND_PARSE = 16 << 10  # characters: a longer program is read in a worker thread, so the
+# control loop never waits for the parser (a 64,000-line call takes about half a second to read)
+MAX_PARSING = 4  # programs being read at once; more are refused
+_PARSER = ThreadPoolExecutor(max_workers=1, thread_name_prefix="urscript-parser")
 SECONDARY_STEPS = 10_000  # a `sec` program runs at once; this bounds it
 
 
@@ -112,6 +117,8 @@ class ControllerModel(RobotModes):
         self.loaded: str | None = None  # a program the dashboard loaded, run by play()
         self.calibrated = True  # the arm's kinematics calibration (a scenario may say it has none)
         self.events: deque[ScriptEvent] = deque(maxlen=MAX_EVENTS)
+        self.inputs_seen: dict[str, float] = {}  # RTDE input name -> model time it was last written
+        self._parsing: deque[Future[Program | ScriptEvent]] = deque()  # programs read off the loop
         self._published: tuple[Any, ...] = ()
         self._limits_checked = -1  # the arm revision whose joints were last checked against the limits
         self.step = 0
@@ -122,6 +129,8 @@ class ControllerModel(RobotModes):
         """Move to control step `step`: the arm and its program, the timestamp, scenario functions."""
         dt = max(0, step - self.step) / self.base_hz
         self.step = step
+        if self._parsing:
+            self._start_parsed()
         self.time = step / self.base_hz
         values = self.values
         if dt > 0 and self.can_move() and not self.paused:
@@ -211,15 +220,33 @@ class ControllerModel(RobotModes):
         A script that cannot be read, names something unknown, or comes while the
         arm cannot move is refused with a runtime exception event; nothing of it runs.
         """
+        if len(text) > BACKGROUND_PARSE:  # read off the control loop, started by a later tick
+            if len(self._parsing) >= MAX_PARSING:
+                self.emit(ScriptEvent("runtime_exception", "too many programs at once: refused", 0, 0))
+                return None
+            self._parsing.append(_PARSER.submit(self._compile, text))
+            return None
+        return self._start(self._compile(text))
+
+    def _compile(self, text: str) -> Program | ScriptEvent:
+        """The program, ready to run, or the event that refuses it (any thread may run this)."""
         try:
-            script = parse(text)
-            program = Program(script, self)
+            return Program(parse(text), self)
         except ScriptFault as fault:
-            self.emit(ScriptEvent("runtime_exception", fault.text, fault.line, fault.column))
-            return None
+            return ScriptEvent("runtime_exception", fault.text, fault.line, fault.column)
         except PROGRAM_ERRORS as exc:  # nested past Python's limits, a number of 5,000 digits
-            self.emit(ScriptEvent("runtime_exception", f"syntax_error: {runtime_text(exc)}", 0, 0))
+            return ScriptEvent("runtime_exception", f"syntax_error: {runtime_text(exc)}", 0, 0)
+
+    def _start_parsed(self) -> None:
+        """Start the programs read in the background, in the order they came."""
+        while self._parsing and self._parsing[0].done():
+            self._start(self._parsing.popleft().result())
+
+    def _start(self, compiled: Program | ScriptEvent) -> Program | None:
+        if isinstance(compiled, ScriptEvent):
+            self.emit(compiled)
             return None
+        program, script = compiled, compiled.script
         if script.secondary:
             for _ in range(SECONDARY_STEPS):
                 program.advance(0.0)
@@ -241,6 +268,8 @@ class ControllerModel(RobotModes):
 
     def _end_program(self) -> None:
         program, self.program = self.program, None
+        if program is not None:
+            program.stop()  # its threads and sockets end with it
         motion = self.arm.motion
         if motion is not None and (motion.holds or program is None or program.fault is not None):
             self.arm.stop(getattr(motion, "a", 1.4))  # a held speed or a failed move decelerates
@@ -261,6 +290,8 @@ class ControllerModel(RobotModes):
     def apply_inputs(self, inputs: Mapping[str, Any]) -> None:
         """A data package from a client: read-backs, then what the outputs reflect."""
         values = self.values
+        for name in inputs:
+            self.inputs_seen[name] = self.time  # for a program's rtde_set_watchdog
         for name, value in inputs.items():
             if name in values and name not in self.functions:
                 values[name] = value  # input registers and the like read back as outputs

@@ -236,13 +236,14 @@ class LinearSpeed(Motion):
         self.arm, self.tcp, self.hold, self.a = arm, tuple(tcp), t, a
         self.pose = kin.pose_to_matrix(kin.forward(arm, start.q, tcp))
         self.target = np.array(xd, dtype=float)
-        self.ramp = float(np.linalg.norm(self.target[:3])) / max(abs(a), 1e-9)
+        self.initial = _tool_speed(arm, tcp, start)  # a speedl after a speedl goes on from its speed
+        self.ramp = float(np.linalg.norm(self.target[:3] - self.initial[:3])) / max(abs(a), 1e-9)
         self.q = start.q.copy()
 
     def step(self, dt: float) -> State:
         self.t += dt
         f = min(1.0, self.t / self.ramp) if self.ramp > 0 else 1.0
-        xd = self.target * f
+        xd = self.initial + (self.target - self.initial) * f
         self.pose[:3, 3] += xd[:3] * dt
         self.pose[:3, :3] = kin.rotvec_to_matrix(xd[3:] * dt) @ self.pose[:3, :3]
         try:
@@ -259,6 +260,18 @@ class LinearSpeed(Motion):
     @property
     def duration(self) -> float:
         return self.hold if self.hold > 0 else self.ramp
+
+
+def _tool_speed(arm: ArmModel, tcp: Floats, start: State) -> np.ndarray:
+    """The TCP's velocity (m/s, rad/s in Base) at the joints' speeds `start.qd`."""
+    if not np.any(start.qd):
+        return np.zeros(6)
+    h = 1e-6
+    now = kin.pose_to_matrix(kin.forward(arm, start.q, tcp))
+    later = kin.pose_to_matrix(kin.forward(arm, start.q + start.qd * h, tcp))
+    turn = later[:3, :3] @ now[:3, :3].T
+    rot = kin.matrix_to_pose(np.block([[turn, np.zeros((3, 1))], [np.zeros((1, 3)), np.ones((1, 1))]]))[3:]
+    return np.concatenate([(later[:3, 3] - now[:3, 3]) / h, np.array(rot) / h])
 
 
 class Servo(Motion):

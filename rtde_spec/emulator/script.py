@@ -1,7 +1,7 @@
 """URScript sent to the emulator's primary/secondary ports: run as the controller runs it.
 
 `run_script` starts a text as the robot's program (the URScript interpreter is
-`urscript.py`, its runner `program.py`): I/O calls before the first motion or sleep
+`urscript/`): I/O calls before the first motion or sleep
 take effect at once, motions then run with the control steps. A script that cannot
 run becomes a runtime exception event on the model (`model.drain_events()`), never
 a silent drop. `ScriptReceiver` joins what a connection sends into whole programs,

@@ -16,6 +16,7 @@ from rtde_spec.spec.external import ExternalControlFile, load_external
 from rtde_spec.spec.loader import default_spec_root, load_spec
 from rtde_spec.spec.realtime import RealtimeFile, load_realtime
 from rtde_spec.spec.schema import Primitive, Spec
+from rtde_spec.spec.urscript import ScriptFunctions, load_urscript
 
 
 @dataclass(frozen=True)
@@ -29,6 +30,7 @@ class SpecBundle:
     dashboard: DashboardFile
     realtime: RealtimeFile
     external: ExternalControlFile
+    urscript: ScriptFunctions
 
     @property
     def primitives(self) -> dict[str, Primitive]:
@@ -48,4 +50,5 @@ def load_bundle(root: Path | str | None = None) -> SpecBundle:
         dashboard=load_dashboard(base),
         realtime=load_realtime(base, catalogue),
         external=load_external(base),
+        urscript=load_urscript(base),
     )

@@ -28,7 +28,17 @@ from rtde_spec.emulator.motion import (
     Motion,
     Servo,
 )
-from rtde_spec.emulator.urscript import ScriptFault, Stmt
+from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
+from rtde_spec.emulator.urscript.values import (  # noqa: F401 - the calls' value types, re-exported
+    INT_MAX,
+    INT_MIN,
+    MAX_TEXT,
+    Pose,
+    _is_number,
+    arithmetic,
+    make_pose,
+    type_name,
+)
 
 Args = list[Any]
 Kwargs = dict[str, Any]
@@ -42,57 +52,8 @@ DIGITAL = {
     "set_tool_digital_out": ("tool", 2),
 }
 ANALOG = {"set_standard_analog_out": 2, "set_analog_out": 2}
-MOVES = {"movej", "movel", "movep", "servoj", "speedj", "speedl"}
+MOVES = {"movej", "movel", "movep", "movec", "servoj", "servoc", "speedj", "speedl"}
 WAITS = MOVES | {"stopj", "stopl", "sleep", "sync", "halt"}  # the commands a program waits on
-
-
-class Pose(list[float]):
-    """A p[...] value: six numbers, told apart from a joint list by movej/movel."""
-
-
-def make_pose(values: list[Any], line: int, column: int) -> Pose:
-    if len(values) != 6 or not all(_is_number(v) for v in values):
-        raise ScriptFault("a pose needs six numbers: p[x, y, z, rx, ry, rz]", line, column)
-    return Pose(float(v) for v in values)
-
-
-INT_MIN, INT_MAX = -(1 << 31), (1 << 31) - 1  # URScript's int is 32 bits
-MAX_TEXT = 1 << 20  # characters of one string (a program doubling a text must not take the memory)
-
-
-def arithmetic(op: str, left: Any, right: Any, line: int, column: int) -> Any:
-    if _is_number(left) and _is_number(right):
-        if op in "/%" and right == 0:
-            raise ScriptFault("Division by zero", line, column)
-        ops: dict[str, Callable[[Any, Any], Any]] = {
-            "+": lambda x, y: x + y,
-            "-": lambda x, y: x - y,
-            "*": lambda x, y: x * y,
-            "/": lambda x, y: x / y,
-            "%": lambda x, y: x % y,
-        }
-        try:
-            result = ops[op](left, right)
-        except OverflowError:
-            raise ScriptFault("Number too large", line, column) from None
-        if isinstance(result, int) and not isinstance(result, bool) and not INT_MIN <= result <= INT_MAX:
-            raise ScriptFault("Integer overflow: URScript's int is 32 bits", line, column)
-        return result
-    if op == "+" and isinstance(left, str) and isinstance(right, str):
-        if len(left) + len(right) > MAX_TEXT:
-            raise ScriptFault(f"String too long (over {MAX_TEXT} characters)", line, column)
-        return left + right
-    raise ScriptFault(f"Type error: {type_name(left)} {op} {type_name(right)}", line, column)
-
-
-def type_name(value: Any) -> str:
-    return {Pose: "pose", list: "array", bool: "bool", int: "int", float: "float", str: "string"}.get(
-        type(value), type(value).__name__
-    )
-
-
-def _is_number(value: Any) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)
 
 
 def arg(stmt: Stmt, args: Args, kwargs: Kwargs, index: int, name: str, default: Any = ...) -> Any:
@@ -277,6 +238,7 @@ COMMANDS: dict[str, Command] = {
     "movej": movej,
     "movel": movel,
     "movep": movel,
+    "servoc": movel,  # a blended linear move to the pose, as movep
     "speedj": speedj,
     "speedl": speedl,
     "servoj": servoj,

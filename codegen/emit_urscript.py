@@ -1,0 +1,63 @@
+"""Emit _generated/urscript_functions.py and docs/reference/urscript.md from spec/urscript/.
+
+URScript's built-ins are a table of functions, not a wire layout, so they have their own
+meta-model (rtde_spec.spec.urscript) and their own emitter.
+"""
+
+from __future__ import annotations
+
+import json
+import pprint
+
+from rtde_spec.spec.urscript import ScriptFunctions
+
+from .render import MD_HEADER, PY_HEADER, md_table
+
+GEN = "rtde_spec/_generated"
+
+
+def emit_urscript(table: ScriptFunctions) -> dict[str, str]:
+    """Relative output path -> text, for the URScript built-ins of the loaded spec bundle."""
+    return {f"{GEN}/urscript_functions.py": _python(table), "docs/reference/urscript.md": _markdown(table)}
+
+
+def _python(table: ScriptFunctions) -> str:
+    literal = pprint.pformat(table.model_dump(mode="json", exclude_unset=True), width=100, sort_dicts=False)
+    return (
+        PY_HEADER
+        + '"""URScript built-in functions of spec/urscript/functions.yaml."""\n\n'
+        + "from typing import Any\n\n"
+        + f"URSCRIPT_FUNCTIONS: dict[str, Any] = {literal}\n"
+    )
+
+
+def _signature(table: ScriptFunctions, name: str) -> str:
+    function = next(f for f in table.functions if f.name == name)
+    parts = [p.name if p.required else f"{p.name}={json.dumps(p.default)}" for p in function.params]
+    return f"`{name}({', '.join(parts)})`"
+
+
+def _markdown(table: ScriptFunctions) -> str:
+    out = [
+        MD_HEADER,
+        "# URScript built-in functions\n\n",
+        "The functions a program sent to the emulator may call without defining them, each as the\n",
+        f"Script Manual lists it ({table.doc_ref}). `since` is the first version per product line\n",
+        "(a line not named does not have it); *unchecked* marks a `since` taken as the line's first\n",
+        "release where the editions on hand do not say. The emulator implements every one; where it\n",
+        "cannot do what a robot does physically it approximates, as the last column says.\n\n",
+        "The emulator's URScript: lexer, parser (grammar in `rtde_spec/emulator/urscript/grammar.ebnf`),\n",
+        "checker and interpreter, with threads scheduled on the control step.\n",
+    ]
+    for section in ("motion", "internals", "interfaces", "maths"):
+        rows = []
+        for f in table.functions:
+            if f.section != section:
+                continue
+            since = ", ".join(f"{line} {v}" for line, v in f.since.items()) + (
+                "" if f.checked else " *unchecked*"
+            )
+            rows.append((_signature(table, f.name), f.returns, since, f.doc, f.emulation or ""))
+        out.append(f"\n## Module {section}\n\n")
+        out.append(md_table(["function", "returns", "since", "what it does", "in the emulator"], rows))
+    return "".join(out)

@@ -1,0 +1,384 @@
+"""The built-in functions a program calls for a value or an effect, beyond script_calls' motions
+and I/O: the RTDE registers (bound to the RTDE server's input and output registers), the pose
+maths, kinematics queries, settings and the force and freedrive modes, which the emulator
+approximates: it records the mode and holds the arm, since it models no forces
+(docs/reference/urscript.md lists each function with its source in UR's Script Manual).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from functools import cache
+from typing import Any
+
+import numpy as np
+
+from rtde_spec.emulator import kinematics as kin
+from rtde_spec.emulator.interfaces import Runner
+from rtde_spec.emulator.urscript import calls as script_calls
+from rtde_spec.emulator.urscript import sockets
+from rtde_spec.emulator.urscript.calls import Pose, number, six, type_name
+from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
+from rtde_spec.errors import RtdeSpecError
+
+Args = list[Any]
+Kwargs = dict[str, Any]
+Builtin = Callable[[Runner, Stmt, Args, Kwargs], Any]
+BUILTINS: dict[str, Builtin] = {}
+WAITING: dict[str, Callable[[Runner, Stmt, Args, Kwargs], sockets.Waiting]] = dict(sockets.READERS)
+WAITING["socket_open"] = sockets.socket_open
+
+
+def builtin(*names: str) -> Callable[[Builtin], Builtin]:
+    def register(fn: Builtin) -> Builtin:
+        for name in names:
+            BUILTINS[name] = fn
+        return fn
+
+    return register
+
+
+def names() -> set[str]:
+    """Every name a program may call without defining it."""
+    return set(BUILTINS) | set(WAITING) | set(script_calls.COMMANDS) | set(script_calls.FUNCTIONS)
+
+
+@cache
+def names_for(line: str, version: str) -> frozenset[str]:
+    """The built-ins a controller of this product line and version has (spec/urscript's `since`);
+    a line the table does not cover (PolyScope X) gets every one the emulator runs."""
+    from rtde_spec.spec.urscript import urscript_functions
+    from rtde_spec.spec.versions import Version
+
+    table = urscript_functions()
+    if line not in table.product_lines:
+        return frozenset(names())
+    have = Version.parse(version)
+    return frozenset(
+        f.name for f in table.functions if line in f.since and Version.parse(f.since[line]) <= have
+    )
+
+
+def call(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
+    fn = BUILTINS.get(stmt.name)
+    if fn is None:
+        return script_calls.call_function(runner, stmt, stmt.name, args, kwargs)
+    try:
+        return fn(runner, stmt, args, kwargs)
+    except ScriptFault:
+        raise
+    except (IndexError, TypeError, ValueError, ArithmeticError, KeyError) as exc:
+        raise ScriptFault(f"{stmt.name}: bad arguments ({exc})", stmt.line, stmt.column or 1) from exc
+
+
+def field(value: Any, name: str, line: int, column: int) -> Any:
+    """`s.name` of a struct."""
+    if not isinstance(value, dict) or name not in value:
+        raise ScriptFault(f"Type error: {type_name(value)} has no field {name}", line, column)
+    return value[name]
+
+
+def _arg(stmt: Stmt, args: Args, kwargs: Kwargs, index: int, name: str, default: Any = ...) -> Any:
+    return script_calls.arg(stmt, args, kwargs, index, name, default)
+
+
+def _register(stmt: Stmt, args: Args, kwargs: Kwargs) -> int:
+    n = _arg(stmt, args, kwargs, 0, "address")
+    if not isinstance(n, int) or isinstance(n, bool) or not 0 <= n <= 47:
+        raise ScriptFault(f"{stmt.name}: no register {n!r} (0 to 47)", stmt.line, stmt.column or 1)
+    return n
+
+
+# --- RTDE registers: the same values the RTDE server reads and writes ----------------------------
+
+
+@builtin("read_input_integer_register", "read_input_float_register", "read_input_boolean_register")
+def _read_input(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
+    kind = stmt.name.split("_")[2]
+    n = _register(stmt, args, kwargs)
+    rtde = {"integer": "int", "float": "double", "boolean": "bit"}[kind]
+    if kind == "boolean":
+        bits = runner.robot.values.get(
+            "input_bit_registers0_to_31" if n < 32 else "input_bit_registers32_to_63", 0
+        )
+        return bool(int(bits) >> (n % 32) & 1) if n < 64 else False
+    value = runner.robot.values.get(f"input_{rtde}_register_{n}", 0)
+    return float(value) if kind == "float" else int(value)
+
+
+@builtin("write_output_integer_register", "write_output_float_register", "write_output_boolean_register")
+def _write_output(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    kind = stmt.name.split("_")[2]
+    n = _register(stmt, args, kwargs)
+    value = _arg(stmt, args, kwargs, 1, "value")
+    values = runner.robot.values
+    if kind == "boolean":
+        key = "output_bit_registers0_to_31" if n < 32 else "output_bit_registers32_to_63"
+        bit = 1 << (n % 32)
+        values[key] = (int(values.get(key, 0)) | bit) if bool(value) else (int(values.get(key, 0)) & ~bit)
+        return
+    if kind == "integer":
+        if not isinstance(value, int) or isinstance(value, bool):
+            raise ScriptFault(f"{stmt.name}: value must be an int, not {type_name(value)}", stmt.line, 1)
+        values[f"output_int_register_{n}"] = value
+    else:
+        values[f"output_double_register_{n}"] = number(stmt, value, "value")
+
+
+@builtin("rtde_set_watchdog")
+def _watchdog(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    name = _arg(stmt, args, kwargs, 0, "variable_name")
+    hz = number(stmt, _arg(stmt, args, kwargs, 1, "min_frequency"), "min_frequency")
+    action = _arg(stmt, args, kwargs, 2, "action", "pause")
+    if not isinstance(name, str) or action not in ("ignore", "pause", "stop"):
+        raise ScriptFault(f"{stmt.name}: needs an input name and ignore, pause or stop", stmt.line, 1)
+    if hz <= 0:
+        raise ScriptFault(f"{stmt.name}: min_frequency must be above 0", stmt.line, 1)
+    settings_of(runner).setdefault("watchdogs", {})[name] = (
+        hz,
+        action,
+        float(getattr(runner.robot, "time", 0.0)),
+    )
+
+
+@builtin("get_steptime")
+def _steptime(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> float:
+    return 1.0 / float(getattr(runner.robot, "base_hz", 500))
+
+
+# --- motions the emulator approximates ---------------------------------------------------------
+
+
+def movec(program: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> script_calls.WaitFactory:
+    """movec: approximated as a linear move to pose_to (the arc through pose_via is not modelled)."""
+    arm = program.robot.arm
+    target = _arg(stmt, args, kwargs, 1, "pose_to")
+    a = number(stmt, _arg(stmt, args, kwargs, 2, "a", script_calls.MOVEL_A), "a")
+    v = number(stmt, _arg(stmt, args, kwargs, 3, "v", script_calls.MOVEL_V), "v")
+    r = number(stmt, _arg(stmt, args, kwargs, 4, "r", 0.0), "r")
+    pose = target if isinstance(target, Pose) else kin.forward(arm.model, six(stmt, target, "q"), arm.tcp)
+    return script_calls._start(
+        program, stmt, script_calls.LinearMove(arm.model, arm.tcp, arm.state, pose, a, v, 0.0), r
+    )
+
+
+script_calls.COMMANDS["movec"] = movec
+
+
+# --- poses ------------------------------------------------------------------------------------
+
+
+def _pose(stmt: Stmt, value: Any) -> np.ndarray:
+    return kin.pose_to_matrix(six(stmt, value, "pose"))
+
+
+@builtin("pose_sub")
+def _pose_sub(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose:
+    a, b = _pose(stmt, args[0]), _pose(stmt, args[1])
+    out = np.eye(4)
+    out[:3, 3] = a[:3, 3] - b[:3, 3]
+    out[:3, :3] = a[:3, :3] @ b[:3, :3].T
+    return Pose(kin.matrix_to_pose(out))
+
+
+@builtin("pose_dist")
+def _pose_dist(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> float:
+    a, b = six(stmt, args[0], "p_from"), six(stmt, args[1], "p_to")
+    return math.dist(a[:3], b[:3])
+
+
+@builtin("point_dist")
+def _point_dist(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> float:
+    return _pose_dist(runner, stmt, args, kwargs)
+
+
+@builtin("interpolate_pose")
+def _interpolate(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose:
+    a, b = _pose(stmt, args[0]), _pose(stmt, args[1])
+    alpha = number(stmt, args[2], "alpha")
+    relative = a[:3, :3].T @ b[:3, :3]
+    vector = np.array(
+        kin.matrix_to_pose(np.block([[relative, np.zeros((3, 1))], [np.zeros((1, 3)), np.ones((1, 1))]]))[3:]
+    )
+    turn = kin.pose_to_matrix([0, 0, 0, *(vector * alpha)])[:3, :3]
+    out = np.eye(4)
+    out[:3, 3] = a[:3, 3] + (b[:3, 3] - a[:3, 3]) * alpha
+    out[:3, :3] = a[:3, :3] @ turn
+    return Pose(kin.matrix_to_pose(out))
+
+
+# --- the arm's state, settings and modes --------------------------------------------------------
+
+
+def settings_of(runner: Runner) -> dict[str, Any]:
+    """What a program set that no RTDE output shows (modes, watchdogs): kept with the program."""
+    settings = getattr(runner, "settings", None)
+    if settings is None:
+        settings = {}
+        runner.settings = settings  # type: ignore[attr-defined]
+    return settings
+
+
+def _values(name: str, default: Any) -> Builtin:
+    def read(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
+        where = settings_of(runner) if name.startswith("_") else runner.robot.values
+        value = where.get(name, default)
+        return [float(v) for v in value] if isinstance(value, (tuple, list)) else value
+
+    return read
+
+
+BUILTINS["get_target_tcp_speed"] = _values("target_TCP_speed", (0.0,) * 6)
+BUILTINS["get_actual_tcp_speed"] = _values("actual_TCP_speed", (0.0,) * 6)
+BUILTINS["get_joint_torques"] = _values("_joint_torques", (0.0,) * 6)
+BUILTINS["get_target_payload"] = _values("payload", 0.0)
+BUILTINS["get_target_payload_cog"] = _values("payload_cog", (0.0,) * 3)
+BUILTINS["get_target_payload_inertia"] = _values("payload_inertia", (0.0,) * 6)
+BUILTINS["get_freedrive_status"] = _values("_freedrive", 0)
+BUILTINS["get_actual_joint_speeds"] = _values("actual_qd", (0.0,) * 6)
+BUILTINS["get_target_joint_speeds"] = _values("target_qd", (0.0,) * 6)
+BUILTINS["get_tcp_force"] = _values("actual_TCP_force", (0.0,) * 6)
+
+
+@builtin("get_tcp_offset")
+def _tcp(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose:
+    return Pose(float(v) for v in runner.robot.arm.tcp)
+
+
+@builtin("get_actual_tool_flange_pose")
+def _flange(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose:
+    arm = runner.robot.arm
+    return Pose(kin.forward(arm.model, list(arm.state.q)))
+
+
+@builtin("get_actual_joint_positions_history", "get_target_waypoint")
+def _history(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
+    arm = runner.robot.arm  # the emulator keeps no history: the present position
+    return Pose(arm.pose()) if stmt.name == "get_target_waypoint" else [float(v) for v in arm.state.q]
+
+
+BUILTINS.update(sockets.SENDERS)
+BUILTINS["socket_close"] = sockets.socket_close
+BUILTINS["get_joint_positions"] = lambda runner, stmt, args, kwargs: [
+    float(v) for v in runner.robot.arm.state.q
+]
+
+
+@builtin("is_steady")
+def _steady(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> bool:
+    arm = runner.robot.arm
+    return arm.motion is None and not np.any(arm.state.qd)
+
+
+@builtin("get_inverse_kin_has_solution", "is_within_safety_limits")
+def _reachable(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> bool:
+    arm = runner.robot.arm
+    target = _arg(stmt, args, kwargs, 0, "pose")
+    if stmt.name == "is_within_safety_limits" and not isinstance(target, Pose):
+        q = six(stmt, target, "q")
+        return all(low <= v <= high for v, (low, high) in zip(q, arm.model.joint_limits, strict=True))
+    try:
+        kin.nearest(arm.model, six(stmt, target, "pose"), arm.state.q, arm.tcp)
+    except (ArithmeticError, ValueError, RtdeSpecError):  # no solution is the answer
+        return False
+    return True
+
+
+@builtin("tool_contact")
+def _contact(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> int:
+    return 0  # the emulated arm meets nothing
+
+
+def _mode(name: str, value: Any) -> Builtin:
+    def set_mode(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+        settings_of(runner)[name] = value
+        if name == "_freedrive" and value:
+            runner.robot.arm.halt()
+
+    return set_mode
+
+
+BUILTINS["force_mode"] = _mode("_force_mode", 1)
+BUILTINS["end_force_mode"] = _mode("_force_mode", 0)
+BUILTINS["teach_mode"] = _mode("_freedrive", 1)
+BUILTINS["freedrive_mode"] = _mode("_freedrive", 1)
+BUILTINS["end_teach_mode"] = _mode("_freedrive", 0)
+BUILTINS["end_freedrive_mode"] = _mode("_freedrive", 0)
+for _name in (
+    "force_mode_set_damping", "force_mode_set_gain_scaling", "zero_ftsensor", "ft_rtde_input_enable",
+    "enable_external_ft_sensor", "set_gravity", "set_tool_voltage", "set_safety_mode_transition_hardness",
+    "set_target_payload", "set_payload_inertia",
+):  # fmt: skip
+    BUILTINS[_name] = _mode(f"_{_name}", 1)
+
+
+@builtin("protective_stop")
+def _protective_stop(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    stop = getattr(runner.robot, "protective_stop", None)
+    if stop is not None:
+        stop()
+
+
+# --- numbers, lists and texts -----------------------------------------------------------------
+
+
+def _math(fn: Callable[..., Any], count: int) -> Builtin:
+    def apply(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
+        return fn(*(number(stmt, a, "x") for a in args[:count]))
+
+    return apply
+
+
+for _name, _fn, _count in (
+    ("pow", math.pow, 2), ("acos", math.acos, 1), ("asin", math.asin, 1), ("atan", math.atan, 1),
+    ("log", lambda b, f: math.log(f, b), 2), ("floor", math.floor, 1), ("ceil", math.ceil, 1),
+):  # fmt: skip
+    BUILTINS[_name] = _math(_fn, _count)
+
+
+@builtin("get_list_length")
+def _length(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> int:
+    value = args[0]
+    if not isinstance(value, list):
+        raise ScriptFault(f"{stmt.name}: not a list", stmt.line, 1)
+    return len(value)
+
+
+@builtin("str_len")
+def _str_len(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> int:
+    return len(script_calls.to_str(args[0]))
+
+
+@builtin("to_num")
+def _to_num(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
+    text = str(args[0]).strip()
+    try:
+        return int(text) if text.lstrip("-").isdigit() and len(text) < 12 else float(text)
+    except ValueError:
+        raise ScriptFault(f"to_num: not a number: {text[:40]!r}", stmt.line, 1) from None
+
+
+@builtin("struct")
+def _struct(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> dict[str, Any]:
+    return dict(kwargs)
+
+
+@builtin("is_nan")
+def _is_nan(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> bool:
+    return math.isnan(number(stmt, args[0], "x"))
+
+
+@builtin("normalize")
+def _normalize(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> list[float]:
+    values = [number(stmt, v, "x") for v in args[0]]
+    size = math.sqrt(sum(v * v for v in values))
+    return [v / size for v in values] if size else values
+
+
+@builtin("norm")
+def _norm(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> float:
+    value = args[0]
+    if isinstance(value, list):
+        return math.sqrt(sum(number(stmt, v, "a") ** 2 for v in value))
+    return abs(number(stmt, value, "a"))

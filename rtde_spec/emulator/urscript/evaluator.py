@@ -1,0 +1,291 @@
+"""URScript expressions, calls and assignments: the values half of the interpreter.
+
+`value` evaluates an expression that cannot wait at once; `steps` evaluates one that may call
+a user function (the checker marked it) as a generator the thread steps through, so a function
+that moves the arm can still give a value. Values keep URScript's shapes: lists nest at most
+MAX_NESTING deep (a matrix of poses), so no value a program builds can make a comparison or
+`norm` run for minutes or take gigabytes.
+"""
+
+from __future__ import annotations
+
+import operator
+from collections.abc import Callable, Generator
+from dataclasses import dataclass
+from typing import TYPE_CHECKING, Any
+
+from rtde_spec.emulator.interfaces import Robot
+from rtde_spec.emulator.urscript import builtins
+from rtde_spec.emulator.urscript import calls as script_calls
+from rtde_spec.emulator.urscript import values as urscript_ops
+from rtde_spec.emulator.urscript.nodes import Branch, Expr, Function, Script, ScriptFault, Stmt
+
+if TYPE_CHECKING:
+    from rtde_spec.emulator.interfaces import Wait
+
+Frame = dict[str, Any]
+MAX_CALL_DEPTH = 64  # user functions calling user functions; deeper is a runaway recursion
+MAX_NESTING = 3  # lists in lists in lists (an array of poses is 2)
+
+
+_NUMBERS = (int, float)  # exact types: a bool is no number here
+_COMPARE: dict[str, Callable[[Any, Any], bool]] = {
+    "==": operator.eq, "!=": operator.ne, "<": operator.lt,
+    "<=": operator.le, ">": operator.gt, ">=": operator.ge,
+}  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Return:
+    value: Any
+
+
+Steps = Generator[None, None, Any]
+
+
+def runtime_text(exc: BaseException) -> str:
+    """The runtime exception's text for a Python error a program's values caused."""
+    if isinstance(exc, RecursionError):
+        return "the program nests too deeply (calls, blocks or values)"
+    if isinstance(exc, ZeroDivisionError):
+        return "Division by zero"
+    if isinstance(exc, OverflowError):
+        return "Number too large"
+    if isinstance(exc, MemoryError):
+        return "out of memory"
+    return f"runtime error: {exc}"[:200]
+
+
+def nesting(items: list[Any]) -> int:
+    """How deep a new list of `items` nests (bounded: its items were checked when built)."""
+    deepest = 0
+    for item in items:
+        if isinstance(item, list):
+            deepest = max(deepest, nesting(item))
+    return deepest + 1
+
+
+class Evaluator:
+    """Expressions and calls of a program; the interpreter adds statements and threads."""
+
+    def __init__(self, script: Script, robot: Robot) -> None:
+        self.script, self.robot = script, robot
+        self.globals: Frame = {}
+        self._depth = 0
+
+    # the interpreter's side
+    def block(self, body: list[Stmt], frame: Frame) -> Steps:
+        raise NotImplementedError
+
+    def start_thread(self, name: str, line: int, column: int) -> int:
+        raise NotImplementedError
+
+    def wait_for(self, done: Any) -> Wait:
+        raise NotImplementedError
+
+    # --- names --------------------------------------------------------------------------------
+
+    def lookup(self, expr: Expr, frame: Frame) -> Any:
+        name = expr.value
+        if name in frame:
+            return frame[name]
+        if name in self.globals:
+            return self.globals[name]
+        if name in script_calls.CONSTANTS:
+            return script_calls.CONSTANTS[name]
+        raise ScriptFault(f"compile_error_name_not_found:{name}", expr.line, expr.column)
+
+    def assign(self, stmt: Stmt, frame: Frame, value: Any) -> None:
+        name = stmt.name
+        if stmt.scope == "global":
+            where = self.globals
+        elif stmt.scope == "local" or name in frame or name not in self.globals:
+            where = frame
+        else:
+            where = self.globals
+        if not stmt.index:
+            where[name] = value
+            return
+        if name not in where:
+            raise ScriptFault(f"compile_error_name_not_found:{name}", stmt.line, stmt.column)
+        positions = [self.value(e, frame) for e in stmt.index]
+        where[name] = urscript_ops.replaced(where[name], positions, value, stmt.line, stmt.column)
+
+    def condition(self, branch: Branch, frame: Frame) -> Steps:
+        assert branch.cond is not None
+        cond = branch.cond
+        value = self.value(cond, frame) if not cond.user else (yield from self.steps(cond, frame))
+        return urscript_ops.truth(value, "a condition", branch.line, branch.column)
+
+    # --- expressions --------------------------------------------------------------------------
+
+    def value(self, expr: Expr, frame: Frame) -> Any:
+        kind = expr.kind
+        if kind in ("num", "str", "bool"):
+            return expr.value
+        if kind == "name":
+            name = expr.value
+            if name in frame:
+                return frame[name]
+            return self.lookup(expr, frame)
+        if kind == "compare":  # numbers compare at once; anything else goes through the type checks
+            left, right = self.value(expr.items[0], frame), self.value(expr.items[1], frame)
+            if type(left) in _NUMBERS and type(right) in _NUMBERS:
+                return _COMPARE[expr.value](left, right)
+            return urscript_ops.compare(expr.value, left, right, expr.line, expr.column)
+        if kind in ("logic", "not"):
+            left = self._operand(self.value(expr.items[0], frame), expr, 0)
+            if kind == "not":
+                return not left
+            word = expr.value
+            if (word == "and" and not left) or (word == "or" and left):
+                return left
+            right = self._operand(self.value(expr.items[1], frame), expr, 1)
+            return left != right if word == "xor" else right
+        if kind == "pose" and len(expr.items) == 1 and ("p" in frame or "p" in self.globals):
+            variable = frame["p"] if "p" in frame else self.globals["p"]  # `p[0]` of a variable named p
+            return urscript_ops.index(variable, self.value(expr.items[0], frame), expr.line, expr.column)
+        if kind == "run":
+            return self.start_thread(expr.value, expr.line, expr.column)
+        values = [self.value(e, frame) for e in expr.items]
+        kwargs = {k: self.value(e, frame) for k, e in expr.kwargs}
+        return self.combine(expr, values, kwargs)
+
+    def steps(self, expr: Expr, frame: Frame) -> Steps:
+        """`value`, for an expression that may wait: yields while a function it calls waits."""
+        if not expr.user:
+            return self.value(expr, frame)
+        kind = expr.kind
+        if kind in ("logic", "not"):
+            left = self._operand((yield from self.steps(expr.items[0], frame)), expr, 0)
+            if kind == "not":
+                return not left
+            word = expr.value
+            if (word == "and" and not left) or (word == "or" and left):
+                return left
+            right = self._operand((yield from self.steps(expr.items[1], frame)), expr, 1)
+            return left != right if word == "xor" else right
+        values, kwargs = yield from self.arguments(expr, frame)
+        if kind == "call":
+            function = self.script.functions.get(expr.value)
+            if function is not None:
+                result = yield from self.invoke(function, values, expr)
+                return result.value if isinstance(result, Return) else None
+            waiting = builtins.WAITING.get(expr.value)
+            if waiting is not None:
+                stmt = Stmt("call", expr.line, "", expr.value, expr, expr.column)
+                return (yield from waiting(self, stmt, values, kwargs))  # type: ignore[arg-type]
+            command = script_calls.COMMANDS.get(expr.value)
+            if command is not None:
+                stmt = Stmt("call", expr.line, "", expr.value, expr, expr.column)
+                wait = command(self, stmt, values, kwargs)  # type: ignore[arg-type]
+                if wait is not None:
+                    yield from wait(False)
+                return None
+        return self.combine(expr, values, kwargs)
+
+    def arguments(self, expr: Expr, frame: Frame) -> Generator[None, None, tuple[list[Any], dict[str, Any]]]:
+        values: list[Any] = []
+        for item in expr.items:
+            values.append((yield from self.steps(item, frame)))
+        kwargs: dict[str, Any] = {}
+        for key, item in expr.kwargs:
+            kwargs[key] = yield from self.steps(item, frame)
+        return values, kwargs
+
+    def _operand(self, value: Any, expr: Expr, i: int) -> bool:
+        item = expr.items[i]
+        word = expr.value or "not"
+        return urscript_ops.truth(value, f"{word}'s operand", item.line or expr.line, item.column)
+
+    def combine(self, expr: Expr, values: list[Any], kwargs: dict[str, Any]) -> Any:
+        kind, line, column = expr.kind, expr.line, expr.column
+        if kind == "list":
+            if nesting(values) > MAX_NESTING:
+                raise ScriptFault(f"Type error: arrays nest at most {MAX_NESTING} deep", line, column)
+            return values
+        if kind == "pose":
+            return script_calls.make_pose(values, line, column)
+        if kind == "neg":
+            return script_calls.arithmetic("-", 0, values[0], line, column)
+        if kind == "compare":
+            return urscript_ops.compare(expr.value, values[0], values[1], line, column)
+        if kind == "index":
+            return urscript_ops.index(values[0], values[1], line, column)
+        if kind == "binop":
+            return script_calls.arithmetic(expr.value, values[0], values[1], line, column)
+        if kind == "field":
+            return builtins.field(values[0], expr.value, line, column)
+        if kind == "call":
+            function = self.script.functions.get(expr.value)
+            if function is not None:  # one that never waits (the checker says): run to its end now
+                steps = self.invoke(function, values, expr)
+                try:
+                    next(steps)
+                except StopIteration as done:
+                    return done.value.value if isinstance(done.value, Return) else None
+                steps.close()
+                raise ScriptFault(f"{expr.value}() waits: not in this expression", line, column)
+            stmt = Stmt("call", line, "", expr.value, expr, column)
+            return builtins.call(self, stmt, values, kwargs)  # type: ignore[arg-type]
+        raise ScriptFault(f"syntax_error_on_line:{line}:", line, column)
+
+    # --- calls --------------------------------------------------------------------------------
+
+    def invoke(self, function: Function, args: list[Any], expr: Expr) -> Steps:
+        if self._depth >= MAX_CALL_DEPTH:
+            raise ScriptFault(
+                f"{function.name}: calls nested deeper than {MAX_CALL_DEPTH}", expr.line, expr.column
+            )
+        frame: Frame = dict(zip(function.params, args, strict=False))
+        for name, default in zip(function.params[len(args) :], function.defaults[len(args) :], strict=True):
+            frame[name] = self.value(default, frame) if default is not None else None
+        self._depth += 1
+        try:
+            return (yield from self.block(function.body, frame))
+        finally:
+            self._depth -= 1
+
+    def call_now(self, stmt: Stmt, frame: Frame) -> None:
+        """A call as a statement that cannot wait (the checker says): a user function, a command
+        such as textmsg, or a function whose value nobody keeps."""
+        expr = stmt.expr
+        assert expr is not None
+        values = [self.value(e, frame) for e in expr.items]
+        kwargs = {k: self.value(e, frame) for k, e in expr.kwargs}
+        command = script_calls.COMMANDS.get(stmt.name)
+        if command is not None and stmt.name not in self.script.functions:
+            command(self, stmt, values, kwargs)  # type: ignore[arg-type]
+            return
+        if stmt.name in self.script.functions:
+            self.combine(expr, values, kwargs)
+            return
+        builtins.call(self, stmt, values, kwargs)  # type: ignore[arg-type]
+
+    def call_statement(self, stmt: Stmt, frame: Frame, following: Stmt | None) -> Steps:
+        """A call as a statement: a user function, a command that may wait, or a value dropped."""
+        expr = stmt.expr
+        assert expr is not None
+        if expr.kind == "run":
+            return self.value(expr, frame)
+        values, kwargs = yield from self.arguments(expr, frame)
+        function = self.script.functions.get(stmt.name)
+        if function is not None:
+            yield from self.invoke(function, values, expr)
+            return None
+        command = script_calls.COMMANDS.get(stmt.name)
+        if command is not None:
+            wait = command(self, stmt, values, kwargs)  # type: ignore[arg-type]
+            if wait is not None:
+                yield from wait(blends_into_move(following))
+            return None
+        waiting = builtins.WAITING.get(stmt.name)
+        if waiting is not None:
+            yield from waiting(self, stmt, values, kwargs)  # type: ignore[arg-type]
+            return None
+        builtins.call(self, stmt, values, kwargs)  # type: ignore[arg-type]
+        return None
+
+
+def blends_into_move(stmt: Stmt | None) -> bool:
+    return stmt is not None and stmt.kind == "call" and stmt.name in script_calls.MOVES

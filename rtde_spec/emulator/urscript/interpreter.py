@@ -1,0 +1,328 @@
+"""URScript's interpreter: the main program and its threads, scheduled on the control step.
+
+Each thread is a generator. Every control step (2 ms on e-Series, 8 ms on CB3) each live
+thread, in the order they were started, runs statements until it waits — a motion command
+for its step of motion, `sync()` or `sleep()` — then yields, as the controller's threads do.
+A thread that runs STEP_BUDGET statements or STEP_SECONDS of the interpreter's time in one
+step without waiting gets the controller's "Runtime is too much behind" runtime error, so the
+servers never wait on a program. `kill` ends a thread, `join` waits for it; when the main
+program ends, stops or faults its threads end with it. Names resolve in the function's locals,
+then the program's globals; assigning a name the globals hold changes the global unless
+`local` says otherwise, as the Script manual describes. Expressions that may call a user
+function (which may wait) are evaluated step by step (`evaluator.py`).
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable, Generator, Iterator
+from dataclasses import dataclass, field
+from enum import Enum
+from typing import Any
+
+from rtde_spec.emulator.events import ScriptEvent
+from rtde_spec.emulator.interfaces import Robot, Wait
+from rtde_spec.emulator.motion import MotionError
+from rtde_spec.emulator.urscript import builtins, sockets
+from rtde_spec.emulator.urscript import calls as script_calls
+from rtde_spec.emulator.urscript import values as urscript_ops
+from rtde_spec.emulator.urscript.checker import check
+from rtde_spec.emulator.urscript.evaluator import Evaluator, Frame, Return, Steps, runtime_text
+from rtde_spec.emulator.urscript.nodes import Script, ScriptFault, Stmt
+from rtde_spec.errors import RtdeSpecError
+
+PROGRAM_ERRORS = (ArithmeticError, ValueError, TypeError, IndexError, KeyError, RecursionError, MemoryError)
+"""What a statement's Python may raise on a program's values: the program's runtime exception."""
+
+STEP_BUDGET = 10_000  # statements (and loop turns) one thread may run in one control step
+STEP_SECONDS = 0.02  # interpreter time one control step may take, all threads together
+MAX_THREADS = 64  # threads running at once
+
+__all__ = ["PROGRAM_ERRORS", "STEP_BUDGET", "Program", "runtime_text"]
+
+
+class _Flow(Enum):
+    BREAK = "break"
+    CONTINUE = "continue"
+
+
+@dataclass(eq=False)
+class _Loop:
+    stmt: Stmt
+    epoch: int  # the control step of its latest turn
+
+
+@dataclass(eq=False)
+class _Thread:
+    id: int
+    name: str
+    steps: Iterator[None]
+    done: bool = False
+    ran: int = 0  # statements since it last waited
+    loops: list[_Loop] = field(default_factory=list)
+
+
+class Program(Evaluator):
+    """One running program; `advance(dt)` once per control step (dt in s of real time)."""
+
+    def __init__(self, script: Script, robot: Robot) -> None:
+        super().__init__(script, robot)
+        self.name = script.name or "script"
+        self.applied: list[str] = []  # the I/O calls run, as written
+        self.clock = 0.0
+        self.finished = False
+        self.fault: ScriptFault | None = None
+        self.cpu = 0.0  # interpreter CPU seconds (its thread's), all steps: benchmarks report it per step
+        self.steps_run = 0
+        self._epoch = 0
+        self._deadline = 0.0
+        line, version = getattr(robot, "line", None), getattr(robot, "version", None)
+        known = builtins.names_for(line.id, str(version)) if line is not None else builtins.names()
+        check(script, known, script_calls.WAITS | set(builtins.WAITING))  # as this version compiles
+        main = _Thread(0, self.name, self._main())
+        self.threads: dict[int, _Thread] = {0: main}
+        self.current = main
+        self._next_id = 1
+
+    # --- scheduling --------------------------------------------------------------------------
+
+    def advance(self, dt: float = 0.0) -> None:
+        if self.finished:
+            return
+        started, cpu = time.perf_counter(), time.thread_time()
+        self.clock += dt
+        self._epoch += 1
+        self.steps_run += 1
+        self._deadline = started + STEP_SECONDS
+        try:
+            self._watchdogs()
+            for thread in list(self.threads.values()):
+                if thread.done:
+                    continue
+                self.current, thread.ran = thread, 0
+                try:
+                    next(thread.steps)
+                except StopIteration:
+                    thread.done = True
+                    if thread.id == 0:
+                        self.finished = True
+                        break
+        except ScriptFault as fault:
+            self.fail(fault)
+        except PROGRAM_ERRORS as exc:  # out of no statement (resuming a chain nested past the limit)
+            self.fail(ScriptFault(runtime_text(exc), 0, 0))
+        finally:
+            if self.finished:
+                self._end_threads()
+            for key in [k for k, t in self.threads.items() if t.done]:
+                del self.threads[key]
+            self.cpu += time.thread_time() - cpu
+
+    def _watchdogs(self) -> None:
+        """rtde_set_watchdog: an RTDE input not written within 1/min_frequency s pauses or stops."""
+        watchdogs = getattr(self, "settings", {}).get("watchdogs")
+        if not watchdogs or self.finished:
+            return
+        now = float(getattr(self.robot, "time", 0.0))
+        seen = getattr(self.robot, "inputs_seen", {})
+        for name, (hz, action, since) in watchdogs.items():
+            if action == "ignore" or now - max(seen.get(name, since), since) <= 1.0 / hz:
+                continue
+            text = f"RTDE input watchdog: {name} not written at {hz:g} Hz"
+            if action == "stop":
+                raise ScriptFault(text, 0, 0)
+            pause = getattr(self.robot, "pause_program", None)
+            if pause is not None:
+                self.robot.emit(ScriptEvent("text", text, 0, program=self.name))
+                watchdogs[name] = (hz, action, now)  # once per silence
+                pause()
+
+    def fail(self, fault: ScriptFault) -> None:
+        self.finished, self.fault = True, fault
+        self._end_threads()
+        self.robot.emit(
+            ScriptEvent("runtime_exception", fault.text, fault.line, fault.column, program=self.name)
+        )
+
+    def stop(self) -> None:
+        """End the program and its threads (stop program, a new program, the end of main)."""
+        self.finished = True
+        self._end_threads()
+
+    def _end_threads(self) -> None:
+        sockets.close_all(self)
+        for thread in list(self.threads.values()):
+            if thread is not self.current:
+                _close(thread)
+        self.threads.clear()
+
+    def start_thread(self, name: str, line: int, column: int) -> int:
+        """`run name()`: a new thread, first stepped in the next control step; its handle."""
+        if len(self.threads) >= MAX_THREADS:
+            raise ScriptFault(f"run {name}: more than {MAX_THREADS} threads", line, column)
+        function = self.script.functions[name]
+        handle = self._next_id
+        self._next_id += 1
+        self.threads[handle] = _Thread(handle, name, self._thread_body(function.body))
+        return handle
+
+    def _kill(self, handle: Any) -> None:
+        thread = self.threads.get(handle) if isinstance(handle, int) and handle else None
+        if thread is None:
+            return  # a thread that ended, or a handle of 0: nothing to do, as on the controller
+        if thread is self.current:
+            raise _Killed
+        _close(thread)
+
+    def _main(self) -> Wait:
+        if self.script.wrapped:  # the program def's own variables are the program's globals
+            yield from self._block(self.script.functions[self.script.name].body, self.globals)
+        else:  # top-level statements: their variables are the globals too
+            yield from self._block(self.script.main, self.globals)
+
+    def _thread_body(self, body: list[Stmt]) -> Wait:
+        try:
+            yield from self._block(body, {})
+        except _Killed:
+            return
+
+    # --- statements --------------------------------------------------------------------------
+
+    def block(self, body: list[Stmt], frame: Frame) -> Steps:
+        return self._block(body, frame)
+
+    def _block(self, body: list[Stmt], frame: Frame) -> Steps:
+        for i, stmt in enumerate(body):
+            self._count(stmt)
+            try:
+                expr = stmt.expr
+                if stmt.kind == "assign" and expr is not None and not expr.user:  # the common case, at once
+                    self.assign(stmt, frame, self.value(expr, frame))
+                    continue
+                if stmt.kind == "call" and expr is not None and expr.kind == "call" and not expr.user:
+                    self.call_now(stmt, frame)  # a call that cannot wait, at once
+                    continue
+                signal = yield from self._statement(stmt, frame, body[i + 1] if i + 1 < len(body) else None)
+            except (ScriptFault, _Killed, GeneratorExit):
+                raise
+            except MotionError as exc:
+                raise ScriptFault(str(exc), stmt.line, 1) from exc
+            except RtdeSpecError as exc:
+                raise ScriptFault(exc.reason, stmt.line, 1) from exc
+            except PROGRAM_ERRORS as exc:  # whatever a program does, it faults; the control step goes on
+                raise ScriptFault(runtime_text(exc), stmt.line, 1) from None
+            if signal is not None:
+                return signal
+        return None
+
+    def _count(self, stmt: Stmt) -> None:
+        """One more statement without a wait; past the budget, the loop that never waits faults."""
+        thread = self.current
+        thread.ran += 1
+        if thread.ran <= STEP_BUDGET and (thread.ran & 255 or time.perf_counter() < self._deadline):
+            return
+        loop = next((loop.stmt for loop in thread.loops if loop.epoch == self._epoch), stmt)
+        raise ScriptFault(
+            f"Runtime is too much behind: the loop on line {loop.line} did not yield "
+            f"({thread.ran} statements in one control step); add sync() or sleep() to it",
+            loop.line,
+            1,
+        )
+
+    def _statement(self, stmt: Stmt, frame: Frame, following: Stmt | None) -> Steps:
+        kind = stmt.kind
+        if kind == "assign":
+            assert stmt.expr is not None
+            value = (
+                self.value(stmt.expr, frame)
+                if not stmt.expr.user
+                else (yield from self.steps(stmt.expr, frame))
+            )
+            self.assign(stmt, frame, value)
+            return None
+        if kind == "if":
+            for branch in stmt.branches:
+                cond = branch.cond
+                if cond is None:
+                    return (yield from self._block(branch.body, frame))
+                if not cond.user:
+                    value = self.value(cond, frame)
+                    taken = urscript_ops.truth(value, "a condition", branch.line, branch.column)
+                else:
+                    taken = yield from self.condition(branch, frame)
+                if taken:
+                    return (yield from self._block(branch.body, frame))
+            return None
+        if kind == "while":
+            return (yield from self._while(stmt, frame))
+        if kind in ("break", "continue"):
+            return _Flow(kind)
+        if kind == "return":
+            if stmt.expr is None:
+                return Return(None)
+            value = (
+                self.value(stmt.expr, frame)
+                if not stmt.expr.user
+                else (yield from self.steps(stmt.expr, frame))
+            )
+            return Return(value)
+        if kind in ("kill", "join"):
+            assert stmt.expr is not None
+            handle = self.value(stmt.expr, frame)
+            if kind == "kill":
+                self._kill(handle)
+            else:
+                yield from self.wait_for(
+                    lambda: not isinstance(handle, int) or not handle or handle not in self.threads
+                )
+            return None
+        if kind == "halt":
+            self.finished = True
+            yield
+            return None
+        if kind in ("enter_critical", "exit_critical"):
+            return None  # threads only switch where they wait, so a critical section holds already
+        assert stmt.expr is not None
+        yield from self.call_statement(stmt, frame, following)
+        return None
+
+    def _while(self, stmt: Stmt, frame: Frame) -> Steps:
+        branch = stmt.branches[0]
+        loop = _Loop(stmt, self._epoch)
+        loops = self.current.loops
+        loops.append(loop)
+        try:
+            while True:
+                loop.epoch = self._epoch
+                self._count(stmt)  # a turn counts, so even an empty body cannot spin forever
+                if not (yield from self.condition(branch, frame)):
+                    return None
+                signal = yield from self._block(branch.body, frame)
+                if signal is _Flow.BREAK:
+                    return None
+                if isinstance(signal, Return):
+                    return signal
+        finally:
+            if loop in loops:
+                loops.remove(loop)
+
+    def wait_for(self, done: Callable[[], bool]) -> Wait:
+        while not done():
+            yield
+
+
+class _Killed(Exception):
+    """A thread killing itself: unwinds its own generator."""
+
+
+def _close(thread: _Thread) -> None:
+    thread.done = True
+    close = getattr(thread.steps, "close", None)
+    if close is not None:
+        try:
+            close()
+        except (ValueError, RuntimeError):  # running or refusing to close: it is done all the same
+            pass
+
+
+Runner = Generator[None, None, None]

@@ -1,0 +1,219 @@
+"""URScript's socket functions: real TCP connections from the program to a client's host and port.
+
+A program opens named sockets (`socket_open("127.0.0.1", 50002, "reverse_socket")`), sends
+ints (4 bytes, big-endian), bytes and strings, and reads binary integers or ASCII floats with
+a time-out. Every socket is non-blocking: a read or a connect waits for its thread's next
+control steps, never the control loop, and a socket's buffer is bounded. Only IP addresses
+are accepted (no name look-ups from a control step). The program's sockets close with it.
+"""
+
+from __future__ import annotations
+
+import errno
+import ipaddress
+import re
+import select
+import socket
+import struct
+from collections.abc import Callable, Generator
+from typing import Any
+
+from rtde_spec.emulator.interfaces import Runner
+from rtde_spec.emulator.urscript.calls import arg, number, type_name
+from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
+
+MAX_BUFFER = 1 << 20  # bytes a socket keeps unread
+OPEN_TIMEOUT = 2.0  # s a socket_open waits for the connection
+DEFAULT = "socket_0"
+Args = list[Any]
+Kwargs = dict[str, Any]
+Waiting = Generator[None, None, Any]
+
+
+class ProgramSocket:
+    """One named connection and what has arrived on it, unread."""
+
+    def __init__(self, sock: socket.socket) -> None:
+        self.sock, self.buffer, self.closed = sock, bytearray(), False
+
+    def pump(self) -> None:
+        """Take what arrived (up to MAX_BUFFER), without waiting."""
+        while not self.closed and len(self.buffer) < MAX_BUFFER:
+            try:
+                data = self.sock.recv(min(65536, MAX_BUFFER - len(self.buffer)))
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError:
+                self.closed = True
+                return
+            if not data:
+                self.closed = True
+                return
+            self.buffer += data
+
+    def send(self, data: bytes) -> bool:
+        try:
+            self.sock.sendall(data)  # small writes on a local link; a full buffer is a failure
+        except (BlockingIOError, OSError):
+            return False
+        return True
+
+    def close(self) -> None:
+        self.closed = True
+        self.sock.close()
+
+
+def sockets_of(runner: Runner) -> dict[str, ProgramSocket]:
+    table = getattr(runner, "sockets", None)
+    if table is None:
+        table = {}
+        runner.sockets = table  # type: ignore[attr-defined]
+    return table
+
+
+def close_all(runner: Runner) -> None:
+    for sock in sockets_of(runner).values():
+        sock.close()
+    sockets_of(runner).clear()
+
+
+def _name(stmt: Stmt, args: Args, kwargs: Kwargs, index: int) -> str:
+    name = arg(stmt, args, kwargs, index, "socket_name", DEFAULT)
+    if not isinstance(name, str):
+        raise ScriptFault(f"{stmt.name}: socket_name must be a string, not {type_name(name)}", stmt.line, 1)
+    return name
+
+
+def socket_open(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Waiting:
+    address, port = arg(stmt, args, kwargs, 0, "address"), arg(stmt, args, kwargs, 1, "port")
+    name = _name(stmt, args, kwargs, 2)
+    try:
+        ipaddress.ip_address(address)
+    except ValueError:
+        return _done(False)  # a host name: the emulator looks up no names
+    if not isinstance(port, int) or not 0 < port < 65536:
+        raise ScriptFault(f"socket_open: no port {port!r}", stmt.line, 1)
+    table = sockets_of(runner)
+    if name in table:
+        table.pop(name).close()
+    sock = socket.socket(socket.AF_INET6 if ":" in address else socket.AF_INET, socket.SOCK_STREAM)
+    sock.setblocking(False)
+    sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+    code = sock.connect_ex((address, port))
+    return _connecting(runner, name, sock, code, runner.clock + OPEN_TIMEOUT)
+
+
+def _connecting(runner: Runner, name: str, sock: socket.socket, code: int, until: float) -> Waiting:
+    while code != 0:
+        if code not in (errno.EINPROGRESS, errno.EALREADY, errno.EWOULDBLOCK) or runner.clock >= until:
+            sock.close()
+            return False
+        yield  # the connection comes while the control steps go on
+        _, writable, _ = select.select([], [sock], [], 0)
+        if writable:
+            code = sock.getsockopt(socket.SOL_SOCKET, socket.SO_ERROR) or 0
+            if code in (errno.EINPROGRESS, errno.EALREADY):
+                code = errno.ECONNREFUSED
+    sockets_of(runner)[name] = ProgramSocket(sock)
+    return True
+
+
+def _done(value: Any) -> Waiting:
+    return value
+    yield  # a generator that returns at once
+
+
+def socket_close(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    sock = sockets_of(runner).pop(_name(stmt, args, kwargs, 0), None)
+    if sock is not None:
+        sock.close()
+
+
+def _sender(encode: Callable[[Stmt, Any], bytes]) -> Callable[[Runner, Stmt, Args, Kwargs], bool]:
+    def send(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> bool:
+        data = encode(stmt, arg(stmt, args, kwargs, 0, "value"))
+        sock = sockets_of(runner).get(_name(stmt, args, kwargs, 1))
+        return sock is not None and not sock.closed and sock.send(data)
+
+    return send
+
+
+def _int(stmt: Stmt, value: Any) -> bytes:
+    if not isinstance(value, int) or isinstance(value, bool):
+        raise ScriptFault(f"{stmt.name}: value must be an int, not {type_name(value)}", stmt.line, 1)
+    return struct.pack(">i", value)
+
+
+def _text(stmt: Stmt, value: Any) -> bytes:
+    from rtde_spec.emulator.urscript.calls import to_str
+
+    return (to_str(value) + ("\n" if stmt.name == "socket_send_line" else "")).encode()
+
+
+def _byte(stmt: Stmt, value: Any) -> bytes:
+    return bytes([int(number(stmt, value, "value")) & 0xFF])
+
+
+SENDERS = {
+    "socket_send_int": _sender(_int),
+    "socket_send_string": _sender(_text),
+    "socket_send_line": _sender(_text),
+    "socket_send_byte": _sender(_byte),
+}
+
+
+def _reader(take: Callable[[ProgramSocket, int], list[Any] | None]) -> Callable[..., Waiting]:
+    def read(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Waiting:
+        count = arg(stmt, args, kwargs, 0, "number")
+        if not isinstance(count, int) or not 0 < count <= 30:
+            raise ScriptFault(f"{stmt.name}: number must be 1 to 30, not {count!r}", stmt.line, 1)
+        sock = sockets_of(runner).get(_name(stmt, args, kwargs, 1))
+        timeout = number(stmt, arg(stmt, args, kwargs, 2, "timeout", 2.0), "timeout")
+        return _reading(runner, sock, take, count, timeout)
+
+    return read
+
+
+def _reading(
+    runner: Runner, sock: ProgramSocket | None, take: Callable[[ProgramSocket, int], list[Any] | None],
+    count: int, timeout: float,
+) -> Waiting:  # fmt: skip
+    until = runner.clock + timeout
+    failed = [0] + [-1] * count if take is _binary else [0] + [0.0] * count
+    while sock is not None:
+        sock.pump()
+        got = take(sock, count)
+        if got is not None:
+            return got
+        if sock.closed or (timeout > 0 and runner.clock >= until):
+            break
+        yield
+    return failed
+
+
+def _binary(sock: ProgramSocket, count: int) -> list[Any] | None:
+    size = 4 * count
+    if len(sock.buffer) < size:
+        return None
+    values = list(struct.unpack(f">{count}i", sock.buffer[:size]))
+    del sock.buffer[:size]
+    return [count, *values]
+
+
+_ASCII = re.compile(rb"\(([^()]*)\)")
+
+
+def _ascii(sock: ProgramSocket, count: int) -> list[Any] | None:
+    found = _ASCII.search(sock.buffer)
+    if found is None:
+        return None
+    text = bytes(found.group(1))  # before the buffer changes under the match
+    del sock.buffer[: found.end()]
+    try:
+        values = [float(v) for v in text.split(b",")]
+    except ValueError:
+        return [0] + [0.0] * count
+    return [len(values), *values] if len(values) == count else [0] + [0.0] * count
+
+
+READERS = {"socket_read_binary_integer": _reader(_binary), "socket_read_ascii_float": _reader(_ascii)}
