@@ -86,17 +86,20 @@ def _strict_checks(
     return lines
 
 
-def _compile_encode(items: Sequence[RecipeItem], packer: struct.Struct, lead: str, strict: bool) -> Any:
+def _compile_encode(
+    items: Sequence[RecipeItem], packer: struct.Struct, lead: str, strict: bool, params: str = ""
+) -> Any:
     """One function from a dict of values to packed bytes, written once per recipe and mode.
 
-    `lead` names the arguments packed before the values ("" for a payload). It
+    `lead` is what is packed before the values ("" for a payload), `params` the arguments
+    it names (constants such as the package size are written into the code). It
     raises `_Refused` (or KeyError, TypeError, struct.error) where the per-value
     checks must decide. strict: every value has a type strict mode takes for its
     kind; otherwise BOOL values are bools or 0/1. Ranges are struct's to check.
     """
     scope: dict[str, Any] = {"Refused": _Refused, "is_bool": _is_bool, "pack": packer.pack}
     names = [f"x{i}" for i in range(len(items))]
-    lines = [f"def encode(v{', ' + lead if lead else ''}):"]
+    lines = [f"def encode(v{', ' + params if params else ''}):"]
     if len(items) == 1:
         lines.append(f"    x0 = v[{items[0].name!r}]")
     else:  # every value in one C call; a missing name raises KeyError
@@ -133,10 +136,11 @@ class Encoder:
         self.package_size = package_size
         self._count = len(self.items)
         self._payload = tuple(_compile_encode(items, payload, "", strict) for strict in (False, True))
-        self._package = tuple(
-            _compile_encode(items, self.package_struct, "size, ptype, rid", strict)
-            for strict in (False, True)
+        lead = f"{package_size}, {DATA_PACKAGE_TYPE}, rid"  # the prefix's constants written in
+        self.fast_package = tuple(
+            _compile_encode(items, self.package_struct, lead, strict, "rid") for strict in (False, True)
         )
+        """encode(values dict, recipe id): the one-call path (raises what `package` explains)."""
 
     def payload(self, values: Any, strict: bool) -> bytes:
         if type(values) is dict and len(values) == self._count:
@@ -149,7 +153,7 @@ class Encoder:
     def package(self, values: Any, recipe_id: int, strict: bool) -> bytes:
         if type(values) is dict and len(values) == self._count:
             try:
-                return self._package[strict](values, self.package_size, DATA_PACKAGE_TYPE, recipe_id)  # type: ignore[no-any-return]
+                return self.fast_package[strict](values, recipe_id)  # type: ignore[no-any-return]
             except _FAST_ERRORS:
                 pass
         try:
