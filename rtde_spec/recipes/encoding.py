@@ -77,7 +77,8 @@ def _strict_checks(
         scope["sequences"] = _STRICT_TYPES["vector"]
         kinds = [_CANONICAL[i.wire.kind] for i in items for _ in range(i.wire.count)]
         scope["canon"] = [int] * leading + kinds
-        lines.append(f"    if not set(map(type, ({', '.join(vectors)},))) <= sequences: raise Refused")
+        inline = " and ".join(f"type({x}) in sequences" for x in vectors)
+        lines.append(f"    if not ({inline}): raise Refused")
         lines.append("    if list(map(type, t)) != canon:")
     else:  # float, int, bool: the builtins' names in the code
         pairs = zip(names, items, strict=True)
