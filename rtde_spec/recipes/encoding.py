@@ -82,8 +82,8 @@ def _strict_checks(
         lines.append("    if list(map(type, t)) != canon:")
     else:  # float, int, bool: the builtins' names in the code
         pairs = zip(names, items, strict=True)
-        inline = (f"type({x}) is {_CANONICAL[i.wire.kind].__name__}" for x, i in pairs)
-        lines.append(f"    if not ({' and '.join(inline)}):")
+        inline = " and ".join(f"type({x}) is {_CANONICAL[i.wire.kind].__name__}" for x, i in pairs)
+        lines.append(f"    if not ({inline}):")
     groups: dict[str, list[str]] = {}
     for x, item in zip(names, items, strict=True):
         groups.setdefault(item.wire.kind, []).append(x if item.wire.count == 1 else f"*{x}")
