@@ -388,6 +388,15 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  {'floor: bare recv() loop, nothing decoded':42s} {floor_us:8.1f} µs")
         label = f"floor, batch={BATCH}: recv + struct tuples"
         print(f"  {label:42s} {floor_b_us:8.1f} µs  (plain tuples of Python numbers, nothing else)")
+        floor_of = {"per package": floor_us, f"batch={BATCH}": floor_b_us, f"batch={BATCH_LONG}": floor_b_us}
+        for label, got in (
+            ("per package", ours_us),
+            (f"batch={BATCH}", batched_us),
+            (f"batch={BATCH_LONG}", longer_us),
+            ("for record in client", iter_us),
+        ):
+            low = floor_of.get(label, floor_us)
+            print(f"  ratios, {label:21s} UR style / ours {ur_us / got:5.1f}x, / floor {got / low:5.2f}x")
         listed = ", ".join(f"{a:.1f}/{b:.1f}/{c:.1f}" for a, b, c in rounds)
         print(f"  (rounds, ours batch={BATCH}/floor/ours batch={BATCH_LONG}, medians above: {listed})")
         try:

@@ -13,7 +13,12 @@ urx takes sub-package type 16 for a message header and re-parses its body, so it
 cannot read the UR5e message whole; urx and rtde_spec are compared on the same
 message without that last sub-package, a layout both read.
 
+The stream row feeds the same message to a `PrimaryStreamDecoder` (framing included), as
+a client or a capture does. Each row is also given as a ratio to the floor's time, and
+urx's time to ours, both per round (medians of the rounds' ratios).
+
 Targets: median <= 50 µs for the 13 sub-packages; >= 4x faster than urx.
+(Issue 30 asks for <= 2x the floor and >= 12x urx: printed, not yet met.)
 
     python benchmarks/bench_primary_decode.py [--assert-targets]
 """
@@ -32,7 +37,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 from ur5e_robot_state import ur5e_robot_state_bytes
 
 from rtde_spec import Catalogue, decode_message
-from rtde_spec.primary.codec import PrimaryCodec
+from rtde_spec.primary.codec import PrimaryCodec, PrimaryStreamDecoder
 
 TARGET_MEDIAN_US = 50.0
 TARGET_VS_URX = 4.0
@@ -120,15 +125,23 @@ def main(argv: list[str] | None = None) -> int:
                 args.calls // 8,
             )
         )
+    stream = PrimaryStreamDecoder()
+    assert stream.feed(data)[0][1] == message
+    rows.insert(3, ("rtde_spec: PrimaryStreamDecoder.feed (13)", stream.feed, data, args.calls // 4))
     unlearned = PrimaryCodec(Catalogue.builtin().spec)
     unlearned.robot_state.SHAPES_PER_SIZE = 0  # every message as a first sighting: a decoder per sub-package
     rows.append(("rtde_spec: a shape not seen before (13)", unlearned.decode_message, data, args.calls // 4))
     samples = interleaved_us(rows)
-    urx_median = statistics.median(samples[3]) if len(rows) > 4 else None
+    has_urx = len(rows) > 5
+    urx_median = statistics.median(samples[4]) if has_urx else None
     print(f"Robot State: {len(data)} bytes, {len(message.sub_packages)} sub-packages\n")  # type: ignore[union-attr]
-    print(f"{'decoder':62s} {'median µs':>10s} {'p90 µs':>8s}")
+    print(f"{'decoder':58s} {'median µs':>9s} {'p90 µs':>7s} {'/ floor':>8s} {'urx / it':>8s}")
+    # (urx reads the 12-sub-package message: its ratio is exact on that row, indicative on others)
     for (label, *_), row in zip(rows, samples, strict=True):
-        print(f"{label:62s} {statistics.median(row):10.1f} {sorted(row)[len(row) * 9 // 10]:8.1f}")
+        to_floor = statistics.median(o / f for o, f in zip(row, samples[0], strict=True))
+        vs_urx = statistics.median(u / o for u, o in zip(samples[4], row, strict=True)) if has_urx else 0.0
+        p90 = sorted(row)[len(row) * 9 // 10]
+        print(f"{label:58s} {statistics.median(row):9.1f} {p90:7.1f} {to_floor:7.2f}x {vs_urx:7.1f}x")
     ours, ours_shared = statistics.median(samples[1]), statistics.median(samples[2])
     ok = ours <= TARGET_MEDIAN_US
     print(f"\nrtde_spec median {ours:.1f} µs (target <= {TARGET_MEDIAN_US:.0f})")

@@ -22,7 +22,7 @@ from rtde_spec._generated.constants import (
     RTDE_LIMITS,
 )
 from rtde_spec.errors import DecodeError, RecipeError, require
-from rtde_spec.recipes.encoding import PREFIX, Encoder, RecipeItem
+from rtde_spec.recipes.encoding import _FAST_ERRORS, PREFIX, Encoder, RecipeItem
 from rtde_spec.recipes.record import record_class
 from rtde_spec.spec.catalogue import Catalogue, Direction, FieldInfo, WireTypeInfo
 
@@ -85,6 +85,8 @@ class RecipeCodec:
         self.record_type = record_class([(i.name, i.wire.count, _py_type(i.wire)) for i in layout])
         self._to_dict = self._compile()
         self._encoder = Encoder(self.items, self.struct, self.package_size)
+        self._fast_package = self._encoder.fast_package
+        self._count = len(self.items)
         self._model_type: type[BaseModel] | None = None
         self._dtype: Any = None
 
@@ -266,6 +268,11 @@ class RecipeCodec:
         strict: bool = False,
     ) -> bytes:
         """A whole data package: header, recipe id, payload; one `struct` call on the happy path."""
+        if type(values) is dict and len(values) == self._count:  # the happy path, one call less
+            try:
+                return self._fast_package[strict](values, recipe_id)  # type: ignore[no-any-return]
+            except _FAST_ERRORS:
+                pass  # explained (or converted) by the encoder
         return self._encoder.package(values, recipe_id, strict)
 
     # --- typed views --------------------------------------------------------
@@ -289,24 +296,9 @@ class RecipeCodec:
         The readable definition, for parsing captures with construct directly; the
         codec's own methods are the fast path. Building fills in the size.
         """
-        from construct import Array, Const, FormatField, Rebuild, Struct
+        from rtde_spec.recipes.construct_view import recipe_construct
 
-        def field(code: str) -> Any:
-            # construct names the standard 4-byte ints "l"/"L" where struct also takes "i"/"I"
-            return FormatField(_PREFIX.format[0], {"i": "l", "I": "L"}.get(code, code))
-
-        size_c, type_c, id_c = (field(code) for code in _PREFIX.format[1:])
-        fields = []
-        for item in self.items:
-            one = field(item.wire.struct[-1])
-            fields.append(item.name / (one if item.wire.count == 1 else Array(item.wire.count, one)))
-        size = self.package_size
-        return Struct(
-            _PREFIX_FIELDS[0] / Rebuild(size_c, lambda _: size),
-            _PREFIX_FIELDS[1] / Const(DATA_PACKAGE_TYPE, type_c),
-            _PREFIX_FIELDS[2] / id_c,
-            *fields,
-        )
+        return recipe_construct(self.items, self.package_size)
 
     @property
     def dtype(self) -> Any:

@@ -64,19 +64,26 @@ def _strict_checks(
 ) -> list[str]:
     """Source lines refusing the values unless each has a type strict mode takes for its kind.
 
-    `t` holds `leading` ints (size, type, recipe id) and then the values. First
-    one comparison for the usual case (every value of its kind's own type);
-    only if that fails, one `set(map(type, ...)) <= allowed` per kind (ints pass
-    for doubles). Each is a C loop over the values: strict costs a few calls per
-    package, not one per value.
+    First the usual case, every value of its kind's own type: with no vectors each
+    type compared inline (no call); with vectors every value's type in one C loop
+    over `t`, the packed arguments (`leading` ints, then the values: cheaper than ~40
+    inline checks and a second tuple).
+    Only if that fails, one `set(map(type, ...)) <= allowed` per kind (ints pass
+    for doubles). Strict costs a few calls per package, not one per value.
     """
-    scope["canon"] = [int] * leading + [_CANONICAL[i.wire.kind] for i in items for _ in range(i.wire.count)]
     vectors = [x for x, item in zip(names, items, strict=True) if item.wire.count > 1]
     lines = []
     if vectors:  # lists or tuples, as the per-value checks want (not sets, arrays, strings)
         scope["sequences"] = _STRICT_TYPES["vector"]
-        lines.append(f"    if not set(map(type, ({', '.join(vectors)},))) <= sequences: raise Refused")
-    lines.append("    if list(map(type, t)) != canon:")
+        kinds = [_CANONICAL[i.wire.kind] for i in items for _ in range(i.wire.count)]
+        scope["canon"] = [int] * leading + kinds
+        inline = " and ".join(f"type({x}) in sequences" for x in vectors)
+        lines.append(f"    if not ({inline}): raise Refused")
+        lines.append("    if list(map(type, t)) != canon:")
+    else:  # float, int, bool: the builtins' names in the code
+        pairs = zip(names, items, strict=True)
+        inline = " and ".join(f"type({x}) is {_CANONICAL[i.wire.kind].__name__}" for x, i in pairs)
+        lines.append(f"    if not ({inline}):")
     groups: dict[str, list[str]] = {}
     for x, item in zip(names, items, strict=True):
         groups.setdefault(item.wire.kind, []).append(x if item.wire.count == 1 else f"*{x}")
@@ -86,17 +93,20 @@ def _strict_checks(
     return lines
 
 
-def _compile_encode(items: Sequence[RecipeItem], packer: struct.Struct, lead: str, strict: bool) -> Any:
+def _compile_encode(
+    items: Sequence[RecipeItem], packer: struct.Struct, lead: str, strict: bool, params: str = ""
+) -> Any:
     """One function from a dict of values to packed bytes, written once per recipe and mode.
 
-    `lead` names the arguments packed before the values ("" for a payload). It
+    `lead` is what is packed before the values ("" for a payload), `params` the arguments
+    it names (constants such as the package size are written into the code). It
     raises `_Refused` (or KeyError, TypeError, struct.error) where the per-value
     checks must decide. strict: every value has a type strict mode takes for its
     kind; otherwise BOOL values are bools or 0/1. Ranges are struct's to check.
     """
     scope: dict[str, Any] = {"Refused": _Refused, "is_bool": _is_bool, "pack": packer.pack}
     names = [f"x{i}" for i in range(len(items))]
-    lines = [f"def encode(v{', ' + lead if lead else ''}):"]
+    lines = [f"def encode(v{', ' + params if params else ''}):"]
     if len(items) == 1:
         lines.append(f"    x0 = v[{items[0].name!r}]")
     else:  # every value in one C call; a missing name raises KeyError
@@ -113,10 +123,11 @@ def _compile_encode(items: Sequence[RecipeItem], packer: struct.Struct, lead: st
             check = f"is_bool({x})" if item.wire.count == 1 else f"all(map(is_bool, {x}))"
             lines.append(f"    if not {check}: raise Refused")
     values = ", ".join(([lead] if lead else []) + parts)
-    if strict:  # the arguments built once: checked, then handed to pack as they are
+    if strict and any(item.wire.count > 1 for item in items):  # the arguments in `t`: checked, then packed
         lines.append(f"    t = ({values},)")
-        lines.extend(_strict_checks(items, names, scope, lead.count(",") + 1 if lead else 0))
         values = "*t"
+    if strict:
+        lines.extend(_strict_checks(items, names, scope, lead.count(",") + 1 if lead else 0))
     lines.append(f"    return pack({values})")
     exec("\n".join(lines), scope)
     return scope["encode"]
@@ -133,10 +144,11 @@ class Encoder:
         self.package_size = package_size
         self._count = len(self.items)
         self._payload = tuple(_compile_encode(items, payload, "", strict) for strict in (False, True))
-        self._package = tuple(
-            _compile_encode(items, self.package_struct, "size, ptype, rid", strict)
-            for strict in (False, True)
+        lead = f"{package_size}, {DATA_PACKAGE_TYPE}, rid"  # the prefix's constants written in
+        self.fast_package = tuple(
+            _compile_encode(items, self.package_struct, lead, strict, "rid") for strict in (False, True)
         )
+        """encode(values dict, recipe id): the one-call path (raises what `package` explains)."""
 
     def payload(self, values: Any, strict: bool) -> bytes:
         if type(values) is dict and len(values) == self._count:
@@ -149,7 +161,7 @@ class Encoder:
     def package(self, values: Any, recipe_id: int, strict: bool) -> bytes:
         if type(values) is dict and len(values) == self._count:
             try:
-                return self._package[strict](values, self.package_size, DATA_PACKAGE_TYPE, recipe_id)  # type: ignore[no-any-return]
+                return self.fast_package[strict](values, recipe_id)  # type: ignore[no-any-return]
             except _FAST_ERRORS:
                 pass
         try:
