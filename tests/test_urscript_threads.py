@@ -17,24 +17,12 @@ import pytest
 from rtde_spec import EmulatorConfig, EmulatorThread, RtdeClient
 from rtde_spec.emulator.model import ControllerModel
 from rtde_spec.emulator.urscript import ScriptFault, parse
+from tests.test_urscript_control import faults, said
+from tests.test_urscript_control import run as run_script
 
 
 def run(script: str, steps: int = 500) -> tuple[ControllerModel, list[tuple[str, str, int, int]]]:
-    model = ControllerModel("5.15.0")
-    model.run_script(script)
-    for _ in range(steps):
-        if model.program is None:
-            break
-        model.tick(model.step + 1)
-    return model, [(e.kind, e.text, e.line, e.column) for e in model.drain_events()]
-
-
-def said(events: list[tuple[str, str, int, int]]) -> list[str]:
-    return [text for kind, text, _, _ in events if kind == "text"]
-
-
-def faults(events: list[tuple[str, str, int, int]]) -> list[tuple[str, int, int]]:
-    return [(text, line, column) for kind, text, line, column in events if kind == "runtime_exception"]
+    return run_script(script, steps)
 
 
 def test_threads_advance_each_step_and_kill_and_join_end_them() -> None:

@@ -12,8 +12,6 @@ from __future__ import annotations
 import errno
 import hashlib
 import io
-import subprocess
-import uuid
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -28,6 +26,7 @@ from rtde_spec.output.partfile import PartStream
 from rtde_spec.output.writers import open_writer
 from tests import capture_files
 from tests.faults.record_run import emulator, run, temp_files
+from tests.faults.tmpfs import mounted_tmpfs
 
 FORMATS = ["parquet", "csv", "jsonl", "mcap"]
 
@@ -42,17 +41,8 @@ def small_disk(tmp_path: Path) -> Iterator[Path]:
     """A 384 kB tmpfs of its own; skipped only where this process may not mount one."""
     where = tmp_path / "disk"
     where.mkdir()
-    mounted = subprocess.run(
-        ["mount", "-t", "tmpfs", "-o", "size=384k", f"rtde-spec-{uuid.uuid4().hex[:8]}", str(where)],
-        capture_output=True,
-        text=True,
-    )
-    if mounted.returncode != 0:
-        pytest.skip(f"cannot mount a tmpfs here: {mounted.stderr.strip()}")
-    try:
+    with mounted_tmpfs(where, "size=384k"):
         yield where
-    finally:
-        subprocess.run(["umount", "-l", str(where)], check=False)
 
 
 def fill(disk: Path, leave: int) -> None:

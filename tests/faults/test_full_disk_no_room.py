@@ -16,7 +16,6 @@ import errno
 import hashlib
 import subprocess
 import sys
-import uuid
 from collections.abc import Iterator
 from pathlib import Path
 
@@ -30,6 +29,7 @@ from rtde_spec.output.writers import open_writer
 from tests.capture_files import rtde_packages
 from tests.faults.many_files import fleet_capture
 from tests.faults.record_run import temp_files
+from tests.faults.tmpfs import mounted_tmpfs
 
 
 @pytest.fixture
@@ -37,25 +37,8 @@ def few_inodes(tmp_path: Path) -> Iterator[Path]:
     """A tmpfs of 4 MB but only 48 inodes; skipped only where this process may not mount one."""
     where = tmp_path / "disk"
     where.mkdir()
-    mounted = subprocess.run(
-        [
-            "mount",
-            "-t",
-            "tmpfs",
-            "-o",
-            "size=4m,nr_inodes=48",
-            f"rtde-spec-{uuid.uuid4().hex[:8]}",
-            str(where),
-        ],
-        capture_output=True,
-        text=True,
-    )
-    if mounted.returncode != 0:
-        pytest.skip(f"cannot mount a tmpfs here: {mounted.stderr.strip()}")
-    try:
+    with mounted_tmpfs(where, "size=4m,nr_inodes=48"):
         yield where
-    finally:
-        subprocess.run(["umount", "-l", str(where)], check=False)
 
 
 def use_up_inodes(disk: Path) -> int:
