@@ -70,6 +70,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     imp.add_argument(
         "--edition",
+        metavar="VERSION",
         help="the controller version the document is written for (default: the newest its version "
         "cells name); fields newer than it are not reported removed",
     )

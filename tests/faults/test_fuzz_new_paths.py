@@ -238,6 +238,10 @@ def _run_script(text: str, steps: int = 200, step_limit: float = 2.0) -> list[tu
     started = time.perf_counter()
     model.run_script(text)
     assert time.perf_counter() - started < step_limit, "starting the program took too long"
+    deadline = time.perf_counter() + 30.0  # a long program is read off the loop: its steps wait for it
+    while model._parsing and time.perf_counter() < deadline:
+        model.tick(model.step + 1)
+        time.sleep(0.01)
     for _ in range(steps):
         if model.program is None:
             break
