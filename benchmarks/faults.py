@@ -149,6 +149,7 @@ CHECKS = {  # issue 31's items held by tests rather than figures: their outcome 
     "wire text escaped (record, serve, decode, capture)": "test_wire_text_escaped.py",
     "both directions in capture order (no SYN, same tables)": "test_capture_midstream.py",
     "conflicts, IPv4 fragments, setup type counts, bounds": "test_capture_linear.py",
+    "every port's decoder: work per byte bounded, byte-by-byte streams": "test_capture_ports_linear.py",
 }
 
 

@@ -129,11 +129,15 @@ HOSTILE = [  # (label, writer, full size; half size runs too, to show time grows
     ("50002 stream without a newline (bytes)", "no_newline", 30_000_000),
     ("SYNs to ports nobody decodes", "syns", 1_500_000),
     ("RTDE connections one after another", "connections", 50_000),
+    ("30004 mid-stream, 1-byte segments, no package", "rtde_bytes", 400_000),
+    ("30003 1-byte segments, no known size", "realtime_bytes", 400_000),
+    ("50003 mid-stream, 1-byte segments, no record", "trajectory_bytes", 400_000),
 ]
 
 
-def hostile_figures(scale: float = 1.0) -> list[dict[str, Any]]:
-    """Per hostile capture: half and full size, seconds and peak RSS each, and the time ratio."""
+def hostile_figures(scale: float = 1.0, only: str = "") -> list[dict[str, Any]]:
+    """Per hostile capture (those whose kind contains `only`): half and full size, seconds and
+    peak RSS each, and the time ratio."""
     import hostile_captures as hc
 
     writers = {
@@ -142,10 +146,15 @@ def hostile_figures(scale: float = 1.0) -> list[dict[str, Any]]:
         "no_newline": lambda path, n: hc.script_stream(path, n, newlines=False),
         "syns": hc.syn_flood,
         "connections": hc.rtde_connections,
+        "rtde_bytes": lambda path, n: hc.byte_by_byte(path, n, 30004),
+        "realtime_bytes": lambda path, n: hc.byte_by_byte(path, n, 30003),
+        "trajectory_bytes": lambda path, n: hc.byte_by_byte(path, n, 50003),
     }
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for label, kind, full in HOSTILE:
+            if only not in kind:
+                continue
             runs = []
             for size in (int(full * scale) // 2, int(full * scale)):
                 path = writers[kind](Path(tmp) / f"{kind}-{size}.pcap", size)
@@ -157,12 +166,27 @@ def hostile_figures(scale: float = 1.0) -> list[dict[str, Any]]:
     return rows
 
 
+def print_hostile(rows: list[dict[str, Any]]) -> None:
+    print("hostile captures (half size, full size: seconds, peak RSS, exit code; time ratio ~2 is linear):")
+    for row in rows:
+        half, full = row["half"], row["full"]
+        print(
+            f"  {row['case']:44s} {half['size']:>11,}: {half['seconds']:6.1f} s {half['peak_mb']:4.0f} MB  "
+            f"{full['size']:>11,}: {full['seconds']:6.1f} s {full['peak_mb']:4.0f} MB exit {full['code']}  "
+            f"x{row['time_ratio']:.2f}"
+        )
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--cases", type=int, default=2500, help="fuzz cases (default: 2500)")
     parser.add_argument("--json", action="store_true", help="print one JSON object (default: text)")
     parser.add_argument("--scale", type=float, default=1.0, help="size of the hostile captures (1.0: full)")
+    parser.add_argument("--only", default="", help="hostile captures whose kind contains this, alone")
     args = parser.parse_args(argv)
+    if args.only:
+        print_hostile(hostile_figures(args.scale, args.only))
+        return 0
     kept = rows_kept()
     fuzz = foreign_exceptions(args.cases)
     hostile = hostile_figures(args.scale)
@@ -185,14 +209,3 @@ def main(argv: list[str] | None = None) -> int:
 
 if __name__ == "__main__":
     sys.exit(main())
-
-
-def print_hostile(rows: list[dict[str, Any]]) -> None:
-    print("hostile captures (half size, full size: seconds, peak RSS, exit code; time ratio ~2 is linear):")
-    for row in rows:
-        half, full = row["half"], row["full"]
-        print(
-            f"  {row['case']:44s} {half['size']:>11,}: {half['seconds']:6.1f} s {half['peak_mb']:4.0f} MB  "
-            f"{full['size']:>11,}: {full['seconds']:6.1f} s {full['peak_mb']:4.0f} MB exit {full['code']}  "
-            f"x{row['time_ratio']:.2f}"
-        )

@@ -145,3 +145,17 @@ def script_stream(path: Path, size: int, newlines: bool, from_robot: bool = True
             seq += len(block)
 
     return write(path, frames())
+
+
+def byte_by_byte(path: Path, size: int, port: int = 30003) -> Path:
+    """`size` bytes that hold no package, sent by the server of `port` one byte per segment, captured
+    from the middle (no handshake): each decoder's search for a boundary sees every byte arrive."""
+    data = bytes((i * 7919 + 13) % 251 for i in range(size))
+
+    def frames() -> Iterator[tuple[float, bytes]]:
+        server, client = _ip(10), _ip(2)
+        for i in range(size):
+            frame = _frame(server, port, client, 40000, 5000 + i, ACK, data[i : i + 1])
+            yield 1_700_000_000 + i * 1e-5, frame
+
+    return write(path, frames())

@@ -39,6 +39,7 @@ BATCH = 4096  # records of one variant decoded together into columns
 MAX_LINE = 4096  # a robot's request line is a word or two: longer ones are cut, counted and reported
 MAX_REQUESTS = 1000  # requests kept per connection (the robot asks once per program start)
 MAX_HELD = 4 << 20  # bytes held waiting for a layout; past that it is chosen from what is known
+CHUNK_COST = 128  # what holding one chunk costs beside its bytes: 1-byte segments count that much
 
 
 def _shared(codec: RecordCodec) -> dict[str, list[str] | None]:
@@ -102,7 +103,7 @@ class ExternalConnection:
         if sender in self.choosers:
             held = self.held[sender]
             held.append(chunk)
-            self.held_bytes += len(chunk.data)
+            self.held_bytes += len(chunk.data) + CHUNK_COST
             if len(held) == 1 or self.held_bytes > MAX_HELD:  # the program sent before, else the end decides
                 self._choose(sender, final=self.held_bytes > MAX_HELD)
             return

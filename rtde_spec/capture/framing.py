@@ -18,6 +18,7 @@ chunk that completed them (`times`).
 
 from __future__ import annotations
 
+import heapq
 from collections.abc import Callable
 
 from rtde_spec.capture.tcp import Chunk
@@ -47,6 +48,10 @@ class Framing:
         self.lead_in = 0  # bytes before the first boundary of a stream captured from its middle
         self.found_start = True  # False until the first boundary of a stream captured from its middle
         self.scan_from = 0  # where the search for a vouched-for candidate goes on
+        self.unjudged: list[tuple[int, int]] = []  # heap of (end, start) of candidates not whole yet,
+        # as absolute stream offsets: each is judged once, when its last byte arrives
+        self.dropped = 0  # bytes deleted from the front of `buf` while searching (its absolute offset)
+        self.filled = 0  # how far whole packages chain from the first byte held (mid-stream start)
         self.marks: list[tuple[int, float]] = []  # unsynced: (end in buf, time) of each chunk held
         self.times: list[float] | None = None  # of the packages the last call gave, when not all `now`
 
@@ -97,6 +102,7 @@ class Framing:
         pos = 0
         buf = self.buf
         marks, self.marks = self.marks, []
+        mark = 0  # the first of `marks` not yet passed (an index: popping the front is quadratic)
         times: list[float] = []
         while len(buf) - pos >= self.header:
             size = self.plausible(pos)
@@ -104,7 +110,7 @@ class Framing:
                 del buf[:pos]
                 self.synced = False
                 self.lost_sync += 1
-                marks, self.marks = [], [(len(buf), now)]
+                marks, mark, self.marks = [], 0, [(len(buf), now)]
                 if not self._resync(final):
                     break
                 self.marks = []
@@ -115,9 +121,9 @@ class Framing:
             out.append(bytes(buf[pos : pos + size]))
             pos += size
             if marks:
-                while marks and marks[0][0] < pos:
-                    marks.pop(0)
-                times.append(marks[0][1] if marks else now)
+                while mark < len(marks) and marks[mark][0] < pos:
+                    mark += 1
+                times.append(marks[mark][1] if mark < len(marks) else now)
         if self.synced:
             del buf[:pos]
         if len(times) == len(out) and any(t != now for t in times):
@@ -138,20 +144,37 @@ class Framing:
         return self._confirmed(final)
 
     def _find_strong(self) -> int | None:
-        """The first candidate the check vouches for, searched from where the last search ended
-        (or from the first one too short to judge then)."""
-        buf, last = self.buf, len(self.buf) - self.header
-        unfinished = None
+        """The first candidate the check vouches for among those that can be judged now.
+
+        Each offset is looked at once: new offsets from where the last search ended, and a
+        candidate not yet whole again only when its last byte has arrived (a heap by its
+        end), so a stream fed byte by byte costs its length, not its length squared."""
+        buf, last, dropped = self.buf, len(self.buf) - self.header, self.dropped
+        found: int | None = None
+        unjudged = self.unjudged
+        while unjudged and unjudged[0][0] - dropped <= len(buf):
+            _, start = heapq.heappop(unjudged)
+            at = start - dropped
+            if at < 0 or (found is not None and at >= found):
+                continue
+            size = self.plausible(at)
+            if size is not None and self.check(buf, at, size) == STRONG:
+                found = at
         for at in range(self.scan_from, last + 1):
+            if found is not None and at >= found:
+                break
             size = self.plausible(at)
             if size is None:
                 continue
             verdict = self.check(buf, at, size)
             if verdict == STRONG:
-                return at
-            if verdict == WEAK and at + size > len(buf) and unfinished is None:
-                unfinished = at
-        self.scan_from = max(0, last + 1) if unfinished is None else unfinished
+                found = at
+                break
+            if verdict == WEAK and at + size > len(buf):
+                heapq.heappush(unjudged, (at + size + dropped, at + dropped))
+        if found is not None:
+            return found
+        self.scan_from = max(self.scan_from, last + 1)
         return None
 
     def _fills_exactly(self) -> bool:
@@ -161,12 +184,13 @@ class Framing:
         packages whole: headers that chain from the first byte exactly to the end are the
         boundary, so the setup exchange a client sends is decoded when it comes, not held
         for a window it never fills (its replies' data would wait for it, unknown)."""
-        at, end = 0, len(self.buf)
+        at, end = self.filled, len(self.buf)
         while at < end:
             size = self.plausible(at)
             if size is None or at + size > end or self.check(self.buf, at, size) == NO:
                 return False
             at += size
+            self.filled = at  # packages already chained are not walked again
         return end > 0
 
     def _leads_to(self, at: int, strong: int) -> bool:
@@ -201,15 +225,19 @@ class Framing:
     def _synced_at(self, at: int) -> bool:
         self._skip(at)
         self.synced = self.found_start = True
-        self.scan_from = 0
+        self.scan_from = self.filled = 0
+        self.unjudged.clear()
         return True
 
     def _skip(self, count: int) -> None:
         if count:
-            if self.found_start:
-                self.skipped += count
-            else:
-                self.lead_in += count
+            # before the first boundary of a stream captured from its middle: the tail of a package,
+            # so at most one package long; bytes past that are no package at all (damage)
+            lead = 0 if self.found_start else min(count, max(0, self.max_size - self.lead_in))
+            self.lead_in += lead
+            self.skipped += count - lead
             del self.buf[:count]
+            self.dropped += count
             self.scan_from = max(0, self.scan_from - count)
+            self.filled = 0
             self.marks = [(end - count, t) for end, t in self.marks if end > count]

@@ -4,6 +4,8 @@ A real-time message has a size and no type; a controller sends every message of 
 connection at the same size (its version's layout), so the connection is framed as
 fixed records of that size: after a TCP gap the next boundary is known exactly, and a
 capture begun mid-stream is cut where a size field equal to that size repeats.
+Until then at most WINDOW bytes are held, each offset looked at once (a stream that
+never shows a known size is passed over, counted and reported, in linear time).
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from rtde_spec.realtime.layout import RealtimeLayout
 TABLE = "realtime"
 SIZE = 4  # the size field leads each message
 BATCH = 2048  # messages decoded together into columns
+WINDOW = 64 << 10  # bytes held looking for the message size (a message is at most a few kB)
 
 
 class RealtimeConnection:
@@ -35,6 +38,10 @@ class RealtimeConnection:
         self.last_time = 0.0
         self.held_messages: list[bytes] = []
         self.held_times: list[float] = []
+        self.search = bytearray()  # the held bytes, searched for the size
+        self.searched = 0  # offsets of `search` already found to be no size (or unconfirmed)
+        self.sizes = set(known_sizes())
+        self.passed = 0  # bytes passed over without a known size
 
     def feed(self, sender: str, chunk: Chunk) -> None:
         self.last_time = chunk.time
@@ -44,28 +51,51 @@ class RealtimeConnection:
         if "controller" not in self.framing:
             self.held.append(chunk)
             self.held_bytes += len(chunk.data)
-            size = self._size(b"".join(c.data for c in self.held), final=False)
+            self.search += chunk.data
+            size = self._size(final=False)
             if size is None:
+                self._bound()
                 return
             self._start(size)
             return
         self._messages(self.framing["controller"].feed(chunk), chunk.time)
 
-    def _size(self, data: bytes, final: bool) -> int | None:
-        """The connection's message size: a known size whose field repeats one message later."""
-        sizes = set(known_sizes())
-        for at in range(max(0, len(data) - SIZE + 1)):
+    def _size(self, final: bool) -> int | None:
+        """The connection's message size: a known size whose field repeats one message later.
+        Offsets before `searched` were judged already; the search goes on from there."""
+        data, sizes = self.search, self.sizes
+        for at in range(self.searched, max(0, len(data) - SIZE + 1)):
             size = int.from_bytes(data[at : at + SIZE], "big")
             if size not in sizes:
+                self.searched = at + 1
                 continue
             if at + size + SIZE <= len(data):
                 if data[at + size : at + size + SIZE] == data[at : at + SIZE]:
                     return size
+                self.searched = at + 1
             elif not final:
                 return None  # wait for the next message to confirm this one
             else:
                 return size
         return None
+
+    def _bound(self) -> None:
+        """Past WINDOW bytes without a size: the bytes judged already are passed over (counted)."""
+        if len(self.search) <= WINDOW or not self.searched:
+            return
+        drop = self.searched
+        del self.search[:drop]
+        self.searched = 0
+        self.passed += drop
+        self.held_bytes -= drop
+        whole = 0  # the held chunks lose the same bytes from their front
+        while whole < len(self.held) and len(self.held[whole].data) <= drop:
+            drop -= len(self.held[whole].data)
+            whole += 1
+        del self.held[:whole]
+        if drop and self.held:
+            first = self.held[0]
+            self.held[0] = Chunk(first.time, first.data[drop:], first.gap_before, first.midstream)
 
     def _start(self, size: int) -> None:
         marker = size.to_bytes(SIZE, "big")
@@ -76,6 +106,7 @@ class RealtimeConnection:
         framing = FixedFraming(size, plausible)
         self.framing["controller"] = framing
         held, self.held = self.held, []
+        self.search = bytearray()
         for chunk in held:
             self._messages(framing.feed(chunk), chunk.time)
 
@@ -114,15 +145,14 @@ class RealtimeConnection:
         return self.framing
 
     def finish(self) -> None:
-        if self.held:
-            size = self._size(b"".join(c.data for c in self.held), final=True)
-            if size is None:
-                self.counts.errors.append(
-                    f"{self.held_bytes} bytes hold no real-time message of a known size"
-                )
-                self.held = []
-            else:
-                self._start(size)
+        size = self._size(final=True) if self.held else None
+        if self.held and size is None:
+            self.passed += self.held_bytes
+            self.held = []
+        if self.passed:
+            self.counts.errors.append(f"{self.passed} bytes hold no real-time message of a known size")
+        if size is not None:
+            self._start(size)
         framing = self.framing.get("controller")
         if framing is not None:
             self._messages(framing.finish(), self.last_time)

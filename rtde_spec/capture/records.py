@@ -30,6 +30,7 @@ class FixedFraming:
         self.to_skip = 0  # bytes of a record cut by a gap still to pass over
         self.skipped = self.cut = self.lead_in = 0
         self.unaligned = False  # no offset ever looked right: decoded from where the stream began
+        self.phase = 0  # unsynced: the first offset not yet refused
         self.times: list[float] | None = None  # records are given the time of the chunk completing them
 
     def feed(self, chunk: Chunk) -> list[bytes]:
@@ -70,22 +71,31 @@ class FixedFraming:
         return out
 
     def _align(self, final: bool) -> bool:
+        """Find the first offset whose next records look right. An offset once refused stays
+        refused (its records do not change as bytes arrive), so each is judged once and a
+        stream fed byte by byte costs its length, not its length times the record size."""
         buf, size = self.buf, self.size
-        data = bytes(buf)
-        need = CONFIRM if not final else max(1, min(CONFIRM, len(data) // size))
-        for phase in range(min(size, max(0, len(data) - size + 1))):
-            if len(data) - phase < need * size:
+        need = CONFIRM if not final else max(1, min(CONFIRM, len(buf) // size))
+        if final:  # fewer records may confirm an offset now: every offset is judged again
+            self.phase = 0
+        while self.phase < min(size, max(0, len(buf) - size + 1)):
+            phase = self.phase
+            if len(buf) - phase < need * size:
                 if not final:
                     return False  # wait for enough records at this offset
                 break
-            if all(self.plausible(data, phase + k * size) for k in range(need)):
+            data = bytes(buf[phase : phase + need * size])
+            if all(self.plausible(data, k * size) for k in range(need)):
                 self.lead_in += phase
                 del buf[:phase]
                 self.synced = True
+                self.phase = 0
                 return True
-        if final or len(data) >= WINDOW:
+            self.phase += 1
+        if final or len(buf) >= WINDOW or self.phase >= size:
             self.unaligned = True  # nothing looks like a record: decode from the first byte
             self.synced = True
+            self.phase = 0
             return True
         return False
 
