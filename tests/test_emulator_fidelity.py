@@ -22,7 +22,7 @@ from pathlib import Path
 
 import pytest
 
-from rtde_spec.emulator.scenario import Scenario
+from rtde_spec.emulator.controller.scenario import Scenario
 from rtde_spec.emulator.server import EmulatorConfig, EmulatorThread
 from rtde_spec.primary.base import RobotStateMessage
 from rtde_spec.primary.codec import PrimaryStreamDecoder

@@ -8,8 +8,8 @@ import time
 import pytest
 
 from rtde_spec._generated import rtde_models as gen
-from rtde_spec.emulator.guard import ClientLimits
-from rtde_spec.emulator.script_framer import ScriptFramer
+from rtde_spec.emulator.ports.guard import ClientLimits
+from rtde_spec.emulator.ports.script_framer import ScriptFramer
 from rtde_spec.emulator.server import EmulatorConfig, EmulatorThread
 from rtde_spec.errors import ProtocolError
 

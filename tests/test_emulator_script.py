@@ -7,8 +7,8 @@ import time
 import pytest
 
 from rtde_spec import EmulatorConfig, EmulatorThread, PrimaryClient, RtdeClient
-from rtde_spec.emulator.model import ControllerModel
-from rtde_spec.emulator.script import run_script
+from rtde_spec.emulator.controller.model import ControllerModel
+from rtde_spec.emulator.ports.script import run_script
 
 
 def test_io_calls_set_the_outputs_a_controller_shows() -> None:

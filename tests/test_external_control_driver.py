@@ -15,7 +15,7 @@ import time
 import pytest
 
 from rtde_spec import EmulatorConfig, EmulatorThread
-from rtde_spec.emulator.model import HOME_Q
+from rtde_spec.emulator.controller.model import HOME_Q
 from rtde_spec.external.codec import record_codec
 
 PROGRAM = """def external_control():

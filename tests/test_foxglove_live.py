@@ -19,7 +19,7 @@ import websockets
 
 from rtde_spec import EmulatorConfig, EmulatorThread
 from rtde_spec.cli.main import main
-from rtde_spec.emulator.scenario import Scenario
+from rtde_spec.emulator.controller.scenario import Scenario
 from rtde_spec.output.foxglove_live import LivePublisher, quaternion
 
 Q = [0.5, -1.2, 1.1, -0.3, 0.4, -0.5]

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 from rtde_spec._generated.enums import ProgramState, RobotMode, SafetyMode
-from rtde_spec.emulator import kinematics as kin
-from rtde_spec.emulator.model import HOME_Q, ControllerModel
+from rtde_spec.emulator.arm import kinematics as kin
+from rtde_spec.emulator.controller.model import HOME_Q, ControllerModel
 from rtde_spec.spec.arms import arm_model
 
 HZ = 500

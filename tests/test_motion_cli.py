@@ -17,7 +17,7 @@ from pathlib import Path
 
 import pytest
 
-from rtde_spec.emulator.model import HOME_Q
+from rtde_spec.emulator.controller.model import HOME_Q
 
 TARGET = [0.5, -1.4, 1.4, -1.6, -1.5, 0.3]
 MOVEJ = f"movej({TARGET}, a=2.0, v=1.0)\n"

@@ -20,8 +20,8 @@ import numpy as np
 import pytest
 
 from rtde_spec import EmulatorConfig, EmulatorThread
-from rtde_spec.emulator import kinematics as kin
-from rtde_spec.emulator.model import HOME_Q
+from rtde_spec.emulator.arm import kinematics as kin
+from rtde_spec.emulator.controller.model import HOME_Q
 from rtde_spec.spec.arms import arm_model
 
 urx_robot = pytest.importorskip("urx.urrobot", reason="python-urx is installed by the test extra")

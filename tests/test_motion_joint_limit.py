@@ -17,7 +17,7 @@ from pathlib import Path
 import pytest
 
 from rtde_spec._generated import rtde_models as gen
-from rtde_spec.emulator.scenario import load_scenario
+from rtde_spec.emulator.controller.scenario import load_scenario
 from rtde_spec.emulator.server import EmulatorConfig, EmulatorThread
 from rtde_spec.primary.codec import PrimaryStreamDecoder
 

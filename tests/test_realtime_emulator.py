@@ -17,9 +17,9 @@ import numpy as np
 import pytest
 
 from rtde_spec import EmulatorConfig, EmulatorThread
-from rtde_spec.emulator import kinematics as kin
-from rtde_spec.emulator.guard import ClientLimits
-from rtde_spec.emulator.model import HOME_Q
+from rtde_spec.emulator.arm import kinematics as kin
+from rtde_spec.emulator.controller.model import HOME_Q
+from rtde_spec.emulator.ports.guard import ClientLimits
 from rtde_spec.spec.arms import arm_model
 
 urx = pytest.importorskip("urx", reason="python-urx is installed by the test extra")

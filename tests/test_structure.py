@@ -104,3 +104,27 @@ def test_start_up_does_not_load_pydantic_or_construct() -> None:
     )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert result.stdout.strip() == "[]"
+
+
+EMULATOR_FLOORS = ("server", "ports", "controller", "urscript", "arm")
+
+
+def test_the_emulator_reads_down_from_server_to_arm() -> None:
+    """server → ports → controller → urscript → arm: a wing imports only the wings below it."""
+    graph = import_graph()
+
+    def floor(module: str) -> int | None:
+        parts = module.split(".")
+        if len(parts) < 3 or parts[:2] != ["rtde_spec", "emulator"]:
+            return None
+        return EMULATOR_FLOORS.index(parts[2]) if parts[2] in EMULATOR_FLOORS else None
+
+    modules = [m for m in graph if m.startswith("rtde_spec.emulator.")]
+    assert {m.split(".")[2] for m in modules} <= set(EMULATOR_FLOORS), "a module outside the wings"
+    upward = [
+        (name, target)
+        for name in modules
+        for target in graph[name]
+        if (a := floor(name)) is not None and (b := floor(target)) is not None and b < a
+    ]
+    assert not upward, upward

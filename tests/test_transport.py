@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 from rtde_spec import AsyncRtdeClient, EmulatorConfig, EmulatorThread, PrimaryClient, RtdeClient
-from rtde_spec.emulator.scenario import Scenario
+from rtde_spec.emulator.controller.scenario import Scenario
 from rtde_spec.errors import RecipeError, RtdeConnectionError, UsageError
 from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
 from rtde_spec.rtde.codec import build, decode_stream
@@ -448,7 +448,7 @@ def test_read_only_port_refuses_script_clearly() -> None:
 
 
 def test_scenario_files_are_validated(tmp_path) -> None:  # type: ignore[no-untyped-def]
-    from rtde_spec.emulator.scenario import load_scenario
+    from rtde_spec.emulator.controller.scenario import load_scenario
 
     bad = tmp_path / "s.yaml"
     bad.write_text("controller: 5.15.0\noutputs:\n  actual_q: {sine: {amplitud: 1}}\n")

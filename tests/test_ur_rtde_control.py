@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 import pytest
 
-from rtde_spec.emulator import kinematics as kin
+from rtde_spec.emulator.arm import kinematics as kin
 from rtde_spec.spec.arms import arm_model
 
 rtde_control = pytest.importorskip("rtde_control", reason="ur_rtde is installed by the test extra")

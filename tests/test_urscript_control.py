@@ -15,8 +15,8 @@ import pytest
 
 from rtde_spec import EmulatorConfig, EmulatorThread, PrimaryClient, RtdeClient
 from rtde_spec._generated.enums import ProgramState
-from rtde_spec.emulator.model import HOME_Q, ControllerModel
-from rtde_spec.emulator.program import STEP_BUDGET
+from rtde_spec.emulator.controller.model import HOME_Q, ControllerModel
+from rtde_spec.emulator.controller.program import STEP_BUDGET
 
 HZ = 500
 A = [round(q + d, 6) for q, d in zip(HOME_Q, (0.1, 0.0, 0.0, 0.0, 0.0, 0.05), strict=True)]

@@ -78,7 +78,7 @@ def test_a_malformed_table_names_the_file_and_the_problem(tmp_path: Path, change
     [("5.4.0", True), ("5.10.0", False), ("3.15.0", True)],  # get_target_payload: e-Series 5.10 on
 )
 def test_a_function_the_controller_version_lacks_is_a_compile_error(version: str, refused: bool) -> None:
-    from rtde_spec.emulator.model import ControllerModel
+    from rtde_spec.emulator.controller.model import ControllerModel
 
     model = ControllerModel(version)
     model.run_script("m = get_target_payload()")

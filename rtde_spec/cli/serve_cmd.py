@@ -116,8 +116,8 @@ def run(args: argparse.Namespace) -> int:
     import logging
     from pathlib import Path
 
-    from rtde_spec.emulator.guard import ClientLimits
-    from rtde_spec.emulator.scenario import Scenario, load_scenario
+    from rtde_spec.emulator.controller.scenario import Scenario, load_scenario
+    from rtde_spec.emulator.ports.guard import ClientLimits
     from rtde_spec.emulator.server import Emulator, EmulatorConfig
     from rtde_spec.printable import SafeFormatter
     from rtde_spec.spec.dashboard import dashboard_spec

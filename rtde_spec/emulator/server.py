@@ -19,14 +19,14 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
-from rtde_spec.emulator.dashboard import DashboardConnection, DashboardHub
-from rtde_spec.emulator.faults import FaultSchedule
-from rtde_spec.emulator.guard import ClientLimits, Port
-from rtde_spec.emulator.model import ControllerModel
-from rtde_spec.emulator.primary_server import PrimaryConnection, PrimaryHub
-from rtde_spec.emulator.realtime_server import RealtimeConnection, RealtimeHub
-from rtde_spec.emulator.rtde_server import RtdeConnection, RtdeHub
-from rtde_spec.emulator.scenario import Scenario
+from rtde_spec.emulator.controller.faults import FaultSchedule
+from rtde_spec.emulator.controller.model import ControllerModel
+from rtde_spec.emulator.controller.scenario import Scenario
+from rtde_spec.emulator.ports.dashboard import DashboardConnection, DashboardHub
+from rtde_spec.emulator.ports.guard import ClientLimits, Port
+from rtde_spec.emulator.ports.primary_server import PrimaryConnection, PrimaryHub
+from rtde_spec.emulator.ports.realtime_server import RealtimeConnection, RealtimeHub
+from rtde_spec.emulator.ports.rtde_server import RtdeConnection, RtdeHub
 from rtde_spec.spec.catalogue import Catalogue
 
 log = logging.getLogger("rtde_spec.emulator")

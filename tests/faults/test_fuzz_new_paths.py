@@ -232,7 +232,7 @@ def test_finding_a_data_package_in_the_read_that_brings_the_setup_reply_is_refus
 
 def _run_script(text: str, steps: int = 200, step_limit: float = 2.0) -> list[tuple[str, str]]:
     """Run `text` on a fresh controller model; its events. Every step must be quick."""
-    from rtde_spec.emulator.model import ControllerModel
+    from rtde_spec.emulator.controller.model import ControllerModel
 
     model = ControllerModel("5.15.0")
     started = time.perf_counter()
@@ -422,7 +422,7 @@ def test_finding_urscript_ints_grow_without_bound() -> None:
 def test_a_script_killing_the_emulator_control_loop() -> None:
     """Was (found by fuzzing): an OverflowError in a later control step ends the server's control loop task
     (the emulator stops stepping, for every client) instead of faulting the program."""
-    from rtde_spec.emulator.model import ControllerModel
+    from rtde_spec.emulator.controller.model import ControllerModel
 
     model = ControllerModel("5.15.0")
     model.run_script(prog("x = " + "9" * 400, "sync()", "y = x / 3"))

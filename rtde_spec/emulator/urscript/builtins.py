@@ -14,11 +14,11 @@ from typing import Any
 
 import numpy as np
 
-from rtde_spec.emulator import kinematics as kin
-from rtde_spec.emulator.interfaces import Runner
+from rtde_spec.emulator.arm import kinematics as kin
 from rtde_spec.emulator.urscript import calls as script_calls
 from rtde_spec.emulator.urscript import sockets
 from rtde_spec.emulator.urscript.calls import Pose, number, six, type_name
+from rtde_spec.emulator.urscript.interfaces import Runner
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
 from rtde_spec.errors import RtdeSpecError
 

@@ -13,10 +13,8 @@ from typing import Any
 
 import numpy as np
 
-from rtde_spec.emulator import kinematics as kin
-from rtde_spec.emulator.events import ScriptEvent
-from rtde_spec.emulator.interfaces import Runner, Wait
-from rtde_spec.emulator.motion import (
+from rtde_spec.emulator.arm import kinematics as kin
+from rtde_spec.emulator.arm.motion import (
     MOVEJ_A,
     MOVEJ_V,
     MOVEL_A,
@@ -28,6 +26,8 @@ from rtde_spec.emulator.motion import (
     Motion,
     Servo,
 )
+from rtde_spec.emulator.urscript.events import ScriptEvent
+from rtde_spec.emulator.urscript.interfaces import Runner, Wait
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
 from rtde_spec.emulator.urscript.values import (  # noqa: F401 - the calls' value types, re-exported
     INT_MAX,

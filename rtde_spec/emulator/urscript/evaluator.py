@@ -14,14 +14,14 @@ from collections.abc import Callable, Generator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from rtde_spec.emulator.interfaces import Robot
 from rtde_spec.emulator.urscript import builtins
 from rtde_spec.emulator.urscript import calls as script_calls
 from rtde_spec.emulator.urscript import values as urscript_ops
+from rtde_spec.emulator.urscript.interfaces import Robot
 from rtde_spec.emulator.urscript.nodes import Branch, Expr, Function, Script, ScriptFault, Stmt
 
 if TYPE_CHECKING:
-    from rtde_spec.emulator.interfaces import Wait
+    from rtde_spec.emulator.urscript.interfaces import Wait
 
 Frame = dict[str, Any]
 MAX_CALL_DEPTH = 64  # user functions calling user functions; deeper is a runaway recursion

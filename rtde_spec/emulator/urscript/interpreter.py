@@ -20,14 +20,14 @@ from dataclasses import dataclass, field
 from enum import Enum
 from typing import Any
 
-from rtde_spec.emulator.events import ScriptEvent
-from rtde_spec.emulator.interfaces import Robot, Wait
-from rtde_spec.emulator.motion import MotionError
+from rtde_spec.emulator.arm.motion import MotionError
 from rtde_spec.emulator.urscript import builtins, sockets
 from rtde_spec.emulator.urscript import calls as script_calls
 from rtde_spec.emulator.urscript import values as urscript_ops
 from rtde_spec.emulator.urscript.checker import check
 from rtde_spec.emulator.urscript.evaluator import Evaluator, Frame, Return, Steps, runtime_text
+from rtde_spec.emulator.urscript.events import ScriptEvent
+from rtde_spec.emulator.urscript.interfaces import Robot, Wait
 from rtde_spec.emulator.urscript.nodes import Script, ScriptFault, Stmt
 from rtde_spec.errors import RtdeSpecError
 

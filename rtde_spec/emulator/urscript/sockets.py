@@ -18,8 +18,8 @@ import struct
 from collections.abc import Callable, Generator
 from typing import Any
 
-from rtde_spec.emulator.interfaces import Runner
 from rtde_spec.emulator.urscript.calls import arg, number, type_name
+from rtde_spec.emulator.urscript.interfaces import Runner
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
 
 MAX_BUFFER = 1 << 20  # bytes a socket keeps unread

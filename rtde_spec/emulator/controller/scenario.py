@@ -32,7 +32,7 @@ from typing import Any
 import yaml
 from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
-from rtde_spec.emulator.faults import Fault
+from rtde_spec.emulator.controller.faults import Fault
 from rtde_spec.errors import UsageError
 from rtde_spec.spec import safe_yaml
 from rtde_spec.spec.catalogue import Catalogue

@@ -118,7 +118,7 @@ def global_variables_setup(names: list[str], micros: int) -> bytes:
 
 
 def event_messages(event: Any, micros: int) -> list[bytes]:
-    """The messages for one model event (emulator/events.py's ScriptEvent)."""
+    """The messages for one model event (emulator/urscript/events.py's ScriptEvent)."""
     kind = getattr(event, "kind", "")
     text = str(getattr(event, "text", ""))
     if kind == "runtime_exception":

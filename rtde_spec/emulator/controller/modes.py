@@ -19,12 +19,12 @@ from rtde_spec._generated.enums import (
     SafetyStatus,
     SafetyStatusBits,
 )
-from rtde_spec.emulator.motion import MOVEJ_A
+from rtde_spec.emulator.arm.motion import MOVEJ_A
 
 if TYPE_CHECKING:
-    from rtde_spec.emulator.arm import Arm
-    from rtde_spec.emulator.events import ScriptEvent
-    from rtde_spec.emulator.program import Program
+    from rtde_spec.emulator.arm.state import Arm
+    from rtde_spec.emulator.controller.program import Program
+    from rtde_spec.emulator.urscript.events import ScriptEvent
 
 
 class RobotModes:

@@ -31,7 +31,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from rtde_spec._generated.enums import SafetyMode, SafetyStatus, SafetyStatusBits
 
 if TYPE_CHECKING:
-    from rtde_spec.emulator.model import ControllerModel
+    from rtde_spec.emulator.controller.model import ControllerModel
 
 log = logging.getLogger("rtde_spec.emulator")
 FaultKind = Literal[
@@ -77,7 +77,7 @@ class FaultSchedule:
         return changed
 
     def _run(self, fault: Fault, t: float) -> None:
-        model: Any = self.model  # the mode methods of ControllerModel (emulator/modes.py)
+        model: Any = self.model  # the mode methods of ControllerModel (emulator/controller/modes.py)
         kind = fault.fault
         if kind == "protective_stop":
             model.protective_stop()

@@ -17,15 +17,15 @@ from collections import deque
 from typing import TYPE_CHECKING
 
 from rtde_spec._generated.enums import RobotMode
-from rtde_spec.emulator.guard import Port
-from rtde_spec.emulator.primary_commands import take_commands
-from rtde_spec.emulator.robot_messages import event_messages, safety_mode_message, version_message
-from rtde_spec.emulator.script import run_script
-from rtde_spec.emulator.script_framer import ScriptPort
-from rtde_spec.emulator.state_message import RobotStateBuilder
+from rtde_spec.emulator.ports.guard import Port
+from rtde_spec.emulator.ports.primary_commands import take_commands
+from rtde_spec.emulator.ports.robot_messages import event_messages, safety_mode_message, version_message
+from rtde_spec.emulator.ports.script import run_script
+from rtde_spec.emulator.ports.script_framer import ScriptPort
+from rtde_spec.emulator.ports.state_message import RobotStateBuilder
 
 if TYPE_CHECKING:
-    from rtde_spec.emulator.model import ControllerModel
+    from rtde_spec.emulator.controller.model import ControllerModel
 
 log = logging.getLogger("rtde_spec.emulator")
 KEEP_SCRIPTS = 64  # the last scripts received, for tests and `watch` to look at

@@ -14,13 +14,13 @@ import struct
 from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.realtime import REALTIME
-from rtde_spec.emulator.guard import Port
-from rtde_spec.emulator.script_framer import ScriptPort
+from rtde_spec.emulator.ports.guard import Port
+from rtde_spec.emulator.ports.script_framer import ScriptPort
 from rtde_spec.realtime import layout_for
 
 if TYPE_CHECKING:
-    from rtde_spec.emulator.model import ControllerModel
-    from rtde_spec.emulator.primary_server import PrimaryHub
+    from rtde_spec.emulator.controller.model import ControllerModel
+    from rtde_spec.emulator.ports.primary_server import PrimaryHub
 
 log = logging.getLogger("rtde_spec.emulator")
 

@@ -10,8 +10,8 @@ from collections.abc import Sequence
 
 import numpy as np
 
-from rtde_spec.emulator import kinematics as kin
-from rtde_spec.emulator.motion import MOVEJ_A, LinearSpeed, Motion, State, rest, stop_joints, stop_linear
+from rtde_spec.emulator.arm import kinematics as kin
+from rtde_spec.emulator.arm.motion import MOVEJ_A, LinearSpeed, Motion, State, rest, stop_joints, stop_linear
 from rtde_spec.spec.arms import ArmModel
 
 LIMIT_SLACK = 1e-9  # rad past a joint limit still counted as at it (a move that ends on it)

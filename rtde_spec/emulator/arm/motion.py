@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from rtde_spec.emulator import kinematics as kin
+from rtde_spec.emulator.arm import kinematics as kin
 from rtde_spec.errors import UsageError
 from rtde_spec.spec.arms import ArmModel
 

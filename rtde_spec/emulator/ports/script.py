@@ -13,7 +13,7 @@ from __future__ import annotations
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from rtde_spec.emulator.model import ControllerModel
+    from rtde_spec.emulator.controller.model import ControllerModel
 
 
 def run_script(model: ControllerModel, text: str) -> list[str]:

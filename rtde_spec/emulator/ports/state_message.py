@@ -42,7 +42,7 @@ from rtde_spec.spec.catalogue import Catalogue
 from rtde_spec.spec.versions import Version
 
 if TYPE_CHECKING:
-    from rtde_spec.emulator.model import ControllerModel
+    from rtde_spec.emulator.controller.model import ControllerModel
 
 # sub-packages in the order a controller sends them, per product line (names from the spec)
 ORDER = {

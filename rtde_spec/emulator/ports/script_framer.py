@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import re
 
-from rtde_spec.emulator.guard import GuardedConnection, Port
+from rtde_spec.emulator.ports.guard import GuardedConnection, Port
 from rtde_spec.errors import ProtocolError
 
 _NOT_TEXT = re.compile(rb"[\x00-\x08\x0b\x0e-\x1f\x7f]")

@@ -30,12 +30,12 @@ from rtde_spec._generated.enums import (
     SafetyStatusBits,
     StandardAnalogOutputBits,
 )
-from rtde_spec.emulator.arm import Arm
-from rtde_spec.emulator.events import ScriptEvent
-from rtde_spec.emulator.modes import RobotModes
-from rtde_spec.emulator.motion import MotionError
-from rtde_spec.emulator.program import PROGRAM_ERRORS, Program, runtime_text
+from rtde_spec.emulator.arm.motion import MotionError
+from rtde_spec.emulator.arm.state import Arm
+from rtde_spec.emulator.controller.modes import RobotModes
+from rtde_spec.emulator.controller.program import PROGRAM_ERRORS, Program, runtime_text
 from rtde_spec.emulator.urscript import ScriptFault, parse
+from rtde_spec.emulator.urscript.events import ScriptEvent
 from rtde_spec.spec.arms import arm_model
 from rtde_spec.spec.catalogue import Catalogue, FieldInfo
 from rtde_spec.spec.versions import Version

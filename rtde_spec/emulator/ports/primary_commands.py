@@ -18,7 +18,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from rtde_spec.emulator.model import ControllerModel
+    from rtde_spec.emulator.controller.model import ControllerModel
 
 log = logging.getLogger("rtde_spec.emulator")
 _BLOCK = re.compile(r"^(def|sec|thread|if|while)\b.*:$")  # what opens a block, as the framer cuts it

@@ -8,8 +8,8 @@ from __future__ import annotations
 from collections.abc import Callable, Generator, Mapping
 from typing import Any, Protocol
 
-from rtde_spec.emulator.arm import Arm
-from rtde_spec.emulator.events import ScriptEvent
+from rtde_spec.emulator.arm.state import Arm
+from rtde_spec.emulator.urscript.events import ScriptEvent
 
 Wait = Generator[None, None, None]
 

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 from rtde_spec._generated import rtde_models as gen
 from rtde_spec._generated.constants import RTDE_ANSWERS, RTDE_LIMITS
 from rtde_spec._generated.enums import TextMessageLevel
-from rtde_spec.emulator.guard import GuardedConnection, Port
+from rtde_spec.emulator.ports.guard import GuardedConnection, Port
 from rtde_spec.errors import DecodeError, RtdeSpecError
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
 from rtde_spec.rtde.codec import decode, observe, setup_names
@@ -28,7 +28,7 @@ from rtde_spec.rtde.protocol_state import ProtocolState
 from rtde_spec.wire.framing import PackageFramer
 
 if TYPE_CHECKING:
-    from rtde_spec.emulator.model import ControllerModel
+    from rtde_spec.emulator.controller.model import ControllerModel
 
 log = logging.getLogger("rtde_spec.emulator")
 NOT_FOUND, IN_USE = RTDE_ANSWERS["not_found"], RTDE_ANSWERS["in_use"]

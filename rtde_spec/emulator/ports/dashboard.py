@@ -18,13 +18,13 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.enums import ProgramState, RobotMode, SafetyMode, SafetyStatus, SafetyStatusBits
-from rtde_spec.emulator.guard import GuardedConnection, Port
-from rtde_spec.emulator.robot_messages import BUILD_DATE
-from rtde_spec.emulator.state_message import arm_parameters, available, robot_type
+from rtde_spec.emulator.ports.guard import GuardedConnection, Port
+from rtde_spec.emulator.ports.robot_messages import BUILD_DATE
+from rtde_spec.emulator.ports.state_message import arm_parameters, available, robot_type
 from rtde_spec.spec.dashboard import DashboardCommand, dashboard_spec
 
 if TYPE_CHECKING:
-    from rtde_spec.emulator.model import ControllerModel
+    from rtde_spec.emulator.controller.model import ControllerModel
 
 log = logging.getLogger("rtde_spec.emulator")
 SERIAL_NUMBER = "20245500001"  # UR serial numbers start with the year of make
@@ -80,7 +80,7 @@ class DashboardHub:
     # --- what the commands do -----------------------------------------------
 
     def _act(self, command: DashboardCommand, argument: str) -> str:
-        model: Any = self.model  # the mode methods of ControllerModel (emulator/modes.py)
+        model: Any = self.model  # the mode methods of ControllerModel (emulator/controller/modes.py)
         action = command.action
         if action == "load":
             return self._load(argument)

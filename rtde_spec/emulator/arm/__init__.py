@@ -1,0 +1,1 @@
+"""The arm: joint state, motion profiles and kinematics (the floor the rest stands on)."""

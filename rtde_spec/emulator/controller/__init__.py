@@ -1,0 +1,1 @@
+"""The controller: modes, faults, scenarios, registers and the running program, one model."""
