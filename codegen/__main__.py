@@ -7,7 +7,7 @@ import sys
 from pathlib import Path
 
 from rtde_spec.errors import SpecError
-from rtde_spec.spec.bundle import load_bundle
+from rtde_spec.metamodel.bundle import load_bundle
 
 from .generate import GEN, generate
 

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 from collections.abc import Iterable
 
-from rtde_spec.spec.schema import Conflict
+from rtde_spec.metamodel.schema import Conflict
 
 from .render import md_table
 

@@ -1,14 +1,14 @@
 """Emit _generated/arms.py and docs/reference/arms.md from spec/arms/models.yaml.
 
 The arm file is separate from the protocol spec (it describes hardware, not the
-wire), so it has its own meta-model (rtde_spec.spec.arms) and its own emitter.
+wire), so it has its own meta-model (rtde_spec.metamodel.arms) and its own emitter.
 """
 
 from __future__ import annotations
 
 import math
 
-from rtde_spec.spec.arms import ArmsFile
+from rtde_spec.metamodel.arms import ArmsFile
 
 from .render import MD_HEADER, literal_module, md_table
 

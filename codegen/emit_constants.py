@@ -5,8 +5,8 @@ The command line reads them for its help text without loading pydantic or constr
 
 from __future__ import annotations
 
-from rtde_spec.spec.catalogue import Catalogue
-from rtde_spec.spec.schema import Spec
+from rtde_spec.metamodel.catalogue import Catalogue
+from rtde_spec.metamodel.schema import Spec
 
 from .emit_rtde import order_of
 from .render import PY_HEADER
@@ -73,7 +73,7 @@ def emit_catalogue_data(catalogue: Catalogue) -> str:
     rows = catalogue.table_rows()
     out = [
         PY_HEADER,
-        '"""The field catalogue as plain rows (see rtde_spec.spec.catalogue.Catalogue.builtin)."""\n\n',
+        '"""The field catalogue as plain rows (see rtde_spec.metamodel.catalogue.Catalogue.builtin)."""\n\n',
         "from typing import Any\n\n",
         "# (id, name, majors, first_version, inherits, rtde_max_frequency, setup_names_max_bytes)\n",
         "LINES: tuple[tuple[Any, ...], ...] = (\n",

@@ -6,7 +6,7 @@ the text encoding differs (RTDE text is ASCII, the primary interface's UTF-8).
 
 from __future__ import annotations
 
-from rtde_spec.spec.schema import CaseSpec, LayoutField, Primitive, Spec
+from rtde_spec.metamodel.schema import CaseSpec, LayoutField, Primitive, Spec
 
 #: construct's name for each struct format character of spec/common/primitives.yaml
 CONSTRUCT_BY_STRUCT = {

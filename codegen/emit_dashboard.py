@@ -1,12 +1,12 @@
 """Emit _generated/dashboard.py and docs/reference/dashboard.md from spec/dashboard/commands.yaml.
 
 The dashboard server speaks text, not the binary layouts of the protocol spec, so it
-has its own meta-model (rtde_spec.spec.dashboard) and its own emitter.
+has its own meta-model (rtde_spec.metamodel.dashboard) and its own emitter.
 """
 
 from __future__ import annotations
 
-from rtde_spec.spec.dashboard import DashboardFile
+from rtde_spec.metamodel.dashboard import DashboardFile
 
 from .render import MD_HEADER, literal_module, md_table
 

@@ -6,7 +6,7 @@ YAML files and answers exactly what spec/ said at generation time.
 
 from __future__ import annotations
 
-from rtde_spec.spec.schema import Spec
+from rtde_spec.metamodel.schema import Spec
 
 from .render import literal_module
 

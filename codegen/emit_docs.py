@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from itertools import groupby
 
-from rtde_spec.spec.catalogue import Catalogue, FieldInfo
-from rtde_spec.spec.schema import FieldSpec, MessageSpec, Spec
+from rtde_spec.metamodel.catalogue import Catalogue, FieldInfo
+from rtde_spec.metamodel.schema import FieldSpec, MessageSpec, Spec
 
 from .conflict_docs import conflict_rows, conflicts_section
 from .layout_docs import header_rows, layout_rows

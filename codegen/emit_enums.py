@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from rtde_spec.spec.schema import Spec
+from rtde_spec.metamodel.schema import Spec
 
 from .render import PY_HEADER, docstring
 

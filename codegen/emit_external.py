@@ -5,8 +5,8 @@ script command protocols). The Lua dissector for them is emitted by emit_lua_ext
 
 from __future__ import annotations
 
-from rtde_spec.spec.external import Detect, ExternalControlFile, Variant
-from rtde_spec.spec.schema import Primitive
+from rtde_spec.metamodel.external import Detect, ExternalControlFile, Variant
+from rtde_spec.metamodel.schema import Primitive
 
 from .render import MD_HEADER, literal_module, md_table
 

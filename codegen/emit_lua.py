@@ -8,8 +8,8 @@ Data packages are decoded with the recipe seen in the same TCP stream's setup ex
 
 from __future__ import annotations
 
-from rtde_spec.spec.catalogue import Catalogue
-from rtde_spec.spec.schema import LayoutField, Spec
+from rtde_spec.metamodel.catalogue import Catalogue
+from rtde_spec.metamodel.schema import LayoutField, Spec
 
 from .render import PY_HEADER
 

@@ -8,11 +8,11 @@ from __future__ import annotations
 
 import string
 
-from rtde_spec.spec.bundle import SpecBundle
-from rtde_spec.spec.catalogue import Catalogue
-from rtde_spec.spec.dashboard import DashboardFile
-from rtde_spec.spec.realtime import PRIMITIVES as RT_PRIMITIVES
-from rtde_spec.spec.realtime import RealtimeFile, layouts
+from rtde_spec.metamodel.bundle import SpecBundle
+from rtde_spec.metamodel.catalogue import Catalogue
+from rtde_spec.metamodel.dashboard import DashboardFile
+from rtde_spec.metamodel.realtime import PRIMITIVES as RT_PRIMITIVES
+from rtde_spec.metamodel.realtime import RealtimeFile, layouts
 
 from .emit_lua import LUA_FIELD, lua_str
 from .emit_lua_external import emit_lua_external

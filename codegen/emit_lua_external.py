@@ -13,8 +13,14 @@ layout's fields are named `<proto>.<layout>.<field>`, with that layout's scales.
 
 from __future__ import annotations
 
-from rtde_spec.spec.external import ExternalControlFile, ExternalProtocol, OlderRecord, RecordMessage, Variant
-from rtde_spec.spec.schema import Primitive
+from rtde_spec.metamodel.external import (
+    ExternalControlFile,
+    ExternalProtocol,
+    OlderRecord,
+    RecordMessage,
+    Variant,
+)
+from rtde_spec.metamodel.schema import Primitive
 
 from .emit_lua import LUA_FIELD, lua_str
 

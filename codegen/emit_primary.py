@@ -5,7 +5,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from rtde_spec.spec.schema import FamilySpec, LayoutField, MemberSpec, Primitive, Spec
+from rtde_spec.metamodel.schema import FamilySpec, LayoutField, MemberSpec, Primitive, Spec
 
 from .emit_construct import CONSTRUCT_BY_STRUCT, prims_of, struct_body
 from .model_fields import field_lines

@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from rtde_spec.spec.schema import Spec
+from rtde_spec.metamodel.schema import Spec
 
 from .conflict_docs import conflict_rows, conflicts_section
 from .layout_docs import field_size, header_rows, layout_rows

@@ -7,8 +7,8 @@ runtime decoder picks a plan by version and unpacks with one `struct.Struct` cal
 
 from __future__ import annotations
 
-from rtde_spec.spec.catalogue import Catalogue
-from rtde_spec.spec.realtime import LayoutPlan, RealtimeFile, layouts
+from rtde_spec.metamodel.catalogue import Catalogue
+from rtde_spec.metamodel.realtime import LayoutPlan, RealtimeFile, layouts
 
 from .render import MD_HEADER, literal_module, md_table
 

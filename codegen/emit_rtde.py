@@ -8,7 +8,7 @@ from __future__ import annotations
 
 import re
 
-from rtde_spec.spec.schema import MessageSpec, Primitive, Spec
+from rtde_spec.metamodel.schema import MessageSpec, Primitive, Spec
 
 from .emit_construct import CONSTRUCT_BY_STRUCT, prims_of, struct_body
 from .model_fields import field_lines

@@ -6,7 +6,7 @@ Bounds come from the primitive's size and sign; vectors are tuples of exactly
 
 from __future__ import annotations
 
-from rtde_spec.spec.catalogue import Catalogue
+from rtde_spec.metamodel.catalogue import Catalogue
 
 from .render import PY_HEADER
 

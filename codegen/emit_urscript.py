@@ -1,7 +1,7 @@
 """Emit _generated/urscript_functions.py and docs/reference/urscript.md from spec/urscript/.
 
 URScript's built-ins are a table of functions, not a wire layout, so they have their own
-meta-model (rtde_spec.spec.urscript) and their own emitter.
+meta-model (rtde_spec.metamodel.urscript) and their own emitter.
 """
 
 from __future__ import annotations
@@ -9,7 +9,7 @@ from __future__ import annotations
 import json
 import pprint
 
-from rtde_spec.spec.urscript import ScriptFunctions
+from rtde_spec.metamodel.urscript import ScriptFunctions
 
 from .render import MD_HEADER, PY_HEADER, md_table
 

@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 
-from rtde_spec.spec.bundle import SpecBundle
+from rtde_spec.metamodel.bundle import SpecBundle
 
 from .emit_arms import emit_arms
 from .emit_constants import emit_catalogue_data, emit_constants

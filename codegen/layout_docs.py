@@ -6,7 +6,7 @@ these rows; a field reads the same in both.
 
 from __future__ import annotations
 
-from rtde_spec.spec.schema import CaseSpec, LayoutField, PackageField, Primitive
+from rtde_spec.metamodel.schema import CaseSpec, LayoutField, PackageField, Primitive
 
 
 def field_size(fld: LayoutField, prims: dict[str, Primitive]) -> int | None:

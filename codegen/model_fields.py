@@ -6,7 +6,7 @@ classes of these lines; only text differs (RTDE: ASCII with the wire's length bo
 
 from __future__ import annotations
 
-from rtde_spec.spec.schema import CaseSpec, LayoutField, Primitive
+from rtde_spec.metamodel.schema import CaseSpec, LayoutField, Primitive
 
 from .emit_types import scalar_annotation
 from .render import field_description

@@ -35,8 +35,8 @@ _EXPORTS: dict[str, str] = {
     "decode_message": "rtde_spec.primary.codec",
     "encode_message": "rtde_spec.primary.codec",
     # the spec
-    "Catalogue": "rtde_spec.spec.catalogue",
-    "Version": "rtde_spec.spec.versions",
+    "Catalogue": "rtde_spec.metamodel.catalogue",
+    "Version": "rtde_spec.metamodel.versions",
     # output
     "open_writer": "rtde_spec.output.writers",
     "to_pandas": "rtde_spec.output.tables",
@@ -125,6 +125,8 @@ if TYPE_CHECKING:
         SpecError,
         UsageError,
     )
+    from rtde_spec.metamodel.catalogue import Catalogue
+    from rtde_spec.metamodel.versions import Version
     from rtde_spec.output.tables import to_arrow, to_pandas
     from rtde_spec.output.writers import open_writer
     from rtde_spec.primary.client import PrimaryClient
@@ -140,5 +142,3 @@ if TYPE_CHECKING:
     from rtde_spec.rtde.protocol_state import ProtocolState
     from rtde_spec.rtde.session import SessionDecoder
     from rtde_spec.rtde.stream import StreamDecoder
-    from rtde_spec.spec.catalogue import Catalogue
-    from rtde_spec.spec.versions import Version

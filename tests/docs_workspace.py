@@ -13,7 +13,7 @@ from pathlib import Path
 
 from rtde_spec import RecipeCodec, build
 from rtde_spec.examples import primary_stream, rtde_session
-from rtde_spec.spec.catalogue import Catalogue
+from rtde_spec.metamodel.catalogue import Catalogue
 
 from .capture_files import Conversation, write
 from .test_capture_driver import session as driver_session

@@ -6,9 +6,9 @@ from typing import Any
 
 from hypothesis import strategies as st
 
+from rtde_spec.metamodel.catalogue import Catalogue, WireTypeInfo
+from rtde_spec.metamodel.schema import PackageField
 from rtde_spec.rtde.messages import RtdeMessage
-from rtde_spec.spec.catalogue import Catalogue, WireTypeInfo
-from rtde_spec.spec.schema import PackageField
 
 SPEC = Catalogue.builtin().spec
 PRIMS = {p.name: p for p in SPEC.primitives.primitives}

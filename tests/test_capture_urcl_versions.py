@@ -23,7 +23,7 @@ import pytest
 
 from rtde_spec.errors import SpecError
 from rtde_spec.external.codec import record_codec
-from rtde_spec.spec.external import external_spec, load_external
+from rtde_spec.metamodel.external import external_spec, load_external
 
 from .capture_files import Conversation, run_capture, write
 from .helpers import ROOT

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import pytest
 
-from rtde_spec.spec.catalogue import Catalogue
+from rtde_spec.metamodel.catalogue import Catalogue
 
 from .helpers import DATA
 

@@ -327,8 +327,8 @@ def test_a_stream_of_a_newer_controller_takes_the_straight_line_decoders() -> No
     versions take the general walk with the older layout."""
     import sys
 
+    from rtde_spec.metamodel.versions import Version
     from rtde_spec.primary.codec import default_codec
-    from rtde_spec.spec.versions import Version
 
     from .helpers import ROOT
 

@@ -9,8 +9,8 @@ import sys
 from pathlib import Path
 
 from codegen.generate import generate
-from rtde_spec.spec.bundle import load_bundle
-from rtde_spec.spec.loader import load_spec
+from rtde_spec.metamodel.bundle import load_bundle
+from rtde_spec.metamodel.loader import load_spec
 
 from .helpers import ROOT
 
@@ -121,7 +121,7 @@ def test_broken_spec_fails_with_file_and_reason(tmp_path: Path) -> None:
 
 
 def test_docs_list_every_field() -> None:
-    from rtde_spec.spec.catalogue import Catalogue
+    from rtde_spec.metamodel.catalogue import Catalogue
 
     text = (ROOT / "docs/reference/rtde-fields.md").read_text()
     for info in Catalogue.builtin().fields():

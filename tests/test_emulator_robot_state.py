@@ -16,9 +16,9 @@ from collections.abc import Iterator
 import pytest
 
 from rtde_spec.emulator.server import EmulatorConfig, EmulatorThread
+from rtde_spec.metamodel.arms import arm_model
 from rtde_spec.primary.base import RobotStateMessage
 from rtde_spec.primary.codec import PrimaryStreamDecoder
-from rtde_spec.spec.arms import arm_model
 
 
 def shape(message: bytes) -> list[tuple[int, int]]:

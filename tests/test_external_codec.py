@@ -11,7 +11,7 @@ import pytest
 
 from rtde_spec.errors import DecodeError, EncodeError, SpecError
 from rtde_spec.external.codec import record_codec
-from rtde_spec.spec.external import load_external
+from rtde_spec.metamodel.external import load_external
 
 from .helpers import ROOT
 

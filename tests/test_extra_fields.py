@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 
 from rtde_spec.errors import SpecError
-from rtde_spec.spec.catalogue import Catalogue
+from rtde_spec.metamodel.catalogue import Catalogue
 
 EXTRA = """\
 outputs:

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 from rtde_spec.emulator.arm import kinematics as kin
 from rtde_spec.emulator.controller.model import ControllerModel
 from rtde_spec.errors import SpecError, UsageError
-from rtde_spec.spec.arms import arm_model, arm_models, load_arms
+from rtde_spec.metamodel.arms import arm_model, arm_models, load_arms
 
 from .helpers import ROOT
 

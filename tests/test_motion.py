@@ -11,7 +11,7 @@ import pytest
 from rtde_spec._generated.enums import ProgramState, RobotMode, SafetyMode
 from rtde_spec.emulator.arm import kinematics as kin
 from rtde_spec.emulator.controller.model import HOME_Q, ControllerModel
-from rtde_spec.spec.arms import arm_model
+from rtde_spec.metamodel.arms import arm_model
 
 HZ = 500
 

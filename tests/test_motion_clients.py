@@ -22,7 +22,7 @@ import pytest
 from rtde_spec import EmulatorConfig, EmulatorThread
 from rtde_spec.emulator.arm import kinematics as kin
 from rtde_spec.emulator.controller.model import HOME_Q
-from rtde_spec.spec.arms import arm_model
+from rtde_spec.metamodel.arms import arm_model
 
 urx_robot = pytest.importorskip("urx.urrobot", reason="python-urx is installed by the test extra")
 rtde_receive = pytest.importorskip("rtde_receive", reason="ur_rtde is installed by the test extra")

@@ -15,6 +15,8 @@ from hypothesis import strategies as st
 from rtde_spec._generated import primary_models as gen
 from rtde_spec._generated import primary_structs
 from rtde_spec.errors import DecodeError, EncodeError
+from rtde_spec.metamodel.schema import LayoutField
+from rtde_spec.metamodel.versions import Version
 from rtde_spec.primary.base import (
     OpaqueMessage,
     PrimaryPart,
@@ -30,8 +32,6 @@ from rtde_spec.primary.codec import (
     default_codec,
     encode_message,
 )
-from rtde_spec.spec.schema import LayoutField
-from rtde_spec.spec.versions import Version
 
 from .helpers import DATA
 from .primary_strategies import MEMBER_KEYS, member_strategy

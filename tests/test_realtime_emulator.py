@@ -20,7 +20,7 @@ from rtde_spec import EmulatorConfig, EmulatorThread
 from rtde_spec.emulator.arm import kinematics as kin
 from rtde_spec.emulator.controller.model import HOME_Q
 from rtde_spec.emulator.ports.guard import ClientLimits
-from rtde_spec.spec.arms import arm_model
+from rtde_spec.metamodel.arms import arm_model
 
 urx = pytest.importorskip("urx", reason="python-urx is installed by the test extra")
 

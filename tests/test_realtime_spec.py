@@ -18,10 +18,10 @@ from pathlib import Path
 import pytest
 
 from rtde_spec.errors import DecodeError, SpecError
+from rtde_spec.metamodel.catalogue import Catalogue
+from rtde_spec.metamodel.realtime import load_realtime
+from rtde_spec.metamodel.versions import Version
 from rtde_spec.realtime import RealtimeStream, decode, encode, layout_for
-from rtde_spec.spec.catalogue import Catalogue
-from rtde_spec.spec.realtime import load_realtime
-from rtde_spec.spec.versions import Version
 
 from .helpers import ROOT
 

@@ -11,9 +11,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rtde_spec.errors import DecodeError, EncodeError, RecipeError
+from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.output.tables import to_arrow, to_pandas
 from rtde_spec.recipes.codec import RecipeCodec
-from rtde_spec.spec.catalogue import Catalogue
 
 from .strategies import wire_value
 

@@ -11,10 +11,10 @@ from pathlib import Path
 import pytest
 
 from rtde_spec.cli.main import main
-from rtde_spec.spec.importers import detect_format, read_document
-from rtde_spec.spec.importers.diff import diff_fields
-from rtde_spec.spec.importers.primary_diff import diff_primary
-from rtde_spec.spec.loader import load_spec
+from rtde_spec.importers import detect_format, read_document
+from rtde_spec.importers.diff import diff_fields
+from rtde_spec.importers.primary_diff import diff_primary
+from rtde_spec.metamodel.loader import load_spec
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = Path(__file__).parent / "data" / "import"
@@ -183,7 +183,7 @@ def test_help_does_not_import_the_importer_or_ruamel() -> None:
         "import sys\n"
         "from rtde_spec.cli.main import build_parser\n"
         "build_parser().format_help()\n"
-        "print([m for m in sys.modules if m.startswith(('ruamel', 'rtde_spec.spec.importers'))])\n"
+        "print([m for m in sys.modules if m.startswith(('ruamel', 'rtde_spec.importers'))])\n"
     )
     result = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
     assert result.stdout.strip() == "[]"

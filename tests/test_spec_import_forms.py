@@ -16,11 +16,11 @@ from typing import Any
 import pytest
 
 from rtde_spec.errors import UsageError
-from rtde_spec.spec.importers import detect_format, read_document
-from rtde_spec.spec.importers.html_doc import read_tables
-from rtde_spec.spec.importers.tables import MAX_ROWS
-from rtde_spec.spec.loader import load_spec
-from rtde_spec.spec.schema import Spec
+from rtde_spec.importers import detect_format, read_document
+from rtde_spec.importers.html_doc import read_tables
+from rtde_spec.importers.tables import MAX_ROWS
+from rtde_spec.metamodel.loader import load_spec
+from rtde_spec.metamodel.schema import Spec
 
 ROOT = Path(__file__).resolve().parent.parent
 

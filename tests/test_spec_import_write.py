@@ -18,8 +18,8 @@ from typing import Any
 import pytest
 
 from rtde_spec.cli.main import main
-from rtde_spec.spec.loader import load_spec
-from rtde_spec.spec.schema import FieldSpec, Spec
+from rtde_spec.metamodel.loader import load_spec
+from rtde_spec.metamodel.schema import FieldSpec, Spec
 
 ROOT = Path(__file__).resolve().parent.parent
 

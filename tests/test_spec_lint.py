@@ -8,7 +8,7 @@ from pathlib import Path
 import pytest
 
 from rtde_spec.errors import SpecError
-from rtde_spec.spec.loader import load_spec
+from rtde_spec.metamodel.loader import load_spec
 
 from .helpers import ROOT
 

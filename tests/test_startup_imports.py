@@ -31,9 +31,9 @@ finally:
 raise SystemExit(code)
 """
 
-META_MODEL = "rtde_spec.spec.schema"  # the pydantic meta-model: codegen's validator of spec/
+META_MODEL = "rtde_spec.metamodel.schema"  # the pydantic meta-model: codegen's validator of spec/
 PRIMARY_MODELS = "rtde_spec._generated.primary_models"
-SPEC_FILES = ("yaml", "rtde_spec.spec.dashboard", "rtde_spec.spec.external")  # their meta-models
+SPEC_FILES = ("yaml", "rtde_spec.metamodel.dashboard", "rtde_spec.metamodel.external")  # their meta-models
 RTDE_MODELS = "rtde_spec._generated.rtde_models"  # the ~100 pydantic package models
 RTDE_ONLY = (META_MODEL, PRIMARY_MODELS, "construct", *SPEC_FILES)
 
@@ -163,7 +163,7 @@ def test_runtime_fields_read_as_the_meta_model_does() -> None:
     the validated spec's."""
     from rtde_spec._generated.external_control import EXTERNAL_CONTROL
     from rtde_spec._generated.spec_data import SPEC
-    from rtde_spec.spec.schema import LayoutField, Primitive
+    from rtde_spec.metamodel.schema import LayoutField, Primitive
 
     fields = [(m["name"], f) for m in SPEC["packages"]["messages"] for f in m.get("fields", [])]
     for fam in SPEC["primary"]["families"]:
@@ -190,8 +190,8 @@ def test_runtime_fields_read_as_the_meta_model_does() -> None:
 
 def test_the_primary_codec_from_generated_data_is_the_one_from_the_validated_spec() -> None:
     """default_codec reads the generated data (no meta-model); a validated Spec gives the same codec."""
+    from rtde_spec.metamodel.catalogue import Catalogue
     from rtde_spec.primary.codec import PrimaryCodec, default_codec
-    from rtde_spec.spec.catalogue import Catalogue
 
     plain, validated = default_codec(), PrimaryCodec(Catalogue.builtin().spec)
     assert plain.families.keys() == validated.families.keys()

@@ -128,3 +128,14 @@ def test_the_emulator_reads_down_from_server_to_arm() -> None:
         if (a := floor(name)) is not None and (b := floor(target)) is not None and b < a
     ]
     assert not upward, upward
+
+
+def test_the_document_importers_serve_only_the_cli() -> None:
+    """Run time never loads the importers: only `rtde-spec spec import` reads UR's documents."""
+    graph = import_graph()
+    users = {
+        name
+        for name, targets in graph.items()
+        if any(t.startswith("rtde_spec.importers") for t in targets) and not name.startswith("rtde_spec.importers")
+    }
+    assert users and all(name.startswith("rtde_spec.cli.") for name in users), users

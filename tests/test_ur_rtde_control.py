@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 from rtde_spec.emulator.arm import kinematics as kin
-from rtde_spec.spec.arms import arm_model
+from rtde_spec.metamodel.arms import arm_model
 
 rtde_control = pytest.importorskip("rtde_control", reason="ur_rtde is installed by the test extra")
 rtde_receive = pytest.importorskip("rtde_receive", reason="ur_rtde is installed by the test extra")

@@ -10,7 +10,7 @@ import pytest
 
 from rtde_spec.emulator.urscript import builtins
 from rtde_spec.errors import SpecError
-from rtde_spec.spec.urscript import load_urscript, urscript_functions
+from rtde_spec.metamodel.urscript import load_urscript, urscript_functions
 
 ROOT = Path(__file__).resolve().parent.parent
 

@@ -118,7 +118,7 @@ def connection_for(kind: str, name: str, client: str, server: str, sink: TableSi
 
         return DashboardConnection(name, server, sink)
     from rtde_spec.capture.external import ExternalConnection, ScriptSenderConnection
-    from rtde_spec.spec.external import external_spec
+    from rtde_spec.metamodel.external import external_spec
 
     protocol = external_spec().protocol(kind)
     session = kw.get("session")  # shared by a capture file's connections: the programs sent to each robot

@@ -29,11 +29,11 @@ from rtde_spec.capture.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
 from rtde_spec.errors import RtdeSpecError
 from rtde_spec.external.programs import MAX_PROGRAM_BYTES, ProgramSent, programs_of
+from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.output.base import plain
 from rtde_spec.recipes.codec import RecipeCodec
 from rtde_spec.rtde.packages import DATA, TEXTS
 from rtde_spec.rtde.session import SessionDecoder
-from rtde_spec.spec.catalogue import Catalogue
 
 BATCH = 4096
 RTDE_HEADER = struct.calcsize(RTDE_HEADER_FORMAT)

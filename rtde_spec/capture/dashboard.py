@@ -17,7 +17,7 @@ from rtde_spec.capture.records import LineFraming
 from rtde_spec.capture.rows import text_columns
 from rtde_spec.capture.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
-from rtde_spec.spec.dashboard import dashboard_spec
+from rtde_spec.metamodel.dashboard import dashboard_spec
 
 TABLE = "dashboard"
 

@@ -23,8 +23,8 @@ from rtde_spec.capture.sink import ArrowSink, DirectorySink, TableSink, output_s
 from rtde_spec.capture.summary import CaptureSummary
 from rtde_spec.capture.tcp import MOD, RECENT
 from rtde_spec.errors import OutputError
+from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
-from rtde_spec.spec.catalogue import Catalogue
 
 RUN_HEAD = PAYLOAD_OFFSET  # size, type, recipe id: the bytes every data package of one run shares
 RUN_MIN, RUN_MAX = 16, 4096  # shorter runs go segment by segment; longer ones are cut

@@ -29,8 +29,8 @@ from rtde_spec.errors import RtdeSpecError
 from rtde_spec.external.codec import RecordCodec, VariantPlan, protocol_codecs, record_codec
 from rtde_spec.external.layouts import Choice, LayoutChooser
 from rtde_spec.external.programs import MAX_PROGRAM_BYTES, programs_of
+from rtde_spec.metamodel.external import ExternalProtocol
 from rtde_spec.output.base import plain
-from rtde_spec.spec.external import ExternalProtocol
 from rtde_spec.wire.columns import decode_columns, record_dtype
 
 SIDE = {"client": "robot", "controller": "driver"}  # the flow's sender names on a driver-served port

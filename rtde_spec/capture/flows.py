@@ -21,9 +21,9 @@ from rtde_spec.capture.packets import FIN, RST, SYN, Segment
 from rtde_spec.capture.sink import TableSink
 from rtde_spec.capture.summary import ConnectionSummary
 from rtde_spec.capture.tcp import Direction
+from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.recipes.codec import RecipeCodec
 from rtde_spec.rtde.packages import encode_package
-from rtde_spec.spec.catalogue import Catalogue
 
 # how an RTDE client opens: the header of a protocol version request (its size and type)
 RTDE_VERSION_REQUEST = encode_package("request_protocol_version", {"protocol_version": 2})[:RTDE_HEADER]

@@ -17,7 +17,7 @@ from rtde_spec.errors import RtdeSpecError, UsageError
 
 if TYPE_CHECKING:
     from rtde_spec.errors import DecodeError
-    from rtde_spec.spec.catalogue import Catalogue
+    from rtde_spec.metamodel.catalogue import Catalogue
     from rtde_spec.wire.framing import Skipped
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
@@ -33,7 +33,7 @@ _CAPTURE_MAGIC = {
 
 def catalogue_for(args: argparse.Namespace) -> Catalogue:
     """The built-in catalogue plus $RTDE_SPEC_EXTRA_FIELDS and --extra-fields files."""
-    from rtde_spec.spec.catalogue import Catalogue
+    from rtde_spec.metamodel.catalogue import Catalogue
 
     base = Catalogue.default()
     extra = getattr(args, "extra_fields", None)
@@ -123,7 +123,7 @@ def controller_version(text: str) -> str:
 
 def release_version(text: str) -> str:
     """argparse type of a release (MAJOR.MINOR allowed, as in `fields --diff 5.10 5.11`)."""
-    from rtde_spec.spec.catalogue import Catalogue
+    from rtde_spec.metamodel.catalogue import Catalogue
 
     try:
         Catalogue.builtin().line_of(text)
@@ -135,8 +135,8 @@ def release_version(text: str) -> str:
 def unknown_release(text: str) -> str | None:
     """Why the spec may not describe this release (None when it is within what it knows: from the
     line's first release to one minor release past the newest any field names)."""
-    from rtde_spec.spec.catalogue import Catalogue
-    from rtde_spec.spec.versions import Version
+    from rtde_spec.metamodel.catalogue import Catalogue
+    from rtde_spec.metamodel.versions import Version
 
     catalogue = Catalogue.builtin()
     version = Version.parse(text)

@@ -15,8 +15,8 @@ from rtde_spec.cli.conventions import describe
 from rtde_spec.output.text import table
 
 if TYPE_CHECKING:
+    from rtde_spec.metamodel.catalogue import Catalogue
     from rtde_spec.rtde.codec import Sender
-    from rtde_spec.spec.catalogue import Catalogue
 
 EXAMPLE = "rtde_session_v2.txt"
 PRIMARY_EXAMPLE = "primary_stream.hex"

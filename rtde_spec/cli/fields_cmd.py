@@ -10,7 +10,7 @@ from rtde_spec.cli.conventions import describe
 from rtde_spec.output.text import print_json, table
 
 if TYPE_CHECKING:
-    from rtde_spec.spec.catalogue import Catalogue, FieldInfo
+    from rtde_spec.metamodel.catalogue import Catalogue, FieldInfo
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -91,7 +91,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _run_primary(args: argparse.Namespace, catalogue: Catalogue) -> int:
-    from rtde_spec.spec.primary_fields import available, primary_fields
+    from rtde_spec.metamodel.primary_fields import available, primary_fields
 
     infos = primary_fields(catalogue)
     if args.controller:

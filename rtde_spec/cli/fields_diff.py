@@ -4,14 +4,14 @@ from __future__ import annotations
 
 from typing import Any
 
+from rtde_spec.metamodel.catalogue import Catalogue
+from rtde_spec.metamodel.versions import Version
 from rtde_spec.output.text import print_json, table
-from rtde_spec.spec.catalogue import Catalogue
-from rtde_spec.spec.versions import Version
 
 
 def version_diff(catalogue: Catalogue, old: str, new: str) -> dict[str, Any]:
     """Fields added and removed from `old` to `new`, per interface, with each version's line."""
-    from rtde_spec.spec.primary_fields import available, primary_fields
+    from rtde_spec.metamodel.primary_fields import available, primary_fields
 
     lines = {v: catalogue.line_of(v) for v in (old, new)}
     out: dict[str, Any] = {

@@ -101,7 +101,7 @@ def _unprompted(head: bytes) -> PortKind:
 
 @functools.cache
 def _greeting() -> str:
-    from rtde_spec.spec.dashboard import dashboard_spec
+    from rtde_spec.metamodel.dashboard import dashboard_spec
 
     return dashboard_spec().greeting
 

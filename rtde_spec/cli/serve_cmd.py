@@ -119,8 +119,8 @@ def run(args: argparse.Namespace) -> int:
     from rtde_spec.emulator.controller.scenario import Scenario, load_scenario
     from rtde_spec.emulator.ports.guard import ClientLimits
     from rtde_spec.emulator.server import Emulator, EmulatorConfig
+    from rtde_spec.metamodel.dashboard import dashboard_spec
     from rtde_spec.printable import SafeFormatter
-    from rtde_spec.spec.dashboard import dashboard_spec
 
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     for handler in logging.getLogger().handlers:  # what clients send is logged, never obeyed

@@ -17,7 +17,7 @@ from rtde_spec.errors import UsageError
 from rtde_spec.output.text import print_json, table
 
 if TYPE_CHECKING:
-    from rtde_spec.spec.importers.changes import Change
+    from rtde_spec.importers.changes import Change
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -86,7 +86,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 
 
 def _cell(what: str, value: Any) -> str:
-    from rtde_spec.spec.importers.changes import value_text
+    from rtde_spec.importers.changes import value_text
 
     text = value_text(what, value)
     return "" if text is None else text if len(text) <= 70 else text[:67] + "..."
@@ -113,7 +113,7 @@ def _rows(changes: list[Change]) -> list[list[Any]]:
 
 def _table_record(t: Any, spec: Any, doc: Any) -> dict[str, Any]:
     """Per table: rows read, fields, those the spec knows, and the spec's count for that edition."""
-    from rtde_spec.spec.importers.scope import expected_names
+    from rtde_spec.importers.scope import expected_names
 
     entries = spec.fields.inputs if t.direction == "input" else spec.fields.outputs
     names = {e.name for e in entries}
@@ -130,10 +130,10 @@ def _table_record(t: Any, spec: Any, doc: Any) -> dict[str, Any]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rtde_spec.spec.importers import read_document
-    from rtde_spec.spec.importers.diff import diff_fields
-    from rtde_spec.spec.importers.primary_diff import diff_primary
-    from rtde_spec.spec.loader import load_spec
+    from rtde_spec.importers import read_document
+    from rtde_spec.importers.diff import diff_fields
+    from rtde_spec.importers.primary_diff import diff_primary
+    from rtde_spec.metamodel.loader import load_spec
 
     if not args.document.is_file():
         raise UsageError(
@@ -144,7 +144,7 @@ def run(args: argparse.Namespace) -> int:
     if args.spec_dir is None and Path("spec", "rtde").is_dir():
         args.spec_dir = Path("spec")
     if args.spec_dir is None and not args.write:  # an installed package: compare with its own spec
-        from rtde_spec.spec.catalogue import Catalogue
+        from rtde_spec.metamodel.catalogue import Catalogue
 
         spec = Catalogue.builtin().spec
     elif args.spec_dir is None or not (args.spec_dir / "rtde").is_dir():
@@ -217,7 +217,7 @@ def run(args: argparse.Namespace) -> int:
             f"{len(known)} known conflicts{hint}"
         )
     if args.write:
-        from rtde_spec.spec.importers.write import write_changes
+        from rtde_spec.importers.write import write_changes
 
         assert args.spec_dir is not None  # --write without a spec folder was refused above
         result = write_changes(changes, doc, spec, args.spec_dir, allow_removals=args.allow_removals)
@@ -228,7 +228,7 @@ def run(args: argparse.Namespace) -> int:
             file=sys.stderr,
         )
     if args.overlay is not None:
-        from rtde_spec.spec.importers.write import write_overlay
+        from rtde_spec.importers.write import write_overlay
 
         count = write_overlay(changes, doc, spec, args.overlay)
         print(f"wrote {count} added fields to {args.overlay}", file=sys.stderr)

@@ -272,7 +272,7 @@ def _subscribe_rtde(args: argparse.Namespace, live: LivePublisher) -> RtdeClient
 
 
 def _available(names: list[str], controller: str) -> list[str]:
-    from rtde_spec.spec.catalogue import Catalogue
+    from rtde_spec.metamodel.catalogue import Catalogue
 
     cat = Catalogue.default()
     return [

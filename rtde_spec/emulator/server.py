@@ -27,7 +27,7 @@ from rtde_spec.emulator.ports.guard import ClientLimits, Port
 from rtde_spec.emulator.ports.primary_server import PrimaryConnection, PrimaryHub
 from rtde_spec.emulator.ports.realtime_server import RealtimeConnection, RealtimeHub
 from rtde_spec.emulator.ports.rtde_server import RtdeConnection, RtdeHub
-from rtde_spec.spec.catalogue import Catalogue
+from rtde_spec.metamodel.catalogue import Catalogue
 
 log = logging.getLogger("rtde_spec.emulator")
 SPIN_SECONDS = 0.0008  # the last part of each wait is spent awake, for sub-millisecond timing

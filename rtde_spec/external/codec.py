@@ -13,9 +13,9 @@ from functools import cache
 from typing import Any
 
 from rtde_spec.errors import DecodeError, EncodeError
-from rtde_spec.spec.catalogue import Catalogue
-from rtde_spec.spec.external import ExternalControlFile, ExternalProtocol, Variant, external_spec
-from rtde_spec.spec.schema import Primitive
+from rtde_spec.metamodel.catalogue import Catalogue
+from rtde_spec.metamodel.external import ExternalControlFile, ExternalProtocol, Variant, external_spec
+from rtde_spec.metamodel.schema import Primitive
 from rtde_spec.wire.layout import Layout
 
 ORDER = {"big": ">", "little": "<"}

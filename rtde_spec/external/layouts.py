@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 from rtde_spec.external.codec import record_codec
 from rtde_spec.external.programs import Programs
-from rtde_spec.spec.external import RecordMessage, program_line
+from rtde_spec.metamodel.external import RecordMessage, program_line
 
 MULTIPLIER = re.compile(r"MULT_\w*=")  # a multiplier the program sets (a line as program_line gives it)
 

@@ -17,7 +17,7 @@ from functools import cache
 from typing import Any
 
 from rtde_spec._generated.spec_data import SPEC
-from rtde_spec.spec.catalogue import Catalogue, FieldInfo, WireTypeInfo
+from rtde_spec.metamodel.catalogue import Catalogue, FieldInfo, WireTypeInfo
 
 NAN_NOTE = "NaN and infinities are null (JSON has no such numbers)."
 _JSON_TYPES = {"bool": "boolean", "int": "integer", "float": "number"}

@@ -31,7 +31,7 @@ def plot_columns(
     robot of a dataset), drawn in the same panels with the label in the legend. The
     image appears only whole: drawn beside `path` and renamed into place.
     """
-    from rtde_spec.spec.catalogue import Catalogue
+    from rtde_spec.metamodel.catalogue import Catalogue
 
     matplotlib = require("matplotlib", "plot", "plotting")
     matplotlib.use("Agg")

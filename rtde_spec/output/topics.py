@@ -27,9 +27,9 @@ from typing import Any
 
 from rtde_spec._generated.constants import DATA_PACKAGE_TYPE
 from rtde_spec._generated.spec_data import SPEC
+from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.output import json_schemas as js
 from rtde_spec.output.base import plain
-from rtde_spec.spec.catalogue import Catalogue
 
 CAPTURE_TIME = "capture_time"
 TIMESTAMP = "timestamp"

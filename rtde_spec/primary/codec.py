@@ -18,6 +18,7 @@ from rtde_spec._generated import primary_models as gen
 from rtde_spec._generated.constants import PRIMARY_BYTE_ORDER as ORDER
 from rtde_spec._generated.constants import PRODUCT_LINES
 from rtde_spec.errors import DecodeError, EncodeError
+from rtde_spec.metamodel.versions import Version
 from rtde_spec.primary.base import (
     OpaqueMessage,
     PrimaryModel,
@@ -31,12 +32,11 @@ from rtde_spec.primary.families import FamilyView, PrimaryView, primary_view
 from rtde_spec.primary.fast_models import build, with_groups
 from rtde_spec.primary.robot_state import RobotStateReader
 from rtde_spec.primary.values import ValueTable
-from rtde_spec.spec.versions import Version
 from rtde_spec.wire.framing import PackageFramer, Skipped, check_header
 from rtde_spec.wire.layout import Layout
 
 if TYPE_CHECKING:
-    from rtde_spec.spec.schema import Spec
+    from rtde_spec.metamodel.schema import Spec
 
 PrimaryMessage = RobotStateMessage | PrimaryPart | OpaqueMessage | UnknownMessage | UnknownMember
 

@@ -23,7 +23,7 @@ from rtde_spec._generated import primary_models as gen
 from rtde_spec.wire.layout import Layout
 
 if TYPE_CHECKING:  # annotations only: the meta-model is not built at run time
-    from rtde_spec.spec.schema import LayoutField
+    from rtde_spec.metamodel.schema import LayoutField
 
 Decoder = Callable[[bytes, int, int], Any]
 

@@ -17,10 +17,10 @@ from typing import Any
 from pydantic import BaseModel
 
 from rtde_spec.errors import DecodeError
+from rtde_spec.metamodel.versions import Version
 from rtde_spec.primary.base import PrimaryPart, RobotStateMessage, UnknownSubPackage
 from rtde_spec.primary.compiled import Decoder, ShapeDecoder, compile_part, compile_shape
 from rtde_spec.primary.fast_models import maker
-from rtde_spec.spec.versions import Version
 from rtde_spec.wire.layout import Layout
 
 Members = dict[int, tuple[type[PrimaryPart], Layout]]

@@ -13,6 +13,7 @@ from __future__ import annotations
 from typing import Any
 
 from rtde_spec.errors import DecodeError, RtdeSpecError
+from rtde_spec.metamodel.versions import Version
 from rtde_spec.realtime.layout import (
     HEADER,
     PACKAGE,
@@ -22,7 +23,6 @@ from rtde_spec.realtime.layout import (
     layout_for,
     layout_for_size,
 )
-from rtde_spec.spec.versions import Version
 
 
 def decode(

@@ -17,7 +17,7 @@ from typing import Any
 from rtde_spec._generated.constants import PRODUCT_LINES
 from rtde_spec._generated.realtime import LAYOUTS, REALTIME_MAX_MESSAGE_BYTES
 from rtde_spec.errors import DecodeError, EncodeError, UsageError
-from rtde_spec.spec.versions import Version
+from rtde_spec.metamodel.versions import Version
 
 HEADER = struct.Struct(">i")
 PACKAGE = "realtime message"

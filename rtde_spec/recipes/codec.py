@@ -22,9 +22,9 @@ from rtde_spec._generated.constants import (
     RTDE_LIMITS,
 )
 from rtde_spec.errors import DecodeError, RecipeError, require
+from rtde_spec.metamodel.catalogue import Catalogue, Direction, FieldInfo, WireTypeInfo
 from rtde_spec.recipes.encoding import _FAST_ERRORS, PREFIX, Encoder, RecipeItem
 from rtde_spec.recipes.record import record_class
-from rtde_spec.spec.catalogue import Catalogue, Direction, FieldInfo, WireTypeInfo
 
 if TYPE_CHECKING:
     from pydantic import BaseModel

@@ -22,7 +22,7 @@ from typing import Any
 
 from rtde_spec._generated.constants import BYTE_ORDER, DATA_PACKAGE_PREFIX_FORMAT, DATA_PACKAGE_TYPE
 from rtde_spec.errors import EncodeError
-from rtde_spec.spec.catalogue import FieldInfo, WireTypeInfo
+from rtde_spec.metamodel.catalogue import FieldInfo, WireTypeInfo
 
 PREFIX = struct.Struct(DATA_PACKAGE_PREFIX_FORMAT)
 

@@ -18,8 +18,8 @@ import yaml
 from defusedxml import DefusedXmlException
 
 from rtde_spec.errors import RecipeError, UsageError
+from rtde_spec.metamodel import safe_yaml
 from rtde_spec.recipes.model import FILE_FORMATS, Direction, Recipe
-from rtde_spec.spec import safe_yaml
 
 MAX_FILE_BYTES = 1 << 20  # 1 MiB: recipes are names; anything larger is not a recipe
 FORMATS = FILE_FORMATS

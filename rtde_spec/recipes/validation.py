@@ -17,10 +17,10 @@ from typing import Literal
 
 from rtde_spec._generated.constants import DATA_PACKAGE_PREFIX_FORMAT, RTDE_ANSWERS
 from rtde_spec._generated.constants import RTDE_LIMITS as LIMITS
+from rtde_spec.metamodel.catalogue import Catalogue, FieldInfo
+from rtde_spec.metamodel.versions import Version
 from rtde_spec.recipes.files import infer_direction
 from rtde_spec.recipes.model import Direction, Recipe
-from rtde_spec.spec.catalogue import Catalogue, FieldInfo
-from rtde_spec.spec.versions import Version
 
 Severity = Literal["error", "warning", "info"]
 NOT_FOUND = RTDE_ANSWERS["not_found"]

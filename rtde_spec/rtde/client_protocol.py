@@ -28,6 +28,8 @@ from rtde_spec._generated.constants import (
     RTDE_PROTOCOLS,
 )
 from rtde_spec.errors import DecodeError, ProtocolError, RecipeError, RtdeConnectionError, RtdeSpecError
+from rtde_spec.metamodel.catalogue import Catalogue
+from rtde_spec.metamodel.versions import Version
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
 from rtde_spec.recipes.encoding import PREFIX
 from rtde_spec.recipes.model import Recipe
@@ -45,8 +47,6 @@ from rtde_spec.rtde.packages import (
     observe_package,
 )
 from rtde_spec.rtde.protocol_state import ProtocolState
-from rtde_spec.spec.catalogue import Catalogue
-from rtde_spec.spec.versions import Version
 from rtde_spec.wire.framing import PackageFramer
 
 INVALID_ID = RTDE_LIMITS["invalid_recipe_id"]

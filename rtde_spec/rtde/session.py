@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.constants import RTDE_DIRECTIONS
 from rtde_spec.errors import DecodeError, RecipeError
+from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.recipes.codec import RecipeCodec
 from rtde_spec.rtde.packages import (
     DATA,
@@ -26,7 +27,6 @@ from rtde_spec.rtde.packages import (
     setup_names,
 )
 from rtde_spec.rtde.protocol_state import ProtocolState
-from rtde_spec.spec.catalogue import Catalogue
 
 if TYPE_CHECKING:
     from rtde_spec.rtde.messages import RtdeMessage

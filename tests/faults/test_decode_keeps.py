@@ -15,8 +15,8 @@ import sys
 from pathlib import Path
 
 import rtde_spec
+from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.recipes.codec import RecipeCodec
-from rtde_spec.spec.catalogue import Catalogue
 
 ROOT = Path(rtde_spec.__file__).resolve().parents[1]
 STATE_HEX = ROOT / "tests" / "data" / "ur5e_robot_state.hex"

@@ -27,7 +27,7 @@ from pathlib import Path
 import pytest
 
 from rtde_spec._generated import rtde_models as gen
-from rtde_spec.spec.catalogue import Catalogue
+from rtde_spec.metamodel.catalogue import Catalogue
 
 if not Path("/proc/self/status").exists():  # pragma: no cover - Linux CI
     pytest.skip("reads the emulator's memory from /proc", allow_module_level=True)

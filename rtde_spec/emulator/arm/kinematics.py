@@ -17,7 +17,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from rtde_spec.errors import UsageError
-from rtde_spec.spec.arms import ArmModel
+from rtde_spec.metamodel.arms import ArmModel
 
 Matrix = NDArray[np.float64]
 Floats = Sequence[float] | NDArray[np.float64]  # a list, a tuple or a numpy vector

@@ -17,7 +17,7 @@ from numpy.typing import NDArray
 
 from rtde_spec.emulator.arm import kinematics as kin
 from rtde_spec.errors import UsageError
-from rtde_spec.spec.arms import ArmModel
+from rtde_spec.metamodel.arms import ArmModel
 
 MOVEJ_A, MOVEJ_V = 1.4, 1.05
 MOVEL_A, MOVEL_V = 1.2, 0.25

@@ -12,7 +12,7 @@ import numpy as np
 
 from rtde_spec.emulator.arm import kinematics as kin
 from rtde_spec.emulator.arm.motion import MOVEJ_A, LinearSpeed, Motion, State, rest, stop_joints, stop_linear
-from rtde_spec.spec.arms import ArmModel
+from rtde_spec.metamodel.arms import ArmModel
 
 LIMIT_SLACK = 1e-9  # rad past a joint limit still counted as at it (a move that ends on it)
 SPEED_STEP = 1e-4  # s: TCP speed is the pose change over this much joint motion

@@ -36,9 +36,9 @@ from rtde_spec.emulator.controller.modes import RobotModes
 from rtde_spec.emulator.controller.program import PROGRAM_ERRORS, Program, runtime_text
 from rtde_spec.emulator.urscript import ScriptFault, parse
 from rtde_spec.emulator.urscript.events import ScriptEvent
-from rtde_spec.spec.arms import arm_model
-from rtde_spec.spec.catalogue import Catalogue, FieldInfo
-from rtde_spec.spec.versions import Version
+from rtde_spec.metamodel.arms import arm_model
+from rtde_spec.metamodel.catalogue import Catalogue, FieldInfo
+from rtde_spec.metamodel.versions import Version
 
 HOME_Q = (0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0)
 DEFAULTS: dict[str, Any] = {

@@ -34,8 +34,8 @@ from pydantic import BaseModel, ConfigDict, Field, ValidationError
 
 from rtde_spec.emulator.controller.faults import Fault
 from rtde_spec.errors import UsageError
-from rtde_spec.spec import safe_yaml
-from rtde_spec.spec.catalogue import Catalogue
+from rtde_spec.metamodel import safe_yaml
+from rtde_spec.metamodel.catalogue import Catalogue
 
 Number = float | list[float]
 

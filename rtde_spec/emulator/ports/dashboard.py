@@ -21,7 +21,7 @@ from rtde_spec._generated.enums import ProgramState, RobotMode, SafetyMode, Safe
 from rtde_spec.emulator.ports.guard import GuardedConnection, Port
 from rtde_spec.emulator.ports.robot_messages import BUILD_DATE
 from rtde_spec.emulator.ports.state_message import arm_parameters, available, robot_type
-from rtde_spec.spec.dashboard import DashboardCommand, dashboard_spec
+from rtde_spec.metamodel.dashboard import DashboardCommand, dashboard_spec
 
 if TYPE_CHECKING:
     from rtde_spec.emulator.controller.model import ControllerModel

@@ -21,9 +21,9 @@ from rtde_spec._generated.enums import (
     ReportDataType,
     RobotMessageType,
 )
+from rtde_spec.metamodel.versions import Version
 from rtde_spec.primary import models as pm
 from rtde_spec.primary.codec import encode_message
-from rtde_spec.spec.versions import Version
 
 PROJECT = "URControl"
 BUILD_DATE = "emulated by rtde_spec"

@@ -48,8 +48,8 @@ def names() -> set[str]:
 def names_for(line: str, version: str) -> frozenset[str]:
     """The built-ins a controller of this product line and version has (spec/urscript's `since`);
     a line the table does not cover (PolyScope X) gets every one the emulator runs."""
-    from rtde_spec.spec.urscript import urscript_functions
-    from rtde_spec.spec.versions import Version
+    from rtde_spec.metamodel.urscript import urscript_functions
+    from rtde_spec.metamodel.versions import Version
 
     table = urscript_functions()
     if line not in table.product_lines:

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import re
 
-from rtde_spec.spec.importers.tables import Table, check_rows
+from rtde_spec.importers.tables import Table, check_rows
 
 _HEAD = ("name", "type", "comment")
 _VERSION_HEAD = re.compile(r"(introduced in )?version|since", re.I)

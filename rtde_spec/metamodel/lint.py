@@ -7,7 +7,7 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 
-from rtde_spec.spec.schema import (
+from rtde_spec.metamodel.schema import (
     BitfieldSpec,
     CaseSpec,
     EnumSpec,
@@ -18,7 +18,7 @@ from rtde_spec.spec.schema import (
     Since,
     Spec,
 )
-from rtde_spec.spec.versions import Version
+from rtde_spec.metamodel.versions import Version
 
 Loc = tuple[str | int, ...]
 Found = Iterator[tuple[Loc, str]]

@@ -20,10 +20,10 @@ from pathlib import Path
 from typing import Any
 
 from rtde_spec.errors import RtdeSpecError, UsageError
-from rtde_spec.spec.importers import availability as av
-from rtde_spec.spec.importers.changes import Change
-from rtde_spec.spec.importers.model import DocField, DocLayoutField, Document
-from rtde_spec.spec.schema import Spec
+from rtde_spec.importers import availability as av
+from rtde_spec.importers.changes import Change
+from rtde_spec.importers.model import DocField, DocLayoutField, Document
+from rtde_spec.metamodel.schema import Spec
 
 
 def _yaml() -> Any:
@@ -81,7 +81,7 @@ def replace_text(path: Path, text: str) -> None:
 
 def check_tree(spec_dir: Path, rel: str, text: str) -> None:
     """Load, lint and generate a copy of the spec tree with `rel` replaced by `text`; raise if any fails."""
-    from rtde_spec.spec.bundle import load_bundle
+    from rtde_spec.metamodel.bundle import load_bundle
 
     with tempfile.TemporaryDirectory(prefix="rtde-spec-import-") as tmp:
         copy = Path(tmp) / "spec"
@@ -123,7 +123,7 @@ def _add_source(entry: Any, source: str) -> None:
 
 def new_entry(row: DocField, doc: Document, spec: Spec) -> dict[str, Any]:
     """A fields.yaml entry for a field the document adds."""
-    from rtde_spec.spec.importers.diff import doc_availability
+    from rtde_spec.importers.diff import doc_availability
 
     entry: dict[str, Any] = {"name": row.name, "type": row.type}
     if row.doc:
@@ -217,7 +217,7 @@ def _apply_rtde(change: Change, data: Any, doc: Document, spec: Spec) -> None:
     elif change.what == "description":
         entry["doc"] = change.new
     elif change.what == "range":
-        from rtde_spec.spec.importers.diff import doc_availability
+        from rtde_spec.importers.diff import doc_availability
 
         per = av.expand(entry)
         low, high = change.new
@@ -354,7 +354,7 @@ def write_overlay(changes: list[Change], doc: Document, spec: Spec, path: Path) 
 
 def _check_overlay(text: str, spec: Spec) -> None:
     """The overlay must load as --extra-fields loads it; checked before anything is written."""
-    from rtde_spec.spec.loader import load_fields_file
+    from rtde_spec.metamodel.loader import load_fields_file
 
     with tempfile.TemporaryDirectory(prefix="rtde-spec-overlay-") as tmp:
         probe = Path(tmp) / "overlay.yaml"

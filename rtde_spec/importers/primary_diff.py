@@ -9,12 +9,12 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from rtde_spec.spec.importers.cells import words
-from rtde_spec.spec.importers.changes import Availability, Change, mark_known, resolve
-from rtde_spec.spec.importers.model import DocLayoutField, DocMember, Document
-from rtde_spec.spec.importers.primary_text import key
-from rtde_spec.spec.schema import FamilySpec, LayoutField, MemberSpec, Spec
-from rtde_spec.spec.versions import Version
+from rtde_spec.importers.cells import words
+from rtde_spec.importers.changes import Availability, Change, mark_known, resolve
+from rtde_spec.importers.model import DocLayoutField, DocMember, Document
+from rtde_spec.importers.primary_text import key
+from rtde_spec.metamodel.schema import FamilySpec, LayoutField, MemberSpec, Spec
+from rtde_spec.metamodel.versions import Version
 
 
 @dataclass

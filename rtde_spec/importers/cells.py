@@ -11,8 +11,8 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
-from rtde_spec.spec.importers.model import VersionNote
-from rtde_spec.spec.schema import Spec
+from rtde_spec.importers.model import VersionNote
+from rtde_spec.metamodel.schema import Spec
 
 _SPAN = r"\[\s*(\d+)\s*\.\.\s*(\d+)\s*\]"
 _TOKEN = re.compile(rf"({_SPAN})|(\d+\.\d+(?:\.\d+){{0,2}})|(/|;|,)|(\S+)")

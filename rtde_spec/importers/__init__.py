@@ -9,13 +9,13 @@ import re
 from pathlib import Path
 
 from rtde_spec.errors import UsageError
-from rtde_spec.spec.importers import cb3_text, eseries_text, html_doc, markdown, rendered_text
-from rtde_spec.spec.importers.cells import Lines, parse_name
-from rtde_spec.spec.importers.model import Document
-from rtde_spec.spec.importers.rows import field_rows, main_line
-from rtde_spec.spec.importers.tables import MAX_BYTES
-from rtde_spec.spec.schema import Spec
-from rtde_spec.spec.versions import Version
+from rtde_spec.importers import cb3_text, eseries_text, html_doc, markdown, rendered_text
+from rtde_spec.importers.cells import Lines, parse_name
+from rtde_spec.importers.model import Document
+from rtde_spec.importers.rows import field_rows, main_line
+from rtde_spec.importers.tables import MAX_BYTES
+from rtde_spec.metamodel.schema import Spec
+from rtde_spec.metamodel.versions import Version
 
 FORMATS = ("cb3-text", "e-series-text", "rendered-text", "markdown", "html", "xlsx", "primary-text")
 #: what a document must hold to be read, for the error when none is found
@@ -37,7 +37,7 @@ def detect_format(text: str) -> str:
         return "html"
     if "ROBOT_STATE_PACKAGE_TYPE" in text or "Sub Package of Robot State" in text:
         return "primary-text"
-    from rtde_spec.spec.importers.primary_listing import SIGN
+    from rtde_spec.importers.primary_listing import SIGN
 
     if SIGN.search(text):
         return "primary-text"
@@ -98,7 +98,7 @@ def read_document(
     if fmt not in (None, *FORMATS):
         raise UsageError(f"unknown form {fmt!r}; one of {', '.join(FORMATS)}")
     if fmt == "xlsx" or (fmt is None and path.suffix.lower() in (".xlsx", ".xlsm")):
-        from rtde_spec.spec.importers.workbook import read_workbook
+        from rtde_spec.importers.workbook import read_workbook
 
         return read_workbook(path, spec, source, line, edition)
     text = _text(path)
@@ -106,11 +106,11 @@ def read_document(
     lines = Lines.of(spec)
     doc = Document(str(path), kind, source or _DEFAULT_SOURCE.get(kind) or _slug(path))
     if kind == "primary-text":
-        from rtde_spec.spec.importers.primary_text import read_members
+        from rtde_spec.importers.primary_text import read_members
 
         doc.members = read_members(text, lines)
         if not doc.members:  # the docs site's C-like listing ("for each joint: ... end")
-            from rtde_spec.spec.importers.primary_listing import read_listing
+            from rtde_spec.importers.primary_listing import read_listing
 
             doc.members = read_listing(text)
         doc.line = line or "e-series"

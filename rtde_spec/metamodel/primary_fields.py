@@ -8,9 +8,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from rtde_spec.spec.catalogue import Catalogue
-from rtde_spec.spec.schema import LayoutField
-from rtde_spec.spec.versions import Version
+from rtde_spec.metamodel.catalogue import Catalogue
+from rtde_spec.metamodel.schema import LayoutField
+from rtde_spec.metamodel.versions import Version
 
 
 @dataclass(frozen=True)

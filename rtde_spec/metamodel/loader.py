@@ -13,9 +13,9 @@ import yaml
 from pydantic import BaseModel, ValidationError
 
 from rtde_spec.errors import SpecError, SpecIssue
-from rtde_spec.spec import safe_yaml
-from rtde_spec.spec.lint import lint_fields_file, lint_spec
-from rtde_spec.spec.schema import (
+from rtde_spec.metamodel import safe_yaml
+from rtde_spec.metamodel.lint import lint_fields_file, lint_spec
+from rtde_spec.metamodel.schema import (
     EnumsFile,
     FieldsFile,
     PackagesFile,

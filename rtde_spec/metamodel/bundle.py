@@ -9,14 +9,14 @@ from __future__ import annotations
 from dataclasses import dataclass
 from pathlib import Path
 
-from rtde_spec.spec.arms import ArmsFile, load_arms
-from rtde_spec.spec.catalogue import Catalogue
-from rtde_spec.spec.dashboard import DashboardFile, load_dashboard
-from rtde_spec.spec.external import ExternalControlFile, load_external
-from rtde_spec.spec.loader import default_spec_root, load_spec
-from rtde_spec.spec.realtime import RealtimeFile, load_realtime
-from rtde_spec.spec.schema import Primitive, Spec
-from rtde_spec.spec.urscript import ScriptFunctions, load_urscript
+from rtde_spec.metamodel.arms import ArmsFile, load_arms
+from rtde_spec.metamodel.catalogue import Catalogue
+from rtde_spec.metamodel.dashboard import DashboardFile, load_dashboard
+from rtde_spec.metamodel.external import ExternalControlFile, load_external
+from rtde_spec.metamodel.loader import default_spec_root, load_spec
+from rtde_spec.metamodel.realtime import RealtimeFile, load_realtime
+from rtde_spec.metamodel.schema import Primitive, Spec
+from rtde_spec.metamodel.urscript import ScriptFunctions, load_urscript
 
 
 @dataclass(frozen=True)

@@ -15,10 +15,10 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
 from rtde_spec.errors import RecipeError
-from rtde_spec.spec.versions import Version
+from rtde_spec.metamodel.versions import Version
 
 if TYPE_CHECKING:
-    from rtde_spec.spec.schema import FieldsFile, FieldSpec, Spec
+    from rtde_spec.metamodel.schema import FieldsFile, FieldSpec, Spec
 
 Direction = Literal["input", "output"]
 DIRECTIONS: tuple[Direction, ...] = ("input", "output")
@@ -117,7 +117,7 @@ class Catalogue:
         """The validated meta-model (for the built-in catalogue: validated on first use)."""
         if self._spec is None:
             from rtde_spec._generated.spec_data import SPEC
-            from rtde_spec.spec.schema import Spec
+            from rtde_spec.metamodel.schema import Spec
 
             self._spec = Spec.model_validate(SPEC)
         return self._spec
@@ -166,8 +166,8 @@ class Catalogue:
 
     def with_extra(self, *paths: str | Path) -> Catalogue:
         """A new catalogue with the fields of extra YAML files (the shape of fields.yaml)."""
-        from rtde_spec.spec.loader import load_fields_file
-        from rtde_spec.spec.schema import FieldsFile
+        from rtde_spec.metamodel.loader import load_fields_file
+        from rtde_spec.metamodel.schema import FieldsFile
 
         extra = list(self.extra)
         for path in paths:

@@ -18,8 +18,8 @@ from __future__ import annotations
 
 import re
 
-from rtde_spec.spec.importers.model import DocLayoutField, DocMember
-from rtde_spec.spec.importers.primary_text import key
+from rtde_spec.importers.model import DocLayoutField, DocMember
+from rtde_spec.importers.primary_text import key
 
 _C_TYPES = {
     "unsigned char": "uint8",

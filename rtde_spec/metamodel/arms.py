@@ -16,7 +16,7 @@ from typing import Annotated, Literal
 from pydantic import Field, model_validator
 
 from rtde_spec.errors import UsageError
-from rtde_spec.spec.schema import StrictModel
+from rtde_spec.metamodel.schema import StrictModel
 
 SPEC_FILE = "arms/models.yaml"
 Six = Annotated[tuple[float, float, float, float, float, float], Field()]
@@ -68,7 +68,7 @@ class ArmsFile(StrictModel):
 
 def load_arms(root: Path | str) -> ArmsFile:
     """Load and validate arms/models.yaml below spec root `root`; SpecError names every problem."""
-    from rtde_spec.spec.loader import load_file
+    from rtde_spec.metamodel.loader import load_file
 
     return load_file(root, SPEC_FILE, ArmsFile)
 

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 from dataclasses import field as dc_field
 from typing import Any
 
-from rtde_spec.spec.schema import Conflict, ProductLine
+from rtde_spec.metamodel.schema import Conflict, ProductLine
 
 Availability = dict[str, str | None]  # product line -> first version, None: not on that line
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import re
 
-from rtde_spec.spec.importers.tables import Table, check_rows, is_heading
+from rtde_spec.importers.tables import Table, check_rows, is_heading
 
 #: a paragraph standing for left-out rows
 _ELLIPSIS = re.compile(r"^\s*(…|\.\.\.)|\band more\b", re.I)

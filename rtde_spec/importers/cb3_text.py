@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from rtde_spec.spec.importers.tables import Table, check_rows, is_heading
+from rtde_spec.importers.tables import Table, check_rows, is_heading
 
 
 def read_tables(text: str) -> list[Table]:

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import re
 
-from rtde_spec.spec.importers.tables import Table, check_rows
+from rtde_spec.importers.tables import Table, check_rows
 
 _RULER = re.compile(r"^\s*\|?\s*:?-{3,}:?\s*(\|\s*:?-{3,}:?\s*)*\|?\s*$")
 

@@ -5,9 +5,9 @@ from __future__ import annotations
 import re
 from collections import Counter
 
-from rtde_spec.spec.importers.cells import Lines, parse_name, parse_versions, spans_in, versions_in_text
-from rtde_spec.spec.importers.model import DocField, TableReport
-from rtde_spec.spec.importers.tables import Table
+from rtde_spec.importers.cells import Lines, parse_name, parse_versions, spans_in, versions_in_text
+from rtde_spec.importers.model import DocField, TableReport
+from rtde_spec.importers.tables import Table
 
 #: a row standing for rows left out ("…", "... and more fields ...", "etc."): never a field
 _PLACEHOLDER = re.compile(r"…|\.\.\.|\band more\b|\betc\.?$|^\W*$", re.I)

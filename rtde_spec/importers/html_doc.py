@@ -13,7 +13,7 @@ import re
 from html.parser import HTMLParser
 
 from rtde_spec.errors import UsageError
-from rtde_spec.spec.importers.tables import Table, check_rows
+from rtde_spec.importers.tables import Table, check_rows
 
 _KEEP = re.compile(r"</?(?:table|tr|td|th|h[1-6]|br|p|li|div)\b[^<>]*>", re.I)
 _TAG = re.compile(r"<[^<>]*>")

@@ -17,7 +17,7 @@ from typing import Annotated, Literal
 
 from pydantic import Field, model_validator
 
-from rtde_spec.spec.schema import Since, StrictModel
+from rtde_spec.metamodel.schema import Since, StrictModel
 
 SPEC_FILE = "dashboard/commands.yaml"
 Action = Literal[
@@ -111,7 +111,7 @@ def _placeholders(text: str) -> set[str]:
 
 def load_dashboard(root: Path | str) -> DashboardFile:
     """Load and validate dashboard/commands.yaml below spec root `root`; SpecError says what is wrong."""
-    from rtde_spec.spec.loader import load_file
+    from rtde_spec.metamodel.loader import load_file
 
     return load_file(root, SPEC_FILE, DashboardFile)
 

@@ -11,8 +11,8 @@ from __future__ import annotations
 
 import re
 
-from rtde_spec.spec.importers.cells import Lines, parse_versions
-from rtde_spec.spec.importers.model import DocLayoutField, DocMember
+from rtde_spec.importers.cells import Lines, parse_versions
+from rtde_spec.importers.model import DocLayoutField, DocMember
 
 _TYPES = r"unsigned char|uint\d+_t|int\d+_t|double|float|bool|char|type32"
 _ROW = re.compile(rf"^(→\s*)?(?:({_TYPES})\s+)?([A-Za-z_][A-Za-z0-9_]*)(?:\[(\d*)\])?$")

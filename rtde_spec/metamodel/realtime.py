@@ -19,9 +19,9 @@ from typing import Annotated, Literal
 from pydantic import Field, model_validator
 
 from rtde_spec.errors import SpecError, SpecIssue
-from rtde_spec.spec.catalogue import Catalogue, LineInfo
-from rtde_spec.spec.schema import LayoutField, Source, StrictModel, VersionStr
-from rtde_spec.spec.versions import Version
+from rtde_spec.metamodel.catalogue import Catalogue, LineInfo
+from rtde_spec.metamodel.schema import LayoutField, Source, StrictModel, VersionStr
+from rtde_spec.metamodel.versions import Version
 
 SPEC_FILE = "realtime/interface.yaml"
 #: struct format character and size of the primitives a real-time message may hold
@@ -134,7 +134,7 @@ def load_realtime(root: Path | str, catalogue: Catalogue | None = None) -> Realt
 
     With a catalogue (its product lines), the documented message sizes are checked too.
     """
-    from rtde_spec.spec.loader import load_file
+    from rtde_spec.metamodel.loader import load_file
 
     table = load_file(root, SPEC_FILE, RealtimeFile)
     if catalogue is not None:

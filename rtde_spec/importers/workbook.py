@@ -14,11 +14,11 @@ from pathlib import Path
 from typing import Any
 
 from rtde_spec.errors import UsageError
-from rtde_spec.spec.importers.cells import Lines
-from rtde_spec.spec.importers.model import Document
-from rtde_spec.spec.importers.rows import is_placeholder
-from rtde_spec.spec.importers.tables import MAX_BYTES, Table, check_rows
-from rtde_spec.spec.schema import Spec
+from rtde_spec.importers.cells import Lines
+from rtde_spec.importers.model import Document
+from rtde_spec.importers.rows import is_placeholder
+from rtde_spec.importers.tables import MAX_BYTES, Table, check_rows
+from rtde_spec.metamodel.schema import Spec
 
 _HEADERS = (("name", "type", "comment"), ("meaning", "type", "number of values"))
 
@@ -62,7 +62,7 @@ def read_workbook(
     path: Path, spec: Spec, source: str | None, line: str | None, edition: str | None
 ) -> Document:
     """Every sheet's tables: RTDE field tables become fields; the report names each table."""
-    from rtde_spec.spec.importers import finish
+    from rtde_spec.importers import finish
 
     try:
         import openpyxl

@@ -16,7 +16,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import Field, model_validator
 
-from rtde_spec.spec.schema import Since, StrictModel
+from rtde_spec.metamodel.schema import Since, StrictModel
 
 SPEC_FILE = "urscript/functions.yaml"
 ValueType = Literal["none", "bool", "int", "float", "number", "string", "pose", "array", "struct"]
@@ -77,7 +77,7 @@ class ScriptFunctions(StrictModel):
 
 def load_urscript(root: Path | str) -> ScriptFunctions:
     """Load and validate urscript/functions.yaml below spec root `root`; SpecError says what is wrong."""
-    from rtde_spec.spec.loader import load_file
+    from rtde_spec.metamodel.loader import load_file
 
     return load_file(root, SPEC_FILE, ScriptFunctions)
 

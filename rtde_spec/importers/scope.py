@@ -7,9 +7,9 @@ version the document's own version cells name.
 
 from __future__ import annotations
 
-from rtde_spec.spec.importers.model import Document
-from rtde_spec.spec.schema import FieldSpec, Spec
-from rtde_spec.spec.versions import Version
+from rtde_spec.importers.model import Document
+from rtde_spec.metamodel.schema import FieldSpec, Spec
+from rtde_spec.metamodel.versions import Version
 
 #: sources that are not documents a guide would be expected to repeat
 UNDOCUMENTED = {"third-party", "user"}

@@ -10,7 +10,7 @@ from __future__ import annotations
 from collections.abc import Mapping
 from typing import Any
 
-from rtde_spec.spec.schema import ProductLine
+from rtde_spec.metamodel.schema import ProductLine
 
 Since = dict[str, str] | None
 

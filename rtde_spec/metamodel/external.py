@@ -16,7 +16,7 @@ from typing import Annotated, Literal
 from pydantic import Field, model_validator
 
 from rtde_spec.errors import SpecError, SpecIssue
-from rtde_spec.spec.schema import EnumSpec, Ident, LayoutField, StrictModel
+from rtde_spec.metamodel.schema import EnumSpec, Ident, LayoutField, StrictModel
 
 SPEC_FILE = "external_control/protocols.yaml"
 PRIMITIVES_FILE = "common/primitives.yaml"
@@ -182,8 +182,8 @@ def _check_record(
 
 def load_external(root: Path | str) -> ExternalControlFile:
     """Load, validate and check external_control/protocols.yaml below spec root `root`."""
-    from rtde_spec.spec.loader import load_file
-    from rtde_spec.spec.schema import PrimitivesFile
+    from rtde_spec.metamodel.loader import load_file
+    from rtde_spec.metamodel.schema import PrimitivesFile
 
     spec = load_file(root, SPEC_FILE, ExternalControlFile)
     primitives = load_file(root, PRIMITIVES_FILE, PrimitivesFile).primitives

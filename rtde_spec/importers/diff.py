@@ -11,12 +11,12 @@ from __future__ import annotations
 
 from collections import defaultdict
 
-from rtde_spec.spec.importers.cells import words
-from rtde_spec.spec.importers.changes import Availability, Change, mark_known, resolve
-from rtde_spec.spec.importers.model import DocField, Document, VersionNote
-from rtde_spec.spec.importers.scope import directions, in_scope, stops_early
-from rtde_spec.spec.schema import FieldSpec, ProductLine, Spec
-from rtde_spec.spec.versions import Version
+from rtde_spec.importers.cells import words
+from rtde_spec.importers.changes import Availability, Change, mark_known, resolve
+from rtde_spec.importers.model import DocField, Document, VersionNote
+from rtde_spec.importers.scope import directions, in_scope, stops_early
+from rtde_spec.metamodel.schema import FieldSpec, ProductLine, Spec
+from rtde_spec.metamodel.versions import Version
 
 _OTHER = {"input": "output", "output": "input"}
 
