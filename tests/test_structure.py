@@ -136,6 +136,7 @@ def test_the_document_importers_serve_only_the_cli() -> None:
     users = {
         name
         for name, targets in graph.items()
-        if any(t.startswith("rtde_spec.importers") for t in targets) and not name.startswith("rtde_spec.importers")
+        if any(t.startswith("rtde_spec.importers") for t in targets)
+        and not name.startswith("rtde_spec.importers")
     }
     assert users and all(name.startswith("rtde_spec.cli.") for name in users), users
