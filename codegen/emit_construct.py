@@ -51,7 +51,7 @@ def construct_of(
             f"prefixed_or_rest({prefix})" if fld.fallback == "rest" else f'PascalString({prefix}, "{text}")'
         )
     if kind == "values":
-        return "GreedyBytes  # typed values: rtde_spec.primary.values"
+        return "GreedyBytes  # typed values: rtde_spec.wire.primary_values"
     if kind == "switch":
         cases = []
         for value, case in (fld.cases or {}).items():

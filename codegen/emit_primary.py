@@ -48,8 +48,8 @@ def emit_primary_models(spec: Spec) -> str:
         '"""\n\n',
         "from typing import Annotated, ClassVar\n\n",
         "from pydantic import Field\n\n",
-        "from rtde_spec.primary.base import PrimaryGroup, PrimaryPart\n",
-        "from rtde_spec.primary.values import VariableValue\n\n",
+        "from rtde_spec.wire.primary_base import PrimaryGroup, PrimaryPart\n",
+        "from rtde_spec.wire.primary_values import VariableValue\n\n",
         f"PORTS: dict[str, int] = {dict(pf.ports)!r}\n",
         f"MAX_MESSAGE_BYTES = {pf.max_message_bytes}\n",
         f"FAMILY_TYPES: dict[str, int] = { ({f.name: f.type for f in pf.families})!r}\n",
@@ -77,7 +77,7 @@ def emit_primary_models(spec: Spec) -> str:
     out += [f"    {name!r}: {name},\n" for name, _, _ in groups]
     out.append("}\n")
     if "VariableValue" not in "".join(out[10:]):
-        out = [o.replace("from rtde_spec.primary.values import VariableValue\n", "") for o in out]
+        out = [o.replace("from rtde_spec.wire.primary_values import VariableValue\n", "") for o in out]
     return "".join(out)
 
 

@@ -91,7 +91,8 @@ def _model(msg: MessageSpec, spec: Spec, prims: dict[str, Primitive]) -> str:
     out.append(f"    PACKAGE_NAME: ClassVar[str] = {names[msg.type]!r}\n")
     out.append(f"    SENDERS: ClassVar[tuple[str, ...]] = {tuple(msg.senders)!r}\n")
     out.append(f"    PROTOCOLS: ClassVar[tuple[int, ...]] = {tuple(msg.protocols)!r}\n")
-    out.append(f'    STRUCT: ClassVar["Construct"] = struct_of({upper(msg.name)!r})\n')
+    structs = "rtde_spec._generated.rtde_structs"
+    out.append(f'    STRUCT: ClassVar["Construct"] = struct_of({structs!r}, {upper(msg.name)!r})\n')
     out.append(f"    HEADER_FORMAT: ClassVar[str] = {header_format(spec)!r}\n")
     out.append(f"    MAX_SIZE: ClassVar[int] = {spec.packages.limits.package_max_bytes}\n")
     enums = {f.name: f.enum for f in msg.fields if f.enum}
@@ -119,7 +120,7 @@ def emit_rtde_models(spec: Spec) -> str:
         "from typing import TYPE_CHECKING, Annotated, ClassVar\n\n",
         "from pydantic import Field\n\n",
         "from rtde_spec._generated.constants import RTDE_PACKAGE_TYPES\n",
-        "from rtde_spec.rtde.messages import RtdeMessage, struct_of\n",
+        "from rtde_spec.wire.rtde_messages import RtdeMessage, struct_of\n",
         "{model_types_import}",
         f"PORT = {pk.port}\n",
         f"HEADER_FORMAT = {header_format(spec)!r}\n",

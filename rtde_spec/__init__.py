@@ -20,7 +20,7 @@ _EXPORTS: dict[str, str] = {
     "encode": "rtde_spec.rtde.codec",
     "build": "rtde_spec.rtde.codec",
     "message_class": "rtde_spec.rtde.codec",
-    "RtdeMessage": "rtde_spec.rtde.messages",
+    "RtdeMessage": "rtde_spec.wire.rtde_messages",
     "ProtocolState": "rtde_spec.rtde.protocol_state",
     "SessionDecoder": "rtde_spec.rtde.session",
     "StreamDecoder": "rtde_spec.rtde.stream",
@@ -138,7 +138,7 @@ if TYPE_CHECKING:
     from rtde_spec.rtde.aio import AsyncRtdeClient
     from rtde_spec.rtde.client import RtdeClient
     from rtde_spec.rtde.codec import build, decode, decode_stream, encode, message_class
-    from rtde_spec.rtde.messages import RtdeMessage
     from rtde_spec.rtde.protocol_state import ProtocolState
     from rtde_spec.rtde.session import SessionDecoder
     from rtde_spec.rtde.stream import StreamDecoder
+    from rtde_spec.wire.rtde_messages import RtdeMessage

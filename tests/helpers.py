@@ -10,8 +10,8 @@ import yaml
 from rtde_spec._generated import rtde_models as gen
 from rtde_spec._generated import rtde_structs
 from rtde_spec.rtde.codec import decode, encode, message_by_name
-from rtde_spec.rtde.layouts import layouts
-from rtde_spec.rtde.messages import RtdeMessage
+from rtde_spec.wire.rtde_layouts import layouts
+from rtde_spec.wire.rtde_messages import RtdeMessage
 
 DATA = Path(__file__).parent / "data"
 ROOT = Path(__file__).resolve().parent.parent

@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 
 from rtde_spec._generated import primary_models as gen
 from rtde_spec.metamodel.schema import CaseSpec, LayoutField
-from rtde_spec.primary.values import VariableValue
+from rtde_spec.wire.primary_values import VariableValue
 
 from .strategies import SPEC, _primitive
 

@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 
 from rtde_spec.metamodel.catalogue import Catalogue, WireTypeInfo
 from rtde_spec.metamodel.schema import PackageField
-from rtde_spec.rtde.messages import RtdeMessage
+from rtde_spec.wire.rtde_messages import RtdeMessage
 
 SPEC = Catalogue.builtin().spec
 PRIMS = {p.name: p for p in SPEC.primitives.primitives}

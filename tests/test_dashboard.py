@@ -13,9 +13,9 @@ import pytest
 from rtde_spec.emulator.server import EmulatorConfig, EmulatorThread
 from rtde_spec.errors import SpecError
 from rtde_spec.metamodel.dashboard import load_dashboard
-from rtde_spec.primary.base import RobotStateMessage
 from rtde_spec.primary.client import PrimaryClient
 from rtde_spec.rtde.client import RtdeClient
+from rtde_spec.wire.primary_base import RobotStateMessage
 
 PROGRAM = 'def prog():\n  textmsg("prog")\n  sleep(30)\nend\n'
 

@@ -24,8 +24,8 @@ import pytest
 
 from rtde_spec.emulator.controller.scenario import Scenario
 from rtde_spec.emulator.server import EmulatorConfig, EmulatorThread
-from rtde_spec.primary.base import RobotStateMessage
 from rtde_spec.primary.codec import PrimaryStreamDecoder
+from rtde_spec.wire.primary_base import RobotStateMessage
 
 
 def raw_messages(sock: socket.socket, seconds: float) -> Iterator[bytes]:

@@ -16,8 +16,8 @@ import pytest
 
 from rtde_spec._generated.enums import RobotMode, SafetyMode
 from rtde_spec.emulator.server import EmulatorConfig, EmulatorThread
-from rtde_spec.primary.base import RobotStateMessage
 from rtde_spec.primary.codec import PrimaryStreamDecoder
+from rtde_spec.wire.primary_base import RobotStateMessage
 
 
 def serve() -> EmulatorThread:

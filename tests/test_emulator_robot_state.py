@@ -17,8 +17,8 @@ import pytest
 
 from rtde_spec.emulator.server import EmulatorConfig, EmulatorThread
 from rtde_spec.metamodel.arms import arm_model
-from rtde_spec.primary.base import RobotStateMessage
 from rtde_spec.primary.codec import PrimaryStreamDecoder
+from rtde_spec.wire.primary_base import RobotStateMessage
 
 
 def shape(message: bytes) -> list[tuple[int, int]]:

@@ -17,20 +17,20 @@ from rtde_spec._generated import primary_structs
 from rtde_spec.errors import DecodeError, EncodeError
 from rtde_spec.metamodel.schema import LayoutField
 from rtde_spec.metamodel.versions import Version
-from rtde_spec.primary.base import (
-    OpaqueMessage,
-    PrimaryPart,
-    RobotStateMessage,
-    UnknownMember,
-    UnknownMessage,
-    UnknownSubPackage,
-)
 from rtde_spec.primary.codec import (
     PrimaryStreamDecoder,
     decode_message,
     decode_stream,
     default_codec,
     encode_message,
+)
+from rtde_spec.wire.primary_base import (
+    OpaqueMessage,
+    PrimaryPart,
+    RobotStateMessage,
+    UnknownMember,
+    UnknownMessage,
+    UnknownSubPackage,
 )
 
 from .helpers import DATA

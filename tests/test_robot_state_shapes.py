@@ -12,8 +12,8 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from rtde_spec.metamodel.catalogue import Catalogue
-from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
 from rtde_spec.primary.codec import PrimaryCodec, decode_message, default_codec, encode_message
+from rtde_spec.wire.primary_base import PrimaryPart, RobotStateMessage
 
 from .helpers import DATA
 from .primary_strategies import MEMBER_KEYS, member_strategy

@@ -140,3 +140,53 @@ def test_the_document_importers_serve_only_the_cli() -> None:
         and not name.startswith("rtde_spec.importers")
     }
     assert users and all(name.startswith("rtde_spec.cli.") for name in users), users
+
+
+# The floors, bottom up (docs/architecture.md draws them): a module imports only its own floor and
+# the floors below. Leaves import nothing of the package; the generated constants are pure data.
+FLOORS: tuple[tuple[str, ...], ...] = (
+    ("rtde_spec.errors", "rtde_spec.printable", "rtde_spec._generated.constants"),
+    ("rtde_spec.wire",),
+    ("rtde_spec._generated",),
+    ("rtde_spec.metamodel",),
+    ("rtde_spec.output",),
+    ("rtde_spec.recipes", "rtde_spec.realtime", "rtde_spec.external", "rtde_spec.primary"),
+    ("rtde_spec.rtde", "rtde_spec.examples"),
+    ("rtde_spec.capture", "rtde_spec.emulator", "rtde_spec.importers"),
+    ("rtde_spec.cli",),
+    ("rtde_spec", "rtde_spec.__main__"),
+)
+# The one lazy lookup back up: the RTDE layouts are compiled, on first use, from the generated
+# spec data (wire/rtde_layouts.py), so the engine needs no pydantic meta-model at run time.
+LOOKUPS_UP = {("rtde_spec.wire.rtde_layouts", "rtde_spec._generated.spec_data")}
+
+
+def floor_of(module: str) -> int:
+    best, length = -1, -1
+    for index, members in enumerate(FLOORS):
+        for member in members:
+            if (module == member or module.startswith(member + ".")) and len(member) > length:
+                best, length = index, len(member)
+    assert best >= 0, f"{module} is on no floor: add it to FLOORS and docs/architecture.md"
+    return best
+
+
+def arrows_up() -> set[tuple[str, str]]:
+    graph = import_graph()
+    return {
+        (name, target)
+        for name, targets in graph.items()
+        for target in targets
+        if floor_of(target) > floor_of(name)
+    }
+
+
+def test_imports_run_down_the_floors() -> None:
+    """No new arrow back up: generated code extends only wire/, wire/ names nothing above it."""
+    assert arrows_up() == LOOKUPS_UP
+
+
+def test_the_floors_diagram_is_the_one_the_imports_draw() -> None:
+    from tests.floors import DOC, block, diagram
+
+    assert block(DOC.read_text()) == diagram(), "run python -m tests.floors and commit docs/architecture.md"

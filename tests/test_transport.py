@@ -16,8 +16,8 @@ import pytest
 from rtde_spec import AsyncRtdeClient, EmulatorConfig, EmulatorThread, PrimaryClient, RtdeClient
 from rtde_spec.emulator.controller.scenario import Scenario
 from rtde_spec.errors import RecipeError, RtdeConnectionError, UsageError
-from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
 from rtde_spec.rtde.codec import build, decode_stream
+from rtde_spec.wire.primary_base import PrimaryPart, RobotStateMessage
 
 SCENARIO = Scenario.model_validate(
     {

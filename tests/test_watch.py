@@ -16,8 +16,8 @@ from rtde_spec import EmulatorConfig, EmulatorThread, RtdeClient, decode_message
 from rtde_spec.cli.main import main
 from rtde_spec.emulator.controller.scenario import Scenario
 from rtde_spec.primary import models as pm
-from rtde_spec.primary.base import RobotStateMessage
 from rtde_spec.primary.events import StateChanges, describe_message
+from rtde_spec.wire.primary_base import RobotStateMessage
 
 from .helpers import DATA
 

@@ -9,8 +9,8 @@ from typing import Annotated, ClassVar
 
 from pydantic import Field
 
-from rtde_spec.primary.base import PrimaryGroup, PrimaryPart
-from rtde_spec.primary.values import VariableValue
+from rtde_spec.wire.primary_base import PrimaryGroup, PrimaryPart
+from rtde_spec.wire.primary_values import VariableValue
 
 PORTS: dict[str, int] = {'primary': 30001, 'secondary': 30002, 'primary_read_only': 30011, 'secondary_read_only': 30012}
 MAX_MESSAGE_BYTES = 1048576

@@ -316,7 +316,7 @@ PROGRAM_STATE_GLOBAL_VARIABLES_UPDATE_MESSAGE = Struct(
     "timestamp" / Int64ub,
     "robot_message_type" / Int8ub,
     "start_index" / Int16ub,
-    "variable_values" / GreedyBytes  # typed values: rtde_spec.primary.values,
+    "variable_values" / GreedyBytes  # typed values: rtde_spec.wire.primary_values,
 )
 
 ROBOT_STATE_MESSAGE = Struct(

@@ -6,7 +6,7 @@ from typing import TYPE_CHECKING, Annotated, ClassVar
 from pydantic import Field
 
 from rtde_spec._generated.constants import RTDE_PACKAGE_TYPES
-from rtde_spec.rtde.messages import RtdeMessage, struct_of
+from rtde_spec.wire.rtde_messages import RtdeMessage, struct_of
 from rtde_spec.wire.model_types import AsciiStr, CsvItem, ShortAsciiStr
 
 if TYPE_CHECKING:  # construct loads with the first STRUCT read
@@ -34,7 +34,7 @@ class RequestProtocolVersion(RtdeMessage):
     PACKAGE_NAME: ClassVar[str] = 'RTDE_REQUEST_PROTOCOL_VERSION'
     SENDERS: ClassVar[tuple[str, ...]] = ('client',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
-    STRUCT: ClassVar["Construct"] = struct_of('REQUEST_PROTOCOL_VERSION')
+    STRUCT: ClassVar["Construct"] = struct_of('rtde_spec._generated.rtde_structs', 'REQUEST_PROTOCOL_VERSION')
     HEADER_FORMAT: ClassVar[str] = '>HB'
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
@@ -55,7 +55,7 @@ class RequestProtocolVersionReply(RtdeMessage):
     PACKAGE_NAME: ClassVar[str] = 'RTDE_REQUEST_PROTOCOL_VERSION'
     SENDERS: ClassVar[tuple[str, ...]] = ('controller',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
-    STRUCT: ClassVar["Construct"] = struct_of('REQUEST_PROTOCOL_VERSION_REPLY')
+    STRUCT: ClassVar["Construct"] = struct_of('rtde_spec._generated.rtde_structs', 'REQUEST_PROTOCOL_VERSION_REPLY')
     HEADER_FORMAT: ClassVar[str] = '>HB'
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
@@ -76,7 +76,7 @@ class GetUrcontrolVersion(RtdeMessage):
     PACKAGE_NAME: ClassVar[str] = 'RTDE_GET_URCONTROL_VERSION'
     SENDERS: ClassVar[tuple[str, ...]] = ('client',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
-    STRUCT: ClassVar["Construct"] = struct_of('GET_URCONTROL_VERSION')
+    STRUCT: ClassVar["Construct"] = struct_of('rtde_spec._generated.rtde_structs', 'GET_URCONTROL_VERSION')
     HEADER_FORMAT: ClassVar[str] = '>HB'
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
@@ -95,7 +95,7 @@ class GetUrcontrolVersionReply(RtdeMessage):
     PACKAGE_NAME: ClassVar[str] = 'RTDE_GET_URCONTROL_VERSION'
     SENDERS: ClassVar[tuple[str, ...]] = ('controller',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
-    STRUCT: ClassVar["Construct"] = struct_of('GET_URCONTROL_VERSION_REPLY')
+    STRUCT: ClassVar["Construct"] = struct_of('rtde_spec._generated.rtde_structs', 'GET_URCONTROL_VERSION_REPLY')
     HEADER_FORMAT: ClassVar[str] = '>HB'
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
@@ -119,7 +119,7 @@ class TextMessageV1Controller(RtdeMessage):
     PACKAGE_NAME: ClassVar[str] = 'RTDE_TEXT_MESSAGE'
     SENDERS: ClassVar[tuple[str, ...]] = ('controller',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1,)
-    STRUCT: ClassVar["Construct"] = struct_of('TEXT_MESSAGE_V1_CONTROLLER')
+    STRUCT: ClassVar["Construct"] = struct_of('rtde_spec._generated.rtde_structs', 'TEXT_MESSAGE_V1_CONTROLLER')
     HEADER_FORMAT: ClassVar[str] = '>HB'
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {'message_type': 'TextMessageLevel'}
@@ -141,7 +141,7 @@ class TextMessageV1Client(RtdeMessage):
     PACKAGE_NAME: ClassVar[str] = 'RTDE_TEXT_MESSAGE'
     SENDERS: ClassVar[tuple[str, ...]] = ('client',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1,)
-    STRUCT: ClassVar["Construct"] = struct_of('TEXT_MESSAGE_V1_CLIENT')
+    STRUCT: ClassVar["Construct"] = struct_of('rtde_spec._generated.rtde_structs', 'TEXT_MESSAGE_V1_CLIENT')
     HEADER_FORMAT: ClassVar[str] = '>HB'
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {'warning_level': 'TextMessageLevel'}
@@ -164,7 +164,7 @@ class TextMessage(RtdeMessage):
     PACKAGE_NAME: ClassVar[str] = 'RTDE_TEXT_MESSAGE'
     SENDERS: ClassVar[tuple[str, ...]] = ('controller', 'client')
     PROTOCOLS: ClassVar[tuple[int, ...]] = (2,)
-    STRUCT: ClassVar["Construct"] = struct_of('TEXT_MESSAGE')
+    STRUCT: ClassVar["Construct"] = struct_of('rtde_spec._generated.rtde_structs', 'TEXT_MESSAGE')
     HEADER_FORMAT: ClassVar[str] = '>HB'
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {'warning_level': 'TextMessageLevel'}
@@ -187,7 +187,7 @@ class DataPackage(RtdeMessage):
     PACKAGE_NAME: ClassVar[str] = 'RTDE_DATA_PACKAGE'
     SENDERS: ClassVar[tuple[str, ...]] = ('controller', 'client')
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
-    STRUCT: ClassVar["Construct"] = struct_of('DATA_PACKAGE')
+    STRUCT: ClassVar["Construct"] = struct_of('rtde_spec._generated.rtde_structs', 'DATA_PACKAGE')
     HEADER_FORMAT: ClassVar[str] = '>HB'
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
@@ -209,7 +209,7 @@ class SetupOutputsV1(RtdeMessage):
     PACKAGE_NAME: ClassVar[str] = 'RTDE_CONTROL_PACKAGE_SETUP_OUTPUTS'
     SENDERS: ClassVar[tuple[str, ...]] = ('client',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1,)
-    STRUCT: ClassVar["Construct"] = struct_of('SETUP_OUTPUTS_V1')
+    STRUCT: ClassVar["Construct"] = struct_of('rtde_spec._generated.rtde_structs', 'SETUP_OUTPUTS_V1')
     HEADER_FORMAT: ClassVar[str] = '>HB'
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
@@ -230,7 +230,7 @@ class SetupOutputsV1Reply(RtdeMessage):
     PACKAGE_NAME: ClassVar[str] = 'RTDE_CONTROL_PACKAGE_SETUP_OUTPUTS'
     SENDERS: ClassVar[tuple[str, ...]] = ('controller',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1,)
-    STRUCT: ClassVar["Construct"] = struct_of('SETUP_OUTPUTS_V1_REPLY')
+    STRUCT: ClassVar["Construct"] = struct_of('rtde_spec._generated.rtde_structs', 'SETUP_OUTPUTS_V1_REPLY')
     HEADER_FORMAT: ClassVar[str] = '>HB'
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
@@ -251,7 +251,7 @@ class SetupOutputsV2(RtdeMessage):
     PACKAGE_NAME: ClassVar[str] = 'RTDE_CONTROL_PACKAGE_SETUP_OUTPUTS'
     SENDERS: ClassVar[tuple[str, ...]] = ('client',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (2,)
-    STRUCT: ClassVar["Construct"] = struct_of('SETUP_OUTPUTS_V2')
+    STRUCT: ClassVar["Construct"] = struct_of('rtde_spec._generated.rtde_structs', 'SETUP_OUTPUTS_V2')
     HEADER_FORMAT: ClassVar[str] = '>HB'
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
@@ -273,7 +273,7 @@ class SetupOutputsV2Reply(RtdeMessage):
     PACKAGE_NAME: ClassVar[str] = 'RTDE_CONTROL_PACKAGE_SETUP_OUTPUTS'
     SENDERS: ClassVar[tuple[str, ...]] = ('controller',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (2,)
-    STRUCT: ClassVar["Construct"] = struct_of('SETUP_OUTPUTS_V2_REPLY')
+    STRUCT: ClassVar["Construct"] = struct_of('rtde_spec._generated.rtde_structs', 'SETUP_OUTPUTS_V2_REPLY')
     HEADER_FORMAT: ClassVar[str] = '>HB'
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
@@ -295,7 +295,7 @@ class SetupInputs(RtdeMessage):
     PACKAGE_NAME: ClassVar[str] = 'RTDE_CONTROL_PACKAGE_SETUP_INPUTS'
     SENDERS: ClassVar[tuple[str, ...]] = ('client',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
-    STRUCT: ClassVar["Construct"] = struct_of('SETUP_INPUTS')
+    STRUCT: ClassVar["Construct"] = struct_of('rtde_spec._generated.rtde_structs', 'SETUP_INPUTS')
     HEADER_FORMAT: ClassVar[str] = '>HB'
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
@@ -316,7 +316,7 @@ class SetupInputsReply(RtdeMessage):
     PACKAGE_NAME: ClassVar[str] = 'RTDE_CONTROL_PACKAGE_SETUP_INPUTS'
     SENDERS: ClassVar[tuple[str, ...]] = ('controller',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
-    STRUCT: ClassVar["Construct"] = struct_of('SETUP_INPUTS_REPLY')
+    STRUCT: ClassVar["Construct"] = struct_of('rtde_spec._generated.rtde_structs', 'SETUP_INPUTS_REPLY')
     HEADER_FORMAT: ClassVar[str] = '>HB'
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
@@ -338,7 +338,7 @@ class Start(RtdeMessage):
     PACKAGE_NAME: ClassVar[str] = 'RTDE_CONTROL_PACKAGE_START'
     SENDERS: ClassVar[tuple[str, ...]] = ('client',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
-    STRUCT: ClassVar["Construct"] = struct_of('START')
+    STRUCT: ClassVar["Construct"] = struct_of('rtde_spec._generated.rtde_structs', 'START')
     HEADER_FORMAT: ClassVar[str] = '>HB'
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
@@ -354,7 +354,7 @@ class StartReply(RtdeMessage):
     PACKAGE_NAME: ClassVar[str] = 'RTDE_CONTROL_PACKAGE_START'
     SENDERS: ClassVar[tuple[str, ...]] = ('controller',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
-    STRUCT: ClassVar["Construct"] = struct_of('START_REPLY')
+    STRUCT: ClassVar["Construct"] = struct_of('rtde_spec._generated.rtde_structs', 'START_REPLY')
     HEADER_FORMAT: ClassVar[str] = '>HB'
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
@@ -375,7 +375,7 @@ class Pause(RtdeMessage):
     PACKAGE_NAME: ClassVar[str] = 'RTDE_CONTROL_PACKAGE_PAUSE'
     SENDERS: ClassVar[tuple[str, ...]] = ('client',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
-    STRUCT: ClassVar["Construct"] = struct_of('PAUSE')
+    STRUCT: ClassVar["Construct"] = struct_of('rtde_spec._generated.rtde_structs', 'PAUSE')
     HEADER_FORMAT: ClassVar[str] = '>HB'
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}
@@ -394,7 +394,7 @@ class PauseReply(RtdeMessage):
     PACKAGE_NAME: ClassVar[str] = 'RTDE_CONTROL_PACKAGE_PAUSE'
     SENDERS: ClassVar[tuple[str, ...]] = ('controller',)
     PROTOCOLS: ClassVar[tuple[int, ...]] = (1, 2)
-    STRUCT: ClassVar["Construct"] = struct_of('PAUSE_REPLY')
+    STRUCT: ClassVar["Construct"] = struct_of('rtde_spec._generated.rtde_structs', 'PAUSE_REPLY')
     HEADER_FORMAT: ClassVar[str] = '>HB'
     MAX_SIZE: ClassVar[int] = 65535
     ENUMS: ClassVar[dict[str, str]] = {}

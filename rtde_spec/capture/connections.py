@@ -271,7 +271,7 @@ class PrimaryConnection:
         self._messages(self.framing.finish(), self.framing.times, self.last_time)
 
     def _messages(self, raws: list[bytes], times: list[float] | None, now: float) -> None:
-        from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
+        from rtde_spec.wire.primary_base import PrimaryPart, RobotStateMessage
 
         for n, raw in enumerate(raws):
             time = now if times is None else times[n]  # a message held back: when it was completed

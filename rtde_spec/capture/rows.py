@@ -21,7 +21,7 @@ from rtde_spec.output.base import plain
 if TYPE_CHECKING:
     from pydantic import BaseModel
 
-    from rtde_spec.primary.base import PrimaryPart
+    from rtde_spec.wire.primary_base import PrimaryPart
 
 U64_MAX = (1 << 64) - 1
 RAW = "_raw"

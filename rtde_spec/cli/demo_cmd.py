@@ -134,8 +134,8 @@ def _example(name: str) -> str:
 def _primary_part() -> None:
     """Decode the embedded primary-interface stream, in small TCP-like chunks."""
     from rtde_spec.output.describe import describe
-    from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
     from rtde_spec.primary.codec import PrimaryStreamDecoder
+    from rtde_spec.wire.primary_base import PrimaryPart, RobotStateMessage
 
     text = "".join(line for line in _example(PRIMARY_EXAMPLE).splitlines() if not line.startswith("#"))
     data = parse_hex(text)

@@ -12,8 +12,8 @@ from rtde_spec.errors import DecodeError, RtdeSpecError
 from rtde_spec.output.describe import describe
 from rtde_spec.output.text import safe_text
 from rtde_spec.output.writers import open_writer
-from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
 from rtde_spec.primary.codec import PrimaryStreamDecoder
+from rtde_spec.wire.primary_base import PrimaryPart, RobotStateMessage
 
 if TYPE_CHECKING:
     from rtde_spec.output.base import Writer

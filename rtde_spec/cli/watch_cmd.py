@@ -23,10 +23,10 @@ from rtde_spec.output.foxglove_live import DEFAULT_PORT
 
 if TYPE_CHECKING:
     from rtde_spec.output.foxglove_live import LivePublisher
-    from rtde_spec.primary.base import RobotStateMessage
     from rtde_spec.primary.client import PrimaryClient
     from rtde_spec.primary.events import StateChanges
     from rtde_spec.rtde.client import RtdeClient
+    from rtde_spec.wire.primary_base import RobotStateMessage
 
 # What a live view is usually opened for: joints, tool pose and load, modes. Fields the
 # controller's version lacks are left out of this default (an explicit list is taken as given).
@@ -282,8 +282,8 @@ def _available(names: list[str], controller: str) -> list[str]:
 
 def _lines(message: Any, changes: StateChanges, every: bool) -> list[tuple[str, str]]:
     """(kind, text) lines for one message: robot messages always, Robot State when modes change."""
-    from rtde_spec.primary.base import RobotStateMessage
     from rtde_spec.primary.events import message_parts
+    from rtde_spec.wire.primary_base import RobotStateMessage
 
     if not isinstance(message, RobotStateMessage):
         return [message_parts(message) or ("message", "")]

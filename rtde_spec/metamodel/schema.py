@@ -11,8 +11,8 @@ from typing import Annotated, Literal
 
 from pydantic import AfterValidator, BaseModel, BeforeValidator, ConfigDict, Field, model_validator
 
-from rtde_spec.metamodel.kinds import field_kind, int_bounds
 from rtde_spec.metamodel.versions import Version
+from rtde_spec.wire.kinds import field_kind, int_bounds
 
 _IDENT = r"^[A-Za-z_][A-Za-z0-9_]*$"
 

@@ -19,7 +19,12 @@ from rtde_spec._generated.constants import PRIMARY_BYTE_ORDER as ORDER
 from rtde_spec._generated.constants import PRODUCT_LINES
 from rtde_spec.errors import DecodeError, EncodeError
 from rtde_spec.metamodel.versions import Version
-from rtde_spec.primary.base import (
+from rtde_spec.primary.families import FamilyView, PrimaryView, primary_view
+from rtde_spec.primary.fast_models import build, with_groups
+from rtde_spec.primary.robot_state import RobotStateReader
+from rtde_spec.wire.framing import PackageFramer, Skipped, check_header
+from rtde_spec.wire.layout import Layout
+from rtde_spec.wire.primary_base import (
     OpaqueMessage,
     PrimaryModel,
     PrimaryPart,
@@ -28,12 +33,7 @@ from rtde_spec.primary.base import (
     UnknownMessage,
     UnknownSubPackage,
 )
-from rtde_spec.primary.families import FamilyView, PrimaryView, primary_view
-from rtde_spec.primary.fast_models import build, with_groups
-from rtde_spec.primary.robot_state import RobotStateReader
-from rtde_spec.primary.values import ValueTable
-from rtde_spec.wire.framing import PackageFramer, Skipped, check_header
-from rtde_spec.wire.layout import Layout
+from rtde_spec.wire.primary_values import ValueTable
 
 if TYPE_CHECKING:
     from rtde_spec.metamodel.schema import Spec

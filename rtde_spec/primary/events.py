@@ -19,7 +19,7 @@ from typing import Any
 from rtde_spec.errors import UsageError
 from rtde_spec.output.describe import describe, enum_name
 from rtde_spec.output.text import safe_text
-from rtde_spec.primary.base import OpaqueMessage, PrimaryModel, PrimaryPart, RobotStateMessage
+from rtde_spec.wire.primary_base import OpaqueMessage, PrimaryModel, PrimaryPart, RobotStateMessage
 
 # (sub-package, field) -> label: the modes and flags an operator acts on
 WATCHED: dict[tuple[str, str], str] = {

@@ -18,8 +18,8 @@ from typing import Any, TypeVar
 from pydantic import BaseModel
 
 from rtde_spec._generated import primary_models as gen
-from rtde_spec.primary.base import PrimaryModel
 from rtde_spec.wire.layout import Layout
+from rtde_spec.wire.primary_base import PrimaryModel
 
 M = TypeVar("M", bound=PrimaryModel)
 _set_dict = BaseModel.__dict__["__dict__"].__set__

@@ -18,10 +18,10 @@ from pydantic import BaseModel
 
 from rtde_spec.errors import DecodeError
 from rtde_spec.metamodel.versions import Version
-from rtde_spec.primary.base import PrimaryPart, RobotStateMessage, UnknownSubPackage
 from rtde_spec.primary.compiled import Decoder, ShapeDecoder, compile_part, compile_shape
 from rtde_spec.primary.fast_models import maker
 from rtde_spec.wire.layout import Layout
+from rtde_spec.wire.primary_base import PrimaryPart, RobotStateMessage, UnknownSubPackage
 
 Members = dict[int, tuple[type[PrimaryPart], Layout]]
 Older = dict[int, list[tuple[Version, Layout]]]  # sub-package type -> (first version not using it, layout)

@@ -14,7 +14,6 @@ from typing import Any
 
 from rtde_spec._generated import rtde_models as gen
 from rtde_spec.errors import DecodeError, EncodeError
-from rtde_spec.rtde.messages import RtdeMessage
 from rtde_spec.rtde.packages import (  # noqa: F401 (Sender, setup_names: re-exported)
     Sender,
     decode_package,
@@ -25,6 +24,7 @@ from rtde_spec.rtde.packages import (  # noqa: F401 (Sender, setup_names: re-exp
 )
 from rtde_spec.rtde.protocol_state import INITIAL_VERSION, ProtocolState
 from rtde_spec.wire.framing import PackageFramer
+from rtde_spec.wire.rtde_messages import RtdeMessage
 
 _HEADER = struct.Struct(gen.HEADER_FORMAT)
 _BY_NAME: dict[str, type[RtdeMessage]] = {cls.NAME: cls for cls in gen.MESSAGES}

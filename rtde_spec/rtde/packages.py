@@ -22,9 +22,9 @@ from rtde_spec._generated.constants import (
     RTDE_SENDERS,
 )
 from rtde_spec.errors import DecodeError, EncodeError
-from rtde_spec.rtde.layouts import layouts
 from rtde_spec.rtde.protocol_state import ProtocolState
 from rtde_spec.wire.framing import check_header
+from rtde_spec.wire.rtde_layouts import layouts
 
 Sender = Literal["controller", "client"]
 HEADER = struct.Struct(RTDE_HEADER_FORMAT)

@@ -29,7 +29,7 @@ from rtde_spec.rtde.packages import (
 from rtde_spec.rtde.protocol_state import ProtocolState
 
 if TYPE_CHECKING:
-    from rtde_spec.rtde.messages import RtdeMessage
+    from rtde_spec.wire.rtde_messages import RtdeMessage
 
 
 @dataclass

@@ -22,9 +22,9 @@ from rtde_spec._generated import rtde_models as gen
 from rtde_spec.errors import DecodeError
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
 from rtde_spec.rtde.codec import Sender, decode, observe, starting_version
-from rtde_spec.rtde.messages import RtdeMessage
 from rtde_spec.rtde.protocol_state import ProtocolState
 from rtde_spec.wire.framing import PackageFramer, Skipped
+from rtde_spec.wire.rtde_messages import RtdeMessage
 
 DATA = gen.DataPackage.PACKAGE_TYPE
 _HEADER = struct.Struct(gen.HEADER_FORMAT)

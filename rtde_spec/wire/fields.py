@@ -13,7 +13,7 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any, Protocol
 
-from rtde_spec.metamodel.kinds import field_kind, int_bounds
+from rtde_spec.wire.kinds import field_kind, int_bounds
 
 
 class CaseLike(Protocol):

@@ -26,7 +26,7 @@ from rtde_spec.errors import DecodeError, EncodeError
 from rtde_spec.wire.fields import CaseLike, FieldLike, PrimitiveLike
 
 if TYPE_CHECKING:
-    from rtde_spec.primary.values import ValueTable
+    from rtde_spec.wire.primary_values import ValueTable
 
 Values = dict[str, Any]
 F = TypeVar("F", bound=FieldLike)  # the meta-model's LayoutField or the runtime's WireField

@@ -23,9 +23,9 @@ from rtde_spec.emulator.ports.guard import GuardedConnection, Port
 from rtde_spec.errors import DecodeError, RtdeSpecError
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
 from rtde_spec.rtde.codec import decode, observe, setup_names
-from rtde_spec.rtde.messages import RtdeMessage
 from rtde_spec.rtde.protocol_state import ProtocolState
 from rtde_spec.wire.framing import PackageFramer
+from rtde_spec.wire.rtde_messages import RtdeMessage
 
 if TYPE_CHECKING:
     from rtde_spec.emulator.controller.model import ControllerModel

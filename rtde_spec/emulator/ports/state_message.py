@@ -38,8 +38,8 @@ from rtde_spec.metamodel.arms import ArmModel, arm_model
 from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.metamodel.versions import Version
 from rtde_spec.primary import models as pm
-from rtde_spec.primary.base import PrimaryPart, RobotStateMessage
 from rtde_spec.primary.codec import decode_message, encode_message
+from rtde_spec.wire.primary_base import PrimaryPart, RobotStateMessage
 
 if TYPE_CHECKING:
     from rtde_spec.emulator.controller.model import ControllerModel

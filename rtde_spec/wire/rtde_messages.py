@@ -6,6 +6,7 @@ imports them back; it runs the same layout engine as decoding.
 
 from __future__ import annotations
 
+import importlib
 import struct
 from functools import cache
 from typing import TYPE_CHECKING, Any, ClassVar
@@ -13,8 +14,8 @@ from typing import TYPE_CHECKING, Any, ClassVar
 from pydantic import BaseModel, ConfigDict, ValidationError
 
 from rtde_spec.errors import EncodeError
-from rtde_spec.rtde.layouts import layouts
 from rtde_spec.wire.pydantic_errors import encode_error
+from rtde_spec.wire.rtde_layouts import layouts
 
 if TYPE_CHECKING:
     from construct import Construct
@@ -32,7 +33,7 @@ class RtdeMessage(BaseModel):
     SENDERS: ClassVar[tuple[str, ...]]
     PROTOCOLS: ClassVar[tuple[int, ...]]
     STRUCT: ClassVar[Construct]
-    FIELDS: ClassVar[tuple[str, ...]]  # field names in wire order; the layout is the spec's (rtde/layouts.py)
+    FIELDS: ClassVar[tuple[str, ...]]  # field names in wire order; layout: wire/rtde_layouts.py
     ENUMS: ClassVar[dict[str, str]]  # field name -> enum name in spec/
     FIXED_FORMAT: ClassVar[str]  # struct format of the leading fixed-size fields
     HEADER_FORMAT: ClassVar[str]  # struct format of the header (size, type)
@@ -79,17 +80,16 @@ def _header(fmt: str) -> struct.Struct:
 
 class _StructOf:
     """`Model.STRUCT`: the package's construct struct, imported on first use (construct and the
-    generated structs cost a capture or a client ~25 ms of start-up they do not need)."""
+    generated structs cost a capture or a client ~25 ms of start-up they do not need). The
+    generated model names the module, so this floor names nothing above it."""
 
-    def __init__(self, name: str) -> None:
-        self.name = name
+    def __init__(self, module: str, name: str) -> None:
+        self.module, self.name = module, name
 
     def __get__(self, obj: object, owner: type | None = None) -> Construct:
-        from rtde_spec._generated import rtde_structs
-
-        return getattr(rtde_structs, self.name)  # type: ignore[no-any-return]
+        return getattr(importlib.import_module(self.module), self.name)  # type: ignore[no-any-return]
 
 
-def struct_of(name: str) -> Any:
-    """The value of a generated model's STRUCT: `rtde_structs.<name>`, imported when read."""
-    return _StructOf(name)
+def struct_of(module: str, name: str) -> Any:
+    """The value of a generated model's STRUCT: `<module>.<name>`, imported when read."""
+    return _StructOf(module, name)
