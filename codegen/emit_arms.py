@@ -10,9 +10,7 @@ import math
 
 from rtde_spec.metamodel.arms import ArmsFile
 
-from .render import MD_HEADER, literal_module, md_table
-
-GEN = "rtde_spec/_generated"
+from .render import GEN, MD_HEADER, literal_module, md_table
 
 
 def emit_arms(arms: ArmsFile) -> dict[str, str]:

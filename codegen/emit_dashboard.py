@@ -8,9 +8,7 @@ from __future__ import annotations
 
 from rtde_spec.metamodel.dashboard import DashboardFile
 
-from .render import MD_HEADER, literal_module, md_table
-
-GEN = "rtde_spec/_generated"
+from .render import GEN, MD_HEADER, literal_module, md_table
 
 
 def emit_dashboard(table: DashboardFile) -> dict[str, str]:

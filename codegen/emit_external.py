@@ -8,9 +8,7 @@ from __future__ import annotations
 from rtde_spec.metamodel.external import Detect, ExternalControlFile, Variant
 from rtde_spec.metamodel.schema import Primitive
 
-from .render import MD_HEADER, literal_module, md_table
-
-GEN = "rtde_spec/_generated"
+from .render import GEN, MD_HEADER, literal_module, md_table
 
 
 def emit_external(spec: ExternalControlFile, prims: dict[str, Primitive]) -> dict[str, str]:

@@ -10,9 +10,7 @@ from __future__ import annotations
 from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.metamodel.realtime import LayoutPlan, RealtimeFile, layouts
 
-from .render import MD_HEADER, literal_module, md_table
-
-GEN = "rtde_spec/_generated"
+from .render import GEN, MD_HEADER, literal_module, md_table
 
 
 def emit_realtime(table: RealtimeFile, catalogue: Catalogue) -> dict[str, str]:

@@ -7,13 +7,10 @@ meta-model (rtde_spec.metamodel.urscript) and their own emitter.
 from __future__ import annotations
 
 import json
-import pprint
 
 from rtde_spec.metamodel.urscript import ScriptFunctions
 
-from .render import MD_HEADER, PY_HEADER, md_table
-
-GEN = "rtde_spec/_generated"
+from .render import GEN, MD_HEADER, literal_module, md_table
 
 
 def emit_urscript(table: ScriptFunctions) -> dict[str, str]:
@@ -22,12 +19,10 @@ def emit_urscript(table: ScriptFunctions) -> dict[str, str]:
 
 
 def _python(table: ScriptFunctions) -> str:
-    literal = pprint.pformat(table.model_dump(mode="json", exclude_unset=True), width=100, sort_dicts=False)
-    return (
-        PY_HEADER
-        + '"""URScript built-in functions of spec/urscript/functions.yaml."""\n\n'
-        + "from typing import Any\n\n"
-        + f"URSCRIPT_FUNCTIONS: dict[str, Any] = {literal}\n"
+    return literal_module(
+        "URScript built-in functions of spec/urscript/functions.yaml.",
+        "URSCRIPT_FUNCTIONS",
+        table.model_dump(mode="json", exclude_unset=True),
     )
 
 

@@ -31,9 +31,7 @@ from .emit_realtime import emit_realtime
 from .emit_rtde import emit_rtde_models, emit_rtde_structs
 from .emit_types import emit_types
 from .emit_urscript import emit_urscript
-from .render import PY_HEADER
-
-GEN = "rtde_spec/_generated"
+from .render import GEN, PY_HEADER
 
 
 def _protocol(b: SpecBundle) -> dict[str, str]:
