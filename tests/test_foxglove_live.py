@@ -246,7 +246,7 @@ def test_the_live_view_serve_runs_against_its_own_ports(emu: EmulatorThread) -> 
     port's Robot State reach a subscriber; stopping it closes the server."""
     import argparse
 
-    from rtde_spec.cli.watch_cmd import LiveView, add_live_arguments
+    from rtde_spec.cli.live_view import LiveView, add_live_arguments
 
     parser = argparse.ArgumentParser()
     add_live_arguments(parser, rtde_port=False)  # serve has its own --rtde-port: the emulator's

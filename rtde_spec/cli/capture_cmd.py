@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.cli.conventions import describe, plural
+from rtde_spec.cli.options import add_lenient
 from rtde_spec.errors import RtdeSpecError, UsageError
 from rtde_spec.printable import safe_text
 
@@ -110,11 +111,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="PROCESSES",
         help="files decoded in parallel processes (default: 1)",
     )
-    p.add_argument(
-        "--lenient",
-        action="store_true",
-        help="exit 0 when an input was damaged (the summary is printed all the same; default: exit 3)",
-    )
+    add_lenient(p, "exit 0 when an input was damaged (the summary is printed all the same; default: exit 3)")
     p.set_defaults(run=run)
 
 

@@ -21,15 +21,11 @@ from rtde_spec._generated.constants import (
     RTDE_PROTOCOLS,
     RTDE_SENDERS,
 )
-from rtde_spec.cli.common import (
-    existing_file,
-    from_hex_text,
-    read_input,
-    recipe_file,
-    reject_capture,
-    report_skipped,
-)
+from rtde_spec.cli.arguments import existing_file, recipe_file
 from rtde_spec.cli.conventions import describe, output_file
+from rtde_spec.cli.inputs import from_hex_text, read_input, reject_capture
+from rtde_spec.cli.options import add_lenient
+from rtde_spec.cli.report import report_skipped
 from rtde_spec.errors import DecodeError, RtdeSpecError
 
 if TYPE_CHECKING:
@@ -96,10 +92,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--jsonl", action="store_const", const="jsonl", dest="format",
         help="the same as --format jsonl: one JSON object per line, streamed (default: off)",
     )  # fmt: skip
-    p.add_argument(
-        "--lenient",
-        action="store_true",
-        help="ignore bytes after the last field (and after a recipe's payload); skip and count "
+    add_lenient(
+        p,
+        "ignore bytes after the last field (and after a recipe's payload); skip and count "
         "packages that do not decode, say so on stderr and exit 0 (default: strict, stop at the first)",
     )
     p.add_argument(
@@ -122,7 +117,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
 def recipe_codec(args: argparse.Namespace) -> RecipeCodec | None:
     if not args.recipe:
         return None
-    from rtde_spec.cli.common import catalogue_for
+    from rtde_spec.cli.arguments import catalogue_for
     from rtde_spec.recipes.codec import RecipeCodec
     from rtde_spec.recipes.files import load_recipes, pick_recipe
     from rtde_spec.recipes.model import Direction, Recipe

@@ -10,8 +10,9 @@ from importlib import resources
 from pathlib import Path
 from typing import TYPE_CHECKING
 
-from rtde_spec.cli.common import catalogue_for, parse_hex
+from rtde_spec.cli.arguments import catalogue_for
 from rtde_spec.cli.conventions import describe
+from rtde_spec.cli.inputs import parse_hex
 from rtde_spec.output.text import table
 
 if TYPE_CHECKING:

@@ -5,8 +5,9 @@ from __future__ import annotations
 import argparse
 from typing import TYPE_CHECKING
 
-from rtde_spec.cli.common import catalogue_for, controller_version, release_version
+from rtde_spec.cli.arguments import catalogue_for, release_version
 from rtde_spec.cli.conventions import describe
+from rtde_spec.cli.options import add_controller
 from rtde_spec.output.text import print_json, table
 
 if TYPE_CHECKING:
@@ -26,12 +27,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
             "rtde-spec fields --extra-fields my_fields.yaml --controller 5.25.0 --json",
         ),
     )
-    p.add_argument(
-        "--controller",
-        metavar="VERSION",
-        type=controller_version,
-        help="only fields available on this controller version (default: every field)",
-    )
+    add_controller(p, "only fields available on this controller version (default: every field)")
     p.add_argument("--direction", choices=("input", "output"), help="only this direction (default: both)")
     p.add_argument("--json", action="store_true", help="print JSON (default: a table)")
     p.add_argument(

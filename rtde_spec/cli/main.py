@@ -37,8 +37,8 @@ from rtde_spec.cli import (
     watch_cmd,
     wireshark_cmd,
 )
-from rtde_spec.cli.common import EXIT_ERROR, EXIT_USAGE
 from rtde_spec.cli.conventions import GLOBAL_AFTER, add_global_options, leaf_parsers
+from rtde_spec.cli.report import EXIT_ERROR, EXIT_USAGE
 from rtde_spec.errors import RtdeSpecError, UsageError
 from rtde_spec.printable import safe_text
 

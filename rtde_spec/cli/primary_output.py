@@ -7,7 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel
 
-from rtde_spec.cli.common import report_skipped
+from rtde_spec.cli.report import report_skipped
 from rtde_spec.errors import DecodeError, RtdeSpecError
 from rtde_spec.output.describe import describe
 from rtde_spec.output.text import safe_text

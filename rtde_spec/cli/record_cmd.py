@@ -12,8 +12,9 @@ from pathlib import Path
 from typing import TYPE_CHECKING, cast
 
 from rtde_spec._generated.constants import RTDE_PORT
-from rtde_spec.cli.common import RECIPE_FILE_HELP, existing_file, port_number
+from rtde_spec.cli.arguments import RECIPE_FILE_HELP, existing_file
 from rtde_spec.cli.conventions import describe, output_file, plural
+from rtde_spec.cli.options import add_connection
 from rtde_spec.errors import RtdeSpecError, UsageError
 from rtde_spec.printable import safe_text
 
@@ -59,14 +60,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         ),
     )
     p.epilog = f"{p.epilog}\n\n{DESCRIPTION}"
-    p.add_argument("--host", required=True, metavar="ADDRESS", help="controller address (required)")
-    p.add_argument(
-        "--port",
-        type=port_number,
-        default=RTDE_PORT,
-        metavar="PORT",
-        help=f"RTDE port (default: {RTDE_PORT})",
-    )
+    add_connection(p, RTDE_PORT, "RTDE port", "seconds to wait for replies")
     what = p.add_mutually_exclusive_group(required=True)
     what.add_argument(
         "--recipe",
@@ -118,13 +112,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "the controller's timestamp: the time each socket read returned, spaced within a read by the "
         "controller's timestamp (default: off)",
     )
-    p.add_argument(
-        "--timeout",
-        type=float,
-        default=5.0,
-        metavar="SECONDS",
-        help="seconds to wait for replies (default: 5)",
-    )
     p.set_defaults(run=run)
 
 
@@ -132,7 +119,7 @@ def names_of(args: argparse.Namespace, alternative: str = ", or the names with -
     """The output names of --fields, or of the --recipe file's recipe (--recipe-key picks one)."""
     if args.fields:
         return [n.strip() for n in args.fields.split(",") if n.strip()]
-    from rtde_spec.cli.common import catalogue_for
+    from rtde_spec.cli.arguments import catalogue_for
     from rtde_spec.recipes.files import load_recipes, pick_recipe
 
     path = existing_file(args.recipe)

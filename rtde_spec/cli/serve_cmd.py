@@ -7,9 +7,10 @@ import errno
 import re
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
-from rtde_spec.cli.common import controller_version, port_number, port_or_off
+from rtde_spec.cli.arguments import port_number, port_or_off
 from rtde_spec.cli.conventions import describe
-from rtde_spec.cli.watch_cmd import add_live_arguments
+from rtde_spec.cli.live_view import add_live_arguments
+from rtde_spec.cli.options import add_controller
 from rtde_spec.errors import UsageError
 from rtde_spec.realtime import REALTIME_PORTS
 
@@ -98,12 +99,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="arm model whose geometry and limits the robot has, e.g. UR5e, UR10 (spec/arms; "
         "default: UR5 for a CB3 version, else UR5e)",
     )
-    p.add_argument(
-        "--controller",
-        metavar="VERSION",
-        type=controller_version,
-        help="controller version to report (default: the scenario's, else 5.15.0)",
-    )
+    add_controller(p, "controller version to report (default: the scenario's, else 5.15.0)")
     p.add_argument(
         "--scenario", metavar="YAML", help="YAML scenario: version and output values (default: none)"
     )
@@ -164,7 +160,7 @@ def run(args: argparse.Namespace) -> int:
         view = None
         try:
             if args.foxglove is not None:  # off the loop: the loop answers the view's handshakes
-                from rtde_spec.cli.watch_cmd import LiveView
+                from rtde_spec.cli.live_view import LiveView
 
                 host = "127.0.0.1" if args.host in ("0.0.0.0", "::") else args.host
                 live = LiveView(host, emulator.ports["rtde"], emulator.ports["secondary"], args)

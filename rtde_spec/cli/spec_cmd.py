@@ -11,8 +11,8 @@ import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from rtde_spec.cli.common import EXIT_ERROR
 from rtde_spec.cli.conventions import describe
+from rtde_spec.cli.report import EXIT_ERROR
 from rtde_spec.errors import UsageError
 from rtde_spec.output.text import print_json, table
 

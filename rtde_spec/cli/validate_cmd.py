@@ -10,8 +10,10 @@ import argparse
 import sys
 from typing import TYPE_CHECKING
 
-from rtde_spec.cli.common import EXIT_USAGE, controller_version, recipe_file
+from rtde_spec.cli.arguments import recipe_file
 from rtde_spec.cli.conventions import describe, plural
+from rtde_spec.cli.options import add_controller
+from rtde_spec.cli.report import EXIT_USAGE
 from rtde_spec.errors import RtdeSpecError
 from rtde_spec.output.text import print_json, table
 from rtde_spec.recipes.model import FILE_FORMATS, Recipe
@@ -40,11 +42,9 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="RECIPE",
         help="a recipe file (XML, YAML, JSON, one name per line) or a comma list",
     )
-    p.add_argument(
-        "--controller",
-        metavar="VERSION",
-        type=controller_version,
-        help="controller version, e.g. 3.15.8, 5.12.2, 10.11.0 (default: the version a recipe file "
+    add_controller(
+        p,
+        "controller version, e.g. 3.15.8, 5.12.2, 10.11.0 (default: the version a recipe file "
         "names, else availability by version is not checked)",
     )
     p.add_argument(
@@ -137,7 +137,7 @@ def print_report(report: ValidationReport) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rtde_spec.cli.common import catalogue_for
+    from rtde_spec.cli.arguments import catalogue_for
     from rtde_spec.recipes.validation import validate_recipes
 
     try:

@@ -1,4 +1,4 @@
-"""Helpers every subcommand shares: the catalogue, input bytes, argument types, exit codes.
+"""Argument types every subcommand shares: files, recipes, ports, controller versions, the catalogue.
 
 Kept free of heavy imports so `rtde-spec --help` starts fast; what needs the spec
 or pydantic imports it inside the function.
@@ -16,19 +16,7 @@ from typing import TYPE_CHECKING
 from rtde_spec.errors import RtdeSpecError, UsageError
 
 if TYPE_CHECKING:
-    from rtde_spec.errors import DecodeError
     from rtde_spec.metamodel.catalogue import Catalogue
-    from rtde_spec.wire.framing import Skipped
-
-EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
-_HEX_RE = re.compile(r"^[0-9a-fA-F]*$")
-_CAPTURE_MAGIC = {
-    b"\xa1\xb2\xc3\xd4": "pcap",
-    b"\xd4\xc3\xb2\xa1": "pcap",
-    b"\xa1\xb2\x3c\x4d": "pcap (nanosecond)",
-    b"\x4d\x3c\xb2\xa1": "pcap (nanosecond)",
-    b"\x0a\x0d\x0d\x0a": "pcapng",
-}
 
 
 def catalogue_for(args: argparse.Namespace) -> Catalogue:
@@ -154,88 +142,3 @@ def unknown_release(text: str) -> str | None:
     if version < first:
         return f"older than the first {line.name} release with RTDE ({first}; nearest known: {first})"
     return None
-
-
-def parse_hex(text: str) -> bytes:
-    """Hex with optional spaces, colons, newlines or a 0x prefix."""
-    cleaned = re.sub(r"[\s:]", "", text)
-    cleaned = cleaned[2:] if cleaned.lower().startswith("0x") else cleaned
-    if not _HEX_RE.match(cleaned):
-        bad = next(i for i, ch in enumerate(cleaned) if ch not in "0123456789abcdefABCDEF")
-        raise RtdeSpecError(f"not hex: character {cleaned[bad]!r} at position {bad}")
-    if len(cleaned) % 2:
-        raise RtdeSpecError(f"not hex: odd number of digits ({len(cleaned)})")
-    return bytes.fromhex(cleaned)
-
-
-def capture_kind(head: bytes) -> str | None:
-    """'pcap' or 'pcapng' when the bytes start like a capture file."""
-    return _CAPTURE_MAGIC.get(bytes(head[:4]))
-
-
-def reject_capture(head: bytes, source: str) -> None:
-    kind = capture_kind(head)
-    if kind is not None:
-        raise UsageError(
-            f"this is a {kind} capture file, not RTDE or primary bytes; "
-            f"decode it with `rtde-spec capture {source} -o OUTDIR`",
-            subject=f"file {source}",
-        )
-
-
-def read_input(arg: str) -> bytes:
-    """HEX_OR_FILE: '-' is stdin, an existing file is read (hex text or binary), else hex."""
-    path = existing_file(arg)
-    if arg == "-":
-        data = sys.stdin.buffer.read()
-    elif path is not None:
-        data = path.read_bytes()
-    else:
-        try:
-            return parse_hex(arg)
-        except RtdeSpecError as exc:
-            if os.sep in arg or Path(arg).suffix:
-                raise UsageError(
-                    "no such file, and not hex either; check the path (or give hex, or - for stdin)",
-                    subject=f"file {arg[:80]}",
-                ) from None
-            raise UsageError(
-                f"{arg[:40]!r} is neither a file nor hex ({exc.reason}); give hex (e.g. 00045601), "
-                "a file, or - for standard input"
-            ) from None
-    reject_capture(data, arg)
-    return from_hex_text(data)
-
-
-def from_hex_text(data: bytes) -> bytes:
-    """The bytes that hex text stands for; `data` itself when it is not hex text."""
-    try:
-        text = data.decode("ascii")
-    except UnicodeDecodeError:
-        return data
-    stripped = re.sub(r"[\s:]", "", text)
-    if stripped and _HEX_RE.match(stripped) and len(stripped) % 2 == 0:
-        return bytes.fromhex(stripped)
-    return data
-
-
-def report_skipped(skipped: Skipped, fault: DecodeError | None, unframed: str, unit: str) -> None:
-    """What --lenient left out, on stderr: counts, bytes, the first offsets and reasons.
-
-    `unframed` says how much of the input from a framing fault on went undecoded.
-    """
-    if skipped.count:
-        print(
-            f"note: --lenient skipped {skipped.count} {unit}{'' if skipped.count == 1 else 's'} "
-            f"that did not decode ({skipped.bytes} bytes)",
-            file=sys.stderr,
-        )
-        for offset, reason in skipped.first:
-            print(f"  at byte {offset}: {reason}", file=sys.stderr)
-        if skipped.count > len(skipped.first):
-            print(f"  ... and {skipped.count - len(skipped.first)} more", file=sys.stderr)
-    if fault is not None:
-        print(
-            f"note: --lenient: the input from byte {fault.offset} on ({unframed}) was not decoded: {fault}",
-            file=sys.stderr,
-        )

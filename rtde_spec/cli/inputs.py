@@ -1,0 +1,86 @@
+"""Input bytes as users give them: hex on the command line, a file of hex or binary, or stdin.
+
+A capture file given where packages are expected is named as such, with the command that reads it.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+import sys
+from pathlib import Path
+
+from rtde_spec.cli.arguments import existing_file
+from rtde_spec.errors import RtdeSpecError, UsageError
+
+_HEX_RE = re.compile(r"^[0-9a-fA-F]*$")
+_CAPTURE_MAGIC = {
+    b"\xa1\xb2\xc3\xd4": "pcap",
+    b"\xd4\xc3\xb2\xa1": "pcap",
+    b"\xa1\xb2\x3c\x4d": "pcap (nanosecond)",
+    b"\x4d\x3c\xb2\xa1": "pcap (nanosecond)",
+    b"\x0a\x0d\x0d\x0a": "pcapng",
+}
+
+
+def parse_hex(text: str) -> bytes:
+    """Hex with optional spaces, colons, newlines or a 0x prefix."""
+    cleaned = re.sub(r"[\s:]", "", text)
+    cleaned = cleaned[2:] if cleaned.lower().startswith("0x") else cleaned
+    if not _HEX_RE.match(cleaned):
+        bad = next(i for i, ch in enumerate(cleaned) if ch not in "0123456789abcdefABCDEF")
+        raise RtdeSpecError(f"not hex: character {cleaned[bad]!r} at position {bad}")
+    if len(cleaned) % 2:
+        raise RtdeSpecError(f"not hex: odd number of digits ({len(cleaned)})")
+    return bytes.fromhex(cleaned)
+
+
+def capture_kind(head: bytes) -> str | None:
+    """'pcap' or 'pcapng' when the bytes start like a capture file."""
+    return _CAPTURE_MAGIC.get(bytes(head[:4]))
+
+
+def reject_capture(head: bytes, source: str) -> None:
+    kind = capture_kind(head)
+    if kind is not None:
+        raise UsageError(
+            f"this is a {kind} capture file, not RTDE or primary bytes; "
+            f"decode it with `rtde-spec capture {source} -o OUTDIR`",
+            subject=f"file {source}",
+        )
+
+
+def read_input(arg: str) -> bytes:
+    """HEX_OR_FILE: '-' is stdin, an existing file is read (hex text or binary), else hex."""
+    path = existing_file(arg)
+    if arg == "-":
+        data = sys.stdin.buffer.read()
+    elif path is not None:
+        data = path.read_bytes()
+    else:
+        try:
+            return parse_hex(arg)
+        except RtdeSpecError as exc:
+            if os.sep in arg or Path(arg).suffix:
+                raise UsageError(
+                    "no such file, and not hex either; check the path (or give hex, or - for stdin)",
+                    subject=f"file {arg[:80]}",
+                ) from None
+            raise UsageError(
+                f"{arg[:40]!r} is neither a file nor hex ({exc.reason}); give hex (e.g. 00045601), "
+                "a file, or - for standard input"
+            ) from None
+    reject_capture(data, arg)
+    return from_hex_text(data)
+
+
+def from_hex_text(data: bytes) -> bytes:
+    """The bytes that hex text stands for; `data` itself when it is not hex text."""
+    try:
+        text = data.decode("ascii")
+    except UnicodeDecodeError:
+        return data
+    stripped = re.sub(r"[\s:]", "", text)
+    if stripped and _HEX_RE.match(stripped) and len(stripped) % 2 == 0:
+        return bytes.fromhex(stripped)
+    return data
