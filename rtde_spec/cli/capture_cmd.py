@@ -81,6 +81,20 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="which recipe of a --recipe file with several (default: the only one, else the only "
         "output recipe)",
     )
+    _add_port_options(p)
+    p.add_argument(
+        "--jobs",
+        type=int,
+        default=1,
+        metavar="PROCESSES",
+        help="files decoded in parallel processes (default: 1)",
+    )
+    add_lenient(p, "exit 0 when an input was damaged (the summary is printed all the same; default: exit 3)")
+    p.set_defaults(run=run)
+
+
+def _add_port_options(p: argparse.ArgumentParser) -> None:
+    """Which ports hold which protocol, beyond the spec's defaults and what content tells."""
     p.add_argument(
         "--rtde-port",
         type=int,
@@ -104,15 +118,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "spec's ports: RTDE 30004, primary 30001/30002/30011/30012, real-time 30003/30013, dashboard "
         "29999, URCL external control 50001-50004)",
     )
-    p.add_argument(
-        "--jobs",
-        type=int,
-        default=1,
-        metavar="PROCESSES",
-        help="files decoded in parallel processes (default: 1)",
-    )
-    add_lenient(p, "exit 0 when an input was damaged (the summary is printed all the same; default: exit 3)")
-    p.set_defaults(run=run)
 
 
 def output_folder_arg(text: str) -> str:

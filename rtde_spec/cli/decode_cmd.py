@@ -78,20 +78,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         default="controller",
         help="who sent the bytes (default: controller)",
     )
-    p.add_argument(
-        "--format",
-        choices=FORMAT_CHOICES,
-        help="output format; json is always one array of objects, one per package, whatever their "
-        "number (jsonl: one object per line) (default: from the -o suffix, else table)",
-    )
-    p.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout (default: stdout)")
-    p.add_argument(
-        "--json", action="store_true", help="the same as --format json: a JSON array (default: off)"
-    )
-    p.add_argument(
-        "--jsonl", action="store_const", const="jsonl", dest="format",
-        help="the same as --format jsonl: one JSON object per line, streamed (default: off)",
-    )  # fmt: skip
+    _add_output_options(p)
     add_lenient(
         p,
         "ignore bytes after the last field (and after a recipe's payload); skip and count "
@@ -112,6 +99,24 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "--no-progress", action="store_true", help="no progress bar (default: shown on a terminal)"
     )
     p.set_defaults(run=run)
+
+
+def _add_output_options(p: argparse.ArgumentParser) -> None:
+    """Where the packages go and as what: a table, JSON, JSON Lines, CSV, Parquet or MCAP."""
+    p.add_argument(
+        "--format",
+        choices=FORMAT_CHOICES,
+        help="output format; json is always one array of objects, one per package, whatever their "
+        "number (jsonl: one object per line) (default: from the -o suffix, else table)",
+    )
+    p.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout (default: stdout)")
+    p.add_argument(
+        "--json", action="store_true", help="the same as --format json: a JSON array (default: off)"
+    )
+    p.add_argument(
+        "--jsonl", action="store_const", const="jsonl", dest="format",
+        help="the same as --format jsonl: one JSON object per line, streamed (default: off)",
+    )  # fmt: skip
 
 
 def recipe_codec(args: argparse.Namespace) -> RecipeCodec | None:

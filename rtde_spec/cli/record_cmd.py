@@ -9,7 +9,7 @@ import sys
 import threading
 from collections.abc import Iterator
 from pathlib import Path
-from typing import TYPE_CHECKING, cast
+from typing import TYPE_CHECKING, Any, cast
 
 from rtde_spec._generated.constants import RTDE_PORT
 from rtde_spec.cli.arguments import RECIPE_FILE_HELP, existing_file
@@ -81,6 +81,19 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--frequency", type=float, default=125.0, metavar="HZ", help="output rate in Hz (default: 125)"
     )
+    _add_stop_and_output(p)
+    p.add_argument(
+        "--wall-clock",
+        action="store_true",
+        help="add host_time, this host's receive time in seconds since the epoch (float64), beside "
+        "the controller's timestamp: the time each socket read returned, spaced within a read by the "
+        "controller's timestamp (default: off)",
+    )
+    p.set_defaults(run=run)
+
+
+def _add_stop_and_output(p: argparse.ArgumentParser) -> None:
+    """When the recording stops, and the file (or parts) it goes to."""
     stop = p.add_mutually_exclusive_group()
     stop.add_argument(
         "--duration",
@@ -105,14 +118,6 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         "pyarrow.dataset.dataset(sorted(glob('run_*.parquet'))). Parts of an earlier run with the same "
         "name are removed once this run's first part is in place (default: one file)",
     )
-    p.add_argument(
-        "--wall-clock",
-        action="store_true",
-        help="add host_time, this host's receive time in seconds since the epoch (float64), beside "
-        "the controller's timestamp: the time each socket read returned, spaced within a read by the "
-        "controller's timestamp (default: off)",
-    )
-    p.set_defaults(run=run)
 
 
 def names_of(args: argparse.Namespace, alternative: str = ", or the names with --fields A,B") -> list[str]:
@@ -153,38 +158,15 @@ def names_of(args: argparse.Namespace, alternative: str = ", or the names with -
 
 
 def run(args: argparse.Namespace) -> int:
-    from rtde_spec.output.partfile import leftovers
     from rtde_spec.output.split import parse_split
-    from rtde_spec.output.writers import format_for, open_writer
+    from rtde_spec.output.writers import open_writer
     from rtde_spec.rtde.client import RtdeClient
     from rtde_spec.rtde.recorder import BATCH_SECONDS, record
 
-    output_file(args.output)
-    fmt = format_for(args.output, args.format)
-    if fmt not in ("csv", "parquet", "jsonl", "mcap"):
-        raise UsageError(f"-o {args.output}: use .csv, .parquet, .jsonl or .mcap (or --format)")
-    if not 0 < args.frequency < float("inf"):  # NaN too; the controller's own limit is checked at setup
-        raise UsageError(f"--frequency {args.frequency:g}: a rate in Hz above 0")
-    for option, value in (("--duration", args.duration), ("--timeout", args.timeout)):
-        if value is not None and not 0 < value < float("inf"):
-            raise UsageError(f"{option} {value:g}: give seconds above 0")
-    if args.samples is not None and args.samples < 1:
-        raise UsageError(f"--samples {args.samples}: give a number of rows of 1 or more")
+    fmt = _checked_format(args)
     split = parse_split(args.split) if args.split else None
     names = names_of(args)
-    for path in leftovers(Path(args.output)):
-        if _empty(path):  # killed before its first batch reached the file: nothing to keep
-            path.unlink(missing_ok=True)
-            continue
-        what = (
-            "a Parquet file without its footer: no reader opens it; --split bounds what a kill costs"
-            if fmt == "parquet"
-            else "its rows up to the last batch are readable"
-        )
-        print(
-            f"note: {path} was left by a recording killed before it closed this file ({what})",
-            file=sys.stderr,
-        )
+    _note_leftovers(Path(args.output), fmt)
     bar = _progress(args)
     # the reader wakes every ~0.1 s, half the recorder's write interval: no row waits longer
     batch = max(1, int(args.frequency * BATCH_SECONDS / 2))
@@ -216,12 +198,57 @@ def run(args: argparse.Namespace) -> int:
             writer.close()
             if bar is not None:
                 bar.close()
+    _report(args, result, names, client, writer if split is not None else None, stop)
+    return 1 if result.stopped_by == "connection" else 0
+
+
+def _checked_format(args: argparse.Namespace) -> str:
+    """The output format, once every number the recording needs is checked (exit 2 otherwise)."""
+    from rtde_spec.output.writers import format_for
+
+    output_file(args.output)
+    fmt = format_for(args.output, args.format)
+    if fmt not in ("csv", "parquet", "jsonl", "mcap"):
+        raise UsageError(f"-o {args.output}: use .csv, .parquet, .jsonl or .mcap (or --format)")
+    if not 0 < args.frequency < float("inf"):  # NaN too; the controller's own limit is checked at setup
+        raise UsageError(f"--frequency {args.frequency:g}: a rate in Hz above 0")
+    for option, value in (("--duration", args.duration), ("--timeout", args.timeout)):
+        if value is not None and not 0 < value < float("inf"):
+            raise UsageError(f"{option} {value:g}: give seconds above 0")
+    if args.samples is not None and args.samples < 1:
+        raise UsageError(f"--samples {args.samples}: give a number of rows of 1 or more")
+    return fmt
+
+
+def _note_leftovers(output: Path, fmt: str) -> None:
+    """Say what a recording killed before it closed left beside the output; drop empty ones."""
+    from rtde_spec.output.partfile import leftovers
+
+    for path in leftovers(output):
+        if _empty(path):  # killed before its first batch reached the file: nothing to keep
+            path.unlink(missing_ok=True)
+            continue
+        what = (
+            "a Parquet file without its footer: no reader opens it; --split bounds what a kill costs"
+            if fmt == "parquet"
+            else "its rows up to the last batch are readable"
+        )
+        print(
+            f"note: {path} was left by a recording killed before it closed this file ({what})",
+            file=sys.stderr,
+        )
+
+
+def _report(
+    args: argparse.Namespace, result: Any, names: list[str], client: RtdeClient, parts_of: Any, stop: _Stop
+) -> None:
+    """The one summary line on stderr, and why a recording ended early."""
     how = result.stopped_by
     if how == "stop" and stop.signal is not None:
         how = signal.Signals(stop.signal).name
     where = args.output
-    if split is not None:
-        parts = getattr(writer, "paths", [])
+    if parts_of is not None:
+        parts = getattr(parts_of, "paths", [])
         where = f"{len(parts)} parts {parts[0]} .. {parts[-1]}" if parts else "no file"
     try:
         print(
@@ -235,7 +262,6 @@ def run(args: argparse.Namespace) -> int:
             print(f"error: the recording ended early: {lost}", file=sys.stderr)
     except OSError:  # SIGHUP: the terminal is gone; the file is what matters
         pass
-    return 1 if result.stopped_by == "connection" else 0
 
 
 def _connect(client: RtdeClient, args: argparse.Namespace) -> None:

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 import errno
 import re
+from typing import TYPE_CHECKING
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.cli.arguments import port_number, port_or_off
@@ -13,6 +14,9 @@ from rtde_spec.cli.live_view import add_live_arguments
 from rtde_spec.cli.options import add_controller
 from rtde_spec.errors import UsageError
 from rtde_spec.realtime import REALTIME_PORTS
+
+if TYPE_CHECKING:
+    from rtde_spec.emulator.server import EmulatorConfig
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -32,6 +36,36 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--host", default="127.0.0.1", metavar="ADDRESS", help="address to bind (default: 127.0.0.1)"
     )
+    _add_ports(p)
+    p.add_argument(
+        "--programs",
+        metavar="DIR",
+        help="where the dashboard's `load NAME` finds programs: NAME as URScript, or the .script "
+        "beside NAME.urp (default: none, so `load` answers File not found)",
+    )
+    p.add_argument(
+        "--max-clients",
+        type=int,
+        default=None,
+        metavar="N",
+        help="connections each port takes; a further one is closed (default: 32)",
+    )
+    p.add_argument(
+        "--model",
+        metavar="ARM",
+        help="arm model whose geometry and limits the robot has, e.g. UR5e, UR10 (spec/arms; "
+        "default: UR5 for a CB3 version, else UR5e)",
+    )
+    add_controller(p, "controller version to report (default: the scenario's, else 5.15.0)")
+    p.add_argument(
+        "--scenario", metavar="YAML", help="YAML scenario: version and output values (default: none)"
+    )
+    add_live_arguments(p, rtde_port=False)
+    p.set_defaults(run=run)
+
+
+def _add_ports(p: argparse.ArgumentParser) -> None:
+    """One option per port the emulator serves, each movable (0: any free port)."""
     p.add_argument(
         "--rtde-port",
         type=port_number,
@@ -80,77 +114,19 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="dashboard server port (default: the controller's, 29999, when free; -1: not served). "
         "PolyScope X versions have no dashboard server",
     )
-    p.add_argument(
-        "--programs",
-        metavar="DIR",
-        help="where the dashboard's `load NAME` finds programs: NAME as URScript, or the .script "
-        "beside NAME.urp (default: none, so `load` answers File not found)",
-    )
-    p.add_argument(
-        "--max-clients",
-        type=int,
-        default=None,
-        metavar="N",
-        help="connections each port takes; a further one is closed (default: 32)",
-    )
-    p.add_argument(
-        "--model",
-        metavar="ARM",
-        help="arm model whose geometry and limits the robot has, e.g. UR5e, UR10 (spec/arms; "
-        "default: UR5 for a CB3 version, else UR5e)",
-    )
-    add_controller(p, "controller version to report (default: the scenario's, else 5.15.0)")
-    p.add_argument(
-        "--scenario", metavar="YAML", help="YAML scenario: version and output values (default: none)"
-    )
-    add_live_arguments(p, rtde_port=False)
-    p.set_defaults(run=run)
 
 
 def run(args: argparse.Namespace) -> int:
     import asyncio
     import logging
-    from pathlib import Path
 
-    from rtde_spec.emulator.controller.scenario import Scenario, load_scenario
-    from rtde_spec.emulator.ports.guard import ClientLimits
-    from rtde_spec.emulator.server import Emulator, EmulatorConfig
-    from rtde_spec.metamodel.dashboard import dashboard_spec
+    from rtde_spec.emulator.server import Emulator
     from rtde_spec.printable import SafeFormatter
 
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(message)s")
     for handler in logging.getLogger().handlers:  # what clients send is logged, never obeyed
         handler.setFormatter(SafeFormatter("%(asctime)s %(message)s"))
-    scenario = load_scenario(args.scenario) if args.scenario else Scenario()
-    if (
-        args.controller
-        and "controller" in scenario.model_fields_set
-        and scenario.controller != args.controller
-    ):
-        raise UsageError(
-            f"--controller {args.controller} and the scenario's controller: {scenario.controller} disagree; "
-            "give the version once (leave out --controller, or change the scenario)",
-            subject=f"--scenario {args.scenario}",
-        )
-    config = EmulatorConfig(
-        host=args.host,
-        rtde_port=args.rtde_port,
-        primary_port=args.primary_port,
-        secondary_port=args.secondary_port,
-        primary_read_only_port=args.primary_read_only_port,
-        secondary_read_only_port=args.secondary_read_only_port,
-        scenario=scenario,
-        controller=args.controller,
-        arm=args.model,
-        dashboard_port=_dashboard_port(args.dashboard_port, dashboard_spec().port),
-        dashboard_optional=args.dashboard_port is None,  # the default port may be taken: then none
-        programs=Path(args.programs) if args.programs else None,
-        realtime_port=_dashboard_port(args.realtime_port, REALTIME_PORTS["realtime"]),
-        realtime_read_only_port=args.realtime_read_only_port,
-        realtime_optional=args.realtime_port is None,  # the default port may be taken: then none
-    )
-    if args.max_clients is not None:
-        config.limits = ClientLimits(max_clients=max(1, args.max_clients))
+    config = _config(args)
     emulator = Emulator(config)
 
     async def main() -> None:
@@ -185,6 +161,48 @@ def run(args: argparse.Namespace) -> int:
             "`rtde-spec serve`?) or give that port another number (0: any free port, printed)"
         ) from None
     return 0
+
+
+def _config(args: argparse.Namespace) -> EmulatorConfig:
+    """The emulator's configuration from the command line and --scenario (which must agree)."""
+    from pathlib import Path
+
+    from rtde_spec.emulator.controller.scenario import Scenario, load_scenario
+    from rtde_spec.emulator.ports.guard import ClientLimits
+    from rtde_spec.emulator.server import EmulatorConfig
+    from rtde_spec.metamodel.dashboard import dashboard_spec
+
+    scenario = load_scenario(args.scenario) if args.scenario else Scenario()
+    if (
+        args.controller
+        and "controller" in scenario.model_fields_set
+        and scenario.controller != args.controller
+    ):
+        raise UsageError(
+            f"--controller {args.controller} and the scenario's controller: {scenario.controller} disagree; "
+            "give the version once (leave out --controller, or change the scenario)",
+            subject=f"--scenario {args.scenario}",
+        )
+    config = EmulatorConfig(
+        host=args.host,
+        rtde_port=args.rtde_port,
+        primary_port=args.primary_port,
+        secondary_port=args.secondary_port,
+        primary_read_only_port=args.primary_read_only_port,
+        secondary_read_only_port=args.secondary_read_only_port,
+        scenario=scenario,
+        controller=args.controller,
+        arm=args.model,
+        dashboard_port=_dashboard_port(args.dashboard_port, dashboard_spec().port),
+        dashboard_optional=args.dashboard_port is None,  # the default port may be taken: then none
+        programs=Path(args.programs) if args.programs else None,
+        realtime_port=_dashboard_port(args.realtime_port, REALTIME_PORTS["realtime"]),
+        realtime_read_only_port=args.realtime_read_only_port,
+        realtime_optional=args.realtime_port is None,  # the default port may be taken: then none
+    )
+    if args.max_clients is not None:
+        config.limits = ClientLimits(max_clients=max(1, args.max_clients))
+    return config
 
 
 def _dashboard_port(given: int | None, default: int) -> int | None:
