@@ -18,7 +18,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-LANGUAGES = {"python", "sh", "yaml", "xml", "json", "text"}
+LANGUAGES = {"python", "sh", "yaml", "xml", "json", "text", "mermaid"}
 _FENCE = re.compile(r"^```(\S*)\s*$")
 _DIRECTIVE = re.compile(r"^<!-- test: (.*) -->\s*$")
 
