@@ -1250,6 +1250,60 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
               'limits': {'input_recipes_max': 255,
                          'invalid_recipe_id': 0,
                          'package_max_bytes': 65535},
+              'data_recipe_id': [{'protocols': [1],
+                                  'senders': ['controller'],
+                                  'recipe_id': 'optional',
+                                  'implied': 1,
+                                  'doc': 'Protocol 1 output data packages come with or without the '
+                                         "recipe id byte. UR's guides show the id in every data "
+                                         "package; UR's C++ client library reads protocol-1 data "
+                                         "packages without it, since UR's own fix for protocol 1 "
+                                         '(the setup reply without its id, and the data packages '
+                                         'after it). The other public clients never read protocol '
+                                         '1.',
+                                  'sources': ["UR's RTDE guide, CB3 and e-Series eras "
+                                              '(shared/seeds rtde-guide-*.txt), RTDE_DATA_PACKAGE: '
+                                              'header, recipe id uint8, then the variables; no '
+                                              'protocol excepted',
+                                              'URCL, '
+                                              'UniversalRobots/Universal_Robots_Client_Library '
+                                              'src/rtde/data_package.cpp DataPackage::parseWith: '
+                                              'the recipe id is read only when the protocol '
+                                              "version is 2; since PR #114 (2022, 'Fixed parsing "
+                                              "of incomming packages when using rtde protocol v1', "
+                                              'issue #113), by UR; serializePackage always writes '
+                                              'the id',
+                                              "UR's Python client, "
+                                              'UniversalRobots/RTDE_Python_Client_Library '
+                                              'rtde/serialize.py DataConfig.unpack: always reads '
+                                              'the id byte, but rtde.py asks for protocol 2 first '
+                                              'and reads a protocol-1 setup reply as if it had an '
+                                              'id, so it never decodes protocol 1',
+                                              'ur_rtde (src/rtde.cpp RTDE::receiveData): always '
+                                              'reads the id byte; it always negotiates protocol '
+                                              '2']},
+                                 {'protocols': [1, 2],
+                                  'senders': ['client'],
+                                  'recipe_id': 'always',
+                                  'doc': 'Input data packages: every source writes the id (several '
+                                         'input recipes may be set up).',
+                                  'sources': ["UR's RTDE guide, both eras: RTDE_DATA_PACKAGE "
+                                              'carries the recipe id',
+                                              'URCL src/rtde/data_package.cpp '
+                                              'DataPackage::serializePackage: writes the id in '
+                                              'both protocols',
+                                              "UR's Python client rtde/serialize.py "
+                                              'DataObject.pack: writes the id when the recipe has '
+                                              'one (every setup reply gives one)']},
+                                 {'protocols': [2],
+                                  'senders': ['controller'],
+                                  'recipe_id': 'always',
+                                  'doc': 'Protocol 2: every source reads the id.',
+                                  'sources': ["UR's RTDE guide, both eras",
+                                              'URCL DataPackage::parseWith (protocol 2)',
+                                              "UR's Python client rtde/serialize.py "
+                                              'DataObject.unpack',
+                                              'ur_rtde src/rtde.cpp RTDE::receiveData']}],
               'header': [{'name': 'size',
                           'type': 'uint16',
                           'doc': 'Package size in bytes, header included'},
