@@ -1,4 +1,4 @@
-"""The 2048-byte limit on a setup's names is the CB3 guide's: e-Series takes URCL-sized setups (issue 27, item 6).
+"""The 2048-byte setup limit is the CB3 guide's: e-Series takes URCL-sized setups (issue 27, item 6).
 
 UR's C++ client library sets up 406 output names in 9,173 bytes against current URSim
 5.x simulators. Every output field this spec has on 5.23 (404 names, 9,133 bytes) is the
