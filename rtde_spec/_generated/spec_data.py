@@ -2164,7 +2164,22 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                            'kinematics calibration'}]},
                                        {'name': 'configuration_data',
                                         'type': 6,
-                                        'doc': 'Sent once after the client connects.',
+                                        'doc': 'Sent once after the client connects. From 5.25.1 '
+                                               'the controller appends two int16 reserved fields '
+                                               'after robot_sub_type; no source gives their '
+                                               'PolyScope X versions, so the layout ends before '
+                                               "them and they stay the sub-package's extra bytes "
+                                               "(the interface's append rule), decoding without a "
+                                               'warning.',
+                                        'source': 'The interface document; URCL '
+                                                  '(UniversalRobots/Universal_Robots_Client_Library) '
+                                                  'src/primary/robot_state/configuration_data.cpp '
+                                                  'reads the same layout (its name for the '
+                                                  "document's deprecated int32 is "
+                                                  "controller_box_type) and, since UR's PR #485 "
+                                                  '(2026, "The Configuration Data robot message '
+                                                  'got new fields in 5.25.1"), int16 reserved_1 '
+                                                  'and reserved_2 when present.',
                                         'fields': [{'name': 'joint_limits',
                                                     'repeat': 6,
                                                     'group': 'JointLimits',
@@ -2238,7 +2253,16 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                            'hardware version'},
                                                    {'name': 'reserved',
                                                     'type': 'int32',
-                                                    'doc': 'Deprecated'},
+                                                    'doc': "Deprecated (the document's name); UR's "
+                                                           'C++ client library reads it as the '
+                                                           'controller box type',
+                                                    'source': 'URCL '
+                                                              '(UniversalRobots/Universal_Robots_Client_Library) '
+                                                              'src/primary/robot_state/configuration_data.cpp '
+                                                              'ConfigurationData::parseWith: '
+                                                              'controller_box_type_, between '
+                                                              'masterboard_version_ and '
+                                                              'robot_type_'},
                                                    {'name': 'robot_type',
                                                     'type': 'int32',
                                                     'enum': 'RobotType',
@@ -2293,7 +2317,23 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                     'doc': 'Teach Pendant Type'}]},
                                        {'name': 'calibration_data',
                                         'type': 9,
-                                        'doc': 'Internal to UR software; kept as bytes.',
+                                        'doc': 'Internal to UR software; kept as bytes. No public '
+                                               'source describes its fields; URSim 5.8 sends a '
+                                               '48-byte body of zeros.',
+                                        'source': 'Searched, no field layout found: the interface '
+                                                  'document ("uint32_t reserved", used by UR '
+                                                  'software only); URCL names the type '
+                                                  'CALIBRATION_DATA (NEEDED_FOR_CALIB_DATA in its '
+                                                  'test capture) and parses no fields '
+                                                  '(include/ur_client_library/primary/robot_state.h); '
+                                                  'its tests/test_primary_parser.cpp capture of '
+                                                  "URSim 5.8's first Robot State holds a 53-byte "
+                                                  'sub-package (48-byte body, all zeros); '
+                                                  'python-urx (urx/ursecmon.py) skips it ("53 '
+                                                  'bytes, used internally by Universal Robots '
+                                                  'software only"); the ROS driver\'s '
+                                                  'ur_calibration reads Kinematics Info (type 5), '
+                                                  'not this.',
                                         'fields': [{'name': 'data',
                                                     'type': 'bytes',
                                                     'length': 'rest',
@@ -2321,7 +2361,17 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                    'fails to decode.'}]},
                                        {'name': 'safety_data',
                                         'type': 10,
-                                        'doc': 'Internal to UR software; kept as bytes.',
+                                        'doc': 'Internal to UR software; kept as bytes. No public '
+                                               'source describes its fields; URSim 5.8 sends a '
+                                               '38-byte body.',
+                                        'source': 'Searched, no field layout found: the interface '
+                                                  'document ("reserved", used by UR software '
+                                                  'only); URCL lists SAFETY_DATA = 10 and parses '
+                                                  'no fields; its tests/test_primary_parser.cpp '
+                                                  "capture of URSim 5.8's first Robot State holds "
+                                                  'a 43-byte sub-package (38-byte body); '
+                                                  'python-urx and the public Java and Python '
+                                                  'primary clients skip it.',
                                         'fields': [{'name': 'data',
                                                     'type': 'bytes',
                                                     'length': 'rest',

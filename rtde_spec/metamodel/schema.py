@@ -238,6 +238,7 @@ class LayoutField(StrictModel):
     scale: Annotated[float, Field(gt=0)] | None = None  # the wire holds value x scale (URCL's MULT_*)
     doc: str | None = None
     since: Since | None = None  # the first version per product line that sends this field
+    source: str | None = None  # the public source of a field the interface document does not describe
     conflicts: list[Conflict] = []  # differences a document shows, decided on purpose
 
     @model_validator(mode="after")
@@ -331,6 +332,7 @@ class MemberSpec(StrictModel):
     type: int
     doc: str | None = None
     doc_ref: str | None = None
+    source: str | None = None  # public sources of what the member's layout says beyond the document
     since: Since | None = None
     fields: list[LayoutField]
     older: list[OlderLayout] = []
