@@ -208,6 +208,30 @@ def test_live_client_reads_protocol_1_data_with_and_without_the_id(forms: list[b
     assert all(r.robot_mode == 7 for r in records)
 
 
+def test_asyncio_client_reads_protocol_1_data_without_the_id() -> None:
+    import asyncio
+
+    from rtde_spec import AsyncRtdeClient
+
+    forms = [True, False] * 5
+    controller = Protocol1Controller(forms)
+
+    async def run() -> list[object]:
+        client = await AsyncRtdeClient("127.0.0.1", controller.port, timeout=5.0).connect(protocol_version=1)
+        try:
+            await client.setup_outputs(NAMES, 125)
+            await client.start()
+            return [await client.receive() for _ in forms]
+        finally:
+            await client.close()
+
+    try:
+        records = asyncio.run(run())
+    finally:
+        controller.close()
+    assert [round(r.timestamp / 0.008) for r in records] == list(range(len(forms)))  # type: ignore[attr-defined]
+
+
 # --- the capture decoder --------------------------------------------------------
 
 
