@@ -47,6 +47,19 @@ def emit_constants(spec: Spec) -> str:
         f"DATA_PACKAGE_PREFIX_FIELDS: tuple[str, ...] = {prefix_names!r}\n",
         f"DATA_PACKAGE_PREFIX_OFFSETS: tuple[int, ...] = {prefix_offsets!r}\n",
         '"""Byte offset of each prefix field (size, type, recipe id) in a data package."""\n',
+        "DATA_WITHOUT_RECIPE_ID: dict[tuple[str, int], int] = {\n",
+        *(
+            f"    ({sender!r}, {proto}): {rule.implied!r},\n"
+            for rule in pk.data_recipe_id
+            if rule.implied is not None
+            for sender in rule.senders
+            for proto in rule.protocols
+        ),
+        "}\n",
+        '"""(sender, protocol) -> the recipe id of a data package sent without its id byte (spec:\n'
+        "packages.yaml data_recipe_id). Pairs not listed always carry the id. A decoder tells\n"
+        "the forms apart by the package size: the recipe's payload plus the prefix, with or\n"
+        'without the id."""\n',
         "RTDE_PACKAGE_TYPES: dict[int, str] = {\n",
         *(f"    {ord(p.code)}: {p.name!r},  # {p.code!r}\n" for p in pk.package_types),
         "}\n",

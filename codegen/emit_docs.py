@@ -143,6 +143,34 @@ def emit_packages_doc(spec: Spec) -> str:
         out += f"{names[msg.type]} (`{msg.type}`) from {' and '.join(msg.senders)}, "
         out += f"protocol {', '.join(map(str, msg.protocols))}. {msg.doc or ''}\n\n"
         out += md_table(["Offset", "Field", "Type", "Bytes", "Meaning"], _layout_rows(msg, spec))
+    return out + _recipe_id_section(spec)
+
+
+def _recipe_id_section(spec: Spec) -> str:
+    """Which data packages carry the recipe id byte, with each rule's sources."""
+    rules = spec.packages.data_recipe_id
+    if not rules:
+        return ""
+    out = (
+        "\n## The recipe id in data packages\n\n"
+        "Where it is optional, a decoder tells the two forms apart by the package's size against "
+        "its recipe's (they differ by the one byte); a package without the id belongs to the "
+        "implied recipe. Encoders always write the id.\n\n"
+    )
+    rows = [
+        [
+            ", ".join(map(str, r.protocols)),
+            " and ".join(r.senders),
+            r.recipe_id,
+            "—" if r.implied is None else r.implied,
+            " ".join((r.doc or "").split()),
+        ]
+        for r in rules
+    ]
+    out += md_table(["Protocol", "From", "Recipe id", "Implied id", "Why"], rows)
+    for r in rules:
+        out += f"\nSources (protocol {', '.join(map(str, r.protocols))}, {' and '.join(r.senders)}):\n\n"
+        out += "".join(f"- {source}\n" for source in r.sources)
     return out
 
 

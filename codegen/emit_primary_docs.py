@@ -45,6 +45,8 @@ def emit_primary_doc(spec: Spec) -> str:
             out += f"\n### {m.name} ({fam.name} sub-type {m.type})\n\n"
             if m.doc:
                 out += f"{m.doc}\n\n"
+            if m.source:
+                out += f"Sources: {m.source}\n\n"
             if m.since:
                 out += "Since: " + ", ".join(f"{k} {v}" for k, v in m.since.items()) + "\n\n"
             for old in m.older:

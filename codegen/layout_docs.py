@@ -49,6 +49,8 @@ def _meaning(fld: LayoutField) -> str:
         text += f" [{fld.unit}]"
     if fld.since:
         text += " Since " + ", ".join(f"{line} {v}" for line, v in fld.since.items()) + "."
+    if fld.source:
+        text += ("" if text.rstrip().endswith(".") else ".") + f" Source: {fld.source}"
     if fld.fallback:
         text += f" Without a length prefix that fits exactly, the text is the {fld.fallback}."
     if fld.peers:

@@ -22,6 +22,13 @@ DATA_PACKAGE_PREFIX_FORMAT = '>HBB'
 DATA_PACKAGE_PREFIX_FIELDS: tuple[str, ...] = ('size', 'type', 'recipe_id')
 DATA_PACKAGE_PREFIX_OFFSETS: tuple[int, ...] = (0, 2, 3)
 """Byte offset of each prefix field (size, type, recipe id) in a data package."""
+DATA_WITHOUT_RECIPE_ID: dict[tuple[str, int], int] = {
+    ('controller', 1): 1,
+}
+"""(sender, protocol) -> the recipe id of a data package sent without its id byte (spec:
+packages.yaml data_recipe_id). Pairs not listed always carry the id. A decoder tells
+the forms apart by the package size: the recipe's payload plus the prefix, with or
+without the id."""
 RTDE_PACKAGE_TYPES: dict[int, str] = {
     86: 'RTDE_REQUEST_PROTOCOL_VERSION',  # 'V'
     118: 'RTDE_GET_URCONTROL_VERSION',  # 'v'

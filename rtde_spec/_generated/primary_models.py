@@ -219,7 +219,7 @@ class KinematicsInfo(PrimaryPart):
 
 
 class ConfigurationData(PrimaryPart):
-    """Sent once after the client connects.
+    """Sent once after the client connects. From 5.25.1 the controller appends two int16 reserved fields after robot_sub_type; no source gives their PolyScope X versions, so the layout ends before them and they stay the sub-package's extra bytes (the interface's append rule), decoding without a warning.
 
     robot_state sub-type 6.
     """
@@ -241,7 +241,7 @@ class ConfigurationData(PrimaryPart):
     dh_alpha: Annotated[Annotated[tuple[float, ...], Field(min_length=6, max_length=6)] | None, Field(description='DHalpha: Denavit-Hartenberg alpha per joint')] = None
     dh_theta: Annotated[Annotated[tuple[float, ...], Field(min_length=6, max_length=6)] | None, Field(description='DHtheta: Denavit-Hartenberg theta per joint')] = None
     masterboard_version: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='masterboardVersion: masterboard hardware version')] = None
-    reserved: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='Deprecated')] = None
+    reserved: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description="Deprecated (the document's name); UR's C++ client library reads it as the controller box type")] = None
     robot_type: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='robotType: Robot Arm type (UR3, UR5, UR10, ...) (values: RobotType)')] = None
     robot_sub_type: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='robotSubType: Robot Arm sub-type')] = None
 
@@ -284,7 +284,7 @@ class AdditionalInfo(PrimaryPart):
 
 
 class CalibrationData(PrimaryPart):
-    """Internal to UR software; kept as bytes.
+    """Internal to UR software; kept as bytes. No public source describes its fields; URSim 5.8 sends a 48-byte body of zeros.
 
     robot_state sub-type 9.
     """
@@ -298,7 +298,7 @@ class CalibrationData(PrimaryPart):
 
 
 class SafetyData(PrimaryPart):
-    """Internal to UR software; kept as bytes.
+    """Internal to UR software; kept as bytes. No public source describes its fields; URSim 5.8 sends a 38-byte body.
 
     robot_state sub-type 10.
     """

@@ -946,6 +946,8 @@ local DATA = 85
 local RTDE_HEADER = 3
 local RTDE_SIZE = 2  -- the size field leads the header
 local PAYLOAD = 4  -- header, recipe id
+-- sender/protocol -> the recipe of a data package sent without its id (told by size)
+local WITHOUT_ID = { ["controller/1"] = 1 }
 
 local streams, frames = {}, {}
 
@@ -954,6 +956,16 @@ local function split_names(text)
   for name in string.gmatch(text .. ",", "([^,]*),") do table.insert(names, name) end
   if #names > 0 and names[#names] == "" then table.remove(names) end
   return names
+end
+
+local function payload_size(names)
+  local total = 0
+  for _, n in ipairs(names) do
+    local w = WIRE[FIELD_TYPE[n] or ""]
+    if not w then return nil end
+    total = total + w.size * w.count
+  end
+  return total
 end
 
 local function stream_state(pinfo)
@@ -985,9 +997,19 @@ local function dissect_rtde_pdu(tvb, pinfo, tree)
   sub:add(F.type, tvb(RTDE_SIZE, 1))
   pinfo.cols.protocol = "RTDE"
   if not layout then return size end
+  local bare = nil  -- the recipe's names when this data package came without its recipe id
+  if ptype == DATA then
+    if not pinfo.visited then
+      local implied = WITHOUT_ID[sender .. "/" .. frame.version]
+      local names = implied and s.recipes[DIRECTION[sender]][implied]
+      if names and size == RTDE_HEADER + (payload_size(names) or -1) then frame.recipes[size .. "/-"] = names end
+    end
+    bare = frame.recipes[size .. "/-"]
+  end
   local pos, values = RTDE_HEADER, {}
   for _, f in ipairs(layout) do
     if pos > size then break end
+    if bare and f.name == "recipe_id" then goto next_field end
     local range
     if f.kind == "prim" then
       if pos + f.size > size then break end
@@ -1005,6 +1027,7 @@ local function dissect_rtde_pdu(tvb, pinfo, tree)
       pos = size
     end
     if range and f.name ~= "payload" then sub:add(F[f.name], range) end
+    ::next_field::
   end
   if not pinfo.visited then
     local name = layout.name
@@ -1018,14 +1041,15 @@ local function dissect_rtde_pdu(tvb, pinfo, tree)
       if id ~= 0 and s.pending.output then s.recipes.output[id] = s.pending.output end
     elseif name == "setup_inputs_reply" then
       if values.input_recipe_id ~= 0 and s.pending.input then s.recipes.input[values.input_recipe_id] = s.pending.input end
-    elseif ptype == DATA then
+    elseif ptype == DATA and not bare then
       frame.recipes[size .. "/" .. values.recipe_id] = s.recipes[DIRECTION[sender]][values.recipe_id]
     end
   end
-  if ptype == DATA and size > PAYLOAD then
-    local names = frame.recipes[size .. "/" .. values.recipe_id]
+  local start = bare and RTDE_HEADER or PAYLOAD
+  if ptype == DATA and size > start then
+    local names = bare or frame.recipes[size .. "/" .. values.recipe_id]
     if names then
-      local p = PAYLOAD
+      local p = start
       for _, n in ipairs(names) do
         local w = WIRE[FIELD_TYPE[n] or ""]
         if not w or p + w.size * w.count > size then break end
@@ -1035,7 +1059,7 @@ local function dissect_rtde_pdu(tvb, pinfo, tree)
         end
       end
     else
-      sub:add(F.payload, tvb(PAYLOAD, size - PAYLOAD))
+      sub:add(F.payload, tvb(start, size - start))
     end
   end
   return size

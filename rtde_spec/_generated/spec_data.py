@@ -1250,6 +1250,60 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
               'limits': {'input_recipes_max': 255,
                          'invalid_recipe_id': 0,
                          'package_max_bytes': 65535},
+              'data_recipe_id': [{'protocols': [1],
+                                  'senders': ['controller'],
+                                  'recipe_id': 'optional',
+                                  'implied': 1,
+                                  'doc': 'Protocol 1 output data packages come with or without the '
+                                         "recipe id byte. UR's guides show the id in every data "
+                                         "package; UR's C++ client library reads protocol-1 data "
+                                         "packages without it, since UR's own fix for protocol 1 "
+                                         '(the setup reply without its id, and the data packages '
+                                         'after it). The other public clients never read protocol '
+                                         '1.',
+                                  'sources': ["UR's RTDE guide, CB3 and e-Series eras "
+                                              '(shared/seeds rtde-guide-*.txt), RTDE_DATA_PACKAGE: '
+                                              'header, recipe id uint8, then the variables; no '
+                                              'protocol excepted',
+                                              'URCL, '
+                                              'UniversalRobots/Universal_Robots_Client_Library '
+                                              'src/rtde/data_package.cpp DataPackage::parseWith: '
+                                              'the recipe id is read only when the protocol '
+                                              "version is 2; since PR #114 (2022, 'Fixed parsing "
+                                              "of incomming packages when using rtde protocol v1', "
+                                              'issue #113), by UR; serializePackage always writes '
+                                              'the id',
+                                              "UR's Python client, "
+                                              'UniversalRobots/RTDE_Python_Client_Library '
+                                              'rtde/serialize.py DataConfig.unpack: always reads '
+                                              'the id byte, but rtde.py asks for protocol 2 first '
+                                              'and reads a protocol-1 setup reply as if it had an '
+                                              'id, so it never decodes protocol 1',
+                                              'ur_rtde (src/rtde.cpp RTDE::receiveData): always '
+                                              'reads the id byte; it always negotiates protocol '
+                                              '2']},
+                                 {'protocols': [1, 2],
+                                  'senders': ['client'],
+                                  'recipe_id': 'always',
+                                  'doc': 'Input data packages: every source writes the id (several '
+                                         'input recipes may be set up).',
+                                  'sources': ["UR's RTDE guide, both eras: RTDE_DATA_PACKAGE "
+                                              'carries the recipe id',
+                                              'URCL src/rtde/data_package.cpp '
+                                              'DataPackage::serializePackage: writes the id in '
+                                              'both protocols',
+                                              "UR's Python client rtde/serialize.py "
+                                              'DataObject.pack: writes the id when the recipe has '
+                                              'one (every setup reply gives one)']},
+                                 {'protocols': [2],
+                                  'senders': ['controller'],
+                                  'recipe_id': 'always',
+                                  'doc': 'Protocol 2: every source reads the id.',
+                                  'sources': ["UR's RTDE guide, both eras",
+                                              'URCL DataPackage::parseWith (protocol 2)',
+                                              "UR's Python client rtde/serialize.py "
+                                              'DataObject.unpack',
+                                              'ur_rtde src/rtde.cpp RTDE::receiveData']}],
               'header': [{'name': 'size',
                           'type': 'uint16',
                           'doc': 'Package size in bytes, header included'},
@@ -2110,7 +2164,22 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                            'kinematics calibration'}]},
                                        {'name': 'configuration_data',
                                         'type': 6,
-                                        'doc': 'Sent once after the client connects.',
+                                        'doc': 'Sent once after the client connects. From 5.25.1 '
+                                               'the controller appends two int16 reserved fields '
+                                               'after robot_sub_type; no source gives their '
+                                               'PolyScope X versions, so the layout ends before '
+                                               "them and they stay the sub-package's extra bytes "
+                                               "(the interface's append rule), decoding without a "
+                                               'warning.',
+                                        'source': 'The interface document; URCL '
+                                                  '(UniversalRobots/Universal_Robots_Client_Library) '
+                                                  'src/primary/robot_state/configuration_data.cpp '
+                                                  'reads the same layout (its name for the '
+                                                  "document's deprecated int32 is "
+                                                  "controller_box_type) and, since UR's PR #485 "
+                                                  '(2026, "The Configuration Data robot message '
+                                                  'got new fields in 5.25.1"), int16 reserved_1 '
+                                                  'and reserved_2 when present.',
                                         'fields': [{'name': 'joint_limits',
                                                     'repeat': 6,
                                                     'group': 'JointLimits',
@@ -2184,7 +2253,16 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                            'hardware version'},
                                                    {'name': 'reserved',
                                                     'type': 'int32',
-                                                    'doc': 'Deprecated'},
+                                                    'doc': "Deprecated (the document's name); UR's "
+                                                           'C++ client library reads it as the '
+                                                           'controller box type',
+                                                    'source': 'URCL '
+                                                              '(UniversalRobots/Universal_Robots_Client_Library) '
+                                                              'src/primary/robot_state/configuration_data.cpp '
+                                                              'ConfigurationData::parseWith: '
+                                                              'controller_box_type_, between '
+                                                              'masterboard_version_ and '
+                                                              'robot_type_'},
                                                    {'name': 'robot_type',
                                                     'type': 'int32',
                                                     'enum': 'RobotType',
@@ -2239,7 +2317,23 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                     'doc': 'Teach Pendant Type'}]},
                                        {'name': 'calibration_data',
                                         'type': 9,
-                                        'doc': 'Internal to UR software; kept as bytes.',
+                                        'doc': 'Internal to UR software; kept as bytes. No public '
+                                               'source describes its fields; URSim 5.8 sends a '
+                                               '48-byte body of zeros.',
+                                        'source': 'Searched, no field layout found: the interface '
+                                                  'document ("uint32_t reserved", used by UR '
+                                                  'software only); URCL names the type '
+                                                  'CALIBRATION_DATA (NEEDED_FOR_CALIB_DATA in its '
+                                                  'test capture) and parses no fields '
+                                                  '(include/ur_client_library/primary/robot_state.h); '
+                                                  'its tests/test_primary_parser.cpp capture of '
+                                                  "URSim 5.8's first Robot State holds a 53-byte "
+                                                  'sub-package (48-byte body, all zeros); '
+                                                  'python-urx (urx/ursecmon.py) skips it ("53 '
+                                                  'bytes, used internally by Universal Robots '
+                                                  'software only"); the ROS driver\'s '
+                                                  'ur_calibration reads Kinematics Info (type 5), '
+                                                  'not this.',
                                         'fields': [{'name': 'data',
                                                     'type': 'bytes',
                                                     'length': 'rest',
@@ -2267,7 +2361,17 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                    'fails to decode.'}]},
                                        {'name': 'safety_data',
                                         'type': 10,
-                                        'doc': 'Internal to UR software; kept as bytes.',
+                                        'doc': 'Internal to UR software; kept as bytes. No public '
+                                               'source describes its fields; URSim 5.8 sends a '
+                                               '38-byte body.',
+                                        'source': 'Searched, no field layout found: the interface '
+                                                  'document ("reserved", used by UR software '
+                                                  'only); URCL lists SAFETY_DATA = 10 and parses '
+                                                  'no fields; its tests/test_primary_parser.cpp '
+                                                  "capture of URSim 5.8's first Robot State holds "
+                                                  'a 43-byte sub-package (38-byte body); '
+                                                  'python-urx and the public Java and Python '
+                                                  'primary clients skip it.',
                                         'fields': [{'name': 'data',
                                                     'type': 'bytes',
                                                     'length': 'rest',

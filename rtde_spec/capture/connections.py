@@ -32,6 +32,7 @@ from rtde_spec.external.programs import MAX_PROGRAM_BYTES, ProgramSent, programs
 from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.output.base import plain
 from rtde_spec.recipes.codec import RecipeCodec
+from rtde_spec.rtde.data_forms import implied_recipe_id
 from rtde_spec.rtde.packages import DATA, TEXTS
 from rtde_spec.rtde.session import SessionDecoder
 
@@ -94,6 +95,8 @@ class RtdeConnection:
         for n, package in enumerate(packages):
             time = now if times is None else times[n]  # a package held back: when it was completed
             self.counts.packages += 1
+            if package[TYPE_AT] == DATA_PACKAGE_TYPE:
+                package = self.session.guide_form(sender, package) or package  # protocol 1, without its id
             if package[TYPE_AT] == DATA_PACKAGE_TYPE and len(package) > RECIPE_ID_AT:
                 codec = self._codec(sender, package)
                 if codec is not None:
@@ -109,6 +112,11 @@ class RtdeConnection:
         def check(buf: bytearray, at: int, size: int) -> int:
             if buf[at + TYPE_AT] != DATA_PACKAGE_TYPE:
                 return WEAK
+            implied = implied_recipe_id(sender, self.session.state.version)
+            if implied is not None:  # a package of the implied recipe sent without its id
+                bare = self.session.recipes.get((direction, implied))
+                if bare is not None and size == RTDE_HEADER + bare.size:
+                    return STRONG
             if size <= RECIPE_ID_AT:
                 return NO
             if at + RECIPE_ID_AT >= len(buf):  # its recipe id has not arrived yet

@@ -15,6 +15,7 @@ from pydantic import BaseModel, ValidationError
 from rtde_spec.errors import SpecError, SpecIssue
 from rtde_spec.metamodel import safe_yaml
 from rtde_spec.metamodel.lint import lint_fields_file, lint_spec
+from rtde_spec.metamodel.lint_facts import lint_recipe_id_rules
 from rtde_spec.metamodel.schema import (
     EnumsFile,
     FieldsFile,
@@ -170,7 +171,8 @@ def load_spec(root: Path | str | None = None) -> Spec:
     if issues:
         raise SpecError(issues)
     spec = Spec(**parts)
-    found = [sources[part].issue(loc, reason) for part, loc, reason in lint_spec(spec)]
+    problems = [*lint_spec(spec), *lint_recipe_id_rules(spec)]
+    found = [sources[part].issue(loc, reason) for part, loc, reason in problems]
     if found:
         raise SpecError(found)
     return spec

@@ -238,6 +238,7 @@ class LayoutField(StrictModel):
     scale: Annotated[float, Field(gt=0)] | None = None  # the wire holds value x scale (URCL's MULT_*)
     doc: str | None = None
     since: Since | None = None  # the first version per product line that sends this field
+    source: str | None = None  # the public source of a field the interface document does not describe
     conflicts: list[Conflict] = []  # differences a document shows, decided on purpose
 
     @model_validator(mode="after")
@@ -284,6 +285,23 @@ class Answers(StrictModel):
     in_use: Annotated[str, Field(pattern=r"^[A-Z_]+$")]
 
 
+class RecipeIdRule(StrictModel):
+    """Whether the data packages of some protocols and senders carry the recipe id byte, and who says so."""
+
+    protocols: Annotated[list[int], Field(min_length=1)]
+    senders: Annotated[list[str], Field(min_length=1)]
+    recipe_id: Literal["always", "optional"]
+    implied: Annotated[int, Field(ge=0, le=255)] | None = None  # the recipe of a package without the byte
+    doc: str | None = None
+    sources: Annotated[list[str], Field(min_length=1)]
+
+    @model_validator(mode="after")
+    def _implied_when_optional(self) -> RecipeIdRule:
+        if (self.recipe_id == "optional") != (self.implied is not None):
+            raise ValueError("`implied` is given exactly when recipe_id is optional")
+        return self
+
+
 class PackagesFile(StrictModel):
     port: int
     doc_ref: str | None = None
@@ -291,6 +309,7 @@ class PackagesFile(StrictModel):
     answers: Answers
     directions: dict[str, Literal["input", "output"]]
     limits: Limits
+    data_recipe_id: list[RecipeIdRule] = []
     header: list[LayoutField]
     senders: dict[str, str]
     package_types: list[PackageTypeSpec]
@@ -313,6 +332,7 @@ class MemberSpec(StrictModel):
     type: int
     doc: str | None = None
     doc_ref: str | None = None
+    source: str | None = None  # public sources of what the member's layout says beyond the document
     since: Since | None = None
     fields: list[LayoutField]
     older: list[OlderLayout] = []

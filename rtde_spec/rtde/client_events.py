@@ -49,7 +49,7 @@ class DataRun:
     (an empty list when the core was told no one wants them: `ClientProtocol.want_records`)."""
 
     records: list[Any]
-    raw: bytes | memoryview  # the packages, back to back
+    raw: bytes | memoryview  # the packages, back to back, in the guides' form (with the id: data_forms)
     size: int  # bytes per package
 
     @property

@@ -34,6 +34,7 @@ from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
 from rtde_spec.recipes.encoding import PREFIX
 from rtde_spec.recipes.model import Recipe
 from rtde_spec.rtde.client_events import DataRun, Event, InputRecipe, Reply, Request, Text
+from rtde_spec.rtde.data_forms import implied_recipe_id, lacks_recipe_id, with_recipe_id
 from rtde_spec.rtde.packages import (
     CONTROLLER_VERSION_REPLY,
     DATA,
@@ -63,6 +64,8 @@ class ClientProtocol:
         self.output: RecipeCodec | None = None
         self.output_recipe_id: int | None = None
         self._run: tuple[int, bytes] | None = None  # (size, leading bytes) of the output's packages
+        # (implied recipe id, payload size) where the output's packages may come without their id
+        self._without_id: tuple[int, int] | None = None
         self.inputs: dict[int, InputRecipe] = {}
         # requests awaiting their reply, oldest first (appended by the caller's thread, removed
         # by the reader's: list copy, append and remove are each atomic)
@@ -214,7 +217,9 @@ class ClientProtocol:
         The output recipe is read per package: a setup reply earlier in the same read sets it,
         and the data after it (a pipelined setup and start) are of that recipe."""
         for _, package in packages:
-            output, run = self.output, self._run
+            output, run, without_id = self.output, self._run, self._without_id
+            if without_id is not None and lacks_recipe_id(package, without_id[1]):
+                package = with_recipe_id(package, without_id[0])  # protocol 1: read by its size
             if output is not None and run is not None and package[: len(run[1])] == run[1]:
                 records = output.decode_records(package) if self.want_records else []
                 events.append(DataRun(records, package, run[0]))
@@ -298,6 +303,8 @@ class ClientProtocol:
             # size, type and recipe id: a package of another recipe is never read as this one
             lead = PREFIX.pack(codec.package_size, DATA_PACKAGE_TYPE, recipe_id)
             self._run = (codec.package_size, lead)
+            implied = implied_recipe_id("controller", self.state.version)
+            self._without_id = (recipe_id, codec.size) if implied == recipe_id else None
         else:
             self.inputs[recipe_id] = InputRecipe(recipe_id, tuple(names), codec)
 

@@ -16,6 +16,7 @@ from rtde_spec._generated.constants import RTDE_DIRECTIONS
 from rtde_spec.errors import DecodeError, RecipeError
 from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.recipes.codec import RecipeCodec
+from rtde_spec.rtde.data_forms import implied_recipe_id, lacks_recipe_id, with_recipe_id
 from rtde_spec.rtde.packages import (
     DATA,
     SETUP_REPLIES,
@@ -57,10 +58,26 @@ class SessionDecoder:
     _pending_names: dict[str, list[str]] = field(default_factory=dict)
     recipes: dict[tuple[str, int], RecipeCodec] = field(default_factory=dict)
 
+    def guide_form(self, sender: str, package: bytes | bytearray | memoryview) -> bytes | None:
+        """A data package sent without its recipe id (protocol 1 allows it: `data_forms`), in the
+        guides' form with the implied id; None when `package` is not one."""
+        implied = implied_recipe_id(sender, self.state.version)
+        if implied is None:
+            return None
+        codec = self.recipes.get((RTDE_DIRECTIONS[sender], implied))
+        if codec is None or not lacks_recipe_id(package, codec.size):
+            return None
+        return with_recipe_id(package, implied)
+
     def feed(self, sender: Sender, package: bytes) -> DecodedPackage:
+        whole = self.guide_form(sender, package)
+        if whole is not None:
+            package = whole
         decoded = decode_package(package, protocol_version=self.state.version, sender=sender)
         name, values = decoded.name, decoded.values
         out = DecodedPackage(sender, decoded)
+        if whole is not None:
+            out.note = f"sent without its recipe id byte: recipe {values['recipe_id']} by its size"
         observe_package(self.state, name, values)
         if name in SETUP_REQUESTS:
             self._pending_names[SETUP_REQUESTS[name]] = setup_names(values["variable_names"])
@@ -77,7 +94,7 @@ class SessionDecoder:
                 try:
                     out.values = codec.decode(values["payload"])
                 except DecodeError as exc:
-                    out.note = str(exc)
+                    out.note = str(exc) if out.note is None else f"{out.note}; {exc}"
         return out
 
     @property

@@ -22,6 +22,7 @@ from rtde_spec._generated import rtde_models as gen
 from rtde_spec.errors import DecodeError
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
 from rtde_spec.rtde.codec import Sender, decode, observe, starting_version
+from rtde_spec.rtde.data_forms import implied_recipe_id, lacks_recipe_id, with_recipe_id
 from rtde_spec.rtde.protocol_state import ProtocolState
 from rtde_spec.wire.framing import PackageFramer, Skipped
 from rtde_spec.wire.rtde_messages import RtdeMessage
@@ -37,6 +38,7 @@ class Package:
     offset: int
     message: RtdeMessage
     values: dict[str, Any] | None = None
+    without_recipe_id: bool = False  # sent without its id byte (protocol 1): `message` has the implied id
 
 
 @dataclass
@@ -126,6 +128,9 @@ class StreamDecoder:
     def _one(self, offset: int, package: bytes) -> Package | None:
         """The package decoded; None when it does not decode and errors are skipped."""
         self.packages += 1
+        whole = self._with_recipe_id(package)
+        if whole is not None:
+            package = whole
         try:
             message = decode(
                 package, protocol_version=self.state.version, sender=self.sender, strict=self.strict
@@ -145,7 +150,15 @@ class StreamDecoder:
             self.skipped.add(offset, len(package), str(exc.in_stream(offset, self.packages)))
             return None
         observe(self.state, message)
-        return Package(offset, message, values)
+        return Package(offset, message, values, whole is not None)
+
+    def _with_recipe_id(self, package: bytes | memoryview) -> bytes | None:
+        """The guides' form of a data package of the recipe sent without its id byte (where the
+        protocol allows it, told by its size: `data_forms`); None for every other package."""
+        implied = implied_recipe_id(self.sender, self.state.version)
+        if implied is None or self.codec is None or not lacks_recipe_id(package, self.codec.size):
+            return None
+        return with_recipe_id(package, implied)
 
 
 def _has_numpy() -> bool:
