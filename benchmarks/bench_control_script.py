@@ -16,6 +16,7 @@ Targets: 0 missed packages, step lateness p99 < 0.5 ms.
 from __future__ import annotations
 
 import json
+import os
 import subprocess
 import sys
 import time
@@ -24,15 +25,22 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_recipe_decode import UR_RTDE_DEFAULT_OUTPUTS
 
-HOST = "127.0.0.91"
+HOST = "127.0.0.97"  # its own address: ur_rtde needs the fixed ports
 TARGET_P99_MS = 0.5
 
 EMULATOR = """
-import json, sys, time
+import gc, json, os, sys, time
 from rtde_spec.emulator.server import EmulatorConfig, EmulatorThread
-host = sys.argv[1]
+host, options = sys.argv[1], json.loads(sys.argv[2])
+profile = options.pop("profile", None)  # a file: cProfile of the loop's thread while measured
 config = EmulatorConfig(host=host, realtime_port=30003, dashboard_port=29999, controller="5.15.0", arm="UR5e",
-                        step_timing=1_000_000)
+                        step_timing=1_000_000, **options)
+pauses = []
+def timed(phase, info, began=[0.0]):
+    if phase == "start":
+        began[0] = time.perf_counter()
+    else:
+        pauses.append(time.perf_counter() - began[0])
 with EmulatorThread(config) as emu:
     print("ready", flush=True)
     sys.stdin.readline()  # the servoJ stream and the readers run: measure from here
@@ -40,14 +48,29 @@ with EmulatorThread(config) as emu:
     program = model.program
     c0, s0, i0 = time.process_time(), model.step, program.cpu if program else 0.0
     e.step_lateness.clear()
+    e.step_busy.clear()
     late0 = e.late_steps
+    gc.callbacks.append(timed)
+    if profile:
+        import cProfile
+        profiler = cProfile.Profile()
+        emu.call(profiler.enable)
     sys.stdin.readline()
+    if profile:
+        emu.call(profiler.disable)
+        profiler.dump_stats(profile)
+    gc.callbacks.remove(timed)
     c1, s1 = time.process_time(), model.step
     i1 = program.cpu if program else 0.0
-    late = sorted(e.step_lateness)
+    late, busy = sorted(e.step_lateness), sorted(e.step_busy)
+    def q(xs, f):
+        return xs[min(len(xs) - 1, int(len(xs) * f))] * 1000
     print(json.dumps({"steps": s1 - s0, "cpu_us": (c1 - c0) / (s1 - s0) * 1e6,
                       "interp_us": (i1 - i0) / (s1 - s0) * 1e6, "late_steps": e.late_steps - late0,
-                      "p99_ms": late[int(len(late) * 0.99)] * 1000, "max_ms": late[-1] * 1000,
+                      "p50_ms": q(late, 0.5), "p90_ms": q(late, 0.9), "p99_ms": q(late, 0.99),
+                      "max_ms": late[-1] * 1000, "busy_p50_ms": q(busy, 0.5), "busy_p99_ms": q(busy, 0.99),
+                      "gc_runs": len(pauses), "gc_max_ms": max(pauses, default=0.0) * 1000,
+                      "policy": emu.call(os.sched_getscheduler, 0),
                       "running": model.program is program and program is not None,
                       "threads": len(program.threads) if program else 0}), flush=True)
     sys.stdin.readline()
@@ -77,17 +100,29 @@ print(json.dumps({"sent": sent, "rate": sent / seconds, "error": error}), flush=
 """
 
 
-def run(seconds: float) -> bool:
+def run(
+    seconds: float, host: str = HOST, realtime: int | None = None, nice: int = 0, profile: str | None = None
+) -> bool:
+    """One run; `realtime`: the emulator's loop at SCHED_FIFO this priority, `nice`: its niceness,
+    `profile`: a file for cProfile's statistics of the emulator's loop while measured."""
     from bench_emulator import TIMING
 
+    options: dict[str, object] = {"realtime_priority": realtime} if realtime is not None else {}
+    if profile:
+        options["profile"] = profile
+    prefix = ["nice", "-n", str(nice)] if nice else []
+    load_before = os.getloadavg()
     emu = subprocess.Popen(
-        [sys.executable, "-c", EMULATOR, HOST], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
+        [*prefix, sys.executable, "-c", EMULATOR, host, json.dumps(options)],
+        stdin=subprocess.PIPE,
+        stdout=subprocess.PIPE,
+        text=True,
     )
     assert emu.stdin is not None and emu.stdout is not None
     try:
         assert emu.stdout.readline().strip() == "ready"
         servo = subprocess.Popen(
-            [sys.executable, "-c", SERVO, HOST, str(seconds)],
+            [sys.executable, "-c", SERVO, host, str(seconds)],
             stdin=subprocess.PIPE,
             stdout=subprocess.PIPE,
             text=True,
@@ -97,7 +132,7 @@ def run(seconds: float) -> bool:
         names = ",".join(UR_RTDE_DEFAULT_OUTPUTS)
         readers = [
             subprocess.Popen(
-                [sys.executable, "-c", TIMING.replace("127.0.0.1", HOST), "30004", str(seconds + 1), names],
+                [sys.executable, "-c", TIMING.replace("127.0.0.1", host), "30004", str(seconds + 1), names],
                 stdout=subprocess.PIPE, text=True,
             )
             for _ in range(4)
@@ -120,15 +155,30 @@ def run(seconds: float) -> bool:
         emu.wait(10)
     missed = sum(r["missed"] for r in rows)
     reader_p99 = max(r["p99_ms"] for r in rows)
-    print(f"ur_rtde's control script in the emulator: servoJ at 500 Hz + 4 RTDE readers, {seconds:g} s")
+    load_after = os.getloadavg()
+    how = (
+        f"SCHED_FIFO {realtime}" if stats["policy"] == getattr(os, "SCHED_FIFO", None) else "normal priority"
+    )
+    how += f", nice {nice}" if nice else ""
+    print(
+        f"ur_rtde's control script in the emulator: servoJ at 500 Hz + 4 RTDE readers, {seconds:g} s ({how})"
+    )
+    print(
+        f"  machine: {os.cpu_count()} cores, load average {load_before[0]:.1f} before, "
+        f"{load_after[0]:.1f} after"
+    )
     print(f"  servoJ commands sent: {stream['sent']} ({stream['rate']:.0f}/s); last target followed to "
           f"{stream['error']:.2e} rad")  # fmt: skip
     print(f"  program running at the end: {stats['running']}, with {stats['threads']} threads")
     print(f"  missed packages (4 readers): {missed:.0f}; reader p99 lateness {reader_p99:.2f} ms")
     print(
         f"  control steps measured: {stats['steps']}, late steps skipped: {stats['late_steps']}; "
-        f"step lateness p99 {stats['p99_ms']:.3f} ms, max {stats['max_ms']:.2f} ms"
+        f"step lateness p50 {stats['p50_ms']:.3f} ms, p90 {stats['p90_ms']:.3f} ms, "
+        f"p99 {stats['p99_ms']:.3f} ms, max {stats['max_ms']:.2f} ms"
     )
+    print(f"  step busy (send + next step's arm and program): p50 {stats['busy_p50_ms']:.3f} ms, "
+          f"p99 {stats['busy_p99_ms']:.3f} ms; garbage collections {stats['gc_runs']}, "
+          f"longest {stats['gc_max_ms']:.2f} ms")  # fmt: skip
     print(f"  interpreter CPU per control step: {stats['interp_us']:.1f} µs; "
           f"emulator process CPU per step: {stats['cpu_us']:.0f} µs (of 2000 µs)")  # fmt: skip
     ok = missed == 0 and stats["p99_ms"] < TARGET_P99_MS and stats["running"]

@@ -25,6 +25,7 @@ less than the UR-client-style loop.
    and four readers (bench_control_script.py).
 
     python benchmarks/bench_emulator.py [--seconds 10] [--motion | --control-script]
+    python benchmarks/bench_emulator.py --control-script --seconds 60 [--realtime 10] [--nice -10]
 """
 
 from __future__ import annotations
@@ -327,11 +328,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--control-script", action="store_true", help="only ur_rtde's control script with a servoJ stream"
     )
+    parser.add_argument("--host", default=None, help="--control-script: the emulator's loopback address")
+    parser.add_argument(
+        "--realtime", type=int, metavar="PRIORITY", help="--control-script: the emulator's loop at SCHED_FIFO"
+    )
+    parser.add_argument("--nice", type=int, default=0, help="--control-script: the emulator's niceness")
+    parser.add_argument("--profile", metavar="FILE", help="--control-script: cProfile of the emulator's loop")
     args = parser.parse_args(argv)
     if args.control_script:
+        from bench_control_script import HOST
         from bench_control_script import run as control_script_run
 
-        ok = control_script_run(args.seconds)
+        ok = control_script_run(args.seconds, args.host or HOST, args.realtime, args.nice, args.profile)
         return 0 if ok or not args.assert_targets else 1
     if args.motion:
         ok = motion_run(args.seconds)

@@ -2,16 +2,21 @@
 ports, the dashboard server and the control loop.
 
 The control loop keeps real time: each step is due at start + step / base rate
-(125 Hz for CB3 versions, 500 Hz for newer); it sleeps to just before the due
-time and waits out the rest, so packages leave within a fraction of a millisecond.
-`Emulator` runs in the caller's event loop; `EmulatorThread` runs one in a
+(125 Hz for CB3 versions, 500 Hz for newer). It wakes at the due time (`controller/clock.py`: a
+timerfd on Linux, no spinning) and first sends what the step's state is, so packages
+leave on time whatever a program costs; then it computes the next step's state (the arm,
+the URScript program within its time slice, the scenario) in the time left before the next
+due time. `Emulator` runs in the caller's event loop; `EmulatorThread` runs one in a
 background thread (tests, the demo, applications that are not asyncio).
 """
 
 from __future__ import annotations
 
 import asyncio
+import gc
 import logging
+import os
+import sys
 import threading
 import time
 from collections import deque
@@ -19,6 +24,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
+from rtde_spec.emulator.controller.clock import StepClock
 from rtde_spec.emulator.controller.faults import FaultSchedule
 from rtde_spec.emulator.controller.model import ControllerModel
 from rtde_spec.emulator.controller.scenario import Scenario
@@ -30,7 +36,6 @@ from rtde_spec.emulator.ports.rtde_server import RtdeConnection, RtdeHub
 from rtde_spec.metamodel.catalogue import Catalogue
 
 log = logging.getLogger("rtde_spec.emulator")
-SPIN_SECONDS = 0.0008  # the last part of each wait is spent awake, for sub-millisecond timing
 STATE_HZ = 10
 
 
@@ -59,6 +64,15 @@ class EmulatorConfig:
     skip_after: float | None = 0.1
     # keep how late each control step ran (s after its due time), the last this many (benchmarks)
     step_timing: int = 0
+    # SCHED_FIFO priority (1-99) for the control loop's thread, as a controller runs its loop in
+    # real time; needs CAP_SYS_NICE (refused: one log line, normal priority). None: normal priority
+    realtime_priority: int | None = None
+    # once started, move what start-up built out of the garbage collector's reach (gc.freeze), so
+    # collections while serving look at the few objects the steps make, not the spec's thousands
+    gc_freeze: bool = True
+    # the GIL's switch interval while serving (s): another Python thread (the background parser,
+    # an in-process client) holds the loop up at most this long; None leaves Python's 5 ms
+    switch_interval: float | None = 0.0005
 
     @classmethod
     def free_ports(cls, **kw: object) -> EmulatorConfig:
@@ -92,8 +106,12 @@ class Emulator:
         self.ports: dict[str, int] = {}
         self.clients: dict[str, Port] = {}  # port name -> its connections, under the limits
         self._loop_task: asyncio.Task[None] | None = None
+        self._serving = False
         self.late_steps = 0
+        # per step, when step_timing is set: how late it woke (its packages left right after) and
+        # how long it was busy (sending, then the next step's arm, program and scenario)
         self.step_lateness: deque[float] = deque(maxlen=max(1, self.config.step_timing))
+        self.step_busy: deque[float] = deque(maxlen=max(1, self.config.step_timing))
 
     async def start(self) -> None:
         loop = asyncio.get_running_loop()
@@ -128,6 +146,10 @@ class Emulator:
                     log.warning("no dashboard server: port %d: %s", c.dashboard_port, exc.strerror)
             else:
                 log.info("no dashboard server: controller %s has none", self.model.version)
+        if c.realtime_priority is not None:
+            _real_time(c.realtime_priority)
+        _serving(+1, c)
+        self._serving = True
         self._loop_task = loop.create_task(self._control_loop())
 
     def _port(self, name: str) -> Port:
@@ -160,37 +182,47 @@ class Emulator:
         log.info("%s on %s:%d", name, self.config.host, self.ports[name])
 
     async def _control_loop(self) -> None:
+        clock = StepClock()
+        try:
+            await self._steps(clock)
+        finally:
+            clock.close()
+
+    async def _steps(self, clock: StepClock) -> None:
         base = self.model.base_hz
         state_every = max(1, base // STATE_HZ)
+        timing = self.config.step_timing
+        skip_after = self.config.skip_after
+        model = self.model
         start = time.perf_counter()
         step = 0
         while True:
             step += 1
             due = start + step / base
-            delay = due - time.perf_counter()
-            if delay > SPIN_SECONDS:
-                await asyncio.sleep(delay - SPIN_SECONDS)
-            while time.perf_counter() < due:
-                time.sleep(0)  # stay awake, but let other threads (an in-process client) run
-            skip_after = self.config.skip_after
-            if skip_after is not None and time.perf_counter() - due > skip_after:  # skip, don't burst
+            await clock.until(due)
+            woke = time.perf_counter()
+            if skip_after is not None and woke - due > skip_after:  # skip, don't burst
                 self.late_steps += 1
-                skipped = int((time.perf_counter() - start) * base) - step
-                step += max(0, skipped)
-            if self.config.step_timing:
-                self.step_lateness.append(time.perf_counter() - due)
-            self.model.tick(step)
-            self.faults.apply(self.model.time)
-            if self._network(self.faults.silent(self.model.time)):
-                continue  # a network drop: nothing goes out
-            self.rtde.send_outputs(step)
-            self.realtime.send()
-            if step % state_every == 0:
-                self.primary.broadcast_state()
-                now = time.monotonic()
-                self.dashboard.observe(now)
-                for port in self.clients.values():
-                    port.check(now)
+                step = max(step, int((woke - start) * base))
+            if timing:
+                self.step_lateness.append(woke - due)
+            if model.step != step:
+                model.tick(step)  # the first step, or after a skip: this step's state now
+                self.faults.apply(model.time)
+            if not self._network(self.faults.silent(model.time)):  # a network drop: nothing goes out
+                self.rtde.send_outputs(step)
+                self.realtime.send()
+                if step % state_every == 0:
+                    self.primary.broadcast_state()
+                    now = time.monotonic()
+                    self.dashboard.observe(now)
+                    for port in self.clients.values():
+                        port.check(now)
+            # the next step's state, in the time left before it is due (its program in a slice of it)
+            model.tick(step + 1)
+            self.faults.apply(model.time)
+            if timing:
+                self.step_busy.append(time.perf_counter() - woke)
 
     def _network(self, down: bool) -> bool:
         """Pause or resume reading from every client as a network drop begins or ends; True while down."""
@@ -207,6 +239,9 @@ class Emulator:
     async def stop(self) -> None:
         if self._loop_task is not None:
             self._loop_task.cancel()
+        if self._serving:
+            self._serving = False
+            _serving(-1, self.config)
         for server in self.servers:
             server.close()
         for port in self.clients.values():
@@ -222,6 +257,39 @@ class Emulator:
             await asyncio.Event().wait()
         finally:
             await self.stop()
+
+
+_SERVING = {"count": 0, "switch_interval": 0.0, "frozen": 0}
+
+
+def _serving(change: int, config: EmulatorConfig) -> None:
+    """Process-wide settings while any emulator serves (several may run in one test process):
+    the GIL's switch interval and gc.freeze; the last one stopped puts them back."""
+    state = _SERVING
+    if change > 0 and state["count"] == 0:
+        state["switch_interval"] = sys.getswitchinterval()
+        if config.switch_interval is not None:
+            sys.setswitchinterval(min(config.switch_interval, sys.getswitchinterval()))
+    if change > 0 and config.gc_freeze and not state["frozen"]:
+        gc.collect()
+        gc.freeze()
+        state["frozen"] += 1
+    state["count"] += change
+    if change < 0 and state["count"] == 0:
+        sys.setswitchinterval(state["switch_interval"])
+        if state["frozen"]:
+            state["frozen"] = 0
+            gc.unfreeze()  # what became garbage meanwhile is collectable again
+
+
+def _real_time(priority: int) -> None:
+    """SCHED_FIFO for the calling thread (the control loop's), or one log line saying why not."""
+    try:
+        os.sched_setscheduler(0, os.SCHED_FIFO, os.sched_param(priority))  # type: ignore[attr-defined,unused-ignore]
+    except (AttributeError, OSError, ValueError) as exc:
+        log.warning("control loop at normal priority: SCHED_FIFO %d refused (%s)", priority, exc)
+    else:
+        log.info("control loop at SCHED_FIFO priority %d", priority)
 
 
 class EmulatorThread:

@@ -26,6 +26,8 @@ if TYPE_CHECKING:
 Frame = dict[str, Any]
 MAX_CALL_DEPTH = 64  # user functions calling user functions; deeper is a runaway recursion
 MAX_NESTING = 3  # lists in lists in lists (an array of poses is 2)
+MAX_ELEMENTS = 1 << 16  # elements of one value, through its lists (one held twice counts twice)
+MANY = 256  # items of one list or call between looks at the step's CPU budget
 
 
 _NUMBERS = (int, float)  # exact types: a bool is no number here
@@ -56,13 +58,37 @@ def runtime_text(exc: BaseException) -> str:
     return f"runtime error: {exc}"[:200]
 
 
-def nesting(items: list[Any]) -> int:
-    """How deep a new list of `items` nests (bounded: its items were checked when built)."""
-    deepest = 0
-    for item in items:
-        if isinstance(item, list):
-            deepest = max(deepest, nesting(item))
-    return deepest + 1
+def shape(items: list[Any]) -> tuple[int, int]:
+    """How deep a new list of `items` nests and how many elements it holds through its lists.
+
+    A list held twice counts twice but is walked once, and the walk stops past MAX_ELEMENTS,
+    so this costs at most about MAX_ELEMENTS steps whatever the value shares."""
+    seen: dict[int, tuple[int, int]] = {}
+
+    def walk(values: list[Any]) -> tuple[int, int]:
+        known = seen.get(id(values))
+        if known is not None:
+            return known
+        inner = [v for v in values if isinstance(v, list)]
+        deepest, count = 0, len(values) - len(inner)
+        for item in inner:
+            depth, size = walk(item)
+            deepest, count = max(deepest, depth), count + size
+            if count > MAX_ELEMENTS:
+                break
+        seen[id(values)] = (deepest + 1, count)
+        return deepest + 1, count
+
+    return walk(items)
+
+
+def check_shape(values: list[Any], line: int, column: int) -> None:
+    """A list value a program builds: at most MAX_NESTING deep, MAX_ELEMENTS elements."""
+    depth, count = shape(values)
+    if depth > MAX_NESTING:
+        raise ScriptFault(f"Type error: arrays nest at most {MAX_NESTING} deep", line, column)
+    if count > MAX_ELEMENTS:
+        raise ScriptFault(f"Type error: an array holds at most {MAX_ELEMENTS} elements", line, column)
 
 
 class Evaluator:
@@ -72,6 +98,7 @@ class Evaluator:
         self.script, self.robot = script, robot
         self.globals: Frame = {}
         self._depth = 0
+        self._sync = 0  # > 0 while a function runs inside an expression (it cannot be preempted)
 
     # the interpreter's side
     def block(self, body: list[Stmt], frame: Frame) -> Steps:
@@ -82,6 +109,9 @@ class Evaluator:
 
     def wait_for(self, done: Any) -> Wait:
         raise NotImplementedError
+
+    def over_budget(self, line: int) -> None:
+        """The runtime error once the step's CPU budget is spent (the interpreter keeps it)."""
 
     # --- names --------------------------------------------------------------------------------
 
@@ -109,7 +139,10 @@ class Evaluator:
         if name not in where:
             raise ScriptFault(f"compile_error_name_not_found:{name}", stmt.line, stmt.column)
         positions = [self.value(e, frame) for e in stmt.index]
-        where[name] = urscript_ops.replaced(where[name], positions, value, stmt.line, stmt.column)
+        changed = urscript_ops.replaced(where[name], positions, value, stmt.line, stmt.column)
+        if isinstance(value, list):  # `a[0] = a` must not nest a value deeper each turn
+            check_shape(changed, stmt.line, stmt.column)
+        where[name] = changed
 
     def condition(self, branch: Branch, frame: Frame) -> Steps:
         assert branch.cond is not None
@@ -147,9 +180,21 @@ class Evaluator:
             return urscript_ops.index(variable, self.value(expr.items[0], frame), expr.line, expr.column)
         if kind == "run":
             return self.start_thread(expr.value, expr.line, expr.column)
-        values = [self.value(e, frame) for e in expr.items]
+        items = expr.items
+        if len(items) > MANY:
+            values = self._many(items, frame, expr.line)
+        else:
+            values = [self.value(e, frame) for e in items]
         kwargs = {k: self.value(e, frame) for k, e in expr.kwargs}
         return self.combine(expr, values, kwargs)
+
+    def _many(self, items: tuple[Expr, ...], frame: Frame, line: int) -> list[Any]:
+        """The values of a long list or argument list, within the step's CPU budget."""
+        values: list[Any] = []
+        for start in range(0, len(items), MANY):
+            self.over_budget(line)
+            values.extend([self.value(e, frame) for e in items[start : start + MANY]])
+        return values
 
     def steps(self, expr: Expr, frame: Frame) -> Steps:
         """`value`, for an expression that may wait: yields while a function it calls waits."""
@@ -186,7 +231,9 @@ class Evaluator:
 
     def arguments(self, expr: Expr, frame: Frame) -> Generator[None, None, tuple[list[Any], dict[str, Any]]]:
         values: list[Any] = []
-        for item in expr.items:
+        for i, item in enumerate(expr.items):
+            if i and not i % MANY:
+                self.over_budget(expr.line)
             values.append((yield from self.steps(item, frame)))
         kwargs: dict[str, Any] = {}
         for key, item in expr.kwargs:
@@ -201,8 +248,7 @@ class Evaluator:
     def combine(self, expr: Expr, values: list[Any], kwargs: dict[str, Any]) -> Any:
         kind, line, column = expr.kind, expr.line, expr.column
         if kind == "list":
-            if nesting(values) > MAX_NESTING:
-                raise ScriptFault(f"Type error: arrays nest at most {MAX_NESTING} deep", line, column)
+            check_shape(values, line, column)
             return values
         if kind == "pose":
             return script_calls.make_pose(values, line, column)
@@ -220,10 +266,13 @@ class Evaluator:
             function = self.script.functions.get(expr.value)
             if function is not None:  # one that never waits (the checker says): run to its end now
                 steps = self.invoke(function, values, expr)
+                self._sync += 1  # it runs to its end here: no thread switch inside it
                 try:
                     next(steps)
                 except StopIteration as done:
                     return done.value.value if isinstance(done.value, Return) else None
+                finally:
+                    self._sync -= 1
                 steps.close()
                 raise ScriptFault(f"{expr.value}() waits: not in this expression", line, column)
             stmt = Stmt("call", line, "", expr.value, expr, column)
@@ -251,7 +300,12 @@ class Evaluator:
         such as textmsg, or a function whose value nobody keeps."""
         expr = stmt.expr
         assert expr is not None
-        values = [self.value(e, frame) for e in expr.items]
+        items = expr.items
+        values = (
+            self._many(items, frame, expr.line)
+            if len(items) > MANY
+            else [self.value(e, frame) for e in items]
+        )
         kwargs = {k: self.value(e, frame) for k, e in expr.kwargs}
         command = script_calls.COMMANDS.get(stmt.name)
         if command is not None and stmt.name not in self.script.functions:

@@ -3,10 +3,16 @@
 Each thread is a generator. Every control step (2 ms on e-Series, 8 ms on CB3) each live
 thread, in the order they were started, runs statements until it waits — a motion command
 for its step of motion, `sync()` or `sleep()` — then yields, as the controller's threads do.
-A thread that runs STEP_BUDGET statements or STEP_SECONDS of the interpreter's time in one
-step without waiting gets the controller's "Runtime is too much behind" runtime error, so the
-servers never wait on a program. `kill` ends a thread, `join` waits for it; when the main
-program ends, stops or faults its threads end with it. Names resolve in the function's locals,
+The interpreter has a slice of each step (SLICE of it, in CPU time, so a loaded machine does
+not change what a program does): a thread still running when the slice is over is preempted
+and goes on in the next step, so the control loop keeps its time. A thread that runs
+STEP_BUDGET statements without waiting, or a step whose statements take HARD_STEPS control
+steps of CPU (one huge statement, or a function run inside an expression, which cannot be
+preempted), gets the controller's "Runtime is too much behind" runtime error; a program whose
+process grows MEMORY_BUDGET past what it held when the program started gets "out of memory".
+So the servers never wait on a program, nor run out of memory. `kill` ends a thread, `join`
+waits for it; when the main program ends, stops or faults its threads end with it.
+Names resolve in the function's locals,
 then the program's globals; assigning a name the globals hold changes the global unless
 `local` says otherwise, as the Script manual describes. Expressions that may call a user
 function (which may wait) are evaluated step by step (`evaluator.py`).
@@ -14,6 +20,7 @@ function (which may wait) are evaluated step by step (`evaluator.py`).
 
 from __future__ import annotations
 
+import os
 import time
 from collections.abc import Callable, Generator, Iterator
 from dataclasses import dataclass, field
@@ -34,8 +41,11 @@ from rtde_spec.errors import RtdeSpecError
 PROGRAM_ERRORS = (ArithmeticError, ValueError, TypeError, IndexError, KeyError, RecursionError, MemoryError)
 """What a statement's Python may raise on a program's values: the program's runtime exception."""
 
-STEP_BUDGET = 10_000  # statements (and loop turns) one thread may run in one control step
-STEP_SECONDS = 0.02  # interpreter time one control step may take, all threads together
+STEP_BUDGET = 10_000  # statements (and loop turns) one thread may run without waiting
+SLICE = 0.3  # of a control step: the interpreter's CPU time in it before threads are preempted
+HARD_STEPS = 2.0  # control steps of CPU one step's interpreting may take before the program faults
+MEMORY_BUDGET = 256 << 20  # bytes the process may grow while a program runs
+MEMORY_EVERY = 10  # control steps between looks at the process's memory
 MAX_THREADS = 64  # threads running at once
 
 __all__ = ["PROGRAM_ERRORS", "STEP_BUDGET", "Program", "runtime_text"]
@@ -59,6 +69,7 @@ class _Thread:
     steps: Iterator[None]
     done: bool = False
     ran: int = 0  # statements since it last waited
+    preempted: bool = False  # its slice ran out: it goes on in the next step, not having waited
     loops: list[_Loop] = field(default_factory=list)
 
 
@@ -74,8 +85,14 @@ class Program(Evaluator):
         self.fault: ScriptFault | None = None
         self.cpu = 0.0  # interpreter CPU seconds (its thread's), all steps: benchmarks report it per step
         self.steps_run = 0
+        self.preemptions = 0  # threads sent on to the next step at the end of the slice
         self._epoch = 0
-        self._deadline = 0.0
+        self._slice_end = 0.0  # perf_counter: the slice may be over (the CPU time says)
+        self._cpu_slice_end = 0.0  # thread_time: the slice is over
+        self._cpu_end = 0.0  # thread_time: the step has taken too much
+        hz = float(getattr(robot, "base_hz", 0) or 500)
+        self.step_seconds = 1.0 / hz
+        self._memory_start = resident_bytes()
         line, version = getattr(robot, "line", None), getattr(robot, "version", None)
         known = builtins.names_for(line.id, str(version)) if line is not None else builtins.names()
         check(script, known, script_calls.WAITS | set(builtins.WAITING))  # as this version compiles
@@ -93,13 +110,20 @@ class Program(Evaluator):
         self.clock += dt
         self._epoch += 1
         self.steps_run += 1
-        self._deadline = started + STEP_SECONDS
+        self._slice_end = started + SLICE * self.step_seconds
+        self._cpu_slice_end = cpu + SLICE * self.step_seconds
+        self._cpu_end = cpu + HARD_STEPS * self.step_seconds
         try:
             self._watchdogs()
+            if self.steps_run % MEMORY_EVERY == 0:
+                self._memory()
             for thread in list(self.threads.values()):
                 if thread.done:
                     continue
-                self.current, thread.ran = thread, 0
+                self.current = thread
+                if not thread.preempted:
+                    thread.ran = 0
+                thread.preempted = False
                 try:
                     next(thread.steps)
                 except StopIteration:
@@ -136,6 +160,14 @@ class Program(Evaluator):
                 self.robot.emit(ScriptEvent("text", text, 0, program=self.name))
                 watchdogs[name] = (hz, action, now)  # once per silence
                 pause()
+
+    def _memory(self) -> None:
+        """The controller's out-of-memory fault for a program that holds more than MEMORY_BUDGET."""
+        grown = resident_bytes() - self._memory_start
+        if grown > MEMORY_BUDGET:
+            raise ScriptFault(
+                f"out of memory: the program holds over {MEMORY_BUDGET >> 20} MB ({grown >> 20} MB)", 0, 0
+            )
 
     def fail(self, fault: ScriptFault) -> None:
         self.finished, self.fault = True, fault
@@ -193,7 +225,8 @@ class Program(Evaluator):
 
     def _block(self, body: list[Stmt], frame: Frame) -> Steps:
         for i, stmt in enumerate(body):
-            self._count(stmt)
+            if self._count(stmt):
+                yield  # the slice is over: this thread goes on in the next step
             try:
                 expr = stmt.expr
                 if stmt.kind == "assign" and expr is not None and not expr.user:  # the common case, at once
@@ -215,19 +248,39 @@ class Program(Evaluator):
                 return signal
         return None
 
-    def _count(self, stmt: Stmt) -> None:
-        """One more statement without a wait; past the budget, the loop that never waits faults."""
+    def _count(self, stmt: Stmt) -> bool:
+        """One more statement without a wait; True when the thread is to yield (its slice is over).
+
+        Past STEP_BUDGET statements without a wait the loop that never waits faults; past the
+        step's CPU budget, where the thread cannot be preempted, the statement faults."""
         thread = self.current
         thread.ran += 1
-        if thread.ran <= STEP_BUDGET and (thread.ran & 255 or time.perf_counter() < self._deadline):
-            return
-        loop = next((loop.stmt for loop in thread.loops if loop.epoch == self._epoch), stmt)
-        raise ScriptFault(
-            f"Runtime is too much behind: the loop on line {loop.line} did not yield "
-            f"({thread.ran} statements in one control step); add sync() or sleep() to it",
-            loop.line,
-            1,
-        )
+        if thread.ran > STEP_BUDGET:
+            loop = next((loop.stmt for loop in thread.loops if loop.epoch == self._epoch), stmt)
+            raise ScriptFault(
+                f"Runtime is too much behind: the loop on line {loop.line} did not yield "
+                f"({thread.ran} statements without a wait); add sync() or sleep() to it",
+                loop.line,
+                1,
+            )
+        if time.perf_counter() < self._slice_end or time.thread_time() < self._cpu_slice_end:
+            return False  # (the clock alone is cheap; the CPU time counts when the machine is loaded)
+        if not self._sync:
+            thread.preempted = True
+            self.preemptions += 1
+            return True
+        self.over_budget(stmt.line)
+        return False
+
+    def over_budget(self, line: int) -> None:
+        """The controller's runtime error once this step's interpreting took HARD_STEPS of CPU."""
+        if time.thread_time() > self._cpu_end:
+            ms = HARD_STEPS * self.step_seconds * 1000
+            raise ScriptFault(
+                f"Runtime is too much behind: line {line} took over {ms:g} ms in one control step",
+                line,
+                1,
+            )
 
     def _statement(self, stmt: Stmt, frame: Frame, following: Stmt | None) -> Steps:
         kind = stmt.kind
@@ -294,7 +347,8 @@ class Program(Evaluator):
         try:
             while True:
                 loop.epoch = self._epoch
-                self._count(stmt)  # a turn counts, so even an empty body cannot spin forever
+                if self._count(stmt):  # a turn counts, so even an empty body cannot spin forever
+                    yield
                 if not (yield from self.condition(branch, frame)):
                     return None
                 signal = yield from self._block(branch.body, frame)
@@ -309,6 +363,18 @@ class Program(Evaluator):
     def wait_for(self, done: Callable[[], bool]) -> Wait:
         while not done():
             yield
+
+
+def resident_bytes() -> int:
+    """The process's resident memory (Linux /proc; elsewhere 0: the memory budget is not kept)."""
+    try:
+        with open("/proc/self/statm", "rb") as statm:
+            return int(statm.read().split()[1]) * _PAGE
+    except (OSError, ValueError, IndexError):
+        return 0
+
+
+_PAGE = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
 
 
 class _Killed(Exception):

@@ -66,9 +66,18 @@ def _elementwise(op: str, left: Any, right: Any, line: int, column: int) -> list
         raise ScriptFault(f"Type error: arrays of {len(left)} and {len(right)} elements", line, column)
     lefts = left if isinstance(left, list) else [left] * size
     rights = right if isinstance(right, list) else [right] * size
+    if all(type(v) in _PLAIN for v in lefts) and all(type(v) in _PLAIN for v in rights):  # at C speed
+        if op in "/%" and 0 in rights:
+            raise ScriptFault("Division by zero", line, column)
+        results = list(map(_OPS[op], lefts, rights))
+        if all(type(r) is float or INT_MIN <= r <= INT_MAX for r in results):
+            return results
     if not all(_is_number(v) for v in (*lefts, *rights)):
         raise ScriptFault(f"Type error: {type_name(left)} {op} {type_name(right)}", line, column)
     return [arithmetic(op, a, b, line, column) for a, b in zip(lefts, rights, strict=True)]
+
+
+_PLAIN = (int, float)  # exact types (a bool is no number): element-wise at once
 
 
 def type_name(value: Any) -> str:
