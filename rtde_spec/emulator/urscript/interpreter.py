@@ -170,6 +170,9 @@ class Program(Evaluator):
             )
 
     def fail(self, fault: ScriptFault) -> None:
+        # kept without its traceback: the frames it holds hold the program (a cycle that would keep
+        # every value the program made until a full garbage collection)
+        fault.__traceback__ = fault.__context__ = fault.__cause__ = None
         self.finished, self.fault = True, fault
         self._end_threads()
         self.robot.emit(
@@ -180,6 +183,7 @@ class Program(Evaluator):
         """End the program and its threads (stop program, a new program, the end of main)."""
         self.finished = True
         self._end_threads()
+        self.globals.clear()  # what the program made goes now, not at the next full collection
 
     def _end_threads(self) -> None:
         sockets.close_all(self)
