@@ -64,7 +64,7 @@ def test_a_thread_that_never_waits_is_preempted_at_its_slice_then_faults_after_t
 def test_preemption_spreads_a_long_loop_over_steps_and_the_main_program_keeps_its_turns() -> None:
     """A loop of 3,000 turns without a wait (6,000 statements, under the budget) ends without a
     fault; while it runs the main program still gets one turn in every step."""
-    from rtde_spec.emulator.model import ControllerModel
+    from rtde_spec.emulator.controller.model import ControllerModel
 
     model = ControllerModel("5.15.0")
     program = model.run_script(
@@ -86,7 +86,7 @@ def test_preemption_spreads_a_long_loop_over_steps_and_the_main_program_keeps_it
 
 def test_a_program_that_allocates_without_end_stops_out_of_memory_and_gives_it_back() -> None:
     """Each step keeps another 1 MB text under a new name; past MEMORY_BUDGET the program faults."""
-    from rtde_spec.emulator.model import ControllerModel
+    from rtde_spec.emulator.controller.model import ControllerModel
 
     names = 2 * (interpreter.MEMORY_BUDGET >> 20)
     grow = "".join(f"  x{i} = str_cat(s, s)\n  sync()\n" for i in range(names))
