@@ -41,7 +41,14 @@ def timed(phase, info, began=[0.0]):
         began[0] = time.perf_counter()
     else:
         pauses.append(time.perf_counter() - began[0])
+faults = []
 with EmulatorThread(config) as emu:
+    emit = emu.model.emit
+    def kept(event):
+        if event.kind == "runtime_exception":
+            faults.append(f"{event.text} (line {event.line})")
+        emit(event)
+    emu.model.emit = kept
     print("ready", flush=True)
     sys.stdin.readline()  # the servoJ stream and the readers run: measure from here
     e, model = emu.emulator, emu.model
@@ -72,7 +79,7 @@ with EmulatorThread(config) as emu:
                       "gc_runs": len(pauses), "gc_max_ms": max(pauses, default=0.0) * 1000,
                       "policy": emu.call(os.sched_getscheduler, 0),
                       "running": model.program is program and program is not None,
-                      "threads": len(program.threads) if program else 0}), flush=True)
+                      "threads": len(program.threads) if program else 0, "faults": faults[:3]}), flush=True)
     sys.stdin.readline()
 """
 
@@ -170,6 +177,8 @@ def run(
     print(f"  servoJ commands sent: {stream['sent']} ({stream['rate']:.0f}/s); last target followed to "
           f"{stream['error']:.2e} rad")  # fmt: skip
     print(f"  program running at the end: {stats['running']}, with {stats['threads']} threads")
+    for fault in stats["faults"]:
+        print(f"  runtime exception: {fault}")
     print(f"  missed packages (4 readers): {missed:.0f}; reader p99 lateness {reader_p99:.2f} ms")
     print(
         f"  control steps measured: {stats['steps']}, late steps skipped: {stats['late_steps']}; "
