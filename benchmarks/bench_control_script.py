@@ -8,9 +8,16 @@ readers, each control step's lateness against its due time (p99, measured in the
 loop), the URScript interpreter's CPU per control step (all the program's threads) and the
 emulator process's CPU per step, and how closely the arm followed (the last target).
 
+Lateness is when the loop woke against the step's due time (the step's packages leave right
+after, before the next step's program runs); busy is how long the step then worked. The load
+average is printed: on a shared machine the operating system, not the loop, decides the tail.
+`--realtime P` runs the emulator's loop thread at SCHED_FIFO priority P (as a controller runs
+its loop; needs CAP_SYS_NICE), `--nice N` the emulator process at niceness N, `--profile FILE`
+writes cProfile statistics of the loop while measured.
+
 Targets: 0 missed packages, step lateness p99 < 0.5 ms.
 
-    python benchmarks/bench_emulator.py --control-script [--seconds 60]
+    python benchmarks/bench_emulator.py --control-script [--seconds 60] [--realtime 10] [--nice -10]
 """
 
 from __future__ import annotations
