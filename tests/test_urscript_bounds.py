@@ -124,3 +124,12 @@ def test_the_interpreter_never_hands_program_text_to_eval_exec_or_compile() -> N
                     found.append(f"{path.name}:{node.lineno} {name}")
     assert len(list(URSCRIPT.glob("*.py"))) >= 8  # lexer, parser, checker, interpreter, ...
     assert found == []
+
+
+def test_a_function_run_inside_an_expression_may_take_milliseconds_under_the_statement_budget() -> None:
+    """Once it faulted: a step's CPU past 4 ms (a full garbage collection, a long function inside an
+    expression) was blamed on the statement running then, and ur_rtde's control script stopped."""
+    function = "def f():\n  i = 0\n  while i < 4000:\n    i = i + 1\n  end\n  return i\nend\n"
+    _, events = run_script(function + "x = f() + 1\ntextmsg(x)\n", 10)
+    assert not faults(events)
+    assert [text for kind, text, _, _ in events if kind == "text"] == ["4001"]

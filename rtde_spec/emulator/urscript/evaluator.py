@@ -10,6 +10,7 @@ MAX_NESTING deep (a matrix of poses), so no value a program builds can make a co
 from __future__ import annotations
 
 import operator
+import time
 from collections.abc import Callable, Generator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
@@ -27,7 +28,8 @@ Frame = dict[str, Any]
 MAX_CALL_DEPTH = 64  # user functions calling user functions; deeper is a runaway recursion
 MAX_NESTING = 3  # lists in lists in lists (an array of poses is 2)
 MAX_ELEMENTS = 1 << 16  # elements of one value, through its lists (one held twice counts twice)
-MANY = 256  # items of one list or call between looks at the step's CPU budget
+MANY = 256  # items of one list or call between looks at the statement's CPU time
+STATEMENT_SECONDS = 0.004  # CPU one statement's list or arguments may take (two e-Series steps)
 
 
 _NUMBERS = (int, float)  # exact types: a bool is no number here
@@ -35,6 +37,9 @@ _COMPARE: dict[str, Callable[[Any, Any], bool]] = {
     "==": operator.eq, "!=": operator.ne, "<": operator.lt,
     "<=": operator.le, ">": operator.gt, ">=": operator.ge,
 }  # fmt: skip
+
+
+_NONE: dict[str, Any] = {}  # no keyword arguments (never changed: builtins only read it)
 
 
 @dataclass(frozen=True)
@@ -110,8 +115,16 @@ class Evaluator:
     def wait_for(self, done: Any) -> Wait:
         raise NotImplementedError
 
-    def over_budget(self, line: int) -> None:
-        """The runtime error once the step's CPU budget is spent (the interpreter keeps it)."""
+    @staticmethod
+    def over_budget(began: float, line: int) -> None:
+        """The controller's runtime error once one statement's items took STATEMENT_SECONDS of CPU."""
+        if time.thread_time() - began > STATEMENT_SECONDS:
+            raise ScriptFault(
+                f"Runtime is too much behind: line {line} took over {STATEMENT_SECONDS * 1000:g} ms "
+                "in one control step",
+                line,
+                1,
+            )
 
     # --- names --------------------------------------------------------------------------------
 
@@ -167,13 +180,17 @@ class Evaluator:
                 return _COMPARE[expr.value](left, right)
             return urscript_ops.compare(expr.value, left, right, expr.line, expr.column)
         if kind in ("logic", "not"):
-            left = self._operand(self.value(expr.items[0], frame), expr, 0)
+            left = self.value(expr.items[0], frame)
+            if type(left) is not bool:
+                left = self._operand(left, expr, 0)  # the type error
             if kind == "not":
                 return not left
             word = expr.value
             if (word == "and" and not left) or (word == "or" and left):
                 return left
-            right = self._operand(self.value(expr.items[1], frame), expr, 1)
+            right = self.value(expr.items[1], frame)
+            if type(right) is not bool:
+                right = self._operand(right, expr, 1)
             return left != right if word == "xor" else right
         if kind == "pose" and len(expr.items) == 1 and ("p" in frame or "p" in self.globals):
             variable = frame["p"] if "p" in frame else self.globals["p"]  # `p[0]` of a variable named p
@@ -185,14 +202,15 @@ class Evaluator:
             values = self._many(items, frame, expr.line)
         else:
             values = [self.value(e, frame) for e in items]
-        kwargs = {k: self.value(e, frame) for k, e in expr.kwargs}
+        kwargs = {k: self.value(e, frame) for k, e in expr.kwargs} if expr.kwargs else _NONE
         return self.combine(expr, values, kwargs)
 
     def _many(self, items: tuple[Expr, ...], frame: Frame, line: int) -> list[Any]:
         """The values of a long list or argument list, within the step's CPU budget."""
         values: list[Any] = []
+        began = time.thread_time()
         for start in range(0, len(items), MANY):
-            self.over_budget(line)
+            self.over_budget(began, line)
             values.extend([self.value(e, frame) for e in items[start : start + MANY]])
         return values
 
@@ -231,9 +249,10 @@ class Evaluator:
 
     def arguments(self, expr: Expr, frame: Frame) -> Generator[None, None, tuple[list[Any], dict[str, Any]]]:
         values: list[Any] = []
+        began = time.thread_time()
         for i, item in enumerate(expr.items):
             if i and not i % MANY:
-                self.over_budget(expr.line)
+                self.over_budget(began, expr.line)
             values.append((yield from self.steps(item, frame)))
         kwargs: dict[str, Any] = {}
         for key, item in expr.kwargs:
@@ -247,22 +266,7 @@ class Evaluator:
 
     def combine(self, expr: Expr, values: list[Any], kwargs: dict[str, Any]) -> Any:
         kind, line, column = expr.kind, expr.line, expr.column
-        if kind == "list":
-            check_shape(values, line, column)
-            return values
-        if kind == "pose":
-            return script_calls.make_pose(values, line, column)
-        if kind == "neg":
-            return script_calls.arithmetic("-", 0, values[0], line, column)
-        if kind == "compare":
-            return urscript_ops.compare(expr.value, values[0], values[1], line, column)
-        if kind == "index":
-            return urscript_ops.index(values[0], values[1], line, column)
-        if kind == "binop":
-            return script_calls.arithmetic(expr.value, values[0], values[1], line, column)
-        if kind == "field":
-            return builtins.field(values[0], expr.value, line, column)
-        if kind == "call":
+        if kind == "call":  # the commonest first
             function = self.script.functions.get(expr.value)
             if function is not None:  # one that never waits (the checker says): run to its end now
                 steps = self.invoke(function, values, expr)
@@ -275,8 +279,25 @@ class Evaluator:
                     self._sync -= 1
                 steps.close()
                 raise ScriptFault(f"{expr.value}() waits: not in this expression", line, column)
-            stmt = Stmt("call", line, "", expr.value, expr, column)
+            stmt = expr.call
+            if stmt is None:
+                stmt = expr.call = Stmt("call", line, "", expr.value, expr, column)
             return builtins.call(self, stmt, values, kwargs)  # type: ignore[arg-type]
+        if kind == "binop":
+            return script_calls.arithmetic(expr.value, values[0], values[1], line, column)
+        if kind == "list":
+            check_shape(values, line, column)
+            return values
+        if kind == "pose":
+            return script_calls.make_pose(values, line, column)
+        if kind == "neg":
+            return script_calls.arithmetic("-", 0, values[0], line, column)
+        if kind == "compare":
+            return urscript_ops.compare(expr.value, values[0], values[1], line, column)
+        if kind == "index":
+            return urscript_ops.index(values[0], values[1], line, column)
+        if kind == "field":
+            return builtins.field(values[0], expr.value, line, column)
         raise ScriptFault(f"syntax_error_on_line:{line}:", line, column)
 
     # --- calls --------------------------------------------------------------------------------
@@ -286,9 +307,11 @@ class Evaluator:
             raise ScriptFault(
                 f"{function.name}: calls nested deeper than {MAX_CALL_DEPTH}", expr.line, expr.column
             )
-        frame: Frame = dict(zip(function.params, args, strict=False))
-        for name, default in zip(function.params[len(args) :], function.defaults[len(args) :], strict=True):
-            frame[name] = self.value(default, frame) if default is not None else None
+        params = function.params
+        frame: Frame = dict(zip(params, args, strict=False))
+        if len(args) < len(params):
+            for name, default in zip(params[len(args) :], function.defaults[len(args) :], strict=True):
+                frame[name] = self.value(default, frame) if default is not None else None
         self._depth += 1
         try:
             return (yield from self.block(function.body, frame))

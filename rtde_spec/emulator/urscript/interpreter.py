@@ -6,16 +6,16 @@ for its step of motion, `sync()` or `sleep()` — then yields, as the controller
 The interpreter has a slice of each step (SLICE of it, in CPU time, so a loaded machine does
 not change what a program does): a thread still running when the slice is over is preempted
 and goes on in the next step, so the control loop keeps its time. A thread that runs
-STEP_BUDGET statements without waiting, or a step whose statements take HARD_STEPS control
-steps of CPU (one huge statement, or a function run inside an expression, which cannot be
-preempted), gets the controller's "Runtime is too much behind" runtime error; a program whose
-process grows MEMORY_BUDGET past what it held when the program started gets "out of memory".
-So the servers never wait on a program, nor run out of memory. `kill` ends a thread, `join`
-waits for it; when the main program ends, stops or faults its threads end with it.
-Names resolve in the function's locals,
-then the program's globals; assigning a name the globals hold changes the global unless
-`local` says otherwise, as the Script manual describes. Expressions that may call a user
-function (which may wait) are evaluated step by step (`evaluator.py`).
+STEP_BUDGET statements without waiting (a function run inside an expression cannot be
+preempted: this bounds it), or one statement that takes STATEMENT_SECONDS of CPU (a call of
+64,000 arguments; evaluator.py), gets the controller's "Runtime is too much behind" runtime
+error; a program whose process grows MEMORY_BUDGET past what it held when the program started
+gets "out of memory". So the servers never wait on a program, nor run out of memory. `kill`
+ends a thread, `join` waits for it; when the main program ends, stops or faults its threads
+end with it. Names resolve in the function's locals, then the program's globals; assigning a
+name the globals hold changes the global unless `local` says otherwise, as the Script manual
+describes. Expressions that may call a user function (which may wait) are evaluated step by
+step (`evaluator.py`).
 """
 
 from __future__ import annotations
@@ -43,7 +43,6 @@ PROGRAM_ERRORS = (ArithmeticError, ValueError, TypeError, IndexError, KeyError, 
 
 STEP_BUDGET = 10_000  # statements (and loop turns) one thread may run without waiting
 SLICE = 0.3  # of a control step: the interpreter's CPU time in it before threads are preempted
-HARD_STEPS = 2.0  # control steps of CPU one step's interpreting may take before the program faults
 MEMORY_BUDGET = 256 << 20  # bytes the process may grow while a program runs
 MEMORY_EVERY = 10  # control steps between looks at the process's memory
 MAX_THREADS = 64  # threads running at once
@@ -89,7 +88,6 @@ class Program(Evaluator):
         self._epoch = 0
         self._slice_end = 0.0  # perf_counter: the slice may be over (the CPU time says)
         self._cpu_slice_end = 0.0  # thread_time: the slice is over
-        self._cpu_end = 0.0  # thread_time: the step has taken too much
         hz = float(getattr(robot, "base_hz", 0) or 500)
         self.step_seconds = 1.0 / hz
         self._memory_start = resident_bytes()
@@ -112,7 +110,6 @@ class Program(Evaluator):
         self.steps_run += 1
         self._slice_end = started + SLICE * self.step_seconds
         self._cpu_slice_end = cpu + SLICE * self.step_seconds
-        self._cpu_end = cpu + HARD_STEPS * self.step_seconds
         try:
             self._watchdogs()
             if self.steps_run % MEMORY_EVERY == 0:
@@ -269,22 +266,11 @@ class Program(Evaluator):
             )
         if time.perf_counter() < self._slice_end or time.thread_time() < self._cpu_slice_end:
             return False  # (the clock alone is cheap; the CPU time counts when the machine is loaded)
-        if not self._sync:
-            thread.preempted = True
-            self.preemptions += 1
-            return True
-        self.over_budget(stmt.line)
-        return False
-
-    def over_budget(self, line: int) -> None:
-        """The controller's runtime error once this step's interpreting took HARD_STEPS of CPU."""
-        if time.thread_time() > self._cpu_end:
-            ms = HARD_STEPS * self.step_seconds * 1000
-            raise ScriptFault(
-                f"Runtime is too much behind: line {line} took over {ms:g} ms in one control step",
-                line,
-                1,
-            )
+        if self._sync:
+            return False  # inside an expression: STEP_BUDGET statements bound it
+        thread.preempted = True
+        self.preemptions += 1
+        return True
 
     def _statement(self, stmt: Stmt, frame: Frame, following: Stmt | None) -> Steps:
         kind = stmt.kind
@@ -372,12 +358,14 @@ class Program(Evaluator):
 def resident_bytes() -> int:
     """The process's resident memory (Linux /proc; elsewhere 0: the memory budget is not kept)."""
     try:
-        with open("/proc/self/statm", "rb") as statm:
-            return int(statm.read().split()[1]) * _PAGE
-    except (OSError, ValueError, IndexError):
+        if not _STATM:
+            _STATM.append(os.open("/proc/self/statm", os.O_RDONLY | getattr(os, "O_CLOEXEC", 0)))
+        return int(os.pread(_STATM[0], 128, 0).split()[1]) * _PAGE
+    except (OSError, ValueError, IndexError, AttributeError):
         return 0
 
 
+_STATM: list[int] = []  # /proc/self/statm, opened once (read in a few µs, not opened each time)
 _PAGE = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
 
 

@@ -28,6 +28,7 @@ class Expr:
     column: int = 0
     line: int = 0
     user: bool = False
+    call: Stmt | None = field(default=None, repr=False)  # a call's statement form, made once (interpreter)
 
 
 @dataclass(frozen=True)
