@@ -63,6 +63,7 @@ with EmulatorThread(config) as emu:
     c0, s0, i0 = time.process_time(), model.step, program.cpu if program else 0.0
     e.step_lateness.clear()
     e.step_busy.clear()
+    e.step_sent.clear()
     late0 = e.late_steps
     gc.callbacks.append(timed)
     if profile:
@@ -76,13 +77,14 @@ with EmulatorThread(config) as emu:
     gc.callbacks.remove(timed)
     c1, s1 = time.process_time(), model.step
     i1 = program.cpu if program else 0.0
-    late, busy = sorted(e.step_lateness), sorted(e.step_busy)
+    late, busy, sent = sorted(e.step_lateness), sorted(e.step_busy), sorted(e.step_sent)
     def q(xs, f):
         return xs[min(len(xs) - 1, int(len(xs) * f))] * 1000
     print(json.dumps({"steps": s1 - s0, "cpu_us": (c1 - c0) / (s1 - s0) * 1e6,
                       "interp_us": (i1 - i0) / (s1 - s0) * 1e6, "late_steps": e.late_steps - late0,
                       "p50_ms": q(late, 0.5), "p90_ms": q(late, 0.9), "p99_ms": q(late, 0.99),
                       "max_ms": late[-1] * 1000, "busy_p50_ms": q(busy, 0.5), "busy_p99_ms": q(busy, 0.99),
+                      "sent_p50_ms": q(sent, 0.5), "sent_p99_ms": q(sent, 0.99),
                       "gc_runs": len(pauses), "gc_max_ms": max(pauses, default=0.0) * 1000,
                       "policy": emu.call(os.sched_getscheduler, 0),
                       "running": model.program is program and program is not None,
@@ -192,6 +194,8 @@ def run(
         f"step lateness p50 {stats['p50_ms']:.3f} ms, p90 {stats['p90_ms']:.3f} ms, "
         f"p99 {stats['p99_ms']:.3f} ms, max {stats['max_ms']:.2f} ms"
     )
+    print(f"  packages written (after the due time): p50 {stats['sent_p50_ms']:.3f} ms, "
+          f"p99 {stats['sent_p99_ms']:.3f} ms")  # fmt: skip
     print(f"  step busy (send + next step's arm and program): p50 {stats['busy_p50_ms']:.3f} ms, "
           f"p99 {stats['busy_p99_ms']:.3f} ms; garbage collections {stats['gc_runs']}, "
           f"longest {stats['gc_max_ms']:.2f} ms")  # fmt: skip

@@ -108,10 +108,11 @@ class Emulator:
         self._loop_task: asyncio.Task[None] | None = None
         self._serving = False
         self.late_steps = 0
-        # per step, when step_timing is set: how late it woke (its packages left right after) and
-        # how long it was busy (sending, then the next step's arm, program and scenario)
+        # per step, when step_timing is set: how late it woke, how late its packages were all
+        # written, and how long it was busy (sending, then the next step's arm, program, scenario)
         self.step_lateness: deque[float] = deque(maxlen=max(1, self.config.step_timing))
         self.step_busy: deque[float] = deque(maxlen=max(1, self.config.step_timing))
+        self.step_sent: deque[float] = deque(maxlen=max(1, self.config.step_timing))  # s after due
 
     async def start(self) -> None:
         loop = asyncio.get_running_loop()
@@ -218,6 +219,8 @@ class Emulator:
                     self.dashboard.observe(now)
                     for port in self.clients.values():
                         port.check(now)
+            if timing:
+                self.step_sent.append(time.perf_counter() - due)  # its packages are out
             # the next step's state, in the time left before it is due (its program in a slice of it)
             model.tick(step + 1)
             self.faults.apply(model.time)
