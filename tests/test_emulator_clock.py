@@ -57,3 +57,26 @@ def test_a_real_time_priority_the_system_refuses_is_one_log_line_and_the_emulato
     assert [round((b - a) * 500) for a, b in itertools.pairwise(stamps)] == [1] * 19
     refused = [r.getMessage() for r in caplog.records if "SCHED_FIFO" in r.getMessage()]
     assert len(refused) == 1 and "normal priority" in refused[0]
+
+
+def test_serve_takes_a_real_time_priority_and_refuses_one_out_of_range() -> None:
+    import subprocess
+
+    ports = ["--rtde-port", "0", "--primary-port", "0", "--secondary-port", "0"]
+    ports += ["--realtime-port", "-1", "--dashboard-port", "-1"]
+    bad = subprocess.run(
+        [sys.executable, "-m", "rtde_spec", "serve", *ports, "--realtime-priority", "100"],
+        capture_output=True, text=True, timeout=60,
+    )  # fmt: skip
+    assert bad.returncode == 2 and "--realtime-priority 100: give 1..99" in bad.stderr
+    with subprocess.Popen(
+        [sys.executable, "-m", "rtde_spec", "serve", *ports, "--realtime-priority", "5"],
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+    ) as serve:  # fmt: skip
+        try:
+            assert serve.stdout is not None
+            line = serve.stdout.readline()
+            assert line.startswith("emulating controller") and "rtde" in line, line
+        finally:
+            serve.terminate()
+            serve.wait(30)
