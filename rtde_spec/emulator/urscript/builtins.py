@@ -307,10 +307,47 @@ BUILTINS["end_teach_mode"] = _mode("_freedrive", 0)
 BUILTINS["end_freedrive_mode"] = _mode("_freedrive", 0)
 for _name in (
     "force_mode_set_damping", "force_mode_set_gain_scaling", "zero_ftsensor", "ft_rtde_input_enable",
-    "enable_external_ft_sensor", "set_gravity", "set_tool_voltage", "set_safety_mode_transition_hardness",
-    "set_target_payload", "set_payload_inertia",
+    "enable_external_ft_sensor", "set_gravity", "set_safety_mode_transition_hardness",
 ):  # fmt: skip
     BUILTINS[_name] = _mode(f"_{_name}", 1)
+
+TOOL_VOLTAGES = (0, 12, 24)  # what the tool connector supplies (Script Manual, set_tool_voltage)
+
+
+@builtin("set_tool_voltage")
+def _tool_voltage(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    """The tool connector's supply, shown as RTDE's tool_output_voltage (and the primary Tool Data).
+    URCL's driver sends it as a float (24.0): a whole number of volts is taken in either type."""
+    volts = number(stmt, _arg(stmt, args, kwargs, 0, "voltage"), "voltage")
+    if volts not in TOOL_VOLTAGES:
+        raise ScriptFault(
+            f"{stmt.name}: voltage must be 0, 12 or 24, not {volts:g}", stmt.line, stmt.column or 1
+        )
+    settings_of(runner)["_set_tool_voltage"] = int(volts)
+    runner.robot.values["tool_output_voltage"] = int(volts)
+
+
+def _three(stmt: Stmt, value: Any, name: str, count: int) -> tuple[float, ...]:
+    if not isinstance(value, list) or len(value) != count:
+        raise ScriptFault(f"{stmt.name}: {name} must be {count} numbers", stmt.line, stmt.column or 1)
+    return tuple(number(stmt, v, name) for v in value)
+
+
+@builtin("set_target_payload", "set_payload_inertia")
+def _target_payload(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    """Mass, centre of gravity and inertia, shown as RTDE's payload, payload_cog and payload_inertia
+    at once (the transition time is not modelled)."""
+    values = runner.robot.values
+    if stmt.name == "set_payload_inertia":
+        values["payload_inertia"] = _three(stmt, _arg(stmt, args, kwargs, 0, "inertia"), "inertia", 6)
+        return
+    mass = number(stmt, _arg(stmt, args, kwargs, 0, "m"), "m")
+    if mass < 0:
+        raise ScriptFault(f"{stmt.name}: a negative mass", stmt.line, stmt.column or 1)
+    cog = _three(stmt, _arg(stmt, args, kwargs, 1, "cog"), "cog", 3)
+    inertia = _three(stmt, _arg(stmt, args, kwargs, 2, "inertia", [0.0] * 6), "inertia", 6)
+    number(stmt, _arg(stmt, args, kwargs, 3, "transition_time", 0.0), "transition_time")
+    values.update(payload=mass, payload_cog=cog, payload_inertia=inertia)
 
 
 @builtin("protective_stop")

@@ -36,6 +36,7 @@ PROGRAM_ERRORS = (ArithmeticError, ValueError, TypeError, IndexError, KeyError, 
 
 STEP_BUDGET = 10_000  # statements (and loop turns) one thread may run in one control step
 STEP_SECONDS = 0.02  # interpreter time one control step may take, all threads together
+SLICE_SECONDS = 0.001  # interpreter time after which a call that could wait lets the step end first
 MAX_THREADS = 64  # threads running at once
 
 __all__ = ["PROGRAM_ERRORS", "STEP_BUDGET", "Program", "runtime_text"]
@@ -136,6 +137,17 @@ class Program(Evaluator):
                 self.robot.emit(ScriptEvent("text", text, 0, program=self.name))
                 watchdogs[name] = (hz, action, now)  # once per silence
                 pause()
+
+    def slice_used(self) -> bool:
+        """Whether the running thread has used its slice of this control step (half the statement
+        budget, or SLICE_SECONDS of the step's interpreter time). A call that could wait (a socket
+        read) then waits for the next step before it returns, as the controller puts a thread that
+        used its time slice to rest until the next frame (Script Manual, thread scheduling): a
+        driver's loop reading a flood of records keeps up step by step instead of faulting."""
+        return (
+            self.current.ran > STEP_BUDGET // 2
+            or time.perf_counter() > self._deadline - STEP_SECONDS + SLICE_SECONDS
+        )
 
     def fail(self, fault: ScriptFault) -> None:
         self.finished, self.fault = True, fault

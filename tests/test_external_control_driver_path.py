@@ -1,0 +1,199 @@
+"""The ROS driver's path through the emulator, end to end: a test client of URCL's external
+control (tests/external_driver.py, written from spec/external_control/) plays the driver.
+
+It readies the arm with the primary port's plain commands as URCL does (`power on`,
+`set robotmode run`, `stop program`), sends an external-control program in the style of
+URCL's (tests/data/external_control_driver.urscript: threads, named sockets back to the
+driver's reverse, trajectory and script command servers, time-outs as keepalives) headless
+on the primary port, then drives it: servoj targets and keepalives on the reverse port,
+trajectory points with timing on the trajectory port (their result comes back there),
+script commands on the script command port. The arm is seen through RTDE (actual_q, TCP
+pose, payload, TCP offset, tool voltage) and the primary port (robot mode, text messages).
+Every server is on a free port.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Iterator
+from dataclasses import dataclass
+from typing import Any
+
+import pytest
+
+from rtde_spec import EmulatorConfig, EmulatorThread, RtdeClient
+from rtde_spec.emulator import kinematics as kin
+from rtde_spec.spec.arms import arm_model
+from tests.external_driver import DriverSide, PrimaryWatch, straight
+
+RAD, METRE = 1e-4, 1e-4
+POWER_OFF, IDLE, RUNNING = 3, 5, 7  # RobotMode
+OUTPUTS = ["actual_q", "actual_TCP_pose", "payload", "payload_cog", "tcp_offset", "tool_output_voltage",
+           "runtime_state"]  # fmt: skip
+
+
+@dataclass
+class Session:
+    emu: EmulatorThread
+    primary: PrimaryWatch
+    driver: DriverSide
+    rtde: RtdeClient
+
+    def latest(self) -> Any:
+        """The newest RTDE record (the ones queued before it are dropped)."""
+        record = self.rtde.receive(timeout=5)
+        while True:
+            try:
+                record = self.rtde.receive(timeout=0.001)
+            except TimeoutError:
+                return record
+
+    def q(self) -> list[float]:
+        return list(self.latest().actual_q)
+
+    def until(self, done: Any, seconds: float, what: str, keepalive: bool = True) -> Any:
+        """Keep the program alive (as the driver's loop does) until `done(record)`; the record."""
+        deadline = time.monotonic() + seconds
+        while True:
+            record = self.latest()
+            if done(record):
+                return record
+            assert time.monotonic() < deadline, f"{what}: not within {seconds} s ({self.primary.texts[-6:]})"
+            if keepalive:
+                self.driver.keepalive()
+            time.sleep(0.02)
+
+
+def start(emu: EmulatorThread) -> Iterator[Session]:
+    primary = PrimaryWatch("127.0.0.1", emu.ports["primary"])
+    driver = DriverSide()
+    rtde = RtdeClient("127.0.0.1", emu.ports["rtde"]).connect()
+    try:
+        rtde.setup_outputs(OUTPUTS, 125)
+        rtde.start()
+        yield Session(emu, primary, driver, rtde)
+    finally:
+        rtde.close()
+        driver.close()
+        primary.close()
+
+
+@pytest.fixture
+def session() -> Iterator[Session]:
+    with EmulatorThread(EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=None)) as emu:
+        yield from start(emu)
+
+
+def ready_and_run(s: Session) -> None:
+    """The driver's start-up: a powered, released arm, no program, then its program, connected back."""
+    primary, driver = s.primary, s.driver
+    primary.wait(lambda w: w.mode is not None, 5, "a Robot State")
+    primary.send("power off")
+    primary.wait(lambda w: w.mode.robot_mode == POWER_OFF, 5, "POWER_OFF after power off")
+    primary.send("power on")
+    primary.wait(lambda w: w.mode.robot_mode == IDLE and w.mode.is_robot_power_on, 5, "IDLE after power on")
+    primary.send("stop program")
+    primary.send("set robotmode run")  # URCL's brake release
+    primary.wait(lambda w: w.mode.robot_mode == RUNNING, 5, "RUNNING after set robotmode run")
+    primary.send(driver.program())
+    driver.accept()
+    primary.wait_text("external control active")
+    primary.wait(lambda w: w.mode.is_program_running, 5, "the program running")
+
+
+def test_the_driver_readies_the_arm_streams_servoj_runs_a_trajectory_and_sends_script_commands(
+    session: Session,
+) -> None:
+    s, driver = session, session.driver
+    ready_and_run(s)
+    assert not s.primary.exceptions
+
+    # servoj targets on the reverse port: a ramp at 500 Hz, then the last target held
+    home = s.q()
+    goal = [home[0] + 0.2, home[1] - 0.1, home[2] + 0.1, home[3], home[4], home[5] - 0.2]
+    servoj = driver.mode("SERVOJ")
+    steps = 250
+    for i in range(steps + 1):
+        driver.write_command(straight(home, goal, i / steps), servoj, read_timeout=0.5)
+        time.sleep(0.002)
+    for _ in range(50):
+        driver.write_command(goal, servoj, read_timeout=0.5)
+        time.sleep(0.002)
+    record = s.until(lambda r: list(r.actual_q) == pytest.approx(goal, abs=RAD), 5, "the servoj target")
+    s.primary.wait(lambda w: w.q == pytest.approx(goal, abs=RAD), 5, "the servoj target in the Robot State")
+
+    # a trajectory: two joint points with durations, then a linear point, forwarded on 50003
+    first = [goal[0] - 0.3, goal[1] + 0.1, goal[2] - 0.1, goal[3] + 0.1, goal[4], goal[5] + 0.3]
+    second = [first[0] + 0.1, *first[1:5], first[5] - 0.1]
+    model = arm_model("UR5e")
+    pose = kin.forward(model, second)
+    third = [pose[0], pose[1] + 0.05, pose[2] - 0.03, *pose[3:]]
+    driver.trajectory_control("START", points=3)
+    started = time.monotonic()
+    driver.write_point("MOVEJ", first, duration=0.6)
+    driver.write_point("MOVEJ", second, duration=0.4)
+    driver.write_point("MOVEL", third, velocity=0.25, acceleration=1.2)
+    assert driver.trajectory_result(seconds=10) == "SUCCESS"
+    took = time.monotonic() - started
+    record = s.latest()
+    assert list(record.actual_TCP_pose) == pytest.approx(third, abs=METRE)
+    assert took > 1.0  # the durations were kept: 0.6 s + 0.4 s before the linear move
+    s.primary.wait_text("trajectory finished: 0")
+
+    # script commands on 50004: their effects show in the RTDE outputs
+    driver.script_command("set_payload", mass=1.25, cog=[0.0, 0.01, 0.04])
+    driver.script_command("set_tcp_offset", offset=[0.0, 0.0, 0.15, 0.0, 0.0, 0.0])
+    driver.script_command("set_tool_voltage", voltage=24.0)
+    driver.script_command("zero_ft_sensor")
+    driver.script_command(
+        "start_force_mode", task_frame=[0.0] * 6, selection_vector=[0, 0, 1, 0, 0, 0],
+        wrench=[0, 0, -5, 0, 0, 0], force_type=2, limits=[0.1, 0.1, 0.1, 0.2, 0.2, 0.2],
+        damping_factor=0.025, gain_scaling=0.5,
+    )  # fmt: skip
+    driver.script_command("end_force_mode")
+    driver.script_command("start_tool_contact")
+    driver.script_command("end_tool_contact")
+    assert driver.tool_contact_result() == "CANCELED"  # ended with no contact: the arm met nothing
+    record = s.until(
+        lambda r: r.payload == pytest.approx(1.25) and r.tool_output_voltage == 24 and r.tcp_offset[2] > 0.1,
+        5, "the script commands' effects",
+    )  # fmt: skip
+    assert list(record.payload_cog) == pytest.approx([0.0, 0.01, 0.04])
+    assert list(record.tcp_offset) == pytest.approx([0.0, 0.0, 0.15, 0.0, 0.0, 0.0])
+    flange_to_tcp = kin.forward(model, list(record.actual_q), record.tcp_offset)
+    assert list(record.actual_TCP_pose) == pytest.approx(flange_to_tcp, abs=1e-9)
+    s.primary.wait(lambda w: sum("script command done" in t for t in w.texts) == 8, 5, "8 commands done")
+
+    # STOPPED ends the program; it closes its sockets
+    driver.write_command([0.0] * 6, driver.mode("STOPPED"))
+    s.primary.wait_text("external control ended")
+    s.primary.wait(lambda w: not w.mode.is_program_running, 5, "the program stopped")
+    assert driver.closed_by_robot("reverse")
+    assert not s.primary.exceptions
+
+
+def test_a_flood_of_keepalives_is_read_step_by_step_and_silence_ends_the_program(session: Session) -> None:
+    """URCL's script command example writes keepalives in a loop that never sleeps: the program's
+    reverse loop reads what arrives until its time slice is used and goes on in the next control
+    step, as the controller schedules a thread (no runtime error); when the driver falls silent,
+    the read times out after the last record's read_timeout and the program ends itself."""
+    s, driver = session, session.driver
+    ready_and_run(s)
+    burst = driver.reverse_codec.encode(
+        "motion_target", {"read_timeout": 0.2, "target": [0.0] * 6, "control_mode": driver.mode("IDLE")}
+    )
+    driver.robot["reverse"].sendall(burst * 20_000)  # 640 kB at once
+    home = s.q()
+    goal = [home[0] - 0.1, *home[1:]]
+    for _ in range(100):
+        driver.write_command(goal, driver.mode("SERVOJ"), read_timeout=0.2)
+    s.until(
+        lambda r: list(r.actual_q) == pytest.approx(goal, abs=RAD),
+        20,
+        "the servoj target after the flood",
+        False,
+    )
+    assert not s.primary.exceptions
+    s.primary.wait_text("reverse socket timed out: external control ends", 10)
+    s.primary.wait(lambda w: not w.mode.is_program_running, 5, "the program stopped")
+    assert not s.primary.exceptions
