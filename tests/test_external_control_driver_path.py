@@ -28,6 +28,7 @@ from tests.external_driver import DriverSide, PrimaryWatch, straight
 
 RAD, METRE = 1e-4, 1e-4
 POWER_OFF, IDLE, RUNNING = 3, 5, 7  # RobotMode
+POSITION, TEACH, FORCE = 0, 1, 2  # ControlMode of the Robot Mode Data
 OUTPUTS = ["actual_q", "actual_TCP_pose", "payload", "payload_cog", "tcp_offset", "tool_output_voltage",
            "runtime_state"]  # fmt: skip
 
@@ -150,7 +151,9 @@ def test_the_driver_readies_the_arm_streams_servoj_runs_a_trajectory_and_sends_s
         wrench=[0, 0, -5, 0, 0, 0], force_type=2, limits=[0.1, 0.1, 0.1, 0.2, 0.2, 0.2],
         damping_factor=0.025, gain_scaling=0.5,
     )  # fmt: skip
+    s.primary.wait(lambda w: w.mode.control_mode == FORCE, 5, "FORCE control mode in the Robot State")
     driver.script_command("end_force_mode")
+    s.primary.wait(lambda w: w.mode.control_mode == POSITION, 5, "POSITION control mode again")
     driver.script_command("start_tool_contact")
     driver.script_command("end_tool_contact")
     assert driver.tool_contact_result() == "CANCELED"  # ended with no contact: the arm met nothing

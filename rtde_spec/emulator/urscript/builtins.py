@@ -1,7 +1,6 @@
 """The built-in functions a program calls for a value or an effect, beyond script_calls' motions
 and I/O: the RTDE registers (bound to the RTDE server's input and output registers), the pose
-maths, kinematics queries, settings and the force and freedrive modes, which the emulator
-approximates: it records the mode and holds the arm, since it models no forces
+maths, kinematics queries, the sockets (sockets.py) and the modes and settings (builtins_modes.py)
 (docs/reference/urscript.md lists each function with its source in UR's Script Manual).
 """
 
@@ -18,6 +17,7 @@ from rtde_spec.emulator import kinematics as kin
 from rtde_spec.emulator.interfaces import Runner
 from rtde_spec.emulator.urscript import calls as script_calls
 from rtde_spec.emulator.urscript import sockets
+from rtde_spec.emulator.urscript.builtins_modes import MODES, settings_of
 from rtde_spec.emulator.urscript.calls import Pose, number, six, type_name
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
 from rtde_spec.errors import RtdeSpecError
@@ -211,15 +211,6 @@ def _interpolate(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose
 # --- the arm's state, settings and modes --------------------------------------------------------
 
 
-def settings_of(runner: Runner) -> dict[str, Any]:
-    """What a program set that no RTDE output shows (modes, watchdogs): kept with the program."""
-    settings = getattr(runner, "settings", None)
-    if settings is None:
-        settings = {}
-        runner.settings = settings  # type: ignore[attr-defined]
-    return settings
-
-
 def _values(name: str, default: Any) -> Builtin:
     def read(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
         where = settings_of(runner) if name.startswith("_") else runner.robot.values
@@ -259,6 +250,7 @@ def _history(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
 
 
 BUILTINS.update(sockets.SENDERS)
+BUILTINS.update(MODES)
 BUILTINS["socket_close"] = sockets.socket_close
 BUILTINS["get_joint_positions"] = lambda runner, stmt, args, kwargs: [
     float(v) for v in runner.robot.arm.state.q
@@ -288,73 +280,6 @@ def _reachable(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> bool:
 @builtin("tool_contact")
 def _contact(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> int:
     return 0  # the emulated arm meets nothing
-
-
-def _mode(name: str, value: Any) -> Builtin:
-    def set_mode(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
-        settings_of(runner)[name] = value
-        if name == "_freedrive" and value:
-            runner.robot.arm.halt()
-
-    return set_mode
-
-
-BUILTINS["force_mode"] = _mode("_force_mode", 1)
-BUILTINS["end_force_mode"] = _mode("_force_mode", 0)
-BUILTINS["teach_mode"] = _mode("_freedrive", 1)
-BUILTINS["freedrive_mode"] = _mode("_freedrive", 1)
-BUILTINS["end_teach_mode"] = _mode("_freedrive", 0)
-BUILTINS["end_freedrive_mode"] = _mode("_freedrive", 0)
-for _name in (
-    "force_mode_set_damping", "force_mode_set_gain_scaling", "zero_ftsensor", "ft_rtde_input_enable",
-    "enable_external_ft_sensor", "set_gravity", "set_safety_mode_transition_hardness",
-):  # fmt: skip
-    BUILTINS[_name] = _mode(f"_{_name}", 1)
-
-TOOL_VOLTAGES = (0, 12, 24)  # what the tool connector supplies (Script Manual, set_tool_voltage)
-
-
-@builtin("set_tool_voltage")
-def _tool_voltage(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
-    """The tool connector's supply, shown as RTDE's tool_output_voltage (and the primary Tool Data).
-    URCL's driver sends it as a float (24.0): a whole number of volts is taken in either type."""
-    volts = number(stmt, _arg(stmt, args, kwargs, 0, "voltage"), "voltage")
-    if volts not in TOOL_VOLTAGES:
-        raise ScriptFault(
-            f"{stmt.name}: voltage must be 0, 12 or 24, not {volts:g}", stmt.line, stmt.column or 1
-        )
-    settings_of(runner)["_set_tool_voltage"] = int(volts)
-    runner.robot.values["tool_output_voltage"] = int(volts)
-
-
-def _three(stmt: Stmt, value: Any, name: str, count: int) -> tuple[float, ...]:
-    if not isinstance(value, list) or len(value) != count:
-        raise ScriptFault(f"{stmt.name}: {name} must be {count} numbers", stmt.line, stmt.column or 1)
-    return tuple(number(stmt, v, name) for v in value)
-
-
-@builtin("set_target_payload", "set_payload_inertia")
-def _target_payload(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
-    """Mass, centre of gravity and inertia, shown as RTDE's payload, payload_cog and payload_inertia
-    at once (the transition time is not modelled)."""
-    values = runner.robot.values
-    if stmt.name == "set_payload_inertia":
-        values["payload_inertia"] = _three(stmt, _arg(stmt, args, kwargs, 0, "inertia"), "inertia", 6)
-        return
-    mass = number(stmt, _arg(stmt, args, kwargs, 0, "m"), "m")
-    if mass < 0:
-        raise ScriptFault(f"{stmt.name}: a negative mass", stmt.line, stmt.column or 1)
-    cog = _three(stmt, _arg(stmt, args, kwargs, 1, "cog"), "cog", 3)
-    inertia = _three(stmt, _arg(stmt, args, kwargs, 2, "inertia", [0.0] * 6), "inertia", 6)
-    number(stmt, _arg(stmt, args, kwargs, 3, "transition_time", 0.0), "transition_time")
-    values.update(payload=mass, payload_cog=cog, payload_inertia=inertia)
-
-
-@builtin("protective_stop")
-def _protective_stop(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
-    stop = getattr(runner.robot, "protective_stop", None)
-    if stop is not None:
-        stop()
 
 
 # --- numbers, lists and texts -----------------------------------------------------------------
