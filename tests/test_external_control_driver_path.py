@@ -29,8 +29,8 @@ from tests.external_driver import DriverSide, PrimaryWatch, straight
 RAD, METRE = 1e-4, 1e-4
 POWER_OFF, IDLE, RUNNING = 3, 5, 7  # RobotMode
 POSITION, TEACH, FORCE = 0, 1, 2  # ControlMode of the Robot Mode Data
-OUTPUTS = ["actual_q", "actual_TCP_pose", "payload", "payload_cog", "tcp_offset", "tool_output_voltage",
-           "runtime_state"]  # fmt: skip
+OUTPUTS = ["actual_q", "actual_qd", "actual_TCP_pose", "actual_TCP_speed", "payload", "payload_cog",
+           "tcp_offset", "tool_output_voltage", "runtime_state"]  # fmt: skip
 
 
 @dataclass
@@ -199,4 +199,79 @@ def test_a_flood_of_keepalives_is_read_step_by_step_and_silence_ends_the_program
     assert not s.primary.exceptions
     s.primary.wait_text("reverse socket timed out: external control ends", 10)
     s.primary.wait(lambda w: not w.mode.is_program_running, 5, "the program stopped")
+    assert not s.primary.exceptions
+
+
+def stream(driver: DriverSide, values: list[float], mode: str, seconds: float) -> None:
+    """One record every 2 ms for `seconds`, as the driver's control loop writes them."""
+    for _ in range(int(seconds / 0.002)):
+        driver.write_command(values, driver.mode(mode), read_timeout=1.0)
+        time.sleep(0.002)
+
+
+@pytest.mark.slow
+def test_speed_pose_spline_cancel_and_freedrive_modes_move_the_arm_as_the_driver_asks(
+    session: Session,
+) -> None:
+    s, driver = session, session.driver
+    ready_and_run(s)
+
+    # SPEEDJ: joint velocities held while they stream; IDLE stops the arm
+    start = s.q()
+    stream(driver, [0.2, 0.0, 0.0, 0.0, 0.0, -0.1], "SPEEDJ", 0.5)
+    assert list(s.latest().actual_qd) == pytest.approx([0.2, 0.0, 0.0, 0.0, 0.0, -0.1], abs=1e-6)
+    record = s.until(lambda r: not any(r.actual_qd), 5, "SPEEDJ stopped by IDLE")
+    moved = [b - a for a, b in zip(start, record.actual_q, strict=True)]
+    assert moved[0] > 0.05 and moved[5] < -0.025 and moved[1:5] == pytest.approx([0.0] * 4, abs=1e-9)
+
+    # SPEEDL: a tool velocity along z
+    pose = s.latest().actual_TCP_pose
+    stream(driver, [0.0, 0.0, 0.05, 0.0, 0.0, 0.0], "SPEEDL", 0.5)
+    assert s.latest().actual_TCP_speed[2] == pytest.approx(0.05, abs=1e-4)
+    record = s.until(lambda r: not any(abs(v) > 1e-9 for v in r.actual_TCP_speed), 5, "SPEEDL stopped")
+    assert record.actual_TCP_pose[2] - pose[2] > 0.01
+    assert list(record.actual_TCP_pose[:2]) == pytest.approx(list(pose[:2]), abs=1e-4)
+
+    # POSE: a Cartesian target streamed, followed through inverse kinematics
+    pose = list(s.latest().actual_TCP_pose)
+    goal = [pose[0] + 0.03, pose[1] - 0.02, pose[2], *pose[3:]]
+    for i in range(151):
+        driver.write_command(straight(pose, goal, min(1.0, i / 100)), driver.mode("POSE"), read_timeout=1.0)
+        time.sleep(0.002)
+    s.until(lambda r: list(r.actual_TCP_pose) == pytest.approx(goal, abs=METRE), 5, "the POSE target", False)
+
+    # FORWARD, cubic spline points: through a via point at speed, to rest at the end
+    q0 = s.q()
+    via = [q0[0] + 0.2, q0[1], q0[2] - 0.1, *q0[3:]]
+    end = [q0[0] + 0.3, q0[1] + 0.1, q0[2] - 0.1, *q0[3:]]
+    driver.trajectory_control("START", points=2)
+    driver.write_spline_point(via, [0.15, 0.05, 0.0, 0.0, 0.0, 0.0], duration=0.8)
+    driver.write_spline_point(end, [0.0] * 6, duration=0.8)
+    started = time.monotonic()
+    assert driver.trajectory_result() == "SUCCESS"
+    assert time.monotonic() - started > 1.2  # 1.6 s of splines
+    assert s.q() == pytest.approx(end, abs=RAD)
+
+    # FORWARD, canceled: the result says so and the arm stops short of the target
+    q0 = s.q()
+    far = [q0[0] - 1.0, *q0[1:]]
+    driver.trajectory_control("START", points=2)
+    driver.write_point("MOVEJ", far, duration=3.0)
+    driver.write_point("MOVEJ", q0, duration=3.0)
+    time.sleep(0.5)
+    driver.trajectory_control("CANCEL", points=2)
+    assert driver.trajectory_result() == "CANCELED"
+    record = s.until(lambda r: not any(r.actual_qd), 5, "the arm stopped after CANCEL")
+    assert q0[0] - 0.9 < record.actual_q[0] < q0[0] - 0.01
+
+    # FREEDRIVE: the Robot State's control mode is TEACH until it ends
+    freedrive = {"read_timeout": 1.0, "unused": [0] * 5, "control_mode": driver.mode("FREEDRIVE")}
+    codec = driver.reverse_codec
+    driver.robot["reverse"].sendall(codec.encode("freedrive_control", {**freedrive, "freedrive_action": 1}))
+    s.primary.wait(lambda w: w.mode.control_mode == TEACH, 5, "TEACH in freedrive")
+    driver.robot["reverse"].sendall(codec.encode("freedrive_control", {**freedrive, "freedrive_action": -1}))
+    s.primary.wait(lambda w: w.mode.control_mode == POSITION, 5, "POSITION after freedrive")
+
+    driver.write_command([0.0] * 6, driver.mode("STOPPED"))
+    s.primary.wait_text("external control ended")
     assert not s.primary.exceptions
