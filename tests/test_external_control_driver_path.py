@@ -23,6 +23,7 @@ import pytest
 
 from rtde_spec import EmulatorConfig, EmulatorThread, RtdeClient
 from rtde_spec.emulator import kinematics as kin
+from rtde_spec.emulator.model import HOME_Q, ControllerModel
 from rtde_spec.spec.arms import arm_model
 from tests.external_driver import DriverSide, PrimaryWatch, straight
 
@@ -185,7 +186,7 @@ def test_a_flood_of_keepalives_is_read_step_by_step_and_silence_ends_the_program
     burst = driver.reverse_codec.encode(
         "motion_target", {"read_timeout": 0.2, "target": [0.0] * 6, "control_mode": driver.mode("IDLE")}
     )
-    driver.robot["reverse"].sendall(burst * 20_000)  # 640 kB at once
+    driver.robot["reverse"].sendall(burst * 5_000)  # 160 kB at once
     home = s.q()
     goal = [home[0] - 0.1, *home[1:]]
     for _ in range(100):
@@ -275,3 +276,21 @@ def test_speed_pose_spline_cancel_and_freedrive_modes_move_the_arm_as_the_driver
     driver.write_command([0.0] * 6, driver.mode("STOPPED"))
     s.primary.wait_text("external control ended")
     assert not s.primary.exceptions
+
+
+def test_a_stalled_server_catches_up_step_by_step_so_a_speedj_per_step_keeps_its_length() -> None:
+    """A driver's spline is a speedj of one control step each step (URCL's jointSplineStep). When a
+    loaded machine stalls the server and it skips steps, the arm and the program catch up one step
+    at a time: each speed lasts its one step, as on a controller, instead of the skipped time."""
+    model = ControllerModel("5.15.0")
+    model.run_script(
+        "def spline():\n  i = 0\n  while i < 100:\n    speedj([0.1, 0, 0, 0, 0, 0], 40.0, 0.002)\n"
+        "    i = i + 1\n  end\n  stopj(40.0)\nend\n"
+    )
+    step = 0
+    for jump in [1] * 20 + [30] + [1] * 20 + [25] + [1] * 200:  # two stalls, 60 and 50 ms
+        step += jump
+        model.tick(step)
+    assert model.program is None  # ended
+    moved = model.arm.state.q[0] - HOME_Q[0]
+    assert moved == pytest.approx(100 * 0.002 * 0.1, abs=2e-4)  # 100 steps at 0.1 rad/s, ramps aside

@@ -89,6 +89,7 @@ BACKGROUND_PARSE = 16 << 10  # characters: a longer program is read in a worker 
 MAX_PARSING = 4  # programs being read at once; more are refused
 _PARSER = ThreadPoolExecutor(max_workers=1, thread_name_prefix="urscript-parser")
 SECONDARY_STEPS = 10_000  # a `sec` program runs at once; this bounds it
+CATCH_UP_STEPS = 250  # control steps a tick runs one by one after a stall (past them, longer steps)
 
 
 class ControllerModel(RobotModes):
@@ -133,8 +134,13 @@ class ControllerModel(RobotModes):
             self._start_parsed()
         self.time = step / self.base_hz
         values = self.values
-        if dt > 0 and self.can_move() and not self.paused:
-            self._advance(dt)
+        # after a stall (the server skipped steps) the arm and its program catch up step by step, so
+        # a program's held speed lasts the one step it asked for (a driver's speedj splines, URCL's)
+        steps = max(1, min(CATCH_UP_STEPS, round(dt * self.base_hz)))
+        for _ in range(steps if dt > 0 else 0):
+            if not self.can_move() or self.paused:
+                break
+            self._advance(dt / steps)
         if "timestamp" in values:
             values["timestamp"] = self.time
         self._publish()
