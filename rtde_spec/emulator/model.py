@@ -13,6 +13,7 @@ methods of `RobotModes`. Enum values and bit positions come from the generated t
 from __future__ import annotations
 
 import math
+import time
 from collections import deque
 from collections.abc import Callable, Mapping
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -89,7 +90,8 @@ BACKGROUND_PARSE = 16 << 10  # characters: a longer program is read in a worker 
 MAX_PARSING = 4  # programs being read at once; more are refused
 _PARSER = ThreadPoolExecutor(max_workers=1, thread_name_prefix="urscript-parser")
 SECONDARY_STEPS = 10_000  # a `sec` program runs at once; this bounds it
-CATCH_UP_STEPS = 250  # control steps a tick runs one by one after a stall (past them, longer steps)
+CATCH_UP_STEPS = 250  # control steps a tick runs one by one after a stall, at most
+CATCH_UP_SECONDS = 0.02  # time a tick may spend catching up; the rest of the stall is dropped
 
 
 class ControllerModel(RobotModes):
@@ -134,13 +136,18 @@ class ControllerModel(RobotModes):
             self._start_parsed()
         self.time = step / self.base_hz
         values = self.values
-        # after a stall (the server skipped steps) the arm and its program catch up step by step, so
-        # a program's held speed lasts the one step it asked for (a driver's speedj splines, URCL's)
-        steps = max(1, min(CATCH_UP_STEPS, round(dt * self.base_hz)))
-        for _ in range(steps if dt > 0 else 0):
+        # After a stall (the server skipped steps) the arm and its program catch up step by step, so
+        # a held speed lasts the one step a program asked for (a driver's speedj splines, URCL's);
+        # what a loaded machine cannot catch up within CATCH_UP_SECONDS is dropped: the arm and the
+        # program stand still for it, as a program could give no command in it.
+        steps = round(dt * self.base_hz)
+        until = time.perf_counter() + CATCH_UP_SECONDS
+        for _ in range(min(steps, CATCH_UP_STEPS)):
             if not self.can_move() or self.paused:
                 break
             self._advance(dt / steps)
+            if time.perf_counter() > until:
+                break
         if "timestamp" in values:
             values["timestamp"] = self.time
         self._publish()
