@@ -298,11 +298,11 @@ def test_speed_pose_spline_cancel_and_freedrive_modes_move_the_arm_as_the_driver
     assert not s.primary.exceptions
 
 
-def test_a_stalled_server_catches_up_step_by_step_so_a_speedj_per_step_keeps_its_length() -> None:
+def test_after_a_stall_of_the_server_a_speedj_per_step_still_lasts_one_step() -> None:
     """A driver's spline is a speedj of one control step each step (URCL's jointSplineStep). When a
-    loaded machine stalls the server and it skips steps, the arm and the program catch up one step
-    at a time: each speed lasts its one step, as on a controller, instead of the skipped time (what
-    cannot be caught up is dropped: the arm stands still for it)."""
+    loaded machine stalls the server and it skips steps, the arm and the program take one step and
+    stand still for the rest: each speed lasts its one step, as on a controller, instead of running
+    on for the skipped time (a 0.3 rad spline of URCL's went 0.3855 and 0.5012 rad)."""
     model = ControllerModel("5.15.0")
     model.run_script(
         "def spline():\n  i = 0\n  while i < 100:\n    speedj([0.1, 0, 0, 0, 0, 0], 40.0, 0.002)\n"

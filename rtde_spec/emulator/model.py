@@ -13,7 +13,6 @@ methods of `RobotModes`. Enum values and bit positions come from the generated t
 from __future__ import annotations
 
 import math
-import time
 from collections import deque
 from collections.abc import Callable, Mapping
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -90,8 +89,6 @@ BACKGROUND_PARSE = 16 << 10  # characters: a longer program is read in a worker 
 MAX_PARSING = 4  # programs being read at once; more are refused
 _PARSER = ThreadPoolExecutor(max_workers=1, thread_name_prefix="urscript-parser")
 SECONDARY_STEPS = 10_000  # a `sec` program runs at once; this bounds it
-CATCH_UP_STEPS = 250  # control steps a tick runs one by one after a stall, at most
-CATCH_UP_SECONDS = 0.02  # time a tick may spend catching up; the rest of the stall is dropped
 
 
 class ControllerModel(RobotModes):
@@ -136,18 +133,12 @@ class ControllerModel(RobotModes):
             self._start_parsed()
         self.time = step / self.base_hz
         values = self.values
-        # After a stall (the server skipped steps) the arm and its program catch up step by step, so
-        # a held speed lasts the one step a program asked for (a driver's speedj splines, URCL's);
-        # what a loaded machine cannot catch up within CATCH_UP_SECONDS is dropped: the arm and the
-        # program stand still for it, as a program could give no command in it.
-        steps = round(dt * self.base_hz)
-        until = time.perf_counter() + CATCH_UP_SECONDS
-        for _ in range(min(steps, CATCH_UP_STEPS)):
-            if not self.can_move() or self.paused:
-                break
-            self._advance(dt / steps)
-            if time.perf_counter() > until:
-                break
+        # After a stall (the server skipped steps, 100 ms late) the arm and its program take one
+        # control step and stand still for the rest, as the steps a real controller never skips: a
+        # held speed lasts the one step a program asked for (a driver's speedj spline, URCL's), and
+        # a program's socket time-out does not run out while the server, not its driver, was late.
+        if dt > 0 and self.can_move() and not self.paused:
+            self._advance(min(dt, 1.0 / self.base_hz))
         if "timestamp" in values:
             values["timestamp"] = self.time
         self._publish()
