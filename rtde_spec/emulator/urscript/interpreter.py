@@ -3,7 +3,7 @@
 Each thread is a generator. Every control step (2 ms on e-Series, 8 ms on CB3) each live
 thread, in the order they were started, runs statements until it waits — a motion command
 for its step of motion, `sync()` or `sleep()` — then yields, as the controller's threads do.
-A thread that runs STEP_BUDGET statements or STEP_SECONDS of the interpreter's time in one
+A thread that runs STEP_BUDGET statements or STEP_SECONDS of the interpreter's CPU time in one
 step without waiting gets the controller's "Runtime is too much behind" runtime error, so the
 servers never wait on a program. `kill` ends a thread, `join` waits for it; when the main
 program ends, stops or faults its threads end with it. Names resolve in the function's locals,
@@ -35,8 +35,8 @@ PROGRAM_ERRORS = (ArithmeticError, ValueError, TypeError, IndexError, KeyError, 
 """What a statement's Python may raise on a program's values: the program's runtime exception."""
 
 STEP_BUDGET = 10_000  # statements (and loop turns) one thread may run in one control step
-STEP_SECONDS = 0.02  # interpreter time one control step may take, all threads together
-SLICE_SECONDS = 0.001  # interpreter time after which a call that could wait lets the step end first
+STEP_SECONDS = 0.02  # interpreter CPU time one control step may take, all threads together
+SLICE_SECONDS = 0.001  # interpreter CPU time after which a call that could wait lets the step end first
 MAX_THREADS = 64  # threads running at once
 
 __all__ = ["PROGRAM_ERRORS", "STEP_BUDGET", "Program", "runtime_text"]
@@ -90,11 +90,11 @@ class Program(Evaluator):
     def advance(self, dt: float = 0.0) -> None:
         if self.finished:
             return
-        started, cpu = time.perf_counter(), time.thread_time()
+        cpu = time.thread_time()
         self.clock += dt
         self._epoch += 1
         self.steps_run += 1
-        self._deadline = started + STEP_SECONDS
+        self._deadline = cpu + STEP_SECONDS  # CPU time: a loaded machine's waits are not the program's
         try:
             self._watchdogs()
             for thread in list(self.threads.values()):
@@ -146,7 +146,7 @@ class Program(Evaluator):
         driver's loop reading a flood of records keeps up step by step instead of faulting."""
         return (
             self.current.ran > STEP_BUDGET // 2
-            or time.perf_counter() > self._deadline - STEP_SECONDS + SLICE_SECONDS
+            or time.thread_time() > self._deadline - STEP_SECONDS + SLICE_SECONDS
         )
 
     def fail(self, fault: ScriptFault) -> None:
@@ -231,7 +231,7 @@ class Program(Evaluator):
         """One more statement without a wait; past the budget, the loop that never waits faults."""
         thread = self.current
         thread.ran += 1
-        if thread.ran <= STEP_BUDGET and (thread.ran & 255 or time.perf_counter() < self._deadline):
+        if thread.ran <= STEP_BUDGET and (thread.ran & 255 or time.thread_time() < self._deadline):
             return
         loop = next((loop.stmt for loop in thread.loops if loop.epoch == self._epoch), stmt)
         raise ScriptFault(
