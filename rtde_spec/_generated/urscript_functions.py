@@ -109,8 +109,8 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'returns': 'none',
                 'since': {'cb3': '3.0.0', 'e-series': '5.0.0'},
                 'doc': 'Compliant along the selected axes of the task frame',
-                'emulation': 'recorded; the arm holds still (the emulator models no contact '
-                             'forces)'},
+                'emulation': 'the Robot Mode Data shows control mode FORCE; the arm holds still '
+                             '(the emulator models no contact forces)'},
                {'name': 'end_force_mode',
                 'section': 'motion',
                 'returns': 'none',
@@ -139,7 +139,8 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'returns': 'none',
                 'since': {'cb3': '3.0.0', 'e-series': '5.0.0'},
                 'doc': 'Let the arm be moved by hand',
-                'emulation': 'recorded; the arm stops and holds (no hand moves it)'},
+                'emulation': 'the Robot Mode Data shows control mode TEACH; the arm stops and '
+                             'holds (no hand moves it)'},
                {'name': 'end_freedrive_mode',
                 'section': 'motion',
                 'returns': 'none',
