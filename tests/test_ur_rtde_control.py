@@ -9,18 +9,21 @@ for a reply) on a loopback address of its own, since ur_rtde's ports are fixed.
 
 from __future__ import annotations
 
+import os
 import re
-import shutil
 import subprocess
 import sys
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pytest
 
+import rtde_spec
+from rtde_spec import PrimaryClient
 from rtde_spec.emulator.arm import kinematics as kin
 from rtde_spec.metamodel.arms import arm_model
 
@@ -30,6 +33,7 @@ rtde_io = pytest.importorskip("rtde_io", reason="ur_rtde is installed by the tes
 
 HOST = "127.0.0.71"
 RAD, METRE = 1e-4, 1e-4
+POSITION, TEACH, FORCE = 0, 1, 2  # the Robot Mode Data's control mode (primary port)
 # ur_rtde needs the controller's own ports on its host: every test of this module in one xdist worker
 pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("default-ports")]
 
@@ -42,11 +46,14 @@ class Robot:
 
 
 def serve(host: str) -> subprocess.Popen[str]:
-    exe = shutil.which("rtde-spec")
-    command = [exe] if exe else [sys.executable, "-m", "rtde_spec"]
+    """`rtde-spec serve` of the rtde_spec these tests import (a worktree's, not an installed one's)."""
+    tree = str(Path(rtde_spec.__file__).resolve().parents[1])
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (tree, os.environ.get("PYTHONPATH")) if p)}
     proc = subprocess.Popen(
         [
-            *command,
+            sys.executable,
+            "-m",
+            "rtde_spec",
             "serve",
             "--host",
             host,
@@ -60,6 +67,7 @@ def serve(host: str) -> subprocess.Popen[str]:
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
+        env=env,
     )
     assert proc.stdout is not None
     line = proc.stdout.readline()
@@ -126,8 +134,10 @@ def test_a_servoj_stream_at_500_hz_is_followed_to_its_last_target(robot: Robot) 
         q = [start[0] + 0.0004 * i, *start[1:5], start[5] - 0.0004 * i]
         assert robot.control.servoJ(q, 0.5, 0.5, 0.002, 0.1, 300)
         robot.control.waitPeriod(period)
-    settle(robot, 0.5)  # generous: a loaded machine may hold the emulator's process back
+    # a loaded machine may hold the emulator's process back: the last target is reached late
+    settle_until(lambda: robot.receive.getActualQ() == pytest.approx(q, abs=RAD))
     robot.control.servoStop()
+    settle(robot)
     assert robot.receive.getActualQ() == pytest.approx(q, abs=RAD)
 
 
@@ -160,11 +170,13 @@ def test_an_async_movej_is_stopped_by_stopj(robot: Robot) -> None:
     target = [start[0] - 1.0, *start[1:]]
     assert robot.control.moveJ(target, 0.3, 0.5, True)  # asynchronous: returns at once
     time.sleep(0.4)
+    assert not robot.control.isSteady()  # on its way
     robot.control.stopJ(2.0)
     settle(robot, 0.3)
     q = robot.receive.getActualQ()
     assert robot.receive.getActualQd() == pytest.approx([0.0] * 6, abs=1e-9)
     assert start[0] - 0.9 < q[0] < start[0] - 0.01  # stopped on the way
+    assert robot.control.isSteady()
 
 
 def test_an_async_movel_is_stopped_by_stopl(robot: Robot) -> None:
@@ -191,21 +203,38 @@ def test_set_tcp_and_set_payload_show_in_the_outputs(robot: Robot) -> None:
     assert robot.control.setTcp([0.0] * 6)
 
 
+def control_mode(host: str = HOST) -> int:
+    """The control mode of the next Robot State on the primary port (URCL's primary client reads it)."""
+    with PrimaryClient(host, 30001, timeout=5) as client:
+        for message in client:
+            if message.NAME == "robot_state":
+                mode = next(p for p in message.sub_packages if type(p).__name__ == "RobotModeData")
+                return int(mode.control_mode)
+    raise AssertionError("the primary port closed before a Robot State")
+
+
 def test_force_mode_and_teach_mode_hold_the_arm_and_end(robot: Robot) -> None:
     q = robot.receive.getActualQ()
     pose = robot.receive.getActualTCPPose()
+    assert control_mode() == POSITION
     assert robot.control.forceMode(
         [0.0] * 6, [0, 0, 1, 0, 0, 0], [0, 0, -2, 0, 0, 0], 2, [2, 2, 1.5, 1, 1, 1]
     )
+    settle_until(lambda: control_mode() == FORCE)
     time.sleep(0.3)
     assert robot.control.forceModeStop()
-    assert robot.control.teachMode() and robot.control.endTeachMode()
+    settle_until(lambda: control_mode() == POSITION)
+    assert robot.control.teachMode()
+    settle_until(lambda: control_mode() == TEACH)
+    assert robot.control.endTeachMode()
+    settle_until(lambda: control_mode() == POSITION)
     settle(robot)
     assert robot.receive.getActualTCPPose() == pytest.approx(pose, abs=1e-9)  # approximated: held still
     target = [q[0] + 0.05, *q[1:]]
     assert robot.control.moveJ(target)  # the script still takes commands
     settle(robot)
     assert robot.receive.getActualQ() == pytest.approx(target, abs=RAD)
+    assert robot.control.isSteady()
 
 
 def test_rtde_io_setters_show_in_the_outputs() -> None:
@@ -221,6 +250,11 @@ def test_rtde_io_setters_show_in_the_outputs() -> None:
             assert receive.getTargetSpeedFraction() == pytest.approx(0.4)
             assert io.setStandardDigitalOut(3, False)
             settle_until(lambda: receive.getActualDigitalOutputBits() == 1 << 17)
+            assert io.setConfigurableDigitalOut(2, True)
+            settle_until(lambda: receive.getActualDigitalOutputBits() == (1 << 10) | (1 << 17))
+            assert io.setAnalogOutputVoltage(0, 0.25) and io.setAnalogOutputCurrent(1, 0.75)
+            settle_until(lambda: receive.getStandardAnalogOutput0() == pytest.approx(0.25))
+            settle_until(lambda: receive.getStandardAnalogOutput1() == pytest.approx(0.75))
         finally:
             io.disconnect()
             receive.disconnect()

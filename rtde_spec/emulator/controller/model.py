@@ -133,8 +133,12 @@ class ControllerModel(RobotModes):
             self._start_parsed()
         self.time = step / self.base_hz
         values = self.values
+        # After a stall (the server skipped steps, 100 ms late) the arm and its program take one
+        # control step and stand still for the rest, as the steps a real controller never skips: a
+        # held speed lasts the one step a program asked for (a driver's speedj spline, URCL's), and
+        # a program's socket time-out does not run out while the server, not its driver, was late.
         if dt > 0 and self.can_move() and not self.paused:
-            self._advance(dt)
+            self._advance(min(dt, 1.0 / self.base_hz))
         if "timestamp" in values:
             values["timestamp"] = self.time
         self._publish()

@@ -26,7 +26,6 @@ from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.enums import (
     AnalogIoTypes,
-    ControlMode,
     JointMode,
     ProgramState,
     RobotMode,
@@ -34,6 +33,7 @@ from rtde_spec._generated.enums import (
     SafetyMode,
     TeachPendantType,
 )
+from rtde_spec.emulator.urscript.builtins_modes import control_mode
 from rtde_spec.metamodel.arms import ArmModel, arm_model
 from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.metamodel.versions import Version
@@ -207,7 +207,7 @@ class RobotStateBuilder:
             "is_program_running": runtime == ProgramState.RUNNING,
             "is_program_paused": runtime == ProgramState.PAUSED,
             "robot_mode": mode,
-            "control_mode": int(ControlMode.POSITION),
+            "control_mode": control_mode(self.model.program),
             "target_speed_fraction": float(values.get("target_speed_fraction", 1.0)),
             "speed_scaling": float(values.get("speed_scaling", 1.0)),
             "target_speed_fraction_limit": 1.0,

@@ -1,7 +1,6 @@
 """The built-in functions a program calls for a value or an effect, beyond script_calls' motions
 and I/O: the RTDE registers (bound to the RTDE server's input and output registers), the pose
-maths, kinematics queries, settings and the force and freedrive modes, which the emulator
-approximates: it records the mode and holds the arm, since it models no forces
+maths, kinematics queries, the sockets (sockets.py) and the modes and settings (builtins_modes.py)
 (docs/reference/urscript.md lists each function with its source in UR's Script Manual).
 """
 
@@ -17,6 +16,7 @@ import numpy as np
 from rtde_spec.emulator.arm import kinematics as kin
 from rtde_spec.emulator.urscript import calls as script_calls
 from rtde_spec.emulator.urscript import sockets
+from rtde_spec.emulator.urscript.builtins_modes import MODES, settings_of
 from rtde_spec.emulator.urscript.calls import Pose, number, six, type_name
 from rtde_spec.emulator.urscript.interfaces import Runner
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
@@ -211,15 +211,6 @@ def _interpolate(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose
 # --- the arm's state, settings and modes --------------------------------------------------------
 
 
-def settings_of(runner: Runner) -> dict[str, Any]:
-    """What a program set that no RTDE output shows (modes, watchdogs): kept with the program."""
-    settings = getattr(runner, "settings", None)
-    if settings is None:
-        settings = {}
-        runner.settings = settings  # type: ignore[attr-defined]
-    return settings
-
-
 def _values(name: str, default: Any) -> Builtin:
     def read(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
         where = settings_of(runner) if name.startswith("_") else runner.robot.values
@@ -259,6 +250,7 @@ def _history(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
 
 
 BUILTINS.update(sockets.SENDERS)
+BUILTINS.update(MODES)
 BUILTINS["socket_close"] = sockets.socket_close
 BUILTINS["get_joint_positions"] = lambda runner, stmt, args, kwargs: [
     float(v) for v in runner.robot.arm.state.q
@@ -288,36 +280,6 @@ def _reachable(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> bool:
 @builtin("tool_contact")
 def _contact(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> int:
     return 0  # the emulated arm meets nothing
-
-
-def _mode(name: str, value: Any) -> Builtin:
-    def set_mode(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
-        settings_of(runner)[name] = value
-        if name == "_freedrive" and value:
-            runner.robot.arm.halt()
-
-    return set_mode
-
-
-BUILTINS["force_mode"] = _mode("_force_mode", 1)
-BUILTINS["end_force_mode"] = _mode("_force_mode", 0)
-BUILTINS["teach_mode"] = _mode("_freedrive", 1)
-BUILTINS["freedrive_mode"] = _mode("_freedrive", 1)
-BUILTINS["end_teach_mode"] = _mode("_freedrive", 0)
-BUILTINS["end_freedrive_mode"] = _mode("_freedrive", 0)
-for _name in (
-    "force_mode_set_damping", "force_mode_set_gain_scaling", "zero_ftsensor", "ft_rtde_input_enable",
-    "enable_external_ft_sensor", "set_gravity", "set_tool_voltage", "set_safety_mode_transition_hardness",
-    "set_target_payload", "set_payload_inertia",
-):  # fmt: skip
-    BUILTINS[_name] = _mode(f"_{_name}", 1)
-
-
-@builtin("protective_stop")
-def _protective_stop(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
-    stop = getattr(runner.robot, "protective_stop", None)
-    if stop is not None:
-        stop()
 
 
 # --- numbers, lists and texts -----------------------------------------------------------------

@@ -166,6 +166,14 @@ class Program(Evaluator):
                 f"out of memory: the program holds over {MEMORY_BUDGET >> 20} MB ({grown >> 20} MB)", 0, 0
             )
 
+    def slice_used(self) -> bool:
+        """Whether the running thread has used its slice of this control step (half the statement
+        budget, or the interpreter's CPU slice). A call that could wait (a socket read) then waits
+        for the next step before it returns, as the controller puts a thread that used its time
+        slice to rest until the next frame (Script Manual, thread scheduling): a driver's loop
+        reading a flood of records keeps up step by step instead of faulting."""
+        return self.current.ran > STEP_BUDGET // 2 or time.thread_time() > self._cpu_slice_end
+
     def fail(self, fault: ScriptFault) -> None:
         # kept without its traceback: the frames it holds hold the program (a cycle that would keep
         # every value the program made until a full garbage collection)

@@ -180,6 +180,9 @@ def _reading(
 ) -> Waiting:  # fmt: skip
     until = runner.clock + timeout
     failed = [0] + [-1] * count if take is _binary else [0] + [0.0] * count
+    used = getattr(runner, "slice_used", None)
+    if used is not None and used():
+        yield  # the thread's time slice is spent: the read returns in the next control step
     while sock is not None:
         sock.pump()
         got = take(sock, count)

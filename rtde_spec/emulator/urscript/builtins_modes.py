@@ -1,0 +1,118 @@
+"""The built-ins that set the arm's modes and settings: force, teach and freedrive modes (which the
+emulator approximates: it records the mode and holds the arm, since it models no forces), the tool
+voltage and the payload, and a protective stop. What a program sets that no RTDE output shows is
+kept with the program (`settings_of`), so it ends with it; the modes show in the Robot Mode Data's
+control mode (`control_mode`), the tool voltage and payload in their RTDE outputs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+from rtde_spec._generated.enums import ControlMode
+from rtde_spec.emulator.urscript.calls import arg, number
+from rtde_spec.emulator.urscript.interfaces import Runner
+from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
+
+Args = list[Any]
+Kwargs = dict[str, Any]
+Builtin = Callable[[Runner, Stmt, Args, Kwargs], Any]
+MODES: dict[str, Builtin] = {}
+
+
+def _builtin(*names: str) -> Callable[[Builtin], Builtin]:
+    def register(fn: Builtin) -> Builtin:
+        for name in names:
+            MODES[name] = fn
+        return fn
+
+    return register
+
+
+def settings_of(runner: Runner) -> dict[str, Any]:
+    """What a program set that no RTDE output shows (modes, watchdogs): kept with the program."""
+    settings = getattr(runner, "settings", None)
+    if settings is None:
+        settings = {}
+        runner.settings = settings  # type: ignore[attr-defined]
+    return settings
+
+
+def _mode(name: str, value: Any) -> Builtin:
+    def set_mode(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+        settings_of(runner)[name] = value
+        if name == "_freedrive" and value:
+            runner.robot.arm.halt()
+
+    return set_mode
+
+
+def control_mode(program: object) -> int:
+    """The control mode a running program's modes put the arm in (the Robot Mode Data's
+    control_mode): TEACH in freedrive or teach mode, FORCE in force mode, else POSITION. A program
+    that ends takes its modes with it, as the controller ends them with the program."""
+    settings = getattr(program, "settings", None) or {}
+    if settings.get("_freedrive"):
+        return int(ControlMode.TEACH)
+    if settings.get("_force_mode"):
+        return int(ControlMode.FORCE)
+    return int(ControlMode.POSITION)
+
+
+MODES["force_mode"] = _mode("_force_mode", 1)
+MODES["end_force_mode"] = _mode("_force_mode", 0)
+MODES["teach_mode"] = _mode("_freedrive", 1)
+MODES["freedrive_mode"] = _mode("_freedrive", 1)
+MODES["end_teach_mode"] = _mode("_freedrive", 0)
+MODES["end_freedrive_mode"] = _mode("_freedrive", 0)
+for _name in (
+    "force_mode_set_damping", "force_mode_set_gain_scaling", "zero_ftsensor", "ft_rtde_input_enable",
+    "enable_external_ft_sensor", "set_gravity", "set_safety_mode_transition_hardness",
+):  # fmt: skip
+    MODES[_name] = _mode(f"_{_name}", 1)
+
+TOOL_VOLTAGES = (0, 12, 24)  # what the tool connector supplies (Script Manual, set_tool_voltage)
+
+
+@_builtin("set_tool_voltage")
+def _tool_voltage(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    """The tool connector's supply, shown as RTDE's tool_output_voltage (and the primary Tool Data).
+    URCL's driver sends it as a float (24.0): a whole number of volts is taken in either type."""
+    volts = number(stmt, arg(stmt, args, kwargs, 0, "voltage"), "voltage")
+    if volts not in TOOL_VOLTAGES:
+        raise ScriptFault(
+            f"{stmt.name}: voltage must be 0, 12 or 24, not {volts:g}", stmt.line, stmt.column or 1
+        )
+    settings_of(runner)["_set_tool_voltage"] = int(volts)
+    runner.robot.values["tool_output_voltage"] = int(volts)
+
+
+def _three(stmt: Stmt, value: Any, name: str, count: int) -> tuple[float, ...]:
+    if not isinstance(value, list) or len(value) != count:
+        raise ScriptFault(f"{stmt.name}: {name} must be {count} numbers", stmt.line, stmt.column or 1)
+    return tuple(number(stmt, v, name) for v in value)
+
+
+@_builtin("set_target_payload", "set_payload_inertia")
+def _target_payload(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    """Mass, centre of gravity and inertia, shown as RTDE's payload, payload_cog and payload_inertia
+    at once (the transition time is not modelled)."""
+    values = runner.robot.values
+    if stmt.name == "set_payload_inertia":
+        values["payload_inertia"] = _three(stmt, arg(stmt, args, kwargs, 0, "inertia"), "inertia", 6)
+        return
+    mass = number(stmt, arg(stmt, args, kwargs, 0, "m"), "m")
+    if mass < 0:
+        raise ScriptFault(f"{stmt.name}: a negative mass", stmt.line, stmt.column or 1)
+    cog = _three(stmt, arg(stmt, args, kwargs, 1, "cog"), "cog", 3)
+    inertia = _three(stmt, arg(stmt, args, kwargs, 2, "inertia", [0.0] * 6), "inertia", 6)
+    number(stmt, arg(stmt, args, kwargs, 3, "transition_time", 0.0), "transition_time")
+    values.update(payload=mass, payload_cog=cog, payload_inertia=inertia)
+
+
+@_builtin("protective_stop")
+def _protective_stop(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    stop = getattr(runner.robot, "protective_stop", None)
+    if stop is not None:
+        stop()
