@@ -1,0 +1,74 @@
+"""Who reads the socket: the caller while it iterates, the reader thread when it stops.
+
+On real loopback sockets against the emulator at 500 Hz: records come in order with
+no gap either way, and the connection is drained while nobody asks for records.
+"""
+
+from __future__ import annotations
+
+import itertools
+import threading
+import time
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+
+from rtde_spec import EmulatorConfig, EmulatorThread, RtdeClient
+from rtde_spec.rtde import client as client_module
+
+
+@pytest.fixture
+def emu() -> Iterator[EmulatorThread]:
+    running = EmulatorThread(EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0)).start()
+    yield running
+    running.stop()
+
+
+def steps(stamps: list[float]) -> list[int]:
+    return [round((b - a) * 500) for a, b in itertools.pairwise(stamps)]
+
+
+def test_the_caller_reads_while_it_iterates_and_the_reader_drains_when_it_stops(emu: EmulatorThread) -> None:
+    with RtdeClient("127.0.0.1", emu.ports["rtde"], timeout=5) as client:
+        client.setup_outputs(["timestamp", "actual_q"], 500)
+        readers: list[str] = []
+        one_record = client.core.one_record
+
+        def seen(data: bytes) -> Any:  # which thread reads the single-package reads
+            readers.append(threading.current_thread().name)
+            return one_record(data)
+
+        client.core.one_record = seen  # type: ignore[method-assign]
+        client.start()
+        stamps = []
+        for record in client:
+            stamps.append(record.timestamp)
+            if len(stamps) == 300:
+                break
+        assert steps(stamps) == [1] * 299  # in order, none lost
+        # after the first reads the caller holds the socket: its own thread reads
+        assert readers.count(threading.current_thread().name) >= 250
+        # nobody asks for LEASE and more: the reader thread drains into the queue
+        before = client.received
+        time.sleep(client_module.LEASE + 0.5)
+        assert client.received - before >= 100
+        assert client.connection_lost is None
+        more = [client.receive().timestamp for _ in range(50)]
+        assert steps([stamps[-1], *more]) == [1] * 50  # the queue went on where the caller stopped
+
+
+def test_a_request_while_iterating_gets_its_reply_at_once(emu: EmulatorThread) -> None:
+    with RtdeClient("127.0.0.1", emu.ports["rtde"], timeout=5) as client:
+        client.setup_outputs(["timestamp"], 500)
+        client.start()
+        for _, _record in zip(range(100), client, strict=False):
+            pass
+        began = time.monotonic()
+        client.pause()  # the caller stopped reading: its reply must not wait for the lease to end
+        assert time.monotonic() - began < 5
+        with pytest.raises(TimeoutError):  # paused: what came before the reply, then nothing
+            for _ in range(1000):
+                client.receive(timeout=0.3)
+        client.start()
+        assert client.receive().timestamp > 0  # and the caller reads again after a request
