@@ -34,7 +34,8 @@ from rtde_spec.rtde.client_protocol import ClientBase, DataRun, InputRecipe, Rep
 log = logging.getLogger("rtde_spec.client")
 LOG_LEVELS = (logging.CRITICAL, logging.ERROR, logging.WARNING, logging.INFO)  # by text-message level
 LEASE = 0.2  # s: the reader thread keeps off the socket this long after the caller last read it
-_exhaust: Callable[[Iterable[Any]], None] = collections.deque(maxlen=0).extend  # runs an iterator to its end, keeping nothing
+# runs an iterator to its end, keeping nothing
+_exhaust: Callable[[Iterable[Any]], None] = collections.deque(maxlen=0).extend
 SLICE = 0.1  # s: a blocking read returns after this long without data (SO_RCVTIMEO), to look at the time
 
 
