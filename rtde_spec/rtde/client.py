@@ -290,7 +290,15 @@ class RtdeClient(ClientBase):
                     if not chunk:
                         self._finish(self._ended("the controller closed the connection"))
                         return
-                    self._handle(chunk)
+                    record = self.core.one_record(chunk) if self._callbacks else None
+                    if record is None:
+                        self._handle(chunk)
+                        continue
+                    self.received += 1  # one package, to the callbacks: no event, no list
+                    for raw in self._raw_callbacks:
+                        raw(chunk)
+                    for callback in self._callbacks:
+                        callback(record)
         except BaseException as exc:
             self._finish(exc)
 
