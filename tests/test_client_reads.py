@@ -32,23 +32,31 @@ def steps(stamps: list[float]) -> list[int]:
 def test_the_caller_reads_while_it_iterates_and_the_reader_drains_when_it_stops(emu: EmulatorThread) -> None:
     with RtdeClient("127.0.0.1", emu.ports["rtde"], timeout=5) as client:
         client.setup_outputs(["timestamp", "actual_q"], 500)
-        readers: list[str] = []
-        one_record = client.core.one_record
+        readers: list[str] = []  # the thread of every read, in order
+        one_record, receive = client.core.one_record, client.core.receive
 
-        def seen(data: bytes) -> Any:  # which thread reads the single-package reads
+        def one(data: bytes) -> Any:  # the caller's reads all come here first
             readers.append(threading.current_thread().name)
             return one_record(data)
 
-        client.core.one_record = seen  # type: ignore[method-assign]
+        def events(data: bytes) -> Any:  # the reader thread's reads (and the caller's longer ones)
+            if threading.current_thread() is not threading.main_thread():
+                readers.append(threading.current_thread().name)
+            return receive(data)
+
+        client.core.one_record = one  # type: ignore[method-assign]
+        client.core.receive = events  # type: ignore[method-assign]
         client.start()
-        stamps = []
+        stamps, later = [], 0
         for record in client:
             stamps.append(record.timestamp)
+            if len(stamps) == 50:
+                later = len(readers)
             if len(stamps) == 300:
                 break
         assert steps(stamps) == [1] * 299  # in order, none lost
-        # after the first reads the caller holds the socket: its own thread reads
-        assert readers.count(threading.current_thread().name) >= 250
+        # once the caller iterates, its own thread does every read
+        assert readers[later:] and set(readers[later:]) == {threading.main_thread().name}
         # nobody asks for LEASE and more: the reader thread drains into the queue
         before = client.received
         time.sleep(client_module.LEASE + 0.5)

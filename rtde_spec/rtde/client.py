@@ -205,11 +205,18 @@ class RtdeClient(ClientBase):
         return None
 
     def __iter__(self) -> Iterator[Any]:
+        """Records until the connection closes cleanly (`receive` without its call per record)."""
+        data = self._data
         while True:
+            if self._callbacks or self._raw_callbacks:
+                self.receive()  # raises: the records go to the callbacks
             try:
-                yield self.receive()
+                record = data.popleft() if data else self._wait(self.timeout)
+            except IndexError:  # another caller took the last one
+                continue
             except RtdeConnectionError:
                 return
+            yield record
 
     def on_data(self, callback: Callable[[Any], None]) -> None:
         """Call `callback(record)` in the reader thread for every data package (keep it short).
