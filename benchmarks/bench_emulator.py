@@ -7,9 +7,11 @@
 2. Receive-loop CPU per package, each client in its own process against the same
    emulator for `--seconds`: our RtdeClient (58 fields into typed records), ur_rtde's
    RTDEReceiveInterface (if installed), and a UR-client-style loop (recv, unpack, a
-   dict per package, as UR's rtde.py does). Ours waking per package, and batched: one
-   wake-up per 50 packages (100 ms) and per 100 (200 ms), sampled in rounds in turn
-   with a floor of batched `recv` + `struct` tuples (no names, no checks, no thread).
+   dict per package, as UR's rtde.py does). Ours waking per package (`on_data`, and
+   `for record in client`), and batched: one wake-up per 50 packages (100 ms) and per
+   100 (200 ms); floors: a bare `recv()` loop, and batched `recv` + `struct` tuples (no
+   names, no checks, no thread). Every row in each of `--rounds` rounds, in turn; the
+   ratios are taken within each round, their medians reported. `--receive-only`: only this.
 
 3. With --motion, only this (the rows above are unchanged without it): the emulator
    (5.15, 500 Hz) in its own process while a motion program runs (movej back and forth,
@@ -19,12 +21,14 @@
    step (everything: motion, kinematics, RTDE to eight clients, real-time, Robot State).
 
 Targets: no missed packages, p99 lateness <= 1 ms; ours <= 8 µs/package and >= 10x
-less than the UR-client-style loop.
+less than the UR-client-style loop. Issue 30 (printed): `for record in client` <= 15 µs
+and >= 6x less than the UR-client-style loop.
 
 4. With --control-script, only this: ur_rtde's control program with a servoJ stream at 500 Hz
    and four readers (bench_control_script.py).
 
-    python benchmarks/bench_emulator.py [--seconds 10] [--motion | --control-script]
+    python benchmarks/bench_emulator.py [--seconds 10] [--rounds 3]
+        [--receive-only | --motion | --control-script]
     python benchmarks/bench_emulator.py --control-script --seconds 60 [--realtime 10] [--nice -10]
 """
 
