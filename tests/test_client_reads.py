@@ -80,3 +80,15 @@ def test_a_request_while_iterating_gets_its_reply_at_once(emu: EmulatorThread) -
                 client.receive(timeout=0.3)
         client.start()
         assert client.receive().timestamp > 0  # and the caller reads again after a request
+
+
+def test_timeouts_shorter_and_longer_than_a_read_slice_are_kept(emu: EmulatorThread) -> None:
+    with RtdeClient("127.0.0.1", emu.ports["rtde"], timeout=5) as client:
+        client.setup_outputs(["timestamp"], 500)  # not started: nothing comes
+        for wait in (client_module.SLICE / 2, client_module.SLICE * 3.5):
+            began = time.monotonic()
+            with pytest.raises(TimeoutError, match="no data package"):
+                client.receive(timeout=wait)
+            assert wait * 0.9 <= time.monotonic() - began < wait + 2
+        client.start()
+        assert client.receive(timeout=client_module.SLICE / 2 + 2).timestamp > 0

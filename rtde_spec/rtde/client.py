@@ -21,6 +21,7 @@ import queue
 import select
 import socket
 import struct
+import sys
 import threading
 import time
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
@@ -181,11 +182,7 @@ class RtdeClient(ClientBase):
                 except BlockingIOError:
                     return None  # no data within SLICE
             else:
-                poll = self._poll
-                if poll is None:
-                    poll = self._poll = select.poll()
-                    poll.register(sock, select.POLLIN)
-                if not poll.poll(max(0.0, left) * 1000.0):
+                if not self._readable(sock, max(0.0, left)):
                     return None
                 chunk = sock.recv(max(65536, 2 * self._low_mark))
         except OSError as exc:
@@ -203,6 +200,16 @@ class RtdeClient(ClientBase):
         except Exception as exc:  # a faulty package ends the connection, as in the reader thread
             self._finish(exc)
         return None
+
+    def _readable(self, sock: socket.socket, seconds: float) -> bool:
+        """Whether the socket has something to read within `seconds` (poll, or select without it)."""
+        if not hasattr(select, "poll"):
+            return bool(select.select([sock], [], [], seconds)[0])
+        poll = self._poll
+        if poll is None:
+            poll = self._poll = select.poll()
+            poll.register(sock, select.POLLIN)
+        return bool(poll.poll(seconds * 1000.0))
 
     def __iter__(self) -> Iterator[Any]:
         """Records until the connection closes cleanly (`receive` without its call per record)."""
@@ -373,7 +380,9 @@ class RtdeClient(ClientBase):
 
 def _recv_timeout(sock: socket.socket, seconds: float) -> bool:
     """Make a blocking recv return (EAGAIN) after `seconds` without data; False where the
-    option is missing (reads then poll first)."""
+    option is not a `struct timeval` as here (Windows takes milliseconds): reads then poll first."""
+    if not sys.platform.startswith(("linux", "darwin", "freebsd")):
+        return False
     try:
         sec = int(seconds)
         sock.setsockopt(
