@@ -26,10 +26,15 @@ from rtde_spec.rtde.client_protocol import ClientBase, DataRun, InputRecipe, Rep
 log = logging.getLogger("rtde_spec.client")
 
 
+def _wake(waiter: asyncio.Future[None]) -> None:
+    if not waiter.done():
+        waiter.set_result(None)
+
+
 class AsyncRtdeClient(ClientBase):
     def __init__(self, host: str, port: int = RTDE_PORT, **options: Any) -> None:
         super().__init__(host, port, **options)
-        self._data_event = asyncio.Event()
+        self._waiter: asyncio.Future[None] | None = None  # set when records (or the end) come
         self._replies: asyncio.Queue[Reply | BaseException] = asyncio.Queue()
         self._writer: asyncio.StreamWriter | None = None
         self._task: asyncio.Task[None] | None = None
@@ -74,15 +79,26 @@ class AsyncRtdeClient(ClientBase):
         await self._write(self.core.send_inputs(recipe, {**(values or {}), **named}))
 
     async def receive(self, timeout: float | None = None) -> Any:
-        while not self._data:
+        """The next record; waits on one future with a timer (no task per wait, as wait_for makes)."""
+        data = self._data
+        if data:
+            return data.popleft()
+        loop = asyncio.get_running_loop()
+        wait = timeout or self.timeout
+        deadline = loop.time() + wait
+        while not data:
             if self._closed is not None:
                 raise self._closed
-            self._data_event.clear()
+            if loop.time() >= deadline:
+                raise TimeoutError(f"no data package from {self.where} in time")
+            waiter = self._waiter = loop.create_future()
+            timer = loop.call_at(deadline, _wake, waiter)
             try:
-                await asyncio.wait_for(self._data_event.wait(), timeout or self.timeout)
-            except asyncio.TimeoutError:
-                raise TimeoutError(f"no data package from {self.where} in time") from None
-        return self._data.popleft()
+                await waiter
+            finally:
+                timer.cancel()
+                self._waiter = None
+        return data.popleft()
 
     async def __aiter__(self) -> AsyncIterator[Any]:
         while True:
@@ -156,7 +172,7 @@ class AsyncRtdeClient(ClientBase):
                         self.received += got
                         self.skipped += max(0, len(self._data) + got - self._data.maxlen)  # type: ignore[operator]
                         self._data.extend(event.records)
-                        self._data_event.set()
+                        self._wake()
                     elif isinstance(event, Text):
                         log.log(LOG_LEVELS[min(event.level, 3)], "%s: %s", event.source, event.message)
                     else:
@@ -168,4 +184,9 @@ class AsyncRtdeClient(ClientBase):
         except BaseException as exc:  # kept as raised: a protocol error is not a quiet close
             self._closed = exc
             self._replies.put_nowait(exc)
-            self._data_event.set()
+            self._wake()
+
+    def _wake(self) -> None:
+        """Wake the caller waiting in receive (if any)."""
+        if self._waiter is not None:
+            _wake(self._waiter)

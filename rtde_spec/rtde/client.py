@@ -3,7 +3,11 @@
 The controller drops a client that does not read; so from `connect()` a thread
 reads the socket, hands replies to the caller waiting for them, logs text
 messages, and keeps data packages in a bounded queue (oldest dropped, counted in
-`skipped`). Every blocking call has a timeout; refused and closed connections are
+`skipped`). While the caller keeps asking for records (`receive`, `for record in
+client`), it reads the socket itself and the reader thread steps aside (a lease of
+`LEASE` seconds, renewed by every call): one wake-up per read instead of two and no
+hand-over between threads; when the caller stops asking, the reader thread drains
+again. Every blocking call has a timeout; refused and closed connections are
 errors naming host and port. A connection that ends inside a package, a package that
 does not decode or breaks the protocol, ends iteration with that error (a clean close
 ends it quietly).
@@ -11,13 +15,16 @@ ends it quietly).
 
 from __future__ import annotations
 
+import collections
 import logging
 import queue
 import select
 import socket
+import struct
+import sys
 import threading
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
 from typing import Any
 
 from rtde_spec._generated.constants import RTDE_PORT
@@ -27,6 +34,10 @@ from rtde_spec.rtde.client_protocol import ClientBase, DataRun, InputRecipe, Rep
 
 log = logging.getLogger("rtde_spec.client")
 LOG_LEVELS = (logging.CRITICAL, logging.ERROR, logging.WARNING, logging.INFO)  # by text-message level
+LEASE = 0.2  # s: the reader thread keeps off the socket this long after the caller last read it
+# runs an iterator to its end, keeping nothing
+_exhaust: Callable[[Iterable[Any]], None] = collections.deque(maxlen=0).extend
+SLICE = 0.1  # s: a blocking read returns after this long without data (SO_RCVTIMEO), to look at the time
 
 
 class RtdeClient(ClientBase):
@@ -36,12 +47,16 @@ class RtdeClient(ClientBase):
         super().__init__(host, port, **options)
         self._sock: socket.socket | None = None
         self._replies: queue.Queue[Reply | BaseException] = queue.Queue()
-        self._bell: queue.SimpleQueue[None] = queue.SimpleQueue()  # rung when records wait (C-level wait)
         self._callbacks: list[Callable[[Any], None]] = []
         self._raw_callbacks: list[Callable[[bytes], None]] = []
         self._reader: threading.Thread | None = None
         self._send_lock = threading.Lock()
         self._closing = False  # close() was called: the end is ours, not the controller's
+        self._reading = threading.Lock()  # held by the thread reading the socket (reader or caller)
+        self._lease = 0.0  # monotonic time until which the caller's thread reads the socket
+        self._nudge = threading.Event()  # wakes the reader thread out of a lease (close, a request)
+        self._poll: Any = None  # the caller's poll object (select.poll objects are per thread)
+        self._sliced = False  # SO_RCVTIMEO is SLICE: a read is one recv, no poll before it
 
     # --- connection ---------------------------------------------------------
 
@@ -55,6 +70,7 @@ class RtdeClient(ClientBase):
             ) from None
         self._sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         self._sock.settimeout(None)
+        self._sliced = _recv_timeout(self._sock, SLICE)
         self._reader = threading.Thread(target=self._read_loop, name=f"rtde-reader-{self.where}", daemon=True)
         self._reader.start()
         for version in self._versions_to_try(protocol_version):
@@ -68,6 +84,7 @@ class RtdeClient(ClientBase):
 
     def close(self) -> None:
         self._closing = True
+        self._nudge.set()
         if self._sock is not None:
             try:
                 self._sock.shutdown(socket.SHUT_RDWR)
@@ -119,29 +136,94 @@ class RtdeClient(ClientBase):
                 "data packages go to the on_data/on_raw callbacks, not to receive()",
                 subject=self.where,
             )
-        wait = timeout or self.timeout
-        deadline: float | None = None
-        while True:
+        if self._data:
             try:
                 return self._data.popleft()  # records waiting: no lock, no wait
-            except IndexError:
+            except IndexError:  # another caller took the last one
                 pass
+        return self._wait(timeout or self.timeout)
+
+    def _wait(self, wait: float) -> Any:
+        """The next record once it comes: read here when the socket is free, else wait for the
+        reader thread's read to end (it hands the records over with the lock, then steps aside)."""
+        data = self._data
+        now = time.monotonic()
+        deadline = now + wait
+        while True:
+            if data:
+                try:
+                    return data.popleft()
+                except IndexError:  # another caller took the last one
+                    continue
             if self._closed is not None:
-                self._bell.put(None)  # and the next waiting reader hears it too
                 raise self._gone()
-            deadline = deadline if deadline is not None else time.monotonic() + wait
-            try:
-                self._bell.get(timeout=max(0.0, deadline - time.monotonic()))
-            except queue.Empty:
-                if not self._data and self._closed is None:
-                    raise TimeoutError(f"no data package from {self.where} within {wait} s") from None
+            self._lease = now + LEASE  # the reader thread steps aside after its current read
+            if self._reading.acquire(True, max(0.0, deadline - now)):
+                try:
+                    if self._closed is None and not data:
+                        record = self._read_here(deadline - now)
+                        if record is not None:  # nothing older waits: the queue was empty
+                            return record
+                finally:
+                    self._reading.release()
+            now = time.monotonic()
+            if not data and self._closed is None and now >= deadline:
+                raise TimeoutError(f"no data package from {self.where} within {wait} s")
+
+    def _read_here(self, left: float) -> Any:
+        """One read of the socket in the caller's thread (holding `_reading`), up to about `left` s:
+        the record when the read was exactly one data package; else its events are handled."""
+        sock = self._sock
+        assert sock is not None
+        try:
+            if self._sliced and left >= SLICE:
+                try:
+                    chunk = sock.recv(max(65536, 2 * self._low_mark))  # one call: SO_RCVTIMEO bounds it
+                except BlockingIOError:
+                    return None  # no data within SLICE
+            else:
+                if not self._readable(sock, max(0.0, left)):
+                    return None
+                chunk = sock.recv(max(65536, 2 * self._low_mark))
+        except OSError as exc:
+            self._finish(self._ended(f"connection lost: {exc.strerror or exc}"))
+            return None
+        if not chunk:
+            self._finish(self._ended("the controller closed the connection"))
+            return None
+        try:
+            record = self.core.one_record(chunk)
+            if record is not None:
+                self.received += 1
+                return record
+            self._handle(chunk)
+        except Exception as exc:  # a faulty package ends the connection, as in the reader thread
+            self._finish(exc)
+        return None
+
+    def _readable(self, sock: socket.socket, seconds: float) -> bool:
+        """Whether the socket has something to read within `seconds` (poll, or select without it)."""
+        if not hasattr(select, "poll"):
+            return bool(select.select([sock], [], [], seconds)[0])
+        poll = self._poll
+        if poll is None:
+            poll = self._poll = select.poll()
+            poll.register(sock, select.POLLIN)
+        return bool(poll.poll(seconds * 1000.0))
 
     def __iter__(self) -> Iterator[Any]:
+        """Records until the connection closes cleanly (`receive` without its call per record)."""
+        data = self._data
         while True:
+            if self._callbacks or self._raw_callbacks:
+                self.receive()  # raises: the records go to the callbacks
             try:
-                yield self.receive()
+                record = data.popleft() if data else self._wait(self.timeout)
+            except IndexError:  # another caller took the last one
+                continue
             except RtdeConnectionError:
                 return
+            yield record
 
     def on_data(self, callback: Callable[[Any], None]) -> None:
         """Call `callback(record)` in the reader thread for every data package (keep it short).
@@ -178,6 +260,8 @@ class RtdeClient(ClientBase):
             raise self._closed
         if self._low_mark > 1:
             self._wake_after(self._sock, 1)  # the reply must not wait for a batch
+        self._lease = 0.0  # the reader thread reads the reply (the caller waits for it, not records)
+        self._nudge.set()
         self._write(data)
         deadline = time.monotonic() + self.timeout
         while True:
@@ -198,19 +282,37 @@ class RtdeClient(ClientBase):
         if poller is not None:
             poller.register(sock, select.POLLIN)
         try:
-            while True:
-                try:
-                    if self._low_mark > 1 and poller is not None:
-                        # a blocked recv keeps the low mark it started with; poll sees it lowered
-                        poller.poll()
-                    chunk = sock.recv(max(65536, 2 * self._low_mark))
-                except OSError as exc:
-                    self._finish(self._ended(f"connection lost: {exc.strerror or exc}"))
-                    return
-                if not chunk:
-                    self._finish(self._ended("the controller closed the connection"))
-                    return
-                self._handle(chunk)
+            while self._closed is None:
+                left = self._lease - time.monotonic()
+                if left > 0 and not self._closing:  # the caller reads the socket: keep off till it stops
+                    self._nudge.wait(left)
+                    self._nudge.clear()
+                    continue
+                with self._reading:
+                    if self._closed is not None or self._lease > time.monotonic():
+                        continue
+                    try:
+                        if self._low_mark > 1 and poller is not None:
+                            # a blocked recv keeps the low mark it started with; poll sees it lowered
+                            poller.poll()
+                        chunk = sock.recv(max(65536, 2 * self._low_mark))
+                    except BlockingIOError:
+                        continue  # SLICE without data
+                    except OSError as exc:
+                        self._finish(self._ended(f"connection lost: {exc.strerror or exc}"))
+                        return
+                    if not chunk:
+                        self._finish(self._ended("the controller closed the connection"))
+                        return
+                    record = self.core.one_record(chunk) if self._callbacks else None
+                    if record is None:
+                        self._handle(chunk)
+                        continue
+                    self.received += 1  # one package, to the callbacks: no event, no list
+                    for raw in self._raw_callbacks:
+                        raw(chunk)
+                    for callback in self._callbacks:
+                        callback(record)
         except BaseException as exc:
             self._finish(exc)
 
@@ -243,10 +345,10 @@ class RtdeClient(ClientBase):
 
     def _deliver(self, runs: list[DataRun]) -> None:
         """Hand over the data packages of one read: to the callbacks if there are any, else
-        to the queue (the oldest dropped and counted when full), ringing for a waiting reader.
+        to the queue (the oldest dropped and counted when full).
 
-        The deque is safe between one producer and consumers without a lock; records go in
-        before the ring, so whoever takes a ring finds them.
+        The deque is safe between one producer and consumers without a lock; the records are
+        in it before `_reading` is released, so a caller waiting for that lock finds them.
         """
         records = runs[0].records if len(runs) == 1 else [r for run in runs for r in run.records]
         self.received += runs[0].count if len(runs) == 1 else sum(run.count for run in runs)
@@ -256,15 +358,12 @@ class RtdeClient(ClientBase):
                     for package in run.packages():
                         raw(package)
             for callback in self._callbacks:
-                for record in records:
-                    callback(record)
+                _exhaust(map(callback, records))  # the loop in C: a batch of 50 is 50 calls, no steps
             return
         room = self._data.maxlen - len(self._data)  # type: ignore[operator]
         if len(records) > room:
             self.skipped += len(records) - room  # the oldest go; the socket keeps being drained
         self._data.extend(records)
-        if not self._bell.qsize():  # one ring is enough: the woken reader finds all in the queue
-            self._bell.put(None)
 
     def _ended(self, cause: str) -> BaseException:
         if self._closing:
@@ -274,10 +373,24 @@ class RtdeClient(ClientBase):
     def _finish(self, exc: BaseException) -> None:
         self._closed = exc
         self._replies.put(exc)
-        self._bell.put(None)
 
     def _gone(self) -> BaseException:
         return self._closed or RtdeConnectionError("connection closed", subject=self.where)
+
+
+def _recv_timeout(sock: socket.socket, seconds: float) -> bool:
+    """Make a blocking recv return (EAGAIN) after `seconds` without data; False where the
+    option is not a `struct timeval` as here (Windows takes milliseconds): reads then poll first."""
+    if not sys.platform.startswith(("linux", "darwin", "freebsd")):
+        return False
+    try:
+        sec = int(seconds)
+        sock.setsockopt(
+            socket.SOL_SOCKET, socket.SO_RCVTIMEO, struct.pack("@ll", sec, int((seconds - sec) * 1e6))
+        )
+    except (OSError, AttributeError, struct.error):
+        return False
+    return True
 
 
 __all__ = ["InputRecipe", "RtdeClient", "RtdeConnectionError"]

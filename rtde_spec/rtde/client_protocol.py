@@ -211,6 +211,15 @@ class ClientProtocol:
             raise
         return events
 
+    def one_record(self, data: bytes) -> Any:
+        """The record of a read that is exactly one data package of the output recipe (what a
+        caller reading at one package per wake-up gets), framed; None for any other read, which
+        then goes to `receive`. The shortest path from a read to a record: no event, no list."""
+        run = self._run
+        if run is not None and len(data) == run[0] and self.want_records and self.framer.take_run(data, *run):
+            return self.output.decode_record(data, PAYLOAD_OFFSET)  # type: ignore[union-attr]
+        return None
+
     def _events(self, packages: list[tuple[int, Any]], events: list[Event]) -> None:
         """Append the event of each framed package (a fault raises, `events` keeps those before).
 
