@@ -26,12 +26,15 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     inner.required = True
     imp = inner.add_parser(
         "import",
-        help="read an RTDE guide (text, Markdown, HTML) or the primary interface document; report changes",
+        help="read an RTDE guide, the primary or real-time interface document (text, Markdown, HTML, "
+        ".xlsx); report changes",
         **describe(
-            "Compares a published document (an RTDE guide as text, Markdown or HTML, or the primary "
-            "interface document) with the spec: added, removed, type, direction, availability per product "
-            "line, register range and description changes, per field. --write edits spec/ in place; "
-            "-o writes the added fields as an --extra-fields overlay.",
+            "Compares a published document (an RTDE guide, the primary/secondary or the real-time "
+            "interface document, as rendered text, Markdown, HTML or UR's client-interface workbook) "
+            "with the spec: added, removed, type, direction, availability per product line, register "
+            "range and description changes, per field; real-time tables per edition (order, types, "
+            "sizes, the message length). --write edits spec/ in place; -o writes the added fields as "
+            "an --extra-fields overlay.",
             "rtde-spec spec import rtde-guide-5.30.txt",
             "rtde-spec spec import rtde-guide-5.30.txt -o new_fields.yaml",
             "rtde-spec spec import rtde-guide-5.30.txt --json --check",
@@ -129,6 +132,32 @@ def _table_record(t: Any, spec: Any, doc: Any) -> dict[str, Any]:
     }
 
 
+def _realtime_record(t: Any, doc: Any, args: argparse.Namespace) -> dict[str, Any]:
+    """Per real-time table: rows read, its TOTAL, and what the spec sends at that edition."""
+    spec_fields: int | None = None
+    spec_bytes: int | None = None
+    if t.edition and t.product_line:
+        from rtde_spec.importers.realtime_diff import plan_for
+        from rtde_spec.metamodel.catalogue import Catalogue
+        from rtde_spec.metamodel.realtime import PRIMITIVES, load_realtime, realtime_spec
+
+        spec = args.loaded_spec
+        table = load_realtime(args.spec_dir) if args.spec_dir is not None else realtime_spec()
+        fields = plan_for(table, Catalogue(spec), t.product_line, t.edition)
+        spec_fields = len(fields)
+        spec_bytes = 4 + sum(PRIMITIVES[f.type][1] * (f.count or 1) for f in fields)
+    return {
+        "title": t.title,
+        "line": t.product_line,
+        "edition": t.edition,
+        "rows": len(t.rows),
+        "total_bytes": t.total[1] if t.total else None,
+        "spec_fields": spec_fields,
+        "spec_bytes": spec_bytes,
+        "skipped": [{"line": n, "cell": c} for n, c in t.skipped],
+    }
+
+
 def run(args: argparse.Namespace) -> int:
     from rtde_spec.importers import read_document
     from rtde_spec.importers.diff import diff_fields
@@ -156,10 +185,23 @@ def run(args: argparse.Namespace) -> int:
         )
     else:
         spec = load_spec(args.spec_dir)
+    args.loaded_spec = spec
     doc = read_document(
         args.document, spec, source=args.source, line=args.line, fmt=args.form, edition=args.edition
     )
-    changes = diff_primary(doc, spec) if doc.interface == "primary" else diff_fields(doc, spec)
+    by_interface: dict[str, list[Change]] = {}
+    if doc.fields:
+        by_interface["rtde"] = diff_fields(doc, spec)
+    if doc.members:
+        by_interface["primary"] = diff_primary(doc, spec)
+    if doc.realtime:
+        from rtde_spec.importers.realtime_diff import diff_realtime
+        from rtde_spec.metamodel.catalogue import Catalogue
+        from rtde_spec.metamodel.realtime import load_realtime, realtime_spec
+
+        realtime = load_realtime(args.spec_dir) if args.spec_dir is not None else realtime_spec()
+        by_interface["realtime"] = diff_realtime(doc, realtime, Catalogue(spec))
+    changes = [c for found in by_interface.values() for c in found]
     new = [c for c in changes if c.known is None]
     known = [c for c in changes if c.known is not None]
     if args.json:
@@ -169,7 +211,9 @@ def run(args: argparse.Namespace) -> int:
             "source": doc.source,
             "line": doc.line,
             "edition": doc.edition,
+            "interfaces": doc.interfaces,
             "tables": [_table_record(t, spec, doc) for t in doc.tables],
+            "realtime": [_realtime_record(t, doc, args) for t in doc.realtime],
             "unlisted": doc.unlisted,
             "remarks": doc.remarks,
             "added": [c.record() for c in new if c.kind == "added"],
@@ -195,7 +239,23 @@ def run(args: argparse.Namespace) -> int:
             )
             for line, cell in t.skipped:
                 print(f"    skipped line {line}: {cell!r} (a placeholder, not a field)")
+        for rt in doc.realtime:
+            r = _realtime_record(rt, doc, args)
+            total = f", TOTAL {r['total_bytes']} bytes" if r["total_bytes"] is not None else ""
+            spec_part = (
+                f"the spec sends {r['spec_fields']} fields, {r['spec_bytes']} bytes at {rt.edition}"
+                if r["spec_fields"] is not None
+                else "not compared"
+            )
+            scope = " ".join(filter(None, [rt.product_line, rt.edition])) or "no product line"
+            print(
+                f"  real-time table {rt.title!r} ({scope}): "
+                f"{len(rt.rows)} rows read{total}; {spec_part}"
+                + (f"; {len(rt.skipped)} placeholder rows skipped" if rt.skipped else "")
+            )
         for direction, names in doc.unlisted.items():
+            if direction.startswith("realtime"):
+                continue  # said in the table's remark
             print(
                 f"  {len(names)} spec {direction}s not listed: the {direction} table stops early "
                 "(a placeholder row), so they are not reported as removed"
@@ -220,6 +280,21 @@ def run(args: argparse.Namespace) -> int:
         from rtde_spec.importers.write import write_changes
 
         assert args.spec_dir is not None  # --write without a spec folder was refused above
+        if "realtime" in by_interface:
+            held = [c for c in by_interface.pop("realtime") if c.known is None]
+            if held:
+                print(
+                    f"not written: {len(held)} real-time changes; spec/realtime/interface.yaml is "
+                    "edited by hand (each field's since, and `lengths` with the document as source)",
+                    file=sys.stderr,
+                )
+        if len(by_interface) > 1:
+            raise UsageError(
+                f"the document holds tables of {' and '.join(by_interface)}; --write applies one "
+                "interface at a time: import a copy holding only one"
+            )
+        changes = [c for found in by_interface.values() for c in found]
+        new = [c for c in changes if c.known is None]
         result = write_changes(changes, doc, spec, args.spec_dir, allow_removals=args.allow_removals)
         for change, why in result.held:
             print(f"not written: {change.field} ({change.where}) removed: {why}", file=sys.stderr)

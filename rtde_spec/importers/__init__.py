@@ -9,8 +9,16 @@ import re
 from pathlib import Path
 
 from rtde_spec.errors import UsageError
-from rtde_spec.importers import cb3_text, eseries_text, html_doc, markdown, rendered_text
+from rtde_spec.importers import (
+    cb3_text,
+    eseries_text,
+    html_doc,
+    markdown,
+    realtime_tables,
+    rendered_text,
+)
 from rtde_spec.importers.cells import Lines, parse_name
+from rtde_spec.importers.edition import newest, versions_named
 from rtde_spec.importers.model import Document
 from rtde_spec.importers.rows import field_rows, main_line
 from rtde_spec.importers.tables import MAX_BYTES
@@ -21,13 +29,20 @@ FORMATS = ("cb3-text", "e-series-text", "rendered-text", "markdown", "html", "xl
 #: what a document must hold to be read, for the error when none is found
 LOOKED_FOR = (
     "an RTDE field table (header cells Name, Type, Comment[, Introduced in version] under a heading "
-    "naming inputs or outputs)"
+    "naming inputs or outputs), a real-time interface table (Meaning, Type, Number of values, "
+    "Size in bytes) or the primary interface's sub-package tables"
 )
 _DEFAULT_SOURCE = {
     "cb3-text": "cb3-guide",
     "e-series-text": "e-series-guide",
     "primary-text": "primary-guide",
 }
+#: the real-time table's header as paragraphs (rendered) or cells ending in `|`
+_REALTIME_HEAD = re.compile(
+    r"^[ \t]*Meaning[ \t]*\|?[ \t]*\n(?:[ \t]*\n)*[ \t]*Type[ \t]*\|?[ \t]*\n(?:[ \t]*\n)*"
+    r"[ \t]*Number of values",
+    re.M | re.I,
+)
 
 
 def detect_format(text: str) -> str:
@@ -35,14 +50,16 @@ def detect_format(text: str) -> str:
     head = text[:4096].lower()
     if "<table" in text.lower() or head.lstrip().startswith(("<!doctype html", "<html")):
         return "html"
+    if re.search(r"^\s*\|\s*(Name|Meaning|Field)\s*\|", text, re.MULTILINE):
+        return "markdown"
     if "ROBOT_STATE_PACKAGE_TYPE" in text or "Sub Package of Robot State" in text:
         return "primary-text"
     from rtde_spec.importers.primary_listing import SIGN
 
     if SIGN.search(text):
         return "primary-text"
-    if re.search(r"^\s*\|\s*Name\s*\|", text, re.MULTILINE):
-        return "markdown"
+    if _REALTIME_HEAD.search(text) or realtime_tables.SPACED_HEAD.search(text):
+        return "rendered-text"
     if re.search(r"^\s*Name\s*\|\s*$", text, re.MULTILINE):
         return "e-series-text"
     if re.search(r"^\s*Name\tType\t", text, re.MULTILINE):
@@ -113,13 +130,15 @@ def read_document(
             from rtde_spec.importers.primary_listing import read_listing
 
             doc.members = read_listing(text)
-        doc.line = line or "e-series"
-        doc.edition = edition
         if not doc.members:
             raise UsageError(
                 f"{path}: no message table read; looked for the primary interface's sub-package "
-                "tables (a title naming the package type, then Name/Type/Comment rows)"
+                "tables (a title naming the package type, then Field/Description[/Introduced in "
+                "version] rows, or the C-like listing: int packageSize, packageType = NAME = n)"
             )
+        named = versions_named(text, lines)
+        doc.line = line or _text_line(named) or "e-series"
+        doc.edition = str(Version.parse(edition)) if edition else named.get(doc.line)
         return doc
     if kind == "cb3-text":
         tables = cb3_text.read_tables(text)
@@ -135,21 +154,91 @@ def read_document(
 
         reader = rendered_text if kind == "rendered-text" else eseries_text
         tables = [eseries_text.split_rows(t, starts_row) for t in reader.read_tables(text)]
+        doc.realtime = realtime_tables.read_paragraphs(text, lines) or realtime_tables.read_spaced(
+            text, lines
+        )
     elif kind == "markdown":
         tables = markdown.read_tables(text)
     else:
         tables = html_doc.read_tables(text)
-    return finish(doc, tables, lines, line, edition, "cb3" if kind == "cb3-text" else "e-series")
+    if kind in ("markdown", "html", "cb3-text"):
+        doc.realtime = realtime_tables.tables_in(tables, lines)
+        doc.members = _primary_tables(tables, lines)
+        if doc.members and source is None:
+            doc.source = "primary-guide"
+    if doc.realtime and source is None:
+        doc.source = "realtime-guide"
+    default = "cb3" if kind == "cb3-text" else "e-series"
+    return finish(doc, tables, lines, line, edition, default, text, spec)
+
+
+def _primary_tables(tables: list, lines: Lines) -> list:
+    """The primary interface's tables of an HTML or Markdown copy (Field | Description[ |
+    Introduced in version]), read as the rendered text form is: a title, then a cell per line."""
+    from rtde_spec.importers.primary_text import read_members
+
+    found = [t for t in tables if [h.strip().lower() for h in t.header[:2]] == ["field", "description"]]
+    if not found:
+        return []
+    parts = []
+    for t in found:
+        cells = [c.strip() for _, row in t.rows for c in row if c.strip()]
+        parts.append("\n".join([t.heading or "table", *[h.strip() for h in t.header if h.strip()], *cells]))
+    return read_members("\n".join(parts), lines)
+
+
+def _text_line(named: dict[str, str]) -> str | None:
+    """The product line a text names software versions of, when it names only one."""
+    return next(iter(named)) if len(named) == 1 else None
+
+
+def listed_edition(doc: Document, spec: Spec | None) -> str | None:
+    """The newest first version (on the document's line) of the spec fields the document lists:
+    a copy listing actual_TCP_acceleration (5.23.0) with a blank cell is at least 5.23.0."""
+    if spec is None:
+        return None
+    from rtde_spec.importers.scope import first_versions
+
+    entries = {
+        (e.name, d): e
+        for d, es in (("input", spec.fields.inputs), ("output", spec.fields.outputs))
+        for e in es
+    }
+    found = [
+        v
+        for f in doc.fields
+        if (entry := entries.get((f.name, f.direction))) is not None
+        for v in first_versions(entry, doc.line, spec)[:1]
+    ]
+    return newest(*found)
 
 
 def finish(
-    doc: Document, tables: list, lines: Lines, line: str | None, edition: str | None, default: str
+    doc: Document,
+    tables: list,
+    lines: Lines,
+    line: str | None,
+    edition: str | None,
+    default: str,
+    text: str = "",
+    spec: Spec | None = None,
 ) -> Document:
-    """Fields of the tables into `doc`, its line and edition; exit 2 when no field table is read."""
+    """Fields of the tables into `doc`, its line and edition; exit 2 when no table of any
+    interface (RTDE fields, real-time rows, primary sub-packages) is read."""
     doc.fields = field_rows(tables, lines, doc.tables)
-    if not doc.fields:
+    if not doc.fields and not doc.realtime and not doc.members:
         seen = f" ({len(tables)} other tables seen)" if tables else ""
         raise UsageError(f"{doc.path} ({doc.format}): no field read{seen}; looked for {LOOKED_FOR}")
-    doc.line = line or main_line(doc.fields, default)
-    doc.edition = str(Version.parse(edition)) if edition else edition_of(doc)
+    named = versions_named(text, lines)
+    if doc.fields:
+        doc.line = line or main_line(doc.fields, _text_line(named) or default)
+    elif line or not doc.line:
+        realtime = next((t.product_line for t in doc.realtime if t.product_line), None)
+        doc.line = line or realtime or _text_line(named) or default
+    if edition:
+        doc.edition = str(Version.parse(edition))
+    elif doc.fields:
+        doc.edition = newest(edition_of(doc), named.get(doc.line), listed_edition(doc, spec))
+    elif not doc.edition:
+        doc.edition = named.get(doc.line)
     return doc

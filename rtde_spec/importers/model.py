@@ -46,6 +46,7 @@ class DocLayoutField:
     group: str = ""  # the repeated or conditional group the row belongs to
     versions: dict[str, str] = field(default_factory=dict)
     version_text: str = ""
+    block: int = 0  # which "for each joint:" block of the member the row is in (0: none)
 
 
 @dataclass
@@ -58,6 +59,7 @@ class DocMember:
     line: int
     fields: list[DocLayoutField] = field(default_factory=list)
     versions: dict[str, str] = field(default_factory=dict)  # "introduced in" of the header rows
+    notes: list[str] = field(default_factory=list)  # what the reader could not tell for sure
 
 
 @dataclass
@@ -74,11 +76,39 @@ class TableReport:
 
 
 @dataclass
+class DocRealtimeRow:
+    """One row of a real-time interface table: Meaning | Type | Number of values | Size in bytes."""
+
+    name: str  # as written ("q target"); "" for the rows UR leaves unnamed (reserved)
+    key: str  # the name as the spec spells it (q_target); "" when unnamed
+    type: str  # as written, lower case (double, integer)
+    count: int
+    size: int  # bytes, as the document gives them
+    doc: str
+    line: int
+    column: str = ""  # the Gnuplot column as written ("2 - 7")
+
+
+@dataclass
+class DocRealtimeTable:
+    """One edition's real-time message table (RealTime 5.10, the workbook's RealTime_3.2 sheet)."""
+
+    title: str
+    line: int
+    edition: str | None  # the version its title names (the table is the message of that version)
+    product_line: str | None  # the line of that version; None: a version no line covers (1.x)
+    header: list[DocRealtimeRow] = field(default_factory=list)  # Message Size
+    rows: list[DocRealtimeRow] = field(default_factory=list)
+    total: tuple[int, int] | None = None  # (values, bytes) of its TOTAL row
+    skipped: list[tuple[int, str]] = field(default_factory=list)  # rows that are no field
+
+
+@dataclass
 class Document:
     """A document as read: its format, the product line it speaks for, and its tables."""
 
     path: str
-    format: str  # cb3-text | e-series-text | markdown | html | primary-text
+    format: str  # cb3-text | e-series-text | rendered-text | markdown | html | xlsx | primary-text
     source: str  # the id recorded in `sources` (cb3-guide, e-series-guide, ...)
     line: str = ""  # the product line whose versions the document lists first
     fields: list[DocField] = field(default_factory=list)
@@ -88,7 +118,16 @@ class Document:
     #: spec fields a table that stops early (a placeholder row) leaves out: direction -> names
     unlisted: dict[str, list[str]] = field(default_factory=dict)
     remarks: list[str] = field(default_factory=list)  # what was read but is no change (blank/CB3-only cells)
+    realtime: list[DocRealtimeTable] = field(default_factory=list)  # real-time interface tables
+
+    @property
+    def interfaces(self) -> list[str]:
+        """The interfaces the document has tables of: rtde, primary, realtime."""
+        found = [("rtde", self.fields), ("primary", self.members), ("realtime", self.realtime)]
+        return [name for name, what in found if what]
 
     @property
     def interface(self) -> str:
-        return "primary" if self.format == "primary-text" else "rtde"
+        """The one interface of the document (the first read when it holds several)."""
+        found = self.interfaces
+        return found[0] if found else ("primary" if self.format == "primary-text" else "rtde")

@@ -13,6 +13,7 @@ from rtde_spec.importers.cells import words
 from rtde_spec.importers.changes import Availability, Change, mark_known, resolve
 from rtde_spec.importers.model import DocLayoutField, DocMember, Document
 from rtde_spec.importers.primary_text import key
+from rtde_spec.importers.scope import first_on as first_versions_of
 from rtde_spec.metamodel.schema import FamilySpec, LayoutField, MemberSpec, Spec
 from rtde_spec.metamodel.versions import Version
 
@@ -76,6 +77,50 @@ def _availability(
     return ours, theirs
 
 
+def _first_on(since: dict[str, str] | None, doc: Document, spec: Spec) -> str | None:
+    """The first version of the document's line that sends a field with this `since`."""
+    return first_versions_of(since, doc.line, spec)
+
+
+def _unversioned(
+    named: dict[str, str], since: dict[str, str] | None, doc: Document, spec: Spec
+) -> tuple[Availability, Availability] | None:
+    """A row without a version (the docs site's listing, the workbook): it says only that the
+    edition sends it. (spec, document) availability when the spec's first version is newer than
+    the edition; None when they agree or the document names no edition."""
+    if named or doc.edition is None or _before_line(doc, spec):
+        return None
+    first = _first_on(since, doc, spec)
+    if first is not None and Version.parse(first) <= Version.parse(doc.edition):
+        return None
+    return {doc.line: first}, {doc.line: f"<= {doc.edition}"}
+
+
+def _before_line(doc: Document, spec: Spec) -> bool:
+    """An edition older than the spec's product line (CB3 3.2 where the line starts at 3.3.0):
+    the spec says nothing of availability there; layouts are still compared."""
+    line = next((p for p in spec.product_lines.product_lines if p.id == doc.line), None)
+    if line is None or doc.edition is None:
+        return False
+    if Version.parse(doc.edition) >= Version.parse(line.first_version):
+        return False
+    note = (
+        f"edition {doc.edition} is older than the spec's {doc.line} line (from {line.first_version}): "
+        "availability not compared, layouts are"
+    )
+    if note not in doc.remarks:
+        doc.remarks.append(note)
+    return True
+
+
+def _newer_than_edition(since: dict[str, str] | None, doc: Document, spec: Spec) -> bool:
+    """A spec field the document's edition cannot list: first sent by a later version of its line."""
+    if doc.edition is None:
+        return False
+    first = _first_on(since, doc, spec)
+    return first is not None and Version.parse(first) > Version.parse(doc.edition)
+
+
 def _find(spec: Spec, member: DocMember) -> tuple[FamilySpec, MemberSpec | None] | None:
     for fam in spec.primary.families:
         if fam.type == member.family_type:
@@ -95,7 +140,11 @@ def _member_changes(
 ) -> list[Change]:
     where = f"{fam.name}/{spec_member.name}"
     out: list[Change] = []
-    ours, theirs = _availability(member.versions, spec_member.since, doc, spec)
+    unversioned = _unversioned(member.versions, spec_member.since, doc, spec)
+    if unversioned is not None or (not member.versions and (doc.edition is None or _before_line(doc, spec))):
+        ours, theirs = unversioned or ({}, {})
+    else:
+        ours, theirs = _availability(member.versions, spec_member.since, doc, spec)
     if ours != theirs:
         out.append(
             mark_known(
@@ -116,10 +165,21 @@ def _member_changes(
         used.add(match)
         leaf = leaves[match]
         found: list[Change] = []
-        if leaf.type != _doc_type(row) and row.type:
+        alone = row.block and sum(r.block == row.block for r in member.fields) == 1
+        if alone and leaf.type == f"{row.type}[{row.group.split()[-1]}]":
+            pass  # "for each joint: double DHa" alone in its block is the spec's double[6]
+        elif not row.group and " in repeat " in leaf.type and leaf.type.split(" in ")[0] == row.type:
+            note = f"line {row.line}: {where} {row.name}: listed once, without the spec's group ({leaf.type})"
+            doc.remarks.append(note)  # an edition with no "repeated for each joint" line
+        elif leaf.type != _doc_type(row) and row.type:
             found.append(Change("changed", "type", leaf.path, where, leaf.type, _doc_type(row), row.line))
         since = leaf.field.since or spec_member.since
-        ours, theirs = _availability(row.versions or member.versions, since, doc, spec)
+        named = row.versions or member.versions
+        unversioned = _unversioned(named, since, doc, spec)
+        if unversioned is not None or (not named and (doc.edition is None or _before_line(doc, spec))):
+            ours, theirs = unversioned or ({}, {})
+        else:
+            ours, theirs = _availability(named, since, doc, spec)
         if ours != theirs:
             found.append(Change("changed", "availability", leaf.path, where, ours, theirs, row.line))
         if row.doc and _describe_changed(row, leaf.field):
@@ -130,7 +190,7 @@ def _member_changes(
             change.extra["row"] = row
             out.append(mark_known(change, leaf.field.conflicts, doc.source))
     for i, leaf in enumerate(leaves):
-        if i not in used:
+        if i not in used and not _newer_than_edition(leaf.field.since or spec_member.since, doc, spec):
             out.append(
                 mark_known(
                     Change("removed", "removed", leaf.path, where, leaf.type, None, None),
@@ -145,6 +205,7 @@ def diff_primary(doc: Document, spec: Spec) -> list[Change]:
     """Every difference between the document's message tables and spec/primary, known ones marked."""
     out: list[Change] = []
     for member in doc.members:
+        doc.remarks += [n for n in member.notes if n not in doc.remarks]
         found = _find(spec, member)
         if found is None or found[1] is None:
             family = found[0].name if found else f"type {member.family_type}"

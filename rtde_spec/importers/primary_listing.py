@@ -8,10 +8,13 @@
     ...
     end
 
-A sub-package starts at `int packageSize`; its title is the line before. "for each joint:"
-opens a group repeated 6 times, closed by "end"; "(if X is installed, also the following:"
-opens a group present only when X is, closed by a line ending in ")". These pages have no
-version column.
+A sub-package starts at `int packageSize`, a message at `int messageSize` (its type from
+`messageType = NAME = n` and `robotMessageType = NAME = n`, its timestamp and source the
+family's prefix); the title is the line before. "for each joint:" opens a group repeated
+6 times, closed by "end" or, in the workbook's sheets (no "end"), by the first row no
+longer indented; "(if X is installed, also the following:" opens a group present only
+when X is, closed by a line ending in ")". `char array x` is a string; `(*)` marks rows
+present only in some cases (read as rows). These pages have no version column.
 """
 
 from __future__ import annotations
@@ -23,7 +26,7 @@ from rtde_spec.importers.primary_text import key
 
 _C_TYPES = {
     "unsigned char": "uint8",
-    "char": "int8",
+    "char": "uint8",  # the document's byte, as the primary text form reads it
     "bool": "bool",
     "short": "int16",
     "unsigned short": "uint16",
@@ -48,45 +51,97 @@ def _prim(text: str) -> str:
     return _C_TYPES.get(text, text.removesuffix("_t"))
 
 
+def _indent(raw: str) -> int:
+    return len(raw) - len(raw.lstrip())
+
+
 def read_listing(text: str) -> list[DocMember]:
-    """Every sub-package listed in the C-like form, with its rows and groups."""
-    lines = [(n, raw.strip()) for n, raw in enumerate(text.splitlines(), start=1) if raw.strip()]
+    """Every sub-package and message listed in the C-like form, with its rows and groups."""
+    lines = [
+        (n, raw.strip(), _indent(raw.replace("\u00a0", " ")))
+        for n, raw in enumerate(text.splitlines(), start=1)
+        if raw.strip()
+    ]
     members: list[DocMember] = []
     member: DocMember | None = None
     family: int | None = None
     group = ""
-    for i, (number, line) in enumerate(lines):
+    block_indent: int | None = None  # the indent of a "for each joint:" block's first row
+    in_message = False  # a message (messageSize): its rows start after robotMessageType
+    block = 0  # counts "for each joint:" blocks: one row alone in one is an array of 6
+    opened = 0  # the line of the open block's "for each joint:"
+
+    def unclosed(at: int) -> None:
+        """A block left open by neither "end" nor an indent: its extent is a guess; say so."""
+        if member is not None and group == "repeat 6" and block_indent is None and opened:
+            member.notes.append(
+                f"line {opened}: 'for each joint:' has no 'end' and its rows no indent: read as "
+                f"repeated up to line {at}; where the block ends cannot be told"
+            )
+
+    for i, (number, text_line, indent) in enumerate(lines):
+        line = re.sub(r"^\(\*\)\s*", "", text_line)  # (*): present only in some cases
+        line = re.sub(r"\bchar array (\w+)", r"char \1[]", line)
+        line = re.sub(r"\s*\(.*\)\s*$", "", line) if ROW.match(line.split("(")[0].strip()) else line
+        closes = line.endswith(")") and "(" not in line  # "short euromapCurrent)" ends an if-group
+        if closes:
+            line = line[:-1].rstrip()
         m = ROW.match(line)
+        title = lines[i - 1][1] if i else "message"
+        if m is not None and m.group(2) and key(m.group(2)) in ("messagesize", "packagesize"):
+            unclosed(lines[i - 1][0] if i else number)
+        if m is not None and m.group(2) and key(m.group(2)) == "messagesize":
+            member = DocMember(title, None, None, lines[i - 1][0] if i else number)
+            members.append(member)
+            family, group, block_indent, in_message = None, "", None, True
+            continue
         if m is not None and m.group(2) and key(m.group(2)) == "packagesize":
-            title = lines[i - 1][1] if i else "sub-package"
             member = DocMember(title, family or 16, None, lines[i - 1][0] if i else number)
             members.append(member)
-            group = ""
+            group, block_indent, in_message = "", None, False
             continue
         if m is not None and m.group(5) is not None:
             name = key(m.group(2) or "")
             if name == "messagetype":
                 family = int(m.group(5))
+                if member is not None and in_message:
+                    member.family_type = family
             elif member is not None:
                 member.member_type = int(m.group(5))
+                in_message = False  # the family's prefix (timestamp, source) is behind
             continue
-        if member is None:
+        if member is None or in_message:
             continue
+        if group == "repeat 6" and block_indent is not None and indent < block_indent and line != "end":
+            group, block_indent = "", None  # the workbook's block ends where the indent does
         if _FOR_EACH.match(line):
-            group = "repeat 6"
+            unclosed(number)
+            group, block_indent = "repeat 6", None
+            block += 1
+            opened = number
         elif line.lower() == "end":
-            group = ""
+            group, block_indent = "", None
         elif (w := _IF.match(line)) is not None:
             group = f"when {key(w.group(1))}installed"
         elif m is not None and m.group(2):
+            if group == "repeat 6" and block_indent is None:
+                block_indent = indent if indent > 0 else None
             type_ = _prim(m.group(1))
             if m.group(3) is not None:
                 type_ = (
                     "string" if m.group(1) == "char" else f"{type_}[{m.group(3)}]" if m.group(3) else "bytes"
                 )
-            member.fields.append(DocLayoutField(m.group(2), key(m.group(2)), type_, "", number, group))
-            if line.rstrip(";").endswith(")") or line.endswith(")"):
+            prev = member.fields[-1] if member.fields else None
+            k = key(m.group(2))
+            if type_ == "string" and prev is not None and prev.key in (k + "size", k + "length"):
+                member.fields.pop()  # projectNameSize, then char array projectName: one field
+                type_ = f"string({prev.type})"
+            row = DocLayoutField(m.group(2), k, type_, "", number, group)
+            row.block = block if group == "repeat 6" else 0
+            member.fields.append(row)
+            if closes:
                 group = ""
-        elif line.endswith(")") and group.startswith("when"):
+        elif closes and group.startswith("when"):
             group = ""
+    unclosed(lines[-1][0] if lines else 0)
     return [m for m in members if m.member_type is not None]

@@ -35,7 +35,19 @@ def _prim(type_text: str) -> str:
     return type_text.removesuffix("_t")
 
 
-_HEAD = ["Field", "Description", "Introduced in version"]
+_HEAD = ["field", "description"]
+_VERSION_HEAD = re.compile(r"(introduced in )?version|since", re.I)
+_FOR_EACH = re.compile(r"^for each joint\s*:?$", re.I)
+
+
+def _head_size(numbered: list[tuple[int, str]], at: int) -> int:
+    """Lines of the table header starting at `at`: Field, Description[, Introduced in version]; 0: none.
+
+    The docs site's 5.9 edition has no version column; the manual's has one.
+    """
+    if [t.lower() for _, t in numbered[at : at + 2]] != _HEAD:
+        return 0
+    return 3 if at + 2 < len(numbered) and _VERSION_HEAD.fullmatch(numbered[at + 2][1]) else 2
 
 
 def _title(lines: list[tuple[int, str]], at: int) -> int:
@@ -61,6 +73,7 @@ class _Builder:
         self.last_row_line = -1
         self.after_header = False
         self.rows: list[DocLayoutField] = []
+        self.block = ""  # a "for each joint: ... end" block: its rows are the 6-times group
 
     def text(self, number: int, text: str) -> None:
         if (m := _REPEAT.match(text)) is not None:
@@ -100,7 +113,7 @@ class _Builder:
         k = key(name)
         self.after_header = k in _HEADER_ROWS
         if not arrow:
-            self.group, self.in_switch = "", False
+            self.group, self.in_switch = self.block, False
         if k in _HEADER_ROWS or k == "robotmessagetype":
             self.last_header = k
             if self.member.family_type == 16 and k == "packagetype":
@@ -141,7 +154,8 @@ def read_members(text: str, lines: Lines) -> list[DocMember]:
     numbered = [(n, raw.strip()) for n, raw in enumerate(text.splitlines(), start=1) if raw.strip()]
     members: list[DocMember] = []
     builder: _Builder | None = None
-    heads = [i for i in range(len(numbered)) if [t for _, t in numbered[i : i + 3]] == _HEAD]
+    heads = {i: _head_size(numbered, i) for i in range(len(numbered))}
+    heads = {i: n for i, n in heads.items() if n}
     titles = {_title(numbered, h): h for h in heads}  # title index -> its header index
     i = 0
     while i < len(numbered):
@@ -152,10 +166,14 @@ def read_members(text: str, lines: Lines) -> list[DocMember]:
             member = DocMember(line, None, None, number)
             members.append(member)
             builder = _Builder(member, lines)
-            i = titles[i] + 3
+            i = titles[i] + heads[titles[i]]
             continue
         if builder is not None:
-            if line.endswith(":") and not re.match(r"^\d+(,\d+)*:", line) and len(line) <= 40:
+            if _FOR_EACH.match(line):
+                builder.block = "repeat 6"  # 5.23's "for each joint: ... end"
+            elif line.lower() == "end" and builder.block:
+                builder.block = ""
+            elif line.endswith(":") and not re.match(r"^\d+(,\d+)*:", line) and len(line) <= 40:
                 builder.member.fields = builder.rows  # "Data types:": the tables that follow are not fields
                 builder = None
             elif (m := _ROW.match(line)) is not None and (m.group(2) or m.group(3).lower() == "reserved"):

@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import re
 
-from rtde_spec.importers.tables import Table, check_rows
+from rtde_spec.importers.tables import Table, check_rows, is_heading
 
 _HEAD = ("name", "type", "comment")
 _VERSION_HEAD = re.compile(r"(introduced in )?version|since", re.I)
@@ -39,6 +39,12 @@ def read_tables(text: str) -> list[Table]:
             current = Table(heading, header, paras[i - 1][0])
             tables.append(current)
             continue
+        if current is not None and [p.lower() for p in words[:2]] == ["name", "type"]:
+            # another table's header (Data types: Name, Type, Size in bits) ends the field table;
+            # the short line before it is that table's title, not a cell of the last row
+            if current.rows and i and current.rows[-1][0] == paras[i - 1][0] and is_heading(paras[i - 1][1]):
+                current.rows.pop()
+            current = None
         number, para = paras[i]
         if "input" in para.lower() or "output" in para.lower():
             if len(para) <= 60 and not para.endswith("."):

@@ -15,7 +15,7 @@ _PLACEHOLDER = re.compile(r"…|\.\.\.|\band more\b|\betc\.?$|^\W*$", re.I)
 
 def is_placeholder(name_cell: str) -> bool:
     """Whether a name cell holds no field name but a note that rows were left out."""
-    word = name_cell.strip()
+    word = name_cell.strip().strip("`*").strip()  # Markdown copies put names in `code` or **bold**
     return bool(_PLACEHOLDER.search(word)) or not re.match(r"[A-Za-z_]", word)
 
 
@@ -44,6 +44,9 @@ def field_rows(tables: list[Table], lines: Lines, reports: list[TableReport] | N
     return out
 
 
+#: "48 general purpose integer registers", "64 general-purpose bits": how many a family holds
+_COUNT = re.compile(r"\b(\d+)\s+(?:general[- ]purpose\s+)?(?:\w+\s+)?(?:registers|bits)\b", re.I)
+
 _VERSION_TOKEN = r"(\[\s*\d+\s*\.\.\s*\d+\s*\]|\d+\.\d+(\.\d+)*|/|,|;|and|cb3|e-series|polyscope[- ]x|sw)"
 _VERSIONISH = re.compile(rf"\s*({_VERSION_TOKEN}\s*)*", re.I)
 
@@ -69,6 +72,11 @@ def _field(cells: list[str], direction: str, line: int, lines: Lines) -> DocFiel
     if family and span is None:
         spans = spans_in(comment)
         span = (min(a for a, _ in spans), max(b for _, b in spans)) if spans else None
+        counted = _COUNT.search(comment)
+        if span is not None and counted is not None and span[1] - span[0] + 1 != int(counted.group(1)):
+            # "48 integer registers ([24..47] available to external RTDE clients)": the comment
+            # names one range of the family, not the family's; its range is not read from it
+            span = None
     doc = comment if not rest else f"{comment} ({rest})"
     return DocField(
         name=name,

@@ -15,7 +15,7 @@ from rtde_spec.metamodel.versions import Version
 UNDOCUMENTED = {"third-party", "user"}
 
 
-def _first_on(since: dict[str, str] | None, line: str, spec: Spec) -> str | None:
+def first_on(since: dict[str, str] | None, line: str, spec: Spec) -> str | None:
     """The first version of `line` that has a field with this `since` (None: not on the line)."""
     lines = {p.id: p for p in spec.product_lines.product_lines}
     if since is None:
@@ -29,11 +29,11 @@ def _first_on(since: dict[str, str] | None, line: str, spec: Spec) -> str | None
 def first_versions(entry: FieldSpec, line: str, spec: Spec) -> list[str]:
     """The first version on `line` of each index range of a field (one for a plain field)."""
     if not entry.ranges:
-        found = _first_on(entry.since, line, spec)
+        found = first_on(entry.since, line, spec)
         return [found] if found else []
     out = []
     for rng in entry.ranges:
-        found = _first_on(rng.since if rng.since is not None else entry.since, line, spec)
+        found = first_on(rng.since if rng.since is not None else entry.since, line, spec)
         if found:
             out.append(found)
     return out

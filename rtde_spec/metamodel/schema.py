@@ -109,7 +109,9 @@ IndexRange = tuple[Annotated[int, Field(ge=0)], Annotated[int, Field(ge=0)]]
 #: a document id: cb3-guide, e-series-guide, third-party, user, or a document an import named
 Source = Annotated[str, Field(pattern=r"^[a-z0-9][a-z0-9.-]*$")]
 #: what an import can find different between a document and the spec
-DiffWhat = Literal["added", "removed", "type", "direction", "availability", "range", "description"]
+DiffWhat = Literal[
+    "added", "removed", "type", "direction", "availability", "range", "description", "name", "length"
+]
 
 
 class Conflict(StrictModel):
