@@ -329,3 +329,233 @@ def test_docs_site_listing_with_for_each_joint_blocks(tmp_path: Path) -> None:
     removed = {c["field"] for c in out["removed"]}
     assert "joints.reserved" in removed and "tcp_offset_x" in removed  # fields newer than this listing
     assert not {f for f in removed if f.split(".")[-1] in {"q_actual", "jointmode", "joint_mode", "x", "rz"}}
+
+
+DATA = Path(__file__).parent / "data" / "import"
+
+
+def test_docs_site_primary_page_without_a_version_column(spec: Spec) -> None:
+    """The docs site's 5.9 page: Field / Description only, the joint rows listed once (no
+    "repeated" line), the edition named in its text ("Robot Software 5.9")."""
+    doc = read_document(DATA / "primary_docs_site.txt", spec)
+    assert (doc.format, doc.line, doc.edition) == ("primary-text", "e-series", "5.9.0")
+    [joint] = doc.members
+    assert (joint.family_type, joint.member_type) == (16, 1)
+    assert [f.name for f in joint.fields][:3] == ["q_actual", "q_target", "qd_actual"]
+    out = _json(str(DATA / "primary_docs_site.txt"), "--spec-dir", str(ROOT / "spec"))
+    assert not [c for c in out["changed"] if c["what"] == "type"]  # no "double in repeat 6 -> double"
+    assert sum("listed once, without the spec's group" in r for r in out["remarks"]) == 7
+
+
+def test_for_each_joint_end_block_in_a_table_with_a_version_column(spec: Spec) -> None:
+    doc = read_document(DATA / "primary_for_each_joint.txt", spec)
+    [joint] = doc.members
+    assert {f.group for f in joint.fields} == {"repeat 6"}
+    assert [f.name for f in joint.fields][-1] == "jointMode"
+    out = _json(str(DATA / "primary_for_each_joint.txt"), "--spec-dir", str(ROOT / "spec"))
+    assert not [c for c in out["changed"] if c["what"] == "type"]
+
+
+@pytest.mark.parametrize(
+    ("text", "line", "edition", "newer"),
+    [
+        (
+            "Universal Robots e-Series, software version 5.9\n",
+            "e-series",
+            "5.9.0",
+            "collision_detection_ratio",
+        ),
+        ("Valid for software versions: 10.12.0, 5.25.0 and later.\n", "e-series", "5.25.0", None),
+        ("CB3 Software version: from 3.4 forward\n", "cb3", "3.4.0", "collision_detection_ratio"),
+        ("Client InterfacesV3.14andV5.9\n", "e-series", "5.9.0", "collision_detection_ratio"),
+    ],
+)
+def test_the_edition_is_read_from_the_documents_own_text(
+    tmp_path: Path, text: str, line: str, edition: str, newer: str | None
+) -> None:
+    """No version cells at all: the text's "software version" names the edition, and a field
+    newer than it (collision_detection_ratio, 5.15.0) is not reported removed."""
+    rows = "| timestamp | DOUBLE | Time elapsed since the controller was started [s] | |\n"
+    path = tmp_path / "guide.md"
+    path.write_text(text + "\n" + HEAD_OUT + rows)
+    out = _json(str(path), "--spec-dir", str(ROOT / "spec"), "--line", line)
+    assert out["edition"] == edition
+    removed = {c["field"] for c in out["removed"]}
+    assert newer is None or newer not in removed
+    if line == "e-series":
+        assert "actual_q" in removed  # inside the edition: a real removal
+    # --edition still wins over the text
+    later = _json(str(path), "--spec-dir", str(ROOT / "spec"), "--line", line, "--edition", "5.20")
+    assert later["edition"] == "5.20.0"
+
+
+def test_numbers_that_are_no_software_version_are_not_an_edition(spec: Spec) -> None:
+    from rtde_spec.importers.cells import Lines
+    from rtde_spec.importers.edition import versions_named
+
+    lines = Lines.of(spec)
+    assert versions_named("the voltage exceeds 5.5 V; scale 3.3 times", lines) == {}
+    assert versions_named("Robot Software 5.9 and CB3 3.15", lines) == {"e-series": "5.9.0", "cb3": "3.15.0"}
+    assert versions_named("RealTime 5.10", lines) == {"e-series": "5.10.0"}
+
+
+def test_listing_if_installed_group_closes_on_its_last_row(tmp_path: Path) -> None:
+    """'(if euromap67 interface is installed, also the following: ... short euromapCurrent)':
+    the row that closes the parenthesis is read, inside the group; the next row is outside it."""
+    path = tmp_path / "listing.txt"
+    path.write_text(
+        "Masterboard data\nint packageSize\nunsigned char packageType = MASTERBOARD_DATA = 3\n"
+        "char euromap67InterfaceInstalled\n(if euromap67 interface is installed, also the following:\n"
+        "int euromapInputBits\nshort euromapCurrent)\nfloat afterTheGroup\n"
+    )
+    from rtde_spec.importers.primary_listing import read_listing
+
+    [member] = read_listing(path.read_text())
+    assert [(f.name, f.group) for f in member.fields] == [
+        ("euromap67InterfaceInstalled", ""),
+        ("euromapInputBits", "when euromap67installed"),
+        ("euromapCurrent", "when euromap67installed"),
+        ("afterTheGroup", ""),
+    ]
+
+
+PRIMARY_HTML = """<html><body><h1>Primary and Secondary Interfaces</h1><p>Robot Software 5.9</p>
+<h3>Joint Data (Sub Package of Robot State Message)</h3>
+<table><tr><th>Field</th><th>Description</th></tr>
+<tr><td>int packageSize</td><td></td></tr>
+<tr><td>unsigned char packageType</td><td>ROBOT_STATE_PACKAGE_TYPE_JOINT_DATA = 1</td></tr>
+<tr><td>double q_actual</td><td></td></tr>
+<tr><td>double q_target</td><td></td></tr>
+<tr><td>double qd_actual</td><td></td></tr>
+<tr><td>float I_actual</td><td></td></tr>
+<tr><td>float V_actual</td><td></td></tr>
+<tr><td>float T_motor</td><td></td></tr>
+<tr><td>float T_micro</td><td>Deprecated - ignore</td></tr>
+<tr><td>uint8_t jointMode</td><td>Joint Modes</td></tr>
+</table></body></html>
+"""
+
+
+@pytest.mark.parametrize("suffix", [".html", ".md"])
+def test_the_primary_page_as_html_or_markdown(spec: Spec, tmp_path: Path, suffix: str) -> None:
+    """The docs site's primary page saved as HTML, or converted to Markdown: Field | Description."""
+    text = PRIMARY_HTML
+    if suffix == ".md":
+        from rtde_spec.importers.html_doc import read_tables as html_tables
+
+        [table] = html_tables(PRIMARY_HTML)
+        rows = "\n".join(f"| {' | '.join(cells)} |" for _, cells in table.rows)
+        text = f"Robot Software 5.9\n\n### {table.heading}\n\n| Field | Description |\n|---|---|\n{rows}\n"
+    path = tmp_path / f"primary{suffix}"
+    path.write_text(text)
+    doc = read_document(path, spec)
+    assert (doc.interface, doc.edition) == ("primary", "5.9.0")
+    [joint] = doc.members
+    assert (joint.family_type, joint.member_type, len(joint.fields)) == (16, 1, 8)
+    out = _json(str(path), "--spec-dir", str(ROOT / "spec"))
+    assert not [c for c in out["changed"] if c["what"] == "type"]
+    assert [c["field"] for c in out["added"]] == ["T_micro"]  # the spec's joints.reserved
+
+
+def test_a_data_types_table_after_the_outputs_ends_them(spec: Spec, tmp_path: Path) -> None:
+    """The support article's outputs header splits "Introduced / in version" over two lines, and
+    its Data types table (Name, Type, Size in bits) follows the outputs: no field "Size"."""
+    text = RENDERED.replace("Introduced in version\n\ntimestamp", "Introduced\n\nin version\n\ntimestamp")
+    text += "\n\n**Data types**\n\nName\n\nType\n\nSize in bits\n\nBOOL\n\n"
+    text += "0 = False, everything else = True\n\n8\n"
+    path = tmp_path / "guide.txt"
+    path.write_text(text)
+    doc = read_document(path, spec)
+    assert [f.name for f in doc.fields if f.direction == "output"] == ["timestamp", "actual_q", "payload"]
+    payload = next(f for f in doc.fields if f.name == "payload")
+    assert (payload.version_text, payload.doc) == ("3.11.0 / 5.0.0", "Payload mass Kg")
+
+
+def test_an_abridged_markdown_copy_with_names_in_code(spec: Spec) -> None:
+    """The shape of an abridged copy of the e-Series guide: names in `code`, a comment naming only
+    the upper register range, a blank cell for a 5.23 field, a placeholder row ending the outputs."""
+    path = DATA / "abridged_guide.md"
+    doc = read_document(path, spec)
+    assert [f.name for f in doc.fields] == [
+        "speed_slider_mask",
+        "input_int_register_{X}",
+        "timestamp",
+        "actual_TCP_acceleration",
+    ]
+    register = doc.fields[1]
+    assert register.index is None  # "[24..47]" in the comment is one range of 48 registers, not the family's
+    assert doc.edition == "5.23.0"  # it lists actual_TCP_acceleration, which the spec has from 5.23.0
+    out = _json(str(path), "--spec-dir", str(ROOT / "spec"))
+    assert (out["added"], out["changed"]) == ([], [])  # no "range [0, 47] -> [24, 47]"
+    # the inputs table has no placeholder: what it leaves out is reported; the outputs stop early
+    assert {c["where"] for c in out["removed"]} == {"input"} and len(out["unlisted"]["output"]) > 50
+    assert out["tables"][1]["skipped"] == [{"line": 20, "cell": "… *and more fields* …"}]
+    assert any("actual_TCP_acceleration: blank version cell" in r for r in out["remarks"])
+
+
+def test_write_refuses_a_document_of_two_interfaces(tmp_path: Path) -> None:
+    """A workbook with an RTDE sheet and a primary listing sheet: --write edits one interface's
+    file at a time, so it is refused (nothing written) and the report still lists both."""
+    openpyxl = pytest.importorskip("openpyxl")
+    import shutil
+
+    book = openpyxl.Workbook()
+    rtde = book.active
+    rtde.title = "RTDE outputs"
+    rtde.append(["Robot Controller Outputs"])
+    rtde.append(["Name", "Type", "Comment", "Introduced in version"])
+    rtde.append(["actual_tcp_jerk", "VECTOR6D", "Actual TCP jerk", "5.30.0"])
+    rtde.append(["… and more", None, None, None])
+    listing = book.create_sheet("5.9")
+    for line in [
+        "Cartesian info",
+        "int packageSize",
+        "unsigned char packageType = CARTESIAN_INFO = 4",
+        "double X",
+    ]:
+        listing.append([line])
+    path = tmp_path / "Client_Interface.xlsx"
+    book.save(path)
+    tree = tmp_path / "spec"
+    shutil.copytree(ROOT / "spec", tree)
+    before = {p: p.read_bytes() for p in tree.rglob("*.yaml")}
+    out = _json(str(path), "--spec-dir", str(tree))
+    assert out["interfaces"] == ["rtde", "primary"]
+    result = _cli(str(path), "--spec-dir", str(tree), "--write")
+    assert result.returncode == 2 and "one interface at a time" in result.stderr
+    assert {p: p.read_bytes() for p in tree.rglob("*.yaml")} == before
+
+
+def test_listing_arrays_as_one_row_blocks_and_length_prefixed_strings(tmp_path: Path) -> None:
+    """The workbook's listing writes double[6] as "for each joint:" over one indented row, and a
+    string as its size then "char array name": both read as the spec spells them."""
+    path = tmp_path / "listing.txt"
+    path.write_text(
+        "Configuration data\nint packageSize\nunsigned char packageType = CONFIGURATION_DATA = 6\n"
+        "for each joint:\n   double DHa\nfor each joint:\n   double DHd\ndouble afterThem\n"
+        "VersionMessage\nint messageSize\nunsigned char messageType = ROBOT_MESSAGE = 20\n"
+        "uint64_t timestamp\nchar source\nchar robotMessageType = ROBOT_MESSAGE_VERSION = 3\n"
+        "char projectNameSize\nchar array projectName\nunsigned char majorVersion\n"
+    )
+    out = _json(str(path), "--spec-dir", str(ROOT / "spec"))
+    changed = {(c["field"], c["what"]) for c in out["changed"]}
+    assert ("dh_a", "type") not in changed and ("dh_d", "type") not in changed
+    assert ("project_name", "type") not in changed
+    assert "projectNameSize" not in {c["field"] for c in out["added"]}
+
+
+def test_a_for_each_joint_block_without_end_or_indent_is_reported(tmp_path: Path) -> None:
+    """One copy of the workbook lost the indent that ends its blocks: the rows are still read,
+    and the report says where a block's end is a guess."""
+    path = tmp_path / "listing.txt"
+    path.write_text(
+        "Configuration data\nint packageSize\nunsigned char packageType = CONFIGURATION_DATA = 6\n"
+        "for each joint:\ndouble jointMinLimit\ndouble jointMaxLimit\ndouble vJointDefault\n"
+    )
+    out = _json(str(path), "--spec-dir", str(ROOT / "spec"))
+    assert any(r.startswith("line 4: 'for each joint:' has no 'end'") for r in out["remarks"])
+    indented = tmp_path / "indented.txt"
+    indented.write_text(path.read_text().replace("double joint", "   double joint"))
+    assert not any(
+        "has no 'end'" in r for r in _json(str(indented), "--spec-dir", str(ROOT / "spec"))["remarks"]
+    )
