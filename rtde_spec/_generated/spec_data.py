@@ -701,7 +701,8 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                        {'what': 'range',
                                         'document': '[0, 48]',
                                         'sources': ['cb3-guide',
-                                                    'universal-robot-rust-crate-readme'],
+                                                    'universal-robot-rust-crate-readme',
+                                                    'rtde-guide-support-article-2021'],
                                         'decision': 'The CB3 guide (and the crate README after it) '
                                                     'name the input read-back family X=[0 .. 48], '
                                                     'but their own comment says 48 registers, '
@@ -740,7 +741,8 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                        {'what': 'range',
                                         'document': '[0, 48]',
                                         'sources': ['cb3-guide',
-                                                    'universal-robot-rust-crate-readme'],
+                                                    'universal-robot-rust-crate-readme',
+                                                    'rtde-guide-support-article-2021'],
                                         'decision': 'The CB3 guide (and the crate README after it) '
                                                     'name the input read-back family X=[0 .. 48], '
                                                     'but their own comment says 48 registers, '
@@ -852,7 +854,14 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                         'sources': ['universal-robot-rust-crate-readme'],
                                         'decision': "The crate README's output table stops before "
                                                     'this row (a partial copy of an earlier '
-                                                    'guide); both UR guides list it. Kept.'}]},
+                                                    'guide); both UR guides list it. Kept.'},
+                                       {'what': 'removed',
+                                        'sources': ['rtde-guide-support-article-2021'],
+                                        'decision': "The 2021 support-article copy of UR's guide "
+                                                    '(CB3 up to 3.15, e-Series up to 5.11) has no '
+                                                    'such row; both later guides list it with a '
+                                                    'blank version cell, so its first version is '
+                                                    'not documented. Kept, on every version.'}]},
                         {'name': 'collision_detection_ratio',
                          'type': 'DOUBLE',
                          'doc': 'A C157 or C158 protective stop is triggered when the value '
@@ -883,29 +892,55 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                          'doc': 'Payload mass',
                          'unit': 'kg',
                          'since': {'cb3': '3.11.0', 'e-series': '5.0.0'},
-                         'sources': ['cb3-guide', 'e-series-guide', 'rtde-guide-current'],
+                         'sources': ['cb3-guide',
+                                     'e-series-guide',
+                                     'rtde-guide-current',
+                                     'rtde-guide-support-article-2021'],
                          'conflicts': [{'what': 'removed',
                                         'sources': ['universal-robot-rust-crate-readme'],
                                         'decision': "The crate README's output table stops before "
                                                     'this row (a partial copy of an earlier '
-                                                    'guide); both UR guides list it. Kept.'}]},
+                                                    'guide); both UR guides list it. Kept.'},
+                                       {'what': 'availability',
+                                        'document': 'cb3 3.11.0, e-series 5.5.1, polyscope-x '
+                                                    '10.0.0',
+                                        'sources': ['rtde-guide-support-article-2021'],
+                                        'decision': "The 2021 support-article copy of UR's guide "
+                                                    'gives 3.11.0 / 5.5.1; the newer e-Series '
+                                                    'guide leaves the e-Series cell blank (every '
+                                                    '5.x) and the CB3 date agrees. The newer guide '
+                                                    'wins: e-series 5.0.0 kept.'}]},
                         {'name': 'payload_cog',
                          'type': 'VECTOR3D',
                          'doc': 'Payload center of gravity (CoGx, CoGy, CoGz)',
                          'unit': 'm',
                          'since': {'cb3': '3.11.0', 'e-series': '5.5.0'},
-                         'sources': ['cb3-guide', 'e-series-guide', 'rtde-guide-current'],
+                         'sources': ['cb3-guide',
+                                     'e-series-guide',
+                                     'rtde-guide-current',
+                                     'rtde-guide-support-article-2021'],
                          'conflicts': [{'what': 'removed',
                                         'sources': ['universal-robot-rust-crate-readme'],
                                         'decision': "The crate README's output table stops before "
                                                     'this row (a partial copy of an earlier '
-                                                    'guide); both UR guides list it. Kept.'}]},
+                                                    'guide); both UR guides list it. Kept.'},
+                                       {'what': 'availability',
+                                        'document': 'cb3 3.11.0, e-series 5.5.1, polyscope-x '
+                                                    '10.0.0',
+                                        'sources': ['rtde-guide-support-article-2021'],
+                                        'decision': 'The 2021 support-article copy gives 3.11.0 / '
+                                                    '5.5.1; the newer e-Series guide gives 5.5.0 '
+                                                    '(the first 5.5 release). The newer guide '
+                                                    'wins: e-series 5.5.0 kept.'}]},
                         {'name': 'payload_inertia',
                          'type': 'VECTOR6D',
                          'doc': 'Payload inertia matrix elements (Ixx, Iyy, Izz, Ixy, Ixz, Iyz)',
                          'unit': 'kg·m²',
                          'since': {'cb3': '3.15.0', 'e-series': '5.11.0'},
-                         'sources': ['cb3-guide', 'e-series-guide', 'rtde-guide-current'],
+                         'sources': ['cb3-guide',
+                                     'e-series-guide',
+                                     'rtde-guide-current',
+                                     'rtde-guide-support-article-2021'],
                          'conflicts': [{'what': 'removed',
                                         'sources': ['universal-robot-rust-crate-readme'],
                                         'decision': "The crate README's output table stops before "
