@@ -28,7 +28,7 @@ UR_CONFIG = DATA / "ur_client_config.xml"  # UR's example: recipes state, setp, 
 @pytest.fixture(scope="module")
 def emu() -> Iterator[EmulatorThread]:
     running = EmulatorThread(
-        EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, dashboard_port=0)
+        EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, dashboard_port=0, realtime_port=None)
     ).start()
     yield running
     running.stop()
