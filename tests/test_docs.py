@@ -30,7 +30,7 @@ from .fixed_ports import WAIT, wait_until_free
 # the emulator on the default ports of 127.0.0.1: every test here in one process (pytest-xdist),
 # taking turns for those ports with any other test run on the machine (tests/fixed_ports.py)
 HOST = "127.0.0.1"
-pytestmark = [pytest.mark.xdist_group("default-ports"), pytest.mark.fixed_ports(HOST)]
+pytestmark = [pytest.mark.xdist_group("docs"), pytest.mark.fixed_ports(HOST)]
 
 ALL = [b for doc in documents() for b in blocks(doc)]
 RUNNABLE = [b for b in ALL if b.language in ("python", "sh")]

@@ -68,7 +68,8 @@ def test_the_driver_capture_is_the_recorded_session_on_every_port_it_used() -> N
     texts = [row["text_message"] for row in tables["primary_text_message"]]
     assert "trajectory done" in texts and texts[-1] == "external control stopped"  # the program ran
     (script,) = tables["primary_scripts"]  # headless mode: the program went to 30001
-    assert script["script"].startswith("def external_control():") and "50003" in script["script"]
+    ports = {"driver": "127.0.0.1", "reverse": 50001, "trajectory": 50003, "script_command": 50004}
+    assert script["script"] == drv.PROGRAM.format(**ports)  # rtde_spec/examples/external_control.script
     assert len(tables["rtde_outputs_1"]) > 100 and tables["rtde_inputs_1"][0]["speed_slider_fraction"] == 1.0
 
 

@@ -30,11 +30,12 @@ rtde_io = pytest.importorskip("rtde_io", reason="ur_rtde is installed by the tes
 
 HOST = "127.0.0.71"
 RAD, METRE = 1e-4, 1e-4
-# ur_rtde needs the controller's own ports on its host: every test of this module in one xdist worker
+# ur_rtde needs the controller's own ports on its host: every test of this module in one xdist
+# worker (one emulator for them all), taking turns for the ports with other runs on the machine
 pytestmark = [
     pytest.mark.slow,
-    pytest.mark.xdist_group("default-ports"),
-    pytest.mark.fixed_ports(HOST, "127.0.0.72"),  # taking turns with other runs on the machine
+    pytest.mark.xdist_group("ur-rtde-control"),
+    pytest.mark.fixed_ports(HOST, "127.0.0.72"),
 ]
 
 

@@ -33,6 +33,7 @@ import threading
 import time
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from importlib import resources
 from pathlib import Path
 
 from rtde_spec import RtdeClient
@@ -58,96 +59,11 @@ DASHBOARD = [
 ]
 SHIPPED = Path(__file__).resolve().parent / "files" / "driver.pcap"
 
-# The robot's side: our own program in the shape of URCL's external_control.urscript. The
-# constants' lines are the ones a capture tells the trajectory layout by.
-PROGRAM = """def external_control():
-  MULT_jointstate = 1000000
-  MULT_time = 1000000
-  MOTION_TYPE_MOVEJ = 0
-  MOTION_TYPE_MOVEJ_POSE = 6
-  MODE_STOPPED = -2
-  MODE_SERVOJ = 1
-  MODE_FORWARD = 3
-  TRAJECTORY_START = 1
-  global cmd_q = get_actual_joint_positions()
-  global mode = -1
-  global steptime = get_steptime()
-  thread servo_thread():
-    while True:
-      if mode == MODE_SERVOJ:
-        servoj(cmd_q, t=steptime, lookahead_time=0.03, gain=2000)
-      else:
-        sync()
-      end
-    end
-  end
-  thread script_commands():
-    while True:
-      command = socket_read_binary_integer(28, "script_command_socket", 0.5)
-      if command[0] > 0:
-        if command[1] == 0:
-          zero_ftsensor()
-        elif command[1] == 1:
-          set_payload(command[2] / MULT_jointstate, [command[3], command[4], command[5]] / MULT_jointstate)
-        end
-        textmsg("script command ", command[1])
-      end
-    end
-  end
-  def to_q(words, first):
-    q = [0, 0, 0, 0, 0, 0]
-    i = 0
-    while i < 6:
-      q[i] = words[first + i] / MULT_jointstate
-      i = i + 1
-    end
-    return q
-  end
-  socket_open("{driver}", {reverse}, "reverse_socket")
-  socket_open("{driver}", {trajectory}, "trajectory_socket")
-  socket_open("{driver}", {script_command}, "script_command_socket")
-  servo = run servo_thread()
-  commands = run script_commands()
-  timeout = 1.0
-  while mode != MODE_STOPPED:
-    params = socket_read_binary_integer(8, "reverse_socket", timeout)
-    if params[0] > 0:
-      timeout = params[1] / 1000
-      if params[8] == MODE_FORWARD:
-        if params[2] == TRAJECTORY_START:
-          mode = MODE_FORWARD
-          i = 0
-          while i < params[3]:
-            point = socket_read_binary_integer(21, "trajectory_socket", 2)
-            if point[21] == MOTION_TYPE_MOVEJ:
-              v = point[13] / MULT_jointstate
-              a = point[14] / MULT_jointstate
-              movej(to_q(point, 1), a=a, v=v, t=point[19] / MULT_time, r=point[20] / MULT_jointstate)
-            end
-            i = i + 1
-          end
-          socket_send_int(0, "trajectory_socket")
-          textmsg("trajectory done")
-        end
-      else:
-        enter_critical
-        cmd_q = to_q(params, 2)
-        mode = params[8]
-        exit_critical
-      end
-    else:
-      textmsg("reverse read timed out")
-      mode = MODE_STOPPED
-    end
-  end
-  kill servo
-  kill commands
-  textmsg("external control stopped")
-  socket_close("reverse_socket")
-  socket_close("trajectory_socket")
-  socket_close("script_command_socket")
-end
-"""
+# The robot's side: our own program in the shape of URCL's external_control.urscript
+PROGRAM = "".join(
+    line for line in resources.files(__package__).joinpath("external_control.script").read_text("utf-8")
+    .splitlines(keepends=True) if not line.startswith("#")
+)  # fmt: skip
 
 HOME = (0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0)
 SERVO_STEPS = 150  # 0.3 s of servoj targets at 500 Hz
