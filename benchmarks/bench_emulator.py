@@ -230,7 +230,7 @@ def four_clients(port: int, seconds: float) -> list[dict[str, float]]:
 MOTION_EMULATOR = """
 import json, sys, time
 from rtde_spec.emulator.server import EmulatorConfig, EmulatorThread
-config = EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, realtime_port=0,
+config = EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, realtime_port=0, dashboard_port=None,
                         controller="5.15.0", step_timing=1_000_000)
 with EmulatorThread(config) as emu:
     print(json.dumps(emu.ports), flush=True)

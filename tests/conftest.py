@@ -5,8 +5,11 @@ contributor's loop stays short; CI runs them (`.ci/run` sets RTDE_SPEC_SLOW=1), 
 from __future__ import annotations
 
 import os
+from collections.abc import Iterator
 
 import pytest
+
+from .fixed_ports import fixed_ports
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
@@ -22,3 +25,15 @@ def pytest_report_header(config: pytest.Config) -> str:
     if os.environ.get("RTDE_SPEC_SLOW") == "1" or config.getoption("markexpr"):
         return "slow tests: included"
     return "slow tests: left out (RTDE_SPEC_SLOW=1 or -m slow runs them; CI does)"
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _fixed_ports(request: pytest.FixtureRequest) -> Iterator[None]:
+    """A module marked `fixed_ports(HOST, ...)` holds those addresses' controller ports for its run
+    (tests/fixed_ports.py): it waits for any other run on the machine that holds them."""
+    marker = request.node.get_closest_marker("fixed_ports")
+    if marker is None:
+        yield
+        return
+    with fixed_ports(*marker.args):
+        yield

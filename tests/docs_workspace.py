@@ -4,11 +4,14 @@ They ship in the package (`rtde_spec/examples/files/`, written by `rtde-spec exa
 this module makes them: the captures are written with dpkt (tests/capture_files.py), an
 implementation independent of ours, the byte files from the package's embedded examples.
 Regenerate the shipped copies with `PYTHONPATH=. python3 -m tests.docs_workspace`;
-tests/test_examples.py holds them equal.
+tests/test_examples.py holds them equal. One is recorded, not made: `driver.pcap`, a driver-like
+client's session with the emulator captured on loopback by
+`python -m rtde_spec.examples.make_driver_capture` (copied here as it ships).
 """
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
 from rtde_spec import RecipeCodec, build
@@ -16,7 +19,6 @@ from rtde_spec.examples import primary_stream, rtde_session
 from rtde_spec.metamodel.catalogue import Catalogue
 
 from .capture_files import Conversation, write
-from .test_capture_driver import session as driver_session
 from .test_spec_import_write import guide_from_spec, hand_made  # a guide of a release after today's spec
 
 NAMES = ["timestamp", "actual_q", "actual_TCP_pose", "robot_mode"]
@@ -83,6 +85,7 @@ outputs:
   robot_mode: 7
 """
 SHIPPED = Path(__file__).resolve().parents[1] / "rtde_spec" / "examples" / "files"
+RECORDED = "driver.pcap"  # rtde_spec/examples/make_driver_capture.py records it
 
 
 def make_workspace(folder: Path) -> Path:
@@ -108,15 +111,18 @@ def make_workspace(folder: Path) -> Path:
     (folder / "rtde_config.xml").write_text(UR_CONFIG)
     (folder / "move.script").write_text(SCRIPT)
     (folder / "moving.yaml").write_text(SCENARIO)
-    driver_session(folder)  # driver.pcap: a UR ROS driver session, every port side by side
+    shutil.copyfile(SHIPPED / RECORDED, folder / RECORDED)  # recorded on loopback, not made here
     (folder / "rtde-guide-5.30.txt").write_text(hand_made(guide_from_spec(Catalogue.builtin().spec)))
     return folder
 
 
 if __name__ == "__main__":
-    import shutil
+    import tempfile
 
-    shutil.rmtree(SHIPPED, ignore_errors=True)
-    SHIPPED.mkdir(parents=True)
-    make_workspace(SHIPPED)
+    with tempfile.TemporaryDirectory() as scratch:
+        made = make_workspace(Path(scratch))
+        for old in SHIPPED.iterdir():  # the recorded capture stays; the rest is made again
+            if old.name != RECORDED:
+                shutil.rmtree(old) if old.is_dir() else old.unlink()
+        shutil.copytree(made, SHIPPED, dirs_exist_ok=True)
     print(f"wrote {SHIPPED}")

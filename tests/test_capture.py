@@ -209,6 +209,7 @@ def test_plot_of_a_capture_table(tmp_path: Path) -> None:
     assert missing.returncode == 2 and "no_such_field" in missing.stderr
 
 
+@pytest.mark.slow  # a local Dask cluster of two worker processes
 def test_dask_on_a_local_cluster_of_two_workers(tmp_path: Path) -> None:
     distributed = pytest.importorskip("distributed", reason="dask is installed by the test extra")
     from rtde_spec.capture.fleet import capture_bag, dataset_frame

@@ -173,7 +173,7 @@ CASES: list[Case] = [
 @pytest.fixture(scope="module")
 def ports() -> Iterator[dict[str, int]]:
     emu = EmulatorThread(
-        EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, dashboard_port=0)
+        EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, dashboard_port=0, realtime_port=None)
     ).start()
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))

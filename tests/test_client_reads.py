@@ -20,7 +20,9 @@ from rtde_spec.rtde import client as client_module
 
 @pytest.fixture
 def emu() -> Iterator[EmulatorThread]:
-    running = EmulatorThread(EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0)).start()
+    running = EmulatorThread(
+        EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, realtime_port=None, dashboard_port=None)
+    ).start()
     yield running
     running.stop()
 

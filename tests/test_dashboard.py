@@ -48,7 +48,7 @@ def emu(tmp_path: Path) -> Iterator[EmulatorThread]:
     (programs / "prog.urp").write_bytes(b"\x1f\x8b not read")  # PolyScope's file; the .script runs
     (tmp_path / "outside.script").write_text(PROGRAM)
     config = EmulatorConfig(
-        rtde_port=0, primary_port=0, secondary_port=0, dashboard_port=0, programs=programs
+        rtde_port=0, primary_port=0, secondary_port=0, dashboard_port=0, programs=programs, realtime_port=None
     )
     emulator = EmulatorThread(config).start()
     yield emulator
@@ -149,7 +149,9 @@ def test_a_protective_stop_shows_everywhere_and_unlocks_after_five_seconds(emu: 
 
 
 def test_commands_follow_the_controller_version_and_polyscope_x_has_no_dashboard() -> None:
-    config = EmulatorConfig(rtde_port=None, primary_port=None, secondary_port=None, dashboard_port=0)
+    config = EmulatorConfig(
+        rtde_port=None, primary_port=None, secondary_port=None, dashboard_port=0, realtime_port=None
+    )
     config.controller = "3.10.0"
     with EmulatorThread(config) as emu:
         dash = Dashboard(emu.ports["dashboard"])
@@ -158,7 +160,9 @@ def test_commands_follow_the_controller_version_and_polyscope_x_has_no_dashboard
         assert dash.ask("get serial number") == "could not understand: 'get serial number'"
         assert dash.ask("PolyscopeVersion").startswith("URSoftware 3.10.0.0")
         dash.close()
-    config = EmulatorConfig(rtde_port=None, primary_port=None, secondary_port=None, dashboard_port=0)
+    config = EmulatorConfig(
+        rtde_port=None, primary_port=None, secondary_port=None, dashboard_port=0, realtime_port=None
+    )
     config.controller = "10.11.0"
     with EmulatorThread(config) as emu:
         assert "dashboard" not in emu.ports

@@ -10,6 +10,7 @@ point commands at. The install and test commands of the README are checked again
 
 from __future__ import annotations
 
+import errno
 import json
 import os
 import signal
@@ -24,9 +25,12 @@ import pytest
 import yaml
 
 from .docs_blocks import LANGUAGES, ROOT, Block, blocks, commands, documents
+from .fixed_ports import WAIT, wait_until_free
 
-# one process holds the emulator on the default ports: every test here runs in it (pytest-xdist)
-pytestmark = pytest.mark.xdist_group("default-ports")
+# the emulator on the default ports of 127.0.0.1: every test here in one process (pytest-xdist),
+# taking turns for those ports with any other test run on the machine (tests/fixed_ports.py)
+HOST = "127.0.0.1"
+pytestmark = [pytest.mark.xdist_group("docs"), pytest.mark.fixed_ports(HOST)]
 
 ALL = [b for doc in documents() for b in blocks(doc)]
 RUNNABLE = [b for b in ALL if b.language in ("python", "sh")]
@@ -39,10 +43,17 @@ class Robot:
         self.thread: Any = None
 
     def start(self) -> None:
+        """Start it, waiting while something outside this run holds a port (it takes no turns)."""
         from rtde_spec import EmulatorConfig, EmulatorThread
 
-        if self.thread is None:
-            self.thread = EmulatorThread(EmulatorConfig(dashboard_port=29999)).start()
+        deadline = time.monotonic() + WAIT
+        while self.thread is None:
+            wait_until_free(HOST, wait=max(1.0, deadline - time.monotonic()))
+            try:
+                self.thread = EmulatorThread(EmulatorConfig(host=HOST)).start()  # serve's ports
+            except OSError as exc:
+                if exc.errno != errno.EADDRINUSE or time.monotonic() > deadline:
+                    raise
 
     def stop(self) -> None:
         if self.thread is not None:
@@ -150,6 +161,7 @@ def test_block_runs(block: Block, workspace: Path, robot: Robot) -> None:
     env = _env(workspace)
     if "own-emulator" in block.directives:
         robot.stop()
+        wait_until_free(HOST)
         try:
             _run(block, workspace, env)
         finally:

@@ -47,7 +47,13 @@ def test_a_real_time_priority_the_system_refuses_is_one_log_line_and_the_emulato
     caplog: pytest.LogCaptureFixture,
 ) -> None:
     config = EmulatorConfig(
-        rtde_port=0, primary_port=None, secondary_port=None, realtime_priority=1000, skip_after=None
+        rtde_port=0,
+        primary_port=None,
+        secondary_port=None,
+        realtime_priority=1000,
+        realtime_port=None,
+        dashboard_port=None,
+        skip_after=None,
     )
     with caplog.at_level(logging.WARNING, "rtde_spec.emulator"), EmulatorThread(config) as emu:
         with RtdeClient("127.0.0.1", emu.ports["rtde"]) as client:

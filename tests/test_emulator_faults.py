@@ -60,7 +60,10 @@ def primary_safety_messages(port: int, seconds: float, out: list[int]) -> None:
 def test_scheduled_faults_show_on_rtde_and_the_primary_port(tmp_path: Path) -> None:
     path = tmp_path / "faults.yaml"
     path.write_text(SCENARIO)
-    config = EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, scenario=load_scenario(path))
+    config = EmulatorConfig(
+        rtde_port=0, primary_port=0, secondary_port=0, scenario=load_scenario(path), realtime_port=None,
+        dashboard_port=None,
+    )
     config.skip_after = None  # a stall of the loaded machine delays packages, never skips them
     rows: list[tuple[float, int, int, int]] = []
     safety: list[int] = []

@@ -53,7 +53,10 @@ def urcl_key_message(message: bytes) -> tuple[str, str] | None:
 
 
 def test_program_started_and_stopped_key_messages_carry_the_name_as_urcl_reads_it() -> None:
-    config = EmulatorConfig(rtde_port=None, primary_port=0, secondary_port=None, controller="5.15.0")
+    config = EmulatorConfig(
+        rtde_port=None, primary_port=0, secondary_port=None, controller="5.15.0", realtime_port=None,
+        dashboard_port=None,
+    )
     with EmulatorThread(config) as emu:
         with socket.create_connection(("127.0.0.1", emu.ports["primary"]), timeout=5) as sock:
             sock.sendall(b'def urcl_script():\n  textmsg("hi")\nend\n')
@@ -79,7 +82,7 @@ def test_kinematics_info_reports_a_calibrated_arm_unless_the_scenario_says_not(
         rtde_port=None,
         primary_port=None,
         secondary_port=0,
-        scenario=Scenario(controller="5.8.0", calibrated=calibrated),
+        scenario=Scenario(controller="5.8.0", calibrated=calibrated), realtime_port=None, dashboard_port=None,
     )
     with EmulatorThread(config) as emu:
         with socket.create_connection(("127.0.0.1", emu.ports["secondary"]), timeout=5) as sock:
@@ -144,7 +147,7 @@ def dashboard_emulator(tmp_path: Path, version: str) -> EmulatorThread:
         secondary_port=None,
         dashboard_port=0,
         programs=programs,
-        controller=version,
+        controller=version, realtime_port=None,
     )
     return EmulatorThread(config).start()
 

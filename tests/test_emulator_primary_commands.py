@@ -22,7 +22,10 @@ from rtde_spec.wire.primary_base import RobotStateMessage
 
 def serve() -> EmulatorThread:
     return EmulatorThread(
-        EmulatorConfig(rtde_port=None, primary_port=0, secondary_port=0, realtime_port=0, controller="5.15.0")
+        EmulatorConfig(
+            rtde_port=None, primary_port=0, secondary_port=0, realtime_port=0, controller="5.15.0",
+            dashboard_port=None,
+        )
     ).start()
 
 

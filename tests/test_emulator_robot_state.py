@@ -48,7 +48,10 @@ def messages(port: int, count: int, timeout: float = 5.0) -> Iterator[bytes]:
 
 def serve(version: str) -> EmulatorThread:
     return EmulatorThread(
-        EmulatorConfig(rtde_port=None, primary_port=0, secondary_port=0, controller=version)
+        EmulatorConfig(
+            rtde_port=None, primary_port=0, secondary_port=0, controller=version, realtime_port=None,
+            dashboard_port=None,
+        )
     ).start()
 
 
@@ -236,7 +239,10 @@ def test_textmsg_and_a_script_that_cannot_run_become_robot_messages_on_the_prima
 def test_the_kinematics_sub_package_carries_the_chosen_arm(
     version: str, arm: str | None, expected: str, kind: int
 ) -> None:
-    config = EmulatorConfig(rtde_port=None, primary_port=None, secondary_port=0, controller=version, arm=arm)
+    config = EmulatorConfig(
+        rtde_port=None, primary_port=None, secondary_port=0, controller=version, arm=arm, realtime_port=None,
+        dashboard_port=None,
+    )
     with EmulatorThread(config) as emu:
         got = list(messages(emu.ports["secondary"], 2))
     state = PrimaryStreamDecoder().feed(b"".join(got))[1][1]

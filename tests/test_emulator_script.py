@@ -53,7 +53,10 @@ def test_calls_a_controller_would_refuse_change_nothing(line: str) -> None:
 
 
 def test_a_script_on_the_primary_port_shows_on_rtde_and_not_from_a_read_only_port() -> None:
-    config = EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, secondary_read_only_port=0)
+    config = EmulatorConfig(
+        rtde_port=0, primary_port=0, secondary_port=0, secondary_read_only_port=0, realtime_port=None,
+        dashboard_port=None,
+    )
     emu = EmulatorThread(config).start()
     try:
         with PrimaryClient("127.0.0.1", emu.ports["secondary_read_only"]) as quiet:

@@ -1,7 +1,9 @@
 """`rtde-spec examples DIR`: the files the README's commands name, shipped in the package.
 
 The shipped copies are what tests/docs_workspace.py makes (captures written with dpkt,
-not our encoders); regenerate with `PYTHONPATH=. python3 -m tests.docs_workspace`.
+not our encoders); regenerate with `PYTHONPATH=. python3 -m tests.docs_workspace`. But
+`driver.pcap` is recorded: a driver-like client's session with `rtde-spec serve`, captured on
+loopback by rtde_spec/examples/make_driver_capture.py; it is held here to what that session sends.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ from rtde_spec.cli.examples_cmd import shipped
 from rtde_spec.cli.main import main
 
 from .docs_blocks import ROOT, blocks
-from .docs_workspace import SHIPPED, make_workspace
+from .docs_workspace import RECORDED, SHIPPED, make_workspace
 
 GUIDE = "rtde-guide-5.30.txt"  # made from today's spec: checked by importing it, below
 
@@ -26,7 +28,7 @@ def test_the_shipped_files_are_what_the_generator_makes(tmp_path: Path) -> None:
     names = sorted(str(p.relative_to(made)) for p in made.rglob("*") if p.is_file())
     assert [name for name, _ in shipped()] == names
     for name in names:
-        if name != GUIDE:
+        if name not in (GUIDE, RECORDED):
             assert (SHIPPED / name).read_bytes() == (made / name).read_bytes(), f"regenerate {name}"
 
 
@@ -40,6 +42,35 @@ def test_examples_writes_every_file_and_the_captures_decode(
     tables = capture_tables(tmp_path / "ex" / "robot.pcapng")
     assert tables["rtde_outputs_1"].num_rows == 500
     assert "urcl_reverse" in capture_tables(tmp_path / "ex" / "driver.pcap")
+
+
+def test_the_driver_capture_is_the_recorded_session_on_every_port_it_used() -> None:
+    """What make_driver_capture's client sent and the emulator's program answered, decoded."""
+    from rtde_spec.examples import make_driver_capture as drv
+
+    path = SHIPPED / RECORDED
+    assert drv.check(path) == []  # the six connections, nothing foreign, no damage
+    tables = {name: table.to_pylist() for name, table in capture_tables(path).items()}
+    dashboard = [(row["request"], row["outcome"]) for row in tables["dashboard"] if row["request"]]
+    assert dashboard == [(command, "ok") for command in drv.DASHBOARD]
+    servo = tables["urcl_reverse"]
+    assert [row["control_mode"] for row in servo] == [1] * (drv.SERVO_STEPS + 1) + [-2]
+    assert [servo[0][f"target_{j}"] for j in range(6)] == list(drv.HOME)
+    points = tables["urcl_trajectory_points"]
+    assert [[p[f"target_{j}"] for j in range(6)] for p in points] == [list(t[0]) for t in drv.TRAJECTORY]
+    assert [(p["velocity"], p["acceleration"], p["duration"]) for p in points] == [
+        (v, a, t) for _, v, a, t, _ in drv.TRAJECTORY
+    ]
+    start = tables["urcl_reverse_trajectory"][0]
+    assert (start["trajectory_action"], start["point_count"]) == (1, len(drv.TRAJECTORY))
+    assert [row["result"] for row in tables["urcl_trajectory_results"]] == [0]  # the robot's answer
+    assert [row["variant"] for row in tables["urcl_script_commands"]] == ["set_payload", "zero_ft_sensor"]
+    texts = [row["text_message"] for row in tables["primary_text_message"]]
+    assert "trajectory done" in texts and texts[-1] == "external control stopped"  # the program ran
+    (script,) = tables["primary_scripts"]  # headless mode: the program went to 30001
+    ports = {"driver": "127.0.0.1", "reverse": 50001, "trajectory": 50003, "script_command": 50004}
+    assert script["script"] == drv.PROGRAM.format(**ports)  # rtde_spec/examples/external_control.script
+    assert len(tables["rtde_outputs_1"]) > 100 and tables["rtde_inputs_1"][0]["speed_slider_fraction"] == 1.0
 
 
 def test_examples_never_overwrites_without_force(tmp_path: Path, capsys: pytest.CaptureFixture[str]) -> None:

@@ -69,7 +69,9 @@ def test_the_arm_follows_servoj_targets_streamed_on_the_reverse_port() -> None:
     target = [q + 0.15 for q in HOME_Q]
     with socket.create_server(("127.0.0.1", 0)) as reverse_server:
         port = reverse_server.getsockname()[1]
-        config = EmulatorConfig(rtde_port=None, primary_port=0, secondary_port=None)
+        config = EmulatorConfig(
+            rtde_port=None, primary_port=0, secondary_port=None, realtime_port=None, dashboard_port=None
+        )
         with EmulatorThread(config) as emu:
             with socket.create_connection(("127.0.0.1", emu.ports["primary"])) as primary:
                 primary.sendall(PROGRAM.format(port=port).encode())

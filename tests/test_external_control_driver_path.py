@@ -102,7 +102,11 @@ def start(emu: EmulatorThread) -> Iterator[Session]:
 
 @pytest.fixture
 def session() -> Iterator[Session]:
-    with EmulatorThread(EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=None)) as emu:
+    with EmulatorThread(
+        EmulatorConfig(
+            rtde_port=0, primary_port=0, secondary_port=None, realtime_port=None, dashboard_port=None
+        )
+    ) as emu:
         yield from start(emu)
 
 

@@ -187,3 +187,14 @@ def test_file_outputs_name_the_path_given_in_plain_words(
     ):
         code, _, err = run(capsys, *argv)
         assert code == 2 and f"error: -o {output}: {says}" in err and "Errno" not in err, argv
+
+
+def test_a_capture_with_connections_but_no_rows_is_exit_3_naming_the_ports(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    rtde = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30004))
+    rtde.handshake()  # a connection to the RTDE port that never says a word
+    capture = write(tmp_path / "quiet.pcap", [rtde])
+    code, out, err = run(capsys, "capture", str(capture), "-o", str(tmp_path / "out"))
+    assert code == 3 and "1 connection\n" in out and "tables: none" in out
+    assert ": ok:" not in err and "no rows found; TCP ports seen: 30004" in err and "--port-map" in err

@@ -32,7 +32,10 @@ MESSAGE_DATA = 0x01  # binary opcode: uint32 subscription id, uint64 log time (b
 @pytest.fixture
 def emu() -> Iterator[EmulatorThread]:
     running = EmulatorThread(
-        EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, scenario=SCENARIO)
+        EmulatorConfig(
+            rtde_port=0, primary_port=0, secondary_port=0, scenario=SCENARIO, realtime_port=None,
+            dashboard_port=None,
+        )
     ).start()
     yield running
     running.stop()
@@ -279,7 +282,7 @@ def test_serve_with_foxglove_publishes_the_emulator_live() -> None:
     port = free_port()
     proc = subprocess.Popen(
         [sys.executable, "-m", "rtde_spec", "serve", "--rtde-port", "0", "--primary-port", "0",
-         "--secondary-port", "0", "--dashboard-port", "0", "--foxglove", str(port),
+         "--secondary-port", "0", "--dashboard-port", "0", "--realtime-port", "0", "--foxglove", str(port),
          "--rtde-fields", "timestamp,actual_q", "--rtde-frequency", "25"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )  # fmt: skip

@@ -24,6 +24,7 @@ rtde_receive = pytest.importorskip("rtde_receive", reason="ur_rtde is installed 
 import rtde_io  # noqa: E402
 
 HOST = "127.0.0.2"
+pytestmark = pytest.mark.fixed_ports(HOST)  # in turn with other runs (tests/fixed_ports.py)
 SCENARIO = """
 controller: 5.15.0
 outputs:

@@ -18,6 +18,7 @@ from .test_interop import serve
 
 DUMPCAP = shutil.which("dumpcap")
 HOST = "127.0.0.3"
+pytestmark = pytest.mark.fixed_ports(HOST)  # in turn with other runs (tests/fixed_ports.py)
 if DUMPCAP is None:
     reason = "dumpcap is not installed (Debian package tshark; .ci/run installs it): no live capture test"
     if os.environ.get("CI"):

@@ -26,13 +26,15 @@ from rtde_spec.metamodel.arms import arm_model
 
 urx_robot = pytest.importorskip("urx.urrobot", reason="python-urx is installed by the test extra")
 rtde_receive = pytest.importorskip("rtde_receive", reason="ur_rtde is installed by the test extra")
+pytestmark = pytest.mark.fixed_ports("127.0.0.23", "127.0.0.24")  # in turn with other runs
 
 
 def test_urx_getters_and_waiting_moves_end_at_the_target() -> None:
     host = "127.0.0.23"
     # urx recognises the Robot State of CB3 controllers (3.x sizes); it is a CB3-era client
     config = EmulatorConfig(
-        host=host, rtde_port=None, primary_port=None, secondary_port=30002, controller="3.15.0", arm="UR5"
+        host=host, rtde_port=None, primary_port=None, secondary_port=30002, controller="3.15.0", arm="UR5",
+        realtime_port=None, dashboard_port=None
     )
     with EmulatorThread(config) as emu:
         robot = urx_robot.URRobot(host)

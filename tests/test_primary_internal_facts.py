@@ -36,7 +36,14 @@ def test_every_internal_member_names_its_sources() -> None:
 
 def first_state(version: str) -> tuple[bytes, bytes]:
     emu = EmulatorThread(
-        EmulatorConfig(rtde_port=None, primary_port=0, secondary_port=0, controller=version)
+        EmulatorConfig(
+            rtde_port=None,
+            primary_port=0,
+            secondary_port=0,
+            realtime_port=None,
+            dashboard_port=None,
+            controller=version,
+        )
     ).start()
     try:
         version_message, state = (m for m in messages(emu.ports["secondary"], 2))

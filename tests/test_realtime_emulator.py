@@ -23,6 +23,7 @@ from rtde_spec.emulator.ports.guard import ClientLimits
 from rtde_spec.metamodel.arms import arm_model
 
 urx = pytest.importorskip("urx", reason="python-urx is installed by the test extra")
+pytestmark = pytest.mark.fixed_ports("127.0.0.25")  # in turn with other runs (tests/fixed_ports.py)
 
 TARGET = [0.3, -1.4, 1.4, -1.6, -1.5, 0.2]
 
@@ -45,8 +46,9 @@ def read_messages(sock: socket.socket, seconds: float) -> list[tuple[float, ...]
 
 
 def config(host: str, version: str, **kw: object) -> EmulatorConfig:
+    off: dict[str, object] = {"realtime_port": None, "dashboard_port": None}
     return EmulatorConfig(
-        host=host, rtde_port=None, primary_port=None, secondary_port=None, controller=version, **kw
+        host=host, rtde_port=None, primary_port=None, secondary_port=None, controller=version, **{**off, **kw}
     )  # type: ignore[arg-type]
 
 

@@ -27,7 +27,9 @@ UR_CONFIG = DATA / "ur_client_config.xml"  # UR's example: recipes state, setp, 
 
 @pytest.fixture(scope="module")
 def emu() -> Iterator[EmulatorThread]:
-    config = EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, dashboard_port=0)
+    config = EmulatorConfig(
+        rtde_port=0, primary_port=0, secondary_port=0, dashboard_port=0, realtime_port=None
+    )
     config.skip_after = None  # a stall of the loaded machine delays packages, never skips them
     running = EmulatorThread(config).start()
     yield running

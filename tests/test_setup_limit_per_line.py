@@ -54,7 +54,14 @@ def test_validate_command_on_e_series(tmp_path: pytest.TempPathFactory) -> None:
 
 def test_emulator_on_e_series_takes_the_whole_list_and_sends_it() -> None:
     emu = EmulatorThread(
-        EmulatorConfig(rtde_port=0, primary_port=None, secondary_port=None, controller="5.23.0")
+        EmulatorConfig(
+            rtde_port=0,
+            primary_port=None,
+            secondary_port=None,
+            realtime_port=None,
+            dashboard_port=None,
+            controller="5.23.0",
+        )
     ).start()
     try:
         with RtdeClient("127.0.0.1", emu.ports["rtde"]) as client:
@@ -69,7 +76,14 @@ def test_emulator_on_e_series_takes_the_whole_list_and_sends_it() -> None:
 
 def test_client_refuses_it_for_cb3_before_sending() -> None:
     emu = EmulatorThread(
-        EmulatorConfig(rtde_port=0, primary_port=None, secondary_port=None, controller="3.15.8")
+        EmulatorConfig(
+            rtde_port=0,
+            primary_port=None,
+            secondary_port=None,
+            realtime_port=None,
+            dashboard_port=None,
+            controller="3.15.8",
+        )
     ).start()
     try:
         with RtdeClient("127.0.0.1", emu.ports["rtde"]) as client:

@@ -174,6 +174,7 @@ def _fields(root: Path, version: str) -> dict[str, dict[str, Any]]:
     return {f"{f['direction']}:{f['name']}": f for f in json.loads(result.stdout)}
 
 
+@pytest.mark.slow  # spec import --write, then codegen of the whole spec: 3.7 s CPU
 def test_write_then_codegen_shows_the_changes_at_their_versions(spec: Spec, tmp_path: Path) -> None:
     root = _copy_tree(tmp_path)
     fields_yaml = root / "spec" / "rtde" / "fields.yaml"

@@ -31,7 +31,10 @@ SCENARIO = Scenario.model_validate(
 
 
 def emulator(scenario: Scenario = SCENARIO, **ports: int | None) -> EmulatorThread:
-    config = EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, scenario=scenario)
+    config = EmulatorConfig(
+        rtde_port=0, primary_port=0, secondary_port=0, scenario=scenario, realtime_port=None,
+        dashboard_port=None,
+    )
     for name, port in ports.items():
         setattr(config, name, port)
     return EmulatorThread(config).start()

@@ -34,8 +34,13 @@ rtde_io = pytest.importorskip("rtde_io", reason="ur_rtde is installed by the tes
 HOST = "127.0.0.71"
 RAD, METRE = 1e-4, 1e-4
 POSITION, TEACH, FORCE = 0, 1, 2  # the Robot Mode Data's control mode (primary port)
-# ur_rtde needs the controller's own ports on its host: every test of this module in one xdist worker
-pytestmark = [pytest.mark.slow, pytest.mark.xdist_group("default-ports")]
+# ur_rtde needs the controller's own ports on its host: every test of this module in one xdist
+# worker (one emulator for them all), taking turns for the ports with other runs on the machine
+pytestmark = [
+    pytest.mark.slow,
+    pytest.mark.xdist_group("ur-rtde-control"),
+    pytest.mark.fixed_ports(HOST, "127.0.0.72"),
+]
 
 
 @dataclass

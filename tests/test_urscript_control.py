@@ -46,7 +46,9 @@ def faults(events: list[tuple[str, str, int, int]]) -> list[tuple[str, int, int]
 
 
 def serve() -> EmulatorThread:
-    config = EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=None, dashboard_port=0)
+    config = EmulatorConfig(
+        rtde_port=0, primary_port=0, secondary_port=None, dashboard_port=0, realtime_port=None
+    )
     return EmulatorThread(config).start()
 
 

@@ -81,7 +81,9 @@ def test_a_thread_that_never_waits_is_the_controllers_runtime_error() -> None:
 
 
 def test_the_register_functions_are_the_rtde_servers_registers() -> None:
-    config = EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=None)
+    config = EmulatorConfig(
+        rtde_port=0, primary_port=0, secondary_port=None, realtime_port=None, dashboard_port=None
+    )
     with EmulatorThread(config) as emu, RtdeClient("127.0.0.1", emu.ports["rtde"]) as client:
         client.setup_outputs(
             ["output_int_register_24", "output_double_register_30", "output_bit_registers0_to_31"], 500

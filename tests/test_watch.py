@@ -28,7 +28,10 @@ SCENARIO = Scenario.model_validate({"controller": "5.11.2", "outputs": {"actual_
 @pytest.fixture
 def emu() -> Iterator[EmulatorThread]:
     running = EmulatorThread(
-        EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, scenario=SCENARIO)
+        EmulatorConfig(
+            rtde_port=0, primary_port=0, secondary_port=0, scenario=SCENARIO, realtime_port=None,
+            dashboard_port=None,
+        )
     ).start()
     yield running
     running.stop()
@@ -145,7 +148,10 @@ def test_errors_read_only_refused_port_and_missing_script(
 
 def test_a_controller_that_closes_is_an_error_after_what_it_sent(capsys: pytest.CaptureFixture[str]) -> None:
     running = EmulatorThread(
-        EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, scenario=SCENARIO)
+        EmulatorConfig(
+            rtde_port=0, primary_port=0, secondary_port=0, scenario=SCENARIO, realtime_port=None,
+            dashboard_port=None,
+        )
     ).start()
     port = running.ports["secondary"]
     stopper = threading.Timer(0.5, running.stop)

@@ -42,7 +42,9 @@ def run_online(args: argparse.Namespace) -> int:
     logging.getLogger("rtde_spec").setLevel(logging.WARNING)
     out = demo_folder(args.output)
     csv_path, png_path = out / "joints.csv", out / "joints.png"
-    config = EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0)
+    config = EmulatorConfig(
+        rtde_port=0, primary_port=0, secondary_port=0, realtime_port=None, dashboard_port=None
+    )
     with EmulatorThread(config) as emulator:
         port, primary = emulator.ports["rtde"], emulator.ports["primary"]
         print(

@@ -27,7 +27,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         **describe(
             "Writes the files every README command names into FOLDER: robot.pcapng (an RTDE and a "
             "primary connection), captures/ (two robots), late.pcap and its recipe outputs.txt, "
-            "driver.pcap (a UR ROS driver session on every port), rtde_config.xml, move.script, the "
+            "driver.pcap (a driver-like client's session with the emulator, captured on loopback: "
+            "dashboard, primary, RTDE, 50001/50003/50004), rtde_config.xml, move.script, the "
             "scenario moving.yaml, byte files (session.bin, data.bin, capture_30001.bin) and an "
             "excerpt of a guide of our own (rtde-guide-5.30.txt). Run the README's commands from "
             "that folder. Existing files are left alone unless --force.",

@@ -24,6 +24,8 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
+from rtde_spec._generated.dashboard import DASHBOARD
+from rtde_spec._generated.realtime import REALTIME_PORTS
 from rtde_spec.emulator.controller.clock import StepClock
 from rtde_spec.emulator.controller.faults import FaultSchedule
 from rtde_spec.emulator.controller.model import ControllerModel
@@ -41,6 +43,10 @@ STATE_HZ = 10
 
 @dataclass
 class EmulatorConfig:
+    """The ports `rtde-spec serve` serves, on the controller's numbers: RTDE 30004, primary 30001,
+    secondary 30002, real-time 30003, dashboard 29999 (the read-only ones off). Each moves to a
+    free port with 0 (`emu.ports` names them) or is left out with None; `free_ports()` moves all."""
+
     host: str = "127.0.0.1"
     rtde_port: int | None = RTDE_PORT
     primary_port: int | None = PRIMARY_PORTS["primary"]
@@ -50,11 +56,9 @@ class EmulatorConfig:
     scenario: Scenario = field(default_factory=Scenario)
     controller: str | None = None  # overrides the scenario's version
     arm: str | None = None  # arm model (spec/arms): default UR5 for a CB3 version, else UR5e
-    # the dashboard server (29999 on a controller) is off unless given, so parallel tests never collide
-    dashboard_port: int | None = None
+    dashboard_port: int | None = int(DASHBOARD["port"])  # type: ignore[call-overload]
     dashboard_optional: bool = False  # a dashboard port in use is logged and skipped, not an error
-    # the real-time ports (30003/30013 on a controller): off unless given, as the dashboard
-    realtime_port: int | None = None
+    realtime_port: int | None = REALTIME_PORTS["realtime"]
     realtime_read_only_port: int | None = None
     realtime_optional: bool = False  # a real-time port in use is logged and skipped, not an error
     programs: Path | None = None  # where the dashboard's `load` finds programs (none: "File not found")
@@ -78,9 +82,7 @@ class EmulatorConfig:
     def free_ports(cls, **kw: object) -> EmulatorConfig:
         """Every port `rtde-spec serve` serves (RTDE, primary, secondary, real-time, dashboard),
         each on a free port (`emu.ports` names them); a keyword moves or drops one (None).
-
-        The plain defaults serve RTDE, primary and secondary on the controller's ports and leave
-        real-time and the dashboard off, so tests running side by side never collide on them.
+        Tests running side by side use this: the plain defaults are the controller's fixed ports.
         """
         ports: dict[str, object] = {
             "rtde_port": 0, "primary_port": 0, "secondary_port": 0, "realtime_port": 0, "dashboard_port": 0,
@@ -317,6 +319,10 @@ class EmulatorThread:
         try:
             self._loop.run_until_complete(self.emulator.start())
         except BaseException as exc:
+            # the ports opened before the one that failed are closed: a failed start left them
+            # listening for the life of the process, so every later start there failed too
+            self._loop.run_until_complete(self.emulator.stop())
+            self._loop.close()
             self._error = exc
             self._ready.set()
             return

@@ -37,7 +37,7 @@ def emu(tmp_path: Path) -> Iterator[EmulatorThread]:
     (programs / "inside.script").write_text('def inside():\n  textmsg("in")\nend\n')
     os.symlink(programs / "inside.script", programs / "alias.script")  # a link that stays inside
     config = EmulatorConfig(
-        rtde_port=0, primary_port=0, secondary_port=0, dashboard_port=0, programs=programs
+        rtde_port=0, primary_port=0, secondary_port=0, dashboard_port=0, programs=programs, realtime_port=None
     )
     emulator = EmulatorThread(config).start()
     yield emulator

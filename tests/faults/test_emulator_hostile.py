@@ -43,7 +43,8 @@ SERVER = """
 import asyncio, dataclasses, logging, sys
 from rtde_spec.emulator.server import Emulator, EmulatorConfig
 logging.basicConfig(level=logging.INFO, stream=sys.stderr, format="%(levelname)s %(message)s")
-wanted = dict(rtde_port=0, primary_port=0, secondary_port=0, skip_after=None)
+wanted = dict(rtde_port=0, primary_port=0, secondary_port=0, realtime_port=None, dashboard_port=None,
+              skip_after=None)
 names = {f.name for f in dataclasses.fields(EmulatorConfig)}
 config = EmulatorConfig(**{k: v for k, v in wanted.items() if k in names})
 if hasattr(config, "limits"):

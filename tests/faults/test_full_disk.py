@@ -64,6 +64,7 @@ def said_full(stderr: str, path: Path) -> None:
     assert "Errno" not in stderr, stderr
 
 
+@pytest.mark.slow  # a recorder against the emulator until a tmpfs fills: 2-3 s CPU, 25-37 s loaded
 @pytest.mark.parametrize("fmt", FORMATS)
 def test_a_recording_on_a_filling_disk_keeps_the_existing_file(
     emu: EmulatorThread, small_disk: Path, fmt: str
