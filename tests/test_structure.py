@@ -151,8 +151,8 @@ FLOORS: tuple[tuple[str, ...], ...] = (
     ("rtde_spec.metamodel",),
     ("rtde_spec.output",),
     ("rtde_spec.recipes", "rtde_spec.realtime", "rtde_spec.external", "rtde_spec.primary"),
-    ("rtde_spec.rtde", "rtde_spec.examples"),
-    ("rtde_spec.capture", "rtde_spec.emulator", "rtde_spec.importers"),
+    ("rtde_spec.rtde",),
+    ("rtde_spec.capture", "rtde_spec.emulator", "rtde_spec.importers", "rtde_spec.examples"),
     ("rtde_spec.cli",),
     ("rtde_spec", "rtde_spec.__main__"),
 )

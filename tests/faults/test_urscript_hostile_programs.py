@@ -31,8 +31,8 @@ if not Path("/proc/self/status").exists():  # pragma: no cover - Linux CI
 SERVER = """
 import asyncio, sys
 from rtde_spec.emulator.server import Emulator, EmulatorConfig
-config = EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=None, dashboard_port=0, realtime_port=None,
-                        skip_after=None)
+config = EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=None, dashboard_port=0,
+                        realtime_port=None, skip_after=None)
 
 async def main():
     emulator = Emulator(config)
