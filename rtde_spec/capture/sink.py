@@ -14,8 +14,8 @@ import json
 import os
 import stat
 import time
-from collections import OrderedDict
-from collections.abc import Mapping
+from collections import OrderedDict, deque
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -61,6 +61,7 @@ class TableSink:
     def __init__(self) -> None:
         self.rows: dict[str, int] = {}
         self.recipes: dict[tuple[str, tuple[str, ...]], str] = {}  # (direction, names) -> table
+        self.lag = 0  # blocks of a mapped input this sink may still read after it is given them
 
     def table_for_recipe(self, direction: str, names: tuple[str, ...]) -> str:
         key = (direction, names)
@@ -109,7 +110,9 @@ class DirectorySink(TableSink):
     through our own file object, so they can be suspended too.
     """
 
-    def __init__(self, outdir: str | Path, fmt: str, stem: str, budget: int | None = None) -> None:
+    def __init__(
+        self, outdir: str | Path, fmt: str, stem: str, budget: int | None = None, workers: int = 0
+    ) -> None:
         super().__init__()
         self.outdir, self.fmt, self.stem = Path(outdir), fmt, stem
         self.writers: dict[tuple[str, str, str], Writer] = {}
@@ -118,6 +121,9 @@ class DirectorySink(TableSink):
         self._pinned = self.budget // 2 if fmt == "parquet" else 0  # pyarrow's own files: fastest
         self._pinned_keys: set[tuple[str, str, str]] = set()
         self._open: OrderedDict[tuple[str, str, str], Writer] = OrderedDict()  # suspendable, by last use
+        self.ahead = OrderedWrites(workers) if workers > 0 and fmt in PREPARED else None
+        if self.ahead is not None:  # batches are views of the file, prepared while it is read on
+            self.lag = self.ahead.depth
 
     def _writer(self, table: str, robot: str, day: str) -> Writer:
         key = (table, robot, day)
@@ -150,13 +156,29 @@ class DirectorySink(TableSink):
         return writer
 
     def _row(self, table: str, robot: str, day: str, record: Mapping[str, Any]) -> None:
+        if self.ahead is not None:
+            self.ahead.add((table, robot, day), None, record, self._write)
+            return
         self._writer(table, robot, day).write(record)
 
     def _columns(self, table: str, robot: str, day: str, columns: Mapping[str, Any]) -> None:
+        if self.ahead is not None:
+            self.ahead.add((table, robot, day), PREPARED[self.fmt], columns, self._write)
+            return
         self._writer(table, robot, day).write_columns(columns)
+
+    def _write(self, key: tuple[str, str, str], prepared: bool, item: Any) -> None:
+        """One item of `OrderedWrites`, in the order the decoder gave them (as without workers)."""
+        writer = self._writer(*key)
+        if prepared:
+            writer.write_prepared(item)  # type: ignore[attr-defined]
+        else:
+            writer.write(item)
 
     def abort(self) -> None:
         """Drop every table of this capture: files of earlier runs stay as they were."""
+        if self.ahead is not None:
+            self.ahead.drop()
         for writer in self.writers.values():
             writer.abort()
         self.writers.clear()
@@ -164,6 +186,8 @@ class DirectorySink(TableSink):
     def close(self) -> None:
         """Every table finished first, then all put in place: a write error keeps none of them."""
         try:
+            if self.ahead is not None:
+                self.ahead.finish(self._write)
             for writer in self.writers.values():
                 writer.prepare()
         except BaseException:
@@ -188,6 +212,68 @@ class DirectorySink(TableSink):
                 raise OutputError(
                     f"{failed.reason}; {kept}", errno=failed.errno, subject=failed.subject
                 ) from exc
+
+
+def _parquet_prepare(columns: Mapping[str, Any]) -> Any:
+    from rtde_spec.output.parquet import prepared_columns
+
+    return prepared_columns(columns)
+
+
+# formats whose writers take a batch prepared on another thread (`write_prepared`)
+PREPARED: dict[str, Callable[[Mapping[str, Any]], Any]] = {"parquet": _parquet_prepare}
+Key = tuple[str, str, str]
+WriteItem = Callable[[Key, bool, Any], None]
+
+
+class OrderedWrites:
+    """Batches prepared on worker threads, written in the order they were given.
+
+    Preparing a batch for its file (numpy copies of every column out of the packages,
+    with the GIL released) is half the work of a capture; the decoder goes on framing
+    while `workers` threads prepare, and each batch reaches its writer in turn, so the
+    files are those of a run without workers, byte for byte. At most `depth` batches
+    wait: memory stays bounded, and a slow disk slows the decoder rather than filling it.
+    """
+
+    def __init__(self, workers: int, depth: int | None = None) -> None:
+        from concurrent.futures import ThreadPoolExecutor
+
+        self.pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="rtde-spec-prepare")
+        self.depth = depth if depth is not None else workers + 1
+        self.queue: deque[tuple[Key, bool, Any]] = deque()  # (key, prepared?, future or record)
+
+    def add(self, key: Key, prepare: Callable[[Any], Any] | None, item: Any, write: WriteItem) -> None:
+        if prepare is None:  # a row: written in turn, as soon as what is before it is
+            self.queue.append((key, False, item))
+        else:
+            self.queue.append((key, True, self.pool.submit(prepare, item)))
+        self._drain(write, self.depth)
+
+    def _drain(self, write: WriteItem, keep: int) -> None:
+        """Write from the front: every batch already prepared, and more until `keep` wait."""
+        queue = self.queue
+        while queue:
+            key, prepared, item = queue[0]
+            if prepared and len(queue) <= keep and not item.done():
+                return
+            queue.popleft()
+            write(key, prepared, item.result() if prepared else item)
+
+    def finish(self, write: WriteItem) -> None:
+        """Everything written; the threads end."""
+        try:
+            self._drain(write, 0)
+        finally:
+            self.drop()
+
+    def drop(self) -> None:
+        """Nothing more is written (an error, or abort): waiting batches are forgotten."""
+        for _, prepared, item in self.queue:
+            if prepared:
+                item.cancel()
+        self.queue.clear()
+        self.pool.shutdown(wait=True)
 
 
 class ArrowSink(TableSink):

@@ -148,10 +148,13 @@ class ParquetWriter(Writer):
             self._add(rows_table(rows))
 
     def write_columns(self, columns: Mapping[str, Any]) -> None:
+        self.write_prepared(prepared_columns(columns))
+
+    def write_prepared(self, prepared: Any) -> None:
+        """A batch `prepared_columns` made (on any thread), written in the caller's order."""
         self._flush_rows()
-        flat = flat_columns(columns)
-        self._add(arrow_table(flat))
-        self.rows += len(next(iter(flat.values()))) if flat else 0
+        self._add(prepared)
+        self.rows += prepared.num_rows
 
     def size(self) -> int:
         """The Arrow size of the rows so far: about the file's, as float columns stay uncompressed."""
@@ -175,6 +178,16 @@ class ParquetWriter(Writer):
         if not isinstance(self.stream, str):
             self._wait()  # the row group in flight is written through the file first
             super().suspend()
+
+
+def prepared_columns(columns: Mapping[str, Any]) -> Any:
+    """A batch of numpy columns as the Arrow table `ParquetWriter.write_prepared` takes.
+
+    The costly part of writing a batch before encoding (copying every column out of the
+    packages into native order: numpy, the GIL released) and no state of any writer, so
+    a capture with `--jobs` runs it on worker threads while the file stays in order.
+    """
+    return arrow_table(flat_columns(columns))
 
 
 def usable_cores() -> int:
