@@ -9,7 +9,6 @@ appears complete: the writers write beside the name and rename into place at clo
 
 from __future__ import annotations
 
-import hashlib
 import json
 import os
 import stat
@@ -52,7 +51,16 @@ def output_stem(path: str | Path) -> str:
     if not regular:
         return f"{path.stem}-{time.strftime('%Y%m%dT%H%M%S', time.gmtime())}-{os.getpid()}"
     key = os.fsencode(os.path.realpath(path))
-    return f"{path.stem}-{hashlib.sha1(key).hexdigest()[:8]}"
+    return f"{path.stem}-{_sha1(key).hexdigest()[:8]}"
+
+
+def _sha1(data: bytes) -> Any:
+    """SHA-1 from CPython's own module: `hashlib` loads OpenSSL first (~4 ms of every start)."""
+    try:
+        from _sha1 import sha1  # type: ignore[import-not-found]
+    except ImportError:  # a Python built without it: OpenSSL's
+        from hashlib import sha1
+    return sha1(data)
 
 
 class TableSink:

@@ -43,7 +43,7 @@ class ParquetWriter(Writer):
         self._bytes = 0  # Arrow bytes of the rows so far, for splitting by size
         self._row_bytes: float | None = None
         self._pa = require("pyarrow", "parquet", "Parquet output")
-        self._pq = require("pyarrow.parquet", "parquet", "Parquet output")
+        self._pq = require("pyarrow._parquet", "parquet", "Parquet output")
         self._writer: Any = None
         self._rows: list[dict[str, Any]] = []
         self._tables: list[Any] = []
@@ -59,7 +59,7 @@ class ParquetWriter(Writer):
         self._written(self._create, schema, discrete or False, stats or False, compression)
 
     def _create(self, schema: Any, dictionary: Any, stats: Any, compression: Any) -> None:
-        self._writer = self._pq.ParquetWriter(
+        self._writer = LeanParquetWriter(
             self.stream, schema, use_dictionary=dictionary, write_statistics=stats, compression=compression
         )
 
@@ -90,18 +90,20 @@ class ParquetWriter(Writer):
         except (ValueError, self._pa.ArrowInvalid) as exc:
             raise UsageError(f"a batch does not fit the file's columns: {exc}", subject=WHERE) from exc
 
-    def _write_held(self) -> None:
+    def _write_held(self, last: bool = False) -> None:
         """Hand the held rows to the writing thread; at most one row group is in flight.
 
         pyarrow encodes with the GIL released, so on two cores the next batch decodes
         while this one is written. Memory stays bounded: one group held, one writing.
+        The `last` group is written here: nothing is left to overlap it with (and a
+        small output never starts the thread, nor imports its pool).
         """
         if not self._tables:
             return
         group = self._pa.concat_tables(self._tables)
         self._tables, self._held = [], 0
         self._wait()
-        if not (self.THREADED if self.THREADED is not None else usable_cores() > 1):
+        if last or not (self.THREADED if self.THREADED is not None else usable_cores() > 1):
             self._written(self._writer.write_table, group, row_group_size=group.num_rows)
             return
         if self._pool is None:
@@ -164,7 +166,7 @@ class ParquetWriter(Writer):
         try:
             self._flush_rows()
             if self._writer is not None:
-                self._write_held()
+                self._write_held(last=True)
                 self._wait()
                 self._written(self._writer.close)
         finally:
@@ -178,6 +180,57 @@ class ParquetWriter(Writer):
         if not isinstance(self.stream, str):
             self._wait()  # the row group in flight is written through the file first
             super().suspend()
+
+
+# what pyarrow.parquet.ParquetWriter gives pyarrow's own writer when not told otherwise (pyarrow 14
+# to 26); the rest are that writer's defaults. tests/test_parquet_lean.py: the same bytes.
+PYARROW_PARQUET_DEFAULTS: dict[str, Any] = {
+    "version": "2.6",
+    "use_deprecated_int96_timestamps": False,
+    "writer_engine_version": "V2",
+    "data_page_version": "1.0",
+    "use_compliant_nested_type": True,
+    "store_schema": True,
+    "use_dictionary": True,
+    "compression": "snappy",
+    "write_statistics": True,
+}
+
+
+class LeanParquetWriter:
+    """`pyarrow.parquet.ParquetWriter` for a local file or a Python file object, without
+    importing `pyarrow.parquet`: that module loads pyarrow's filesystems (S3, GCS, HDFS,
+    Azure, and with them `ssl`), ~30 ms of CPU before a one-package capture writes a byte.
+    The writer below it (`pyarrow._parquet`) is the same, given the same settings.
+    """
+
+    def __init__(self, where: Any, schema: Any, **options: Any) -> None:
+        from pyarrow import OSFile, _parquet
+
+        self.schema = schema
+        self._file = OSFile(where, "wb") if isinstance(where, str) else None  # as pyarrow opens a path
+        try:
+            self._writer = _parquet.ParquetWriter(
+                self._file if self._file is not None else where,
+                schema,
+                **{**PYARROW_PARQUET_DEFAULTS, **options},
+            )
+        except BaseException:
+            if self._file is not None:
+                self._file.close()
+            raise
+
+    def write_table(self, table: Any, row_group_size: int | None = None) -> None:
+        if not table.schema.equals(self.schema, check_metadata=False):
+            raise ValueError(f"a table of another schema than the file's: {table.schema} vs {self.schema}")
+        self._writer.write_table(table, row_group_size=row_group_size)
+
+    def close(self) -> None:
+        try:
+            self._writer.close()
+        finally:
+            if self._file is not None:
+                self._file.close()
 
 
 def prepared_columns(columns: Mapping[str, Any]) -> Any:
