@@ -206,7 +206,8 @@ def _read_blocks(
     """`_by_block` for what cannot be mapped: read, and carry a cut-off record over.
 
     `read1` takes what a pipe has (up to a block) rather than waiting for a whole block,
-    so a live capture piped in is decoded as it comes. A record larger than what is
+    so a live capture piped in is decoded as it comes; while more is waiting, it is read
+    on up to a block. A record larger than what is
     held is waited for by doubling what is read before trying again, so a record
     claiming gigabytes costs reading the input once, not once per block.
     """
@@ -221,7 +222,7 @@ def _read_blocks(
             if chunk:
                 pieces.append(chunk)
                 held += len(chunk)
-            if not chunk or held >= want:
+            if not chunk or (held >= want and (held >= BLOCK or not _waiting(f))):
                 break
         buf = b"".join(pieces) if len(pieces) != 1 else pieces[0]
         found = _Columns()
@@ -236,6 +237,17 @@ def _read_blocks(
             if carry:
                 _stopped(stats, start, len(carry), claimed=claim(carry, 0))
             return
+
+
+def _waiting(f: IO[bytes]) -> bool:
+    """Whether more of a pipe can be read at once: a fast writer's stream is taken in blocks
+    (a pipe gives 64 kB a read, and every block costs its numpy set-up), a live one as it comes."""
+    try:
+        import select
+
+        return bool(select.select([f], [], [], 0)[0])
+    except (OSError, ValueError, TypeError, AttributeError):  # not a file descriptor (a BytesIO)
+        return False
 
 
 def _pcap(

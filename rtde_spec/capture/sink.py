@@ -9,6 +9,7 @@ appears complete: the writers write beside the name and rename into place at clo
 
 from __future__ import annotations
 
+import glob
 import json
 import os
 import stat
@@ -109,6 +110,9 @@ def descriptor_budget() -> int:
     return max(8, min(64, soft // 8))
 
 
+PART_METADATA_BYTES = 16 << 20  # a table's file held in memory past this: its next part starts
+
+
 class DirectorySink(TableSink):
     """One file per table, robot and day; at most `budget` of them hold a descriptor at once.
 
@@ -116,15 +120,31 @@ class DirectorySink(TableSink):
     recently written give back their descriptor (`Writer.suspend`) and reopen at their
     end when written again. Parquet files beyond the first `budget // 2` are written
     through our own file object, so they can be suspended too.
+
+    A file whose writer holds more than `part_bytes` of index until it closes (Parquet's
+    footer: ~9 MB per million packages of a 58-field recipe) is finished there, and the
+    table goes on in STEM_0001.EXT, STEM_0002.EXT, ... beside it: memory stays flat
+    however long the capture. The parts are put in place with the rest at close; parts of
+    an earlier run of the same input that this run did not write are removed then.
     """
 
     def __init__(
-        self, outdir: str | Path, fmt: str, stem: str, budget: int | None = None, workers: int = 0
+        self,
+        outdir: str | Path,
+        fmt: str,
+        stem: str,
+        budget: int | None = None,
+        workers: int = 0,
+        part_bytes: int = PART_METADATA_BYTES,
     ) -> None:
         super().__init__()
         self.outdir, self.fmt, self.stem = Path(outdir), fmt, stem
         self.writers: dict[tuple[str, str, str], Writer] = {}
         self.paths: list[Path] = []
+        self.part_bytes = part_bytes
+        self.parts: dict[tuple[str, str, str], int] = {}  # parts finished before the open one
+        self.schemas: dict[tuple[str, str, str], Any] = {}  # a table's columns, for its next part
+        self.finished: list[Writer] = []  # parts finished beside their names, put in place at close
         self.budget = budget or descriptor_budget()
         self._pinned = self.budget // 2 if fmt == "parquet" else 0  # pyarrow's own files: fastest
         self._pinned_keys: set[tuple[str, str, str]] = set()
@@ -138,7 +158,8 @@ class DirectorySink(TableSink):
         writer = self.writers.get(key)
         if writer is None:
             folder = self.outdir / table / f"robot={robot.replace(':', '_')}" / f"date={day}"
-            path = folder / f"{self.stem}.{EXTENSIONS[self.fmt]}"
+            part = self.parts.get(key, 0)
+            path = folder / f"{self.stem}{f'_{part:04d}' if part else ''}.{EXTENSIONS[self.fmt]}"
             pinned = len(self._pinned_keys) < self._pinned
             try:  # a folder or file that cannot be made (no inode left: a full disk) ends the run
                 folder.mkdir(parents=True, exist_ok=True)
@@ -153,6 +174,8 @@ class DirectorySink(TableSink):
 
                 writer.topic = topic_for_table(table)  # type: ignore[attr-defined]
             self.writers[key] = writer
+            if key in self.schemas:  # the table's next part: the columns of the parts before
+                writer.schema = self.schemas[key]  # type: ignore[attr-defined]
             if pinned:
                 self._pinned_keys.add(key)
         if key in self._pinned_keys:
@@ -167,13 +190,17 @@ class DirectorySink(TableSink):
         if self.ahead is not None:
             self.ahead.add((table, robot, day), None, record, self._write)
             return
-        self._writer(table, robot, day).write(record)
+        writer = self._writer(table, robot, day)
+        writer.write(record)
+        self._part_full((table, robot, day), writer)
 
     def _columns(self, table: str, robot: str, day: str, columns: Mapping[str, Any]) -> None:
         if self.ahead is not None:
             self.ahead.add((table, robot, day), PREPARED[self.fmt], columns, self._write)
             return
-        self._writer(table, robot, day).write_columns(columns)
+        writer = self._writer(table, robot, day)
+        writer.write_columns(columns)
+        self._part_full((table, robot, day), writer)
 
     def _write(self, key: tuple[str, str, str], prepared: bool, item: Any) -> None:
         """One item of `OrderedWrites`, in the order the decoder gave them (as without workers)."""
@@ -182,6 +209,22 @@ class DirectorySink(TableSink):
             writer.write_prepared(item)  # type: ignore[attr-defined]
         else:
             writer.write(item)
+        self._part_full(key, writer)
+
+    def _part_full(self, key: tuple[str, str, str], writer: Writer) -> None:
+        """Finish the table's file here when its writer holds too much until close; the next
+        write opens the next part."""
+        if writer.held_metadata() <= self.part_bytes:
+            return
+        del self.writers[key]
+        self._open.pop(key, None)
+        self._pinned_keys.discard(key)
+        self.parts[key] = self.parts.get(key, 0) + 1
+        held = getattr(writer, "_writer", None)
+        if held is not None:
+            self.schemas[key] = held.schema
+        self.finished.append(writer)
+        writer.prepare()  # its footer written and its memory given back; in place at close
 
     def abort(self) -> None:
         """Drop every table of this capture: files of earlier runs stay as they were."""
@@ -189,7 +232,10 @@ class DirectorySink(TableSink):
             self.ahead.drop()
         for writer in self.writers.values():
             writer.abort()
+        for writer in self.finished:
+            writer.discard()
         self.writers.clear()
+        self.finished.clear()
 
     def close(self) -> None:
         """Every table finished first, then all put in place: a write error keeps none of them."""
@@ -202,13 +248,17 @@ class DirectorySink(TableSink):
             self.abort()
             raise
         failed: BaseException | None = None
-        for writer in self.writers.values():  # every table put in place, even after one fails
+        for writer in [
+            *self.finished,
+            *self.writers.values(),
+        ]:  # every table put in place, even after one fails
             try:
                 writer.commit()
             except Exception as exc:
                 failed = failed or exc
         if failed is not None:
             raise failed
+        self._remove_stale_parts()
         if self.recipes:
             listing = [{"table": t, "direction": d, "names": list(n)} for (d, n), t in self.recipes.items()]
             target = self.outdir / f"recipes-{self.stem}.json"
@@ -220,6 +270,18 @@ class DirectorySink(TableSink):
                 raise OutputError(
                     f"{failed.reason}; {kept}", errno=failed.errno, subject=failed.subject
                 ) from exc
+
+    def _remove_stale_parts(self) -> None:
+        """Parts STEM_NNNN of an earlier run of this input that this run did not write (it was
+        shorter): left, they would read as rows of this capture."""
+        written = {str(p) for p in self.paths}
+        for folder in {p.parent for p in self.paths}:
+            for old in folder.glob(f"{glob.escape(self.stem)}_[0-9][0-9][0-9][0-9].{EXTENSIONS[self.fmt]}"):
+                if str(old) not in written:
+                    try:
+                        old.unlink()
+                    except OSError:  # gone already, or not ours to remove: the summary lists ours
+                        pass
 
 
 def _parquet_prepare(columns: Mapping[str, Any]) -> Any:
