@@ -220,9 +220,9 @@ class DirectorySink(TableSink):
         self._open.pop(key, None)
         self._pinned_keys.discard(key)
         self.parts[key] = self.parts.get(key, 0) + 1
-        held = getattr(writer, "_writer", None)
-        if held is not None:
-            self.schemas[key] = held.schema
+        schema = getattr(writer, "schema", None)
+        if schema is not None:
+            self.schemas[key] = schema
         self.finished.append(writer)
         writer.prepare()  # its footer written and its memory given back; in place at close
 

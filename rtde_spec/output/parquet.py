@@ -58,6 +58,7 @@ class ParquetWriter(Writer):
 
     def _open(self, schema: Any) -> None:
         pa = self._pa
+        self.schema = schema
         discrete = [f.name for f in schema if not pa.types.is_floating(f.type)]
         stats = [*discrete, *(["timestamp"] if "timestamp" in schema.names else [])]
         compression = {f.name: "snappy" if f.name in discrete else "none" for f in schema}
@@ -181,6 +182,7 @@ class ParquetWriter(Writer):
                 self._write_held(last=True)
                 self._wait()
                 self._written(self._writer.close)
+                self._writer = None  # pyarrow's writer keeps the footer it wrote: let it go
         finally:
             if self._pool is not None:
                 self._pool.shutdown()
