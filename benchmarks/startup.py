@@ -31,8 +31,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-# target: milliseconds over `python -c pass` (issue "Second first contact", point 5)
-TARGETS = {"--help": 70.0, "capture 1 package -> parquet": 300.0, "record -> network": 250.0}
+# target: milliseconds over `python -c pass` (issue "Second first contact", point 5; the capture's
+# 250 ms is issue 30.5's)
+TARGETS = {"--help": 70.0, "capture 1 package -> parquet": 250.0, "record -> network": 250.0}
 
 
 def one_package_pcap(folder: Path) -> Path:

@@ -69,7 +69,7 @@ def decode_capture(
             table.sweep(seg.time, _finish)
 
     try:
-        for item in items(path, stats, progress):
+        for item in items(path, stats, progress, sink.lag):
             if isinstance(item, Segment):
                 one(item)
                 continue
@@ -207,11 +207,16 @@ def decode_to_directory(
     outdir: str | Path,
     fmt: str = "parquet",
     recipe_names: Sequence[str] | None = None,
+    workers: int = 0,
     **kw: Any,
 ) -> CaptureSummary:
-    """One file into OUTDIR (the unit of work of parallel and Dask runs; picklable arguments)."""
+    """One file into OUTDIR (the unit of work of parallel and Dask runs; picklable arguments).
+
+    `workers`: threads that prepare batches for the files while the capture is read on
+    (`sink.OrderedWrites`; Parquet): the same files, on more cores.
+    """
     codec = RecipeCodec.for_names(recipe_names, "output") if recipe_names else None
-    sink = DirectorySink(outdir, fmt, output_stem(path))
+    sink = DirectorySink(outdir, fmt, output_stem(path), workers=workers)
     try:
         summary = decode_capture(path, sink, recipe=codec, **kw)
     except CaptureInterrupted as stop:

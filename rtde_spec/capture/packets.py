@@ -120,18 +120,22 @@ def _segment(
 
 
 def items(
-    path: str | Path, stats: dict[str, int] | None = None, progress: Callable[[int], None] | None = None
+    path: str | Path,
+    stats: dict[str, int] | None = None,
+    progress: Callable[[int], None] | None = None,
+    lag: int = 0,
 ) -> Iterator[Segment | DataRun]:
     """TCP segments of a capture in file order; runs of data segments as one DataRun each.
 
     Runs are found per block of the file among Ethernet frames (`capture/bulk.py`); every
-    other frame comes segment by segment.
+    other frame comes segment by segment. `lag`: blocks kept mapped after they are handed
+    on, for runs decoded later on other threads (`pcapfile.blocks`).
     """
     counts = stats if stats is not None else {}
     counts.setdefault("frames", 0)
     book = Addresses(counts)  # raw address -> text, converted once per address; IPv4 fragments
     with open(path, "rb") as f:
-        for records in blocks(f, str(path), counts):
+        for records in blocks(f, str(path), counts, lag):
             buf = records.buf
             offsets, lengths = records.offsets.tolist(), records.lengths.tolist()
             times, links = records.times.tolist(), records.links.tolist()

@@ -82,16 +82,19 @@ class _Columns:
         )
 
 
-def blocks(f: IO[bytes], name: str, stats: dict[str, int]) -> Iterator[Records]:
-    """Every frame of the capture in file order, a block of the file at a time."""
+def blocks(f: IO[bytes], name: str, stats: dict[str, int], lag: int = 0) -> Iterator[Records]:
+    """Every frame of the capture in file order, a block of the file at a time.
+
+    `lag`: blocks of a mapped file kept mapped after they are handed on (a reader decoding
+    views of them on other threads finds their pages still there; see `_by_block`)."""
     head = f.read(4)
     if len(head) < 4:
         raise UsageError("not a pcap or pcapng file (shorter than a header)", subject=f"file {name}")
     magic = int.from_bytes(head, "little")
     if magic == PCAPNG_SHB:
-        yield from _pcapng(f, head, name, stats)
+        yield from _pcapng(f, head, name, stats, lag)
     elif magic in PCAP_MAGIC:
-        yield from _pcap(f, *PCAP_MAGIC[magic], name, stats)
+        yield from _pcap(f, *PCAP_MAGIC[magic], name, stats, lag)
     else:
         raise UsageError(f"not a pcap or pcapng file (magic {head.hex()})", subject=f"file {name}")
 
@@ -115,17 +118,20 @@ Claim = Callable[[Any, int], int]  # the length the record header at a position 
 
 
 def _by_block(
-    f: IO[bytes], carry: bytes, start: int, stats: dict[str, int], parse: Parse, claim: Claim
+    f: IO[bytes], carry: bytes, start: int, stats: dict[str, int], parse: Parse, claim: Claim, lag: int = 0
 ) -> Iterator[Records]:
     """The file a block at a time; `parse(buf, start, end, found)` finds the whole records in
     buf[start:end] and says where they end; the rest goes into the next block (or is
-    counted as cut off at the end). `carry`: bytes already read, from file position `start`."""
+    counted as cut off at the end). `carry`: bytes already read, from file position `start`.
+    The pages of a block done leave memory `lag` blocks later (their views stay valid either
+    way: a page given back is read again from the file when touched)."""
     mapped = _mapped(f)
     if mapped is None:
         yield from _read_blocks(f, carry, start, stats, parse, claim)
         return
     pos, size, window = start, len(mapped), BLOCK
     page = mmap.ALLOCATIONGRANULARITY
+    done: list[int] = []  # where the blocks handed on start, oldest first (pages not yet given back)
     while pos < size:
         end = min(size, pos + window)
         if os.fstat(f.fileno()).st_size < end:  # reading a mapped page past the end would fault
@@ -144,11 +150,19 @@ def _by_block(
                 break
             window *= 2  # a record larger than a block
             continue
-        if hasattr(mapped, "madvise") and reached // page > pos // page:  # done pages leave memory
-            mapped.madvise(mmap.MADV_DONTNEED, pos // page * page, (reached // page - pos // page) * page)
+        done.append(pos)
+        if len(done) > lag:
+            _give_back(mapped, done.pop(0), reached if not done else done[0])
         pos, window = reached, BLOCK
     if pos < size:
         _stopped(stats, pos, size - pos, claimed=claim(mapped, pos))
+
+
+def _give_back(mapped: mmap.mmap, start: int, end: int) -> None:
+    """The whole pages of file bytes start..end-1, done with, leave memory."""
+    page = mmap.ALLOCATIONGRANULARITY
+    if hasattr(mapped, "madvise") and end // page > start // page:
+        mapped.madvise(mmap.MADV_DONTNEED, start // page * page, (end // page - start // page) * page)
 
 
 def _stopped(stats: dict[str, int], at: int, unread: int, *, claimed: int = 0) -> None:
@@ -192,7 +206,8 @@ def _read_blocks(
     """`_by_block` for what cannot be mapped: read, and carry a cut-off record over.
 
     `read1` takes what a pipe has (up to a block) rather than waiting for a whole block,
-    so a live capture piped in is decoded as it comes. A record larger than what is
+    so a live capture piped in is decoded as it comes; while more is waiting, it is read
+    on up to a block. A record larger than what is
     held is waited for by doubling what is read before trying again, so a record
     claiming gigabytes costs reading the input once, not once per block.
     """
@@ -207,7 +222,7 @@ def _read_blocks(
             if chunk:
                 pieces.append(chunk)
                 held += len(chunk)
-            if not chunk or held >= want:
+            if not chunk or (held >= want and (held >= BLOCK or not _waiting(f))):
                 break
         buf = b"".join(pieces) if len(pieces) != 1 else pieces[0]
         found = _Columns()
@@ -224,7 +239,20 @@ def _read_blocks(
             return
 
 
-def _pcap(f: IO[bytes], order: str, unit: float, name: str, stats: dict[str, int]) -> Iterator[Records]:
+def _waiting(f: IO[bytes]) -> bool:
+    """Whether more of a pipe can be read at once: a fast writer's stream is taken in blocks
+    (a pipe gives 64 kB a read, and every block costs its numpy set-up), a live one as it comes."""
+    try:
+        import select
+
+        return bool(select.select([f], [], [], 0)[0])
+    except (OSError, ValueError, TypeError, AttributeError):  # not a file descriptor (a BytesIO)
+        return False
+
+
+def _pcap(
+    f: IO[bytes], order: str, unit: float, name: str, stats: dict[str, int], lag: int = 0
+) -> Iterator[Records]:
     import numpy as np
 
     rest = f.read(20)
@@ -261,7 +289,7 @@ def _pcap(f: IO[bytes], order: str, unit: float, name: str, stats: dict[str, int
     def claim(buf: Any, pos: int) -> int:
         return int(size_at(buf, pos + 8)[0]) + 16 if len(buf) - pos >= 16 else 0
 
-    yield from _by_block(f, b"", 24, stats, parse, claim)  # after the file header
+    yield from _by_block(f, b"", 24, stats, parse, claim, lag)  # after the file header
 
 
 def _strided(buf: Any, start: int, stride: int, count: int, dtype: Any) -> Any:
@@ -289,7 +317,7 @@ def _same_run(buf: Any, pos: int, stride: int, count: int, at: int, value: int, 
     return count
 
 
-def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int]) -> Iterator[Records]:
+def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int], lag: int = 0) -> Iterator[Records]:
     import numpy as np
 
     order = "<"
@@ -345,7 +373,7 @@ def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int]) -> Ite
     def claim(buf: Any, pos: int) -> int:
         return int(struct.unpack_from(order + "I", buf, pos + 4)[0]) if len(buf) - pos >= 8 else 0
 
-    yield from _by_block(f, first, 0, stats, parse, claim)
+    yield from _by_block(f, first, 0, stats, parse, claim, lag)
 
 
 def _resolution(options: bytes, order: str) -> float:

@@ -9,13 +9,13 @@ appears complete: the writers write beside the name and rename into place at clo
 
 from __future__ import annotations
 
-import hashlib
+import glob
 import json
 import os
 import stat
 import time
-from collections import OrderedDict
-from collections.abc import Mapping
+from collections import OrderedDict, deque
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
@@ -52,7 +52,16 @@ def output_stem(path: str | Path) -> str:
     if not regular:
         return f"{path.stem}-{time.strftime('%Y%m%dT%H%M%S', time.gmtime())}-{os.getpid()}"
     key = os.fsencode(os.path.realpath(path))
-    return f"{path.stem}-{hashlib.sha1(key).hexdigest()[:8]}"
+    return f"{path.stem}-{_sha1(key).hexdigest()[:8]}"
+
+
+def _sha1(data: bytes) -> Any:
+    """SHA-1 from CPython's own module: `hashlib` loads OpenSSL first (~4 ms of every start)."""
+    try:
+        from _sha1 import sha1  # type: ignore[import-not-found]
+    except ImportError:  # a Python built without it: OpenSSL's
+        from hashlib import sha1
+    return sha1(data)
 
 
 class TableSink:
@@ -61,6 +70,7 @@ class TableSink:
     def __init__(self) -> None:
         self.rows: dict[str, int] = {}
         self.recipes: dict[tuple[str, tuple[str, ...]], str] = {}  # (direction, names) -> table
+        self.lag = 0  # blocks of a mapped input this sink may still read after it is given them
 
     def table_for_recipe(self, direction: str, names: tuple[str, ...]) -> str:
         key = (direction, names)
@@ -100,6 +110,9 @@ def descriptor_budget() -> int:
     return max(8, min(64, soft // 8))
 
 
+PART_METADATA_BYTES = 16 << 20  # a table's file held in memory past this: its next part starts
+
+
 class DirectorySink(TableSink):
     """One file per table, robot and day; at most `budget` of them hold a descriptor at once.
 
@@ -107,24 +120,46 @@ class DirectorySink(TableSink):
     recently written give back their descriptor (`Writer.suspend`) and reopen at their
     end when written again. Parquet files beyond the first `budget // 2` are written
     through our own file object, so they can be suspended too.
+
+    A file whose writer holds more than `part_bytes` of index until it closes (Parquet's
+    footer: ~9 MB per million packages of a 58-field recipe) is finished there, and the
+    table goes on in STEM_0001.EXT, STEM_0002.EXT, ... beside it: memory stays flat
+    however long the capture. The parts are put in place with the rest at close; parts of
+    an earlier run of the same input that this run did not write are removed then.
     """
 
-    def __init__(self, outdir: str | Path, fmt: str, stem: str, budget: int | None = None) -> None:
+    def __init__(
+        self,
+        outdir: str | Path,
+        fmt: str,
+        stem: str,
+        budget: int | None = None,
+        workers: int = 0,
+        part_bytes: int = PART_METADATA_BYTES,
+    ) -> None:
         super().__init__()
         self.outdir, self.fmt, self.stem = Path(outdir), fmt, stem
         self.writers: dict[tuple[str, str, str], Writer] = {}
         self.paths: list[Path] = []
+        self.part_bytes = part_bytes
+        self.parts: dict[tuple[str, str, str], int] = {}  # parts finished before the open one
+        self.schemas: dict[tuple[str, str, str], Any] = {}  # a table's columns, for its next part
+        self.finished: list[Writer] = []  # parts finished beside their names, put in place at close
         self.budget = budget or descriptor_budget()
         self._pinned = self.budget // 2 if fmt == "parquet" else 0  # pyarrow's own files: fastest
         self._pinned_keys: set[tuple[str, str, str]] = set()
         self._open: OrderedDict[tuple[str, str, str], Writer] = OrderedDict()  # suspendable, by last use
+        self.ahead = OrderedWrites(workers) if workers > 0 and fmt in PREPARED else None
+        if self.ahead is not None:  # batches are views of the file, prepared while it is read on
+            self.lag = self.ahead.depth
 
     def _writer(self, table: str, robot: str, day: str) -> Writer:
         key = (table, robot, day)
         writer = self.writers.get(key)
         if writer is None:
             folder = self.outdir / table / f"robot={robot.replace(':', '_')}" / f"date={day}"
-            path = folder / f"{self.stem}.{EXTENSIONS[self.fmt]}"
+            part = self.parts.get(key, 0)
+            path = folder / f"{self.stem}{f'_{part:04d}' if part else ''}.{EXTENSIONS[self.fmt]}"
             pinned = len(self._pinned_keys) < self._pinned
             try:  # a folder or file that cannot be made (no inode left: a full disk) ends the run
                 folder.mkdir(parents=True, exist_ok=True)
@@ -139,6 +174,8 @@ class DirectorySink(TableSink):
 
                 writer.topic = topic_for_table(table)  # type: ignore[attr-defined]
             self.writers[key] = writer
+            if key in self.schemas:  # the table's next part: the columns of the parts before
+                writer.schema = self.schemas[key]  # type: ignore[attr-defined]
             if pinned:
                 self._pinned_keys.add(key)
         if key in self._pinned_keys:
@@ -150,33 +187,78 @@ class DirectorySink(TableSink):
         return writer
 
     def _row(self, table: str, robot: str, day: str, record: Mapping[str, Any]) -> None:
-        self._writer(table, robot, day).write(record)
+        if self.ahead is not None:
+            self.ahead.add((table, robot, day), None, record, self._write)
+            return
+        writer = self._writer(table, robot, day)
+        writer.write(record)
+        self._part_full((table, robot, day), writer)
 
     def _columns(self, table: str, robot: str, day: str, columns: Mapping[str, Any]) -> None:
-        self._writer(table, robot, day).write_columns(columns)
+        if self.ahead is not None:
+            self.ahead.add((table, robot, day), PREPARED[self.fmt], columns, self._write)
+            return
+        writer = self._writer(table, robot, day)
+        writer.write_columns(columns)
+        self._part_full((table, robot, day), writer)
+
+    def _write(self, key: tuple[str, str, str], prepared: bool, item: Any) -> None:
+        """One item of `OrderedWrites`, in the order the decoder gave them (as without workers)."""
+        writer = self._writer(*key)
+        if prepared:
+            writer.write_prepared(item)  # type: ignore[attr-defined]
+        else:
+            writer.write(item)
+        self._part_full(key, writer)
+
+    def _part_full(self, key: tuple[str, str, str], writer: Writer) -> None:
+        """Finish the table's file here when its writer holds too much until close; the next
+        write opens the next part."""
+        if writer.held_metadata() <= self.part_bytes:
+            return
+        del self.writers[key]
+        self._open.pop(key, None)
+        self._pinned_keys.discard(key)
+        self.parts[key] = self.parts.get(key, 0) + 1
+        schema = getattr(writer, "schema", None)
+        if schema is not None:
+            self.schemas[key] = schema
+        self.finished.append(writer)
+        writer.prepare()  # its footer written and its memory given back; in place at close
 
     def abort(self) -> None:
         """Drop every table of this capture: files of earlier runs stay as they were."""
+        if self.ahead is not None:
+            self.ahead.drop()
         for writer in self.writers.values():
             writer.abort()
+        for writer in self.finished:
+            writer.discard()
         self.writers.clear()
+        self.finished.clear()
 
     def close(self) -> None:
         """Every table finished first, then all put in place: a write error keeps none of them."""
         try:
+            if self.ahead is not None:
+                self.ahead.finish(self._write)
             for writer in self.writers.values():
                 writer.prepare()
         except BaseException:
             self.abort()
             raise
         failed: BaseException | None = None
-        for writer in self.writers.values():  # every table put in place, even after one fails
+        for writer in [
+            *self.finished,
+            *self.writers.values(),
+        ]:  # every table put in place, even after one fails
             try:
                 writer.commit()
             except Exception as exc:
                 failed = failed or exc
         if failed is not None:
             raise failed
+        self._remove_stale_parts()
         if self.recipes:
             listing = [{"table": t, "direction": d, "names": list(n)} for (d, n), t in self.recipes.items()]
             target = self.outdir / f"recipes-{self.stem}.json"
@@ -188,6 +270,80 @@ class DirectorySink(TableSink):
                 raise OutputError(
                     f"{failed.reason}; {kept}", errno=failed.errno, subject=failed.subject
                 ) from exc
+
+    def _remove_stale_parts(self) -> None:
+        """Parts STEM_NNNN of an earlier run of this input that this run did not write (it was
+        shorter): left, they would read as rows of this capture."""
+        written = {str(p) for p in self.paths}
+        for folder in {p.parent for p in self.paths}:
+            for old in folder.glob(f"{glob.escape(self.stem)}_[0-9][0-9][0-9][0-9].{EXTENSIONS[self.fmt]}"):
+                if str(old) not in written:
+                    try:
+                        old.unlink()
+                    except OSError:  # gone already, or not ours to remove: the summary lists ours
+                        pass
+
+
+def _parquet_prepare(columns: Mapping[str, Any]) -> Any:
+    from rtde_spec.output.parquet import prepared_columns
+
+    return prepared_columns(columns)
+
+
+# formats whose writers take a batch prepared on another thread (`write_prepared`)
+PREPARED: dict[str, Callable[[Mapping[str, Any]], Any]] = {"parquet": _parquet_prepare}
+Key = tuple[str, str, str]
+WriteItem = Callable[[Key, bool, Any], None]
+
+
+class OrderedWrites:
+    """Batches prepared on worker threads, written in the order they were given.
+
+    Preparing a batch for its file (numpy copies of every column out of the packages,
+    with the GIL released) is half the work of a capture; the decoder goes on framing
+    while `workers` threads prepare, and each batch reaches its writer in turn, so the
+    files are those of a run without workers, byte for byte. At most `depth` batches
+    wait: memory stays bounded, and a slow disk slows the decoder rather than filling it.
+    """
+
+    def __init__(self, workers: int, depth: int | None = None) -> None:
+        from concurrent.futures import ThreadPoolExecutor
+
+        self.pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="rtde-spec-prepare")
+        self.depth = depth if depth is not None else workers + 1
+        self.queue: deque[tuple[Key, bool, Any]] = deque()  # (key, prepared?, future or record)
+
+    def add(self, key: Key, prepare: Callable[[Any], Any] | None, item: Any, write: WriteItem) -> None:
+        if prepare is None:  # a row: written in turn, as soon as what is before it is
+            self.queue.append((key, False, item))
+        else:
+            self.queue.append((key, True, self.pool.submit(prepare, item)))
+        self._drain(write, self.depth)
+
+    def _drain(self, write: WriteItem, keep: int) -> None:
+        """Write from the front: every batch already prepared, and more until `keep` wait."""
+        queue = self.queue
+        while queue:
+            key, prepared, item = queue[0]
+            if prepared and len(queue) <= keep and not item.done():
+                return
+            queue.popleft()
+            write(key, prepared, item.result() if prepared else item)
+
+    def finish(self, write: WriteItem) -> None:
+        """Everything written; the threads end."""
+        try:
+            self._drain(write, 0)
+        finally:
+            self.drop()
+
+    def drop(self) -> None:
+        """Nothing more is written (an error, or abort): waiting batches are forgotten."""
+        for _, prepared, item in self.queue:
+            if prepared:
+                item.cancel()
+        self.queue.clear()
+        self.pool.shutdown(wait=True)
 
 
 class ArrowSink(TableSink):

@@ -87,7 +87,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         type=int,
         default=1,
         metavar="PROCESSES",
-        help="files decoded in parallel processes (default: 1)",
+        help="files decoded in parallel processes; one file: threads preparing its batches for "
+        "the writers while it is read on, the same tables (Parquet; default: 1)",
     )
     add_lenient(p, "exit 0 when an input was damaged (the summary is printed all the same; default: exit 3)")
     p.set_defaults(run=run)
@@ -192,6 +193,8 @@ def run(args: argparse.Namespace) -> int:
             ]
             summaries = [f.result() for f in futures]
     else:
+        if args.jobs > 1:  # one file on several cores: framing stays here, batches go to threads
+            kw["workers"] = args.jobs - 1
         for f in files:
             bar = _progress(f)
             if bar is not None:

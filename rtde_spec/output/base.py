@@ -102,6 +102,15 @@ class Writer:
         if hasattr(stream, "suspend"):
             stream.suspend()
 
+    def held_metadata(self) -> int:
+        """Bytes of the file's index this writer holds until it closes (Parquet's footer): a
+        dataset starts the table's next part past a bound, so memory stays flat."""
+        return 0
+
+    def discard(self) -> None:
+        """A prepared file is not put in place (another file of its dataset failed)."""
+        self._settle(keep=False)
+
     def size(self) -> int:
         """Bytes written so far (an estimate where the format encodes later): for splitting."""
         return int(getattr(self.stream, "written", 0))

@@ -8,7 +8,6 @@ JSON keeps them as lists.
 
 from __future__ import annotations
 
-import csv
 import io
 import json
 import sys
@@ -17,10 +16,8 @@ from pathlib import Path
 from typing import IO, TYPE_CHECKING, Any
 
 from rtde_spec.errors import OutputError, UsageError
-from rtde_spec.output import jsonlines
 from rtde_spec.output.background import BackgroundStream
 from rtde_spec.output.base import Writer, flat_columns, flatten, native_order, plain
-from rtde_spec.output.mcap import McapWriter
 from rtde_spec.output.parquet import ParquetWriter
 from rtde_spec.output.partfile import DeviceStream, Part, PartStream, is_special
 from rtde_spec.output.tables import arrow_table
@@ -63,6 +60,9 @@ class JsonLinesWriter(Writer):
     def __init__(self, stream: IO[bytes]) -> None:
         super().__init__(stream)
         self._dumps = _dumps()
+        from rtde_spec.output import jsonlines  # loaded with the first JSON Lines writer
+
+        self._jsonlines = jsonlines
         self._lines = jsonlines.formatter()
 
     def write(self, record: Mapping[str, Any]) -> None:
@@ -70,7 +70,7 @@ class JsonLinesWriter(Writer):
         self.rows += 1
 
     def write_columns(self, columns: Mapping[str, Any]) -> None:
-        if jsonlines.fits(columns):
+        if self._jsonlines.fits(columns):
             rows = len(next(iter(columns.values())))
             for start in range(0, rows, _JSON_SLICE_ROWS):  # ~4 kB of text a row: bounded pieces
                 piece = {n: c[start : start + _JSON_SLICE_ROWS] for n, c in columns.items()}
@@ -127,6 +127,8 @@ class CsvWriter(Writer):
     def __init__(self, stream: IO[bytes]) -> None:
         super().__init__(stream)
         self._text = io.TextIOWrapper(stream, encoding="utf-8", newline="", write_through=True)
+        import csv  # loaded with the first CSV writer
+
         self._csv = csv.writer(self._text, lineterminator="\n")  # as pyarrow ends its rows: one ending
         self._header: list[str] | None = None
 
@@ -164,13 +166,13 @@ class CsvWriter(Writer):
         super()._finish()
 
 
-_WRITERS: dict[str, type[Writer]] = {
+_WRITERS: dict[str, type[Writer] | str] = {  # a module's name: imported when that format is asked for
     "table": TableWriter,
     "jsonl": JsonLinesWriter,
     "json": JsonWriter,
     "csv": CsvWriter,
     "parquet": ParquetWriter,
-    "mcap": McapWriter,
+    "mcap": "rtde_spec.output.mcap",
 }
 # Formats a reader reads while they grow (one complete line per row): a recording's file can be
 # in place from its first batch on. A format with a header or footer to finish waits for close.
@@ -187,6 +189,16 @@ def format_for(path: str | None, fmt: str | None) -> str:
         if suffix in (*_WRITERS, "pq", "ndjson")
         else "table"
     )
+
+
+def _writer_class(fmt: str) -> type[Writer]:
+    """The writer of `fmt`; one in a module of its own (MCAP) is imported only when used."""
+    cls = _WRITERS[fmt]
+    if isinstance(cls, str):
+        import importlib
+
+        cls = _WRITERS[fmt] = importlib.import_module(cls).McapWriter
+    return cls
 
 
 def open_writer(
@@ -214,7 +226,7 @@ def open_writer(
     """
     if fmt not in _WRITERS:
         raise UsageError(f"unknown output format {fmt!r}", expected=", ".join(_WRITERS))
-    cls = _WRITERS[fmt]
+    cls = _writer_class(fmt)
     if path is None:
         if cls.NEEDS_PATH:
             raise UsageError(f"{fmt} output needs a file: add -o FILE.{fmt}")

@@ -1,0 +1,152 @@
+"""One capture on several cores (issue 30.4): `capture FILE --jobs N` prepares batches on worker
+threads while the file is read on, and writes the same tables, byte for byte, as `--jobs 1`."""
+
+from __future__ import annotations
+
+import hashlib
+from pathlib import Path
+
+import pyarrow.parquet as pq
+import pytest
+
+from rtde_spec import Catalogue, RecipeCodec, build
+from rtde_spec.capture.decoder import decode_to_directory
+from rtde_spec.capture.sink import DirectorySink, OrderedWrites
+from rtde_spec.errors import OutputError
+from tests.capture_files import Conversation, write
+from tests.test_cli import cli
+
+BIG = (  # a 58-field-like recipe: ~500-byte packages, so a few thousand span several 8 MB blocks
+    "timestamp", "target_q", "target_qd", "target_qdd", "target_current", "target_moment", "actual_q",
+    "actual_qd", "actual_current", "joint_control_output", "actual_TCP_pose", "actual_TCP_speed",
+    "actual_TCP_force", "target_TCP_pose", "target_TCP_speed", "actual_digital_input_bits",
+    "joint_temperatures", "actual_execution_time", "robot_mode", "joint_mode", "safety_mode",
+    "actual_tool_accelerometer", "speed_scaling", "target_speed_fraction", "actual_momentum",
+    "actual_main_voltage", "actual_robot_voltage", "actual_robot_current", "actual_joint_voltage",
+    "actual_digital_output_bits", "runtime_state", "output_int_register_0",
+)  # fmt: skip
+SMALL = ("timestamp", "actual_q", "robot_mode")
+
+
+def _session(conv: Conversation, names: tuple[str, ...], recipe_id: int) -> RecipeCodec:
+    cat = Catalogue.builtin()
+    conv.handshake()
+    conv.send("client", build("request_protocol_version", protocol_version=2))
+    conv.send("server", build("request_protocol_version_reply", accepted=True))
+    conv.send("client", build("setup_outputs_v2", output_frequency=500.0, variable_names=list(names)))
+    types = [cat.get(n, "output").type for n in names]  # type: ignore[union-attr]
+    conv.send("server", build("setup_outputs_v2_reply", output_recipe_id=recipe_id, variable_types=types))
+    conv.send("client", build("start"))
+    conv.send("server", build("start_reply", accepted=True))
+    return RecipeCodec.for_names(list(names), "output", cat)
+
+
+def _package(codec: RecipeCodec, i: int, recipe_id: int) -> bytes:
+    values: dict[str, object] = {}
+    for item in codec.items:
+        one: object = (i * 0.25 + item.wire.size) if item.wire.kind == "float" else (i * 7) % 100
+        values[item.name] = tuple([one] * item.wire.count) if item.wire.count > 1 else one
+    values["timestamp"] = i * 0.002
+    return codec.encode_package(values, recipe_id=recipe_id)
+
+
+@pytest.fixture(scope="module")
+def mixed(tmp_path_factory: pytest.TempPathFactory) -> Path:
+    """Two RTDE connections (a big and a small recipe) interleaved, each with long runs of one
+    package per segment (the bulk path), packages cut across segments and several per segment
+    (the per-package path into the same table), and a text message between the runs."""
+    big = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30004))
+    small = Conversation(("10.0.0.3", 52000), ("10.0.0.11", 30004), time=1_700_000_000.001)
+    big_codec, small_codec = _session(big, BIG, 1), _session(small, SMALL, 2)
+    n = 0
+    for part in range(6):
+        for _ in range(3000):
+            big.send("server", _package(big_codec, n, 1))
+            small.send("server", _package(small_codec, n, 2))
+            n += 1
+        stream = b"".join(_package(big_codec, n + k, 1) for k in range(40))
+        for at in range(0, len(stream), 700):  # cut across segments: framed package by package
+            big.send("server", stream[at : at + 700])
+        n += 40
+        text = build("text_message", message=f"part {part}", source="test", warning_level=1)
+        big.send("server", text)
+    path = write(tmp_path_factory.mktemp("jobs") / "mixed.pcap", [big, small])
+    assert path.stat().st_size > 2 * (8 << 20), "several blocks of the file"
+    return path
+
+
+def digests(folder: Path) -> dict[str, str]:
+    return {
+        str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(folder.rglob("*"))
+        if p.is_file()
+    }
+
+
+def test_one_file_with_jobs_writes_the_same_tables_byte_for_byte(tmp_path: Path, mixed: Path) -> None:
+    one, two = tmp_path / "one", tmp_path / "two"
+    first = cli("capture", str(mixed), "-o", str(one))
+    second = cli("capture", str(mixed), "-o", str(two), "--jobs", "2")
+    assert first.returncode == second.returncode == 0, second.stderr
+    assert first.stdout == second.stdout and first.stderr == second.stderr
+    files = digests(one)
+    assert len([f for f in files if f.endswith(".parquet")]) >= 4  # setup, text and two data tables
+    assert files == digests(two)
+    table = pq.read_table(next(one.glob("rtde_outputs_1/*/*/*.parquet")))
+    stamps = table.column("timestamp").to_pylist()
+    assert len(stamps) == 6 * 3040 and stamps == sorted(stamps), "every row, in capture order"
+
+
+@pytest.mark.parametrize("workers", [1, 3])
+def test_workers_give_the_same_rows_through_the_api(tmp_path: Path, mixed: Path, workers: int) -> None:
+    base = decode_to_directory(mixed, tmp_path / "a")
+    ours = decode_to_directory(mixed, tmp_path / "b", workers=workers)
+    assert ours.tables == base.tables and ours.line() == base.line()
+    assert digests(tmp_path / "a") == digests(tmp_path / "b")
+
+
+def test_csv_with_workers_is_written_as_without(tmp_path: Path, mixed: Path) -> None:
+    """Formats without a prepared path take the batches in the decoding thread: the same files."""
+    base = decode_to_directory(mixed, tmp_path / "a", "csv")
+    ours = decode_to_directory(mixed, tmp_path / "b", "csv", workers=2)
+    assert ours.tables == base.tables
+    assert digests(tmp_path / "a") == digests(tmp_path / "b")
+
+
+def test_ordered_writes_keep_the_order_they_were_given() -> None:
+    import time
+
+    writes = OrderedWrites(workers=3, depth=4)
+    got: list[object] = []
+
+    def slow(value: int) -> int:
+        time.sleep(0.002 * (value % 5))  # later items are often ready first
+        return value
+
+    for i in range(40):
+        if i % 7 == 0:
+            writes.add(("t", "r", "d"), None, f"row {i}", lambda _k, _p, item: got.append(item))
+        else:
+            writes.add(("t", "r", "d"), slow, i, lambda _k, _p, item: got.append(item))
+        assert len(writes.queue) <= 4
+    writes.finish(lambda _k, _p, item: got.append(item))
+    assert got == [f"row {i}" if i % 7 == 0 else i for i in range(40)]
+
+
+def test_a_failed_batch_keeps_no_table_and_names_the_error(tmp_path: Path, mixed: Path) -> None:
+    """An error in a worker reaches the decoding thread; no table of the capture is left behind."""
+    out = tmp_path / "out"
+    old = DirectorySink._write
+
+    def failing(self: DirectorySink, key: tuple[str, str, str], prepared: bool, item: object) -> None:
+        if prepared and key[0] == "rtde_outputs_2" and self.rows.get(key[0], 0) > 5000:
+            raise OutputError("no space left on the device", subject="test")
+        old(self, key, prepared, item)
+
+    DirectorySink._write = failing  # type: ignore[method-assign]
+    try:
+        with pytest.raises(OutputError, match=r"no table of .* was kept"):
+            decode_to_directory(mixed, out, workers=2)
+    finally:
+        DirectorySink._write = old  # type: ignore[method-assign]
+    assert not [p for p in out.rglob("*") if p.is_file()], "nothing half-written is left"
