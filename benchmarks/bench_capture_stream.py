@@ -33,7 +33,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
 BLOCK = 4096  # data packages per repetition of the template
-PART_MB = 16  # the footer a table's open part may hold (capture/sink.py PART_METADATA_BYTES)
+PART_MB = 16  # the footer a table's open part may hold (capture/tables/sink.py PART_METADATA_BYTES)
 GENERATOR = """
 import sys
 sys.path[:0] = sys.argv[1:3]

@@ -255,8 +255,8 @@ def test_runs_of_data_segments_decode_exactly_as_segment_by_segment(
         robots[0].send("server", data(i))
     path = write(tmp_path / f"two.{fmt}", robots, fmt)
     import rtde_spec.capture.decoder as decoder
-    from rtde_spec.capture import bulk
-    from rtde_spec.capture.connections import RtdeConnection
+    from rtde_spec.capture.protocols.rtde import RtdeConnection
+    from rtde_spec.capture.reading import bulk
 
     runs: list[int] = []
     feed_run = RtdeConnection.feed_run

@@ -11,7 +11,7 @@ import pytest
 
 from rtde_spec import Catalogue, RecipeCodec, build
 from rtde_spec.capture.decoder import decode_to_directory
-from rtde_spec.capture.sink import DirectorySink, OrderedWrites
+from rtde_spec.capture.tables.sink import DirectorySink, OrderedWrites
 from rtde_spec.errors import OutputError
 from tests.capture_files import Conversation, write
 from tests.test_cli import cli

@@ -10,7 +10,7 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from rtde_spec.capture.sink import DirectorySink
+from rtde_spec.capture.tables.sink import DirectorySink
 from rtde_spec.output.parquet import CHUNK_METADATA_BYTES, ParquetWriter
 
 ROBOT, DAY = "10.0.0.10", "2023-11-14"

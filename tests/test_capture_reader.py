@@ -15,9 +15,9 @@ from pathlib import Path
 import dpkt
 import pytest
 
-from rtde_spec.capture import pcapfile
-from rtde_spec.capture.bulk import DataRun
-from rtde_spec.capture.packets import Segment, items, segments
+from rtde_spec.capture.reading import pcapfile
+from rtde_spec.capture.reading.bulk import DataRun
+from rtde_spec.capture.reading.packets import Segment, items, segments
 from rtde_spec.errors import UsageError
 
 PAYLOAD = b"\x00\x05V\x00\x02"  # an RTDE version request

@@ -190,3 +190,16 @@ def test_the_floors_diagram_is_the_one_the_imports_draw() -> None:
     from tests.floors import DOC, block, diagram
 
     assert block(DOC.read_text()) == diagram(), "run python -m tests.floors and commit docs/architecture.md"
+
+
+def test_no_function_in_cli_or_capture_is_long() -> None:
+    """About 60 lines at most (an argument parser's list of options may run a little over)."""
+    long = []
+    for folder in ("cli", "capture"):
+        for path in (PACKAGE / folder).rglob("*.py"):
+            for node in ast.walk(ast.parse(path.read_text())):
+                if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
+                    lines = (node.end_lineno or node.lineno) - node.lineno + 1
+                    if lines > (70 if node.name == "add_parser" else 60):
+                        long.append(f"{path.relative_to(ROOT)}:{node.name} {lines} lines")
+    assert not long, long

@@ -1,27 +1,29 @@
-"""Decode capture files, one way through: packets -> TCP streams -> framing -> records -> sink.
+"""Decode capture files, one way down the stages: reading -> routing -> runs -> TCP -> framing ->
+protocol decoders -> tables.
 
-This module drives the layers (`packets`, `tcp`, `framing` inside `connections`, `sink`);
-none of them calls back up. Connections are recognised by port (configurable) and, on
-other ports, by content (an RTDE version request from the client). Every decoded
-package carries the capture time of the segment that completed it. At the end every
-hole still open in a TCP stream is declared lost and everything after it decoded.
+This module drives them: `reading/` gives segments (and bulk runs found with numpy),
+`routing/` gives each its connection (by port, configurable, or by content) and frees
+state that is done, `runs.py` batches whole data packages, `tcp.py` reassembles the
+rest, `framing/` cuts packages, `protocols/` (one decoder per protocol behind
+`ConnectionDecoder`) turns them into rows, and `tables/` writes them and sums up. None
+of them calls back up. Every decoded package carries the capture time of the segment
+that completed it. At the end every hole still open in a TCP stream is declared lost
+and everything after it decoded.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from rtde_spec._generated.constants import DATA_PACKAGE_TYPE, PRIMARY_PORTS, RTDE_PORT
-from rtde_spec.capture.bulk import SIZE_AT, SIZE_BYTES, TYPE_AT
-from rtde_spec.capture.classify import port_kinds
-from rtde_spec.capture.flows import SCRIPT_KIND, Flow, FlowTable, Route, classify
-from rtde_spec.capture.packets import FIN, RST, SYN, Segment, expand, items
-from rtde_spec.capture.sink import ArrowSink, DirectorySink, TableSink, output_stem
-from rtde_spec.capture.summary import CaptureSummary
-from rtde_spec.capture.tcp import MOD, RECENT
+from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
+from rtde_spec.capture.reading.packets import Segment, items
+from rtde_spec.capture.routing.classify import port_kinds
+from rtde_spec.capture.routing.flows import SCRIPT_KIND, Flow, FlowTable, classify
+from rtde_spec.capture.runs import Batcher
+from rtde_spec.capture.tables.sink import ArrowSink, DirectorySink, TableSink, output_stem
+from rtde_spec.capture.tables.summary import CaptureSummary
 from rtde_spec.errors import OutputError
 from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
@@ -48,55 +50,23 @@ def decode_capture(
     cat = catalogue or Catalogue.default()
     ports = port_kinds(rtde_ports, primary_ports, port_map)
     stats: dict[str, int] = {}
-    session: dict[str, Any] = {}  # what this file's connections share (capture/external.py: URCL programs)
+    session: dict[str, Any] = {}  # what this file's connections share (URCL programs: protocols/external.py)
     table = FlowTable(lambda seg: classify(seg, sink, recipe, ports, cat, session))
-    run: _Run | None = None  # data segments, one whole package each, in order: decoded together
-
-    def one(seg: Segment) -> None:
-        nonlocal run
-        route = table.route_of(seg)
-        if route is None:
-            return
-        if run is not None:
-            if run.takes(route, seg):
-                return
-            run.flush()
-            run = None
-        run = _Run.start(route, seg)
-        if run is None:
-            _feed(route, seg)
-        if table.due(seg.time):
-            table.sweep(seg.time, _finish)
-
+    batcher = Batcher(table, _finish)
     try:
         for item in items(path, stats, progress, sink.lag):
             if isinstance(item, Segment):
-                one(item)
-                continue
-            first = next(expand(item))
-            route = table.route_of(first)
-            if run is not None:  # segments held first, so the direction is where this run starts
-                run.flush()
-                run = None
-            whole = _Run.start(route, first) if route is not None else None
-            if whole is None:
-                for seg in expand(item):  # not a run this connection can take whole: segment by segment
-                    one(seg)
-                continue
-            flow, sender, direction = whole.route
-            flow.last = float(item.times[-1])
-            direction.advance(item.rows.size, item.rows[-(RECENT // item.rows.shape[1] + 1) :].tobytes())
-            flow.decoder.feed_run(sender, whole.codec, item.rows, item.times)
+                batcher.segment(item)
+            else:
+                batcher.bulk(item)
     except BaseException as exc:  # Ctrl-C on a live pipe, a read error: what was decoded reaches the tables
-        if run is not None:
-            run.flush()
+        batcher.flush()
         for flow in table.live():
             flow.decoder.close()
         if isinstance(exc, KeyboardInterrupt):
             raise CaptureInterrupted(_summary(path, stats, table)) from exc
         raise
-    if run is not None:
-        run.flush()
+    batcher.flush()
     for flow in sorted(table.live(), key=lambda f: f.kind != SCRIPT_KIND):  # programs whole before readers
         _finish(flow)
     return _summary(path, stats, table)
@@ -130,76 +100,6 @@ class CaptureInterrupted(KeyboardInterrupt):
     def __init__(self, summary: CaptureSummary) -> None:
         super().__init__()
         self.summary = summary
-
-
-_NOT_DATA = SYN | FIN | RST
-
-
-def _feed(route: Route, seg: Segment) -> None:
-    flow, sender, direction = route
-    for chunk in direction.feed(seg.time, seg.seq, seg.payload, syn=bool(seg.flags & SYN)):
-        flow.decoder.feed(sender, chunk)
-
-
-@dataclass
-class _Run:
-    """Consecutive segments of one direction, each exactly one data package of one recipe.
-
-    At 500 Hz that is nearly every segment of an RTDE capture; they skip reassembly and
-    framing one by one and are decoded in one `decode_many` (its prefix check still
-    covers every package). A run too short to pay goes the per-segment way.
-    """
-
-    route: Route
-    codec: RecipeCodec
-    head: bytes  # size, type and recipe id every package of the run starts with
-    next_seq: int
-    segments: list[Segment]
-
-    @classmethod
-    def start(cls, route: Route, seg: Segment) -> _Run | None:
-        flow, sender, direction = route
-        payload = seg.payload
-        if flow.kind != "rtde" or seg.flags & _NOT_DATA or len(payload) <= RUN_HEAD:
-            return None
-        size = int.from_bytes(payload[SIZE_AT : SIZE_AT + SIZE_BYTES], "big")
-        if payload[TYPE_AT] != DATA_PACKAGE_TYPE or size != len(payload):
-            return None
-        if not direction.in_order_at(seg.seq):
-            return None
-        codec = flow.decoder.run_codec(sender, payload)
-        if codec is None:
-            return None
-        return cls(route, codec, payload[:RUN_HEAD], (seg.seq + len(payload)) % MOD, [seg])
-
-    def takes(self, route: Route, seg: Segment) -> bool:
-        """Add the segment if it continues the run; False when it does not."""
-        payload = seg.payload
-        if (
-            route is not self.route
-            or seg.seq != self.next_seq
-            or len(payload) != self.codec.package_size
-            or seg.flags & _NOT_DATA
-            or payload[:RUN_HEAD] != self.head
-            or len(self.segments) >= RUN_MAX
-        ):
-            return False
-        self.segments.append(seg)
-        self.next_seq = (self.next_seq + len(payload)) % MOD
-        return True
-
-    def flush(self) -> None:
-        if len(self.segments) < RUN_MIN:
-            for seg in self.segments:
-                _feed(self.route, seg)
-            return
-        flow, sender, direction = self.route
-        import numpy as np
-
-        data = b"".join(s.payload for s in self.segments)
-        direction.advance(len(data), data[-RECENT:])
-        rows = np.frombuffer(data, dtype=np.uint8).reshape(len(self.segments), -1)
-        flow.decoder.feed_run(sender, self.codec, rows, np.array([s.time for s in self.segments]))
 
 
 def decode_to_directory(

@@ -16,7 +16,7 @@ from rtde_spec.errors import RtdeSpecError, UsageError
 from rtde_spec.printable import safe_text
 
 if TYPE_CHECKING:
-    from rtde_spec.capture.summary import CaptureSummary
+    from rtde_spec.capture.tables.summary import CaptureSummary
 
 SUFFIXES = (".pcap", ".pcapng", ".cap")
 EXIT_MISSING_RECIPE = 1  # data packages that need --recipe (EXIT_ERROR)
@@ -164,8 +164,8 @@ def expand(patterns: list[str]) -> list[Path]:
 
 
 def run(args: argparse.Namespace) -> int:
-    from rtde_spec.capture.classify import parse_port_map
     from rtde_spec.capture.decoder import CaptureInterrupted, decode_to_directory
+    from rtde_spec.capture.routing.classify import parse_port_map
     from rtde_spec.cli.record_cmd import names_of
 
     files = expand(args.files)
@@ -234,7 +234,7 @@ def ports_seen(path: str, most: int = 8) -> str:
     """The TCP ports of a capture's connections, most segments first (a file read again)."""
     from collections import Counter
 
-    from rtde_spec.capture.packets import segments
+    from rtde_spec.capture.reading.packets import segments
 
     counts: Counter[int] = Counter()
     try:

@@ -160,8 +160,34 @@ def _realtime_record(t: Any, doc: Any, args: argparse.Namespace) -> dict[str, An
 
 def run(args: argparse.Namespace) -> int:
     from rtde_spec.importers import read_document
-    from rtde_spec.importers.diff import diff_fields
-    from rtde_spec.importers.primary_diff import diff_primary
+
+    spec = _spec_to_compare(args)
+    args.loaded_spec = spec
+    doc = read_document(
+        args.document, spec, source=args.source, line=args.line, fmt=args.form, edition=args.edition
+    )
+    by_interface = _diff(args, doc, spec)
+    changes = [c for found in by_interface.values() for c in found]
+    new = [c for c in changes if c.known is None]
+    known = [c for c in changes if c.known is not None]
+    if args.json:
+        _print_json(args, doc, spec, new, known)
+    else:
+        _print_report(args, doc, spec, new, known)
+    if args.write:
+        changes = _write(args, doc, spec, by_interface)
+        new = [c for c in changes if c.known is None]
+    if args.overlay is not None:
+        from rtde_spec.importers.write import write_overlay
+
+        count = write_overlay(changes, doc, spec, args.overlay)
+        print(f"wrote {count} added fields to {args.overlay}", file=sys.stderr)
+    return EXIT_ERROR if args.check and new else 0
+
+
+def _spec_to_compare(args: argparse.Namespace) -> Any:
+    """The spec the document is compared with: the checkout's (--spec-dir, or ./spec), else the
+    installed package's own; --write needs a checkout's."""
     from rtde_spec.metamodel.loader import load_spec
 
     if not args.document.is_file():
@@ -186,9 +212,14 @@ def run(args: argparse.Namespace) -> int:
     else:
         spec = load_spec(args.spec_dir)
     args.loaded_spec = spec
-    doc = read_document(
-        args.document, spec, source=args.source, line=args.line, fmt=args.form, edition=args.edition
-    )
+    return spec
+
+
+def _diff(args: argparse.Namespace, doc: Any, spec: Any) -> dict[str, list[Change]]:
+    """The document's changes per interface it holds tables of (rtde, primary, realtime)."""
+    from rtde_spec.importers.diff import diff_fields
+    from rtde_spec.importers.primary_diff import diff_primary
+
     by_interface: dict[str, list[Change]] = {}
     if doc.fields:
         by_interface["rtde"] = diff_fields(doc, spec)
@@ -201,110 +232,115 @@ def run(args: argparse.Namespace) -> int:
 
         realtime = load_realtime(args.spec_dir) if args.spec_dir is not None else realtime_spec()
         by_interface["realtime"] = diff_realtime(doc, realtime, Catalogue(spec))
+    return by_interface
+
+
+def _print_json(
+    args: argparse.Namespace, doc: Any, spec: Any, new: list[Change], known: list[Change]
+) -> None:
+    out: dict[str, Any] = {
+        "document": str(args.document),
+        "format": doc.format,
+        "source": doc.source,
+        "line": doc.line,
+        "edition": doc.edition,
+        "interfaces": doc.interfaces,
+        "tables": [_table_record(t, spec, doc) for t in doc.tables],
+        "realtime": [_realtime_record(t, doc, args) for t in doc.realtime],
+        "unlisted": doc.unlisted,
+        "remarks": doc.remarks,
+        "added": [c.record() for c in new if c.kind == "added"],
+        "removed": [c.record() for c in new if c.kind == "removed"],
+        "changed": [c.record() for c in new if c.kind == "changed"],
+    }
+    if args.show_known:
+        out["known"] = [c.record() for c in known]
+    print_json(out)
+
+
+def _print_report(
+    args: argparse.Namespace, doc: Any, spec: Any, new: list[Change], known: list[Change]
+) -> None:
+    """What was read, table by table, then the changes and the counts."""
+    head = ["change", "field", "where", "what", "index", "spec", "document", "line"]
+    edition = f" {doc.edition}" if doc.edition else ""
+    print(f"{args.document}: {doc.format}, {doc.source}, written for {doc.line}{edition}")
+    if doc.members:
+        fields = sum(len(m.fields) for m in doc.members)
+        print(f"  {len(doc.members)} message tables read, {fields} field rows")
+    for t in doc.tables:
+        r = _table_record(t, spec, doc)
+        print(
+            f"  table {r['heading']!r} (line {r['line']}, {r['direction']}s): {r['rows']} rows read, "
+            f"{r['fields']} fields, {r['matched']} matched the spec, the spec has {r['spec']}"
+            + (f"; {len(t.skipped)} placeholder rows skipped" if t.skipped else "")
+        )
+        for line, cell in t.skipped:
+            print(f"    skipped line {line}: {cell!r} (a placeholder, not a field)")
+    for rt in doc.realtime:
+        r = _realtime_record(rt, doc, args)
+        total = f", TOTAL {r['total_bytes']} bytes" if r["total_bytes"] is not None else ""
+        spec_part = (
+            f"the spec sends {r['spec_fields']} fields, {r['spec_bytes']} bytes at {rt.edition}"
+            if r["spec_fields"] is not None
+            else "not compared"
+        )
+        scope = " ".join(filter(None, [rt.product_line, rt.edition])) or "no product line"
+        print(
+            f"  real-time table {rt.title!r} ({scope}): "
+            f"{len(rt.rows)} rows read{total}; {spec_part}"
+            + (f"; {len(rt.skipped)} placeholder rows skipped" if rt.skipped else "")
+        )
+    for direction, names in doc.unlisted.items():
+        if direction.startswith("realtime"):
+            continue  # said in the table's remark
+        print(
+            f"  {len(names)} spec {direction}s not listed: the {direction} table stops early "
+            "(a placeholder row), so they are not reported as removed"
+        )
+    for remark in doc.remarks:
+        print(f"  {remark}: not a change for {doc.line}")
+    if new:
+        print(table(head, _rows(new)))
+    if args.show_known and known:
+        print("\nknown conflicts (recorded in the spec):")
+        rows = [[*r, c.known.decision if c.known else ""] for r, c in zip(_rows(known), known, strict=True)]
+        print(table([*head, "decision"], rows))
+    counts = {k: sum(c.kind == k for c in new) for k in ("added", "removed", "changed")}
+    hint = "" if args.show_known or not known else " (--show-known lists them)"
+    print(
+        f"\n{counts['added']} added, {counts['removed']} removed, {counts['changed']} changed; "
+        f"{len(known)} known conflicts{hint}"
+    )
+
+
+def _write(
+    args: argparse.Namespace, doc: Any, spec: Any, by_interface: dict[str, list[Change]]
+) -> list[Change]:
+    """--write: one interface's changes applied to the checkout's spec (real-time ones are held)."""
+    from rtde_spec.importers.write import write_changes
+
+    assert args.spec_dir is not None  # --write without a spec folder was refused above
+    if "realtime" in by_interface:
+        held = [c for c in by_interface.pop("realtime") if c.known is None]
+        if held:
+            print(
+                f"not written: {len(held)} real-time changes; spec/realtime/interface.yaml is "
+                "edited by hand (each field's since, and `lengths` with the document as source)",
+                file=sys.stderr,
+            )
+    if len(by_interface) > 1:
+        raise UsageError(
+            f"the document holds tables of {' and '.join(by_interface)}; --write applies one "
+            "interface at a time: import a copy holding only one"
+        )
     changes = [c for found in by_interface.values() for c in found]
     new = [c for c in changes if c.known is None]
-    known = [c for c in changes if c.known is not None]
-    if args.json:
-        out: dict[str, Any] = {
-            "document": str(args.document),
-            "format": doc.format,
-            "source": doc.source,
-            "line": doc.line,
-            "edition": doc.edition,
-            "interfaces": doc.interfaces,
-            "tables": [_table_record(t, spec, doc) for t in doc.tables],
-            "realtime": [_realtime_record(t, doc, args) for t in doc.realtime],
-            "unlisted": doc.unlisted,
-            "remarks": doc.remarks,
-            "added": [c.record() for c in new if c.kind == "added"],
-            "removed": [c.record() for c in new if c.kind == "removed"],
-            "changed": [c.record() for c in new if c.kind == "changed"],
-        }
-        if args.show_known:
-            out["known"] = [c.record() for c in known]
-        print_json(out)
-    else:
-        head = ["change", "field", "where", "what", "index", "spec", "document", "line"]
-        edition = f" {doc.edition}" if doc.edition else ""
-        print(f"{args.document}: {doc.format}, {doc.source}, written for {doc.line}{edition}")
-        if doc.members:
-            fields = sum(len(m.fields) for m in doc.members)
-            print(f"  {len(doc.members)} message tables read, {fields} field rows")
-        for t in doc.tables:
-            r = _table_record(t, spec, doc)
-            print(
-                f"  table {r['heading']!r} (line {r['line']}, {r['direction']}s): {r['rows']} rows read, "
-                f"{r['fields']} fields, {r['matched']} matched the spec, the spec has {r['spec']}"
-                + (f"; {len(t.skipped)} placeholder rows skipped" if t.skipped else "")
-            )
-            for line, cell in t.skipped:
-                print(f"    skipped line {line}: {cell!r} (a placeholder, not a field)")
-        for rt in doc.realtime:
-            r = _realtime_record(rt, doc, args)
-            total = f", TOTAL {r['total_bytes']} bytes" if r["total_bytes"] is not None else ""
-            spec_part = (
-                f"the spec sends {r['spec_fields']} fields, {r['spec_bytes']} bytes at {rt.edition}"
-                if r["spec_fields"] is not None
-                else "not compared"
-            )
-            scope = " ".join(filter(None, [rt.product_line, rt.edition])) or "no product line"
-            print(
-                f"  real-time table {rt.title!r} ({scope}): "
-                f"{len(rt.rows)} rows read{total}; {spec_part}"
-                + (f"; {len(rt.skipped)} placeholder rows skipped" if rt.skipped else "")
-            )
-        for direction, names in doc.unlisted.items():
-            if direction.startswith("realtime"):
-                continue  # said in the table's remark
-            print(
-                f"  {len(names)} spec {direction}s not listed: the {direction} table stops early "
-                "(a placeholder row), so they are not reported as removed"
-            )
-        for remark in doc.remarks:
-            print(f"  {remark}: not a change for {doc.line}")
-        if new:
-            print(table(head, _rows(new)))
-        if args.show_known and known:
-            print("\nknown conflicts (recorded in the spec):")
-            rows = [
-                [*r, c.known.decision if c.known else ""] for r, c in zip(_rows(known), known, strict=True)
-            ]
-            print(table([*head, "decision"], rows))
-        counts = {k: sum(c.kind == k for c in new) for k in ("added", "removed", "changed")}
-        hint = "" if args.show_known or not known else " (--show-known lists them)"
-        print(
-            f"\n{counts['added']} added, {counts['removed']} removed, {counts['changed']} changed; "
-            f"{len(known)} known conflicts{hint}"
-        )
-    if args.write:
-        from rtde_spec.importers.write import write_changes
-
-        assert args.spec_dir is not None  # --write without a spec folder was refused above
-        if "realtime" in by_interface:
-            held = [c for c in by_interface.pop("realtime") if c.known is None]
-            if held:
-                print(
-                    f"not written: {len(held)} real-time changes; spec/realtime/interface.yaml is "
-                    "edited by hand (each field's since, and `lengths` with the document as source)",
-                    file=sys.stderr,
-                )
-        if len(by_interface) > 1:
-            raise UsageError(
-                f"the document holds tables of {' and '.join(by_interface)}; --write applies one "
-                "interface at a time: import a copy holding only one"
-            )
-        changes = [c for found in by_interface.values() for c in found]
-        new = [c for c in changes if c.known is None]
-        result = write_changes(changes, doc, spec, args.spec_dir, allow_removals=args.allow_removals)
-        for change, why in result.held:
-            print(f"not written: {change.field} ({change.where}) removed: {why}", file=sys.stderr)
-        print(
-            f"wrote {len(result.written)} of {len(new)} changes to {args.spec_dir}; run `python -m codegen`",
-            file=sys.stderr,
-        )
-    if args.overlay is not None:
-        from rtde_spec.importers.write import write_overlay
-
-        count = write_overlay(changes, doc, spec, args.overlay)
-        print(f"wrote {count} added fields to {args.overlay}", file=sys.stderr)
-    return EXIT_ERROR if args.check and new else 0
+    result = write_changes(changes, doc, spec, args.spec_dir, allow_removals=args.allow_removals)
+    for change, why in result.held:
+        print(f"not written: {change.field} ({change.where}) removed: {why}", file=sys.stderr)
+    print(
+        f"wrote {len(result.written)} of {len(new)} changes to {args.spec_dir}; run `python -m codegen`",
+        file=sys.stderr,
+    )
+    return changes

@@ -317,7 +317,7 @@ EXPECTED = ["dashboard", "primary", "rtde", "urcl-reverse", "urcl-script_command
 def check(path: Path) -> list[str]:
     """What is wrong with a recorded capture: foreign connections (the ports are the machine's), damage."""
     from rtde_spec.capture.decoder import decode_capture
-    from rtde_spec.capture.sink import ArrowSink
+    from rtde_spec.capture.tables.sink import ArrowSink
 
     summary = decode_capture(path, ArrowSink())
     kinds = sorted(c.kind for c in summary.connections)

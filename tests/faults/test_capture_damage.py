@@ -128,7 +128,7 @@ def test_an_undamaged_capture_exits_0_with_its_summary(tmp_path: Path) -> None:
 
 
 def test_a_connection_keeps_its_first_problems_word_for_word_and_counts_the_rest() -> None:
-    from rtde_spec.capture.connections import MAX_PROBLEMS, Problems
+    from rtde_spec.capture.protocols.base import MAX_PROBLEMS, Problems
 
     problems = Problems()
     for i in range(MAX_PROBLEMS + 250):

@@ -20,10 +20,10 @@ from pathlib import Path
 import dpkt
 import pytest
 
-import rtde_spec.capture.flows as flows
+import rtde_spec.capture.routing.flows as flows
 from rtde_spec import build
 from rtde_spec.capture.decoder import capture_tables, decode_capture
-from rtde_spec.capture.sink import ArrowSink
+from rtde_spec.capture.tables.sink import ArrowSink
 from rtde_spec.capture.tcp import Direction
 from rtde_spec.errors import RecipeError
 from rtde_spec.rtde.client import RtdeClient

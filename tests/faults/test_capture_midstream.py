@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from rtde_spec.capture.decoder import capture_tables, decode_capture
-from rtde_spec.capture.sink import ArrowSink
+from rtde_spec.capture.tables.sink import ArrowSink
 from tests import capture_files
 
 

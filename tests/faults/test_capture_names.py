@@ -41,7 +41,7 @@ def test_a_x_and_b_x_keep_both_and_a_rerun_replaces_only_its_own(tmp_path: Path)
 
 
 def test_the_stem_is_stable_and_unique(tmp_path: Path) -> None:
-    from rtde_spec.capture.sink import output_stem
+    from rtde_spec.capture.tables.sink import output_stem
 
     a = rtde_capture(tmp_path / "a" / "x.pcap", rtde_packages(1))
     b = rtde_capture(tmp_path / "b" / "x.pcap", rtde_packages(1))

@@ -18,11 +18,11 @@ from typing import Any
 
 import pytest
 
-import rtde_spec.capture.framing as framing
-import rtde_spec.capture.realtime as realtime
+import rtde_spec.capture.framing.sized as framing
+import rtde_spec.capture.protocols.realtime as realtime
 from rtde_spec.capture.decoder import decode_capture
-from rtde_spec.capture.sink import ArrowSink
-from rtde_spec.capture.summary import CaptureSummary
+from rtde_spec.capture.tables.sink import ArrowSink
+from rtde_spec.capture.tables.summary import CaptureSummary
 from rtde_spec.external.codec import RecordCodec
 from tests.helpers import ROOT
 

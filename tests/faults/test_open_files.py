@@ -17,7 +17,7 @@ import numpy as np
 import pyarrow.parquet as pq
 import pytest
 
-from rtde_spec.capture.sink import DirectorySink
+from rtde_spec.capture.tables.sink import DirectorySink
 from tests import capture_files
 from tests.helpers import ROOT
 

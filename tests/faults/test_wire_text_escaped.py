@@ -16,7 +16,7 @@ import time
 from pathlib import Path
 
 from rtde_spec import build
-from rtde_spec.capture.summary import CaptureSummary, ConnectionSummary
+from rtde_spec.capture.tables.summary import CaptureSummary, ConnectionSummary
 from rtde_spec.rtde.client import RtdeClient
 from tests.helpers import ROOT
 

@@ -1,18 +1,15 @@
-"""Records: the packages of one TCP connection of a capture, decoded into rows for the sink.
+"""RTDE connections of a capture: the session state, setup rows, and data packages batched per recipe.
 
-RTDE connections keep the session state (protocol version, recipes from the setup
-exchange) through `SessionDecoder`; data packages of a known recipe are batched and
-decoded together. Each direction's bytes are cut into packages by `framing.Framing`;
-what a connection adds to it is its protocol's check of a resynchronisation candidate
-(a known recipe's id and size; sub-packages that fill their message). Primary/secondary
-connections decode the controller's messages; what the client sends is URScript.
+The session (protocol version, recipes from the setup exchange) is followed by
+`SessionDecoder`; data packages of a known recipe are batched and decoded together, or
+come as whole runs from the bulk path (`run_codec` / `feed_run`). A resynchronisation
+candidate is checked against a known recipe's id and size.
 """
 
 from __future__ import annotations
 
 import json
 import struct
-from dataclasses import dataclass, field
 from typing import Any
 
 from rtde_spec._generated.constants import (
@@ -23,12 +20,12 @@ from rtde_spec._generated.constants import (
     RTDE_LIMITS,
     RTDE_PACKAGE_TYPES,
 )
-from rtde_spec.capture.framing import NO, STRONG, WEAK, Check, Framing
-from rtde_spec.capture.rows import flatten_part, text_columns, wide_values
-from rtde_spec.capture.sink import TableSink, day_of
+from rtde_spec.capture.framing.sized import NO, STRONG, WEAK, Check, Framing
+from rtde_spec.capture.protocols.base import Counts
+from rtde_spec.capture.tables.rows import wide_values
+from rtde_spec.capture.tables.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
 from rtde_spec.errors import RtdeSpecError
-from rtde_spec.external.programs import MAX_PROGRAM_BYTES, ProgramSent, programs_of
 from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.output.base import plain
 from rtde_spec.recipes.codec import RecipeCodec
@@ -40,35 +37,6 @@ BATCH = 4096
 RTDE_HEADER = struct.calcsize(RTDE_HEADER_FORMAT)
 _SIZE_AT, TYPE_AT, RECIPE_ID_AT = DATA_PACKAGE_PREFIX_OFFSETS
 RTDE_SIZE_BYTES = TYPE_AT - _SIZE_AT  # the size field leads the header
-
-
-class Problems(list[str]):
-    """A connection's problems: the first MAX_PROBLEMS kept word for word, the rest only counted,
-    so a capture of a million bad packages costs a number, not a million strings."""
-
-    def __init__(self) -> None:
-        super().__init__()
-        self.more = 0
-
-    def append(self, problem: str) -> None:
-        if len(self) < MAX_PROBLEMS:
-            super().append(problem)
-        else:
-            self.more += 1
-
-    def lines(self) -> list[str]:
-        more = [f"... {self.more} more problems of this connection, not listed"] if self.more else []
-        return [*self, *more]
-
-
-MAX_PROBLEMS = 1000
-
-
-@dataclass
-class Counts:
-    packages: int = 0
-    errors: Problems = field(default_factory=Problems)
-    unknown_recipe_sizes: dict[int, int] = field(default_factory=dict)  # data package size -> count
 
 
 class RtdeConnection:
@@ -235,91 +203,3 @@ class RtdeConnection:
     def close(self) -> None:
         for key in list(self.batches):
             self._flush(key)
-
-
-class PrimaryConnection:
-    def __init__(self, name: str, robot: str, sink: TableSink, session: dict[str, Any] | None = None) -> None:
-        from rtde_spec.primary.codec import default_codec  # primary models load with the first primary stream
-
-        self.name, self.robot, self.sink = name, robot, sink
-        # a driver in headless mode sends its program here, not on 50002: it tells the URCL version too
-        self.programs = programs_of(session)
-        self.program: ProgramSent | None = None
-        self.codec = default_codec()
-        families = {f.spec.type for f in self.codec.families.values()}
-        codec = self.codec
-        self.framing = Framing(codec.size_bytes, codec.header.size, families, codec.max_size, _tiled(codec))
-        self.counts = Counts()
-        self.last_time = 0.0
-
-    def feed(self, sender: str, chunk: Chunk) -> None:
-        base = {"connection": self.name, "capture_time": chunk.time}
-        day = day_of(chunk.time)
-        if sender == "client":  # URScript (or anything else a client sends)
-            self.sink.row("primary_scripts", self.robot, day, {**base, **text_columns("script", chunk.data)})
-            self._program(chunk)
-            return
-        self.last_time = chunk.time
-        self._messages(self.framing.feed(chunk), self.framing.times, chunk.time)
-
-    def framings(self) -> dict[str, Framing]:
-        return {"controller": self.framing}
-
-    def _program(self, chunk: Chunk) -> None:
-        """Keep the text a client sends as the robot's program (a new one at each `def`/`sec`)."""
-        if self.programs is None:
-            return
-        if self.program is None or chunk.data.lstrip()[:4] in (b"def ", b"sec "):
-            self.program = ProgramSent(chunk.time, bytearray())
-            self.programs.add(self.robot, self.name.rpartition(":")[2], self.program)
-        room = MAX_PROGRAM_BYTES - len(self.program.reply)
-        self.program.reply += chunk.data[: max(0, room)]
-
-    def finish(self) -> None:
-        self._messages(self.framing.finish(), self.framing.times, self.last_time)
-
-    def _messages(self, raws: list[bytes], times: list[float] | None, now: float) -> None:
-        from rtde_spec.wire.primary_base import PrimaryPart, RobotStateMessage
-
-        for n, raw in enumerate(raws):
-            time = now if times is None else times[n]  # a message held back: when it was completed
-            base = {"connection": self.name, "capture_time": time}
-            day = day_of(time)
-            self.counts.packages += 1
-            try:
-                message = self.codec.decode_message(raw)
-            except RtdeSpecError as exc:
-                self.counts.errors.append(f"message at {time:.6f}: {exc}")
-                continue
-            parts = message.sub_packages if isinstance(message, RobotStateMessage) else [message]
-            for part in parts:
-                name = getattr(part, "NAME", "unknown")
-                values = (
-                    flatten_part(part)
-                    if isinstance(part, PrimaryPart)
-                    else {"raw": bytes(getattr(part, "raw", b"")).hex()}
-                )
-                self.sink.row(f"primary_{name}", self.robot, day, {**base, **values})
-
-    def close(self) -> None:
-        pass
-
-
-def _tiled(codec: Any) -> Check:
-    """A candidate message of a family made of sub-packages is surely one when their sizes fill it."""
-    tiled = {t for t, f in codec.families.items() if f.spec.layout == "subpackages"}
-    at_type, head, sub = codec.size_bytes, codec.header.size, codec.sub_header
-
-    def check(buf: bytearray, at: int, size: int) -> int:
-        end = at + size
-        if buf[at + at_type] not in tiled or end > len(buf):
-            return WEAK
-        pos = at + head
-        while end - pos >= sub.size:
-            step = sub.unpack_from(buf, pos)[0]
-            if step < sub.size:
-                return WEAK
-            pos += step
-        return STRONG if pos == end else WEAK
-
-    return check

@@ -15,11 +15,12 @@ from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
 
-from rtde_spec.capture.classify import ROBOT_CLIENT_KINDS, connection_for, content_kind
-from rtde_spec.capture.connections import RTDE_HEADER
-from rtde_spec.capture.packets import FIN, RST, SYN, Segment
-from rtde_spec.capture.sink import TableSink
-from rtde_spec.capture.summary import ConnectionSummary
+from rtde_spec.capture.protocols.base import ConnectionDecoder
+from rtde_spec.capture.protocols.rtde import RTDE_HEADER
+from rtde_spec.capture.reading.packets import FIN, RST, SYN, Segment
+from rtde_spec.capture.routing.classify import ROBOT_CLIENT_KINDS, connection_for, content_kind
+from rtde_spec.capture.tables.sink import TableSink
+from rtde_spec.capture.tables.summary import ConnectionSummary
 from rtde_spec.capture.tcp import Direction
 from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.recipes.codec import RecipeCodec
@@ -42,7 +43,7 @@ class Flow:
     client: tuple[str, int]
     server: tuple[str, int]
     kind: str
-    decoder: Any
+    decoder: ConnectionDecoder
     directions: dict[str, Direction] = field(
         default_factory=lambda: {"client": Direction(), "controller": Direction()}
     )

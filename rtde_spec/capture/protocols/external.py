@@ -20,10 +20,10 @@ import json
 from dataclasses import dataclass, field
 from typing import Any
 
-from rtde_spec.capture.connections import Counts
-from rtde_spec.capture.records import FixedFraming
-from rtde_spec.capture.rows import text_columns
-from rtde_spec.capture.sink import TableSink, day_of
+from rtde_spec.capture.framing.lines import FixedFraming
+from rtde_spec.capture.protocols.base import Counts
+from rtde_spec.capture.tables.rows import text_columns
+from rtde_spec.capture.tables.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
 from rtde_spec.errors import RtdeSpecError
 from rtde_spec.external.codec import RecordCodec, VariantPlan, protocol_codecs, record_codec

@@ -20,7 +20,7 @@ from rtde_spec._generated.constants import (
     DATA_PACKAGE_PREFIX_OFFSETS,
     DATA_PACKAGE_TYPE,
 )
-from rtde_spec.capture.pcapfile import Records
+from rtde_spec.capture.reading.pcapfile import Records
 
 ETHERNET, IPV4, TCP = 1, 0x0800, 6
 ETH, IP_MIN, TCP_MIN = 14, 20, 20

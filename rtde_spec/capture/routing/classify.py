@@ -14,7 +14,8 @@ from functools import cache
 from typing import Any
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
-from rtde_spec.capture.sink import TableSink
+from rtde_spec.capture.protocols.base import ConnectionDecoder
+from rtde_spec.capture.tables.sink import TableSink
 from rtde_spec.errors import UsageError
 
 STREAM_KINDS = ("rtde", "primary", "realtime", "dashboard")  # the controller serves these
@@ -99,25 +100,27 @@ def content_kind(payload: bytes) -> str | None:
     return None
 
 
-def connection_for(kind: str, name: str, client: str, server: str, sink: TableSink, **kw: Any) -> Any:
+def connection_for(
+    kind: str, name: str, client: str, server: str, sink: TableSink, **kw: Any
+) -> ConnectionDecoder:
     """The decoder of one connection of `kind`; the robot is the server but for external control."""
     if kind == "rtde":
-        from rtde_spec.capture.connections import RtdeConnection
+        from rtde_spec.capture.protocols.rtde import RtdeConnection
 
         return RtdeConnection(name, server, sink, kw["recipe"], kw["catalogue"])
     if kind == "primary":
-        from rtde_spec.capture.connections import PrimaryConnection
+        from rtde_spec.capture.protocols.primary import PrimaryConnection
 
         return PrimaryConnection(name, server, sink, kw.get("session"))
     if kind == "realtime":
-        from rtde_spec.capture.realtime import RealtimeConnection
+        from rtde_spec.capture.protocols.realtime import RealtimeConnection
 
         return RealtimeConnection(name, server, sink)
     if kind == "dashboard":
-        from rtde_spec.capture.dashboard import DashboardConnection
+        from rtde_spec.capture.protocols.dashboard import DashboardConnection
 
         return DashboardConnection(name, server, sink)
-    from rtde_spec.capture.external import ExternalConnection, ScriptSenderConnection
+    from rtde_spec.capture.protocols.external import ExternalConnection, ScriptSenderConnection
     from rtde_spec.metamodel.external import external_spec
 
     protocol = external_spec().protocol(kind)

@@ -13,9 +13,9 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import NamedTuple
 
-from rtde_spec.capture.bulk import DataRun, run_of, runs
-from rtde_spec.capture.ipfrag import Addresses
-from rtde_spec.capture.pcapfile import blocks
+from rtde_spec.capture.reading.bulk import DataRun, run_of, runs
+from rtde_spec.capture.reading.ipfrag import Addresses
+from rtde_spec.capture.reading.pcapfile import blocks
 
 FIN, SYN, RST = 0x01, 0x02, 0x04
 ACK_PSH = 0x18  # the flags a run's segments stand for (a run has no FIN, SYN or RST)
@@ -127,7 +127,7 @@ def items(
 ) -> Iterator[Segment | DataRun]:
     """TCP segments of a capture in file order; runs of data segments as one DataRun each.
 
-    Runs are found per block of the file among Ethernet frames (`capture/bulk.py`); every
+    Runs are found per block of the file among Ethernet frames (`capture/reading/bulk.py`); every
     other frame comes segment by segment. `lag`: blocks kept mapped after they are handed
     on, for runs decoded later on other threads (`pcapfile.blocks`).
     """

@@ -25,7 +25,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import IO, Any
 
-from rtde_spec.capture.recordsync import MAX_BLOCK, next_pcap_record, next_pcapng_block, pcap_limit
+from rtde_spec.capture.reading.recordsync import MAX_BLOCK, next_pcap_record, next_pcapng_block, pcap_limit
 from rtde_spec.errors import UsageError
 
 BLOCK = 8 << 20

@@ -12,10 +12,10 @@ from __future__ import annotations
 from collections import deque
 from typing import Any
 
-from rtde_spec.capture.connections import Counts
-from rtde_spec.capture.records import LineFraming
-from rtde_spec.capture.rows import text_columns
-from rtde_spec.capture.sink import TableSink, day_of
+from rtde_spec.capture.framing.lines import LineFraming
+from rtde_spec.capture.protocols.base import Counts
+from rtde_spec.capture.tables.rows import text_columns
+from rtde_spec.capture.tables.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
 from rtde_spec.metamodel.dashboard import dashboard_spec
 

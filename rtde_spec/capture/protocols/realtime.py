@@ -13,9 +13,9 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from rtde_spec.capture.connections import Counts
-from rtde_spec.capture.records import FixedFraming
-from rtde_spec.capture.sink import TableSink, day_of
+from rtde_spec.capture.framing.lines import FixedFraming
+from rtde_spec.capture.protocols.base import Counts
+from rtde_spec.capture.tables.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
 from rtde_spec.errors import RtdeSpecError
 from rtde_spec.realtime import decode, known_sizes, layout_for_size

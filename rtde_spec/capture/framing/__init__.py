@@ -1,0 +1,1 @@
+"""Framing: one direction's reassembled bytes cut into packages, records or lines."""

@@ -1,0 +1,1 @@
+"""Protocols: one decoder per protocol behind the ConnectionDecoder protocol, packages to rows."""

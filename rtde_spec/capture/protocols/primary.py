@@ -1,0 +1,106 @@
+"""Primary/secondary connections of a capture: the controller's messages to one table per sub-package.
+
+What the client sends is URScript (kept as text, and as the robot's program when a driver
+in headless mode sends it here). A resynchronisation candidate of a family made of
+sub-packages is sure when their sizes fill it.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from rtde_spec.capture.framing.sized import STRONG, WEAK, Check, Framing
+from rtde_spec.capture.protocols.base import Counts
+from rtde_spec.capture.tables.rows import flatten_part, text_columns
+from rtde_spec.capture.tables.sink import TableSink, day_of
+from rtde_spec.capture.tcp import Chunk
+from rtde_spec.errors import RtdeSpecError
+from rtde_spec.external.programs import MAX_PROGRAM_BYTES, ProgramSent, programs_of
+
+
+class PrimaryConnection:
+    def __init__(self, name: str, robot: str, sink: TableSink, session: dict[str, Any] | None = None) -> None:
+        from rtde_spec.primary.codec import default_codec  # primary models load with the first primary stream
+
+        self.name, self.robot, self.sink = name, robot, sink
+        # a driver in headless mode sends its program here, not on 50002: it tells the URCL version too
+        self.programs = programs_of(session)
+        self.program: ProgramSent | None = None
+        self.codec = default_codec()
+        families = {f.spec.type for f in self.codec.families.values()}
+        codec = self.codec
+        self.framing = Framing(codec.size_bytes, codec.header.size, families, codec.max_size, _tiled(codec))
+        self.counts = Counts()
+        self.last_time = 0.0
+
+    def feed(self, sender: str, chunk: Chunk) -> None:
+        base = {"connection": self.name, "capture_time": chunk.time}
+        day = day_of(chunk.time)
+        if sender == "client":  # URScript (or anything else a client sends)
+            self.sink.row("primary_scripts", self.robot, day, {**base, **text_columns("script", chunk.data)})
+            self._program(chunk)
+            return
+        self.last_time = chunk.time
+        self._messages(self.framing.feed(chunk), self.framing.times, chunk.time)
+
+    def framings(self) -> dict[str, Framing]:
+        return {"controller": self.framing}
+
+    def _program(self, chunk: Chunk) -> None:
+        """Keep the text a client sends as the robot's program (a new one at each `def`/`sec`)."""
+        if self.programs is None:
+            return
+        if self.program is None or chunk.data.lstrip()[:4] in (b"def ", b"sec "):
+            self.program = ProgramSent(chunk.time, bytearray())
+            self.programs.add(self.robot, self.name.rpartition(":")[2], self.program)
+        room = MAX_PROGRAM_BYTES - len(self.program.reply)
+        self.program.reply += chunk.data[: max(0, room)]
+
+    def finish(self) -> None:
+        self._messages(self.framing.finish(), self.framing.times, self.last_time)
+
+    def _messages(self, raws: list[bytes], times: list[float] | None, now: float) -> None:
+        from rtde_spec.wire.primary_base import PrimaryPart, RobotStateMessage
+
+        for n, raw in enumerate(raws):
+            time = now if times is None else times[n]  # a message held back: when it was completed
+            base = {"connection": self.name, "capture_time": time}
+            day = day_of(time)
+            self.counts.packages += 1
+            try:
+                message = self.codec.decode_message(raw)
+            except RtdeSpecError as exc:
+                self.counts.errors.append(f"message at {time:.6f}: {exc}")
+                continue
+            parts = message.sub_packages if isinstance(message, RobotStateMessage) else [message]
+            for part in parts:
+                name = getattr(part, "NAME", "unknown")
+                values = (
+                    flatten_part(part)
+                    if isinstance(part, PrimaryPart)
+                    else {"raw": bytes(getattr(part, "raw", b"")).hex()}
+                )
+                self.sink.row(f"primary_{name}", self.robot, day, {**base, **values})
+
+    def close(self) -> None:
+        pass
+
+
+def _tiled(codec: Any) -> Check:
+    """A candidate message of a family made of sub-packages is surely one when their sizes fill it."""
+    tiled = {t for t, f in codec.families.items() if f.spec.layout == "subpackages"}
+    at_type, head, sub = codec.size_bytes, codec.header.size, codec.sub_header
+
+    def check(buf: bytearray, at: int, size: int) -> int:
+        end = at + size
+        if buf[at + at_type] not in tiled or end > len(buf):
+            return WEAK
+        pos = at + head
+        while end - pos >= sub.size:
+            step = sub.unpack_from(buf, pos)[0]
+            if step < sub.size:
+                return WEAK
+            pos += step
+        return STRONG if pos == end else WEAK
+
+    return check

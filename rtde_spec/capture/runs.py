@@ -1,0 +1,140 @@
+"""Runs: the one place where data segments are batched, whole packages of one recipe in order.
+
+At 500 Hz nearly every segment of an RTDE capture is exactly one data package of one
+recipe. `Batcher` takes each routed segment (or a whole bulk item the reader found with
+numpy) and either extends the current run, or flushes it and goes segment by segment
+through TCP reassembly and framing. A run is decoded in one `decode_many` by the RTDE
+decoder (`feed_run`); a run too short to pay goes the per-segment way.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+from rtde_spec._generated.constants import DATA_PACKAGE_TYPE
+from rtde_spec.capture.protocols.rtde import RtdeConnection
+from rtde_spec.capture.reading.bulk import SIZE_AT, SIZE_BYTES, TYPE_AT
+from rtde_spec.capture.reading.packets import FIN, RST, SYN, Segment, expand
+from rtde_spec.capture.routing.flows import FlowTable, Route
+from rtde_spec.capture.tcp import MOD, RECENT
+from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
+
+RUN_HEAD = PAYLOAD_OFFSET  # size, type, recipe id: the bytes every data package of one run shares
+RUN_MIN, RUN_MAX = 16, 4096  # shorter runs go segment by segment; longer ones are cut
+
+
+class Batcher:
+    """Routes segments and bulk items of one capture to their connections, batching runs."""
+
+    def __init__(self, table: FlowTable, finish: Any) -> None:
+        self.table, self.finish = table, finish
+        self.run: Run | None = None  # data segments, one whole package each, in order
+
+    def segment(self, seg: Segment) -> None:
+        route = self.table.route_of(seg)
+        if route is None:
+            return
+        if self.run is not None:
+            if self.run.takes(route, seg):
+                return
+            self.flush()
+        self.run = Run.start(route, seg)
+        if self.run is None:
+            feed(route, seg)
+        if self.table.due(seg.time):
+            self.table.sweep(seg.time, self.finish)
+
+    def bulk(self, item: Any) -> None:
+        """A block of same-shaped data segments the reader found at once: whole, or one by one."""
+        first = next(expand(item))
+        route = self.table.route_of(first)
+        self.flush()  # segments held first, so the direction is where this run starts
+        whole = Run.start(route, first) if route is not None else None
+        if whole is None:
+            for seg in expand(item):  # not a run this connection can take whole: segment by segment
+                self.segment(seg)
+            return
+        flow, sender, direction = whole.route
+        flow.last = float(item.times[-1])
+        direction.advance(item.rows.size, item.rows[-(RECENT // item.rows.shape[1] + 1) :].tobytes())
+        whole.decoder.feed_run(sender, whole.codec, item.rows, item.times)
+
+    def flush(self) -> None:
+        if self.run is not None:
+            self.run.flush()
+            self.run = None
+
+
+_NOT_DATA = SYN | FIN | RST
+
+
+def feed(route: Route, seg: Segment) -> None:
+    flow, sender, direction = route
+    for chunk in direction.feed(seg.time, seg.seq, seg.payload, syn=bool(seg.flags & SYN)):
+        flow.decoder.feed(sender, chunk)
+
+
+@dataclass
+class Run:
+    """Consecutive segments of one direction, each exactly one data package of one recipe.
+
+    At 500 Hz that is nearly every segment of an RTDE capture; they skip reassembly and
+    framing one by one and are decoded in one `decode_many` (its prefix check still
+    covers every package). A run too short to pay goes the per-segment way.
+    """
+
+    route: Route
+    decoder: RtdeConnection
+    codec: RecipeCodec
+    head: bytes  # size, type and recipe id every package of the run starts with
+    next_seq: int
+    segments: list[Segment]
+
+    @classmethod
+    def start(cls, route: Route, seg: Segment) -> Run | None:
+        flow, sender, direction = route
+        payload = seg.payload
+        if flow.kind != "rtde" or seg.flags & _NOT_DATA or len(payload) <= RUN_HEAD:
+            return None
+        size = int.from_bytes(payload[SIZE_AT : SIZE_AT + SIZE_BYTES], "big")
+        if payload[TYPE_AT] != DATA_PACKAGE_TYPE or size != len(payload):
+            return None
+        decoder = flow.decoder
+        if not direction.in_order_at(seg.seq) or not isinstance(decoder, RtdeConnection):
+            return None
+        codec = decoder.run_codec(sender, payload)
+        if codec is None:
+            return None
+        return cls(route, decoder, codec, payload[:RUN_HEAD], (seg.seq + len(payload)) % MOD, [seg])
+
+    def takes(self, route: Route, seg: Segment) -> bool:
+        """Add the segment if it continues the run; False when it does not."""
+        payload = seg.payload
+        if (
+            route is not self.route
+            or seg.seq != self.next_seq
+            or len(payload) != self.codec.package_size
+            or seg.flags & _NOT_DATA
+            or payload[:RUN_HEAD] != self.head
+            or len(self.segments) >= RUN_MAX
+        ):
+            return False
+        self.segments.append(seg)
+        self.next_seq = (self.next_seq + len(payload)) % MOD
+        return True
+
+    def flush(self) -> None:
+        if len(self.segments) < RUN_MIN:
+            for seg in self.segments:
+                feed(self.route, seg)
+            return
+        _, sender, direction = self.route
+        import numpy as np
+
+        data = b"".join(s.payload for s in self.segments)
+        direction.advance(len(data), data[-RECENT:])
+        rows = np.frombuffer(data, dtype=np.uint8).reshape(len(self.segments), -1)
+        self.decoder.feed_run(sender, self.codec, rows, np.array([s.time for s in self.segments]))
+
+

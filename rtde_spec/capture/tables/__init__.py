@@ -1,0 +1,1 @@
+"""Tables: rows, the sinks they go to, and the summary of what a capture gave and lost."""
