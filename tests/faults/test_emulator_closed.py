@@ -99,10 +99,10 @@ def test_slider_values_out_of_range_never_poison_the_arm(emu: EmulatorThread) ->
         assert _slider_and_q(client)[0] == 0.0  # clamped, as the controller's slider is
         _send_slider(client, 7.0)
         assert _slider_and_q(client)[0] == 1.0
-        emu.emulator.model.load_program(
-            "def go():\n  movej([0.2, -1.4, 1.4, -1.5, -1.5, 0.1], a=3, v=2)\nend\n"
-        )
-        emu.emulator.model.play()
+        model = emu.emulator.model
+        program = "def go():\n  movej([0.2, -1.4, 1.4, -1.5, -1.5, 0.1], a=3, v=2)\nend\n"
+        started = emu.call(lambda: (model.load_program(program), model.play())[1])  # on the control loop
+        assert started, "the program was refused: the arm cannot move"
         deadline = time.monotonic() + 10
         q: list[float] = []
         while time.monotonic() < deadline:
