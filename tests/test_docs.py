@@ -71,8 +71,8 @@ def robot() -> Iterator[Robot]:
         held.stop()
 
 
-@pytest.fixture(scope="module")
-def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:
+@pytest.fixture(scope="session")  # not module: a worker that runs another module between two
+def workspace(tmp_path_factory: pytest.TempPathFactory) -> Path:  # blocks keeps what the first made
     folder = tmp_path_factory.mktemp("docs") / "rtde-examples"
     env = _env(folder.parent)
     made = subprocess.run(["rtde-spec", "examples", str(folder)], env=env, capture_output=True, text=True)
