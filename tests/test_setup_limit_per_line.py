@@ -52,17 +52,17 @@ def test_validate_command_on_e_series(tmp_path: pytest.TempPathFactory) -> None:
     assert refused.returncode != 0 and "2048" in refused.stdout + refused.stderr
 
 
+def _rtde_only(controller: str) -> EmulatorThread:
+    """An emulator of `controller` serving RTDE alone, on a free port."""
+    config = EmulatorConfig(
+        rtde_port=0, primary_port=None, secondary_port=None, realtime_port=None, dashboard_port=None
+    )
+    config.controller = controller
+    return EmulatorThread(config).start()
+
+
 def test_emulator_on_e_series_takes_the_whole_list_and_sends_it() -> None:
-    emu = EmulatorThread(
-        EmulatorConfig(
-            rtde_port=0,
-            primary_port=None,
-            secondary_port=None,
-            realtime_port=None,
-            dashboard_port=None,
-            controller="5.23.0",
-        )
-    ).start()
+    emu = _rtde_only("5.23.0")
     try:
         with RtdeClient("127.0.0.1", emu.ports["rtde"]) as client:
             codec = client.setup_outputs(NAMES, 125)
@@ -75,16 +75,7 @@ def test_emulator_on_e_series_takes_the_whole_list_and_sends_it() -> None:
 
 
 def test_client_refuses_it_for_cb3_before_sending() -> None:
-    emu = EmulatorThread(
-        EmulatorConfig(
-            rtde_port=0,
-            primary_port=None,
-            secondary_port=None,
-            realtime_port=None,
-            dashboard_port=None,
-            controller="3.15.8",
-        )
-    ).start()
+    emu = _rtde_only("3.15.8")
     try:
         with RtdeClient("127.0.0.1", emu.ports["rtde"]) as client:
             names = [n for n in NAMES if n in every_output("3.15.8")]

@@ -11,8 +11,6 @@ from __future__ import annotations
 
 import json
 import shutil
-import subprocess
-import sys
 from pathlib import Path
 from typing import Any
 
@@ -24,6 +22,7 @@ from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.metamodel.loader import load_spec
 from rtde_spec.metamodel.realtime import PRIMITIVES, load_realtime
 from rtde_spec.metamodel.schema import Spec
+from tests.test_spec_import_forms import _cli
 
 ROOT = Path(__file__).resolve().parent.parent
 DATA = Path(__file__).parent / "data" / "import"
@@ -34,16 +33,6 @@ Row = list[str]
 @pytest.fixture(scope="module")
 def spec() -> Spec:
     return load_spec(ROOT / "spec")
-
-
-def _cli(*args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [sys.executable, "-m", "rtde_spec.cli", "spec", "import", *args],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        timeout=120,
-    )
 
 
 def _json(*args: str) -> dict[str, Any]:
