@@ -185,7 +185,8 @@ def test_damaged_bytes_of_a_learned_shape_decode_as_without_shapes(edits: list[t
             outcomes.append(codec.decode_message(bytes(damaged)))
         except DecodeError as exc:
             outcomes.append(str(exc))
-    assert outcomes[0] == outcomes[1]
+    # repr, not ==: a damaged double may be NaN, which equals nothing, itself included
+    assert repr(outcomes[0]) == repr(outcomes[1])
     assert learned.robot_state.shapes[len(data) - 5]  # the learned shape was there to try
 
 
