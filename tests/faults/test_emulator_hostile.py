@@ -67,6 +67,26 @@ def rss(pid: int) -> int:
     return int(found.group(1)) * 1024 if found else 0
 
 
+class PeakRss:
+    """The largest resident size a process reaches while sampled (every 20 ms, in a thread)."""
+
+    def __init__(self, pid: int) -> None:
+        self.pid = pid
+        self.baseline = self.peak = rss(pid)
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._sample, daemon=True)
+        self._thread.start()
+
+    def _sample(self) -> None:
+        while not self._stop.is_set():
+            self.peak = max(self.peak, rss(self.pid))
+            time.sleep(0.02)
+
+    def stop(self) -> None:
+        self._stop.set()
+        self._thread.join()
+
+
 def rtde_start(port: int, names: list[str], rcvbuf: int | None = None) -> socket.socket:
     """Connect, ask for protocol 2, set up outputs at 500 Hz and start, without waiting for replies."""
     sock = socket.socket()
@@ -156,20 +176,10 @@ def test_well_behaved_clients_miss_nothing_beside_hostile_ones_and_memory_stays_
         for client in good:
             client.start()
         time.sleep(1.5)
-        baseline = rss(proc.pid)
-        peak = [baseline]
-        sampling = threading.Event()
-
-        def sample() -> None:
-            while not sampling.is_set():
-                peak[0] = max(peak[0], rss(proc.pid))
-                time.sleep(0.02)
-
-        sampler = threading.Thread(target=sample, daemon=True)
-        sampler.start()
+        sampler = PeakRss(proc.pid)
 
         vectors = [f.name for f in Catalogue.default().fields("output", "5.15.0") if f.wire.count == 6]
-        big = []
+        big: list[str] = []
         for name in vectors:  # as many 48-byte fields as the setup limit allows
             if len(",".join([*big, name])) < 2000:
                 big.append(name)
@@ -187,8 +197,7 @@ def test_well_behaved_clients_miss_nothing_beside_hostile_ones_and_memory_stays_
         for h in hostile:
             h.start()
         time.sleep(SECONDS)
-        sampling.set()
-        sampler.join()
+        sampler.stop()
         for h in hostile:
             h.stop.set()
         for client in good:
@@ -201,7 +210,7 @@ def test_well_behaved_clients_miss_nothing_beside_hostile_ones_and_memory_stays_
         proc.wait(10)
     reader.join(5)
 
-    growth = max(peak[0], final) - baseline
+    growth = max(sampler.peak, final) - sampler.baseline
     drops = [line for line in log if "dropping" in line or "refusing" in line]
     report = (
         f"growth {growth / 2**20:.1f} MiB; received {[len(c.stamps) for c in good]}; "

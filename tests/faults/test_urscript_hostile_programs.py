@@ -22,7 +22,7 @@ import pytest
 
 from rtde_spec import PrimaryClient
 from rtde_spec.emulator.urscript.interpreter import MEMORY_BUDGET
-from tests.faults.test_emulator_hostile import GoodClient, rss
+from tests.faults.test_emulator_hostile import GoodClient, PeakRss, rss
 from tests.test_urscript_control import named, read_until
 
 if not Path("/proc/self/status").exists():  # pragma: no cover - Linux CI
@@ -148,17 +148,7 @@ def test_hostile_programs_end_in_errors_while_rtde_and_the_dashboard_keep_answer
         reader.start()
         pinger.start()
         time.sleep(1.0)
-        baseline = rss(proc.pid)
-        peak = [baseline]
-        sampling = threading.Event()
-
-        def sample() -> None:
-            while not sampling.is_set():
-                peak[0] = max(peak[0], rss(proc.pid))
-                time.sleep(0.02)
-
-        sampler = threading.Thread(target=sample, daemon=True)
-        sampler.start()
+        sampler = PeakRss(proc.pid)
         texts = []
         with PrimaryClient("127.0.0.1", primary_port, timeout=10) as client:
             for script, _ in PROGRAMS:
@@ -188,8 +178,7 @@ def test_hostile_programs_end_in_errors_while_rtde_and_the_dashboard_keep_answer
                 closed += 1
             sock.close()
         time.sleep(1.0)
-        sampling.set()
-        sampler.join()
+        sampler.stop()
         final = rss(proc.pid)
         reader.stop.set()
         pinger.stop.set()
@@ -202,8 +191,9 @@ def test_hostile_programs_end_in_errors_while_rtde_and_the_dashboard_keep_answer
         f"faults {texts}; 10 MB refused {ten_mb}; crowd closed {closed}/500; "
         f"reader missed {reader.missed()}, "
         f"longest wait {reader.longest:.2f} s, error {reader.error}; dashboard answers {pinger.answers}, "
-        f"longest {pinger.longest:.2f} s, error {pinger.error}; RSS +{(peak[0] - baseline) >> 20} MB peak, "
-        f"+{(final - baseline) >> 20} MB at the end"
+        f"longest {pinger.longest:.2f} s, error {pinger.error}; "
+        f"RSS +{(sampler.peak - sampler.baseline) >> 20} MB peak, "
+        f"+{(final - sampler.baseline) >> 20} MB at the end"
     )
     print(report)  # the figures, with -s
     for text, (_, expected) in zip(texts, PROGRAMS, strict=True):
@@ -211,4 +201,5 @@ def test_hostile_programs_end_in_errors_while_rtde_and_the_dashboard_keep_answer
     assert ten_mb and closed >= 500 - 32, report
     assert reader.error is None and reader.missed() == 0 and len(reader.stamps) > 1000, report
     assert reader.longest < 2.0 and pinger.error is None and pinger.longest < 2.0, report
-    assert peak[0] - baseline < MEMORY_BUDGET + (96 << 20) and final - baseline < 96 << 20, report
+    assert sampler.peak - sampler.baseline < MEMORY_BUDGET + (96 << 20), report
+    assert final - sampler.baseline < 96 << 20, report
