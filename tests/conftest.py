@@ -9,10 +9,13 @@ from collections.abc import Iterator
 
 import pytest
 
+from . import durations
 from .fixed_ports import fixed_ports
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    order = durations.longest_first([item.nodeid for item in items], durations.load())
+    items[:] = [items[i] for i in order]  # every process sorts alike: xdist checks they agree
     if os.environ.get("RTDE_SPEC_SLOW") == "1" or config.getoption("markexpr"):
         return
     slow = [item for item in items if item.get_closest_marker("slow") is not None]

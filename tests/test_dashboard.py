@@ -132,6 +132,7 @@ def test_load_play_pause_stop_a_program_from_the_programs_directory(emu: Emulato
         dash.close()
 
 
+@pytest.mark.slow  # seconds of real time (recording, a 5 s rule, a move): CI runs it
 def test_a_protective_stop_shows_everywhere_and_unlocks_after_five_seconds(emu: EmulatorThread) -> None:
     dash = Dashboard(emu.ports["dashboard"])
     try:

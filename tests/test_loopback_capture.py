@@ -26,6 +26,7 @@ if DUMPCAP is None:
     pytest.skip(reason, allow_module_level=True)
 
 
+@pytest.mark.slow  # seconds of real time (recording, a 5 s rule, a move): CI runs it
 def test_live_capture_of_our_client_and_ur_rtde(tmp_path: Path) -> None:
     rtde_receive = pytest.importorskip("rtde_receive", reason="ur_rtde is installed by the test extra")
     capture = tmp_path / "live.pcapng"

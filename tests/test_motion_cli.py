@@ -64,6 +64,7 @@ def test_demo_records_a_moving_arm_in_seconds(tmp_path: Path) -> None:
     assert elapsed < 60  # about 5 s on an idle machine; generous for a loaded one
 
 
+@pytest.mark.slow  # seconds of real time (recording, a 5 s rule, a move): CI runs it
 def test_watch_every_shows_the_joints_move_one_way_along_a_movej(tmp_path: Path) -> None:
     script = tmp_path / "move.script"
     script.write_text(MOVEJ)
@@ -88,6 +89,7 @@ def test_watch_every_shows_the_joints_move_one_way_along_a_movej(tmp_path: Path)
     assert len({round(b, 4) for b in base}) >= 8  # many values on the way: it moved, not jumped
 
 
+@pytest.mark.slow  # seconds of real time (recording, a 5 s rule, a move): CI runs it
 def test_record_and_plot_show_the_move(tmp_path: Path) -> None:
     out, png = tmp_path / "joints.csv", tmp_path / "joints.png"
     proc, ports = serve("127.0.0.43")

@@ -94,6 +94,7 @@ def watch(emu: EmulatorThread, seconds: float) -> tuple[list[object], list[tuple
     return primary, realtime
 
 
+@pytest.mark.slow  # seconds of real time (recording, a 5 s rule, a move): CI runs it
 def test_a_speedj_into_a_joint_limit_stops_there_with_a_protective_stop_everywhere() -> None:
     with EmulatorThread(config()) as emu:
         with socket.create_connection(("127.0.0.1", emu.ports["primary"])) as sock:

@@ -170,23 +170,27 @@ def _serve(handler: object) -> tuple[socket.socket, threading.Thread]:
 
 
 def test_probe_tells_real_time_like_streams_and_silent_ports() -> None:
+    probed = threading.Event()  # each peer holds its connection open until the probe has its answer
+
     def realtime(conn: socket.socket) -> None:  # fixed-size packages, each led by its length
         conn.sendall(((1116).to_bytes(4, "big") + bytes(1112)) * 3)
-        time.sleep(2)
+        probed.wait(5)
 
     def silent(conn: socket.socket) -> None:
         conn.recv(100)  # reads the RTDE request, answers nothing
-        time.sleep(2)
+        probed.wait(5)
 
     def other(conn: socket.socket) -> None:
         conn.sendall(b"SSH-2.0-OpenSSH_9.6\r\n")
-        time.sleep(2)
+        probed.wait(5)
 
     found = {}
     for handler in (realtime, silent, other):
         server, thread = _serve(handler)
+        probed.clear()
         with server:
             found[handler.__name__] = probe("127.0.0.1", server.getsockname()[1], 1.0)
+        probed.set()
         thread.join(5)
     assert found["realtime"].kind == "realtime" and "1116-byte packages" in found["realtime"].detail
     assert found["silent"].kind == "silent" and "did not answer an RTDE request" in found["silent"].detail

@@ -66,6 +66,7 @@ def test_a_signal_ends_the_recording_with_every_row_in_a_readable_file(
     assert temp_files(tmp_path) == []
 
 
+@pytest.mark.slow  # seconds of real time (recording, a 5 s rule, a move): CI runs it
 def test_sigkill_with_split_keeps_every_closed_parquet_part(emu: EmulatorThread, tmp_path: Path) -> None:
     out = tmp_path / "run.parquet"
     result, sent_until = record_then_signal(emu, out, signal.SIGKILL, 6.0, "--split", "2s")
@@ -90,6 +91,7 @@ def test_sigkill_with_split_keeps_every_closed_parquet_part(emu: EmulatorThread,
     assert [p.name for p in parts(tmp_path, "run", ".parquet")] == ["run_0000.parquet"]
 
 
+@pytest.mark.slow  # seconds of real time (recording, a 5 s rule, a move): CI runs it
 def test_sigkill_of_a_split_csv_loses_at_most_the_last_batch(emu: EmulatorThread, tmp_path: Path) -> None:
     result, sent_until = record_then_signal(emu, tmp_path / "run.csv", signal.SIGKILL, 5.0, "--split", "2s")
     assert result.returncode == -signal.SIGKILL
