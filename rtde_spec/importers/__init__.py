@@ -130,6 +130,8 @@ def read_document(
             from rtde_spec.importers.primary_listing import read_listing
 
             doc.members = read_listing(text)
+            if source is None:  # the C-like listing is the client-interface workbook's form
+                doc.source = "client-interface-workbook"
         if not doc.members:
             raise UsageError(
                 f"{path}: no message table read; looked for the primary interface's sub-package "

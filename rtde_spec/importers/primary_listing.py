@@ -42,6 +42,8 @@ ROW = re.compile(
     rf"^({_TYPE})(?:\s+([A-Za-z_][A-Za-z0-9_]*))?(?:\[(\d*)\])?(?:\s*=\s*([A-Z_][A-Z0-9_]*)\s*=\s*(\d+))?;?$"
 )
 _FOR_EACH = re.compile(r"^for each joint\s*:?$", re.I)
+#: the global variables update's typed values, spelled out chunk by chunk: the spec's variable_values
+_FOR_EACH_VARIABLE = re.compile(r"^for each variable\b", re.I)
 _IF = re.compile(r"^\(?if (\w+)(?: interface)? is installed.*following:?$", re.I)
 #: whether a text is in this form: a package type given as NAME = number
 SIGN = re.compile(r"packageType\s*=\s*[A-Z_]+\s*=\s*\d+")
@@ -70,10 +72,14 @@ def read_listing(text: str) -> list[DocMember]:
     in_message = False  # a message (messageSize): its rows start after robotMessageType
     block = 0  # counts "for each joint:" blocks: one row alone in one is an array of 6
     opened = 0  # the line of the open block's "for each joint:"
+    values = False  # inside "for each variable:": the rest of the member is its typed values
+    pending: list[DocLayoutField] = []  # the open block's rows, until "end" or an indent shows its end
 
     def unclosed(at: int) -> None:
         """A block left open by neither "end" nor an indent: its extent is a guess; say so."""
         if member is not None and group == "repeat 6" and block_indent is None and opened:
+            for row in pending:
+                row.guessed = True
             member.notes.append(
                 f"line {opened}: 'for each joint:' has no 'end' and its rows no indent: read as "
                 f"repeated up to line {at}; where the block ends cannot be told"
@@ -82,6 +88,7 @@ def read_listing(text: str) -> list[DocMember]:
     for i, (number, text_line, indent) in enumerate(lines):
         line = re.sub(r"^\(\*\)\s*", "", text_line)  # (*): present only in some cases
         line = re.sub(r"\bchar array (\w+)", r"char \1[]", line)
+        line = re.sub(r"^(.*\w)\s*=\s*\d+\s*-\s*\d+$", r"\1", line)  # "requestedType = 0-8": its values
         line = re.sub(r"\s*\(.*\)\s*$", "", line) if ROW.match(line.split("(")[0].strip()) else line
         closes = line.endswith(")") and "(" not in line  # "short euromapCurrent)" ends an if-group
         if closes:
@@ -93,12 +100,12 @@ def read_listing(text: str) -> list[DocMember]:
         if m is not None and m.group(2) and key(m.group(2)) == "messagesize":
             member = DocMember(title, None, None, lines[i - 1][0] if i else number)
             members.append(member)
-            family, group, block_indent, in_message = None, "", None, True
+            family, group, block_indent, in_message, values = None, "", None, True, False
             continue
         if m is not None and m.group(2) and key(m.group(2)) == "packagesize":
             member = DocMember(title, family or 16, None, lines[i - 1][0] if i else number)
             members.append(member)
-            group, block_indent, in_message = "", None, False
+            group, block_indent, in_message, values = "", None, False, False
             continue
         if m is not None and m.group(5) is not None:
             name = key(m.group(2) or "")
@@ -110,19 +117,34 @@ def read_listing(text: str) -> list[DocMember]:
                 member.member_type = int(m.group(5))
                 in_message = False  # the family's prefix (timestamp, source) is behind
             continue
-        if member is None or in_message:
+        if member is None or in_message or values:
             continue
         if group == "repeat 6" and block_indent is not None and indent < block_indent and line != "end":
             group, block_indent = "", None  # the workbook's block ends where the indent does
-        if _FOR_EACH.match(line):
+        if _FOR_EACH_VARIABLE.match(line):
+            # "for each variable: unsigned char valueType, one of the following chunks ...": one
+            # field of typed values, as the spec reads it (variable_values), not a row per chunk
+            member.fields.append(DocLayoutField("variableValues", "variablevalues", "bytes", "", number))
+            values = True
+        elif _FOR_EACH.match(line):
             unclosed(number)
             group, block_indent = "repeat 6", None
             block += 1
             opened = number
+            pending = []
         elif line.lower() == "end":
             group, block_indent = "", None
         elif (w := _IF.match(line)) is not None:
-            group = f"when {key(w.group(1))}installed"
+            # the group hangs on the row naming the interface ("char euromap67InterfaceInstalled")
+            prev = member.fields[-1] if member.fields else None
+            stem = key(w.group(1))
+            named = prev is not None and prev.key.startswith(stem) and prev.key.endswith("installed")
+            group = f"when {prev.key}" if named and prev is not None else f"when {stem}installed"
+        elif m is not None and not m.group(2) and m.group(5) is None and "(" in text_line:
+            # "uint32_t (Used by Universal Robots software only)": an unnamed field, the document's
+            # reserved one (as the 5.x document names it)
+            row = DocLayoutField("reserved", "reserved", _prim(m.group(1)), "", number, group)
+            member.fields.append(row)
         elif m is not None and m.group(2):
             if group == "repeat 6" and block_indent is None:
                 block_indent = indent if indent > 0 else None
@@ -139,9 +161,16 @@ def read_listing(text: str) -> list[DocMember]:
             row = DocLayoutField(m.group(2), k, type_, "", number, group)
             row.block = block if group == "repeat 6" else 0
             member.fields.append(row)
+            if group == "repeat 6":
+                pending.append(row)
             if closes:
                 group = ""
         elif closes and group.startswith("when"):
             group = ""
     unclosed(lines[-1][0] if lines else 0)
+    last = lines[-1][1] if lines else ""
+    if member is not None and (m := ROW.match(last)) is not None and not m.group(2) and m.group(5) is None:
+        # the copy ends inside a row ("unsigned char " and no name): this member is cut short
+        member.cut = True
+        member.notes.append(f"line {lines[-1][0]}: the copy ends inside a row of {member.title!r}: cut short")
     return [m for m in members if m.member_type is not None]
