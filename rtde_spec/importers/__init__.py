@@ -130,7 +130,9 @@ def read_document(
             from rtde_spec.importers.primary_listing import read_listing
 
             doc.members = read_listing(text)
-            if source is None:  # the C-like listing is the client-interface workbook's form
+            if source is None and not re.search(r"Robot Software \d", text):
+                # the C-like listing is the client-interface workbook's form; the interface
+                # document (ClientInterfaces_Primary.pdf as text) uses it too, under "Robot Software 5.x"
                 doc.source = "client-interface-workbook"
         if not doc.members:
             raise UsageError(

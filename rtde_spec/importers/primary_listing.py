@@ -87,7 +87,7 @@ def read_listing(text: str) -> list[DocMember]:
 
     for i, (number, text_line, indent) in enumerate(lines):
         line = re.sub(r"^\(\*\)\s*", "", text_line)  # (*): present only in some cases
-        line = re.sub(r"\bchar array (\w+)", r"char \1[]", line)
+        line = re.sub(r"\bchar ?array (\w+)", r"char \1[]", line, flags=re.I)  # the PDF: charArray
         line = re.sub(r"^(.*\w)\s*=\s*\d+\s*-\s*\d+$", r"\1", line)  # "requestedType = 0-8": its values
         line = re.sub(r"\s*\(.*\)\s*$", "", line) if ROW.match(line.split("(")[0].strip()) else line
         closes = line.endswith(")") and "(" not in line  # "short euromapCurrent)" ends an if-group
