@@ -2102,9 +2102,14 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                            'each',
                                                     'conflicts': [{'what': 'type',
                                                                    'document': 'int32',
-                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'sources': ['client-interface-workbook-3.2',
+                                                                               'primary-guide-5.10'],
                                                                    'decision': '`int` in the 3.x '
-                                                                               'workbook; the 5.x '
+                                                                               'workbook and in '
+                                                                               'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf); '
+                                                                               'the current '
                                                                                'document and URCL '
                                                                                'read uint32_t (one '
                                                                                'bit per input or '
@@ -2117,9 +2122,14 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                            'each',
                                                     'conflicts': [{'what': 'type',
                                                                    'document': 'int32',
-                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'sources': ['client-interface-workbook-3.2',
+                                                                               'primary-guide-5.10'],
                                                                    'decision': '`int` in the 3.x '
-                                                                               'workbook; the 5.x '
+                                                                               'workbook and in '
+                                                                               'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf); '
+                                                                               'the current '
                                                                                'document and URCL '
                                                                                'read uint32_t (one '
                                                                                'bit per input or '
@@ -2187,24 +2197,33 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                            'reduced mode',
                                                     'conflicts': [{'what': 'type',
                                                                    'document': 'uint8',
-                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'sources': ['client-interface-workbook-3.2',
+                                                                               'primary-guide-5.10'],
                                                                    'decision': '`unsigned char '
                                                                                'InReducedMode` in '
-                                                                               'the 3.x workbook; '
-                                                                               'the 5.x document '
-                                                                               'and URCL read a '
-                                                                               'bool: one byte '
-                                                                               'either way, '
+                                                                               'the 3.x workbook, '
+                                                                               'uint8_t in the '
+                                                                               '5.9/5.10 document '
+                                                                               '(ClientInterfaces_Primary.pdf); '
+                                                                               'the current '
+                                                                               'document and URCL '
+                                                                               'read a bool: one '
+                                                                               'byte either way, '
                                                                                'kept.'}]},
                                                    {'name': 'immi_interface_installed',
                                                     'type': 'bool',
                                                     'doc': 'True if the IMMI interface is '
                                                            'installed',
                                                     'conflicts': [{'what': 'removed',
-                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'sources': ['client-interface-workbook-3.2',
+                                                                               'primary-guide-5.10'],
                                                                    'decision': 'Named euromap67... '
                                                                                'in the 3.x '
-                                                                               'workbook (see the '
+                                                                               'workbook and in '
+                                                                               'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               '(see the '
                                                                                "sub-package's "
                                                                                'conflicts): kept '
                                                                                'as the IMMI '
@@ -2218,12 +2237,18 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                        '(Euromap 67) inputs, one '
                                                                        'bit each',
                                                                 'conflicts': [{'what': 'removed',
-                                                                               'sources': ['client-interface-workbook-3.2'],
+                                                                               'sources': ['client-interface-workbook-3.2',
+                                                                                           'primary-guide-5.10'],
                                                                                'decision': 'Named '
                                                                                            'euromap67... '
                                                                                            'in the '
                                                                                            '3.x '
                                                                                            'workbook '
+                                                                                           'and in '
+                                                                                           'the '
+                                                                                           '5.9/5.10 '
+                                                                                           'document '
+                                                                                           '(ClientInterfaces_Primary.pdf) '
                                                                                            '(see '
                                                                                            'the '
                                                                                            "sub-package's "
@@ -2238,12 +2263,18 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                        '(Euromap 67) outputs, one '
                                                                        'bit each',
                                                                 'conflicts': [{'what': 'removed',
-                                                                               'sources': ['client-interface-workbook-3.2'],
+                                                                               'sources': ['client-interface-workbook-3.2',
+                                                                                           'primary-guide-5.10'],
                                                                                'decision': 'Named '
                                                                                            'euromap67... '
                                                                                            'in the '
                                                                                            '3.x '
                                                                                            'workbook '
+                                                                                           'and in '
+                                                                                           'the '
+                                                                                           '5.9/5.10 '
+                                                                                           'document '
+                                                                                           '(ClientInterfaces_Primary.pdf) '
                                                                                            '(see '
                                                                                            'the '
                                                                                            "sub-package's "
@@ -2258,12 +2289,18 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                 'doc': 'euromap67Voltage24V: IMMI '
                                                                        '24 V supply voltage',
                                                                 'conflicts': [{'what': 'removed',
-                                                                               'sources': ['client-interface-workbook-3.2'],
+                                                                               'sources': ['client-interface-workbook-3.2',
+                                                                                           'primary-guide-5.10'],
                                                                                'decision': 'Named '
                                                                                            'euromap67... '
                                                                                            'in the '
                                                                                            '3.x '
                                                                                            'workbook '
+                                                                                           'and in '
+                                                                                           'the '
+                                                                                           '5.9/5.10 '
+                                                                                           'document '
+                                                                                           '(ClientInterfaces_Primary.pdf) '
                                                                                            '(see '
                                                                                            'the '
                                                                                            "sub-package's "
@@ -2278,12 +2315,18 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                 'doc': 'euromap67Current: IMMI '
                                                                        'supply current',
                                                                 'conflicts': [{'what': 'removed',
-                                                                               'sources': ['client-interface-workbook-3.2'],
+                                                                               'sources': ['client-interface-workbook-3.2',
+                                                                                           'primary-guide-5.10'],
                                                                                'decision': 'Named '
                                                                                            'euromap67... '
                                                                                            'in the '
                                                                                            '3.x '
                                                                                            'workbook '
+                                                                                           'and in '
+                                                                                           'the '
+                                                                                           '5.9/5.10 '
+                                                                                           'document '
+                                                                                           '(ClientInterfaces_Primary.pdf) '
                                                                                            '(see '
                                                                                            'the '
                                                                                            "sub-package's "
@@ -2309,9 +2352,13 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                            'device input',
                                                     'conflicts': [{'what': 'type',
                                                                    'document': 'uint8',
-                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'sources': ['client-interface-workbook-3.2',
+                                                                               'primary-guide-5.10'],
                                                                    'decision': 'uint8_t in the 3.2 '
-                                                                               'workbook; the 5.x '
+                                                                               'workbook and the '
+                                                                               '5.9/5.10 document '
+                                                                               '(ClientInterfaces_Primary.pdf); '
+                                                                               'the current '
                                                                                'document and URCL '
                                                                                'read a bool: one '
                                                                                'byte either way, '
@@ -2402,18 +2449,22 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                         'conflicts': [{'what': 'added',
                                                        'field': 'euromap67InterfaceInstalled',
                                                        'document': 'uint8',
-                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'sources': ['client-interface-workbook-3.2',
+                                                                   'primary-guide-5.10'],
                                                        'decision': 'euromap67 in the 3.x workbook '
+                                                                   'and in the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
                                                                    'is the IMMI interface of the '
-                                                                   '5.x document '
+                                                                   'current document '
                                                                    '(immiInterfaceInstalled, '
                                                                    'immiInputBits, immiOutputBits, '
                                                                    'immiVoltage24V, immiCurrent): '
                                                                    'the same bytes at the same '
-                                                                   'place (char and int where 5.x '
-                                                                   'says bool and uint32_t); kept '
-                                                                   "as the spec's IMMI group, with "
-                                                                   "URCL's names."},
+                                                                   'place (char and int where the '
+                                                                   'current document says bool and '
+                                                                   "uint32_t); kept as the spec's "
+                                                                   "IMMI group, with URCL's "
+                                                                   'names.'},
                                                       {'what': 'added',
                                                        'field': 'euromapInputBits',
                                                        'document': 'int32 in when '
@@ -2466,18 +2517,22 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                        'field': 'euromapCurrent',
                                                        'document': 'float in when '
                                                                    'euromap67interfaceinstalled',
-                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'sources': ['client-interface-workbook-3.2',
+                                                                   'primary-guide-5.10'],
                                                        'decision': 'euromap67 in the 3.x workbook '
+                                                                   'and in the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
                                                                    'is the IMMI interface of the '
-                                                                   '5.x document '
+                                                                   'current document '
                                                                    '(immiInterfaceInstalled, '
                                                                    'immiInputBits, immiOutputBits, '
                                                                    'immiVoltage24V, immiCurrent): '
                                                                    'the same bytes at the same '
-                                                                   'place (char and int where 5.x '
-                                                                   'says bool and uint32_t); kept '
-                                                                   "as the spec's IMMI group, with "
-                                                                   "URCL's names."},
+                                                                   'place (char and int where the '
+                                                                   'current document says bool and '
+                                                                   "uint32_t); kept as the spec's "
+                                                                   "IMMI group, with URCL's "
+                                                                   'names.'},
                                                       {'what': 'added',
                                                        'field': 'masterSaftyState',
                                                        'document': 'uint8',
@@ -2520,8 +2575,64 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                        'decision': 'short in the 1.x sheets, float '
                                                                    'from 3.0 (immiCurrent); after '
                                                                    "the older layout's end: extra "
-                                                                   'bytes (see '
-                                                                   'masterOnOffState).'}]},
+                                                                   'bytes (see masterOnOffState).'},
+                                                      {'what': 'added',
+                                                       'field': 'euromapInputBits',
+                                                       'document': 'uint32 in when '
+                                                                   'euromap67interfaceinstalled',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'euromap67 in the 3.x workbook '
+                                                                   'and in the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'is the IMMI interface of the '
+                                                                   'current document '
+                                                                   '(immiInterfaceInstalled, '
+                                                                   'immiInputBits, immiOutputBits, '
+                                                                   'immiVoltage24V, immiCurrent): '
+                                                                   'the same bytes at the same '
+                                                                   'place (char and int where the '
+                                                                   'current document says bool and '
+                                                                   "uint32_t); kept as the spec's "
+                                                                   "IMMI group, with URCL's "
+                                                                   'names.'},
+                                                      {'what': 'added',
+                                                       'field': 'euromapOutputBits',
+                                                       'document': 'uint32 in when '
+                                                                   'euromap67interfaceinstalled',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'euromap67 in the 3.x workbook '
+                                                                   'and in the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'is the IMMI interface of the '
+                                                                   'current document '
+                                                                   '(immiInterfaceInstalled, '
+                                                                   'immiInputBits, immiOutputBits, '
+                                                                   'immiVoltage24V, immiCurrent): '
+                                                                   'the same bytes at the same '
+                                                                   'place (char and int where the '
+                                                                   'current document says bool and '
+                                                                   "uint32_t); kept as the spec's "
+                                                                   "IMMI group, with URCL's "
+                                                                   'names.'},
+                                                      {'what': 'added',
+                                                       'field': 'euromapVoltage24V',
+                                                       'document': 'float in when '
+                                                                   'euromap67interfaceinstalled',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'euromap67 in the 3.x workbook '
+                                                                   'and in the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'is the IMMI interface of the '
+                                                                   'current document '
+                                                                   '(immiInterfaceInstalled, '
+                                                                   'immiInputBits, immiOutputBits, '
+                                                                   'immiVoltage24V, immiCurrent): '
+                                                                   'the same bytes at the same '
+                                                                   'place (char and int where the '
+                                                                   'current document says bool and '
+                                                                   "uint32_t); kept as the spec's "
+                                                                   "IMMI group, with URCL's "
+                                                                   'names.'}]},
                                        {'name': 'cartesian_info',
                                         'type': 4,
                                         'fields': [{'name': 'x',
@@ -2590,7 +2701,16 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                     'type': 'uint32',
                                                     'count': 6,
                                                     'doc': 'checksum: one checksum per joint of '
-                                                           'its kinematics calibration'},
+                                                           'its kinematics calibration',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': 'Spelled cheksum in '
+                                                                               'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               '(see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'dh_theta',
                                                     'type': 'double',
                                                     'count': 6,
@@ -2612,7 +2732,15 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                    {'name': 'calibration_status',
                                                     'type': 'uint32',
                                                     'doc': 'calibration_status: state of the '
-                                                           'kinematics calibration'}]},
+                                                           'kinematics calibration'}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'cheksum',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'cheksum (sic) in the 5.9/5.10 '
+                                                                   'document '
+                                                                   '(ClientInterfaces_Primary.pdf): '
+                                                                   "the spec's checksum, one per "
+                                                                   'joint.'}]},
                                        {'name': 'configuration_data',
                                         'type': 6,
                                         'doc': 'Sent once after the client connects. From 5.25.1 '
@@ -2645,12 +2773,18 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                 'doc': 'jointMaxLimit: highest '
                                                                        'allowed joint position',
                                                                 'conflicts': [{'what': 'removed',
-                                                                               'sources': ['client-interface-workbook-3.2'],
+                                                                               'sources': ['client-interface-workbook-3.2',
+                                                                                           'primary-guide-5.10'],
                                                                                'decision': 'Spelled '
                                                                                            'jointMaxLimitt '
                                                                                            'in the '
                                                                                            '3.x '
                                                                                            'workbook '
+                                                                                           'and '
+                                                                                           'the '
+                                                                                           '5.9/5.10 '
+                                                                                           'document '
+                                                                                           '(ClientInterfaces_Primary.pdf) '
                                                                                            '(see '
                                                                                            'the '
                                                                                            "sub-package's "
@@ -2726,10 +2860,14 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                               'masterboard_version_ and '
                                                               'robot_type_',
                                                     'conflicts': [{'what': 'removed',
-                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'sources': ['client-interface-workbook-3.2',
+                                                                               'primary-guide-5.10'],
                                                                    'decision': 'controllerBoxType '
                                                                                'in the 3.x '
-                                                                               'workbook (see the '
+                                                                               'workbook and the '
+                                                                               '5.9/5.10 document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               '(see the '
                                                                                "sub-package's "
                                                                                'conflicts).'}]},
                                                    {'name': 'robot_type',
@@ -2742,18 +2880,25 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                     'doc': 'robotSubType: Robot Arm sub-type'}],
                                         'conflicts': [{'what': 'added',
                                                        'field': 'jointMaxLimitt',
-                                                       'sources': ['client-interface-workbook-3.2'],
-                                                       'decision': "The 3.x workbook's misspelling "
-                                                                   'of jointMaxLimit (the 5.x '
-                                                                   'document and URCL: '
-                                                                   'joint_max_limit).'},
+                                                       'sources': ['client-interface-workbook-3.2',
+                                                                   'primary-guide-5.10'],
+                                                       'decision': "The 3.x workbook's and the "
+                                                                   '5.9/5.10 document '
+                                                                   "(ClientInterfaces_Primary.pdf)'s "
+                                                                   'misspelling of jointMaxLimit '
+                                                                   '(the current document and '
+                                                                   'URCL: joint_max_limit).'},
                                                       {'what': 'added',
                                                        'field': 'controllerBoxType',
-                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'sources': ['client-interface-workbook-3.2',
+                                                                   'primary-guide-5.10'],
                                                        'decision': 'controllerBoxType in the 3.x '
-                                                                   'workbook, controller_box_type '
-                                                                   'in URCL; the current document '
-                                                                   'calls this int32 reserved '
+                                                                   'workbook and the 5.9/5.10 '
+                                                                   'document '
+                                                                   '(ClientInterfaces_Primary.pdf), '
+                                                                   'controller_box_type in URCL; '
+                                                                   'the current document calls '
+                                                                   'this int32 reserved '
                                                                    '(deprecated): kept as '
                                                                    'reserved, its source naming '
                                                                    "URCL's reading."}]},
@@ -2911,6 +3056,18 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                                'in the 3.2 '
                                                                                'workbook (see the '
                                                                                "sub-package's "
+                                                                               'conflicts).'},
+                                                                  {'what': 'removed',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': 'Named '
+                                                                               'freedriveButtonEnabled '
+                                                                               '/ '
+                                                                               'IOEnabledFreedrive '
+                                                                               '/ reserved in the '
+                                                                               '5.9/5.10 document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               '(see the '
+                                                                               "sub-package's "
                                                                                'conflicts).'}]},
                                                    {'name': 'is_freedrive_io_pressed',
                                                     'type': 'bool',
@@ -2926,6 +3083,18 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                                'IOEnabledFreedrive '
                                                                                'in the 3.2 '
                                                                                'workbook (see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'},
+                                                                  {'what': 'removed',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': 'Named '
+                                                                               'freedriveButtonEnabled '
+                                                                               '/ '
+                                                                               'IOEnabledFreedrive '
+                                                                               '/ reserved in the '
+                                                                               '5.9/5.10 document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               '(see the '
                                                                                "sub-package's "
                                                                                'conflicts).'}]},
                                                    {'name': 'tp_type',
@@ -2943,7 +3112,19 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                                'reserved, the '
                                                                                'current one Teach '
                                                                                'Pendant Type): '
-                                                                               'kept.'}]}],
+                                                                               'kept.'},
+                                                                  {'what': 'removed',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': 'Named '
+                                                                               'freedriveButtonEnabled '
+                                                                               '/ '
+                                                                               'IOEnabledFreedrive '
+                                                                               '/ reserved in the '
+                                                                               '5.9/5.10 document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               '(see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]}],
                                         'conflicts': [{'what': 'added',
                                                        'field': 'teachButtonPressed',
                                                        'document': 'bool',
@@ -2997,7 +3178,55 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                    'isFreedriveIOPressed), whose '
                                                                    'fourth byte (teach pendant '
                                                                    'type) came later: kept as the '
-                                                                   'current document has them.'}]},
+                                                                   'current document has them.'},
+                                                      {'what': 'added',
+                                                       'field': 'freedriveButtonEnabled',
+                                                       'document': 'bool',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'names these bytes '
+                                                                   'tpButtonState, '
+                                                                   'freedriveButtonEnabled, '
+                                                                   'IOEnabledFreedrive and '
+                                                                   'reserved; the current document '
+                                                                   'names the last three '
+                                                                   'isManualFreedriveAllowed, '
+                                                                   'isFreedriveIOPressed and Teach '
+                                                                   'Pendant Type: kept as the '
+                                                                   'newer document has them.'},
+                                                      {'what': 'added',
+                                                       'field': 'IOEnabledFreedrive',
+                                                       'document': 'bool',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'names these bytes '
+                                                                   'tpButtonState, '
+                                                                   'freedriveButtonEnabled, '
+                                                                   'IOEnabledFreedrive and '
+                                                                   'reserved; the current document '
+                                                                   'names the last three '
+                                                                   'isManualFreedriveAllowed, '
+                                                                   'isFreedriveIOPressed and Teach '
+                                                                   'Pendant Type: kept as the '
+                                                                   'newer document has them.'},
+                                                      {'what': 'added',
+                                                       'field': 'reserved',
+                                                       'document': 'uint8',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'names these bytes '
+                                                                   'tpButtonState, '
+                                                                   'freedriveButtonEnabled, '
+                                                                   'IOEnabledFreedrive and '
+                                                                   'reserved; the current document '
+                                                                   'names the last three '
+                                                                   'isManualFreedriveAllowed, '
+                                                                   'isFreedriveIOPressed and Teach '
+                                                                   'Pendant Type: kept as the '
+                                                                   'newer document has them.'}]},
                                        {'name': 'calibration_data',
                                         'type': 9,
                                         'doc': 'Internal to UR software; kept as bytes. No public '
@@ -3041,7 +3270,109 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                    'the whole body as `data` '
                                                                    'bytes, whatever its length, so '
                                                                    "no firmware's sub-package "
-                                                                   'fails to decode.'}]},
+                                                                   'fails to decode.'},
+                                                      {'what': 'added',
+                                                       'field': 'Fx',
+                                                       'document': 'double',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'lists Calibration Data '
+                                                                   '(NEEDED_FOR_CALIB_DATA = 9) as '
+                                                                   'six doubles Fx, Fy, Fz, Frx, '
+                                                                   'Fry, Frz: 48 bytes, the size '
+                                                                   "of URSim 5.8's body (all "
+                                                                   'zeros); the current document '
+                                                                   'calls the body reserved (used '
+                                                                   'by UR software only) and no '
+                                                                   'other public source names its '
+                                                                   'fields: kept as bytes, every '
+                                                                   'length decoding.'},
+                                                      {'what': 'added',
+                                                       'field': 'Fy',
+                                                       'document': 'double',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'lists Calibration Data '
+                                                                   '(NEEDED_FOR_CALIB_DATA = 9) as '
+                                                                   'six doubles Fx, Fy, Fz, Frx, '
+                                                                   'Fry, Frz: 48 bytes, the size '
+                                                                   "of URSim 5.8's body (all "
+                                                                   'zeros); the current document '
+                                                                   'calls the body reserved (used '
+                                                                   'by UR software only) and no '
+                                                                   'other public source names its '
+                                                                   'fields: kept as bytes, every '
+                                                                   'length decoding.'},
+                                                      {'what': 'added',
+                                                       'field': 'Fz',
+                                                       'document': 'double',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'lists Calibration Data '
+                                                                   '(NEEDED_FOR_CALIB_DATA = 9) as '
+                                                                   'six doubles Fx, Fy, Fz, Frx, '
+                                                                   'Fry, Frz: 48 bytes, the size '
+                                                                   "of URSim 5.8's body (all "
+                                                                   'zeros); the current document '
+                                                                   'calls the body reserved (used '
+                                                                   'by UR software only) and no '
+                                                                   'other public source names its '
+                                                                   'fields: kept as bytes, every '
+                                                                   'length decoding.'},
+                                                      {'what': 'added',
+                                                       'field': 'Frx',
+                                                       'document': 'double',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'lists Calibration Data '
+                                                                   '(NEEDED_FOR_CALIB_DATA = 9) as '
+                                                                   'six doubles Fx, Fy, Fz, Frx, '
+                                                                   'Fry, Frz: 48 bytes, the size '
+                                                                   "of URSim 5.8's body (all "
+                                                                   'zeros); the current document '
+                                                                   'calls the body reserved (used '
+                                                                   'by UR software only) and no '
+                                                                   'other public source names its '
+                                                                   'fields: kept as bytes, every '
+                                                                   'length decoding.'},
+                                                      {'what': 'added',
+                                                       'field': 'Fry',
+                                                       'document': 'double',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'lists Calibration Data '
+                                                                   '(NEEDED_FOR_CALIB_DATA = 9) as '
+                                                                   'six doubles Fx, Fy, Fz, Frx, '
+                                                                   'Fry, Frz: 48 bytes, the size '
+                                                                   "of URSim 5.8's body (all "
+                                                                   'zeros); the current document '
+                                                                   'calls the body reserved (used '
+                                                                   'by UR software only) and no '
+                                                                   'other public source names its '
+                                                                   'fields: kept as bytes, every '
+                                                                   'length decoding.'},
+                                                      {'what': 'added',
+                                                       'field': 'Frz',
+                                                       'document': 'double',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'lists Calibration Data '
+                                                                   '(NEEDED_FOR_CALIB_DATA = 9) as '
+                                                                   'six doubles Fx, Fy, Fz, Frx, '
+                                                                   'Fry, Frz: 48 bytes, the size '
+                                                                   "of URSim 5.8's body (all "
+                                                                   'zeros); the current document '
+                                                                   'calls the body reserved (used '
+                                                                   'by UR software only) and no '
+                                                                   'other public source names its '
+                                                                   'fields: kept as bytes, every '
+                                                                   'length decoding.'}]},
                                        {'name': 'safety_data',
                                         'type': 10,
                                         'doc': 'Internal to UR software; kept as bytes. No public '
@@ -3116,12 +3447,50 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                     'type': 'uint8',
                                                     'enum': 'ToolDigitalOutputMode',
                                                     'doc': 'digitalOutputModeOutput0: mode of tool '
-                                                           'digital output 0'},
+                                                           'digital output 0',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': "'digtal output "
+                                                                               "mode output 0' in "
+                                                                               'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               '(see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'digital_output_mode_pin1',
                                                     'type': 'uint8',
                                                     'enum': 'ToolDigitalOutputMode',
                                                     'doc': 'digitalOutputModeOutput1: mode of tool '
-                                                           'digital output 1'}]},
+                                                           'digital output 1',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': "'digtal output "
+                                                                               "mode output 1' in "
+                                                                               'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               '(see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'digtalOutputModeOutput0',
+                                                       'document': 'uint8',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': "'digtal output mode output 0' "
+                                                                   '(sic) in the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf): '
+                                                                   "the spec's "
+                                                                   'digital_output_mode_pin0.'},
+                                                      {'what': 'added',
+                                                       'field': 'digtalOutputModeOutput1',
+                                                       'document': 'uint8',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': "'digtal output mode output 1' "
+                                                                   '(sic) in the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf): '
+                                                                   "the spec's "
+                                                                   'digital_output_mode_pin1.'}]},
                                        {'name': 'singularity_info',
                                         'type': 13,
                                         'doc': 'Internal; sent only in freedrive with individually '
@@ -3235,7 +3604,25 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                              'also reads the rest of the message. '
                                                              'Agreed.',
                                                     'doc': 'textMessage: the text, to the end of '
-                                                           'the message'}]},
+                                                           'the message',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': 'Named '
+                                                                               'textTextMessage in '
+                                                                               'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               "(see the message's "
+                                                                               'conflicts).'}]}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'textTextMessage',
+                                                       'document': 'string',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'textTextMessage in the '
+                                                                   '5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf): '
+                                                                   'the text of the text message '
+                                                                   "(the spec's text_message)."}]},
                                        {'name': 'version_message',
                                         'type': 3,
                                         'doc': 'The first message on primary and secondary '
@@ -3350,7 +3737,23 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                    'decision': 'The 3.x workbook '
                                                                                'has a text instead '
                                                                                "(see the message's "
-                                                                               'conflicts).'}]}],
+                                                                               'conflicts).'},
+                                                                  {'what': 'type',
+                                                                   'document': 'uint32',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': 'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               'gives reportData '
+                                                                               'as uint32_t; the '
+                                                                               'current document '
+                                                                               'and URCL read it '
+                                                                               'by reportDataType '
+                                                                               '(uint32, int32 or '
+                                                                               'float): the switch '
+                                                                               'is kept, its '
+                                                                               'uint32 cases are '
+                                                                               'that reading.'}]}],
                                         'conflicts': [{'what': 'added',
                                                        'field': 'textMessage',
                                                        'document': 'string',
@@ -3429,6 +3832,16 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                                'has a text after '
                                                                                'the level instead '
                                                                                "(see the message's "
+                                                                               'conflicts).'},
+                                                                  {'what': 'removed',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': 'Named '
+                                                                               'robotMessageDataType '
+                                                                               '/ robotMessageData '
+                                                                               'in the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               "(see the message's "
                                                                                'conflicts).'}]},
                                                    {'name': 'report_data',
                                                     'switch': 'data_type',
@@ -3449,6 +3862,16 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                                'has a text after '
                                                                                'the level instead '
                                                                                "(see the message's "
+                                                                               'conflicts).'},
+                                                                  {'what': 'removed',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': 'Named '
+                                                                               'robotMessageDataType '
+                                                                               '/ robotMessageData '
+                                                                               'in the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               "(see the message's "
                                                                                'conflicts).'}]},
                                                    {'name': 'report_text',
                                                     'type': 'string',
@@ -3465,12 +3888,18 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                              'follows as report_text, so both '
                                                              'decode without error and re-encode '
                                                              'to the same bytes.',
-                                                    'doc': 'Text after the report data; not in the '
-                                                           'document (empty when absent).',
+                                                    'doc': 'Text after the report data: the '
+                                                           '5.9/5.10 document lists it '
+                                                           '(robotCommTextMessage), the current '
+                                                           'one does not (empty when absent).',
                                                     'conflicts': [{'what': 'removed',
                                                                    'sources': ['primary-guide'],
-                                                                   'decision': 'Not in the '
-                                                                               "document; UR's C++ "
+                                                                   'decision': 'Not in the current '
+                                                                               'document; the '
+                                                                               '5.9/5.10 document '
+                                                                               'lists it '
+                                                                               '(robotCommTextMessage) '
+                                                                               "and UR's C++ "
                                                                                'client library '
                                                                                'reads a text after '
                                                                                'the report data '
@@ -3500,7 +3929,52 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                    'level; the 5.x document reads '
                                                                    'data type and data there, URCL '
                                                                    'those and then a text '
-                                                                   '(report_text): kept.'}]},
+                                                                   '(report_text): kept.'},
+                                                      {'what': 'added',
+                                                       'field': 'robotMessageDataType',
+                                                       'document': 'uint32',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'names them '
+                                                                   'robotMessageDataType, '
+                                                                   'robotMessageData and '
+                                                                   'robotCommTextMessage (the '
+                                                                   "spec's data_type, report_data "
+                                                                   'and report_text; the current '
+                                                                   'document: dataType, reportData '
+                                                                   'and, for data type 5, a text): '
+                                                                   'kept.'},
+                                                      {'what': 'added',
+                                                       'field': 'robotMessageData',
+                                                       'document': 'uint32',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'names them '
+                                                                   'robotMessageDataType, '
+                                                                   'robotMessageData and '
+                                                                   'robotCommTextMessage (the '
+                                                                   "spec's data_type, report_data "
+                                                                   'and report_text; the current '
+                                                                   'document: dataType, reportData '
+                                                                   'and, for data type 5, a text): '
+                                                                   'kept.'},
+                                                      {'what': 'added',
+                                                       'field': 'robotCommTextMessage',
+                                                       'document': 'string',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'names them '
+                                                                   'robotMessageDataType, '
+                                                                   'robotMessageData and '
+                                                                   'robotCommTextMessage (the '
+                                                                   "spec's data_type, report_data "
+                                                                   'and report_text; the current '
+                                                                   'document: dataType, reportData '
+                                                                   'and, for data type 5, a text): '
+                                                                   'kept.'}]},
                                        {'name': 'key_message',
                                         'type': 7,
                                         'doc': 'Primary interface only.',
@@ -3580,7 +4054,25 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                    'decision': 'textMessage in the '
                                                                                '3.x workbook (see '
                                                                                "the message's "
-                                                                               'conflicts).'}]}],
+                                                                               'conflicts).'},
+                                                                  {'what': 'type',
+                                                                   'document': 'string',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': 'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               'ends the message '
+                                                                               'with '
+                                                                               'keyTextMessage as '
+                                                                               'a charArray to the '
+                                                                               'end, as URCL reads '
+                                                                               'it; the current '
+                                                                               'document puts a '
+                                                                               'uint16 length '
+                                                                               'first: the spec '
+                                                                               'reads both '
+                                                                               '(fallback: rest), '
+                                                                               'see peers.'}]}],
                                         'conflicts': [{'what': 'added',
                                                        'field': 'titleSize',
                                                        'document': 'uint8',
@@ -3694,7 +4186,20 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                    'decision': 'The 3.x workbook '
                                                                                'has the text only '
                                                                                "(see the message's "
-                                                                               'conflicts).'}]},
+                                                                               'conflicts).'},
+                                                                  {'what': 'type',
+                                                                   'document': 'int32',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': '`int` in the '
+                                                                               '5.9/5.10 document '
+                                                                               '(ClientInterfaces_Primary.pdf); '
+                                                                               'the current '
+                                                                               'document and URCL '
+                                                                               '(uint32_t) read it '
+                                                                               'unsigned: kept '
+                                                                               '(line and column '
+                                                                               'numbers are '
+                                                                               'positive).'}]},
                                                    {'name': 'script_column_number',
                                                     'type': 'uint32',
                                                     'doc': 'scriptColumnNumber: column of the '
@@ -3704,7 +4209,20 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                    'decision': 'The 3.x workbook '
                                                                                'has the text only '
                                                                                "(see the message's "
-                                                                               'conflicts).'}]},
+                                                                               'conflicts).'},
+                                                                  {'what': 'type',
+                                                                   'document': 'int32',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': '`int` in the '
+                                                                               '5.9/5.10 document '
+                                                                               '(ClientInterfaces_Primary.pdf); '
+                                                                               'the current '
+                                                                               'document and URCL '
+                                                                               '(uint32_t) read it '
+                                                                               'unsigned: kept '
+                                                                               '(line and column '
+                                                                               'numbers are '
+                                                                               'positive).'}]},
                                                    {'name': 'runtime_exception_text_message',
                                                     'type': 'string',
                                                     'length': 'rest',
@@ -3749,7 +4267,41 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                          "document's uint8 length "
                                                                          'is kept.',
                                                                 'doc': 'labelName: last executed '
-                                                                       'line label name'},
+                                                                       'line label name',
+                                                                'conflicts': [{'what': 'type',
+                                                                               'document': 'string(int32) '
+                                                                                           'in '
+                                                                                           'repeat '
+                                                                                           'until_end',
+                                                                               'sources': ['primary-guide-5.10'],
+                                                                               'decision': 'the '
+                                                                                           '5.9/5.10 '
+                                                                                           'document '
+                                                                                           '(ClientInterfaces_Primary.pdf) '
+                                                                                           'gives '
+                                                                                           'an int '
+                                                                                           'length '
+                                                                                           'before '
+                                                                                           'the '
+                                                                                           'name; '
+                                                                                           'the '
+                                                                                           'current '
+                                                                                           'document '
+                                                                                           'a '
+                                                                                           'uint8 '
+                                                                                           'length: '
+                                                                                           'the '
+                                                                                           'newer '
+                                                                                           'document '
+                                                                                           'kept '
+                                                                                           '(no '
+                                                                                           'public '
+                                                                                           'client '
+                                                                                           'parses '
+                                                                                           'this '
+                                                                                           'message '
+                                                                                           'to '
+                                                                                           'tell).'}]},
                                                                {'name': 'thread_name',
                                                                 'type': 'string',
                                                                 'length': 'uint16',
@@ -3758,7 +4310,41 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                          "document's uint16 length "
                                                                          'is kept.',
                                                                 'doc': 'threadName: the name of '
-                                                                       'the thread'}],
+                                                                       'the thread',
+                                                                'conflicts': [{'what': 'type',
+                                                                               'document': 'string(int32) '
+                                                                                           'in '
+                                                                                           'repeat '
+                                                                                           'until_end',
+                                                                               'sources': ['primary-guide-5.10'],
+                                                                               'decision': 'the '
+                                                                                           '5.9/5.10 '
+                                                                                           'document '
+                                                                                           '(ClientInterfaces_Primary.pdf) '
+                                                                                           'gives '
+                                                                                           'an int '
+                                                                                           'length '
+                                                                                           'before '
+                                                                                           'the '
+                                                                                           'name; '
+                                                                                           'the '
+                                                                                           'current '
+                                                                                           'document '
+                                                                                           'a '
+                                                                                           'uint16 '
+                                                                                           'length: '
+                                                                                           'the '
+                                                                                           'newer '
+                                                                                           'document '
+                                                                                           'kept '
+                                                                                           '(no '
+                                                                                           'public '
+                                                                                           'client '
+                                                                                           'parses '
+                                                                                           'this '
+                                                                                           'message '
+                                                                                           'to '
+                                                                                           'tell).'}]}],
                                                     'doc': 'One entry per running thread with '
                                                            'labeled lines'}]}],
                            'conflicts': [{'what': 'added',
@@ -3768,7 +4354,19 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                       'then a text) of the 3.x workbook; the 5.x '
                                                       'document does not list it (its Program '
                                                       'Threads message, 14, tells labels): left '
-                                                      'out.'}]},
+                                                      'out.'},
+                                         {'what': 'added',
+                                          'document': 'sub-type 2',
+                                          'sources': ['primary-guide-5.10'],
+                                          'decision': 'The Popup Message of the 5.9/5.10 document '
+                                                      '(ClientInterfaces_Primary.pdf) '
+                                                      '(ROBOT_MESSAGE_TYPE_POPUP = 2: requestId, '
+                                                      'requestedType, warning, error, blocking, a '
+                                                      'title after its uint8 length, the text); '
+                                                      'the current document does not list it and '
+                                                      'no public client parses it: left out (a '
+                                                      'type-2 robot message decodes as an unknown '
+                                                      'member, its bytes kept).'}]},
                           {'name': 'program_state',
                            'type': 25,
                            'layout': 'tagged',
@@ -3816,7 +4414,22 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                     'type': 'variable_values',
                                                     'doc': 'variableValues: each variable value '
                                                            'contains a type byte, its data and a '
-                                                           'terminating new line character'}]}],
+                                                           'terminating new line character',
+                                                    'conflicts': [{'what': 'type',
+                                                                   'document': 'uint8',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': '`unsigned char '
+                                                                               'variableValues` in '
+                                                                               'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf): '
+                                                                               'the typed values '
+                                                                               'as bytes (its '
+                                                                               'Value Types '
+                                                                               'chapter gives '
+                                                                               'each); the spec '
+                                                                               'reads them as '
+                                                                               'variable_values.'}]}]}],
                            'conflicts': [{'what': 'added',
                                           'document': 'sub-type 2',
                                           'sources': ['client-interface-workbook-3.2'],
