@@ -483,7 +483,7 @@ class RobotCommMessage(PrimaryPart):
     robot_message_report_level: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='robotMessageReportLevel (Report Levels) (values: ReportLevel)')] = None
     data_type: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='robotMessageDataType: the type of report_data (0-4 a 32-bit number, 5 a string) (values: ReportDataType)')] = None
     report_data: Annotated[float | int | str | None, Field(description='robotMessageData: a value of the type data_type names; the last field is a 32-bit number for data types 0-4 or a variable length string for data type 5')] = None
-    report_text: Annotated[str | None, Field(description='Text after the report data; not in the document (empty when absent).')] = None
+    report_text: Annotated[str | None, Field(description='Text after the report data: the 5.9/5.10 document lists it (robotCommTextMessage), the current one does not (empty when absent).')] = None
 
 
 class KeyMessage(PrimaryPart):

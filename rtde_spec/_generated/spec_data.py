@@ -1793,14 +1793,30 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                    {'name': 'is_real_robot_connected',
                                                     'type': 'bool',
                                                     'doc': 'isRealRobotConnected: a real arm is '
-                                                           'connected (false in simulation)'},
+                                                           'connected (false in simulation)',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Named '
+                                                                               'isRobotConnected '
+                                                                               'in the 3.x '
+                                                                               'workbook (see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'is_real_robot_enabled',
                                                     'type': 'bool',
                                                     'doc': 'isRealRobotEnabled: the real arm is '
                                                            'enabled (false when simulating)'},
                                                    {'name': 'is_robot_power_on',
                                                     'type': 'bool',
-                                                    'doc': 'isRobotPowerOn: the arm is powered'},
+                                                    'doc': 'isRobotPowerOn: the arm is powered',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Named '
+                                                                               'isPowerOnRobot in '
+                                                                               'the 3.x workbook '
+                                                                               '(see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'is_emergency_stopped',
                                                     'type': 'bool',
                                                     'doc': 'isEmergencyStopped: an emergency stop '
@@ -1869,7 +1885,29 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                'type': 'uint8',
                                                                'enum': 'RobotMode'},
                                                               {'name': 'target_speed_fraction',
-                                                               'type': 'double'}]}]},
+                                                               'type': 'double'}]}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'isRobotConnected',
+                                                       'document': 'bool',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': "The 3.x workbook's name "
+                                                                   '(python-urx reads it so) for '
+                                                                   'isRealRobotConnected; the 5.x '
+                                                                   'document and URCL '
+                                                                   '(is_real_robot_connected_) '
+                                                                   'name it as the spec does: the '
+                                                                   'same bool at the same place.'},
+                                                      {'what': 'added',
+                                                       'field': 'isPowerOnRobot',
+                                                       'document': 'bool',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': "The 3.x workbook's name "
+                                                                   '(python-urx reads it so) for '
+                                                                   'isRobotPowerOn; the 5.x '
+                                                                   'document and URCL '
+                                                                   '(is_robot_power_on_) name it '
+                                                                   'as the spec does: the same '
+                                                                   'bool at the same place.'}]},
                                        {'name': 'joint_data',
                                         'type': 1,
                                         'fields': [{'name': 'joints',
@@ -1907,30 +1945,85 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                        'temperature'},
                                                                {'name': 'reserved',
                                                                 'type': 'float',
-                                                                'doc': 'Deprecated — ignore'},
+                                                                'doc': 'Deprecated — ignore',
+                                                                'conflicts': [{'what': 'removed',
+                                                                               'sources': ['client-interface-workbook-3.2',
+                                                                                           'primary-guide-5.9'],
+                                                                               'decision': 'Named '
+                                                                                           'T_micro '
+                                                                                           'in the '
+                                                                                           '3.x '
+                                                                                           'workbook '
+                                                                                           'and '
+                                                                                           'the '
+                                                                                           '5.9/5.10 '
+                                                                                           'document '
+                                                                                           '(see '
+                                                                                           'the '
+                                                                                           "sub-package's "
+                                                                                           'conflicts).'}]},
                                                                {'name': 'joint_mode',
                                                                 'type': 'uint8',
                                                                 'enum': 'JointMode',
                                                                 'doc': 'jointMode (Joint Modes)'}],
-                                                    'doc': 'One entry per joint, base first'}]},
+                                                    'doc': 'One entry per joint, base first'}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'T_micro',
+                                                       'sources': ['client-interface-workbook-3.2',
+                                                                   'primary-guide-5.9'],
+                                                       'decision': 'T_micro in the 3.x workbook, '
+                                                                   'python-urx and the 5.9/5.10 '
+                                                                   'edition of the document (there '
+                                                                   "'Deprecated - ignore'); the "
+                                                                   'current document names this '
+                                                                   'float reserved: kept as '
+                                                                   'reserved.'}]},
                                        {'name': 'tool_data',
                                         'type': 2,
                                         'fields': [{'name': 'analog_input_range0',
                                                     'type': 'uint8',
                                                     'doc': 'analogInputRange0: range of tool '
-                                                           'analog input 0'},
+                                                           'analog input 0',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Numbered 2 and 3 '
+                                                                               'in the 3.x '
+                                                                               'workbook (see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'analog_input_range1',
                                                     'type': 'uint8',
                                                     'doc': 'analogInputRange1: range of tool '
-                                                           'analog input 1'},
+                                                           'analog input 1',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Numbered 2 and 3 '
+                                                                               'in the 3.x '
+                                                                               'workbook (see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'analog_input0',
                                                     'type': 'double',
                                                     'doc': 'analogInput0: tool analog input 0 (A '
-                                                           'or V by its range)'},
+                                                           'or V by its range)',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Numbered 2 and 3 '
+                                                                               'in the 3.x '
+                                                                               'workbook (see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'analog_input1',
                                                     'type': 'double',
                                                     'doc': 'analogInput1: tool analog input 1 (A '
-                                                           'or V by its range)'},
+                                                           'or V by its range)',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Numbered 2 and 3 '
+                                                                               'in the 3.x '
+                                                                               'workbook (see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'tool_voltage_48v',
                                                     'type': 'float',
                                                     'unit': 'V',
@@ -1951,19 +2044,97 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                    {'name': 'tool_mode',
                                                     'type': 'uint8',
                                                     'enum': 'JointMode',
-                                                    'doc': 'toolMode (Tool Modes)'}]},
+                                                    'doc': 'toolMode (Tool Modes)'}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'analogInputRange2',
+                                                       'document': 'uint8',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'The 3.x workbook (and '
+                                                                   "python-urx) numbers the tool's "
+                                                                   'analog inputs 2 and 3, as '
+                                                                   "URScript's analog_in[2] and "
+                                                                   'analog_in[3] do; the 5.x '
+                                                                   'document and URCL number them '
+                                                                   '0 and 1: the same bytes, '
+                                                                   'kept.'},
+                                                      {'what': 'added',
+                                                       'field': 'analogInputRange3',
+                                                       'document': 'uint8',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'The 3.x workbook (and '
+                                                                   "python-urx) numbers the tool's "
+                                                                   'analog inputs 2 and 3, as '
+                                                                   "URScript's analog_in[2] and "
+                                                                   'analog_in[3] do; the 5.x '
+                                                                   'document and URCL number them '
+                                                                   '0 and 1: the same bytes, '
+                                                                   'kept.'},
+                                                      {'what': 'added',
+                                                       'field': 'analogInput2',
+                                                       'document': 'double',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'The 3.x workbook (and '
+                                                                   "python-urx) numbers the tool's "
+                                                                   'analog inputs 2 and 3, as '
+                                                                   "URScript's analog_in[2] and "
+                                                                   'analog_in[3] do; the 5.x '
+                                                                   'document and URCL number them '
+                                                                   '0 and 1: the same bytes, '
+                                                                   'kept.'},
+                                                      {'what': 'added',
+                                                       'field': 'analogInput3',
+                                                       'document': 'double',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'The 3.x workbook (and '
+                                                                   "python-urx) numbers the tool's "
+                                                                   'analog inputs 2 and 3, as '
+                                                                   "URScript's analog_in[2] and "
+                                                                   'analog_in[3] do; the 5.x '
+                                                                   'document and URCL number them '
+                                                                   '0 and 1: the same bytes, '
+                                                                   'kept.'}]},
                                        {'name': 'masterboard_data',
                                         'type': 3,
                                         'fields': [{'name': 'digital_input_bits',
                                                     'type': 'uint32',
                                                     'doc': 'digitalInputBits: standard and '
                                                            'configurable digital inputs, one bit '
-                                                           'each'},
+                                                           'each',
+                                                    'conflicts': [{'what': 'type',
+                                                                   'document': 'int32',
+                                                                   'sources': ['client-interface-workbook-3.2',
+                                                                               'primary-guide-5.10'],
+                                                                   'decision': '`int` in the 3.x '
+                                                                               'workbook and in '
+                                                                               'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf); '
+                                                                               'the current '
+                                                                               'document and URCL '
+                                                                               'read uint32_t (one '
+                                                                               'bit per input or '
+                                                                               'output): the same '
+                                                                               '4 bytes, kept.'}]},
                                                    {'name': 'digital_output_bits',
                                                     'type': 'uint32',
                                                     'doc': 'digitalOutputBits: standard and '
                                                            'configurable digital outputs, one bit '
-                                                           'each'},
+                                                           'each',
+                                                    'conflicts': [{'what': 'type',
+                                                                   'document': 'int32',
+                                                                   'sources': ['client-interface-workbook-3.2',
+                                                                               'primary-guide-5.10'],
+                                                                   'decision': '`int` in the 3.x '
+                                                                               'workbook and in '
+                                                                               'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf); '
+                                                                               'the current '
+                                                                               'document and URCL '
+                                                                               'read uint32_t (one '
+                                                                               'bit per input or '
+                                                                               'output): the same '
+                                                                               '4 bytes, kept.'}]},
                                                    {'name': 'analog_input_range0',
                                                     'type': 'uint8',
                                                     'doc': 'analogInputRange0: range of standard '
@@ -2023,11 +2194,40 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                    {'name': 'in_reduced_mode',
                                                     'type': 'bool',
                                                     'doc': 'InReducedMode: the safety system is in '
-                                                           'reduced mode'},
+                                                           'reduced mode',
+                                                    'conflicts': [{'what': 'type',
+                                                                   'document': 'uint8',
+                                                                   'sources': ['client-interface-workbook-3.2',
+                                                                               'primary-guide-5.10'],
+                                                                   'decision': '`unsigned char '
+                                                                               'InReducedMode` in '
+                                                                               'the 3.x workbook, '
+                                                                               'uint8_t in the '
+                                                                               '5.9/5.10 document '
+                                                                               '(ClientInterfaces_Primary.pdf); '
+                                                                               'the current '
+                                                                               'document and URCL '
+                                                                               'read a bool: one '
+                                                                               'byte either way, '
+                                                                               'kept.'}]},
                                                    {'name': 'immi_interface_installed',
                                                     'type': 'bool',
                                                     'doc': 'True if the IMMI interface is '
-                                                           'installed'},
+                                                           'installed',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2',
+                                                                               'primary-guide-5.10'],
+                                                                   'decision': 'Named euromap67... '
+                                                                               'in the 3.x '
+                                                                               'workbook and in '
+                                                                               'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               '(see the '
+                                                                               "sub-package's "
+                                                                               'conflicts): kept '
+                                                                               'as the IMMI '
+                                                                               'group.'}]},
                                                    {'name': 'immi',
                                                     'when': 'immi_interface_installed',
                                                     'group': 'ImmiData',
@@ -2035,22 +2235,106 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                 'type': 'uint32',
                                                                 'doc': 'euromap67InputBits: IMMI '
                                                                        '(Euromap 67) inputs, one '
-                                                                       'bit each'},
+                                                                       'bit each',
+                                                                'conflicts': [{'what': 'removed',
+                                                                               'sources': ['client-interface-workbook-3.2',
+                                                                                           'primary-guide-5.10'],
+                                                                               'decision': 'Named '
+                                                                                           'euromap67... '
+                                                                                           'in the '
+                                                                                           '3.x '
+                                                                                           'workbook '
+                                                                                           'and in '
+                                                                                           'the '
+                                                                                           '5.9/5.10 '
+                                                                                           'document '
+                                                                                           '(ClientInterfaces_Primary.pdf) '
+                                                                                           '(see '
+                                                                                           'the '
+                                                                                           "sub-package's "
+                                                                                           'conflicts): '
+                                                                                           'kept '
+                                                                                           'as the '
+                                                                                           'IMMI '
+                                                                                           'group.'}]},
                                                                {'name': 'immi_output_bits',
                                                                 'type': 'uint32',
                                                                 'doc': 'euromap67OutputBits: IMMI '
                                                                        '(Euromap 67) outputs, one '
-                                                                       'bit each'},
+                                                                       'bit each',
+                                                                'conflicts': [{'what': 'removed',
+                                                                               'sources': ['client-interface-workbook-3.2',
+                                                                                           'primary-guide-5.10'],
+                                                                               'decision': 'Named '
+                                                                                           'euromap67... '
+                                                                                           'in the '
+                                                                                           '3.x '
+                                                                                           'workbook '
+                                                                                           'and in '
+                                                                                           'the '
+                                                                                           '5.9/5.10 '
+                                                                                           'document '
+                                                                                           '(ClientInterfaces_Primary.pdf) '
+                                                                                           '(see '
+                                                                                           'the '
+                                                                                           "sub-package's "
+                                                                                           'conflicts): '
+                                                                                           'kept '
+                                                                                           'as the '
+                                                                                           'IMMI '
+                                                                                           'group.'}]},
                                                                {'name': 'immi_voltage_24v',
                                                                 'type': 'float',
                                                                 'unit': 'V',
                                                                 'doc': 'euromap67Voltage24V: IMMI '
-                                                                       '24 V supply voltage'},
+                                                                       '24 V supply voltage',
+                                                                'conflicts': [{'what': 'removed',
+                                                                               'sources': ['client-interface-workbook-3.2',
+                                                                                           'primary-guide-5.10'],
+                                                                               'decision': 'Named '
+                                                                                           'euromap67... '
+                                                                                           'in the '
+                                                                                           '3.x '
+                                                                                           'workbook '
+                                                                                           'and in '
+                                                                                           'the '
+                                                                                           '5.9/5.10 '
+                                                                                           'document '
+                                                                                           '(ClientInterfaces_Primary.pdf) '
+                                                                                           '(see '
+                                                                                           'the '
+                                                                                           "sub-package's "
+                                                                                           'conflicts): '
+                                                                                           'kept '
+                                                                                           'as the '
+                                                                                           'IMMI '
+                                                                                           'group.'}]},
                                                                {'name': 'immi_current',
                                                                 'type': 'float',
                                                                 'unit': 'A',
                                                                 'doc': 'euromap67Current: IMMI '
-                                                                       'supply current'}],
+                                                                       'supply current',
+                                                                'conflicts': [{'what': 'removed',
+                                                                               'sources': ['client-interface-workbook-3.2',
+                                                                                           'primary-guide-5.10'],
+                                                                               'decision': 'Named '
+                                                                                           'euromap67... '
+                                                                                           'in the '
+                                                                                           '3.x '
+                                                                                           'workbook '
+                                                                                           'and in '
+                                                                                           'the '
+                                                                                           '5.9/5.10 '
+                                                                                           'document '
+                                                                                           '(ClientInterfaces_Primary.pdf) '
+                                                                                           '(see '
+                                                                                           'the '
+                                                                                           "sub-package's "
+                                                                                           'conflicts): '
+                                                                                           'kept '
+                                                                                           'as the '
+                                                                                           'IMMI '
+                                                                                           'group.'}]}],
                                                     'doc': 'Present only when '
                                                            'immi_interface_installed is true'},
                                                    {'name': 'reserved',
@@ -2065,32 +2349,71 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                     'type': 'bool',
                                                     'doc': 'threePositionEnablingDeviceInput: '
                                                            'state of the 3-position enabling '
-                                                           'device input'},
+                                                           'device input',
+                                                    'conflicts': [{'what': 'type',
+                                                                   'document': 'uint8',
+                                                                   'sources': ['client-interface-workbook-3.2',
+                                                                               'primary-guide-5.10'],
+                                                                   'decision': 'uint8_t in the 3.2 '
+                                                                               'workbook and the '
+                                                                               '5.9/5.10 document '
+                                                                               '(ClientInterfaces_Primary.pdf); '
+                                                                               'the current '
+                                                                               'document and URCL '
+                                                                               'read a bool: one '
+                                                                               'byte either way, '
+                                                                               'kept.'}]},
                                                    {'name': 'reserved_2',
                                                     'type': 'uint8',
-                                                    'doc': 'Used by Universal Robots software '
-                                                           'only'}],
+                                                    'doc': 'Used by Universal Robots software only',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Not in the 3.2 '
+                                                                               'workbook, which '
+                                                                               'ends at '
+                                                                               'threePositionEnablingDeviceInput; '
+                                                                               'the 5.x document '
+                                                                               'and URCL read this '
+                                                                               'trailing byte '
+                                                                               '(appended after '
+                                                                               '3.2; its first CB3 '
+                                                                               'version is '
+                                                                               'unknown): '
+                                                                               'kept.'}]}],
                                         'older': [{'before': '3.0.0',
                                                    'source': 'python-urx (urx/ursecmon.py, '
                                                              'ParserUtils.parse) reads software '
                                                              'before 3.0 with this layout (struct '
-                                                             'format iBhhbbddbbddffffBBb)',
+                                                             'format iBhhbbddbbddffffBBb: its last '
+                                                             'three bytes are the safety state, '
+                                                             'masterOnOffState and '
+                                                             "euromap67InterfaceInstalled); UR's "
+                                                             'client-interface workbook '
+                                                             '(Client_Interface.xlsx, sheets 1.7 '
+                                                             'and 1.8) lists the same rows and the '
+                                                             'euromap67 fields that follow when '
+                                                             'that byte is set (int, int, short, '
+                                                             'short). This layout ends at the '
+                                                             'safety state: the bytes after it '
+                                                             'have no field of the current layout '
+                                                             'to hold them, so they stay the '
+                                                             "sub-package's extra bytes",
                                                    'fields': [{'name': 'digital_input_bits',
                                                                'type': 'int16'},
                                                               {'name': 'digital_output_bits',
                                                                'type': 'int16'},
                                                               {'name': 'analog_input_range0',
-                                                               'type': 'int8'},
+                                                               'type': 'uint8'},
                                                               {'name': 'analog_input_range1',
-                                                               'type': 'int8'},
+                                                               'type': 'uint8'},
                                                               {'name': 'analog_input0',
                                                                'type': 'double'},
                                                               {'name': 'analog_input1',
                                                                'type': 'double'},
                                                               {'name': 'analog_output_domain0',
-                                                               'type': 'int8'},
+                                                               'type': 'uint8'},
                                                               {'name': 'analog_output_domain1',
-                                                               'type': 'int8'},
+                                                               'type': 'uint8'},
                                                               {'name': 'analog_output0',
                                                                'type': 'double'},
                                                               {'name': 'analog_output1',
@@ -2105,7 +2428,211 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                'type': 'float'},
                                                               {'name': 'safety_mode',
                                                                'type': 'uint8',
-                                                               'enum': 'SafetyMode'}]}]},
+                                                               'enum': 'SafetyMode',
+                                                               'conflicts': [{'what': 'removed',
+                                                                              'sources': ['client-interface-workbook-1.8'],
+                                                                              'decision': 'masterSaftyState '
+                                                                                          '(sic) '
+                                                                                          'in the '
+                                                                                          "workbook's "
+                                                                                          '1.x '
+                                                                                          'sheets: '
+                                                                                          'the '
+                                                                                          'safety '
+                                                                                          'state '
+                                                                                          'byte '
+                                                                                          'python-urx '
+                                                                                          'reads '
+                                                                                          'there; '
+                                                                                          'kept as '
+                                                                                          'safety_mode.'}]}]}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'euromap67InterfaceInstalled',
+                                                       'document': 'uint8',
+                                                       'sources': ['client-interface-workbook-3.2',
+                                                                   'primary-guide-5.10'],
+                                                       'decision': 'euromap67 in the 3.x workbook '
+                                                                   'and in the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'is the IMMI interface of the '
+                                                                   'current document '
+                                                                   '(immiInterfaceInstalled, '
+                                                                   'immiInputBits, immiOutputBits, '
+                                                                   'immiVoltage24V, immiCurrent): '
+                                                                   'the same bytes at the same '
+                                                                   'place (char and int where the '
+                                                                   'current document says bool and '
+                                                                   "uint32_t); kept as the spec's "
+                                                                   "IMMI group, with URCL's "
+                                                                   'names.'},
+                                                      {'what': 'added',
+                                                       'field': 'euromapInputBits',
+                                                       'document': 'int32 in when '
+                                                                   'euromap67interfaceinstalled',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'euromap67 in the 3.x workbook '
+                                                                   'is the IMMI interface of the '
+                                                                   '5.x document '
+                                                                   '(immiInterfaceInstalled, '
+                                                                   'immiInputBits, immiOutputBits, '
+                                                                   'immiVoltage24V, immiCurrent): '
+                                                                   'the same bytes at the same '
+                                                                   'place (char and int where 5.x '
+                                                                   'says bool and uint32_t); kept '
+                                                                   "as the spec's IMMI group, with "
+                                                                   "URCL's names."},
+                                                      {'what': 'added',
+                                                       'field': 'euromapOutputBits',
+                                                       'document': 'int32 in when '
+                                                                   'euromap67interfaceinstalled',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'euromap67 in the 3.x workbook '
+                                                                   'is the IMMI interface of the '
+                                                                   '5.x document '
+                                                                   '(immiInterfaceInstalled, '
+                                                                   'immiInputBits, immiOutputBits, '
+                                                                   'immiVoltage24V, immiCurrent): '
+                                                                   'the same bytes at the same '
+                                                                   'place (char and int where 5.x '
+                                                                   'says bool and uint32_t); kept '
+                                                                   "as the spec's IMMI group, with "
+                                                                   "URCL's names."},
+                                                      {'what': 'added',
+                                                       'field': 'euromapVoltage',
+                                                       'document': 'float in when '
+                                                                   'euromap67interfaceinstalled',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'euromap67 in the 3.x workbook '
+                                                                   'is the IMMI interface of the '
+                                                                   '5.x document '
+                                                                   '(immiInterfaceInstalled, '
+                                                                   'immiInputBits, immiOutputBits, '
+                                                                   'immiVoltage24V, immiCurrent): '
+                                                                   'the same bytes at the same '
+                                                                   'place (char and int where 5.x '
+                                                                   'says bool and uint32_t); kept '
+                                                                   "as the spec's IMMI group, with "
+                                                                   "URCL's names."},
+                                                      {'what': 'added',
+                                                       'field': 'euromapCurrent',
+                                                       'document': 'float in when '
+                                                                   'euromap67interfaceinstalled',
+                                                       'sources': ['client-interface-workbook-3.2',
+                                                                   'primary-guide-5.10'],
+                                                       'decision': 'euromap67 in the 3.x workbook '
+                                                                   'and in the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'is the IMMI interface of the '
+                                                                   'current document '
+                                                                   '(immiInterfaceInstalled, '
+                                                                   'immiInputBits, immiOutputBits, '
+                                                                   'immiVoltage24V, immiCurrent): '
+                                                                   'the same bytes at the same '
+                                                                   'place (char and int where the '
+                                                                   'current document says bool and '
+                                                                   "uint32_t); kept as the spec's "
+                                                                   "IMMI group, with URCL's "
+                                                                   'names.'},
+                                                      {'what': 'added',
+                                                       'field': 'masterSaftyState',
+                                                       'document': 'uint8',
+                                                       'sources': ['client-interface-workbook-1.8'],
+                                                       'decision': 'masterSaftyState (sic): the '
+                                                                   "1.x sheets' name of the safety "
+                                                                   "state byte (the spec's older "
+                                                                   'layout: safety_mode).'},
+                                                      {'what': 'added',
+                                                       'field': 'masterOnOffState',
+                                                       'document': 'uint8',
+                                                       'sources': ['client-interface-workbook-1.8'],
+                                                       'decision': 'The 1.x sheets (and '
+                                                                   "python-urx's format, BBb) have "
+                                                                   'masterOnOffState, '
+                                                                   'euromap67InterfaceInstalled '
+                                                                   'and the euromap67 fields after '
+                                                                   "the safety state; the spec's "
+                                                                   'older layout ends at the '
+                                                                   'safety state (no field of the '
+                                                                   'current layout holds an on/off '
+                                                                   'state), so those bytes stay '
+                                                                   "the sub-package's extra "
+                                                                   'bytes.'},
+                                                      {'what': 'added',
+                                                       'field': 'euromapVoltage',
+                                                       'document': 'int16 in when '
+                                                                   'euromap67interfaceinstalled',
+                                                       'sources': ['client-interface-workbook-1.8'],
+                                                       'decision': 'short in the 1.x sheets, float '
+                                                                   'from 3.0 (immiVoltage24V); '
+                                                                   "after the older layout's end: "
+                                                                   'extra bytes (see '
+                                                                   'masterOnOffState).'},
+                                                      {'what': 'added',
+                                                       'field': 'euromapCurrent',
+                                                       'document': 'int16 in when '
+                                                                   'euromap67interfaceinstalled',
+                                                       'sources': ['client-interface-workbook-1.8'],
+                                                       'decision': 'short in the 1.x sheets, float '
+                                                                   'from 3.0 (immiCurrent); after '
+                                                                   "the older layout's end: extra "
+                                                                   'bytes (see masterOnOffState).'},
+                                                      {'what': 'added',
+                                                       'field': 'euromapInputBits',
+                                                       'document': 'uint32 in when '
+                                                                   'euromap67interfaceinstalled',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'euromap67 in the 3.x workbook '
+                                                                   'and in the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'is the IMMI interface of the '
+                                                                   'current document '
+                                                                   '(immiInterfaceInstalled, '
+                                                                   'immiInputBits, immiOutputBits, '
+                                                                   'immiVoltage24V, immiCurrent): '
+                                                                   'the same bytes at the same '
+                                                                   'place (char and int where the '
+                                                                   'current document says bool and '
+                                                                   "uint32_t); kept as the spec's "
+                                                                   "IMMI group, with URCL's "
+                                                                   'names.'},
+                                                      {'what': 'added',
+                                                       'field': 'euromapOutputBits',
+                                                       'document': 'uint32 in when '
+                                                                   'euromap67interfaceinstalled',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'euromap67 in the 3.x workbook '
+                                                                   'and in the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'is the IMMI interface of the '
+                                                                   'current document '
+                                                                   '(immiInterfaceInstalled, '
+                                                                   'immiInputBits, immiOutputBits, '
+                                                                   'immiVoltage24V, immiCurrent): '
+                                                                   'the same bytes at the same '
+                                                                   'place (char and int where the '
+                                                                   'current document says bool and '
+                                                                   "uint32_t); kept as the spec's "
+                                                                   "IMMI group, with URCL's "
+                                                                   'names.'},
+                                                      {'what': 'added',
+                                                       'field': 'euromapVoltage24V',
+                                                       'document': 'float in when '
+                                                                   'euromap67interfaceinstalled',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'euromap67 in the 3.x workbook '
+                                                                   'and in the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'is the IMMI interface of the '
+                                                                   'current document '
+                                                                   '(immiInterfaceInstalled, '
+                                                                   'immiInputBits, immiOutputBits, '
+                                                                   'immiVoltage24V, immiCurrent): '
+                                                                   'the same bytes at the same '
+                                                                   'place (char and int where the '
+                                                                   'current document says bool and '
+                                                                   "uint32_t); kept as the spec's "
+                                                                   "IMMI group, with URCL's "
+                                                                   'names.'}]},
                                        {'name': 'cartesian_info',
                                         'type': 4,
                                         'fields': [{'name': 'x',
@@ -2174,7 +2701,16 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                     'type': 'uint32',
                                                     'count': 6,
                                                     'doc': 'checksum: one checksum per joint of '
-                                                           'its kinematics calibration'},
+                                                           'its kinematics calibration',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': 'Spelled cheksum in '
+                                                                               'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               '(see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'dh_theta',
                                                     'type': 'double',
                                                     'count': 6,
@@ -2196,7 +2732,15 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                    {'name': 'calibration_status',
                                                     'type': 'uint32',
                                                     'doc': 'calibration_status: state of the '
-                                                           'kinematics calibration'}]},
+                                                           'kinematics calibration'}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'cheksum',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'cheksum (sic) in the 5.9/5.10 '
+                                                                   'document '
+                                                                   '(ClientInterfaces_Primary.pdf): '
+                                                                   "the spec's checksum, one per "
+                                                                   'joint.'}]},
                                        {'name': 'configuration_data',
                                         'type': 6,
                                         'doc': 'Sent once after the client connects. From 5.25.1 '
@@ -2227,7 +2771,24 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                 'type': 'double',
                                                                 'unit': 'rad',
                                                                 'doc': 'jointMaxLimit: highest '
-                                                                       'allowed joint position'}],
+                                                                       'allowed joint position',
+                                                                'conflicts': [{'what': 'removed',
+                                                                               'sources': ['client-interface-workbook-3.2',
+                                                                                           'primary-guide-5.10'],
+                                                                               'decision': 'Spelled '
+                                                                                           'jointMaxLimitt '
+                                                                                           'in the '
+                                                                                           '3.x '
+                                                                                           'workbook '
+                                                                                           'and '
+                                                                                           'the '
+                                                                                           '5.9/5.10 '
+                                                                                           'document '
+                                                                                           '(ClientInterfaces_Primary.pdf) '
+                                                                                           '(see '
+                                                                                           'the '
+                                                                                           "sub-package's "
+                                                                                           'conflicts).'}]}],
                                                     'doc': 'One entry per joint, base first'},
                                                    {'name': 'joint_motion_limits',
                                                     'repeat': 6,
@@ -2297,7 +2858,18 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                               'ConfigurationData::parseWith: '
                                                               'controller_box_type_, between '
                                                               'masterboard_version_ and '
-                                                              'robot_type_'},
+                                                              'robot_type_',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2',
+                                                                               'primary-guide-5.10'],
+                                                                   'decision': 'controllerBoxType '
+                                                                               'in the 3.x '
+                                                                               'workbook and the '
+                                                                               '5.9/5.10 document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               '(see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'robot_type',
                                                     'type': 'int32',
                                                     'enum': 'RobotType',
@@ -2305,51 +2877,356 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                            'UR10, ...)'},
                                                    {'name': 'robot_sub_type',
                                                     'type': 'int32',
-                                                    'doc': 'robotSubType: Robot Arm sub-type'}]},
+                                                    'doc': 'robotSubType: Robot Arm sub-type'}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'jointMaxLimitt',
+                                                       'sources': ['client-interface-workbook-3.2',
+                                                                   'primary-guide-5.10'],
+                                                       'decision': "The 3.x workbook's and the "
+                                                                   '5.9/5.10 document '
+                                                                   "(ClientInterfaces_Primary.pdf)'s "
+                                                                   'misspelling of jointMaxLimit '
+                                                                   '(the current document and '
+                                                                   'URCL: joint_max_limit).'},
+                                                      {'what': 'added',
+                                                       'field': 'controllerBoxType',
+                                                       'sources': ['client-interface-workbook-3.2',
+                                                                   'primary-guide-5.10'],
+                                                       'decision': 'controllerBoxType in the 3.x '
+                                                                   'workbook and the 5.9/5.10 '
+                                                                   'document '
+                                                                   '(ClientInterfaces_Primary.pdf), '
+                                                                   'controller_box_type in URCL; '
+                                                                   'the current document calls '
+                                                                   'this int32 reserved '
+                                                                   '(deprecated): kept as '
+                                                                   'reserved, its source naming '
+                                                                   "URCL's reading."}]},
                                        {'name': 'force_mode_data',
                                         'type': 7,
                                         'fields': [{'name': 'fx',
                                                     'type': 'double',
-                                                    'doc': 'Deprecated — always 0.0'},
+                                                    'doc': 'Deprecated — always 0.0',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Named without the '
+                                                                               'F in the 3.x '
+                                                                               'workbook (see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'fy',
                                                     'type': 'double',
-                                                    'doc': 'Deprecated — always 0.0'},
+                                                    'doc': 'Deprecated — always 0.0',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Named without the '
+                                                                               'F in the 3.x '
+                                                                               'workbook (see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'fz',
                                                     'type': 'double',
-                                                    'doc': 'Deprecated — always 0.0'},
+                                                    'doc': 'Deprecated — always 0.0',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Named without the '
+                                                                               'F in the 3.x '
+                                                                               'workbook (see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'frx',
                                                     'type': 'double',
-                                                    'doc': 'Deprecated — always 0.0'},
+                                                    'doc': 'Deprecated — always 0.0',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Named without the '
+                                                                               'F in the 3.x '
+                                                                               'workbook (see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'fry',
                                                     'type': 'double',
-                                                    'doc': 'Deprecated — always 0.0'},
+                                                    'doc': 'Deprecated — always 0.0',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Named without the '
+                                                                               'F in the 3.x '
+                                                                               'workbook (see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'frz',
                                                     'type': 'double',
-                                                    'doc': 'Deprecated — always 0.0'},
+                                                    'doc': 'Deprecated — always 0.0',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Named without the '
+                                                                               'F in the 3.x '
+                                                                               'workbook (see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'robot_dexterity',
                                                     'type': 'double',
                                                     'doc': 'robotDexterity: how far the arm is '
-                                                           'from a singularity; higher is '
-                                                           'better'}]},
+                                                           'from a singularity; higher is better'}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'X',
+                                                       'document': 'double',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'X, Y, Z, Rx, Ry, Rz in the 3.x '
+                                                                   'workbook; the 5.x document '
+                                                                   'names them Fx..Frz '
+                                                                   '(deprecated, always 0.0): '
+                                                                   'kept.'},
+                                                      {'what': 'added',
+                                                       'field': 'Y',
+                                                       'document': 'double',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'X, Y, Z, Rx, Ry, Rz in the 3.x '
+                                                                   'workbook; the 5.x document '
+                                                                   'names them Fx..Frz '
+                                                                   '(deprecated, always 0.0): '
+                                                                   'kept.'},
+                                                      {'what': 'added',
+                                                       'field': 'Z',
+                                                       'document': 'double',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'X, Y, Z, Rx, Ry, Rz in the 3.x '
+                                                                   'workbook; the 5.x document '
+                                                                   'names them Fx..Frz '
+                                                                   '(deprecated, always 0.0): '
+                                                                   'kept.'},
+                                                      {'what': 'added',
+                                                       'field': 'Rx',
+                                                       'document': 'double',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'X, Y, Z, Rx, Ry, Rz in the 3.x '
+                                                                   'workbook; the 5.x document '
+                                                                   'names them Fx..Frz '
+                                                                   '(deprecated, always 0.0): '
+                                                                   'kept.'},
+                                                      {'what': 'added',
+                                                       'field': 'Ry',
+                                                       'document': 'double',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'X, Y, Z, Rx, Ry, Rz in the 3.x '
+                                                                   'workbook; the 5.x document '
+                                                                   'names them Fx..Frz '
+                                                                   '(deprecated, always 0.0): '
+                                                                   'kept.'},
+                                                      {'what': 'added',
+                                                       'field': 'Rz',
+                                                       'document': 'double',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'X, Y, Z, Rx, Ry, Rz in the 3.x '
+                                                                   'workbook; the 5.x document '
+                                                                   'names them Fx..Frz '
+                                                                   '(deprecated, always 0.0): '
+                                                                   'kept.'}]},
                                        {'name': 'additional_info',
                                         'type': 8,
                                         'fields': [{'name': 'tp_button_state',
                                                     'type': 'uint8',
                                                     'doc': 'tpButtonState: teach pendant buttons '
                                                            'pressed (freedrive, power), one bit '
-                                                           'each'},
+                                                           'each',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Named '
+                                                                               'teachButtonPressed '
+                                                                               '/ '
+                                                                               'teachButtonEnabled '
+                                                                               '/ '
+                                                                               'IOEnabledFreedrive '
+                                                                               'in the 3.2 '
+                                                                               'workbook (see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'is_manual_freedrive_allowed',
                                                     'type': 'bool',
                                                     'doc': 'freedriveButtonEnabled: freedrive by '
-                                                           'hand is allowed now'},
+                                                           'hand is allowed now',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Named '
+                                                                               'teachButtonPressed '
+                                                                               '/ '
+                                                                               'teachButtonEnabled '
+                                                                               '/ '
+                                                                               'IOEnabledFreedrive '
+                                                                               'in the 3.2 '
+                                                                               'workbook (see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'},
+                                                                  {'what': 'removed',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': 'Named '
+                                                                               'freedriveButtonEnabled '
+                                                                               '/ '
+                                                                               'IOEnabledFreedrive '
+                                                                               '/ reserved in the '
+                                                                               '5.9/5.10 document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               '(see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'is_freedrive_io_pressed',
                                                     'type': 'bool',
                                                     'doc': 'IOEnabledFreedrive: freedrive is '
-                                                           'requested through an I/O'},
+                                                           'requested through an I/O',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Named '
+                                                                               'teachButtonPressed '
+                                                                               '/ '
+                                                                               'teachButtonEnabled '
+                                                                               '/ '
+                                                                               'IOEnabledFreedrive '
+                                                                               'in the 3.2 '
+                                                                               'workbook (see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'},
+                                                                  {'what': 'removed',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': 'Named '
+                                                                               'freedriveButtonEnabled '
+                                                                               '/ '
+                                                                               'IOEnabledFreedrive '
+                                                                               '/ reserved in the '
+                                                                               '5.9/5.10 document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               '(see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'tp_type',
                                                     'type': 'uint8',
                                                     'enum': 'TeachPendantType',
-                                                    'doc': 'Teach Pendant Type'}]},
+                                                    'doc': 'Teach Pendant Type',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Not in the 3.2 '
+                                                                               'workbook (three '
+                                                                               'bytes); appended '
+                                                                               'later (the 5.9 '
+                                                                               'document calls '
+                                                                               'this byte '
+                                                                               'reserved, the '
+                                                                               'current one Teach '
+                                                                               'Pendant Type): '
+                                                                               'kept.'},
+                                                                  {'what': 'removed',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': 'Named '
+                                                                               'freedriveButtonEnabled '
+                                                                               '/ '
+                                                                               'IOEnabledFreedrive '
+                                                                               '/ reserved in the '
+                                                                               '5.9/5.10 document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               '(see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'teachButtonPressed',
+                                                       'document': 'bool',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': "The 3.2 workbook's three bools "
+                                                                   '(teachButtonPressed, '
+                                                                   'teachButtonEnabled, '
+                                                                   'IOEnabledFreedrive) are the '
+                                                                   'first three bytes of the 5.x '
+                                                                   "document's layout "
+                                                                   '(tpButtonState as bits, '
+                                                                   'freedriveButtonEnabled / '
+                                                                   'isManualFreedriveAllowed, '
+                                                                   'IOEnabledFreedrive / '
+                                                                   'isFreedriveIOPressed), whose '
+                                                                   'fourth byte (teach pendant '
+                                                                   'type) came later: kept as the '
+                                                                   'current document has them.'},
+                                                      {'what': 'added',
+                                                       'field': 'teachButtonEnabled',
+                                                       'document': 'bool',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': "The 3.2 workbook's three bools "
+                                                                   '(teachButtonPressed, '
+                                                                   'teachButtonEnabled, '
+                                                                   'IOEnabledFreedrive) are the '
+                                                                   'first three bytes of the 5.x '
+                                                                   "document's layout "
+                                                                   '(tpButtonState as bits, '
+                                                                   'freedriveButtonEnabled / '
+                                                                   'isManualFreedriveAllowed, '
+                                                                   'IOEnabledFreedrive / '
+                                                                   'isFreedriveIOPressed), whose '
+                                                                   'fourth byte (teach pendant '
+                                                                   'type) came later: kept as the '
+                                                                   'current document has them.'},
+                                                      {'what': 'added',
+                                                       'field': 'IOEnabledFreedrive',
+                                                       'document': 'bool',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': "The 3.2 workbook's three bools "
+                                                                   '(teachButtonPressed, '
+                                                                   'teachButtonEnabled, '
+                                                                   'IOEnabledFreedrive) are the '
+                                                                   'first three bytes of the 5.x '
+                                                                   "document's layout "
+                                                                   '(tpButtonState as bits, '
+                                                                   'freedriveButtonEnabled / '
+                                                                   'isManualFreedriveAllowed, '
+                                                                   'IOEnabledFreedrive / '
+                                                                   'isFreedriveIOPressed), whose '
+                                                                   'fourth byte (teach pendant '
+                                                                   'type) came later: kept as the '
+                                                                   'current document has them.'},
+                                                      {'what': 'added',
+                                                       'field': 'freedriveButtonEnabled',
+                                                       'document': 'bool',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'names these bytes '
+                                                                   'tpButtonState, '
+                                                                   'freedriveButtonEnabled, '
+                                                                   'IOEnabledFreedrive and '
+                                                                   'reserved; the current document '
+                                                                   'names the last three '
+                                                                   'isManualFreedriveAllowed, '
+                                                                   'isFreedriveIOPressed and Teach '
+                                                                   'Pendant Type: kept as the '
+                                                                   'newer document has them.'},
+                                                      {'what': 'added',
+                                                       'field': 'IOEnabledFreedrive',
+                                                       'document': 'bool',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'names these bytes '
+                                                                   'tpButtonState, '
+                                                                   'freedriveButtonEnabled, '
+                                                                   'IOEnabledFreedrive and '
+                                                                   'reserved; the current document '
+                                                                   'names the last three '
+                                                                   'isManualFreedriveAllowed, '
+                                                                   'isFreedriveIOPressed and Teach '
+                                                                   'Pendant Type: kept as the '
+                                                                   'newer document has them.'},
+                                                      {'what': 'added',
+                                                       'field': 'reserved',
+                                                       'document': 'uint8',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'names these bytes '
+                                                                   'tpButtonState, '
+                                                                   'freedriveButtonEnabled, '
+                                                                   'IOEnabledFreedrive and '
+                                                                   'reserved; the current document '
+                                                                   'names the last three '
+                                                                   'isManualFreedriveAllowed, '
+                                                                   'isFreedriveIOPressed and Teach '
+                                                                   'Pendant Type: kept as the '
+                                                                   'newer document has them.'}]},
                                        {'name': 'calibration_data',
                                         'type': 9,
                                         'doc': 'Internal to UR software; kept as bytes. No public '
@@ -2393,7 +3270,109 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                    'the whole body as `data` '
                                                                    'bytes, whatever its length, so '
                                                                    "no firmware's sub-package "
-                                                                   'fails to decode.'}]},
+                                                                   'fails to decode.'},
+                                                      {'what': 'added',
+                                                       'field': 'Fx',
+                                                       'document': 'double',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'lists Calibration Data '
+                                                                   '(NEEDED_FOR_CALIB_DATA = 9) as '
+                                                                   'six doubles Fx, Fy, Fz, Frx, '
+                                                                   'Fry, Frz: 48 bytes, the size '
+                                                                   "of URSim 5.8's body (all "
+                                                                   'zeros); the current document '
+                                                                   'calls the body reserved (used '
+                                                                   'by UR software only) and no '
+                                                                   'other public source names its '
+                                                                   'fields: kept as bytes, every '
+                                                                   'length decoding.'},
+                                                      {'what': 'added',
+                                                       'field': 'Fy',
+                                                       'document': 'double',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'lists Calibration Data '
+                                                                   '(NEEDED_FOR_CALIB_DATA = 9) as '
+                                                                   'six doubles Fx, Fy, Fz, Frx, '
+                                                                   'Fry, Frz: 48 bytes, the size '
+                                                                   "of URSim 5.8's body (all "
+                                                                   'zeros); the current document '
+                                                                   'calls the body reserved (used '
+                                                                   'by UR software only) and no '
+                                                                   'other public source names its '
+                                                                   'fields: kept as bytes, every '
+                                                                   'length decoding.'},
+                                                      {'what': 'added',
+                                                       'field': 'Fz',
+                                                       'document': 'double',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'lists Calibration Data '
+                                                                   '(NEEDED_FOR_CALIB_DATA = 9) as '
+                                                                   'six doubles Fx, Fy, Fz, Frx, '
+                                                                   'Fry, Frz: 48 bytes, the size '
+                                                                   "of URSim 5.8's body (all "
+                                                                   'zeros); the current document '
+                                                                   'calls the body reserved (used '
+                                                                   'by UR software only) and no '
+                                                                   'other public source names its '
+                                                                   'fields: kept as bytes, every '
+                                                                   'length decoding.'},
+                                                      {'what': 'added',
+                                                       'field': 'Frx',
+                                                       'document': 'double',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'lists Calibration Data '
+                                                                   '(NEEDED_FOR_CALIB_DATA = 9) as '
+                                                                   'six doubles Fx, Fy, Fz, Frx, '
+                                                                   'Fry, Frz: 48 bytes, the size '
+                                                                   "of URSim 5.8's body (all "
+                                                                   'zeros); the current document '
+                                                                   'calls the body reserved (used '
+                                                                   'by UR software only) and no '
+                                                                   'other public source names its '
+                                                                   'fields: kept as bytes, every '
+                                                                   'length decoding.'},
+                                                      {'what': 'added',
+                                                       'field': 'Fry',
+                                                       'document': 'double',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'lists Calibration Data '
+                                                                   '(NEEDED_FOR_CALIB_DATA = 9) as '
+                                                                   'six doubles Fx, Fy, Fz, Frx, '
+                                                                   'Fry, Frz: 48 bytes, the size '
+                                                                   "of URSim 5.8's body (all "
+                                                                   'zeros); the current document '
+                                                                   'calls the body reserved (used '
+                                                                   'by UR software only) and no '
+                                                                   'other public source names its '
+                                                                   'fields: kept as bytes, every '
+                                                                   'length decoding.'},
+                                                      {'what': 'added',
+                                                       'field': 'Frz',
+                                                       'document': 'double',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'lists Calibration Data '
+                                                                   '(NEEDED_FOR_CALIB_DATA = 9) as '
+                                                                   'six doubles Fx, Fy, Fz, Frx, '
+                                                                   'Fry, Frz: 48 bytes, the size '
+                                                                   "of URSim 5.8's body (all "
+                                                                   'zeros); the current document '
+                                                                   'calls the body reserved (used '
+                                                                   'by UR software only) and no '
+                                                                   'other public source names its '
+                                                                   'fields: kept as bytes, every '
+                                                                   'length decoding.'}]},
                                        {'name': 'safety_data',
                                         'type': 10,
                                         'doc': 'Internal to UR software; kept as bytes. No public '
@@ -2468,12 +3447,50 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                     'type': 'uint8',
                                                     'enum': 'ToolDigitalOutputMode',
                                                     'doc': 'digitalOutputModeOutput0: mode of tool '
-                                                           'digital output 0'},
+                                                           'digital output 0',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': "'digtal output "
+                                                                               "mode output 0' in "
+                                                                               'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               '(see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'digital_output_mode_pin1',
                                                     'type': 'uint8',
                                                     'enum': 'ToolDigitalOutputMode',
                                                     'doc': 'digitalOutputModeOutput1: mode of tool '
-                                                           'digital output 1'}]},
+                                                           'digital output 1',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': "'digtal output "
+                                                                               "mode output 1' in "
+                                                                               'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               '(see the '
+                                                                               "sub-package's "
+                                                                               'conflicts).'}]}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'digtalOutputModeOutput0',
+                                                       'document': 'uint8',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': "'digtal output mode output 0' "
+                                                                   '(sic) in the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf): '
+                                                                   "the spec's "
+                                                                   'digital_output_mode_pin0.'},
+                                                      {'what': 'added',
+                                                       'field': 'digtalOutputModeOutput1',
+                                                       'document': 'uint8',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': "'digtal output mode output 1' "
+                                                                   '(sic) in the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf): '
+                                                                   "the spec's "
+                                                                   'digital_output_mode_pin1.'}]},
                                        {'name': 'singularity_info',
                                         'type': 13,
                                         'doc': 'Internal; sent only in freedrive with individually '
@@ -2587,7 +3604,25 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                              'also reads the rest of the message. '
                                                              'Agreed.',
                                                     'doc': 'textMessage: the text, to the end of '
-                                                           'the message'}]},
+                                                           'the message',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': 'Named '
+                                                                               'textTextMessage in '
+                                                                               'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               "(see the message's "
+                                                                               'conflicts).'}]}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'textTextMessage',
+                                                       'document': 'string',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'textTextMessage in the '
+                                                                   '5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf): '
+                                                                   'the text of the text message '
+                                                                   "(the spec's text_message)."}]},
                                        {'name': 'version_message',
                                         'type': 3,
                                         'doc': 'The first message on primary and secondary '
@@ -2613,11 +3648,35 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                    {'name': 'bugfix_version',
                                                     'type': 'int32',
                                                     'doc': 'bugfixVersion of the controller '
-                                                           'software'},
+                                                           'software',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Named svnRevision '
+                                                                               'in the 3.x '
+                                                                               'workbook (see the '
+                                                                               "message's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'build_number',
                                                     'type': 'int32',
-                                                    'doc': 'buildNumber of the controller '
-                                                           'software'},
+                                                    'doc': 'buildNumber of the controller software',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Not in the 3.2 '
+                                                                               'workbook '
+                                                                               '(buildDate follows '
+                                                                               'svnRevision '
+                                                                               'there); the 5.x '
+                                                                               'document and URCL '
+                                                                               'read an int32 '
+                                                                               'build number '
+                                                                               'before the date: '
+                                                                               'kept. A 3.2 '
+                                                                               "controller's "
+                                                                               'message, if the '
+                                                                               'workbook is right, '
+                                                                               'decodes its first '
+                                                                               '4 date bytes as '
+                                                                               'the number.'}]},
                                                    {'name': 'build_date',
                                                     'type': 'string',
                                                     'length': 'rest',
@@ -2627,7 +3686,17 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                              'also reads the rest of the message. '
                                                              'Agreed.',
                                                     'doc': 'buildDate: when the software was '
-                                                           'built, as text'}]},
+                                                           'built, as text'}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'svnRevision',
+                                                       'document': 'int32',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'svnRevision: the 3.x '
+                                                                   "workbook's (and python-urx's) "
+                                                                   'name of the third number, '
+                                                                   "URCL's svn_version_, the 5.x "
+                                                                   "document's bugfixVersion: kept "
+                                                                   'as bugfix_version.'}]},
                                        {'name': 'safety_mode_message',
                                         'type': 5,
                                         'doc': 'Primary interface only.',
@@ -2647,7 +3716,13 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                     'enum': 'ReportDataType',
                                                     'doc': 'reportDataType: the type of '
                                                            'report_data (0,1 uint32; 2 int32; 3 '
-                                                           'float; 4 uint32 shown as hex)'},
+                                                           'float; 4 uint32 shown as hex)',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'The 3.x workbook '
+                                                                               'has a text instead '
+                                                                               "(see the message's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'report_data',
                                                     'switch': 'report_data_type',
                                                     'cases': {'0': 'uint32',
@@ -2656,29 +3731,118 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                               '3': 'float',
                                                               '4': 'uint32'},
                                                     'doc': 'reportData: a value of the type '
-                                                           'report_data_type names'}]},
+                                                           'report_data_type names',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'The 3.x workbook '
+                                                                               'has a text instead '
+                                                                               "(see the message's "
+                                                                               'conflicts).'},
+                                                                  {'what': 'type',
+                                                                   'document': 'uint32',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': 'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               'gives reportData '
+                                                                               'as uint32_t; the '
+                                                                               'current document '
+                                                                               'and URCL read it '
+                                                                               'by reportDataType '
+                                                                               '(uint32, int32 or '
+                                                                               'float): the switch '
+                                                                               'is kept, its '
+                                                                               'uint32 cases are '
+                                                                               'that reading.'}]}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'textMessage',
+                                                       'document': 'string',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'The 3.x workbook ends the '
+                                                                   'message with a text; the 5.x '
+                                                                   'document and URCL read '
+                                                                   'reportDataType and reportData '
+                                                                   'there: kept.'}]},
                                        {'name': 'robot_comm_message',
                                         'type': 6,
                                         'doc': 'Primary interface only. The last field is a 32-bit '
                                                'number (data types 0-4) or a string (5).',
                                         'fields': [{'name': 'robot_message_code',
                                                     'type': 'uint32',
-                                                    'doc': 'robotMessageCode: code of the error'},
+                                                    'doc': 'robotMessageCode: code of the error',
+                                                    'conflicts': [{'what': 'type',
+                                                                   'document': 'int32',
+                                                                   'sources': ['client-interface-workbook-3.2',
+                                                                               'primary-guide-5.9'],
+                                                                   'decision': '`int` in the 3.x '
+                                                                               'workbook and '
+                                                                               'int32_t in the '
+                                                                               '5.9/5.10 document, '
+                                                                               'as URCL reads it; '
+                                                                               'the current '
+                                                                               'document says '
+                                                                               'uint32_t: kept '
+                                                                               '(the same 4 bytes; '
+                                                                               'codes and '
+                                                                               'arguments are '
+                                                                               'small positive '
+                                                                               'numbers).'}]},
                                                    {'name': 'robot_message_argument',
                                                     'type': 'uint32',
                                                     'doc': 'robotMessageArgument: argument of the '
-                                                           'code'},
+                                                           'code',
+                                                    'conflicts': [{'what': 'type',
+                                                                   'document': 'int32',
+                                                                   'sources': ['client-interface-workbook-3.2',
+                                                                               'primary-guide-5.9'],
+                                                                   'decision': '`int` in the 3.x '
+                                                                               'workbook and '
+                                                                               'int32_t in the '
+                                                                               '5.9/5.10 document, '
+                                                                               'as URCL reads it; '
+                                                                               'the current '
+                                                                               'document says '
+                                                                               'uint32_t: kept '
+                                                                               '(the same 4 bytes; '
+                                                                               'codes and '
+                                                                               'arguments are '
+                                                                               'small positive '
+                                                                               'numbers).'}]},
                                                    {'name': 'robot_message_report_level',
                                                     'type': 'int32',
                                                     'enum': 'ReportLevel',
                                                     'doc': 'robotMessageReportLevel (Report '
-                                                           'Levels)'},
+                                                           'Levels)',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'Named warningLevel '
+                                                                               'in the 3.x '
+                                                                               'workbook (see the '
+                                                                               "message's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'data_type',
                                                     'type': 'uint32',
                                                     'enum': 'ReportDataType',
                                                     'doc': 'robotMessageDataType: the type of '
                                                            'report_data (0-4 a 32-bit number, 5 a '
-                                                           'string)'},
+                                                           'string)',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'The 3.x workbook '
+                                                                               'has a text after '
+                                                                               'the level instead '
+                                                                               "(see the message's "
+                                                                               'conflicts).'},
+                                                                  {'what': 'removed',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': 'Named '
+                                                                               'robotMessageDataType '
+                                                                               '/ robotMessageData '
+                                                                               'in the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               "(see the message's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'report_data',
                                                     'switch': 'data_type',
                                                     'cases': {'0': 'uint32',
@@ -2691,8 +3855,24 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                     'doc': 'robotMessageData: a value of the type '
                                                            'data_type names; the last field is a '
                                                            '32-bit number for data types 0-4 or a '
-                                                           'variable length string for data type '
-                                                           '5'},
+                                                           'variable length string for data type 5',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'The 3.x workbook '
+                                                                               'has a text after '
+                                                                               'the level instead '
+                                                                               "(see the message's "
+                                                                               'conflicts).'},
+                                                                  {'what': 'removed',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': 'Named '
+                                                                               'robotMessageDataType '
+                                                                               '/ robotMessageData '
+                                                                               'in the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               "(see the message's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'report_text',
                                                     'type': 'string',
                                                     'length': 'rest',
@@ -2708,32 +3888,149 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                              'follows as report_text, so both '
                                                              'decode without error and re-encode '
                                                              'to the same bytes.',
-                                                    'doc': 'Text after the report data; not in the '
-                                                           'document (empty when absent).',
+                                                    'doc': 'Text after the report data: the '
+                                                           '5.9/5.10 document lists it '
+                                                           '(robotCommTextMessage), the current '
+                                                           'one does not (empty when absent).',
                                                     'conflicts': [{'what': 'removed',
                                                                    'sources': ['primary-guide'],
-                                                                   'decision': 'Not in the '
-                                                                               "document; UR's C++ "
+                                                                   'decision': 'Not in the current '
+                                                                               'document; the '
+                                                                               '5.9/5.10 document '
+                                                                               'lists it '
+                                                                               '(robotCommTextMessage) '
+                                                                               "and UR's C++ "
                                                                                'client library '
                                                                                'reads a text after '
                                                                                'the report data '
                                                                                '(see peers). '
-                                                                               'Kept.'}]}]},
+                                                                               'Kept.'},
+                                                                  {'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'The 3.x workbook '
+                                                                               'has a text after '
+                                                                               'the level instead '
+                                                                               "(see the message's "
+                                                                               'conflicts).'}]}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'warningLevel',
+                                                       'document': 'int32',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'warningLevel: the 3.x '
+                                                                   "workbook's name of "
+                                                                   'robotMessageReportLevel '
+                                                                   '(Report Levels).'},
+                                                      {'what': 'added',
+                                                       'field': 'textMessage',
+                                                       'document': 'string',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'The 3.x workbook ends the '
+                                                                   'message with a text after the '
+                                                                   'level; the 5.x document reads '
+                                                                   'data type and data there, URCL '
+                                                                   'those and then a text '
+                                                                   '(report_text): kept.'},
+                                                      {'what': 'added',
+                                                       'field': 'robotMessageDataType',
+                                                       'document': 'uint32',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'names them '
+                                                                   'robotMessageDataType, '
+                                                                   'robotMessageData and '
+                                                                   'robotCommTextMessage (the '
+                                                                   "spec's data_type, report_data "
+                                                                   'and report_text; the current '
+                                                                   'document: dataType, reportData '
+                                                                   'and, for data type 5, a text): '
+                                                                   'kept.'},
+                                                      {'what': 'added',
+                                                       'field': 'robotMessageData',
+                                                       'document': 'uint32',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'names them '
+                                                                   'robotMessageDataType, '
+                                                                   'robotMessageData and '
+                                                                   'robotCommTextMessage (the '
+                                                                   "spec's data_type, report_data "
+                                                                   'and report_text; the current '
+                                                                   'document: dataType, reportData '
+                                                                   'and, for data type 5, a text): '
+                                                                   'kept.'},
+                                                      {'what': 'added',
+                                                       'field': 'robotCommTextMessage',
+                                                       'document': 'string',
+                                                       'sources': ['primary-guide-5.10'],
+                                                       'decision': 'the 5.9/5.10 document '
+                                                                   '(ClientInterfaces_Primary.pdf) '
+                                                                   'names them '
+                                                                   'robotMessageDataType, '
+                                                                   'robotMessageData and '
+                                                                   'robotCommTextMessage (the '
+                                                                   "spec's data_type, report_data "
+                                                                   'and report_text; the current '
+                                                                   'document: dataType, reportData '
+                                                                   'and, for data type 5, a text): '
+                                                                   'kept.'}]},
                                        {'name': 'key_message',
                                         'type': 7,
                                         'doc': 'Primary interface only.',
                                         'fields': [{'name': 'robot_message_code',
                                                     'type': 'uint32',
                                                     'doc': 'robotMessageCode: code of the key '
-                                                           'event'},
+                                                           'event',
+                                                    'conflicts': [{'what': 'type',
+                                                                   'document': 'int32',
+                                                                   'sources': ['client-interface-workbook-3.2',
+                                                                               'primary-guide-5.9'],
+                                                                   'decision': '`int` in the 3.x '
+                                                                               'workbook and '
+                                                                               'int32_t in the '
+                                                                               '5.9/5.10 document, '
+                                                                               'as URCL reads it; '
+                                                                               'the current '
+                                                                               'document says '
+                                                                               'uint32_t: kept '
+                                                                               '(the same 4 bytes; '
+                                                                               'codes and '
+                                                                               'arguments are '
+                                                                               'small positive '
+                                                                               'numbers).'}]},
                                                    {'name': 'robot_message_argument',
                                                     'type': 'uint32',
                                                     'doc': 'robotMessageArgument: argument of the '
-                                                           'code'},
+                                                           'code',
+                                                    'conflicts': [{'what': 'type',
+                                                                   'document': 'int32',
+                                                                   'sources': ['client-interface-workbook-3.2',
+                                                                               'primary-guide-5.9'],
+                                                                   'decision': '`int` in the 3.x '
+                                                                               'workbook and '
+                                                                               'int32_t in the '
+                                                                               '5.9/5.10 document, '
+                                                                               'as URCL reads it; '
+                                                                               'the current '
+                                                                               'document says '
+                                                                               'uint32_t: kept '
+                                                                               '(the same 4 bytes; '
+                                                                               'codes and '
+                                                                               'arguments are '
+                                                                               'small positive '
+                                                                               'numbers).'}]},
                                                    {'name': 'robot_message_title',
                                                     'type': 'string',
                                                     'length': 'uint8',
-                                                    'doc': 'robotMessageTitle: the title'},
+                                                    'doc': 'robotMessageTitle: the title',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'titleSize + '
+                                                                               'messageTitle in '
+                                                                               'the 3.x workbook '
+                                                                               "(see the message's "
+                                                                               'conflicts).'}]},
                                                    {'name': 'key_text_message',
                                                     'type': 'string',
                                                     'length': 'uint16',
@@ -2751,7 +4048,54 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                              'the length; otherwise the text is '
                                                              'the rest. Encoding writes the '
                                                              "document's form.",
-                                                    'doc': 'keyTextMessage: the text'}]},
+                                                    'doc': 'keyTextMessage: the text',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'textMessage in the '
+                                                                               '3.x workbook (see '
+                                                                               "the message's "
+                                                                               'conflicts).'},
+                                                                  {'what': 'type',
+                                                                   'document': 'string',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': 'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf) '
+                                                                               'ends the message '
+                                                                               'with '
+                                                                               'keyTextMessage as '
+                                                                               'a charArray to the '
+                                                                               'end, as URCL reads '
+                                                                               'it; the current '
+                                                                               'document puts a '
+                                                                               'uint16 length '
+                                                                               'first: the spec '
+                                                                               'reads both '
+                                                                               '(fallback: rest), '
+                                                                               'see peers.'}]}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'titleSize',
+                                                       'document': 'uint8',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'titleSize then messageTitle in '
+                                                                   "the 3.x workbook: the spec's "
+                                                                   'robot_message_title (a uint8 '
+                                                                   'length, then the title).'},
+                                                      {'what': 'added',
+                                                       'field': 'messageTitle',
+                                                       'document': 'string',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'The title after its uint8 '
+                                                                   "length (titleSize): the spec's "
+                                                                   'robot_message_title.'},
+                                                      {'what': 'added',
+                                                       'field': 'textMessage',
+                                                       'document': 'string',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'The key text, to the end of '
+                                                                   'the message, as URCL reads it: '
+                                                                   "the spec's key_text_message "
+                                                                   '(see its peers).'}]},
                                        {'name': 'request_value_message',
                                         'type': 9,
                                         'doc': 'Primary interface only.',
@@ -2771,18 +4115,114 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                              "message; the document's layout is "
                                                              'kept.',
                                                     'doc': 'requestTextMessage: the question shown '
-                                                           'to the user'}]},
+                                                           'to the user',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'textMessage in the '
+                                                                               '3.x workbook (see '
+                                                                               "the message's "
+                                                                               'conflicts).'}]}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'warning',
+                                                       'document': 'bool',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': "The 3.x workbook's (*) rows, "
+                                                                   'present only when '
+                                                                   'requestedType is 8 (a popup); '
+                                                                   'the 5.x document and the spec '
+                                                                   'have no such rows: left out.'},
+                                                      {'what': 'added',
+                                                       'field': 'error',
+                                                       'document': 'bool',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': "The 3.x workbook's (*) rows, "
+                                                                   'present only when '
+                                                                   'requestedType is 8 (a popup); '
+                                                                   'the 5.x document and the spec '
+                                                                   'have no such rows: left out.'},
+                                                      {'what': 'added',
+                                                       'field': 'blocking',
+                                                       'document': 'bool',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': "The 3.x workbook's (*) rows, "
+                                                                   'present only when '
+                                                                   'requestedType is 8 (a popup); '
+                                                                   'the 5.x document and the spec '
+                                                                   'have no such rows: left out.'},
+                                                      {'what': 'added',
+                                                       'field': 'titleLength',
+                                                       'document': 'uint8',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': "The 3.x workbook's (*) rows, "
+                                                                   'present only when '
+                                                                   'requestedType is 8 (a popup); '
+                                                                   'the 5.x document and the spec '
+                                                                   'have no such rows: left out.'},
+                                                      {'what': 'added',
+                                                       'field': 'messageTitle',
+                                                       'document': 'string',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': "The 3.x workbook's (*) rows, "
+                                                                   'present only when '
+                                                                   'requestedType is 8 (a popup); '
+                                                                   'the 5.x document and the spec '
+                                                                   'have no such rows: left out.'},
+                                                      {'what': 'added',
+                                                       'field': 'textMessage',
+                                                       'document': 'string',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'textMessage in the 3.x '
+                                                                   "workbook is the 5.x document's "
+                                                                   'requestTextMessage.'}]},
                                        {'name': 'runtime_exception_message',
                                         'type': 10,
                                         'doc': 'Primary interface only.',
                                         'fields': [{'name': 'script_line_number',
                                                     'type': 'uint32',
                                                     'doc': 'scriptLineNumber: line of the script '
-                                                           'where it failed'},
+                                                           'where it failed',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'The 3.x workbook '
+                                                                               'has the text only '
+                                                                               "(see the message's "
+                                                                               'conflicts).'},
+                                                                  {'what': 'type',
+                                                                   'document': 'int32',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': '`int` in the '
+                                                                               '5.9/5.10 document '
+                                                                               '(ClientInterfaces_Primary.pdf); '
+                                                                               'the current '
+                                                                               'document and URCL '
+                                                                               '(uint32_t) read it '
+                                                                               'unsigned: kept '
+                                                                               '(line and column '
+                                                                               'numbers are '
+                                                                               'positive).'}]},
                                                    {'name': 'script_column_number',
                                                     'type': 'uint32',
                                                     'doc': 'scriptColumnNumber: column of the '
-                                                           'script where it failed'},
+                                                           'script where it failed',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'The 3.x workbook '
+                                                                               'has the text only '
+                                                                               "(see the message's "
+                                                                               'conflicts).'},
+                                                                  {'what': 'type',
+                                                                   'document': 'int32',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': '`int` in the '
+                                                                               '5.9/5.10 document '
+                                                                               '(ClientInterfaces_Primary.pdf); '
+                                                                               'the current '
+                                                                               'document and URCL '
+                                                                               '(uint32_t) read it '
+                                                                               'unsigned: kept '
+                                                                               '(line and column '
+                                                                               'numbers are '
+                                                                               'positive).'}]},
                                                    {'name': 'runtime_exception_text_message',
                                                     'type': 'string',
                                                     'length': 'rest',
@@ -2792,7 +4232,21 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                              'also reads the rest of the message. '
                                                              'Agreed.',
                                                     'doc': 'runtimeExceptionTextMessage: the text '
-                                                           'of the exception'}]},
+                                                           'of the exception',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['client-interface-workbook-3.2'],
+                                                                   'decision': 'The 3.x workbook '
+                                                                               'has the text only '
+                                                                               "(see the message's "
+                                                                               'conflicts).'}]}],
+                                        'conflicts': [{'what': 'added',
+                                                       'field': 'textMessage',
+                                                       'document': 'string',
+                                                       'sources': ['client-interface-workbook-3.2'],
+                                                       'decision': 'The 3.x workbook has the text '
+                                                                   'only; the 5.x document and '
+                                                                   'URCL read the script line and '
+                                                                   'column before it: kept.'}]},
                                        {'name': 'program_threads_message',
                                         'type': 14,
                                         'doc': 'Primary interface only. Running threads with '
@@ -2813,7 +4267,41 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                          "document's uint8 length "
                                                                          'is kept.',
                                                                 'doc': 'labelName: last executed '
-                                                                       'line label name'},
+                                                                       'line label name',
+                                                                'conflicts': [{'what': 'type',
+                                                                               'document': 'string(int32) '
+                                                                                           'in '
+                                                                                           'repeat '
+                                                                                           'until_end',
+                                                                               'sources': ['primary-guide-5.10'],
+                                                                               'decision': 'the '
+                                                                                           '5.9/5.10 '
+                                                                                           'document '
+                                                                                           '(ClientInterfaces_Primary.pdf) '
+                                                                                           'gives '
+                                                                                           'an int '
+                                                                                           'length '
+                                                                                           'before '
+                                                                                           'the '
+                                                                                           'name; '
+                                                                                           'the '
+                                                                                           'current '
+                                                                                           'document '
+                                                                                           'a '
+                                                                                           'uint8 '
+                                                                                           'length: '
+                                                                                           'the '
+                                                                                           'newer '
+                                                                                           'document '
+                                                                                           'kept '
+                                                                                           '(no '
+                                                                                           'public '
+                                                                                           'client '
+                                                                                           'parses '
+                                                                                           'this '
+                                                                                           'message '
+                                                                                           'to '
+                                                                                           'tell).'}]},
                                                                {'name': 'thread_name',
                                                                 'type': 'string',
                                                                 'length': 'uint16',
@@ -2822,9 +4310,63 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                          "document's uint16 length "
                                                                          'is kept.',
                                                                 'doc': 'threadName: the name of '
-                                                                       'the thread'}],
+                                                                       'the thread',
+                                                                'conflicts': [{'what': 'type',
+                                                                               'document': 'string(int32) '
+                                                                                           'in '
+                                                                                           'repeat '
+                                                                                           'until_end',
+                                                                               'sources': ['primary-guide-5.10'],
+                                                                               'decision': 'the '
+                                                                                           '5.9/5.10 '
+                                                                                           'document '
+                                                                                           '(ClientInterfaces_Primary.pdf) '
+                                                                                           'gives '
+                                                                                           'an int '
+                                                                                           'length '
+                                                                                           'before '
+                                                                                           'the '
+                                                                                           'name; '
+                                                                                           'the '
+                                                                                           'current '
+                                                                                           'document '
+                                                                                           'a '
+                                                                                           'uint16 '
+                                                                                           'length: '
+                                                                                           'the '
+                                                                                           'newer '
+                                                                                           'document '
+                                                                                           'kept '
+                                                                                           '(no '
+                                                                                           'public '
+                                                                                           'client '
+                                                                                           'parses '
+                                                                                           'this '
+                                                                                           'message '
+                                                                                           'to '
+                                                                                           'tell).'}]}],
                                                     'doc': 'One entry per running thread with '
-                                                           'labeled lines'}]}]},
+                                                           'labeled lines'}]}],
+                           'conflicts': [{'what': 'added',
+                                          'document': 'sub-type 1',
+                                          'sources': ['client-interface-workbook-3.2'],
+                                          'decision': 'ROBOT_MESSAGE_PROGRAM_LABEL (1: int id, '
+                                                      'then a text) of the 3.x workbook; the 5.x '
+                                                      'document does not list it (its Program '
+                                                      'Threads message, 14, tells labels): left '
+                                                      'out.'},
+                                         {'what': 'added',
+                                          'document': 'sub-type 2',
+                                          'sources': ['primary-guide-5.10'],
+                                          'decision': 'The Popup Message of the 5.9/5.10 document '
+                                                      '(ClientInterfaces_Primary.pdf) '
+                                                      '(ROBOT_MESSAGE_TYPE_POPUP = 2: requestId, '
+                                                      'requestedType, warning, error, blocking, a '
+                                                      'title after its uint8 length, the text); '
+                                                      'the current document does not list it and '
+                                                      'no public client parses it: left out (a '
+                                                      'type-2 robot message decodes as an unknown '
+                                                      'member, its bytes kept).'}]},
                           {'name': 'program_state',
                            'type': 25,
                            'layout': 'tagged',
@@ -2872,7 +4414,29 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                     'type': 'variable_values',
                                                     'doc': 'variableValues: each variable value '
                                                            'contains a type byte, its data and a '
-                                                           'terminating new line character'}]}]},
+                                                           'terminating new line character',
+                                                    'conflicts': [{'what': 'type',
+                                                                   'document': 'uint8',
+                                                                   'sources': ['primary-guide-5.10'],
+                                                                   'decision': '`unsigned char '
+                                                                               'variableValues` in '
+                                                                               'the 5.9/5.10 '
+                                                                               'document '
+                                                                               '(ClientInterfaces_Primary.pdf): '
+                                                                               'the typed values '
+                                                                               'as bytes (its '
+                                                                               'Value Types '
+                                                                               'chapter gives '
+                                                                               'each); the spec '
+                                                                               'reads them as '
+                                                                               'variable_values.'}]}]}],
+                           'conflicts': [{'what': 'added',
+                                          'document': 'sub-type 2',
+                                          'sources': ['client-interface-workbook-3.2'],
+                                          'decision': 'PROGRAM_STATE_MESSAGE_VARIABLE_UPDATE (2), '
+                                                      'marked deprecated by the 3.x workbook '
+                                                      'itself (use the global variables messages); '
+                                                      'not in the 5.x document: left out.'}]},
                           {'name': 'modbus_info_message',
                            'type': 5,
                            'layout': 'opaque',

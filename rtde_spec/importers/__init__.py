@@ -40,7 +40,7 @@ _DEFAULT_SOURCE = {
 #: the real-time table's header as paragraphs (rendered) or cells ending in `|`
 _REALTIME_HEAD = re.compile(
     r"^[ \t]*Meaning[ \t]*\|?[ \t]*\n(?:[ \t]*\n)*[ \t]*Type[ \t]*\|?[ \t]*\n(?:[ \t]*\n)*"
-    r"[ \t]*Number of values",
+    r"[ \t]*Number of\s+values",  # the PDF's text wraps the cell: "Number of" / "values"
     re.M | re.I,
 )
 
@@ -129,7 +129,11 @@ def read_document(
         if not doc.members:  # the docs site's C-like listing ("for each joint: ... end")
             from rtde_spec.importers.primary_listing import read_listing
 
-            doc.members = read_listing(text)
+            doc.members = _newest_section(read_listing(text, _type_enums(spec)), text, doc)
+            if source is None and not re.search(r"Robot Software \d", text):
+                # the C-like listing is the client-interface workbook's form; the interface
+                # document (ClientInterfaces_Primary.pdf as text) uses it too, under "Robot Software 5.x"
+                doc.source = "client-interface-workbook"
         if not doc.members:
             raise UsageError(
                 f"{path}: no message table read; looked for the primary interface's sub-package "
@@ -154,8 +158,10 @@ def read_document(
 
         reader = rendered_text if kind == "rendered-text" else eseries_text
         tables = [eseries_text.split_rows(t, starts_row) for t in reader.read_tables(text)]
-        doc.realtime = realtime_tables.read_paragraphs(text, lines) or realtime_tables.read_spaced(
-            text, lines
+        doc.realtime = (
+            realtime_tables.read_paragraphs(text, lines)
+            or realtime_tables.read_paragraphs(realtime_tables.joined_cells(text), lines)
+            or realtime_tables.read_spaced(text, lines)
         )
     elif kind == "markdown":
         tables = markdown.read_tables(text)
@@ -185,6 +191,43 @@ def _primary_tables(tables: list, lines: Lines) -> list:
         cells = [c.strip() for _, row in t.rows for c in row if c.strip()]
         parts.append("\n".join([t.heading or "table", *[h.strip() for h in t.header if h.strip()], *cells]))
     return read_members("\n".join(parts), lines)
+
+
+_SECTION = re.compile(r"^\s*\d+\.\s+Robot Software (\d+\.\d+(?:\.\d+)?)\s*$", re.M)
+
+
+def _newest_section(members: list, text: str, doc: Document) -> list:
+    """The members of the newest "N. Robot Software X.Y" section when a document holds several
+    editions (ClientInterfaces_Primary.pdf: 5.9 and 5.10); the older sections are reported. A
+    member belongs to the last section heading (or page header naming one) above it."""
+    starts = [(text.count("\n", 0, m.start()) + 1, m.group(1)) for m in _SECTION.finditer(text)]
+    if len({v for _, v in starts}) < 2:
+        return members
+
+    def section(line: int) -> str | None:
+        found = [v for at, v in starts if at <= line]
+        return found[-1] if found else None
+
+    by = {id(m): section(m.line) for m in members}
+    editions = {v for v in by.values() if v}
+    if len(editions) < 2:
+        return members
+    newest = max(editions, key=Version.parse)
+    for edition in sorted(editions - {newest}, key=Version.parse):
+        count = sum(1 for v in by.values() if v == edition)
+        doc.remarks.append(
+            f"section 'Robot Software {edition}': {count} message tables of an older edition in the "
+            f"same document, not compared (the {newest} section is)"
+        )
+    return [m for m in members if by[id(m)] == newest]
+
+
+def _type_enums(spec: Spec) -> dict[str, dict[str, int]]:
+    """The spec's enums of message and sub-package types, by name: a copy that lost a number."""
+    from rtde_spec.importers.primary_listing import TYPE_ENUMS
+
+    wanted = set(TYPE_ENUMS.values())
+    return {e.name: {v.name: v.value for v in e.values} for e in spec.all_enums if e.name in wanted}
 
 
 def _text_line(named: dict[str, str]) -> str | None:

@@ -47,6 +47,7 @@ class DocLayoutField:
     versions: dict[str, str] = field(default_factory=dict)
     version_text: str = ""
     block: int = 0  # which "for each joint:" block of the member the row is in (0: none)
+    guessed: bool = False  # in a block whose end the copy does not show: its group is a guess
 
 
 @dataclass
@@ -60,6 +61,7 @@ class DocMember:
     fields: list[DocLayoutField] = field(default_factory=list)
     versions: dict[str, str] = field(default_factory=dict)  # "introduced in" of the header rows
     notes: list[str] = field(default_factory=list)  # what the reader could not tell for sure
+    cut: bool = False  # the copy ends inside it: fields after its last row are not compared
 
 
 @dataclass

@@ -113,12 +113,45 @@ def _before_line(doc: Document, spec: Spec) -> bool:
     return True
 
 
-def _newer_than_edition(since: dict[str, str] | None, doc: Document, spec: Spec) -> bool:
-    """A spec field the document's edition cannot list: first sent by a later version of its line."""
+def _not_expected(since: dict[str, str] | None, doc: Document, spec: Spec) -> bool:
+    """A spec field the document cannot list: not sent on its line at all (e-Series' trailing
+    reserved byte in a CB3 listing), or first sent by a later version of its line. For an edition
+    older than the line (the 3.2 listing, the line from 3.3.0) a field the line has from its
+    first version is expected: the layouts are compared."""
+    first = _first_on(since, doc, spec) if doc.line else None
+    if doc.line and first is None:
+        return True
     if doc.edition is None:
         return False
-    first = _first_on(since, doc, spec)
+    line = next((p for p in spec.product_lines.product_lines if p.id == doc.line), None)
+    if first is not None and line is not None and first == line.first_version and _before_line(doc, spec):
+        return False
     return first is not None and Version.parse(first) > Version.parse(doc.edition)
+
+
+def _layout(spec_member: MemberSpec, doc: Document) -> list[LayoutField]:
+    """The spec's layout for the document's edition: an `older` one (python-urx's pre-3.0 layouts)
+    when the edition precedes it, else the current one."""
+    if doc.edition is None:
+        return spec_member.fields
+    edition = Version.parse(doc.edition)
+    older = sorted(
+        (o for o in spec_member.older if edition < Version.parse(o.before)),
+        key=lambda o: Version.parse(o.before),
+    )
+    if not older:
+        return spec_member.fields
+    note = f"{spec_member.name}: compared with the spec's layout before {older[0].before} ({older[0].source})"
+    if note not in doc.remarks:
+        doc.remarks.append(note)
+    return older[0].fields
+
+
+def _group_only(row: DocLayoutField, leaf_type: str) -> bool:
+    """A row whose block end the copy does not show, differing from the spec only in that group."""
+    theirs = row.type
+    ours = leaf_type.split(" in ")[0]
+    return row.guessed and (ours == theirs or ours == f"{theirs}[6]")
 
 
 def _find(spec: Spec, member: DocMember) -> tuple[FamilySpec, MemberSpec | None] | None:
@@ -153,7 +186,7 @@ def _member_changes(
                 doc.source,
             )
         )
-    leaves = _leaves(spec_member.fields)
+    leaves = _leaves(_layout(spec_member, doc))
     used: set[int] = set()
     for row in member.fields:
         match = next((i for i, leaf in enumerate(leaves) if i not in used and leaf.key == row.key), None)
@@ -171,6 +204,12 @@ def _member_changes(
         elif not row.group and " in repeat " in leaf.type and leaf.type.split(" in ")[0] == row.type:
             note = f"line {row.line}: {where} {row.name}: listed once, without the spec's group ({leaf.type})"
             doc.remarks.append(note)  # an edition with no "repeated for each joint" line
+        elif leaf.type != _doc_type(row) and row.type and _group_only(row, leaf.type):
+            note = (
+                f"line {row.line}: {where} {row.name}: {_doc_type(row)} read in a block whose end "
+                f"is a guess (the spec: {leaf.type}), not a change"
+            )
+            doc.remarks.append(note)
         elif leaf.type != _doc_type(row) and row.type:
             found.append(Change("changed", "type", leaf.path, where, leaf.type, _doc_type(row), row.line))
         since = leaf.field.since or spec_member.since
@@ -189,8 +228,12 @@ def _member_changes(
         for change in found:
             change.extra["row"] = row
             out.append(mark_known(change, leaf.field.conflicts, doc.source))
+    last = max(used, default=-1)
     for i, leaf in enumerate(leaves):
-        if i not in used and not _newer_than_edition(leaf.field.since or spec_member.since, doc, spec):
+        if member.cut and i > last and i not in used:
+            doc.remarks.append(f"{where} {leaf.path}: after where the copy is cut short, not compared")
+            continue
+        if i not in used and not _not_expected(leaf.field.since or spec_member.since, doc, spec):
             out.append(
                 mark_known(
                     Change("removed", "removed", leaf.path, where, leaf.type, None, None),
@@ -213,7 +256,13 @@ def diff_primary(doc: Document, spec: Spec) -> list[Change]:
                 "added", "added", member.title, family, None, f"sub-type {member.member_type}", member.line
             )
             change.extra["member"] = member
-            out.append(change)
+            out.append(mark_known(change, found[0].conflicts if found else [], doc.source))
+            continue
+        if not member.fields and found[1].fields:
+            # "This package contains a checksum ...": the listing describes it in words only
+            doc.remarks.append(
+                f"line {member.line}: {found[0].name}/{found[1].name}: listed without fields, not compared"
+            )
             continue
         out += _member_changes(member, found[0], found[1], doc, spec)
     return out

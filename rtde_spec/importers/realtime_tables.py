@@ -130,6 +130,26 @@ def _is_title(text: str) -> bool:
     return 0 < len(text) <= 60 and not text.endswith((".", ")", ":")) and not text.startswith("(")
 
 
+#: what a PDF's pages print between table rows: page numbers, running heads, the copyright line
+_PAGE_MARK = re.compile(r"^(?:-\d+-|Chapter \d+|G3/G5|Copyright ©.*|\f.*)$")
+
+
+def joined_cells(text: str) -> str:
+    """The PDF's text (pdftotext): cells are paragraphs, and a long cell wraps over adjacent
+    lines ("Number of" / "values", "Tool vector" / "actual"): one line per paragraph, except
+    that a paragraph ending in the header's first cell keeps its title lines apart from it."""
+    out: list[str] = []
+    for para in re.split(r"\n[ \t]*\n", text):
+        rows = [r.strip() for r in para.splitlines() if r.strip() and not _PAGE_MARK.match(r.strip())]
+        if not rows:
+            continue
+        if len(rows) > 1 and rows[-1].lower() == "meaning":
+            out += rows
+        else:
+            out.append(" ".join(rows))
+    return "\n\n".join(out)
+
+
 def read_paragraphs(text: str, lines: Lines) -> list[DocRealtimeTable]:
     """The rendered page: every cell a paragraph (or a line ending in `|`), rows found by shape.
 
@@ -176,7 +196,10 @@ def read_paragraphs(text: str, lines: Lines) -> list[DocRealtimeTable]:
             continue
         named = i + 3 < size and not is_type(para) and is_type(paras[i + 1][1]) and ints(i + 2)
         unnamed = is_type(para) and ints(i + 1)
-        if named and notes:
+        # the Message Size row (the first, no Gnuplot column) may come without notes (the PDF's
+        # text moves its note away): a name, a type and two numbers after it are the next row
+        first_bare = len(current) == 1 and len(current[-1][1]) == 4
+        if named and (notes or first_bare):
             current.append((number, [para, paras[i + 1][1], paras[i + 2][1], paras[i + 3][1]]))
             i += 4
             notes = False

@@ -68,7 +68,7 @@ def read_workbook(
     path: Path, spec: Spec, source: str | None, line: str | None, edition: str | None
 ) -> Document:
     """Every sheet's tables: RTDE field tables become fields; the report names each table."""
-    from rtde_spec.importers import finish
+    from rtde_spec.importers import _type_enums, finish
 
     try:
         import openpyxl
@@ -97,7 +97,7 @@ def read_workbook(
             # the listing's rows keep their indent: a "for each joint:" block ends where it does
             text = "\n".join(" ".join(c for c in r if c.strip()) for r in raw)
             if SIGN.search(text) or "int packageSize" in text:
-                members = read_listing(text)
+                members = read_listing(text, _type_enums(spec))
                 version, _ = edition_of_title(sheet.title, lines)
                 if members:
                     listings.append((version or "", sheet.title, members))

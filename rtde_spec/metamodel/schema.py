@@ -349,6 +349,7 @@ class FamilySpec(StrictModel):
     doc: str | None = None
     prefix: list[LayoutField] = []
     members: list[MemberSpec] = []
+    conflicts: list[Conflict] = []  # a document's member the spec leaves out on purpose (field: its title)
 
 
 class ValueTypeSpec(StrictModel):
