@@ -33,21 +33,15 @@ def steps(stamps: list[float]) -> list[int]:
 
 def test_the_caller_reads_while_it_iterates_and_the_reader_drains_when_it_stops(emu: EmulatorThread) -> None:
     with RtdeClient("127.0.0.1", emu.ports["rtde"], timeout=5) as client:
-        client.setup_outputs(["timestamp", "actual_q"], 500)
-        readers: list[str] = []  # the thread of every read, in order
-        one_record, receive = client.core.one_record, client.core.receive
+        readers: list[str] = []  # the thread of every read of data packages, in order
+        take_run = client.core.framer.take_run
 
-        def one(data: bytes) -> Any:  # the caller's reads all come here first
+        def take(data: bytes, size: int, lead: bytes) -> int:  # every read of data packages checks here
             readers.append(threading.current_thread().name)
-            return one_record(data)
+            return take_run(data, size, lead)
 
-        def events(data: bytes) -> Any:  # the reader thread's reads (and the caller's longer ones)
-            if threading.current_thread() is not threading.main_thread():
-                readers.append(threading.current_thread().name)
-            return receive(data)
-
-        client.core.one_record = one  # type: ignore[method-assign]
-        client.core.receive = events  # type: ignore[method-assign]
+        client.core.framer.take_run = take  # type: ignore[method-assign]
+        client.setup_outputs(["timestamp", "actual_q"], 500)
         client.start()
         stamps, later = [], 0
         for record in client:
@@ -94,3 +88,58 @@ def test_timeouts_shorter_and_longer_than_a_read_slice_are_kept(emu: EmulatorThr
             assert wait * 0.9 <= time.monotonic() - began < wait + 2
         client.start()
         assert client.receive(timeout=client_module.SLICE / 2 + 2).timestamp > 0
+
+
+def test_a_caller_that_falls_behind_gets_the_packages_it_missed_in_order(emu: EmulatorThread) -> None:
+    """A slow loop body (shorter than the lease) lets packages pile up in the socket: the next
+    read holds many, which leave the one-package path and come in order through the queue."""
+    with RtdeClient("127.0.0.1", emu.ports["rtde"], timeout=5) as client:
+        client.setup_outputs(["timestamp", "actual_q"], 500)
+        client.start()
+        stamps: list[float] = []
+        for record in client:
+            stamps.append(record.timestamp)
+            if len(stamps) in (20, 60, 100):
+                time.sleep(client_module.LEASE / 4)  # ~25 packages arrive meanwhile
+            if len(stamps) == 200:
+                break
+        assert steps(stamps) == [1] * 199
+        assert client.skipped == 0
+
+
+def test_a_batched_client_iterates_in_order_and_each_of_two_callbacks_gets_every_record(
+    emu: EmulatorThread,
+) -> None:
+    with RtdeClient("127.0.0.1", emu.ports["rtde"], timeout=5, batch=20) as client:
+        client.setup_outputs(["timestamp"], 500)
+        client.start()
+        iterated = [record.timestamp for _, record in zip(range(100), client, strict=False)]
+        assert steps(iterated) == [1] * 99
+    first: list[Any] = []
+    second: list[float] = []
+    with RtdeClient("127.0.0.1", emu.ports["rtde"], timeout=5, batch=20) as client:
+        client.setup_outputs(["timestamp"], 500)
+        client.on_data(first.append)
+        client.on_data(lambda record: second.append(record.timestamp))
+        client.start()
+        deadline = time.monotonic() + 5
+        while len(second) < 100 and time.monotonic() < deadline:
+            time.sleep(0.01)
+        client.pause()
+    assert len(second) >= 100 and steps(second) == [1] * (len(second) - 1)
+    assert [r.timestamp for r in first[: len(second)]] == second[: len(first)]
+
+
+def test_an_error_raised_by_a_callback_ends_the_connection_with_that_error(emu: EmulatorThread) -> None:
+    def fails(record: Any) -> None:
+        raise ValueError(f"the user's callback refused {record.timestamp}")
+
+    with RtdeClient("127.0.0.1", emu.ports["rtde"], timeout=5) as client:
+        client.setup_outputs(["timestamp"], 500)
+        client.on_data(fails)
+        client.start()
+        deadline = time.monotonic() + 5
+        while client.connection_lost is None and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert isinstance(client.connection_lost, ValueError)
+        assert "refused" in str(client.connection_lost)

@@ -16,8 +16,8 @@ from __future__ import annotations
 import collections
 import logging
 import socket
-from collections.abc import Mapping, Sequence
-from typing import Any
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from typing import Any, NamedTuple
 
 from rtde_spec._generated.constants import (
     DATA_PACKAGE_TYPE,
@@ -51,8 +51,22 @@ from rtde_spec.rtde.protocol_state import ProtocolState
 from rtde_spec.wire.framing import PackageFramer
 
 INVALID_ID = RTDE_LIMITS["invalid_recipe_id"]
+READ_SIZE = 65536  # bytes a read asks for at least: all the socket holds, in one call
 UNSOLICITED_LOGGED = 10  # unsolicited replies logged one by one; after that only counted
 log = logging.getLogger("rtde_spec.client")
+
+
+class RecordsPath(NamedTuple):
+    """The output recipe's packages as a reader takes them on its shortest path: a read that is
+    exactly one package (`take(read, size, lead)` frames it) is `new(record_type, unpack(read,
+    PAYLOAD_OFFSET))`; a read of several, `map(partial(new, record_type), many(read))`."""
+
+    size: int  # bytes per package
+    lead: bytes  # size, type and recipe id: the first bytes of each
+    take: Callable[[bytes, int, bytes], int]  # the framer's: how many whole packages, 0 if not only those
+    unpack: Callable[[Any, int], tuple[Any, ...]]
+    many: Callable[[Any], Iterator[tuple[Any, ...]]]
+    record_type: type
 
 
 class ClientProtocol:
@@ -76,6 +90,7 @@ class ClientProtocol:
         # False when only raw bytes are taken (a recorder decoding its batches with numpy):
         # data packages are framed and checked, and no record is made
         self.want_records = True
+        self._records_path: RecordsPath | None = None
 
     # --- requests -----------------------------------------------------------
 
@@ -211,6 +226,12 @@ class ClientProtocol:
             raise
         return events
 
+    @property
+    def records_path(self) -> RecordsPath | None:
+        """What a reader needs to turn a read of whole output packages into records without
+        events (None before the output recipe is set up, or when nobody wants records)."""
+        return self._records_path if self.want_records else None
+
     def one_record(self, data: bytes) -> Any:
         """The record of a read that is exactly one data package of the output recipe (what a
         caller reading at one package per wake-up gets), framed; None for any other read, which
@@ -312,6 +333,14 @@ class ClientProtocol:
             # size, type and recipe id: a package of another recipe is never read as this one
             lead = PREFIX.pack(codec.package_size, DATA_PACKAGE_TYPE, recipe_id)
             self._run = (codec.package_size, lead)
+            self._records_path = RecordsPath(
+                codec.package_size,
+                lead,
+                self.framer.take_run,
+                codec.struct.unpack_from,
+                codec._packages.iter_unpack,
+                codec.record_type,
+            )
             implied = implied_recipe_id("controller", self.state.version)
             self._without_id = (recipe_id, codec.size) if implied == recipe_id else None
         else:
@@ -342,6 +371,7 @@ class ClientBase:
         self._data: collections.deque[Any] = collections.deque(maxlen=queue_size)
         self._closed: BaseException | None = None
         self._low_mark = 1  # SO_RCVLOWAT in force: bytes the reader waits for
+        self._bufsize = READ_SIZE  # bytes a read asks for: what the socket holds, twice the low mark
 
     def _wake_after(self, sock: Any, size: int) -> None:
         """The reader wakes once `size` bytes wait (SO_RCVLOWAT); 1 restores per-package.
@@ -357,6 +387,7 @@ class ClientBase:
             self._low_mark = size
         except OSError:
             self._low_mark = 1
+        self._bufsize = max(READ_SIZE, 2 * self._low_mark)
 
     @property
     def where(self) -> str:
