@@ -187,10 +187,10 @@ class RtdeClient(ClientBase):
         except OSError as exc:
             self._finish(self._ended(f"connection lost: {exc.strerror or exc}"))
             return None
-        path = self.core.records_path
-        if path is not None and len(chunk) == path.size and path.take(chunk, path.size, path.lead):
+        record = self.core.one_record(chunk)
+        if record is not None:
             self.received += 1
-            return _new_tuple(path.record_type, path.unpack(chunk, PAYLOAD_OFFSET))
+            return record
         self._other_read(chunk)
         return None
 
@@ -209,8 +209,9 @@ class RtdeClient(ClientBase):
 
         While every read is one data package, the loop reads the socket itself, with the
         fewest steps a read can take: per record the lease renewed, the lock taken without
-        waiting, one `recv`, the framer's check of the read and one `unpack`; no other call,
-        no event, no queue. Any other read (a reply, a batch, the end) takes the general path.
+        waiting, one `recv`, the read's size and leading bytes compared (the framer holding
+        nothing: `ClientProtocol.aligned`) and one `unpack`; no other call, no event, no
+        queue. Any other read (a reply, a batch, the end) takes the general path.
         """
         data, reading, monotonic = self._data, self._reading, time.monotonic
         while True:
@@ -227,7 +228,7 @@ class RtdeClient(ClientBase):
             path = self.core.records_path
             if path is not None and self._sliced and wait >= SLICE and self._closed is None:
                 recv, size, lead = self._sock.recv, path.size, path.lead  # type: ignore[union-attr]
-                take, unpack, record_type = path.take, path.unpack, path.record_type
+                unpack, record_type, core = path.unpack, path.record_type, self.core
                 quiet = False
                 while True:
                     self._lease = monotonic() + LEASE  # the reader thread keeps off the socket
@@ -235,7 +236,8 @@ class RtdeClient(ClientBase):
                         break  # records queued, or another thread reads now: the general path
                     try:
                         chunk = recv(self._bufsize)  # one call: SO_RCVTIMEO bounds it
-                        if len(chunk) == size and take(chunk, size, lead):
+                        if len(chunk) == size and chunk.startswith(lead) and core.aligned:
+                            core.taken += size  # framed here: one package, nothing held before it
                             record = _new_tuple(record_type, unpack(chunk, PAYLOAD_OFFSET))
                         else:
                             self._other_read(chunk)
@@ -363,7 +365,11 @@ class RtdeClient(ClientBase):
                     if path is None or not chunk or len(chunk) % path.size:
                         self._other_read(chunk)
                         continue
-                    count = path.take(chunk, path.size, path.lead)
+                    if len(chunk) == path.size and chunk.startswith(path.lead) and self.core.aligned:
+                        self.core.taken += path.size  # framed here: one package, nothing held before it
+                        count = 1
+                    else:
+                        count = path.take(chunk, path.size, path.lead)
                     if not count:
                         self._other_read(chunk)
                         continue

@@ -91,6 +91,11 @@ class ClientProtocol:
         # data packages are framed and checked, and no record is made
         self.want_records = True
         self._records_path: RecordsPath | None = None
+        # A reader may take a read that is one whole data package of the output recipe itself
+        # (lead bytes and size checked) while `aligned` (the framer holds nothing), adding its
+        # size to `taken`; the framer counts those bytes before it is fed again.
+        self.aligned = True
+        self.taken = 0
 
     # --- requests -----------------------------------------------------------
 
@@ -156,6 +161,9 @@ class ClientProtocol:
     def closed(self, where: str, cause: str = "the controller closed the connection") -> RtdeSpecError:
         """The error that ends a connection; a DecodeError when it ended inside a package, whose
         bytes are lost (so iterating clients raise it instead of ending quietly)."""
+        if self.taken:
+            self.framer.passed(self.taken)
+            self.taken = 0
         held = self.framer.pending
         if not held:
             return RtdeConnectionError(cause, subject=where)
@@ -200,6 +208,15 @@ class ClientProtocol:
         """Events for every package this data completes. A package that does not decode or
         breaks the protocol raises its error; the events of the packages before it in this
         data are then in `before_error`."""
+        if self.taken:
+            self.framer.passed(self.taken)
+            self.taken = 0
+        try:
+            return self._receive(data)
+        finally:
+            self.aligned = not self.framer.pending
+
+    def _receive(self, data: bytes) -> list[Event]:
         output, run = self.output, self._run
         if output is not None and run is not None:
             wanted = self.want_records
@@ -237,7 +254,14 @@ class ClientProtocol:
         caller reading at one package per wake-up gets), framed; None for any other read, which
         then goes to `receive`. The shortest path from a read to a record: no event, no list."""
         run = self._run
-        if run is not None and len(data) == run[0] and self.want_records and self.framer.take_run(data, *run):
+        if (
+            run is not None
+            and len(data) == run[0]
+            and self.want_records
+            and self.aligned
+            and data.startswith(run[1])
+        ):
+            self.taken += run[0]
             return self.output.decode_record(data, PAYLOAD_OFFSET)  # type: ignore[union-attr]
         return None
 
