@@ -223,6 +223,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--receive-only", action="store_true", help="only the receive-loop rows (not the four timing clients)"
     )
+    parser.add_argument(
+        "--against", metavar="CHECKOUT", help="also run our per-package and batch=50 rows from this checkout"
+    )
     parser.add_argument("--no-warm", action="store_true", help="skip the warm in-process receive rows")
     parser.add_argument("--no-syscalls", action="store_true", help="skip the strace count of system calls")
     args = parser.parse_args(argv)
@@ -258,7 +261,9 @@ def main(argv: list[str] | None = None) -> int:
         types = [cat_type(Catalogue.builtin(), n) for n in names]
         codec = RecipeCodec.for_names(names, "output")
         fmt = codec.struct.format[1:]
-        verdicts = receive_rows(port, args.seconds / 2, args.rounds, names, types, codec.size, fmt)
+        verdicts = receive_rows(
+            port, args.seconds / 2, args.rounds, names, types, codec.size, fmt, args.against
+        )
         proc.terminate()
         proc.wait(10)
         ur_rtde_row(serve, args.seconds)

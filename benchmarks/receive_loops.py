@@ -205,8 +205,15 @@ LABELS = {
 }
 
 
-def child(code: str, *args: str, timeout: float = 120) -> dict[str, Any]:
-    out = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True, timeout=timeout)
+AGAINST = "@"  # a row key's suffix: the same row with another checkout of rtde_spec (`--against`)
+
+
+def child(code: str, *args: str, timeout: float = 120, tree: str | None = None) -> dict[str, Any]:
+    """Run a row's code in its own process; `tree`: import rtde_spec from that checkout instead."""
+    env = None if tree is None else {**os.environ, "PYTHONPATH": tree}
+    out = subprocess.run(
+        [sys.executable, "-c", code, *args], capture_output=True, text=True, timeout=timeout, env=env
+    )
     if out.returncode:
         raise SystemExit(out.stderr)
     return json.loads(out.stdout.strip().splitlines()[-1])  # type: ignore[no-any-return]
@@ -230,7 +237,9 @@ def specs(
     }
 
 
-def rounds_of(spec: dict[str, Any], rounds: int) -> tuple[dict[str, list[float]], dict[str, list[float]]]:
+def rounds_of(
+    spec: dict[str, Any], rounds: int, against: str | None = None
+) -> tuple[dict[str, list[float]], dict[str, list[float]]]:
     """CPU µs and wake-ups per package of every row in every round, rows in a rotated order."""
     keys = list(spec)
     us: dict[str, list[float]] = {k: [] for k in keys}
@@ -239,7 +248,7 @@ def rounds_of(spec: dict[str, Any], rounds: int) -> tuple[dict[str, list[float]]
         order = keys[r % len(keys) :] + keys[: r % len(keys)]
         for key in order:
             code, *args = spec[key]
-            got = child(code, *args)
+            got = child(code, *args, tree=against if key.endswith(AGAINST) else None)
             us[key].append(got["cpu"] / got["packages"] * 1e6)
             wakes[key].append(got["wakeups"] / got["packages"])
     return us, wakes
@@ -295,12 +304,29 @@ def syscall_rows(spec: dict[str, Any]) -> None:
 
 
 def receive_rows(
-    port: int, seconds: float, rounds: int, names: list[str], types: list[str], size: int, fmt: str
+    port: int,
+    seconds: float,
+    rounds: int,
+    names: list[str],
+    types: list[str],
+    size: int,
+    fmt: str,
+    against: str | None = None,
 ) -> dict[str, bool]:
     """Every row in every round; prints the table and returns the issue-30 verdicts."""
     spec = specs(port, seconds, names, types, size, fmt)
+    if against is not None:  # ours from another checkout, in the same rounds: an A/B in one run
+        twins = ("iterate", "callback", "batched")
+        ordered: dict[str, Any] = {}
+        for key, row in spec.items():
+            ordered[key] = row
+            if key in twins:
+                ordered[key + AGAINST] = row  # right after its row
+        spec = ordered
+        for key in twins:
+            LABELS[key + AGAINST] = f"  the same, {Path(against).name}"
     load0 = os.getloadavg()
-    us, wakes = rounds_of(spec, rounds)
+    us, wakes = rounds_of(spec, rounds, against)
     load1 = os.getloadavg()
 
     def med(key: str) -> float:
@@ -324,11 +350,17 @@ def receive_rows(
         (f"batch={BATCH}", "batched", "floor_b"),
         (f"batch={BATCH_LONG}", "longer", "floor_b"),
     )
+    if against is not None:
+        rows += tuple(
+            (f"{label} ({Path(against).name})", key + AGAINST, low)
+            for label, key, low in rows
+            if key + AGAINST in us
+        )
     print("  ratios (medians of per-round ratios):")
     for label, key, low in rows:
         over = statistics.median(x - y for x, y in zip(us[key], us[low], strict=True))
         print(
-            f"    {label:21s} UR style / ours {ratio('ur', key):5.1f}x, ours / floor {ratio(key, low):5.2f}x "
+            f"    {label:28s} UR style / ours {ratio('ur', key):5.1f}x, ours / floor {ratio(key, low):5.2f}x "
             f"(+{over:.1f} µs over the floor)"
         )
     over = statistics.median(x - y for x, y in zip(us["floor_unpack"], us["floor"], strict=True))

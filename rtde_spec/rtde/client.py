@@ -349,7 +349,8 @@ class RtdeClient(ClientBase):
                         continue
                 reading.acquire()
                 try:
-                    if self._closed is not None or (self._lease > monotonic() and not self._closing):
+                    lease = self._lease  # 0.0 while no caller ever read: no clock read per package
+                    if self._closed is not None or (lease and lease > monotonic() and not self._closing):
                         continue
                     try:
                         if self._low_mark > 1 and poller is not None:

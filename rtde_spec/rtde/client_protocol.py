@@ -87,10 +87,12 @@ class ClientProtocol:
         self.last_request: Request | None = None  # the request whose bytes were built last
         self.unsolicited = 0  # replies that answered no waiting request (logged, dropped)
         self.before_error: list[Event] = []  # see receive()
-        # False when only raw bytes are taken (a recorder decoding its batches with numpy):
-        # data packages are framed and checked, and no record is made
-        self.want_records = True
-        self._records_path: RecordsPath | None = None
+        self._want_records = True  # see want_records
+        self._path: RecordsPath | None = None  # of the output recipe
+        # what a reader needs to make records of reads of whole output packages without events
+        # (None before the output recipe is set up, or when nobody wants records): an attribute,
+        # read once per read
+        self.records_path: RecordsPath | None = None
         # A reader may take a read that is one whole data package of the output recipe itself
         # (lead bytes and size checked) while `aligned` (the framer holds nothing), adding its
         # size to `taken`; the framer counts those bytes before it is fed again.
@@ -219,7 +221,7 @@ class ClientProtocol:
     def _receive(self, data: bytes) -> list[Event]:
         output, run = self.output, self._run
         if output is not None and run is not None:
-            wanted = self.want_records
+            wanted = self._want_records
             if len(data) == run[0]:  # the usual read at one package per wake-up
                 if self.framer.take_run(data, *run):
                     one = [output.decode_record(data, PAYLOAD_OFFSET)] if wanted else []
@@ -244,10 +246,15 @@ class ClientProtocol:
         return events
 
     @property
-    def records_path(self) -> RecordsPath | None:
-        """What a reader needs to turn a read of whole output packages into records without
-        events (None before the output recipe is set up, or when nobody wants records)."""
-        return self._records_path if self.want_records else None
+    def want_records(self) -> bool:
+        """False when only raw bytes are taken (a recorder decoding its batches with numpy):
+        data packages are framed and checked, and no record is made."""
+        return self._want_records
+
+    @want_records.setter
+    def want_records(self, wanted: bool) -> None:
+        self._want_records = wanted
+        self.records_path = self._path if wanted else None
 
     def one_record(self, data: bytes) -> Any:
         """The record of a read that is exactly one data package of the output recipe (what a
@@ -257,7 +264,7 @@ class ClientProtocol:
         if (
             run is not None
             and len(data) == run[0]
-            and self.want_records
+            and self._want_records
             and self.aligned
             and data.startswith(run[1])
         ):
@@ -275,7 +282,7 @@ class ClientProtocol:
             if without_id is not None and lacks_recipe_id(package, without_id[1]):
                 package = with_recipe_id(package, without_id[0])  # protocol 1: read by its size
             if output is not None and run is not None and package[: len(run[1])] == run[1]:
-                records = output.decode_records(package) if self.want_records else []
+                records = output.decode_records(package) if self._want_records else []
                 events.append(DataRun(records, package, run[0]))
                 continue
             message = decode_package(package, protocol_version=self.state.version, sender="controller")
@@ -357,7 +364,7 @@ class ClientProtocol:
             # size, type and recipe id: a package of another recipe is never read as this one
             lead = PREFIX.pack(codec.package_size, DATA_PACKAGE_TYPE, recipe_id)
             self._run = (codec.package_size, lead)
-            self._records_path = RecordsPath(
+            self._path = RecordsPath(
                 codec.package_size,
                 lead,
                 self.framer.take_run,
@@ -365,6 +372,7 @@ class ClientProtocol:
                 codec._packages.iter_unpack,
                 codec.record_type,
             )
+            self.records_path = self._path if self._want_records else None
             implied = implied_recipe_id("controller", self.state.version)
             self._without_id = (recipe_id, codec.size) if implied == recipe_id else None
         else:
