@@ -144,7 +144,27 @@ class RtdeClient(ClientBase):
                 return self._data.popleft()  # records waiting: no lock, no wait
             except IndexError:  # another caller took the last one
                 pass
-        return self._wait(timeout or self.timeout)
+        wait = timeout or self.timeout
+        path = self.core.records_path
+        if path is not None and self._sliced and wait >= SLICE and self._closed is None:
+            # one read here if the socket is free: a record when it is one package (as __iter__)
+            self._lease = time.monotonic() + LEASE
+            if self._reading.acquire(False):
+                try:
+                    chunk = self._sock.recv(self._bufsize)  # type: ignore[union-attr]
+                    core = self.core
+                    if len(chunk) == path.size and chunk.startswith(path.lead) and core.aligned:
+                        core.taken += path.size
+                        self.received += 1
+                        return _new_tuple(path.record_type, path.unpack(chunk, PAYLOAD_OFFSET))
+                    self._other_read(chunk)
+                except BlockingIOError:  # no data within SLICE
+                    wait -= SLICE
+                except OSError as exc:
+                    self._finish(self._ended(f"connection lost: {exc.strerror or exc}"))
+                finally:
+                    self._reading.release()
+        return self._wait(wait)
 
     def _wait(self, wait: float) -> Any:
         """The next record once it comes: read here when the socket is free, else wait for the
