@@ -208,15 +208,27 @@ LABELS = {
 AGAINST = "@"  # a row key's suffix: the same row with another checkout of rtde_spec (`--against`)
 
 
-def child(code: str, *args: str, timeout: float = 120, tree: str | None = None) -> dict[str, Any]:
-    """Run a row's code in its own process; `tree`: import rtde_spec from that checkout instead."""
+def start(code: str, *args: str, tree: str | None = None) -> subprocess.Popen[str]:
+    """A row's code in its own process; `tree`: import rtde_spec from that checkout instead."""
     env = None if tree is None else {**os.environ, "PYTHONPATH": tree}
-    out = subprocess.run(
-        [sys.executable, "-c", code, *args], capture_output=True, text=True, timeout=timeout, env=env
+    return subprocess.Popen(
+        [sys.executable, "-c", code, *args],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=env,
     )
-    if out.returncode:
-        raise SystemExit(out.stderr)
-    return json.loads(out.stdout.strip().splitlines()[-1])  # type: ignore[no-any-return]
+
+
+def result(proc: subprocess.Popen[str], timeout: float = 120) -> dict[str, Any]:
+    out, err = proc.communicate(timeout=timeout)
+    if proc.returncode:
+        raise SystemExit(err)
+    return json.loads(out.strip().splitlines()[-1])  # type: ignore[no-any-return]
+
+
+def child(code: str, *args: str, timeout: float = 120, tree: str | None = None) -> dict[str, Any]:
+    return result(start(code, *args, tree=tree), timeout)
 
 
 def specs(
@@ -240,17 +252,22 @@ def specs(
 def rounds_of(
     spec: dict[str, Any], rounds: int, against: str | None = None
 ) -> tuple[dict[str, list[float]], dict[str, list[float]]]:
-    """CPU µs and wake-ups per package of every row in every round, rows in a rotated order."""
-    keys = list(spec)
-    us: dict[str, list[float]] = {k: [] for k in keys}
-    wakes: dict[str, list[float]] = {k: [] for k in keys}
+    """CPU µs and wake-ups per package of every row in every round, rows in a rotated order.
+    A row and its twin from the other checkout (`against`) run at the same time, side by side
+    under the same load: their ratio is the A/B figure the drifting load moves least."""
+    keys = [k for k in spec if not k.endswith(AGAINST)]
+    us: dict[str, list[float]] = {k: [] for k in spec}
+    wakes: dict[str, list[float]] = {k: [] for k in spec}
     for r in range(rounds):
-        order = keys[r % len(keys) :] + keys[: r % len(keys)]
-        for key in order:
+        for key in keys[r % len(keys) :] + keys[: r % len(keys)]:
             code, *args = spec[key]
-            got = child(code, *args, tree=against if key.endswith(AGAINST) else None)
-            us[key].append(got["cpu"] / got["packages"] * 1e6)
-            wakes[key].append(got["wakeups"] / got["packages"])
+            runs = {key: start(code, *args)}
+            if key + AGAINST in spec:
+                runs[key + AGAINST] = start(code, *args, tree=against)
+            for name, proc in runs.items():
+                got = result(proc)
+                us[name].append(got["cpu"] / got["packages"] * 1e6)
+                wakes[name].append(got["wakeups"] / got["packages"])
     return us, wakes
 
 
@@ -260,7 +277,7 @@ def syscalls_per_package(code: str, args: list[str], window: float = 2.0) -> dic
     strace = shutil.which("strace")
     if strace is None:
         return None
-    proc = subprocess.Popen([sys.executable, "-c", code, *args], stdout=subprocess.PIPE, text=True)
+    proc = start(code, *args)
     assert proc.stdout is not None
     try:
         if proc.stdout.readline().strip() != "ready":
@@ -351,6 +368,10 @@ def receive_rows(
         (f"batch={BATCH_LONG}", "longer", "floor_b"),
     )
     if against is not None:
+        print(f"  A/B against {against}, each pair at the same time (medians of per-pair ratios):")
+        for key in ("iterate", "callback", "batched"):
+            label = LABELS[key].replace("rtde_spec RtdeClient", "RtdeClient")
+            print(f"    {label:30s} ours / theirs {ratio(key, key + AGAINST):.2f}x")
         rows += tuple(
             (f"{label} ({Path(against).name})", key + AGAINST, low)
             for label, key, low in rows
