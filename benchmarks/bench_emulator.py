@@ -268,7 +268,7 @@ def main(argv: list[str] | None = None) -> int:
         proc.wait(10)
         ur_rtde_row(serve, args.seconds)
         if not args.no_warm:
-            warm_rows()
+            warm_rows(against=args.against)
         if not args.no_syscalls:
             proc, port = serve("127.0.0.1", 0)
             syscall_rows(specs(port, 4.0, names, types, codec.size, fmt))

@@ -208,15 +208,21 @@ LABELS = {
 AGAINST = "@"  # a row key's suffix: the same row with another checkout of rtde_spec (`--against`)
 
 
+HOME = str(Path(__file__).resolve().parents[1])  # the checkout these benchmarks belong to
+
+
 def start(code: str, *args: str, tree: str | None = None) -> subprocess.Popen[str]:
-    """A row's code in its own process; `tree`: import rtde_spec from that checkout instead."""
-    env = None if tree is None else {**os.environ, "PYTHONPATH": tree}
+    """A row's code in its own process, importing rtde_spec from this checkout or from `tree`
+    (its directory is the child's first path entry either way: `python -c` puts the working
+    directory first, so that is set too)."""
+    root = tree or HOME
     return subprocess.Popen(
         [sys.executable, "-c", code, *args],
         stdout=subprocess.PIPE,
         stderr=subprocess.PIPE,
         text=True,
-        env=env,
+        cwd=root,
+        env={**os.environ, "PYTHONPATH": root},
     )
 
 
@@ -474,13 +480,15 @@ for _ in range(5):
     for _ in range(n):
         send(package); take()
     best.append((time.thread_time() - t0) / n * 1e6)
-print(json.dumps({"us": sorted(best)[2]}))
+import rtde_spec
+print(json.dumps({"us": sorted(best)[2], "from": rtde_spec.__file__}))
 """
 
 
-def warm_rows(rounds: int = 5, calls: int = 20000) -> None:
+def warm_rows(rounds: int = 5, calls: int = 20000, against: str | None = None) -> None:
     """One package sent, then taken, in one process, caches warm: our code's own cost per package
-    over the floor, which the load barely moves (the median of `rounds` rounds, modes in turn)."""
+    over the floor, which the load barely moves (the median of `rounds` rounds, modes in turn);
+    with `against`, the same loops from that checkout too."""
     here = str(Path(__file__).parent)
     labels = {
         "floor": "floor: send + recv()",
@@ -488,16 +496,20 @@ def warm_rows(rounds: int = 5, calls: int = 20000) -> None:
         "iterate": "ours: send + next(iter(client))",
         "receive": "ours: send + client.receive()",
     }
+    if against is not None:
+        for key in ("iterate", "receive"):
+            labels[key + AGAINST] = labels[key].replace("ours", Path(against).name)
     got: dict[str, list[float]] = {k: [] for k in labels}
     for _ in range(rounds):
         for key in labels:
-            got[key].append(child(WARM, here, key, str(calls))["us"])
+            tree = against if key.endswith(AGAINST) else None
+            got[key].append(child(WARM, here, key.rstrip(AGAINST), str(calls), tree=tree)["us"])
     print(f"\nwarm, in one process (a scripted controller on loopback sends one package, the loop takes it; "
           f"{calls} calls, median of {rounds} rounds):")  # fmt: skip
     base = got["floor_record"]
     for key, label in labels.items():
         over = statistics.median(x - y for x, y in zip(got[key], base, strict=True))
-        extra = f"  ({over:+.2f} µs over the recv + record floor)" if key in ("iterate", "receive") else ""
+        extra = f"  ({over:+.2f} µs over the recv + record floor)" if not key.startswith("floor") else ""
         print(f"  {label:42s} {statistics.median(got[key]):6.2f} µs{extra}")
 
 
