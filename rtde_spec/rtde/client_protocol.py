@@ -58,8 +58,9 @@ log = logging.getLogger("rtde_spec.client")
 
 class RecordsPath(NamedTuple):
     """The output recipe's packages as a reader takes them on its shortest path: a read that is
-    exactly one package (`take(read, size, lead)` frames it) is `new(record_type, unpack(read,
-    PAYLOAD_OFFSET))`; a read of several, `map(partial(new, record_type), many(read))`."""
+    exactly one package (`size` bytes beginning with `lead`, while `ClientProtocol.aligned`; its
+    size added to `taken`) is `new(record_type, unpack(read, PAYLOAD_OFFSET))`; a read of several
+    (`take(read, size, lead)` frames them) is `map(partial(new, record_type), many(read))`."""
 
     size: int  # bytes per package
     lead: bytes  # size, type and recipe id: the first bytes of each
