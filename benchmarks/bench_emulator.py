@@ -4,14 +4,15 @@
    recipe at 500 Hz for `--seconds`; every package's arrival is stamped. Reported:
    missed packages (gaps in the controller timestamp) and the p99 lateness of each
    package against its due time (first arrival + controller time elapsed).
-2. Receive-loop CPU per package, each client in its own process against the same
-   emulator for `--seconds`: our RtdeClient (58 fields into typed records), ur_rtde's
-   RTDEReceiveInterface (if installed), and a UR-client-style loop (recv, unpack, a
-   dict per package, as UR's rtde.py does). Ours waking per package (`on_data`, and
-   `for record in client`), and batched: one wake-up per 50 packages (100 ms) and per
-   100 (200 ms); floors: a bare `recv()` loop, and batched `recv` + `struct` tuples (no
-   names, no checks, no thread). Every row in each of `--rounds` rounds, in turn; the
-   ratios are taken within each round, their medians reported. `--receive-only`: only this.
+2. Receive-loop CPU per package (`receive_loops.py`), each loop in its own process
+   against the same emulator for `--seconds` / 2, `--rounds` rounds in a rotated order:
+   ours waking per package (`for record in client`, `receive()`, `on_data`) and batched
+   (`batch=50` / `100`, `on_data`); the UR-client-style loop; ur_rtde's
+   RTDEReceiveInterface (if installed); floors: a bare `recv()` loop, the same with one
+   `struct` unpack, batched `recv` + `struct` tuples. Medians, spread, wake-ups per
+   package, medians of per-round ratios, the load average. Then the warm in-process rows
+   (our code's own cost over the floor) and system calls per package under strace.
+   `--receive-only`: only this.
 
 3. With --motion, only this (the rows above are unchanged without it): the emulator
    (5.15, 500 Hz) in its own process while a motion program runs (movej back and forth,
@@ -20,9 +21,9 @@
    due time (measured in the emulator's loop), and the emulator process's CPU per control
    step (everything: motion, kinematics, RTDE to eight clients, real-time, Robot State).
 
-Targets: no missed packages, p99 lateness <= 1 ms; ours <= 8 µs/package and >= 10x
+Targets: no missed packages, p99 lateness <= 1 ms; batch=50 <= 8 µs/package and >= 10x
 less than the UR-client-style loop. Issue 30 (printed): `for record in client` <= 15 µs
-and >= 6x less than the UR-client-style loop.
+and >= 6x less than the UR-client-style loop; batched <= 4 µs and >= 20x.
 
 4. With --control-script, only this: ur_rtde's control program with a servoJ stream at 500 Hz
    and four readers (bench_control_script.py).
@@ -37,137 +38,18 @@ from __future__ import annotations
 import argparse
 import json
 import re
-import statistics
 import subprocess
 import sys
 from pathlib import Path
+from typing import Any
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_recipe_decode import UR_RTDE_DEFAULT_OUTPUTS
+from receive_loops import receive_rows, specs, syscall_rows, ur_rtde_row, warm_rows
 
 TARGET_P99_MS = 1.0
-TARGET_US = 8.0
-TARGET_VS_UR = 10.0
-TARGET_ITER_US = 15.0  # issue 30: the plain `for record in client` loop
-TARGET_ITER_VS_UR = 6.0
 RATE = 500.0
-
-ROUNDS = 3  # of every receive-loop row, in turn
-BATCH = 50  # packages per reader wake-up in the batched row: 100 ms at 500 Hz, as `rtde-spec record`
-BATCH_LONG = 100  # and one wake-up per 200 ms: what a wake-up itself costs shows in the difference
-
-OURS = (
-    f"BATCH = {BATCH}\n"
-    + """
-import functools, json, sys, time
-from rtde_spec import RtdeClient
-port, seconds, names, mode = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3].split(","), sys.argv[4]
-batch = int(sys.argv[5]) if len(sys.argv) > 5 else BATCH if mode.endswith("batched") else 1
-with RtdeClient("127.0.0.1", port, queue_size=100000, batch=batch) as c:
-    c.setup_outputs(names, 500.0)
-    newest = [None]
-    if mode.startswith("callback"):  # records handed over in the reader thread; the consumer
-        c.on_data(functools.partial(newest.__setitem__, 0))  # keeps the newest, as the UR-style loop
-    c.start()
-    while c.received == 0:
-        time.sleep(0.001)
-    t0, c0, n0 = time.monotonic(), time.process_time(), c.received
-    if mode.startswith("callback"):
-        time.sleep(seconds)
-    else:
-        while time.monotonic() - t0 < seconds:
-            c.receive()  # records handed to this thread, one wake-up each
-    print(json.dumps({"cpu": time.process_time() - c0, "packages": c.received - n0, "skipped": c.skipped}))
-"""
-)
-
-UR_STYLE = """
-import json, socket, struct, sys, time
-sys.path.insert(0, sys.argv[4])
-from ur_client_style import baseline_decoder
-port, seconds = int(sys.argv[1]), float(sys.argv[2])
-names, types = sys.argv[3].split(","), sys.argv[5].split(",")
-s = socket.create_connection(("127.0.0.1", port))
-def send(t, body=b""):
-    s.sendall(struct.pack(">HB", 3 + len(body), t) + body)
-def recv_package():
-    head = b""
-    while len(head) < 3: head += s.recv(3 - len(head))
-    size, t = struct.unpack(">HB", head)
-    body = b""
-    while len(body) < size - 3: body += s.recv(size - 3 - len(body))
-    return t, body
-send(ord("V"), struct.pack(">H", 2)); recv_package()
-send(ord("O"), struct.pack(">d", 500.0) + ",".join(names).encode()); recv_package()
-send(ord("S")); recv_package()
-decode = baseline_decoder(names, types)
-recv_package(); t0, c0, n = time.monotonic(), time.process_time(), 0
-while time.monotonic() - t0 < seconds:
-    t, body = recv_package()
-    if t == ord("U"):
-        state = decode(body[1:]); n += 1
-print(json.dumps({"cpu": time.process_time() - c0, "packages": n}))
-"""
-
-HANDSHAKE = """
-s = socket.create_connection(("127.0.0.1", port))
-def send(t, body=b""):
-    s.sendall(struct.pack(">HB", 3 + len(body), t) + body)
-send(ord("V"), struct.pack(">H", 2)); s.recv(100)
-send(ord("O"), struct.pack(">d", 500.0) + names.encode()); s.recv(4096)
-send(ord("S")); s.recv(100)
-"""  # protocol 2, outputs at 500 Hz, started: raw, for the floors
-
-FLOOR = (
-    """
-import json, socket, struct, sys, time
-port, seconds, names = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3]
-"""
-    + HANDSHAKE
-    + """got, t0, c0 = 0, time.monotonic(), time.process_time()
-while time.monotonic() - t0 < seconds:
-    got += len(s.recv(65536))  # nothing else: what a wake-up per TCP segment costs
-print(json.dumps({"cpu": time.process_time() - c0, "packages": got / (4 + int(sys.argv[4]))}))
-"""
-)
-
-FLOOR_BATCHED = (
-    f"BATCH = {BATCH}\n"
-    + """
-import json, socket, struct, sys, time
-port, seconds, names, size = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3], int(sys.argv[4])
-"""
-    + HANDSHAKE
-    + """s.setsockopt(socket.SOL_SOCKET, socket.SO_RCVLOWAT, BATCH * (4 + size))
-values = struct.Struct(">4x" + sys.argv[5])  # every value of a package, its prefix skipped
-got, held, t0, c0 = 0, b"", time.monotonic(), time.process_time()
-while time.monotonic() - t0 < seconds:
-    data = held + s.recv(2 * BATCH * (4 + size))
-    whole = len(data) // (4 + size) * (4 + size)
-    newest = list(values.iter_unpack(data[:whole]))[-1]  # plain tuples: no names, no checks
-    held = data[whole:]
-    got += whole // (4 + size)
-print(json.dumps({"cpu": time.process_time() - c0, "packages": got}))
-"""
-)
-
-UR_RTDE = """
-import json, sys, time
-import rtde_receive
-port, seconds = int(sys.argv[1]), float(sys.argv[2])
-r = rtde_receive.RTDEReceiveInterface(sys.argv[3], 500.0)
-time.sleep(0.2)
-c0, ts0 = time.process_time(), r.getTimestamp()
-time.sleep(seconds)
-print(json.dumps({"cpu": time.process_time() - c0, "packages": round((r.getTimestamp() - ts0) * 500)}))
-r.disconnect()
-"""
-
-
-def payload_size(names: list[str]) -> int:
-    from rtde_spec import RecipeCodec
-
-    return RecipeCodec.for_names(names, "output").size
+ROUNDS = 5  # of every receive-loop row, in a rotated order each round
 
 
 def serve(host: str, port: int) -> tuple[subprocess.Popen[str], int]:
@@ -317,11 +199,8 @@ def motion_run(seconds: float) -> bool:
     return ok
 
 
-def child(code: str, *args: str) -> dict[str, float]:
-    out = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True, timeout=120)
-    if out.returncode:
-        raise SystemExit(out.stderr)
-    return json.loads(out.stdout.strip().splitlines()[-1])  # type: ignore[no-any-return]
+def cat_type(catalogue: Any, name: str) -> str:
+    return catalogue.get(name, "output").type  # type: ignore[no-any-return]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -344,6 +223,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--receive-only", action="store_true", help="only the receive-loop rows (not the four timing clients)"
     )
+    parser.add_argument(
+        "--against", metavar="CHECKOUT", help="also run our per-package and batch=50 rows from this checkout"
+    )
+    parser.add_argument("--no-warm", action="store_true", help="skip the warm in-process receive rows")
+    parser.add_argument("--no-syscalls", action="store_true", help="skip the strace count of system calls")
     args = parser.parse_args(argv)
     if args.control_script:
         from bench_control_script import HOST
@@ -371,91 +255,24 @@ def main(argv: list[str] | None = None) -> int:
             got = f"no missed packages (got {missed:.0f}), p99 <= {TARGET_P99_MS} ms (got {p99:.2f})"
             print(f"  targets: {got}")
 
-        names = ",".join(UR_RTDE_DEFAULT_OUTPUTS)
         from rtde_spec import Catalogue, RecipeCodec
 
-        cat = Catalogue.builtin()
-        types = ",".join(cat.get(n, "output").type for n in UR_RTDE_DEFAULT_OUTPUTS)  # type: ignore[union-attr]
-        print("\nreceive loop, CPU per package (58 fields, 500 Hz, one client each):")
-        size = str(payload_size(UR_RTDE_DEFAULT_OUTPUTS))
-        fmt = RecipeCodec.for_names(UR_RTDE_DEFAULT_OUTPUTS, "output").struct.format[1:]
-        here = str(Path(__file__).parent)
-        half = str(args.seconds / 2)
-        # every row in each round, the rounds in turn: the machine's speed drifts more than the
-        # rows differ, so each round's ratios are taken within the round and their medians reported
-        spec = {
-            "iterate": (OURS, half, names, "iterate"),
-            "callback": (OURS, half, names, "callback"),
-            "ur": (UR_STYLE, half, names, here, types),
-            "floor": (FLOOR, half, names, size),
-            "batched": (OURS, half, names, "callback-batched"),
-            "floor_b": (FLOOR_BATCHED, half, names, size, fmt),
-            "longer": (OURS, half, names, "callback-batched", str(BATCH_LONG)),
-        }
-        per: dict[str, list[float]] = {k: [] for k in spec}
-        for _ in range(args.rounds):
-            for key, (code, *rest) in spec.items():
-                r = child(code, str(port), *rest)
-                per[key].append(r["cpu"] / r["packages"] * 1e6)
-
-        def med(key: str) -> float:
-            return statistics.median(per[key])
-
-        def ratio(a: str, b: str) -> float:
-            return statistics.median(x / y for x, y in zip(per[a], per[b], strict=True))
-
-        ours_us, batched_us, longer_us = med("callback"), med("batched"), med("longer")
-        iter_us = med("iterate")
-        ur_us, floor_us, floor_b_us = med("ur"), med("floor"), med("floor_b")
-        print(f"  {'rtde_spec RtdeClient, on_data callback':42s} {ours_us:8.1f} µs")
-        label = f"rtde_spec RtdeClient(batch={BATCH}), on_data"
-        print(f"  {label:42s} {batched_us:8.1f} µs  (one wake-up per {BATCH} packages: for recording)")
-        label = f"rtde_spec RtdeClient(batch={BATCH_LONG}), on_data"
-        print(f"  {label:42s} {longer_us:8.1f} µs  (one wake-up per {BATCH_LONG / RATE * 1000:.0f} ms)")
-        print(f"  {'rtde_spec RtdeClient, for record in client':42s} {iter_us:8.1f} µs")
-        print(f"  {'UR-client-style loop (recv, unpack, dict)':42s} {ur_us:8.1f} µs")
-        print(f"  {'floor: bare recv() loop, nothing decoded':42s} {floor_us:8.1f} µs")
-        label = f"floor, batch={BATCH}: recv + struct tuples"
-        print(f"  {label:42s} {floor_b_us:8.1f} µs  (plain tuples of Python numbers, nothing else)")
-        rows = (
-            ("per package", "callback", "floor"),
-            (f"batch={BATCH}", "batched", "floor_b"),
-            (f"batch={BATCH_LONG}", "longer", "floor_b"),
-            ("for record in client", "iterate", "floor"),
+        names = list(UR_RTDE_DEFAULT_OUTPUTS)
+        types = [cat_type(Catalogue.builtin(), n) for n in names]
+        codec = RecipeCodec.for_names(names, "output")
+        fmt = codec.struct.format[1:]
+        verdicts = receive_rows(
+            port, args.seconds / 2, args.rounds, names, types, codec.size, fmt, args.against
         )
-        for label, key, low in rows:
-            vs_ur, to_floor = ratio("ur", key), ratio(key, low)
-            print(f"  ratios, {label:21s} UR style / ours {vs_ur:5.1f}x, / floor {to_floor:5.2f}x")
-        listed = "; ".join(f"{k} " + "/".join(f"{v:.1f}" for v in per[k]) for k in per)
-        print(f"  (µs per round, medians above: {listed})")
-        try:
-            import rtde_receive  # noqa: F401
-        except ImportError:
-            print("  ur_rtde: not installed (pip install ur_rtde)")
-        else:
-            proc.terminate()
-            proc.wait(10)
-            proc, port = serve("127.0.0.2", 30004)
-            urr = child(UR_RTDE, str(port), str(args.seconds), "127.0.0.2")
-            print(
-                f"  {'ur_rtde RTDEReceiveInterface (C++)':42s} {urr['cpu'] / urr['packages'] * 1e6:8.1f} µs"
-            )
-        verdicts = {}
-        for label, key in (
-            ("per package", "callback"),
-            (f"batch={BATCH}", "batched"),
-            (f"batch={BATCH_LONG}", "longer"),
-        ):
-            got, vs_ur = med(key), ratio("ur", key)
-            verdicts[label] = hit = got <= TARGET_US and vs_ur >= TARGET_VS_UR
-            target = f"<= {TARGET_US} µs (got {got:.1f}), >= {TARGET_VS_UR}x less than UR style"
-            print(f"  targets, {label}: {target}: {vs_ur:.1f}x: {'met' if hit else 'MISSED'}")
-        got, vs_ur = med("iterate"), ratio("ur", "iterate")
-        target = f"<= {TARGET_ITER_US} µs (got {got:.1f}), >= {TARGET_ITER_VS_UR}x less than UR style"
-        hit = got <= TARGET_ITER_US and vs_ur >= TARGET_ITER_VS_UR
-        verdict = "met" if hit else "MISSED"
-        print(f"  targets (issue 30), for record in client: {target}: {vs_ur:.1f}x: {verdict}")
-        ok = ok and verdicts[f"batch={BATCH}"]  # the recorder's batch is the one for the CPU target
+        proc.terminate()
+        proc.wait(10)
+        ur_rtde_row(serve, args.seconds)
+        if not args.no_warm:
+            warm_rows(against=args.against)
+        if not args.no_syscalls:
+            proc, port = serve("127.0.0.1", 0)
+            syscall_rows(specs(port, 4.0, names, types, codec.size, fmt))
+        ok = ok and verdicts["recording"]  # the recorder's batch is the one for the CPU target
     finally:
         proc.terminate()
         proc.wait(10)

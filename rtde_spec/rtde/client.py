@@ -25,11 +25,13 @@ import sys
 import threading
 import time
 from collections.abc import Callable, Iterable, Iterator, Mapping, Sequence
+from functools import partial
 from typing import Any
 
 from rtde_spec._generated.constants import RTDE_PORT
 from rtde_spec.errors import ProtocolError, RtdeConnectionError, RtdeSpecError, UsageError
 from rtde_spec.printable import safe_text
+from rtde_spec.recipes.codec import PAYLOAD_OFFSET
 from rtde_spec.rtde.client_protocol import ClientBase, DataRun, InputRecipe, Reply, Text
 
 log = logging.getLogger("rtde_spec.client")
@@ -37,6 +39,7 @@ LOG_LEVELS = (logging.CRITICAL, logging.ERROR, logging.WARNING, logging.INFO)  #
 LEASE = 0.2  # s: the reader thread keeps off the socket this long after the caller last read it
 # runs an iterator to its end, keeping nothing
 _exhaust: Callable[[Iterable[Any]], None] = collections.deque(maxlen=0).extend
+_new_tuple: Callable[..., Any] = tuple.__new__  # a record from its values: record types are tuples
 SLICE = 0.1  # s: a blocking read returns after this long without data (SO_RCVTIMEO), to look at the time
 
 
@@ -141,7 +144,27 @@ class RtdeClient(ClientBase):
                 return self._data.popleft()  # records waiting: no lock, no wait
             except IndexError:  # another caller took the last one
                 pass
-        return self._wait(timeout or self.timeout)
+        wait = timeout or self.timeout
+        path = self.core.records_path
+        if path is not None and self._sliced and wait >= SLICE and self._closed is None:
+            # one read here if the socket is free: a record when it is one package (as __iter__)
+            self._lease = time.monotonic() + LEASE
+            if self._reading.acquire(False):
+                try:
+                    chunk = self._sock.recv(self._bufsize)  # type: ignore[union-attr]
+                    core = self.core
+                    if len(chunk) == path.size and chunk.startswith(path.lead) and core.aligned:
+                        core.taken += path.size
+                        self.received += 1
+                        return _new_tuple(path.record_type, path.unpack(chunk, PAYLOAD_OFFSET))
+                    self._other_read(chunk)
+                except BlockingIOError:  # no data within SLICE
+                    wait -= SLICE
+                except OSError as exc:
+                    self._finish(self._ended(f"connection lost: {exc.strerror or exc}"))
+                finally:
+                    self._reading.release()
+        return self._wait(wait)
 
     def _wait(self, wait: float) -> Any:
         """The next record once it comes: read here when the socket is free, else wait for the
@@ -176,29 +199,19 @@ class RtdeClient(ClientBase):
         sock = self._sock
         assert sock is not None
         try:
-            if self._sliced and left >= SLICE:
-                try:
-                    chunk = sock.recv(max(65536, 2 * self._low_mark))  # one call: SO_RCVTIMEO bounds it
-                except BlockingIOError:
-                    return None  # no data within SLICE
-            else:
-                if not self._readable(sock, max(0.0, left)):
-                    return None
-                chunk = sock.recv(max(65536, 2 * self._low_mark))
+            if not ((self._sliced and left >= SLICE) or self._readable(sock, max(0.0, left))):
+                return None
+            chunk = sock.recv(self._bufsize)  # sliced: one call, SO_RCVTIMEO bounds it
+        except BlockingIOError:
+            return None  # no data within SLICE
         except OSError as exc:
             self._finish(self._ended(f"connection lost: {exc.strerror or exc}"))
             return None
-        if not chunk:
-            self._finish(self._ended("the controller closed the connection"))
-            return None
-        try:
-            record = self.core.one_record(chunk)
-            if record is not None:
-                self.received += 1
-                return record
-            self._handle(chunk)
-        except Exception as exc:  # a faulty package ends the connection, as in the reader thread
-            self._finish(exc)
+        record = self.core.one_record(chunk)
+        if record is not None:
+            self.received += 1
+            return record
+        self._other_read(chunk)
         return None
 
     def _readable(self, sock: socket.socket, seconds: float) -> bool:
@@ -212,18 +225,76 @@ class RtdeClient(ClientBase):
         return bool(poll.poll(seconds * 1000.0))
 
     def __iter__(self) -> Iterator[Any]:
-        """Records until the connection closes cleanly (`receive` without its call per record)."""
-        data = self._data
+        """Records until the connection closes cleanly (`receive` without its call per record).
+
+        While every read is one data package, the loop reads the socket itself, with the
+        fewest steps a read can take: per record the lease renewed, the lock taken without
+        waiting, one `recv`, the read's size and leading bytes compared (the framer holding
+        nothing: `ClientProtocol.aligned`) and one `unpack`; no other call, no event, no
+        queue. Any other read (a reply, a batch, the end) takes the general path.
+        """
+        data, reading, monotonic = self._data, self._reading, time.monotonic
         while True:
             if self._callbacks or self._raw_callbacks:
                 self.receive()  # raises: the records go to the callbacks
-            try:
-                record = data.popleft() if data else self._wait(self.timeout)
-            except IndexError:  # another caller took the last one
+            if data:
+                try:
+                    record = data.popleft()
+                except IndexError:  # another caller took the last one
+                    continue
+                yield record
                 continue
+            wait = self.timeout
+            path = self.core.records_path
+            if path is not None and self._sliced and wait >= SLICE and self._closed is None:
+                recv, size, lead = self._sock.recv, path.size, path.lead  # type: ignore[union-attr]
+                unpack, record_type, core = path.unpack, path.record_type, self.core
+                quiet = False
+                while True:
+                    self._lease = monotonic() + LEASE  # the reader thread keeps off the socket
+                    if data or not reading.acquire(False):
+                        break  # records queued, or another thread reads now: the general path
+                    try:
+                        chunk = recv(self._bufsize)  # one call: SO_RCVTIMEO bounds it
+                        if len(chunk) == size and chunk.startswith(lead) and core.aligned:
+                            core.taken += size  # framed here: one package, nothing held before it
+                            record = _new_tuple(record_type, unpack(chunk, PAYLOAD_OFFSET))
+                        else:
+                            self._other_read(chunk)
+                            break
+                    except BlockingIOError:  # no data within SLICE
+                        quiet = True
+                        break
+                    except OSError as exc:
+                        self._finish(self._ended(f"connection lost: {exc.strerror or exc}"))
+                        break
+                    finally:
+                        reading.release()
+                    self.received += 1
+                    yield record
+                    if self._callbacks or self._raw_callbacks:
+                        break
+                if not quiet:
+                    continue
+                wait -= SLICE  # a read slice passed without data: the time-out counts it
+            try:
+                record = self._wait(wait)
             except RtdeConnectionError:
                 return
             yield record
+
+    def _other_read(self, chunk: bytes) -> bool:
+        """A read that is not one data package (held by the thread that holds `_reading`): its
+        events handed over, or the end of the connection; True when it ended it."""
+        if not chunk:
+            self._finish(self._ended("the controller closed the connection"))
+            return True
+        try:
+            self._handle(chunk)
+        except Exception as exc:  # a faulty package ends the connection, as in the reader thread
+            self._finish(exc)
+            return True
+        return False
 
     def on_data(self, callback: Callable[[Any], None]) -> None:
         """Call `callback(record)` in the reader thread for every data package (keep it short).
@@ -276,43 +347,72 @@ class RtdeClient(ClientBase):
             # else the late reply of a request that timed out before: not this one's
 
     def _read_loop(self) -> None:
+        """The reader thread: drains the socket whenever the caller is not reading it. A read of
+        one data package goes to the `on_data` callbacks as one record, a read of several as a
+        stream of records made one at a time (the newest values stay in the cache; nothing
+        builds a list of them); anything else through the events (`_handle`)."""
         sock = self._sock
         assert sock is not None
+        recv, reading, nudge, monotonic = sock.recv, self._reading, self._nudge, time.monotonic
+        callbacks, raws = self._callbacks, self._raw_callbacks  # lists: callbacks added later count
         poller = select.poll() if hasattr(select, "poll") else None
         if poller is not None:
             poller.register(sock, select.POLLIN)
         try:
             while self._closed is None:
-                left = self._lease - time.monotonic()
-                if left > 0 and not self._closing:  # the caller reads the socket: keep off till it stops
-                    self._nudge.wait(left)
-                    self._nudge.clear()
-                    continue
-                with self._reading:
-                    if self._closed is not None or self._lease > time.monotonic():
+                lease = self._lease
+                if lease and not self._closing:
+                    left = lease - monotonic()
+                    if left > 0:  # the caller reads the socket: keep off till it stops
+                        nudge.wait(left)
+                        nudge.clear()
+                        continue
+                reading.acquire()
+                try:
+                    lease = self._lease  # 0.0 while no caller ever read: no clock read per package
+                    if self._closed is not None or (lease and lease > monotonic() and not self._closing):
                         continue
                     try:
                         if self._low_mark > 1 and poller is not None:
                             # a blocked recv keeps the low mark it started with; poll sees it lowered
                             poller.poll()
-                        chunk = sock.recv(max(65536, 2 * self._low_mark))
+                        chunk = recv(self._bufsize)
                     except BlockingIOError:
                         continue  # SLICE without data
                     except OSError as exc:
                         self._finish(self._ended(f"connection lost: {exc.strerror or exc}"))
                         return
-                    if not chunk:
-                        self._finish(self._ended("the controller closed the connection"))
-                        return
-                    record = self.core.one_record(chunk) if self._callbacks else None
-                    if record is None:
-                        self._handle(chunk)
+                    path = self.core.records_path if callbacks or raws else None
+                    if path is None or not chunk or len(chunk) % path.size:
+                        self._other_read(chunk)
                         continue
-                    self.received += 1  # one package, to the callbacks: no event, no list
-                    for raw in self._raw_callbacks:
-                        raw(chunk)
-                    for callback in self._callbacks:
-                        callback(record)
+                    if len(chunk) == path.size and chunk.startswith(path.lead) and self.core.aligned:
+                        self.core.taken += path.size  # framed here: one package, nothing held before it
+                        count = 1
+                    else:
+                        count = path.take(chunk, path.size, path.lead)
+                    if not count:
+                        self._other_read(chunk)
+                        continue
+                    self.received += count
+                    for raw in raws:
+                        if count == 1:
+                            raw(chunk)
+                        else:
+                            _exhaust(map(raw, DataRun([], chunk, path.size).packages()))
+                    if count == 1:
+                        record = _new_tuple(path.record_type, path.unpack(chunk, PAYLOAD_OFFSET))
+                        for callback in callbacks:
+                            callback(record)
+                    elif len(callbacks) == 1:  # the loop in C, one record alive at a time
+                        made = partial(_new_tuple, path.record_type)
+                        _exhaust(map(callbacks[0], map(made, path.many(chunk))))
+                    else:
+                        for record in map(partial(_new_tuple, path.record_type), path.many(chunk)):
+                            for callback in callbacks:
+                                callback(record)
+                finally:
+                    reading.release()
         except BaseException as exc:
             self._finish(exc)
 

@@ -16,8 +16,8 @@ from __future__ import annotations
 import collections
 import logging
 import socket
-from collections.abc import Mapping, Sequence
-from typing import Any
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from typing import Any, NamedTuple
 
 from rtde_spec._generated.constants import (
     DATA_PACKAGE_TYPE,
@@ -51,8 +51,23 @@ from rtde_spec.rtde.protocol_state import ProtocolState
 from rtde_spec.wire.framing import PackageFramer
 
 INVALID_ID = RTDE_LIMITS["invalid_recipe_id"]
+READ_SIZE = 65536  # bytes a read asks for at least: all the socket holds, in one call
 UNSOLICITED_LOGGED = 10  # unsolicited replies logged one by one; after that only counted
 log = logging.getLogger("rtde_spec.client")
+
+
+class RecordsPath(NamedTuple):
+    """The output recipe's packages as a reader takes them on its shortest path: a read that is
+    exactly one package (`size` bytes beginning with `lead`, while `ClientProtocol.aligned`; its
+    size added to `taken`) is `new(record_type, unpack(read, PAYLOAD_OFFSET))`; a read of several
+    (`take(read, size, lead)` frames them) is `map(partial(new, record_type), many(read))`."""
+
+    size: int  # bytes per package
+    lead: bytes  # size, type and recipe id: the first bytes of each
+    take: Callable[[bytes, int, bytes], int]  # the framer's: how many whole packages, 0 if not only those
+    unpack: Callable[[Any, int], tuple[Any, ...]]
+    many: Callable[[Any], Iterator[tuple[Any, ...]]]
+    record_type: type
 
 
 class ClientProtocol:
@@ -73,9 +88,17 @@ class ClientProtocol:
         self.last_request: Request | None = None  # the request whose bytes were built last
         self.unsolicited = 0  # replies that answered no waiting request (logged, dropped)
         self.before_error: list[Event] = []  # see receive()
-        # False when only raw bytes are taken (a recorder decoding its batches with numpy):
-        # data packages are framed and checked, and no record is made
-        self.want_records = True
+        self._want_records = True  # see want_records
+        self._path: RecordsPath | None = None  # of the output recipe
+        # what a reader needs to make records of reads of whole output packages without events
+        # (None before the output recipe is set up, or when nobody wants records): an attribute,
+        # read once per read
+        self.records_path: RecordsPath | None = None
+        # A reader may take a read that is one whole data package of the output recipe itself
+        # (lead bytes and size checked) while `aligned` (the framer holds nothing), adding its
+        # size to `taken`; the framer counts those bytes before it is fed again.
+        self.aligned = True
+        self.taken = 0
 
     # --- requests -----------------------------------------------------------
 
@@ -141,6 +164,9 @@ class ClientProtocol:
     def closed(self, where: str, cause: str = "the controller closed the connection") -> RtdeSpecError:
         """The error that ends a connection; a DecodeError when it ended inside a package, whose
         bytes are lost (so iterating clients raise it instead of ending quietly)."""
+        if self.taken:
+            self.framer.passed(self.taken)
+            self.taken = 0
         held = self.framer.pending
         if not held:
             return RtdeConnectionError(cause, subject=where)
@@ -185,9 +211,18 @@ class ClientProtocol:
         """Events for every package this data completes. A package that does not decode or
         breaks the protocol raises its error; the events of the packages before it in this
         data are then in `before_error`."""
+        if self.taken:
+            self.framer.passed(self.taken)
+            self.taken = 0
+        try:
+            return self._receive(data)
+        finally:
+            self.aligned = not self.framer.pending
+
+    def _receive(self, data: bytes) -> list[Event]:
         output, run = self.output, self._run
         if output is not None and run is not None:
-            wanted = self.want_records
+            wanted = self._want_records
             if len(data) == run[0]:  # the usual read at one package per wake-up
                 if self.framer.take_run(data, *run):
                     one = [output.decode_record(data, PAYLOAD_OFFSET)] if wanted else []
@@ -211,12 +246,30 @@ class ClientProtocol:
             raise
         return events
 
+    @property
+    def want_records(self) -> bool:
+        """False when only raw bytes are taken (a recorder decoding its batches with numpy):
+        data packages are framed and checked, and no record is made."""
+        return self._want_records
+
+    @want_records.setter
+    def want_records(self, wanted: bool) -> None:
+        self._want_records = wanted
+        self.records_path = self._path if wanted else None
+
     def one_record(self, data: bytes) -> Any:
         """The record of a read that is exactly one data package of the output recipe (what a
         caller reading at one package per wake-up gets), framed; None for any other read, which
         then goes to `receive`. The shortest path from a read to a record: no event, no list."""
         run = self._run
-        if run is not None and len(data) == run[0] and self.want_records and self.framer.take_run(data, *run):
+        if (
+            run is not None
+            and len(data) == run[0]
+            and self._want_records
+            and self.aligned
+            and data.startswith(run[1])
+        ):
+            self.taken += run[0]
             return self.output.decode_record(data, PAYLOAD_OFFSET)  # type: ignore[union-attr]
         return None
 
@@ -230,7 +283,7 @@ class ClientProtocol:
             if without_id is not None and lacks_recipe_id(package, without_id[1]):
                 package = with_recipe_id(package, without_id[0])  # protocol 1: read by its size
             if output is not None and run is not None and package[: len(run[1])] == run[1]:
-                records = output.decode_records(package) if self.want_records else []
+                records = output.decode_records(package) if self._want_records else []
                 events.append(DataRun(records, package, run[0]))
                 continue
             message = decode_package(package, protocol_version=self.state.version, sender="controller")
@@ -312,6 +365,15 @@ class ClientProtocol:
             # size, type and recipe id: a package of another recipe is never read as this one
             lead = PREFIX.pack(codec.package_size, DATA_PACKAGE_TYPE, recipe_id)
             self._run = (codec.package_size, lead)
+            self._path = RecordsPath(
+                codec.package_size,
+                lead,
+                self.framer.take_run,
+                codec.struct.unpack_from,
+                codec._packages.iter_unpack,
+                codec.record_type,
+            )
+            self.records_path = self._path if self._want_records else None
             implied = implied_recipe_id("controller", self.state.version)
             self._without_id = (recipe_id, codec.size) if implied == recipe_id else None
         else:
@@ -342,6 +404,7 @@ class ClientBase:
         self._data: collections.deque[Any] = collections.deque(maxlen=queue_size)
         self._closed: BaseException | None = None
         self._low_mark = 1  # SO_RCVLOWAT in force: bytes the reader waits for
+        self._bufsize = READ_SIZE  # bytes a read asks for: what the socket holds, twice the low mark
 
     def _wake_after(self, sock: Any, size: int) -> None:
         """The reader wakes once `size` bytes wait (SO_RCVLOWAT); 1 restores per-package.
@@ -357,6 +420,7 @@ class ClientBase:
             self._low_mark = size
         except OSError:
             self._low_mark = 1
+        self._bufsize = max(READ_SIZE, 2 * self._low_mark)
 
     @property
     def where(self) -> str:

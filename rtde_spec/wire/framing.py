@@ -163,6 +163,11 @@ class PackageFramer:
         self._offset += end - start
         return data[end:]
 
+    def passed(self, count: int) -> None:
+        """Count `count` bytes of whole packages a reader took itself (as `take_run` would, while
+        nothing was held), so that later offsets stay those of the stream."""
+        self._offset += count
+
     def close(self) -> None:
         """Raise DecodeError if the stream ended inside a package (or could not be framed)."""
         if self._broken is not None:
