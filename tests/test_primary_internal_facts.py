@@ -26,7 +26,7 @@ MEMBERS = {m.name: m for f in load_spec(ROOT / "spec").primary.families for m in
 
 
 def test_every_internal_member_names_its_sources() -> None:
-    for name in ("configuration_data", "calibration_data", "safety_data"):
+    for name in ("configuration_data", "calibration_data", "safety_data", "payload_info", "internal_data"):
         assert MEMBERS[name].source, name
     assert "#485" in (MEMBERS["configuration_data"].source or "")
     assert "NEEDED_FOR_CALIB_DATA" in (MEMBERS["calibration_data"].source or "")
@@ -37,7 +37,7 @@ def test_every_internal_member_names_its_sources() -> None:
     reserved = next(f for f in MEMBERS["configuration_data"].fields if f.name == "reserved")
     assert reserved.source and "controller_box_type" in reserved.source
     doc = (ROOT / "docs" / "reference" / "primary.md").read_text()
-    assert doc.count("Sources: Searched, no field layout found") == 1 and "controller_box_type" in doc
+    assert doc.count("Sources: Searched, no field layout found") == 3 and "controller_box_type" in doc
     assert "Sources: ClientInterfaces_Primary.pdf, Robot Software 5.9 and 5.10" in doc
 
 

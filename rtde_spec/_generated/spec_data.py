@@ -3517,6 +3517,15 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                         'type': 14,
                                         'doc': 'Internal to UR software (active payload); kept as '
                                                'bytes.',
+                                        'source': 'Searched, no field layout found: the interface '
+                                                  'document ("reserved", used by UR software '
+                                                  'only); the 5.9/5.10 edition '
+                                                  '(ClientInterfaces_Primary.pdf) ends its '
+                                                  "sub-packages at Singularity Info (13); UR's "
+                                                  '2015 client-interface workbook ends at '
+                                                  "Calibration Data (9); URCL's RobotStateType and "
+                                                  "ur-kotlin's RobotStatePackageType end at "
+                                                  'TOOL_MODE_INFO (12).',
                                         'fields': [{'name': 'data',
                                                     'type': 'bytes',
                                                     'length': 'rest',
@@ -3545,6 +3554,15 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                        {'name': 'internal_data',
                                         'type': 15,
                                         'doc': 'Internal to UR software; kept as bytes.',
+                                        'source': 'Searched, no field layout found: the interface '
+                                                  'document ("reserved", used by UR software '
+                                                  'only); the 5.9/5.10 edition '
+                                                  '(ClientInterfaces_Primary.pdf) ends its '
+                                                  "sub-packages at Singularity Info (13); UR's "
+                                                  '2015 client-interface workbook ends at '
+                                                  "Calibration Data (9); URCL's RobotStateType and "
+                                                  "ur-kotlin's RobotStatePackageType end at "
+                                                  'TOOL_MODE_INFO (12).',
                                         'fields': [{'name': 'data',
                                                     'type': 'bytes',
                                                     'length': 'rest',
