@@ -3,8 +3,10 @@
 Configuration Data is decoded field by field (the document's layout, which UR's C++
 client library reads the same way); from 5.25.1 the controller appends two int16
 reserved fields (URCL PR #485), kept as extra bytes without a warning. Calibration Data
-(9) and Safety Data (10) stay bytes: no public source describes their fields, and the
-spec says which sources were searched. None of this changes a byte the emulator sends.
+(9) is decoded as the 5.9/5.10 interface document (ClientInterfaces_Primary.pdf) lists it:
+six doubles Fx..Frz, the 48 bytes URSim 5.8 sends. Safety Data (10) stays bytes: no public
+source describes its fields, and the spec says which sources were searched. None of this
+changes a byte the emulator sends.
 """
 
 from __future__ import annotations
@@ -24,14 +26,19 @@ MEMBERS = {m.name: m for f in load_spec(ROOT / "spec").primary.families for m in
 
 
 def test_every_internal_member_names_its_sources() -> None:
-    for name in ("configuration_data", "calibration_data", "safety_data"):
+    for name in ("configuration_data", "calibration_data", "safety_data", "payload_info", "internal_data"):
         assert MEMBERS[name].source, name
     assert "#485" in (MEMBERS["configuration_data"].source or "")
     assert "NEEDED_FOR_CALIB_DATA" in (MEMBERS["calibration_data"].source or "")
+    pdf = "ClientInterfaces_Primary.pdf, Robot Software 5.9 and 5.10"
+    assert (MEMBERS["calibration_data"].source or "").startswith(pdf)
+    assert all(pdf in (f.source or "") for f in MEMBERS["calibration_data"].fields)
+    assert "ClientInterfaces_Primary.pdf" in (MEMBERS["safety_data"].source or "")
     reserved = next(f for f in MEMBERS["configuration_data"].fields if f.name == "reserved")
     assert reserved.source and "controller_box_type" in reserved.source
     doc = (ROOT / "docs" / "reference" / "primary.md").read_text()
-    assert doc.count("Sources: Searched, no field layout found") == 2 and "controller_box_type" in doc
+    assert doc.count("Sources: Searched, no field layout found") == 3 and "controller_box_type" in doc
+    assert "Sources: ClientInterfaces_Primary.pdf, Robot Software 5.9 and 5.10" in doc
 
 
 def first_state(version: str) -> tuple[bytes, bytes]:
@@ -60,7 +67,10 @@ def test_the_5_8_robot_state_keeps_ursims_bytes_and_decodes_back_to_them() -> No
     assert isinstance(decoded, RobotStateMessage)
     assert encode_message(decoded) == state
     parts = {p.NAME: p for p in decoded.sub_packages if isinstance(p, PrimaryPart)}
-    assert len(parts["calibration_data"].data) == 48 and len(parts["safety_data"].data) == 38
+    calibration = parts["calibration_data"]
+    assert calibration.values() == dict.fromkeys(("fx", "fy", "fz", "frx", "fry", "frz"), 0.0)
+    assert (calibration.extra, calibration.missing) == (b"", ())
+    assert len(parts["safety_data"].data) == 38
 
 
 def with_configuration_tail(state: bytes, tail: bytes) -> bytes:

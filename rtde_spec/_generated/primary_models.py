@@ -284,7 +284,7 @@ class AdditionalInfo(PrimaryPart):
 
 
 class CalibrationData(PrimaryPart):
-    """Internal to UR software; kept as bytes. No public source describes its fields; URSim 5.8 sends a 48-byte body of zeros.
+    """Used internally by UR software ("should be skipped"); decoded as the 5.9/5.10 document lists it: six doubles Fx, Fy, Fz, Frx, Fry, Frz (48 bytes, the body URSim 5.8 and CB3 send). A shorter body decodes the fields present and lists the missing ones, a longer one keeps the rest as extra bytes (the interface's append rule), so every release's sub-package decodes and re-encodes to the same bytes.
 
     robot_state sub-type 9.
     """
@@ -294,7 +294,12 @@ class CalibrationData(PrimaryPart):
     TYPE: ClassVar[int] = 9
     ENUMS: ClassVar[dict[str, str]] = {}
 
-    data: Annotated[bytes | None, Field(description='The sub-package body: used by UR software only')] = None
+    fx: Annotated[float | None, Field(description="Fx: used by UR software only (the 5.9/5.10 document's name; no unit given)")] = None
+    fy: Annotated[float | None, Field(description="Fy: used by UR software only (the 5.9/5.10 document's name; no unit given)")] = None
+    fz: Annotated[float | None, Field(description="Fz: used by UR software only (the 5.9/5.10 document's name; no unit given)")] = None
+    frx: Annotated[float | None, Field(description="Frx: used by UR software only (the 5.9/5.10 document's name; no unit given)")] = None
+    fry: Annotated[float | None, Field(description="Fry: used by UR software only (the 5.9/5.10 document's name; no unit given)")] = None
+    frz: Annotated[float | None, Field(description="Frz: used by UR software only (the 5.9/5.10 document's name; no unit given)")] = None
 
 
 class SafetyData(PrimaryPart):

@@ -184,7 +184,12 @@ ROBOT_STATE_ADDITIONAL_INFO = Struct(
 )
 
 ROBOT_STATE_CALIBRATION_DATA = Struct(
-    "data" / GreedyBytes,
+    "fx" / Float64b,
+    "fy" / Float64b,
+    "fz" / Float64b,
+    "frx" / Float64b,
+    "fry" / Float64b,
+    "frz" / Float64b,
 )
 
 ROBOT_STATE_SAFETY_DATA = Struct(

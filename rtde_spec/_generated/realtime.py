@@ -279,7 +279,23 @@ REALTIME: dict[str, Any] = {'doc_ref': 'Realtime Client Interface (ClientInterfa
              'type': 'double',
              'count': 3,
              'doc': 'Unused: used by Universal Robots software only (3 doubles: 1140 bytes on 5.9)',
-             'since': {'e-series': '5.9.0'}},
+             'since': {'e-series': '5.9.0'},
+             'conflicts': [{'what': 'type',
+                            'document': 'double',
+                            'sources': ['realtime-guide'],
+                            'decision': 'ClientInterfaces_Realtime.pdf (RealTime 5.9 and 5.10) '
+                                        'lists Gnuplot columns 140, 141 and 142 as three unnamed '
+                                        '1-double rows (used by UR software only); the spec keeps '
+                                        'them as one field of 3 doubles: the same 24 bytes at the '
+                                        'same offset, the message length (1140 / 1220) unchanged, '
+                                        'and one name for what no client reads.'},
+                           {'what': 'added',
+                            'field': '(unnamed) after reserved_5',
+                            'document': 'double',
+                            'sources': ['realtime-guide'],
+                            'decision': "The second and third of the document's three unnamed "
+                                        '1-double rows at columns 140-142: bytes 9-24 of '
+                                        'reserved_5 (double[3]); see the type conflict.'}]},
             {'name': 'payload_mass',
              'type': 'double',
              'unit': 'kg',

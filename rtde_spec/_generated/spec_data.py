@@ -3229,150 +3229,151 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                                    'newer document has them.'}]},
                                        {'name': 'calibration_data',
                                         'type': 9,
-                                        'doc': 'Internal to UR software; kept as bytes. No public '
-                                               'source describes its fields; URSim 5.8 sends a '
-                                               '48-byte body of zeros.',
-                                        'source': 'Searched, no field layout found: the interface '
-                                                  'document ("uint32_t reserved", used by UR '
-                                                  'software only); URCL names the type '
-                                                  'CALIBRATION_DATA (NEEDED_FOR_CALIB_DATA in its '
-                                                  'test capture) and parses no fields '
-                                                  '(include/ur_client_library/primary/robot_state.h); '
-                                                  'its tests/test_primary_parser.cpp capture of '
-                                                  "URSim 5.8's first Robot State holds a 53-byte "
-                                                  'sub-package (48-byte body, all zeros); '
-                                                  'python-urx (urx/ursecmon.py) skips it ("53 '
-                                                  'bytes, used internally by Universal Robots '
-                                                  'software only"); the ROS driver\'s '
-                                                  'ur_calibration reads Kinematics Info (type 5), '
-                                                  'not this.',
-                                        'fields': [{'name': 'data',
-                                                    'type': 'bytes',
-                                                    'length': 'rest',
-                                                    'doc': 'The sub-package body: used by UR '
-                                                           'software only',
+                                        'doc': 'Used internally by UR software ("should be '
+                                               'skipped"); decoded as the 5.9/5.10 document lists '
+                                               'it: six doubles Fx, Fy, Fz, Frx, Fry, Frz (48 '
+                                               'bytes, the body URSim 5.8 and CB3 send). A shorter '
+                                               'body decodes the fields present and lists the '
+                                               'missing ones, a longer one keeps the rest as extra '
+                                               "bytes (the interface's append rule), so every "
+                                               "release's sub-package decodes and re-encodes to "
+                                               'the same bytes.',
+                                        'source': 'ClientInterfaces_Primary.pdf, Robot Software '
+                                                  "5.9 and 5.10 (UR's primary/secondary interface "
+                                                  'document, sections 2.1.11 and 3.1.11, '
+                                                  '"Calibration data (Sub Package of Robot State '
+                                                  'Message, Internally used only)": packageType = '
+                                                  'NEEDED_FOR_CALIB_DATA = 9, double Fx, Fy, Fz, '
+                                                  "Frx, Fry, Frz). Sizes: URCL's "
+                                                  'tests/test_primary_parser.cpp capture of URSim '
+                                                  "5.8's first Robot State holds a 53-byte "
+                                                  "sub-package (48-byte body, all zeros); UR's "
+                                                  '2015 client-interface workbook '
+                                                  '(Client_Interface.xlsx, sheet '
+                                                  'DataStreamFromURController) says "This package '
+                                                  'has a length of 53 bytes" for CB3. The current '
+                                                  'document calls the body "uint32_t reserved" and '
+                                                  'URCL (CALIBRATION_DATA = 9) and python-urx '
+                                                  'parse no fields of it.',
+                                        'fields': [{'name': 'fx',
+                                                    'type': 'double',
+                                                    'doc': 'Fx: used by UR software only (the '
+                                                           "5.9/5.10 document's name; no unit "
+                                                           'given)',
+                                                    'source': 'ClientInterfaces_Primary.pdf, Robot '
+                                                              'Software 5.9 and 5.10 (double Fx)',
                                                     'conflicts': [{'what': 'removed',
                                                                    'sources': ['primary-guide'],
-                                                                   'decision': "The document's "
-                                                                               '`reserved`: kept '
-                                                                               'as the '
-                                                                               "sub-package's "
-                                                                               'bytes (see the '
+                                                                   'decision': 'The current '
+                                                                               'document calls the '
+                                                                               'body `uint32_t '
+                                                                               'reserved` (see the '
                                                                                "member's "
-                                                                               'conflicts).'}]}],
+                                                                               'conflicts); kept '
+                                                                               'as the 5.9/5.10 '
+                                                                               "document's Fx."}]},
+                                                   {'name': 'fy',
+                                                    'type': 'double',
+                                                    'doc': 'Fy: used by UR software only (the '
+                                                           "5.9/5.10 document's name; no unit "
+                                                           'given)',
+                                                    'source': 'ClientInterfaces_Primary.pdf, Robot '
+                                                              'Software 5.9 and 5.10 (double Fy)',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['primary-guide'],
+                                                                   'decision': 'The current '
+                                                                               'document calls the '
+                                                                               'body `uint32_t '
+                                                                               'reserved` (see the '
+                                                                               "member's "
+                                                                               'conflicts); kept '
+                                                                               'as the 5.9/5.10 '
+                                                                               "document's Fy."}]},
+                                                   {'name': 'fz',
+                                                    'type': 'double',
+                                                    'doc': 'Fz: used by UR software only (the '
+                                                           "5.9/5.10 document's name; no unit "
+                                                           'given)',
+                                                    'source': 'ClientInterfaces_Primary.pdf, Robot '
+                                                              'Software 5.9 and 5.10 (double Fz)',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['primary-guide'],
+                                                                   'decision': 'The current '
+                                                                               'document calls the '
+                                                                               'body `uint32_t '
+                                                                               'reserved` (see the '
+                                                                               "member's "
+                                                                               'conflicts); kept '
+                                                                               'as the 5.9/5.10 '
+                                                                               "document's Fz."}]},
+                                                   {'name': 'frx',
+                                                    'type': 'double',
+                                                    'doc': 'Frx: used by UR software only (the '
+                                                           "5.9/5.10 document's name; no unit "
+                                                           'given)',
+                                                    'source': 'ClientInterfaces_Primary.pdf, Robot '
+                                                              'Software 5.9 and 5.10 (double Frx)',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['primary-guide'],
+                                                                   'decision': 'The current '
+                                                                               'document calls the '
+                                                                               'body `uint32_t '
+                                                                               'reserved` (see the '
+                                                                               "member's "
+                                                                               'conflicts); kept '
+                                                                               'as the 5.9/5.10 '
+                                                                               "document's Frx."}]},
+                                                   {'name': 'fry',
+                                                    'type': 'double',
+                                                    'doc': 'Fry: used by UR software only (the '
+                                                           "5.9/5.10 document's name; no unit "
+                                                           'given)',
+                                                    'source': 'ClientInterfaces_Primary.pdf, Robot '
+                                                              'Software 5.9 and 5.10 (double Fry)',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['primary-guide'],
+                                                                   'decision': 'The current '
+                                                                               'document calls the '
+                                                                               'body `uint32_t '
+                                                                               'reserved` (see the '
+                                                                               "member's "
+                                                                               'conflicts); kept '
+                                                                               'as the 5.9/5.10 '
+                                                                               "document's Fry."}]},
+                                                   {'name': 'frz',
+                                                    'type': 'double',
+                                                    'doc': 'Frz: used by UR software only (the '
+                                                           "5.9/5.10 document's name; no unit "
+                                                           'given)',
+                                                    'source': 'ClientInterfaces_Primary.pdf, Robot '
+                                                              'Software 5.9 and 5.10 (double Frz)',
+                                                    'conflicts': [{'what': 'removed',
+                                                                   'sources': ['primary-guide'],
+                                                                   'decision': 'The current '
+                                                                               'document calls the '
+                                                                               'body `uint32_t '
+                                                                               'reserved` (see the '
+                                                                               "member's "
+                                                                               'conflicts); kept '
+                                                                               'as the 5.9/5.10 '
+                                                                               "document's "
+                                                                               'Frz.'}]}],
                                         'conflicts': [{'what': 'added',
                                                        'field': 'reserved',
                                                        'document': 'uint32',
                                                        'sources': ['primary-guide'],
-                                                       'decision': 'The document calls the body '
-                                                                   '`reserved` (used by UR '
-                                                                   'software only); the spec keeps '
-                                                                   'the whole body as `data` '
-                                                                   'bytes, whatever its length, so '
-                                                                   "no firmware's sub-package "
-                                                                   'fails to decode.'},
-                                                      {'what': 'added',
-                                                       'field': 'Fx',
-                                                       'document': 'double',
-                                                       'sources': ['primary-guide-5.10'],
-                                                       'decision': 'the 5.9/5.10 document '
+                                                       'decision': 'The current document calls the '
+                                                                   'body `uint32_t reserved` (used '
+                                                                   'by UR software only), which no '
+                                                                   "sender's 48-byte body fits; "
+                                                                   'the 5.9/5.10 document '
                                                                    '(ClientInterfaces_Primary.pdf) '
-                                                                   'lists Calibration Data '
-                                                                   '(NEEDED_FOR_CALIB_DATA = 9) as '
-                                                                   'six doubles Fx, Fy, Fz, Frx, '
-                                                                   'Fry, Frz: 48 bytes, the size '
-                                                                   "of URSim 5.8's body (all "
-                                                                   'zeros); the current document '
-                                                                   'calls the body reserved (used '
-                                                                   'by UR software only) and no '
-                                                                   'other public source names its '
-                                                                   'fields: kept as bytes, every '
-                                                                   'length decoding.'},
-                                                      {'what': 'added',
-                                                       'field': 'Fy',
-                                                       'document': 'double',
-                                                       'sources': ['primary-guide-5.10'],
-                                                       'decision': 'the 5.9/5.10 document '
-                                                                   '(ClientInterfaces_Primary.pdf) '
-                                                                   'lists Calibration Data '
-                                                                   '(NEEDED_FOR_CALIB_DATA = 9) as '
-                                                                   'six doubles Fx, Fy, Fz, Frx, '
-                                                                   'Fry, Frz: 48 bytes, the size '
-                                                                   "of URSim 5.8's body (all "
-                                                                   'zeros); the current document '
-                                                                   'calls the body reserved (used '
-                                                                   'by UR software only) and no '
-                                                                   'other public source names its '
-                                                                   'fields: kept as bytes, every '
-                                                                   'length decoding.'},
-                                                      {'what': 'added',
-                                                       'field': 'Fz',
-                                                       'document': 'double',
-                                                       'sources': ['primary-guide-5.10'],
-                                                       'decision': 'the 5.9/5.10 document '
-                                                                   '(ClientInterfaces_Primary.pdf) '
-                                                                   'lists Calibration Data '
-                                                                   '(NEEDED_FOR_CALIB_DATA = 9) as '
-                                                                   'six doubles Fx, Fy, Fz, Frx, '
-                                                                   'Fry, Frz: 48 bytes, the size '
-                                                                   "of URSim 5.8's body (all "
-                                                                   'zeros); the current document '
-                                                                   'calls the body reserved (used '
-                                                                   'by UR software only) and no '
-                                                                   'other public source names its '
-                                                                   'fields: kept as bytes, every '
-                                                                   'length decoding.'},
-                                                      {'what': 'added',
-                                                       'field': 'Frx',
-                                                       'document': 'double',
-                                                       'sources': ['primary-guide-5.10'],
-                                                       'decision': 'the 5.9/5.10 document '
-                                                                   '(ClientInterfaces_Primary.pdf) '
-                                                                   'lists Calibration Data '
-                                                                   '(NEEDED_FOR_CALIB_DATA = 9) as '
-                                                                   'six doubles Fx, Fy, Fz, Frx, '
-                                                                   'Fry, Frz: 48 bytes, the size '
-                                                                   "of URSim 5.8's body (all "
-                                                                   'zeros); the current document '
-                                                                   'calls the body reserved (used '
-                                                                   'by UR software only) and no '
-                                                                   'other public source names its '
-                                                                   'fields: kept as bytes, every '
-                                                                   'length decoding.'},
-                                                      {'what': 'added',
-                                                       'field': 'Fry',
-                                                       'document': 'double',
-                                                       'sources': ['primary-guide-5.10'],
-                                                       'decision': 'the 5.9/5.10 document '
-                                                                   '(ClientInterfaces_Primary.pdf) '
-                                                                   'lists Calibration Data '
-                                                                   '(NEEDED_FOR_CALIB_DATA = 9) as '
-                                                                   'six doubles Fx, Fy, Fz, Frx, '
-                                                                   'Fry, Frz: 48 bytes, the size '
-                                                                   "of URSim 5.8's body (all "
-                                                                   'zeros); the current document '
-                                                                   'calls the body reserved (used '
-                                                                   'by UR software only) and no '
-                                                                   'other public source names its '
-                                                                   'fields: kept as bytes, every '
-                                                                   'length decoding.'},
-                                                      {'what': 'added',
-                                                       'field': 'Frz',
-                                                       'document': 'double',
-                                                       'sources': ['primary-guide-5.10'],
-                                                       'decision': 'the 5.9/5.10 document '
-                                                                   '(ClientInterfaces_Primary.pdf) '
-                                                                   'lists Calibration Data '
-                                                                   '(NEEDED_FOR_CALIB_DATA = 9) as '
-                                                                   'six doubles Fx, Fy, Fz, Frx, '
-                                                                   'Fry, Frz: 48 bytes, the size '
-                                                                   "of URSim 5.8's body (all "
-                                                                   'zeros); the current document '
-                                                                   'calls the body reserved (used '
-                                                                   'by UR software only) and no '
-                                                                   'other public source names its '
-                                                                   'fields: kept as bytes, every '
-                                                                   'length decoding.'}]},
+                                                                   'lists it as six doubles '
+                                                                   'Fx..Frz, the size URSim 5.8 '
+                                                                   'and CB3 send: decoded so, a '
+                                                                   'shorter or longer body keeping '
+                                                                   'missing fields or extra '
+                                                                   'bytes.'}]},
                                        {'name': 'safety_data',
                                         'type': 10,
                                         'doc': 'Internal to UR software; kept as bytes. No public '
@@ -3380,12 +3381,21 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                                '38-byte body.',
                                         'source': 'Searched, no field layout found: the interface '
                                                   'document ("reserved", used by UR software '
-                                                  'only); URCL lists SAFETY_DATA = 10 and parses '
-                                                  'no fields; its tests/test_primary_parser.cpp '
+                                                  'only); the 5.9/5.10 edition '
+                                                  '(ClientInterfaces_Primary.pdf, sections 2.1.12 '
+                                                  'and 3.1.12) gives only "safety data" after the '
+                                                  'header ("used internally by Universal Robots '
+                                                  'software only and should be skipped"); UR\'s '
+                                                  '2015 client-interface workbook '
+                                                  '(Client_Interface.xlsx, sheets 1.6-3.2 and '
+                                                  'DataStreamFromURController) has no type 10; '
+                                                  'URCL lists SAFETY_DATA = 10 and parses no '
+                                                  'fields; its tests/test_primary_parser.cpp '
                                                   "capture of URSim 5.8's first Robot State holds "
                                                   'a 43-byte sub-package (38-byte body); '
-                                                  'python-urx and the public Java and Python '
-                                                  'primary clients skip it.',
+                                                  'python-urx, ur-kotlin (SAFETY_DATA, no decoder) '
+                                                  'and the public Java and Python primary clients '
+                                                  'skip it.',
                                         'fields': [{'name': 'data',
                                                     'type': 'bytes',
                                                     'length': 'rest',
@@ -3507,6 +3517,15 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                         'type': 14,
                                         'doc': 'Internal to UR software (active payload); kept as '
                                                'bytes.',
+                                        'source': 'Searched, no field layout found: the interface '
+                                                  'document ("reserved", used by UR software '
+                                                  'only); the 5.9/5.10 edition '
+                                                  '(ClientInterfaces_Primary.pdf) ends its '
+                                                  "sub-packages at Singularity Info (13); UR's "
+                                                  '2015 client-interface workbook ends at '
+                                                  "Calibration Data (9); URCL's RobotStateType and "
+                                                  "ur-kotlin's RobotStatePackageType end at "
+                                                  'TOOL_MODE_INFO (12).',
                                         'fields': [{'name': 'data',
                                                     'type': 'bytes',
                                                     'length': 'rest',
@@ -3535,6 +3554,15 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                        {'name': 'internal_data',
                                         'type': 15,
                                         'doc': 'Internal to UR software; kept as bytes.',
+                                        'source': 'Searched, no field layout found: the interface '
+                                                  'document ("reserved", used by UR software '
+                                                  'only); the 5.9/5.10 edition '
+                                                  '(ClientInterfaces_Primary.pdf) ends its '
+                                                  "sub-packages at Singularity Info (13); UR's "
+                                                  '2015 client-interface workbook ends at '
+                                                  "Calibration Data (9); URCL's RobotStateType and "
+                                                  "ur-kotlin's RobotStatePackageType end at "
+                                                  'TOOL_MODE_INFO (12).',
                                         'fields': [{'name': 'data',
                                                     'type': 'bytes',
                                                     'length': 'rest',

@@ -158,9 +158,10 @@ def read_document(
 
         reader = rendered_text if kind == "rendered-text" else eseries_text
         tables = [eseries_text.split_rows(t, starts_row) for t in reader.read_tables(text)]
+        links = realtime_tables.chapter_titles(text)
         doc.realtime = (
-            realtime_tables.read_paragraphs(text, lines)
-            or realtime_tables.read_paragraphs(realtime_tables.joined_cells(text), lines)
+            realtime_tables.read_paragraphs(text, lines, links)
+            or realtime_tables.read_paragraphs(realtime_tables.joined_cells(text), lines, links)
             or realtime_tables.read_spaced(text, lines)
         )
     elif kind == "markdown":

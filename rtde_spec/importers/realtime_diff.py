@@ -116,11 +116,15 @@ def diff_table(t: DocRealtimeTable, doc: Document, spec: RealtimeFile, catalogue
     by_name = {f.name: f for f in spec.fields}
     for op, a0, a1, b0, b1 in matcher.get_opcodes():
         rows, fields = t.rows[a0:a1], expected[b0:b1]
+        paired = 0
         if op in ("equal", "replace"):
             pairs = list(zip(rows, fields, strict=False))
             for row, fld in pairs:
                 out += [mark_known(c, fld.conflicts, doc.source) for c in _compare(row, fld, where, doc)]
             rows, fields = rows[len(pairs) :], fields[len(pairs) :]
+            paired = len(pairs)
+        # an added unnamed row is named by the spec field it follows, whose conflicts may record it
+        before = expected[b0 + paired - 1] if b0 + paired > 0 else None
         for row in rows:
             later = by_name.get(row.key)
             if later is not None and later not in expected:
@@ -136,17 +140,12 @@ def diff_table(t: DocRealtimeTable, doc: Document, spec: RealtimeFile, catalogue
                 )
                 out.append(mark_known(change, later.conflicts, doc.source))
                 continue
-            out.append(
-                Change(
-                    "added",
-                    "added",
-                    row.key or f"{_UNNAMED} line {row.line}",
-                    where,
-                    None,
-                    _row_type(row),
-                    row.line,
-                )
-            )
+            if row.key or before is None:
+                name = row.key or f"{_UNNAMED} line {row.line}"
+            else:
+                name = f"{_UNNAMED} after {before.name}"
+            change = Change("added", "added", name, where, None, _row_type(row), row.line)
+            out.append(mark_known(change, before.conflicts, doc.source) if before and not row.key else change)
         tail = op == "insert" or (op == "replace" and not rows)  # spec fields past the rows
         for fld in fields:
             if t.skipped or (tail and b1 == len(expected) and t.total is None):

@@ -137,24 +137,83 @@ _PAGE_MARK = re.compile(r"^(?:-\d+-|Chapter \d+|G3/G5|Copyright ©.*|\f.*)$")
 def joined_cells(text: str) -> str:
     """The PDF's text (pdftotext): cells are paragraphs, and a long cell wraps over adjacent
     lines ("Number of" / "values", "Tool vector" / "actual"): one line per paragraph, except
-    that a paragraph ending in the header's first cell keeps its title lines apart from it."""
+    that a paragraph ending in the header's first cell keeps its title lines apart from it.
+
+    pdftotext also prints a row's name cell out of order, after the page's last row (before
+    its page mark): such a name goes back to the unnamed row of that page whose notes it
+    repeats ("Tool Accelerometer values" -> "Tool x,y and z accelerometer values")."""
     out: list[str] = []
+    page_ends: list[int] = []
     for para in re.split(r"\n[ \t]*\n", text):
         rows = [r.strip() for r in para.splitlines() if r.strip() and not _PAGE_MARK.match(r.strip())]
         if not rows:
+            if para.strip():
+                page_ends.append(len(out))
             continue
         if len(rows) > 1 and rows[-1].lower() == "meaning":
             out += rows
         else:
             out.append(" ".join(rows))
+    start = 0
+    for end in page_ends:
+        _restore_name(out, start, end)
+        start = end
     return "\n\n".join(out)
 
 
-def read_paragraphs(text: str, lines: Lines) -> list[DocRealtimeTable]:
+def _words(text: str) -> set[str]:
+    return set(re.findall(r"[a-z0-9]+", text.lower()))
+
+
+def _is_name_cell(cell: str) -> bool:
+    return (
+        0 < len(cell) <= 40
+        and not is_type(cell)
+        and not _COLUMN.match(cell)
+        and not cell.endswith((".", ")", ":"))
+        and cell[:1].isupper()
+    )
+
+
+def _restore_name(cells: list[str], start: int, end: int) -> None:
+    """Move a name cell printed at the end of a page (before `end`) back to the unnamed row of
+    that page (from `start`) whose notes share at least two of its words; else leave it."""
+    at = end - 1
+    if at <= start or not _is_name_cell(cells[at]) or is_type(cells[at - 1]):
+        return
+    name = _words(cells[at])
+    best, best_score = None, 1
+    for k in range(start + 1, at - 3):
+        # an unnamed row: a type and two numbers right after the notes of the row before
+        if not (is_type(cells[k]) and _INT.match(cells[k + 1]) and _INT.match(cells[k + 2])):
+            continue
+        if _INT.match(cells[k - 1]) or _COLUMN.match(cells[k - 1]) or len(cells[k - 1].split()) < 4:
+            continue
+        notes = cells[k + 4] if _COLUMN.match(cells[k + 3]) else cells[k + 3]
+        score = len(name & _words(notes))
+        if score > best_score:
+            best, best_score = k, score
+    if best is not None:
+        cells.insert(best, cells.pop(at))
+
+
+#: a chapter heading ("5. Safety Mode Types"): the Notes column links to these by title
+_CHAPTER = re.compile(r"^\s*\d+\.\s+([A-Za-z][A-Za-z ]*[A-Za-z])\s*\d*\s*$", re.M)
+
+
+def chapter_titles(text: str) -> frozenset[str]:
+    """The document's chapter titles, lower case: the texts its Notes column links to."""
+    return frozenset(m.group(1).lower() for m in _CHAPTER.finditer(text))
+
+
+def read_paragraphs(text: str, lines: Lines, links: frozenset[str] = frozenset()) -> list[DocRealtimeTable]:
     """The rendered page: every cell a paragraph (or a line ending in `|`), rows found by shape.
 
     A row starts at a name followed by a type and two whole numbers, or, for the rows UR
     leaves unnamed, at a type followed by two numbers once the row before has its notes.
+    A chapter's title (`links`: "Safety Mode Types") after a row whose notes hold no link yet
+    is that row's link, not the name of the (unnamed) row after it; a TOTAL printed after its
+    two numbers takes them back from the last row's notes.
     """
     paras = [(n, _clean(raw)) for n, raw in enumerate(text.splitlines(), start=1)]
     paras = [(n, p) for n, p in paras if p and not re.fullmatch(r"[-|: ]+", p)]
@@ -190,11 +249,26 @@ def read_paragraphs(text: str, lines: Lines) -> list[DocRealtimeTable]:
             i += 1
             continue
         if para.upper() == "TOTAL":
+            last = current[-1][1] if current else []
+            if not ints(i + 1) and len(last) >= 7 and _INT.match(last[-2]) and _INT.match(last[-1]):
+                # the PDF's text prints the TOTAL row's numbers before its label
+                current.append((number, ["TOTAL", *last[-2:]]))
+                del last[-2:]
+                current = None
+                i += 1
+                continue
             current.append((number, [p for _, p in paras[i : i + 4]]))
             current = None
             i += 4
             continue
         named = i + 3 < size and not is_type(para) and is_type(paras[i + 1][1]) and ints(i + 2)
+        if (
+            named
+            and current
+            and para.lower() in links
+            and not any(c.lower() in links for c in current[-1][1][4:])
+        ):
+            named = False  # the row above's link to a chapter (its notes have none yet)
         unnamed = is_type(para) and ints(i + 1)
         # the Message Size row (the first, no Gnuplot column) may come without notes (the PDF's
         # text moves its note away): a name, a type and two numbers after it are the next row
@@ -222,7 +296,10 @@ def read_paragraphs(text: str, lines: Lines) -> list[DocRealtimeTable]:
 
 
 #: the manual page as a text extractor gives it: the header and every row on one line, spaces between
-SPACED_HEAD = re.compile(r"^\s*Meaning\s+Type\s+Number of values\s+Size in bytes\b", re.I | re.M)
+#: (pdftotext -layout wraps the header's cells under it: "Number of" / "values", "Size in" / "bytes")
+SPACED_HEAD = re.compile(
+    r"^\s*Meaning\s+Type\s+Number of(?:\s+values)?\s+Size in(?:\s+bytes)?\b", re.I | re.M
+)
 _SPACED_ROW = re.compile(
     r"^(?P<name>.*?)\s*\b(?P<type>double|integer|int32|uint64)\s+(?P<count>\d+)\s+(?P<size>\d+)"
     r"(?:\s+(?P<column>\d+(?:\s*-\s*\d+)?)(?=\s|$))?\s*(?P<notes>.*)$",
@@ -233,12 +310,19 @@ _SPACED_TOTAL = re.compile(r"^\s*TOTAL\s+(\d+)\s+(\d+)\b", re.I)
 
 def read_spaced(text: str, lines: Lines) -> list[DocRealtimeTable]:
     """Tables whose header and rows are each one line of space-separated cells ("RealTime 5.9"
-    as extracted from the manual's page); a line that is no row continues the notes above."""
+    as extracted from the manual's page); a line that is no row continues the notes above.
+
+    In a column layout (pdftotext -layout: cells apart by runs of spaces, a wrapped cell
+    continued on the lines below it), the part of a continuation line left of the row's
+    Type column continues its name ("Tool vector" / "actual"), the rest its notes; page
+    marks between rows are dropped."""
     tables: list[Table] = []
     titles: list[str] = []
     current: Table | None = None
     title = ""
     count = 0
+    columns = False
+    type_at = 0  # where the last row's Type cell starts, in a column layout
     for number, raw in enumerate(text.splitlines(), start=1):
         line = " ".join(raw.split())
         if not line:
@@ -247,6 +331,7 @@ def read_spaced(text: str, lines: Lines) -> list[DocRealtimeTable]:
             current = Table(title, HEAD_CELLS, number)
             tables.append(current)
             titles.append(title)
+            columns = bool(re.search(r"Meaning {2,}Type", raw))
             continue
         if current is None:
             if _is_title(line):
@@ -256,14 +341,25 @@ def read_spaced(text: str, lines: Lines) -> list[DocRealtimeTable]:
             current.rows.append((number, ["TOTAL", total.group(1), total.group(2)]))
             current = None
             continue
+        if columns and _PAGE_MARK.match(line):
+            continue
         row = _SPACED_ROW.match(line)
         if row is not None:
             cells = [row["name"], row["type"], row["count"], row["size"], row["column"] or "", row["notes"]]
             current.rows.append((number, cells))
+            found = re.search(rf"\b{re.escape(row['type'])}\b", raw)
+            type_at = found.start() if found else 0
             count += 1
             check_rows(count, number)
         elif is_placeholder(line):
             current.rows.append((number, [line]))
+        elif current.rows and columns and type_at:
+            cells = current.rows[-1][1]
+            name, notes = " ".join(raw[:type_at].split()), " ".join(raw[type_at:].split())
+            if name and len(cells) >= 6:
+                cells[0] = f"{cells[0]} {name}".strip()
+            if notes:
+                cells.append(notes)
         elif current.rows:
             current.rows[-1][1].append(line)  # a note's link ("Robot Modes") on a line of its own
     return [table_of(t, lines, t_title) for t, t_title in zip(tables, titles, strict=True)]

@@ -294,7 +294,12 @@ CASES = [
         state(8, struct.pack(">B??B", 0, True, False, 2)),
         dict(tp_button_state=0, is_manual_freedrive_allowed=True, is_freedrive_io_pressed=False, tp_type=2),
     ),
-    ("calibration_data", state(9, b"\x00\x00\x00\x2a"), dict(data="0000002a")),
+    (
+        # the 5.9/5.10 document's six doubles (ClientInterfaces_Primary.pdf)
+        "calibration_data",
+        state(9, struct.pack(">6d", 0.5, -0.25, 1.0, 0.0, 2.0, -3.5)),
+        dict(fx=0.5, fy=-0.25, fz=1.0, frx=0.0, fry=2.0, frz=-3.5),
+    ),
     ("safety_data", state(10, bytes(range(16))), dict(data=bytes(range(16)).hex())),
     (
         "tool_comm_info",
