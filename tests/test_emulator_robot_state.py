@@ -128,6 +128,7 @@ def test_cb3_layouts_match_python_urx_formats_and_its_parser() -> None:
     ]:
         assert sizes[kind] == struct.calcsize(fmt), kind
     assert 10 not in sizes and 11 not in sizes and 12 not in sizes  # e-Series sub-packages
+    assert sizes[9] == 53  # Calibration Data: UR's 2015 workbook gives CB3 this 53-byte sub-package
     parser = ParserUtils()
     parsed = parser.parse(states[0])
     assert parser.version == (3, 2)  # told by the robot mode data's size, as on a CB3 robot

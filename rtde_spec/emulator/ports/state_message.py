@@ -47,9 +47,9 @@ if TYPE_CHECKING:
 # sub-packages in the order a controller sends them, per product line (names from the spec)
 ORDER = {
     "cb3": [
-        "robot_mode_data", "joint_data", "cartesian_info", "kinematics_info", "configuration_data",
-        "masterboard_data", "tool_data", "force_mode_data", "additional_info",
-    ],
+        "robot_mode_data", "joint_data", "cartesian_info", "kinematics_info", "calibration_data",
+        "configuration_data", "masterboard_data", "tool_data", "force_mode_data", "additional_info",
+    ],  # calibration data on CB3 too: UR's 2015 workbook lists it, 53 bytes (sheet DataStreamFromURController)
     "e-series": [
         "robot_mode_data", "joint_data", "cartesian_info", "kinematics_info", "calibration_data",
         "masterboard_data", "tool_data", "configuration_data", "force_mode_data", "additional_info",
