@@ -155,7 +155,7 @@ def make_captures(*jobs: tuple[Path, int, str]) -> None:
 # thread) against the rest (preparing batches, encoding Parquet), for the 2-core estimate
 SPLIT_CHILD = """
 import json, resource, shutil, sys, threading, time
-from rtde_spec.capture import sink as S
+from rtde_spec.capture.tables import sink as S
 from rtde_spec.output import parquet as P
 from rtde_spec.capture.decoder import decode_to_directory
 spent = {"prepare": 0.0, "encode": 0.0}

@@ -55,6 +55,7 @@ class ParquetWriter(Writer):
             None  # the file's columns; None: the first batch's (a table's next part: its last's)
         )
         self._groups = 0  # row groups handed to pyarrow: its footer holds each one's column chunks
+        self.threaded: bool | None = None  # this file's `THREADED` (False: it is written on a worker)
 
     def _open(self, schema: Any) -> None:
         pa = self._pa
@@ -110,7 +111,8 @@ class ParquetWriter(Writer):
         self._tables, self._held = [], 0
         self._groups += 1
         self._wait()
-        if last or not (self.THREADED if self.THREADED is not None else usable_cores() > 1):
+        threaded = self.threaded if self.threaded is not None else self.THREADED
+        if last or not (threaded if threaded is not None else usable_cores() > 1):
             self._written(self._writer.write_table, group, row_group_size=group.num_rows)
             return
         if self._pool is None:
