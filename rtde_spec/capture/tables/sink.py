@@ -316,8 +316,9 @@ class OrderedWrites:
     the files are those of a run without workers, byte for byte) and otherwise prepares
     the next batch. Encoding one file's row groups in order is the one chain that cannot
     be split, so it runs whenever its next batch is ready, and the threads that run are
-    no more than `--jobs`: the decoding thread prepares batches too, but only while
-    `depth` of them wait (the workers are behind), instead of waiting. Memory stays
+    no more than `--jobs`: the decoding thread prepares batches too (the newest: the
+    oldest is the writing worker's next), but only while `depth` of them wait (the
+    workers are behind), instead of waiting. Memory stays
     bounded by `depth`, and a slow disk slows the decoder rather than filling memory.
     An error on a worker stops the workers and is raised in the decoding thread.
     """
@@ -378,7 +379,7 @@ class OrderedWrites:
                 if not self.todo:
                     self.cond.wait()
                     continue
-                slot = self.todo.popleft()
+                slot = self.todo.pop()  # the newest: the oldest is the writing worker's next
             self._prepare(slot)
 
     def _check(self) -> None:
