@@ -4,6 +4,7 @@ threads while the file is read on, and writes the same tables, byte for byte, as
 from __future__ import annotations
 
 import hashlib
+import sys
 from pathlib import Path
 
 import pyarrow.parquet as pq
@@ -11,7 +12,7 @@ import pytest
 
 from rtde_spec import Catalogue, RecipeCodec, build
 from rtde_spec.capture.decoder import decode_to_directory
-from rtde_spec.capture.tables.sink import DirectorySink, OrderedWrites
+from rtde_spec.capture.tables.sink import SWITCH_INTERVAL, DirectorySink, OrderedWrites
 from rtde_spec.errors import OutputError
 from tests.capture_files import Conversation, write
 from tests.test_cli import cli
@@ -117,6 +118,7 @@ def test_ordered_writes_keep_the_order_they_were_given() -> None:
     import time
 
     got: list[object] = []
+    before = sys.getswitchinterval()
     writes = OrderedWrites(workers=3, write=lambda _k, _p, item: got.append(item), depth=4)
 
     def slow(value: int) -> int:
@@ -129,9 +131,11 @@ def test_ordered_writes_keep_the_order_they_were_given() -> None:
         else:
             writes.add(("t", "r", "d"), slow, i)
         assert len(writes.queue) < 4
+    assert sys.getswitchinterval() <= SWITCH_INTERVAL, "a worker waits at most this for the GIL"
     writes.finish()
     assert got == [f"row {i}" if i % 7 == 0 else i for i in range(40)]
     assert not any(t.is_alive() for t in writes.threads)
+    assert sys.getswitchinterval() == before, "Python's own again"
 
 
 def test_a_batch_that_cannot_be_prepared_stops_the_workers_and_is_raised_here() -> None:
