@@ -298,13 +298,15 @@ def one_file_rows(capture: Path, warm: Path, packages: int, rounds: int, work: P
         else:
             print(f"    Parquet's writer thread: encoding {g('encode@worker', 0):.2f}")
     jobs1_cpu = statistics.median(c for _, c in got[1])
-    serial = max(0.0, jobs1_cpu - mid[0]["cpu"])  # start-up and the end: one thread
+    small = [sys.executable, "-m", "rtde_spec", "capture", str(warm), "-o", str(work / "small")]
+    serial = statistics.median(cli_usage(small)[1] for _ in range(3))  # start-up and end: one thread
     one = mid[1]
     chain = one.get("cpu@worker", 0) - one.get("prepare@worker", 0)  # what only the writing worker can do
     best = serial + max(one["cpu"] / 2, chain)
     estimate = jobs1_cpu / best
     print(
-        f"  on 2 free cores at best: start-up and end {serial:.2f} s (one thread) + max(CPU/2 "
+        f"  on 2 free cores at best: start-up and end {serial:.2f} s (CPU of a {WARM_PACKAGES:,}-package "
+        f"capture; one thread) + max(CPU/2 "
         f"{one['cpu'] / 2:.2f}, the writing chain {chain:.2f}) = {best:.2f} s wall "
         f"= {estimate:.2f}x the one-core rate"
     )
