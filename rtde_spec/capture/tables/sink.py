@@ -352,7 +352,7 @@ class OrderedWrites:
             thread.start()
 
     def add(self, key: Key, prepare: Callable[[Any], Any] | None, item: Any) -> None:
-        """Hand over one item; while `depth` wait, prepare the oldest batch no worker has begun."""
+        """Hand over one item; while `depth` wait, prepare the newest batch no worker has begun."""
         slot = _Slot(key, prepare, item)
         with self.cond:
             self._check()
@@ -386,7 +386,7 @@ class OrderedWrites:
         while True:
             with self.cond:
                 self._check()
-                if done():
+                if done() or self.stopped:  # stopped: nothing given is written any more
                     return
                 if not self.todo:
                     self.cond.wait()
