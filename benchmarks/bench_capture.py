@@ -151,56 +151,78 @@ def make_captures(*jobs: tuple[Path, int, str]) -> None:
     os.sync()
 
 
-# per-thread CPU of one in-process decode with `workers`: the serial part (framing, in the main
-# thread) against the rest (preparing batches, encoding Parquet), for the 2-core estimate
+# where the CPU goes in one in-process decode with `workers`: each stage's CPU by the thread that ran
+# it (time.thread_time), and each thread's time asleep (waiting on a queue or the GIL) and waiting
+# for a core (/proc/thread-self/schedstat: CPU and run-queue nanoseconds), for the 2-core estimate
 SPLIT_CHILD = """
-import json, resource, shutil, sys, threading, time
-from rtde_spec.capture import sink as S
+import json, os, resource, shutil, sys, threading, time
+from rtde_spec.capture.tables import sink as S
 from rtde_spec.output import parquet as P
 from rtde_spec.capture.decoder import decode_to_directory
-spent = {"prepare": 0.0, "encode": 0.0}
 lock = threading.Lock()
-prepare = S.PREPARED["parquet"]
-def timed_prepare(columns):
-    t = time.thread_time()
+spent = {}
+def add(key, value):
+    with lock:
+        spent[key] = spent.get(key, 0.0) + value
+def role():
+    return "main" if threading.current_thread() is threading.main_thread() else "worker"
+def timed(fn, stage):
+    def run(*a, **k):
+        t = time.thread_time()
+        try:
+            return fn(*a, **k)
+        finally:
+            add(f"{stage}@{role()}", time.thread_time() - t)
+    return run
+def sched():
     try:
-        return prepare(columns)
-    finally:
-        with lock:
-            spent["prepare"] += time.thread_time() - t
-S.PREPARED["parquet"] = timed_prepare
-written = P.ParquetWriter._written
-def timed_written(self, *a, **k):
-    t = time.thread_time()
-    try:
-        return written(self, *a, **k)
-    finally:
-        if threading.current_thread() is not threading.main_thread():
-            with lock:
-                spent["encode"] += time.thread_time() - t
-P.ParquetWriter._written = timed_written
+        with open("/proc/thread-self/schedstat") as f:
+            cpu, queued, _ = f.read().split()
+        return int(cpu) / 1e9, int(queued) / 1e9
+    except OSError:
+        return time.thread_time(), 0.0
+def thread_life(fn):
+    def run(*a, **k):
+        w0, (c0, q0) = time.perf_counter(), sched()
+        try:
+            return fn(*a, **k)
+        finally:
+            (c1, q1), wall = sched(), time.perf_counter() - w0
+            add("cpu@worker", c1 - c0); add("queued@worker", q1 - q0)
+            add("asleep@worker", wall - (c1 - c0) - (q1 - q0))
+    return run
+P.prepared_columns = timed(P.prepared_columns, "prepare")  # with and without workers
+P.ParquetWriter._written = timed(P.ParquetWriter._written, "encode")
+S.OrderedWrites._work = thread_life(S.OrderedWrites._work)
 path, out, workers = sys.argv[1], sys.argv[2], int(sys.argv[3])
 decode_to_directory(sys.argv[4], out + "-warm", workers=workers)
 shutil.rmtree(out, ignore_errors=True)
-spent.update(prepare=0.0, encode=0.0)
-main0, r0 = time.thread_time(), resource.getrusage(resource.RUSAGE_SELF)
+spent.clear()
+w0, (c0, q0), r0 = time.perf_counter(), sched(), resource.getrusage(resource.RUSAGE_SELF)
 summary = decode_to_directory(path, out, workers=workers)
-r1 = resource.getrusage(resource.RUSAGE_SELF)
+r1, (c1, q1), wall = resource.getrusage(resource.RUSAGE_SELF), sched(), time.perf_counter() - w0
 cpu = r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime
-print(json.dumps({"cpu": cpu, "main": time.thread_time() - main0, **spent,
+print(json.dumps({"cpu": cpu, "wall": wall, "cpu@main": c1 - c0, "queued@main": q1 - q0,
+                  "asleep@main": wall - (c1 - c0) - (q1 - q0), **spent,
                   "rows": summary.tables.get("rtde_outputs_1", 0)}))
 """
 
 
 def cli_run(argv: list[str]) -> tuple[float, float]:
     """(wall s, CPU s of the child and its threads) of one whole `rtde-spec` process."""
+    wall, cpu, _ = cli_usage(argv)
+    return wall, cpu
+
+
+def cli_usage(argv: list[str]) -> tuple[float, float, float]:
+    """(wall s, CPU s, peak MB) of one whole process."""
     start = time.perf_counter()
     proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     _, status, usage = os.wait4(proc.pid, 0)
     wall = time.perf_counter() - start
     if os.waitstatus_to_exitcode(status) != 0:
         raise SystemExit(f"{argv}: exit {os.waitstatus_to_exitcode(status)}")
-    return wall, usage.ru_utime + usage.ru_stime
+    return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024
 
 
 def one_file_rows(capture: Path, warm: Path, packages: int, rounds: int, work: Path) -> dict[str, float]:
@@ -209,26 +231,37 @@ def one_file_rows(capture: Path, warm: Path, packages: int, rounds: int, work: P
     cli = [sys.executable, "-m", "rtde_spec", "capture", str(capture), "-o"]
     load = os.getloadavg()[0]
     got: dict[int, list[tuple[float, float]]] = {1: [], 2: []}
+    peak = {1: 0.0, 2: 0.0}
+    print(f"\none file of {packages:,} packages, whole CLI processes in turn (wall s / CPU s / peak MB):")
     for attempt in range(rounds + 1):  # the first round warms the page cache and is not kept
         for jobs in (1, 2):
             out = work / f"jobs{jobs}"
             shutil.rmtree(out, ignore_errors=True)
-            wall, cpu = cli_run([*cli, str(out), "--jobs", str(jobs)])
+            wall, cpu, mb = cli_usage([*cli, str(out), "--jobs", str(jobs)])
             if attempt:
                 got[jobs].append((wall, cpu))
+                peak[jobs] = max(peak[jobs], mb)
+        if attempt:
+            (w1, c1), (w2, c2) = got[1][-1], got[2][-1]
+            print(
+                f"  round {attempt} (load {os.getloadavg()[0]:.1f}): --jobs 1 {w1:.2f} / {c1:.2f}, "
+                f"--jobs 2 {w2:.2f} / {c2:.2f}: {c1 / w2:.2f}x the one-core rate"
+            )
     ones, twos = (sorted((work / f"jobs{j}").rglob("*.parquet")) for j in (1, 2))
     same = [p.read_bytes() == q.read_bytes() for p, q in zip(ones, twos, strict=True)]
     load = max(load, os.getloadavg()[0])
     one_core = [packages / cpu for _, cpu in got[1]]  # packages per CPU-second of --jobs 1
     two_wall = [packages / wall for wall, _ in got[2]]
     ratio = [b / a for a, b in zip(one_core, two_wall, strict=True)]
-    print(f"\none file of {packages:,} packages, whole CLI processes, {rounds} rounds", end="")
-    print(f" (load average up to {load:.1f}):")
+    print(f"  medians of {rounds} rounds (load average up to {load:.1f}):")
     for jobs in (1, 2):
         walls, cpus = [w for w, _ in got[jobs]], [c for _, c in got[jobs]]
         share = statistics.median(c / w for w, c in got[jobs])
         wall, cpu = statistics.median(walls), statistics.median(cpus)
-        print(f"  --jobs {jobs}: wall {wall:6.2f} s, CPU {cpu:6.2f} s (CPU/wall {share:.2f})")
+        print(
+            f"  --jobs {jobs}: wall {wall:6.2f} s, CPU {cpu:6.2f} s (CPU/wall {share:.2f}), "
+            f"peak {peak[jobs]:.0f} MB"
+        )
     print(f"  one-core rate (packages per CPU-second of --jobs 1): {statistics.median(one_core):,.0f}")
     print(
         f"  --jobs 2 packages per wall-second: {statistics.median(two_wall):,.0f} = "
@@ -236,24 +269,47 @@ def one_file_rows(capture: Path, warm: Path, packages: int, rounds: int, work: P
         "is the other sessions' too)"
     )
     print(f"  tables of --jobs 2 byte-identical to --jobs 1: {all(same) and bool(same)}")
-    split = {}
-    for workers in (0, 1):
-        done = subprocess.run(
-            [sys.executable, "-c", SPLIT_CHILD, str(capture), str(work / "split"), str(workers), str(warm)],
-            capture_output=True, text=True, check=True,
-        )  # fmt: skip
-        split[workers] = json.loads(done.stdout.strip().splitlines()[-1])
-    for workers, got_ in split.items():
-        bound = max(got_["main"], got_["prepare"], got_["encode"], got_["cpu"] / 2)
-        other = got_["cpu"] - got_["main"] - got_["prepare"] - got_["encode"]
+    split: dict[int, list[dict[str, float]]] = {0: [], 1: []}
+    for _ in range(3):  # in turn, as the CLI rounds; each figure is the median of three
+        for workers in (0, 1):
+            argv = [str(capture), str(work / "split"), str(workers), str(warm)]
+            done = subprocess.run(
+                [sys.executable, "-c", SPLIT_CHILD, *argv], capture_output=True, text=True, check=True
+            )
+            split[workers].append(json.loads(done.stdout.strip().splitlines()[-1]))
+    mid = {w: {k: statistics.median(r.get(k, 0.0) for r in rs) for k in rs[0]} for w, rs in split.items()}
+    for workers, got_ in mid.items():
+        g = got_.get
+        main_rest = g("cpu@main", 0) - g("prepare@main", 0) - g("encode@main", 0)
         print(
-            f"  in-process, {workers} worker thread(s): CPU {got_['cpu']:.2f} s = main thread "
-            f"{got_['main']:.2f} + preparing {got_['prepare']:.2f} + encoding {got_['encode']:.2f} "
-            f"(+ other {other:.2f}); on 2 free cores at best {bound:.2f} s wall"
+            f"  in-process, {workers} worker(s), medians of 3: CPU {g('cpu', 0):.2f} s, "
+            f"wall {g('wall', 0):.2f} s;"
+            f" main thread {g('cpu@main', 0):.2f} = reading+framing+decoding {main_rest:.2f}"
+            f" + preparing {g('prepare@main', 0):.2f} + encoding {g('encode@main', 0):.2f}"
+            f" (asleep {g('asleep@main', 0):.2f}, waiting for a core {g('queued@main', 0):.2f})"
         )
-    best = max(split[1]["main"], split[1]["prepare"], split[1]["encode"], split[1]["cpu"] / 2)
-    estimate = split[0]["cpu"] / best
-    print(f"  estimate for 2 free cores: {estimate:.2f}x the one-core rate (stage CPU of this run)")
+        if workers:
+            rest = g("cpu@worker", 0) - g("prepare@worker", 0) - g("encode@worker", 0)
+            print(
+                f"    worker thread {g('cpu@worker', 0):.2f} = encoding {g('encode@worker', 0):.2f}"
+                f" + preparing {g('prepare@worker', 0):.2f} + handing over {rest:.2f}"
+                f" (asleep {g('asleep@worker', 0):.2f}, waiting for a core {g('queued@worker', 0):.2f})"
+            )
+        else:
+            print(f"    Parquet's writer thread: encoding {g('encode@worker', 0):.2f}")
+    jobs1_cpu = statistics.median(c for _, c in got[1])
+    small = [sys.executable, "-m", "rtde_spec", "capture", str(warm), "-o", str(work / "small")]
+    serial = statistics.median(cli_usage(small)[1] for _ in range(3))  # start-up and end: one thread
+    one = mid[1]
+    chain = one.get("cpu@worker", 0) - one.get("prepare@worker", 0)  # what only the writing worker can do
+    best = serial + max(one["cpu"] / 2, chain)
+    estimate = jobs1_cpu / best
+    print(
+        f"  on 2 free cores at best: start-up and end {serial:.2f} s (CPU of a {WARM_PACKAGES:,}-package "
+        f"capture; one thread) + max(CPU/2 "
+        f"{one['cpu'] / 2:.2f}, the writing chain {chain:.2f}) = {best:.2f} s wall "
+        f"= {estimate:.2f}x the one-core rate"
+    )
     return {"ratio": statistics.median(ratio), "estimate": estimate,
             "one_core": statistics.median(one_core), "load": load}  # fmt: skip
 

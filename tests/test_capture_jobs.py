@@ -4,6 +4,7 @@ threads while the file is read on, and writes the same tables, byte for byte, as
 from __future__ import annotations
 
 import hashlib
+import sys
 from pathlib import Path
 
 import pyarrow.parquet as pq
@@ -11,7 +12,7 @@ import pytest
 
 from rtde_spec import Catalogue, RecipeCodec, build
 from rtde_spec.capture.decoder import decode_to_directory
-from rtde_spec.capture.tables.sink import DirectorySink, OrderedWrites
+from rtde_spec.capture.tables.sink import SWITCH_INTERVAL, DirectorySink, OrderedWrites
 from rtde_spec.errors import OutputError
 from tests.capture_files import Conversation, write
 from tests.test_cli import cli
@@ -116,8 +117,9 @@ def test_csv_with_workers_is_written_as_without(tmp_path: Path, mixed: Path) -> 
 def test_ordered_writes_keep_the_order_they_were_given() -> None:
     import time
 
-    writes = OrderedWrites(workers=3, depth=4)
     got: list[object] = []
+    before = sys.getswitchinterval()
+    writes = OrderedWrites(workers=3, write=lambda _k, _p, item: got.append(item), depth=4)
 
     def slow(value: int) -> int:
         time.sleep(0.002 * (value % 5))  # later items are often ready first
@@ -125,12 +127,33 @@ def test_ordered_writes_keep_the_order_they_were_given() -> None:
 
     for i in range(40):
         if i % 7 == 0:
-            writes.add(("t", "r", "d"), None, f"row {i}", lambda _k, _p, item: got.append(item))
+            writes.add(("t", "r", "d"), None, f"row {i}")
         else:
-            writes.add(("t", "r", "d"), slow, i, lambda _k, _p, item: got.append(item))
-        assert len(writes.queue) <= 4
-    writes.finish(lambda _k, _p, item: got.append(item))
+            writes.add(("t", "r", "d"), slow, i)
+        assert len(writes.queue) < 4
+    assert sys.getswitchinterval() <= SWITCH_INTERVAL, "a worker waits at most this for the GIL"
+    writes.finish()
     assert got == [f"row {i}" if i % 7 == 0 else i for i in range(40)]
+    assert not any(t.is_alive() for t in writes.threads)
+    assert sys.getswitchinterval() == before, "Python's own again"
+
+
+def test_a_batch_that_cannot_be_prepared_stops_the_workers_and_is_raised_here() -> None:
+    got: list[object] = []
+    writes = OrderedWrites(workers=2, write=lambda _k, _p, item: got.append(item), depth=3)
+
+    def prepare(value: int) -> int:
+        if value == 5:
+            raise ValueError("batch 5 is bad")
+        return value
+
+    with pytest.raises(ValueError, match="batch 5 is bad"):
+        for i in range(50):
+            writes.add(("t", "r", "d"), prepare, i)
+        writes.finish()
+    writes.drop()
+    assert not any(t.is_alive() for t in writes.threads)
+    assert got == list(range(len(got))) and len(got) <= 5, "in order, and nothing after the bad batch"
 
 
 def test_a_failed_batch_keeps_no_table_and_names_the_error(tmp_path: Path, mixed: Path) -> None:

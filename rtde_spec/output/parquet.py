@@ -55,6 +55,7 @@ class ParquetWriter(Writer):
             None  # the file's columns; None: the first batch's (a table's next part: its last's)
         )
         self._groups = 0  # row groups handed to pyarrow: its footer holds each one's column chunks
+        self.threaded: bool | None = None  # this file's `THREADED` (False: it is written on a worker)
 
     def _open(self, schema: Any) -> None:
         pa = self._pa
@@ -110,7 +111,8 @@ class ParquetWriter(Writer):
         self._tables, self._held = [], 0
         self._groups += 1
         self._wait()
-        if last or not (self.THREADED if self.THREADED is not None else usable_cores() > 1):
+        threaded = self.threaded if self.threaded is not None else self.THREADED
+        if last or not (threaded if threaded is not None else usable_cores() > 1):
             self._written(self._writer.write_table, group, row_group_size=group.num_rows)
             return
         if self._pool is None:
@@ -254,7 +256,78 @@ def prepared_columns(columns: Mapping[str, Any]) -> Any:
     packages into native order: numpy, the GIL released) and no state of any writer, so
     a capture with `--jobs` runs it on worker threads while the file stays in order.
     """
-    return arrow_table(flat_columns(columns))
+    return arrow_table(native_columns(columns))
+
+
+BLOCK_ROWS = 512  # rows copied at a time: ~600 KB of 58-field packages, at home in a core's L2 cache
+
+
+def native_columns(columns: Mapping[str, Any]) -> dict[str, Any]:
+    """`flat_columns` (the same names, values and types), copied the way the cache likes.
+
+    The columns of a batch are fields of the same packages, often a view of the capture
+    file, one package per row. Copied column by column (`astype`), every package's
+    cache lines are fetched once per column: 160 times for a 58-field recipe. Fields
+    that follow each other in the package with one type (most of a recipe: vectors of
+    doubles) are copied together here, a block of rows at a time, so each block is read
+    from memory once: half the time, and a few dozen numpy calls instead of 160.
+    """
+    import numpy as np
+
+    out: dict[str, Any] = {}
+    runs: list[tuple[Any, list[Any]]] = []  # (the packages' bytes of one run of fields, its outputs)
+    run: list[tuple[str, Any]] = []
+    for name, column in [*columns.items(), ("", None)]:
+        if run and (column is None or not _continues(run[-1][1], column)):
+            runs.append(_run_columns(np, run, out))
+            run = []
+        if column is None:
+            break
+        if _in_packages(column):
+            run.append((name, column))
+        else:
+            out.update(flat_columns({name: column}))  # a column of its own (text, bytes, native)
+    size = len(next(iter(columns.values()))) if columns else 0
+    for start in range(0, size, BLOCK_ROWS):
+        for source, targets in runs:
+            rows = source[start : start + BLOCK_ROWS]
+            for target in targets:
+                target[:, start : start + BLOCK_ROWS] = rows.T
+    return out
+
+
+def _in_packages(column: Any) -> bool:
+    """A wire number (big-endian), a field of packages: one value or a vector per row."""
+    if column.dtype.isnative or column.dtype.kind not in "fiu" or column.ndim not in (1, 2):
+        return False
+    return column.ndim == 1 or column.strides[1] == column.dtype.itemsize
+
+
+def _continues(before: Any, column: Any) -> bool:
+    """`column` starts where `before` ends, in the same rows, with the same type."""
+    width = before.dtype.base.itemsize * (before.shape[1] if before.ndim == 2 else 1)
+    return (
+        column.dtype.base == before.dtype.base
+        and len(column) == len(before)
+        and column.strides[0] == before.strides[0]
+        and (column.ndim == 1 or column.strides[1] == column.dtype.base.itemsize)
+        and column.__array_interface__["data"][0] == before.__array_interface__["data"][0] + width
+    )
+
+
+def _run_columns(np: Any, run: list[tuple[str, Any]], out: dict[str, Any]) -> tuple[Any, list[Any]]:
+    """One view of a run's bytes (rows x fields) and the native arrays it is copied into
+    (one row of a 2-D array per output column, contiguous), named in `out`."""
+    first = run[0][1]
+    base = first.dtype.base
+    widths = [(n, c.shape[1] if c.ndim == 2 else 0) for n, c in run]  # 0: one value, named as it is
+    names = [f"{n}_{i}" if w else n for n, w in widths for i in range(max(w, 1))]
+    source = np.lib.stride_tricks.as_strided(
+        first, shape=(len(first), len(names)), strides=(first.strides[0], base.itemsize), writeable=False
+    )
+    target = np.empty((len(names), len(first)), dtype=base.newbyteorder("="))
+    out.update(zip(names, target, strict=True))
+    return source, [target]
 
 
 def usable_cores() -> int:

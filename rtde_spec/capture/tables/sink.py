@@ -13,6 +13,7 @@ import glob
 import json
 import os
 import stat
+import sys
 import time
 from collections import OrderedDict, deque
 from collections.abc import Callable, Mapping
@@ -149,7 +150,7 @@ class DirectorySink(TableSink):
         self._pinned = self.budget // 2 if fmt == "parquet" else 0  # pyarrow's own files: fastest
         self._pinned_keys: set[tuple[str, str, str]] = set()
         self._open: OrderedDict[tuple[str, str, str], Writer] = OrderedDict()  # suspendable, by last use
-        self.ahead = OrderedWrites(workers) if workers > 0 and fmt in PREPARED else None
+        self.ahead = OrderedWrites(workers, self._write) if workers > 0 and fmt in PREPARED else None
         if self.ahead is not None:  # batches are views of the file, prepared while it is read on
             self.lag = self.ahead.depth
 
@@ -174,6 +175,8 @@ class DirectorySink(TableSink):
 
                 writer.topic = topic_for_table(table)  # type: ignore[attr-defined]
             self.writers[key] = writer
+            if self.ahead is not None:  # written on a worker already: row groups encoded in it
+                writer.threaded = False  # type: ignore[attr-defined]
             if key in self.schemas:  # the table's next part: the columns of the parts before
                 writer.schema = self.schemas[key]  # type: ignore[attr-defined]
             if pinned:
@@ -188,7 +191,7 @@ class DirectorySink(TableSink):
 
     def _row(self, table: str, robot: str, day: str, record: Mapping[str, Any]) -> None:
         if self.ahead is not None:
-            self.ahead.add((table, robot, day), None, record, self._write)
+            self.ahead.add((table, robot, day), None, record)
             return
         writer = self._writer(table, robot, day)
         writer.write(record)
@@ -196,7 +199,7 @@ class DirectorySink(TableSink):
 
     def _columns(self, table: str, robot: str, day: str, columns: Mapping[str, Any]) -> None:
         if self.ahead is not None:
-            self.ahead.add((table, robot, day), PREPARED[self.fmt], columns, self._write)
+            self.ahead.add((table, robot, day), PREPARED[self.fmt], columns)
             return
         writer = self._writer(table, robot, day)
         writer.write_columns(columns)
@@ -241,7 +244,7 @@ class DirectorySink(TableSink):
         """Every table finished first, then all put in place: a write error keeps none of them."""
         try:
             if self.ahead is not None:
-                self.ahead.finish(self._write)
+                self.ahead.finish()
             for writer in self.writers.values():
                 writer.prepare()
         except BaseException:
@@ -296,54 +299,153 @@ Key = tuple[str, str, str]
 WriteItem = Callable[[Key, bool, Any], None]
 
 
-class OrderedWrites:
-    """Batches prepared on worker threads, written in the order they were given.
+class _Slot:
+    """One item given to `OrderedWrites`: a batch (prepared in turn) or a row (ready as given)."""
 
-    Preparing a batch for its file (numpy copies of every column out of the packages,
-    with the GIL released) is half the work of a capture; the decoder goes on framing
-    while `workers` threads prepare, and each batch reaches its writer in turn, so the
-    files are those of a run without workers, byte for byte. At most `depth` batches
-    wait: memory stays bounded, and a slow disk slows the decoder rather than filling it.
+    __slots__ = ("item", "key", "prepare", "ready")
+
+    def __init__(self, key: Key, prepare: Callable[[Any], Any] | None, item: Any) -> None:
+        self.key, self.prepare, self.item = key, prepare, item
+        self.ready = prepare is None
+
+
+# s a thread waits for the GIL before it asks for it (Python's default: 0.005): the writing worker
+# takes the GIL back after each row group it encoded, and waited ~0.3 s of a 1 M-package capture
+# for the decoding thread to give it up; with 1 ms ~0.2 s (bench_capture.py, asleep@worker)
+SWITCH_INTERVAL = 0.001
+
+
+class OrderedWrites:
+    """Batches prepared and written on worker threads, in the order they were given.
+
+    The decoding thread reads and frames: it hands each batch over and goes on. A
+    worker writes the front batch as soon as it is prepared (one worker at a time, so
+    the files are those of a run without workers, byte for byte) and otherwise prepares
+    the next batch. Encoding one file's row groups in order is the one chain that cannot
+    be split, so it runs whenever its next batch is ready, and the threads that run are
+    no more than `--jobs`: the decoding thread prepares batches too (the newest: the
+    oldest is the writing worker's next), but only while `depth` of them wait (the
+    workers are behind), instead of waiting. Memory stays bounded by `depth`, and a
+    slow disk slows the decoder rather than filling memory. An error on a worker stops
+    the workers and is raised in the decoding thread. While the workers run, Python's
+    switch interval is `SWITCH_INTERVAL` (then as it was).
     """
 
-    def __init__(self, workers: int, depth: int | None = None) -> None:
-        from concurrent.futures import ThreadPoolExecutor
+    def __init__(self, workers: int, write: WriteItem, depth: int | None = None) -> None:
+        import threading
 
-        self.pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix="rtde-spec-prepare")
-        self.depth = depth if depth is not None else workers + 1
-        self.queue: deque[tuple[Key, bool, Any]] = deque()  # (key, prepared?, future or record)
+        self.write = write
+        self.depth = depth if depth is not None else workers + 2
+        self.queue: deque[_Slot] = deque()  # given and not yet written, in order
+        self.todo: deque[_Slot] = deque()  # batches no thread has begun to prepare, in order
+        self.writing = False  # a worker is writing the batch it took from the front
+        self.stopped = False
+        self.failed: BaseException | None = None
+        self.cond = threading.Condition()
+        self.threads = [
+            threading.Thread(target=self._work, name=f"rtde-spec-write-{i}", daemon=True)
+            for i in range(workers)
+        ]
+        self._interval = sys.getswitchinterval()
+        sys.setswitchinterval(min(self._interval, SWITCH_INTERVAL))
+        for thread in self.threads:
+            thread.start()
 
-    def add(self, key: Key, prepare: Callable[[Any], Any] | None, item: Any, write: WriteItem) -> None:
-        if prepare is None:  # a row: written in turn, as soon as what is before it is
-            self.queue.append((key, False, item))
-        else:
-            self.queue.append((key, True, self.pool.submit(prepare, item)))
-        self._drain(write, self.depth)
+    def add(self, key: Key, prepare: Callable[[Any], Any] | None, item: Any) -> None:
+        """Hand over one item; while `depth` wait, prepare the newest batch no worker has begun."""
+        slot = _Slot(key, prepare, item)
+        with self.cond:
+            self._check()
+            self.queue.append(slot)
+            if prepare is not None:
+                self.todo.append(slot)
+            self.cond.notify_all()
+        self._help(lambda: len(self.queue) < self.depth)
 
-    def _drain(self, write: WriteItem, keep: int) -> None:
-        """Write from the front: every batch already prepared, and more until `keep` wait."""
-        queue = self.queue
-        while queue:
-            key, prepared, item = queue[0]
-            if prepared and len(queue) <= keep and not item.done():
-                return
-            queue.popleft()
-            write(key, prepared, item.result() if prepared else item)
-
-    def finish(self, write: WriteItem) -> None:
-        """Everything written; the threads end."""
+    def finish(self) -> None:
+        """Everything written (this thread helps prepare what is left); the threads end."""
         try:
-            self._drain(write, 0)
+            self._help(lambda: not self.queue and not self.writing)
         finally:
             self.drop()
 
     def drop(self) -> None:
         """Nothing more is written (an error, or abort): waiting batches are forgotten."""
-        for _, prepared, item in self.queue:
-            if prepared:
-                item.cancel()
-        self.queue.clear()
-        self.pool.shutdown(wait=True)
+        with self.cond:
+            self.stopped = True
+            self.queue.clear()
+            self.todo.clear()
+            self.cond.notify_all()
+        for thread in self.threads:
+            thread.join()
+        if sys.getswitchinterval() == min(self._interval, SWITCH_INTERVAL):  # ours still: as it was
+            sys.setswitchinterval(self._interval)
+
+    def _help(self, done: Callable[[], bool]) -> None:
+        """Until `done()`: prepare batches nobody has begun, else wait for the workers."""
+        while True:
+            with self.cond:
+                self._check()
+                if done() or self.stopped:  # stopped: nothing given is written any more
+                    return
+                if not self.todo:
+                    self.cond.wait()
+                    continue
+                slot = self.todo.pop()  # the newest: the oldest is the writing worker's next
+            self._prepare(slot)
+
+    def _check(self) -> None:
+        if self.failed is not None:
+            raise self.failed
+
+    def _prepare(self, slot: _Slot) -> None:
+        try:
+            prepared = slot.prepare(slot.item)  # type: ignore[misc]
+        except BaseException as exc:
+            self._fail(exc)
+            raise
+        with self.cond:
+            slot.item, slot.ready = prepared, True
+            self.cond.notify_all()
+
+    def _fail(self, exc: BaseException) -> None:
+        with self.cond:
+            if self.failed is None:
+                self.failed = exc
+            self.cond.notify_all()
+
+    def _work(self) -> None:
+        """A worker: write the front batch when it is ready and nobody writes, else prepare one."""
+        cond = self.cond
+        while True:
+            with cond:
+                while True:
+                    if self.stopped or self.failed is not None:
+                        return
+                    queue = self.queue
+                    if not self.writing and queue and queue[0].ready:
+                        slot, writes = queue.popleft(), True
+                        self.writing = True
+                        break
+                    if self.todo:
+                        slot, writes = self.todo.popleft(), False
+                        break
+                    cond.wait()
+            if not writes:
+                try:
+                    self._prepare(slot)
+                except BaseException:
+                    return
+                continue
+            try:
+                self.write(slot.key, slot.prepare is not None, slot.item)
+            except BaseException as exc:
+                self._fail(exc)
+                return
+            finally:
+                with cond:
+                    self.writing = False
+                    cond.notify_all()
 
 
 class ArrowSink(TableSink):
