@@ -20,8 +20,9 @@ from typing import Any
 
 from rtde_spec._generated.constants import RTDE_PORT
 from rtde_spec.errors import ProtocolError, RtdeConnectionError, RtdeSpecError
-from rtde_spec.rtde.client import LOG_LEVELS
-from rtde_spec.rtde.client_protocol import ClientBase, DataRun, InputRecipe, Reply, Text
+from rtde_spec.rtde.client_base import ClientBase
+from rtde_spec.rtde.client_protocol import DataRun, InputRecipe, Reply, Text
+from rtde_spec.rtde.client_thread import LOG_LEVELS
 
 log = logging.getLogger("rtde_spec.client")
 
