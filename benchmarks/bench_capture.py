@@ -156,7 +156,7 @@ def make_captures(*jobs: tuple[Path, int, str]) -> None:
 # for a core (/proc/thread-self/schedstat: CPU and run-queue nanoseconds), for the 2-core estimate
 SPLIT_CHILD = """
 import json, os, resource, shutil, sys, threading, time
-from rtde_spec.capture.tables import sink as S
+from rtde_spec.capture.tables import ordered_writes as S
 from rtde_spec.output import parquet as P
 from rtde_spec.capture.decoder import decode_to_directory
 lock = threading.Lock()

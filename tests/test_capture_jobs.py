@@ -12,7 +12,8 @@ import pytest
 
 from rtde_spec import Catalogue, RecipeCodec, build
 from rtde_spec.capture.decoder import decode_to_directory
-from rtde_spec.capture.tables.sink import SWITCH_INTERVAL, DirectorySink, OrderedWrites
+from rtde_spec.capture.tables.ordered_writes import SWITCH_INTERVAL, OrderedWrites
+from rtde_spec.capture.tables.sink import DirectorySink
 from rtde_spec.errors import OutputError
 from tests.capture_files import Conversation, write
 from tests.test_cli import cli

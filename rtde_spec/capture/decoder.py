@@ -113,7 +113,7 @@ def decode_to_directory(
     """One file into OUTDIR (the unit of work of parallel and Dask runs; picklable arguments).
 
     `workers`: threads that prepare batches and write them in order while the capture is
-    read on (`sink.OrderedWrites`; Parquet): the same files, on more cores.
+    read on (`ordered_writes.OrderedWrites`; Parquet): the same files, on more cores.
     """
     codec = RecipeCodec.for_names(recipe_names, "output") if recipe_names else None
     sink = DirectorySink(outdir, fmt, output_stem(path), workers=workers)

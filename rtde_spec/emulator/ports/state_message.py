@@ -49,7 +49,7 @@ ORDER = {
     "cb3": [
         "robot_mode_data", "joint_data", "cartesian_info", "kinematics_info", "calibration_data",
         "configuration_data", "masterboard_data", "tool_data", "force_mode_data", "additional_info",
-    ],  # calibration data on CB3 too: UR's 2015 workbook lists it, 53 bytes (sheet DataStreamFromURController)
+    ],  # calibration data on CB3 too: UR's 2015 workbook lists it, 53 bytes (DataStreamFromURController)
     "e-series": [
         "robot_mode_data", "joint_data", "cartesian_info", "kinematics_info", "calibration_data",
         "masterboard_data", "tool_data", "configuration_data", "force_mode_data", "additional_info",
