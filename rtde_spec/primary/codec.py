@@ -272,6 +272,14 @@ class PrimaryStreamDecoder:
     def feed(self, data: bytes | bytearray | memoryview) -> list[tuple[int, PrimaryMessage]]:
         out: list[tuple[int, PrimaryMessage]] = []
         self.decoded = out
+        codec = self.codec
+        if type(data) is bytes and len(data) >= codec.header.size:  # one whole message, nothing held:
+            size, mtype = codec.header.unpack_from(data)  # what a 10 Hz client's read usually is
+            if size == len(data) and size <= codec.max_size and mtype == codec.state_type:
+                offset = self.framer.offset
+                if self.framer.take_run(data, size, b""):  # framed as the framer would (it counts it)
+                    self._decode_state(out, offset, data, size)
+                    return out
         try:
             framed = self.framer.feed(data)
         except DecodeError:  # an unusable size: the messages before it still decode, then it is raised
@@ -279,6 +287,19 @@ class PrimaryStreamDecoder:
             raise
         self._decode_into(out, framed)
         return out
+
+    def _decode_state(self, out: list[tuple[int, PrimaryMessage]], at: int, raw: bytes, size: int) -> None:
+        """A whole Robot State message, as _decode_into decodes it, without its general steps."""
+        self.count += 1
+        offset, codec = at, self.codec
+        try:
+            message = codec.robot_state.decode(raw, codec.header.size, size, self.version, self.reuse)
+        except DecodeError as exc:
+            if not self.skip_errors:
+                raise exc.in_stream(offset, self.count) from None
+            self.skipped.add(offset, size, str(exc.in_stream(offset, self.count)))
+            return
+        out.append((offset, message))
 
     def _decode_into(self, out: list[tuple[int, PrimaryMessage]], framed: list[tuple[int, bytes]]) -> None:
         for offset, raw in framed:
