@@ -95,10 +95,11 @@ def _unpack(src: _Source, layout: Layout, fields: list[LayoutField]) -> list[str
     step = Layout(fields, layout.prims, order=layout.order)._single
     if step is None:
         raise _NotFixed
-    t, unpack = src.name("t"), src.name("U", step.struct.unpack_from)
-    size = step.struct.size
-    src.add(f"if end - p < {size}:", "    return None", f"{t} = {unpack}(buf, p)", f"p += {size}")
-    entries, _ = _fields(src, fields, t, 0)
+    unpack, size = src.name("U", step.struct.unpack_from), step.struct.size
+    names = [src.name("v") for _ in step.struct.unpack(bytes(size))]  # a local per value
+    read = f"({', '.join(names)},) = {unpack}(buf, p)"
+    src.add(f"if end - p < {size}:", "    return None", read, f"p += {size}")
+    entries, _ = _fields(src, fields, names, 0)
     return entries
 
 

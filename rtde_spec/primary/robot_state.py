@@ -20,8 +20,6 @@ import struct
 from collections.abc import Callable
 from typing import Any
 
-from pydantic import BaseModel
-
 from rtde_spec.errors import DecodeError
 from rtde_spec.metamodel.versions import Version
 from rtde_spec.primary.compiled import CompiledShape, Decoder, compile_part, compile_shape
@@ -37,7 +35,6 @@ Shape = tuple[tuple[int, int], ...]  # (size, type) of each sub-package, in orde
 Reuse = dict[CompiledShape, list[Any]]  # a caller's own caches of sub-package models, per shape
 _NONE: frozenset[int] = frozenset()
 _new = object.__new__
-_set_dict = BaseModel.__dict__["__dict__"].__set__  # fast_models.maker, without its call
 
 
 class RobotStateReader:
@@ -86,7 +83,7 @@ class RobotStateReader:
                 subs = compiled.decode(buf, pos, cache)
                 if subs is not None:
                     message = _new(RobotStateMessage)
-                    _set_dict(message, {"sub_packages": subs})
+                    message.__dict__["sub_packages"] = subs  # its own dict (as compiled.py fills them)
                     return message  # type: ignore[no-any-return]
         subs, shape = self._walk(buf, pos, end, older, version)
         if shape is not None and not older:
