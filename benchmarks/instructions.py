@@ -3,7 +3,9 @@
 Each row runs in its own `valgrind --tool=callgrind` process twice, with N calls and with
 none after the same setup and warm-up; the difference over N is the row's instructions
 per call. Rows: decode of a 58-field data package, encode of 8 and 58 fields (default and
-strict), a URSim 5.8 Robot State, each beside its floor and its peer.
+strict), a URSim 5.8 Robot State (`rs`: one message repeated; `rsmove`: the next message
+of a stream of distinct ones as a moving robot sends them, see
+`ur5e_robot_state.moving_robot_stream`), each beside its floor and its peer.
 
     python benchmarks/instructions.py [--calls 1000] [ROW ...]     (needs valgrind)
 """
@@ -11,10 +13,12 @@ strict), a URSim 5.8 Robot State, each beside its floor and its peer.
 from __future__ import annotations
 
 import argparse
+import os
 import re
 import shutil
 import subprocess
 import sys
+import tempfile
 from collections.abc import Callable
 from pathlib import Path
 
@@ -24,7 +28,9 @@ ROWS = [
     *(f"enc8:{m}" for m in ("floor", "default", "strict", "UR")),
     *(f"enc58:{m}" for m in ("floor", "default", "strict", "UR")),
     *(f"rs:{m}" for m in ("floor", "ours", "stream", "floor12", "ours12", "urx")),
+    *(f"rsmove:{m}" for m in ("floor", "ours", "stream", "floor12", "ours12", "urx")),
 ]
+STREAM_FILE = "RTDE_SPEC_BENCH_STREAM"  # environment: the file holding the moving-robot stream
 
 
 def _encode(names: list[str], direction: str, mode: str) -> Callable[[], object]:
@@ -50,7 +56,12 @@ def _encode(names: list[str], direction: str, mode: str) -> Callable[[], object]
     return lambda: codec.encode_package(values, 1, strict)
 
 
-def _robot_state(mode: str) -> Callable[[], object]:
+def _robot_state(mode: str, moving: bool) -> Callable[[], object]:
+    """One message a call: the benchmark's message repeated, or (moving) the next of the
+    moving-robot stream (`ur5e_robot_state.moving_robot_stream`, round and round)."""
+    import itertools
+    import os
+
     import bench_primary_decode as bench
     from ur5e_robot_state import ur5e_robot_state_bytes
 
@@ -58,22 +69,32 @@ def _robot_state(mode: str) -> Callable[[], object]:
     from rtde_spec.primary.codec import PrimaryStreamDecoder
 
     data = ur5e_robot_state_bytes()
-    shared = bench.without_last_sub_package(data)  # the 12 sub-packages urx reads
-    one = shared if mode.endswith("12") or mode == "urx" else data
+    if moving:  # written by the parent process: building it under callgrind would take minutes
+        blob = Path(os.environ[STREAM_FILE]).read_bytes()
+        messages, pos = [], 0
+        while pos < len(blob):
+            size = int.from_bytes(blob[pos : pos + 4], "big")
+            messages.append(blob[pos : pos + size])
+            pos += size
+    else:
+        messages = [data]
+    if mode.endswith("12") or mode == "urx":  # the 12 sub-packages urx reads
+        messages = [bench.without_last_sub_package(m) for m in messages]
+    it = itertools.cycle(messages)
     if mode.startswith("floor"):
         floor = bench.baseline_decoder(data)
-        return lambda: floor(one)
+        return lambda: floor(next(it))
     if mode == "stream":
         stream = PrimaryStreamDecoder()
-        return lambda: stream.feed(data)
+        return lambda: stream.feed(next(it))
     if mode == "urx":
         import logging
 
         from urx.ursecmon import ParserUtils
 
         logging.disable(logging.CRITICAL)
-        return lambda: ParserUtils().parse(shared)
-    return lambda: decode_message(one)
+        return lambda: ParserUtils().parse(next(it))
+    return lambda: decode_message(next(it))
 
 
 def _decode(mode: str) -> Callable[[], object]:
@@ -101,8 +122,8 @@ def run_row(row: str, calls: int) -> None:
     kind, mode = row.split(":")
     if kind == "dec":
         fn = _decode(mode)
-    elif kind == "rs":
-        fn = _robot_state(mode)
+    elif kind in ("rs", "rsmove"):
+        fn = _robot_state(mode, kind == "rsmove")
     else:
         from bench_recipe_decode import UR_RTDE_DEFAULT_OUTPUTS
         from bench_recipe_encode import INPUTS_8
@@ -134,6 +155,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("rows", nargs="*", default=ROWS, help=f"rows (default: all: {' '.join(ROWS)})")
     parser.add_argument("--calls", type=int, default=1000)
+    parser.add_argument("--messages", type=int, default=1000, help="distinct messages of the rsmove rows")
     parser.add_argument("--run", help=argparse.SUPPRESS)  # inside the measured process
     args = parser.parse_args(argv)
     if args.run:
@@ -142,14 +164,27 @@ def main(argv: list[str] | None = None) -> int:
     if shutil.which("valgrind") is None:
         print("valgrind is not installed")
         return 1
+    os.environ.setdefault("PYTHONHASHSEED", "0")  # the same process twice: the same string hashes
+    with tempfile.TemporaryDirectory(prefix="rs-stream-") as tmp:
+        if any(r.startswith("rsmove:") for r in args.rows):
+            sys.path.insert(0, str(HERE))
+            from ur5e_robot_state import moving_robot_stream
+
+            path = Path(tmp) / "stream.bin"
+            path.write_bytes(b"".join(moving_robot_stream(args.messages)))
+            os.environ[STREAM_FILE] = str(path)
+        count_rows(args.rows, args.calls)
+    return 0
+
+
+def count_rows(rows: list[str], calls: int) -> None:
     counts = {}
-    for row in args.rows:
-        counts[row] = (instructions(row, args.calls) - instructions(row, 0)) // args.calls
+    for row in rows:
+        counts[row] = (instructions(row, calls) - instructions(row, 0)) // calls
         kind = row.split(":")[0]
         floor = counts.get(f"{kind}:floor") or counts.get(f"{kind}:floor12" if row.endswith("12") else "")
         to_floor = f"{counts[row] / floor:6.2f}x the floor" if floor else ""
         print(f"{row:14s} {counts[row]:10,d} instructions per call  {to_floor}", flush=True)
-    return 0
 
 
 if __name__ == "__main__":

@@ -21,7 +21,7 @@ from rtde_spec.errors import DecodeError, EncodeError
 from rtde_spec.metamodel.versions import Version
 from rtde_spec.primary.families import FamilyView, PrimaryView, primary_view
 from rtde_spec.primary.fast_models import build, with_groups
-from rtde_spec.primary.robot_state import RobotStateReader
+from rtde_spec.primary.robot_state import Reuse, RobotStateReader
 from rtde_spec.wire.framing import PackageFramer, Skipped, check_header
 from rtde_spec.wire.layout import Layout
 from rtde_spec.wire.primary_base import (
@@ -103,12 +103,18 @@ class PrimaryCodec:
     # --- decoding -----------------------------------------------------------
 
     def decode_message(
-        self, data: bytes | bytearray | memoryview, *, strict: bool = True, version: Version | None = None
+        self,
+        data: bytes | bytearray | memoryview,
+        *,
+        strict: bool = True,
+        version: Version | None = None,
+        reuse: Reuse | None = None,
     ) -> PrimaryMessage:
         """One whole message; with strict=False bytes after it are ignored.
 
         `version` (from the Version message) picks the spec's older layouts where a
-        sub-package has them.
+        sub-package has them. `reuse`: a caller's own cache of Robot State sub-package
+        models (`{}` to start one; a stream decoder keeps one), else the codec's shared one.
         """
         buf = data if type(data) is bytes else bytes(data)
         hsize = self.header.size
@@ -123,7 +129,7 @@ class PrimaryCodec:
                 hint="; use PrimaryStreamDecoder for several",
             )
         if mtype == self.state_type:  # most of a stream: Robot State, ten times a second
-            return self.robot_state.decode(buf, hsize, size, version)
+            return self.robot_state.decode(buf, hsize, size, version, reuse)
         fam = self.families.get(mtype)
         if fam is None:
             return UnknownMessage(type=mtype, size=size, raw=buf[:size])
@@ -131,7 +137,7 @@ class PrimaryCodec:
         if layout == "opaque":
             return OpaqueMessage(family=fam.spec.name, type=mtype, raw=buf[hsize:size])
         if layout == "subpackages":
-            return self.robot_state.decode(buf, hsize, size, version)
+            return self.robot_state.decode(buf, hsize, size, version, reuse)
         return self._tagged(fam, buf, hsize, size)
 
     def _tagged(self, fam: _Family, buf: bytes, pos: int, end: int) -> PrimaryMessage:
@@ -261,10 +267,19 @@ class PrimaryStreamDecoder:
         self.version: Version | None = None
         self.count = 0
         self.decoded: list[tuple[int, PrimaryMessage]] = []  # of the last feed, up to an error
+        self.reuse: Reuse = {}  # the last model of each Robot State sub-package (robot_state.py)
 
     def feed(self, data: bytes | bytearray | memoryview) -> list[tuple[int, PrimaryMessage]]:
         out: list[tuple[int, PrimaryMessage]] = []
         self.decoded = out
+        codec = self.codec
+        if type(data) is bytes and len(data) >= codec.header.size:  # one whole message, nothing held:
+            size, mtype = codec.header.unpack_from(data)  # what a 10 Hz client's read usually is
+            if size == len(data) and size <= codec.max_size and mtype == codec.state_type:
+                offset = self.framer.offset
+                if self.framer.take_run(data, size, b""):  # framed as the framer would (it counts it)
+                    self._decode_state(out, offset, data, size)
+                    return out
         try:
             framed = self.framer.feed(data)
         except DecodeError:  # an unusable size: the messages before it still decode, then it is raised
@@ -273,11 +288,24 @@ class PrimaryStreamDecoder:
         self._decode_into(out, framed)
         return out
 
+    def _decode_state(self, out: list[tuple[int, PrimaryMessage]], at: int, raw: bytes, size: int) -> None:
+        """A whole Robot State message, as _decode_into decodes it, without its general steps."""
+        self.count += 1
+        offset, codec = at, self.codec
+        try:
+            message = codec.robot_state.decode(raw, codec.header.size, size, self.version, self.reuse)
+        except DecodeError as exc:
+            if not self.skip_errors:
+                raise exc.in_stream(offset, self.count) from None
+            self.skipped.add(offset, size, str(exc.in_stream(offset, self.count)))
+            return
+        out.append((offset, message))
+
     def _decode_into(self, out: list[tuple[int, PrimaryMessage]], framed: list[tuple[int, bytes]]) -> None:
         for offset, raw in framed:
             self.count += 1
             try:
-                message = self.codec.decode_message(raw, version=self.version)
+                message = self.codec.decode_message(raw, version=self.version, reuse=self.reuse)
             except DecodeError as exc:
                 if not self.skip_errors:
                     raise exc.in_stream(offset, self.count) from None

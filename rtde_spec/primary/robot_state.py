@@ -6,6 +6,12 @@ each sub-package goes to its generated decoder (`compiled.compile_part`); parts 
 are unknown, shorter than their layout, or of an older layout picked by the controller
 version take the general layout walk, which names what is missing. All three give the
 same models (tests compare them).
+
+A learned shape also reuses models: at 10 Hz most sub-packages (kinematics, configuration,
+safety, tool communication) come with the same bytes as in the last message, and a
+sub-package equal in bytes to the last one in its slot is handed out as the same frozen
+model (see `compiled.CompiledShape`). A stream decoder keeps its own caches; decode_message
+shares one per shape, bounded like the shapes (one model and its bytes per slot).
 """
 
 from __future__ import annotations
@@ -14,11 +20,9 @@ import struct
 from collections.abc import Callable
 from typing import Any
 
-from pydantic import BaseModel
-
 from rtde_spec.errors import DecodeError
 from rtde_spec.metamodel.versions import Version
-from rtde_spec.primary.compiled import Decoder, ShapeDecoder, compile_part, compile_shape
+from rtde_spec.primary.compiled import CompiledShape, Decoder, compile_part, compile_shape
 from rtde_spec.primary.fast_models import maker
 from rtde_spec.wire.layout import Layout
 from rtde_spec.wire.primary_base import PrimaryPart, RobotStateMessage, UnknownSubPackage
@@ -28,9 +32,9 @@ Older = dict[int, list[tuple[Version, Layout]]]  # sub-package type -> (first ve
 PartWalk = Callable[[type[PrimaryPart], Layout, bytes, int, int], Any]  # the general layout walk
 
 Shape = tuple[tuple[int, int], ...]  # (size, type) of each sub-package, in order
+Reuse = dict[CompiledShape, list[Any]]  # a caller's own caches of sub-package models, per shape
 _NONE: frozenset[int] = frozenset()
 _new = object.__new__
-_set_dict = BaseModel.__dict__["__dict__"].__set__  # fast_models.maker, without its call
 
 
 class RobotStateReader:
@@ -47,23 +51,40 @@ class RobotStateReader:
             if decoder is not None:
                 self.fast[sub_type] = decoder
         self._older: dict[Version, frozenset[int]] = {}
-        # body size -> (header check, expected headers, decoder) of the shapes compiled
-        self.shapes: dict[int, list[tuple[Any, tuple[int, ...], ShapeDecoder]]] = {}
+        # body size -> the shapes compiled (each checks its headers itself)
+        self.shapes: dict[int, list[CompiledShape]] = {}
         self._seen: dict[Shape, int] = {}
         self._make = maker(RobotStateMessage)
 
-    def decode(self, buf: bytes, pos: int, end: int, version: Version | None = None) -> RobotStateMessage:
+    REUSE_SHAPES = 8  # caches one caller keeps (a controller sends one or two shapes)
+
+    def decode(
+        self, buf: bytes, pos: int, end: int, version: Version | None = None, reuse: Reuse | None = None
+    ) -> RobotStateMessage:
+        """The message's body between `pos` and `end`.
+
+        `reuse`: the caller's own caches of the last model per sub-package (a stream
+        decoder's); without one, the codec's shared cache of each shape is used. Either
+        way a sub-package equal in bytes to the last one of its slot is the same (frozen)
+        model object, and the result equals a decode without reuse.
+        """
         older = self.older_for(version) if version is not None else _NONE
         shapes = self.shapes.get(end - pos)
         if shapes is not None and not older:
-            for check, expected, decode in shapes:
-                if check(buf, pos) == expected:
-                    subs = decode(buf, pos)
-                    if subs is not None:
-                        message = _new(RobotStateMessage)
-                        _set_dict(message, {"sub_packages": subs})
-                        return message  # type: ignore[no-any-return]
-                    break
+            for compiled in shapes:
+                if reuse is None:
+                    cache = compiled.shared
+                else:
+                    cache = reuse.get(compiled)  # type: ignore[assignment]
+                    if cache is None:
+                        if len(reuse) >= self.REUSE_SHAPES:
+                            reuse.clear()
+                        cache = reuse[compiled] = compiled.cache()
+                subs = compiled.decode(buf, pos, cache)
+                if subs is not None:
+                    message = _new(RobotStateMessage)
+                    message.__dict__["sub_packages"] = subs  # its own dict (as compiled.py fills them)
+                    return message  # type: ignore[no-any-return]
         subs, shape = self._walk(buf, pos, end, older, version)
         if shape is not None and not older:
             self._learn(end - pos, shape)
@@ -119,12 +140,10 @@ class RobotStateReader:
         self._seen[shape] = seen
         if seen < 2:
             return
-        decode = compile_shape([(*self.members[t], s) for s, t in shape], self.header.size)
-        if decode is None:
+        compiled_shape = compile_shape([(*self.members[t], s) for s, t in shape], self.header)
+        if compiled_shape is None:
             return
-        fmt = "".join(f"{self.header.format[1:]}{s - self.header.size}x" for s, _ in shape)
-        check = struct.Struct(self.header.format[0] + fmt).unpack_from
-        compiled.append((check, tuple(v for pair in shape for v in pair), decode))
+        compiled.append(compiled_shape)
         self._seen.pop(shape, None)  # (another thread may have compiled it too)
 
     def _sub_package(self, sub_type: int, buf: bytes, pos: int, stop: int, version: Version | None) -> Any:
