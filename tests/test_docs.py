@@ -14,6 +14,7 @@ import errno
 import json
 import os
 import signal
+import socket
 import subprocess
 import sys
 import time
@@ -135,13 +136,28 @@ def _ci_step(part: str) -> bool:
     return False
 
 
-def _run_until_stopped(command: str, folder: Path, env: dict[str, str], seconds: float) -> None:
+def _listening(port: int) -> bool:
+    try:
+        socket.create_connection((HOST, port), timeout=0.5).close()
+    except OSError:
+        return False
+    return True
+
+
+def _run_until_stopped(
+    command: str, folder: Path, env: dict[str, str], seconds: float, ready: int | None = None
+) -> None:
+    """Run a command that serves until Ctrl-C for `seconds`, or (with `ready`) until that port
+    accepts and a second more has passed: long enough to see it serve, not a fixed wait."""
     proc = subprocess.Popen(
         command, shell=True, cwd=folder, env=env, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
         start_new_session=True,
     )  # fmt: skip
     deadline = time.monotonic() + seconds
     while time.monotonic() < deadline and proc.poll() is None:
+        if ready is not None and _listening(ready):
+            deadline = min(deadline, time.monotonic() + 1.0)
+            ready = None
         time.sleep(0.1)
     if proc.poll() is not None:
         _, err = proc.communicate()
@@ -190,7 +206,8 @@ def _run(block: Block, workspace: Path, env: dict[str, str]) -> None:
         if not rest:
             continue
         if until is not None:
-            _run_until_stopped(rest, workspace, env, float(until))
+            ready = block.directives.get("ready")
+            _run_until_stopped(rest, workspace, env, float(until), int(ready) if ready else None)
             continue
         result = subprocess.run(
             rest, shell=True, cwd=workspace, env=env, capture_output=True, text=True, timeout=180

@@ -57,6 +57,7 @@ def primary_safety_messages(port: int, seconds: float, out: list[int]) -> None:
                     out.append(message.safety_mode_type)  # type: ignore[union-attr]
 
 
+@pytest.mark.slow  # seconds of scheduled faults: CI runs it
 def test_scheduled_faults_show_on_rtde_and_the_primary_port(tmp_path: Path) -> None:
     path = tmp_path / "faults.yaml"
     path.write_text(SCENARIO)

@@ -127,6 +127,7 @@ def ready_and_run(s: Session) -> None:
     primary.wait(lambda w: w.mode.is_program_running, 5, "the program running")
 
 
+@pytest.mark.slow  # a whole driver session: CI runs it
 def test_the_driver_readies_the_arm_streams_servoj_runs_a_trajectory_and_sends_script_commands(
     session: Session,
 ) -> None:

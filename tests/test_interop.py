@@ -129,6 +129,7 @@ def test_ur_rtde_io_writes_show_up_in_outputs_and_in_our_client(emulator: subpro
         receive.disconnect()
 
 
+@pytest.mark.slow  # a recording of seconds (test_record_signals covers signals in the plain run): CI runs it
 def test_recorder_interrupted_keeps_its_rows(tmp_path: Path) -> None:
     proc = serve(["--rtde-port", "0", "--primary-port", "0", "--secondary-port", "0", *NO_FIXED_PORTS])
     out = tmp_path / "rec.csv"
@@ -154,6 +155,7 @@ def test_recorder_interrupted_keeps_its_rows(tmp_path: Path) -> None:
         proc.wait(10)
 
 
+@pytest.mark.slow  # a recording of seconds: CI runs it
 def test_recorder_keeps_rows_when_the_controller_goes_away(tmp_path: Path) -> None:
     proc = serve(["--rtde-port", "0", "--primary-port", "0", "--secondary-port", "0", *NO_FIXED_PORTS])
     out = tmp_path / "rec.parquet"

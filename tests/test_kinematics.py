@@ -16,6 +16,7 @@ from rtde_spec.emulator.arm import kinematics as kin
 from rtde_spec.emulator.controller.model import ControllerModel
 from rtde_spec.errors import SpecError, UsageError
 from rtde_spec.metamodel.arms import arm_model, arm_models, load_arms
+from tests.budget import examples
 
 from .helpers import ROOT
 
@@ -81,7 +82,7 @@ def test_home_of_the_emulator_faces_down() -> None:
 
 
 @pytest.mark.parametrize("name", NAMES)
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60), deadline=None)
 @given(q=joints)
 def test_forward_matches_an_explicit_chain(name: str, q: tuple[float, ...]) -> None:
     rot, pos = chain(name, q)
@@ -92,7 +93,7 @@ def test_forward_matches_an_explicit_chain(name: str, q: tuple[float, ...]) -> N
 
 
 @pytest.mark.parametrize("name", ["UR5e", "UR3", "UR10e", "UR16e", "UR30"])
-@settings(max_examples=150, deadline=None)
+@settings(max_examples=examples(150), deadline=None)
 @given(q=joints, tcp=offsets)
 def test_every_inverse_solution_reaches_the_pose_and_the_nearest_is_where_we_were(
     name: str, q: tuple[float, ...], tcp: tuple[float, ...]

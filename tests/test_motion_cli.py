@@ -47,6 +47,7 @@ def monotone(values: list[float]) -> bool:
     return all((b >= a - 1e-12) if up else (b <= a + 1e-12) for a, b in itertools.pairwise(values))
 
 
+@pytest.mark.slow  # the README's demo block runs it in the plain run too: CI runs it
 def test_demo_records_a_moving_arm_in_seconds(tmp_path: Path) -> None:
     started = time.monotonic()
     result = subprocess.run([*command(), "demo", "-o", str(tmp_path)], capture_output=True, text=True)

@@ -74,6 +74,7 @@ def serve(host: str) -> tuple[subprocess.Popen[str], int]:
     return proc, int(found.group(1))
 
 
+@pytest.mark.slow  # seconds of a move; test_interop runs ur_rtde in the plain run: CI runs it
 def test_ur_rtde_receive_sees_the_joints_move_during_a_movej() -> None:
     host = "127.0.0.24"
     proc, primary_port = serve(host)

@@ -26,6 +26,7 @@ from rtde_spec import RecipeCodec, StreamDecoder, build, open_writer
 from rtde_spec.output.background import BackgroundStream
 from rtde_spec.output.jsonlines import fits, formatter
 from rtde_spec.wire.framing import PackageFramer
+from tests.budget import examples
 
 NAMES = ["timestamp", "actual_q", "robot_mode", "output_bit_register_64", "actual_digital_input_bits"]
 CODEC = RecipeCodec.for_names(NAMES, "output")
@@ -62,7 +63,7 @@ def frame(pieces: list[bytes | bytearray]) -> list[tuple[int, bytes]]:
     return out
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60), deadline=None)
 @given(st.lists(st.integers(0, len(STREAM)), max_size=12))
 def test_framing_in_place_equals_framing_a_copy_at_any_cut(cuts: list[int]) -> None:
     bounds = [0, *sorted(cuts), len(STREAM)]
@@ -193,7 +194,7 @@ print("pandas" in sys.modules)
     )
 
 
-@settings(max_examples=60, deadline=None)
+@settings(max_examples=examples(60), deadline=None)
 @given(st.lists(st.text(max_size=6), max_size=20), st.booleans())
 def test_text_columns_to_arrow_as_pyarrow_makes_them(values: list[str], constant: bool) -> None:
     """Text columns (the one-value fast path included) hold what pyarrow's own conversion holds."""
@@ -222,7 +223,7 @@ def _client_with_recipe() -> Any:
     return core
 
 
-@settings(max_examples=80, deadline=None)
+@settings(max_examples=examples(80), deadline=None)
 @given(st.lists(st.integers(1, 400), max_size=12))
 def test_client_core_gives_the_same_events_whatever_the_reads(cuts: list[int]) -> None:
     """One package per read (the per-package path), several, or split anywhere: the same
@@ -280,7 +281,7 @@ def test_a_read_the_size_of_whole_packages_that_is_not_only_data_takes_the_gener
         _client_with_recipe().receive(bytes(other))
 
 
-@settings(max_examples=80, deadline=None)
+@settings(max_examples=examples(80), deadline=None)
 @given(st.integers(0, 5), st.integers(0, 3), st.integers(0, 255))
 def test_a_damaged_lead_in_a_batched_read_ends_as_in_reads_of_one_package(
     package: int, byte: int, value: int

@@ -32,6 +32,7 @@ from rtde_spec.wire.primary_base import (
     UnknownMessage,
     UnknownSubPackage,
 )
+from tests.budget import examples
 
 from .helpers import DATA
 from .primary_strategies import MEMBER_KEYS, member_strategy
@@ -107,7 +108,7 @@ def test_generated_construct_structs_agree(case: dict[str, Any]) -> None:
 
 @pytest.mark.parametrize("key", MEMBER_KEYS, ids=[f"{f}-{t}" for f, t in MEMBER_KEYS])
 def test_round_trip_every_model(key: tuple[str, int]) -> None:
-    @settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+    @settings(max_examples=examples(60), deadline=None, suppress_health_check=[HealthCheck.too_slow])
     @given(member_strategy(*key))
     def check(part: PrimaryPart) -> None:
         data = encode_message(part)
@@ -213,7 +214,7 @@ def test_global_variable_errors() -> None:
         decode_message(struct.pack(">IB", 5 + len(body), 25) + body)
 
 
-@settings(max_examples=400, deadline=None)
+@settings(max_examples=examples(400), deadline=None)
 @given(st.binary(max_size=120), st.sampled_from([5, 16, 20, 25, 99]))
 def test_garbage_raises_only_decode_error(body: bytes, mtype: int) -> None:
     data = struct.pack(">IB", 5 + len(body), mtype) + body
@@ -229,7 +230,7 @@ def test_garbage_raises_only_decode_error(body: bytes, mtype: int) -> None:
         pass
 
 
-@settings(max_examples=100, deadline=None)
+@settings(max_examples=examples(100), deadline=None)
 @given(st.data())
 def test_stream_independent_of_read_boundaries(data: st.DataObject) -> None:
     picks = data.draw(st.lists(st.sampled_from(GOLDEN), min_size=1, max_size=8))
@@ -318,7 +319,7 @@ def test_compiled_sub_package_decoder_equals_the_layout_walk(key: tuple[str, int
     fast = codec.robot_state.fast.get(key[1])
     assert fast is not None, f"{cls.NAME} has no compiled decoder"
 
-    @settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+    @settings(max_examples=examples(40), deadline=None, suppress_health_check=[HealthCheck.too_slow])
     @given(member_strategy(*key), st.binary(max_size=6), st.integers(0, 400))
     def check(part: PrimaryPart, tail: bytes, cut: int) -> None:
         body = encode_message(part)[10:] + tail  # after the message and sub-package headers

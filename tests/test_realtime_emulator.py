@@ -96,6 +96,7 @@ def test_each_version_streams_its_size_at_its_control_rate(version: str, size: i
     assert messages[-1][94] == 7  # robot mode RUNNING, guide column 95
 
 
+@pytest.mark.slow  # seconds of a move: CI runs it
 def test_urscript_on_30003_moves_the_arm_and_the_read_only_port_runs_nothing() -> None:
     host = "127.0.0.1"
     with EmulatorThread(config(host, "5.10.0", realtime_port=0, realtime_read_only_port=0)) as emu:

@@ -14,6 +14,7 @@ from rtde_spec.errors import DecodeError, EncodeError, RecipeError
 from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.output.tables import to_arrow, to_pandas
 from rtde_spec.recipes.codec import RecipeCodec
+from tests.budget import examples
 
 from .strategies import wire_value
 
@@ -38,7 +39,7 @@ def _same(a: object, b: object) -> bool:
     return a == b
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=examples(200), deadline=None)
 @given(recipe_and_values())
 def test_round_trip_dict_record_model_package(case: tuple[RecipeCodec, dict]) -> None:
     codec, values = case
@@ -55,7 +56,7 @@ def test_round_trip_dict_record_model_package(case: tuple[RecipeCodec, dict]) ->
     assert codec.decode_package(package, recipe_id=7) == record
 
 
-@settings(max_examples=100, deadline=None)
+@settings(max_examples=examples(100), deadline=None)
 @given(recipe_and_values(allow_nan=True), st.integers(1, 20))
 def test_bulk_decode_matches_per_packet(case: tuple[RecipeCodec, dict], count: int) -> None:
     codec, values = case
@@ -72,7 +73,7 @@ def test_bulk_decode_matches_per_packet(case: tuple[RecipeCodec, dict], count: i
             assert _same(column[0].item(), expected)
 
 
-@settings(max_examples=100, deadline=None)
+@settings(max_examples=examples(100), deadline=None)
 @given(recipe_and_values(), st.integers(0, 12), st.integers(0, 11))
 def test_records_of_many_packages_are_those_of_each(
     case: tuple[RecipeCodec, dict], count: int, bad: int
@@ -346,7 +347,7 @@ def mixed_values(draw: st.DrawFn) -> tuple[RecipeCodec, dict]:
     return codec, values
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=examples(300), deadline=None)
 @given(mixed_values(), st.booleans())
 def test_compiled_path_agrees_with_the_per_value_checks(case: tuple[RecipeCodec, dict], strict: bool) -> None:
     """A dict takes the compiled one-call path, a read-only mapping the per-value checks: the

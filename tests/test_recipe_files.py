@@ -9,6 +9,7 @@ import pytest
 from rtde_spec.errors import RecipeError
 from rtde_spec.recipes.files import FORMATS, dumps_recipes, load_recipes, save_recipes
 from rtde_spec.recipes.model import Recipe
+from tests.budget import examples
 
 from .helpers import DATA
 
@@ -137,7 +138,9 @@ def test_random_text_gives_recipes_or_recipe_error(tmp_path: Path, fmt: str) -> 
 
     from rtde_spec.recipes.validation import validate_recipes
 
-    @settings(max_examples=80, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+    @settings(
+        max_examples=examples(80), deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture]
+    )
     @given(st.text(max_size=200))
     def check(text: str) -> None:
         path = tmp_path / "r.any"

@@ -15,6 +15,7 @@ from rtde_spec.errors import DecodeError
 from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.primary.codec import PrimaryCodec, PrimaryStreamDecoder, decode_message, encode_message
 from rtde_spec.wire.primary_base import RobotStateMessage
+from tests.budget import examples
 
 from .helpers import ROOT
 from .test_robot_state_shapes import _offset_of_immi_flag
@@ -123,7 +124,7 @@ def test_a_stream_decoder_keeps_its_own_cache() -> None:
     assert all(x is not y for x, y in zip(subs(a), subs(shared), strict=True))
 
 
-@settings(max_examples=120, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(120), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.data())
 def test_one_changed_byte_anywhere_in_a_sub_package_gives_a_new_correct_model(data: st.DataObject) -> None:
     parts = bounds(BASE)
@@ -160,7 +161,7 @@ def outcome(decode: Any, data: bytes) -> str:
         return f"error: {exc}"
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(150), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(
     st.lists(st.tuples(st.integers(0, 1331), st.integers(0, 255)), min_size=1, max_size=6),
     st.booleans(),

@@ -14,6 +14,7 @@ from hypothesis import strategies as st
 from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.primary.codec import PrimaryCodec, decode_message, default_codec, encode_message
 from rtde_spec.wire.primary_base import PrimaryPart, RobotStateMessage
+from tests.budget import examples
 
 from .helpers import DATA
 from .primary_strategies import MEMBER_KEYS, member_strategy
@@ -38,7 +39,7 @@ def message(subs: list[PrimaryPart]) -> bytes:
     return encode_message(RobotStateMessage(sub_packages=subs))
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(60), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(parts, parts)
 def test_a_learned_shape_decodes_as_the_walk_does(
     first: list[PrimaryPart], second: list[PrimaryPart]
@@ -53,7 +54,7 @@ def test_a_learned_shape_decodes_as_the_walk_does(
         assert sum(len(v) for v in shapes.values()) >= 1
 
 
-@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(40), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(member_strategy("robot_state", 3), min_size=2, max_size=2))
 def test_same_sizes_other_values_and_a_flag_the_size_does_not_carry(boards: list[PrimaryPart]) -> None:
     """Two masterboard sub-packages of the same size: the second decodes its own values; one
@@ -157,7 +158,7 @@ def test_threads_sharing_a_codec_learn_shapes_without_errors() -> None:
     assert sum(len(v) for v in codec.robot_state.shapes.values()) >= 4
 
 
-@settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(150), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.lists(st.tuples(st.integers(0, 1331), st.integers(0, 255)), min_size=1, max_size=6))
 def test_damaged_bytes_of_a_learned_shape_decode_as_without_shapes(edits: list[tuple[int, int]]) -> None:
     """Bytes changed anywhere in a message whose shape is learned (headers included): the

@@ -11,6 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rtde_spec.output.tables import rows_table
+from tests.budget import examples
 
 KEYS = ["a", "b", "c", "d"]
 VALUES = {
@@ -22,7 +23,7 @@ VALUES = {
 ROW = st.fixed_dictionaries({}, optional={k: VALUES[k] for k in KEYS})
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=examples(200), deadline=None)
 @given(st.lists(ROW, min_size=1, max_size=12))
 def test_rows_become_the_table_from_pylist_makes(rows: list[dict[str, Any]]) -> None:
     names = list(dict.fromkeys(k for row in rows for k in row))  # every row's keys, in order

@@ -10,11 +10,12 @@ from rtde_spec._generated import rtde_models as gen
 from rtde_spec.errors import DecodeError
 from rtde_spec.rtde.codec import decode, decode_stream, encode
 from rtde_spec.wire.framing import PackageFramer
+from tests.budget import examples
 
 from .helpers import golden
 from .strategies import message_strategy
 
-SETTINGS = settings(max_examples=150, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+SETTINGS = settings(max_examples=examples(150), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 
 
 @pytest.mark.parametrize("cls", gen.MESSAGES, ids=lambda c: c.NAME)
@@ -46,7 +47,7 @@ def test_round_trip_bytes_with_nan(cls: type) -> None:
     check()
 
 
-@settings(max_examples=400, deadline=None)
+@settings(max_examples=examples(400), deadline=None)
 @given(
     data=st.binary(max_size=80),
     sender=st.sampled_from(gen.SENDERS),
@@ -64,7 +65,7 @@ def test_random_bytes_raise_only_decode_error(data: bytes, sender: str, proto: i
         assert str(exc)
 
 
-@settings(max_examples=300, deadline=None)
+@settings(max_examples=examples(300), deadline=None)
 @given(
     header=st.sampled_from(sorted(gen.PACKAGE_TYPES)),
     body=st.binary(max_size=40),
@@ -90,7 +91,7 @@ def test_every_truncation_of_a_golden_package_is_a_decode_error(case: dict) -> N
         assert info.value.offset is not None
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=examples(200), deadline=None)
 @given(st.data())
 def test_framer_is_independent_of_read_boundaries(data: st.DataObject) -> None:
     cases = golden()

@@ -19,6 +19,7 @@ from hypothesis import strategies as st
 
 from rtde_spec._generated import primary_models as pm
 from rtde_spec.primary.codec import default_codec
+from tests.budget import examples
 
 from ..capture_files import FILE_OPS, FRAME_OPS, Conversation, decode_mutated, run_capture, write
 
@@ -73,7 +74,7 @@ def test_a_uint64_of_2_to_the_63_lands_in_a_uint64_column(tmp_path: Path) -> Non
 
 @pytest.mark.slow  # long end to end: CI runs it (RTDE_SPEC_SLOW=1), the fast loop does not
 @settings(
-    max_examples=120,
+    max_examples=examples(120),
     deadline=None,
     suppress_health_check=[HealthCheck.function_scoped_fixture, HealthCheck.too_slow],
 )

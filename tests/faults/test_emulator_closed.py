@@ -83,6 +83,7 @@ def _slider_and_q(client: RtdeClient) -> tuple[float, list[float]]:
     return float(record.target_speed_fraction), [float(v) for v in record.actual_q]
 
 
+@pytest.mark.slow  # seconds of a moving arm: CI runs it
 def test_slider_values_out_of_range_never_poison_the_arm(emu: EmulatorThread) -> None:
     with RtdeClient("127.0.0.1", emu.ports["rtde"]) as client:
         client.setup_outputs(["target_speed_fraction", "actual_q"], 125)

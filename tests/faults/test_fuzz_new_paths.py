@@ -26,6 +26,7 @@ from rtde_spec.rtde import codec
 from rtde_spec.rtde.client_events import DataRun, Reply, Text
 from rtde_spec.rtde.client_protocol import ClientProtocol
 from rtde_spec.rtde.packages import decode_package, encode_package
+from tests.budget import examples
 
 from ..helpers import ROOT
 
@@ -71,7 +72,7 @@ DECODE_ARGS = st.tuples(st.sampled_from([1, 2]), st.sampled_from(["controller", 
 # --- 1. rtde.packages --------------------------------------------------------------------------
 
 
-@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(400), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(PACKAGE_BYTES, DECODE_ARGS)
 def test_decode_package_raises_only_decode_errors_and_its_values_make_a_model(
     data: bytes, args: tuple[int, str, bool]
@@ -89,7 +90,7 @@ def test_decode_package_raises_only_decode_errors_and_its_values_make_a_model(
         pass
 
 
-@settings(max_examples=400, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(400), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(PACKAGE_BYTES, st.sampled_from([1, 2]), st.sampled_from(["controller", "client"]))
 @example(bytes.fromhex("00045684"), 2, "controller")  # a BOOL byte of 0x84
 def test_a_strictly_decoded_package_encodes_back_to_its_bytes(data: bytes, version: int, sender: str) -> None:
@@ -193,7 +194,7 @@ def _feed(core: ClientProtocol, chunks: list[bytes]) -> tuple[list[Any], str | N
 
 
 @pytest.mark.slow  # long end to end: CI runs it (RTDE_SPEC_SLOW=1), the fast loop does not
-@settings(max_examples=250, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(250), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(controller_streams(), st.booleans())
 def test_the_client_core_raises_only_library_errors_on_any_controller_bytes(
     stream: tuple[bytes, list[bytes]], version_reply_first: bool
@@ -203,7 +204,7 @@ def test_the_client_core_raises_only_library_errors_on_any_controller_bytes(
 
 
 @pytest.mark.slow  # long end to end: CI runs it (RTDE_SPEC_SLOW=1), the fast loop does not
-@settings(max_examples=250, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(250), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(controller_streams(), st.booleans())
 @example((SETUP_REPLY + DATA + bytes(56), [SETUP_REPLY + DATA + bytes(56)]), True)  # found by the campaign
 def test_the_client_core_hands_out_the_same_events_however_the_bytes_are_read(
@@ -358,7 +359,7 @@ def random_program(r: random.Random) -> str:
     return text
 
 
-@settings(max_examples=60, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(60), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(st.randoms(use_true_random=False))
 def test_random_programs_fault_cleanly_and_every_step_is_quick(r: random.Random) -> None:
     """Random programs: each faults cleanly or runs (it once failed rarely here: a movej `t` that is a huge
@@ -480,7 +481,7 @@ def urcl_sessions(draw: Any) -> tuple[bytes | None, list[bytes], list[int]]:
 
 
 @pytest.mark.slow  # long end to end: CI runs it (RTDE_SPEC_SLOW=1), the fast loop does not
-@settings(max_examples=30, deadline=None, suppress_health_check=[HealthCheck.too_slow])
+@settings(max_examples=examples(30), deadline=None, suppress_health_check=[HealthCheck.too_slow])
 @given(urcl_sessions(), st.booleans())
 def test_urcl_capture_of_any_program_and_records_raises_only_library_errors(
     tmp_path_factory: Any, session: tuple[bytes | None, list[bytes], list[int]], one_write_each: bool
@@ -533,7 +534,7 @@ PLAIN_VALUES = {
 }
 
 
-@settings(max_examples=200, deadline=None)
+@settings(max_examples=examples(200), deadline=None)
 @given(st.lists(st.fixed_dictionaries({}, optional=PLAIN_VALUES), min_size=1, max_size=10))
 def test_rows_table_keeps_every_plain_value(rows: list[dict[str, Any]]) -> None:
     from rtde_spec.output.tables import rows_table

@@ -50,7 +50,12 @@ def stamps_of(path: Path) -> list[float]:
 
 @pytest.mark.parametrize(
     ("sig", "suffix"),
-    [(signal.SIGTERM, ".parquet"), (SIGHUP, ".parquet"), (signal.SIGTERM, ".jsonl"), (SIGHUP, ".csv")],
+    [
+        (signal.SIGTERM, ".parquet"),
+        pytest.param(SIGHUP, ".parquet", marks=pytest.mark.slow),  # each signal and format once in
+        pytest.param(signal.SIGTERM, ".jsonl", marks=pytest.mark.slow),  # the plain run; CI runs all
+        (SIGHUP, ".csv"),
+    ],
 )
 def test_a_signal_ends_the_recording_with_every_row_in_a_readable_file(
     emu: EmulatorThread, tmp_path: Path, sig: int, suffix: str
