@@ -99,8 +99,9 @@ def _internal_part(kind: int, size: int) -> PrimaryPart:
 
 
 def _internal(kind: int, size: int) -> dict[str, Any]:
-    """A sub-package UR software uses only, `size` zero bytes as the spec's fields read them
-    (one `data` field today; whatever fields the spec gives it, the bytes stay the same)."""
+    """A sub-package of `size` zero bytes (URSim's size) as the spec's fields read them: Safety
+    Data's one `data` field, Calibration Data's six doubles; whatever fields the spec gives it,
+    the bytes sent stay the ones URSim sends."""
     part = _internal_part(kind, size)
     return {name: getattr(part, name) for name in type(part).model_fields if name not in ("extra", "missing")}
 
