@@ -17,6 +17,7 @@ import pytest
 from rtde_spec import EmulatorConfig, EmulatorThread
 from rtde_spec.emulator.controller.model import HOME_Q
 from rtde_spec.external.codec import record_codec
+from rtde_spec.primary.codec import PrimaryStreamDecoder
 
 PROGRAM = """def external_control():
   global cmd_q = get_actual_joint_positions()
@@ -64,6 +65,29 @@ end
 """
 
 
+def robot_messages_until(
+    primary: socket.socket, text: str, seconds: float = 5.0
+) -> tuple[list[str], list[str]]:
+    """The text messages and runtime exceptions a primary client reads, until `text` comes (the
+    port drains the controller's events every 100 ms: a client reads them, as a driver does)."""
+    decoder, texts, errors = PrimaryStreamDecoder(), list[str](), list[str]()
+    deadline = time.monotonic() + seconds
+    primary.settimeout(0.5)
+    while text not in texts and time.monotonic() < deadline:
+        try:
+            chunk = primary.recv(65536)
+        except TimeoutError:
+            continue
+        if not chunk:
+            break
+        for _, message in decoder.feed(chunk):
+            if getattr(message, "text_message", None) is not None:
+                texts.append(str(message.text_message))
+            if getattr(message, "runtime_exception_text_message", None) is not None:
+                errors.append(str(message.runtime_exception_text_message))
+    return texts, errors
+
+
 def test_the_arm_follows_servoj_targets_streamed_on_the_reverse_port() -> None:
     codec = record_codec("reverse", "reverse_command")
     target = [q + 0.15 for q in HOME_Q]
@@ -73,6 +97,7 @@ def test_the_arm_follows_servoj_targets_streamed_on_the_reverse_port() -> None:
             rtde_port=None, primary_port=0, secondary_port=None, realtime_port=None, dashboard_port=None
         )
         with EmulatorThread(config) as emu:
+            watcher = socket.create_connection(("127.0.0.1", emu.ports["primary"]))
             with socket.create_connection(("127.0.0.1", emu.ports["primary"])) as primary:
                 primary.sendall(PROGRAM.format(port=port).encode())
             reverse_server.settimeout(10)
@@ -103,7 +128,8 @@ def test_the_arm_follows_servoj_targets_streamed_on_the_reverse_port() -> None:
                     assert time.monotonic() < deadline, "the program did not stop"
                     time.sleep(0.01)
                 assert robot.recv(64) == b""  # the program closed its socket
-            events = emu.call(lambda: [(e.kind, e.text) for e in emu.model.drain_events()])
-    assert ("text", "external control stopped") in events
-    assert not [text for kind, text in events if kind == "runtime_exception"]
+            with watcher:
+                texts, errors = robot_messages_until(watcher, "external control stopped")
+    assert "external control stopped" in texts
+    assert not errors
     assert emu.model.values["actual_q"] == pytest.approx(target, abs=1e-5)
