@@ -5,7 +5,9 @@ none after the same setup and warm-up; the difference over N is the row's instru
 per call. Rows: decode of a 58-field data package, encode of 8 and 58 fields (default and
 strict), a URSim 5.8 Robot State (`rs`: one message repeated; `rsmove`: the next message
 of a stream of distinct ones as a moving robot sends them, see
-`ur5e_robot_state.moving_robot_stream`), each beside its floor and its peer.
+`ur5e_robot_state.moving_robot_stream`), each beside its floor and its peer; `values12` and
+`objects12` are the bounds of `bench_primary_decode.bound_decoder` (our decoder minus its
+models: values in tuples; model objects holding no values).
 
     python benchmarks/instructions.py [--calls 1000] [ROW ...]     (needs valgrind)
 """
@@ -23,12 +25,13 @@ from collections.abc import Callable
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
+BOUNDS = ("values12", "objects12")  # our Robot State decoder minus its models (bench_primary_decode)
 ROWS = [
     *(f"dec:{m}" for m in ("floor", "record", "UR")),
     *(f"enc8:{m}" for m in ("floor", "default", "strict", "UR")),
     *(f"enc58:{m}" for m in ("floor", "default", "strict", "UR")),
     *(f"rs:{m}" for m in ("floor", "ours", "stream", "floor12", "ours12", "urx")),
-    *(f"rsmove:{m}" for m in ("floor", "ours", "stream", "floor12", "ours12", "urx")),
+    *(f"rsmove:{m}" for m in ("floor", "ours", "stream", "floor12", "ours12", "urx", *BOUNDS)),
 ]
 STREAM_FILE = "RTDE_SPEC_BENCH_STREAM"  # environment: the file holding the moving-robot stream
 
@@ -84,6 +87,9 @@ def _robot_state(mode: str, moving: bool) -> Callable[[], object]:
     if mode.startswith("floor"):
         floor = bench.baseline_decoder(data)
         return lambda: floor(next(it))
+    if mode in ("values12", "objects12"):  # the bounds: our generated code minus its models
+        bound = bench.bound_decoder(mode[:-2], messages[:2])
+        return lambda: bound(next(it))
     if mode == "stream":
         stream = PrimaryStreamDecoder()
         return lambda: stream.feed(next(it))
@@ -182,7 +188,8 @@ def count_rows(rows: list[str], calls: int) -> None:
     for row in rows:
         counts[row] = (instructions(row, calls) - instructions(row, 0)) // calls
         kind = row.split(":")[0]
-        floor = counts.get(f"{kind}:floor") or counts.get(f"{kind}:floor12" if row.endswith("12") else "")
+        floor = counts.get(f"{kind}:floor12") if row.endswith("12") else None
+        floor = floor or counts.get(f"{kind}:floor")
         to_floor = f"{counts[row] / floor:6.2f}x the floor" if floor else ""
         print(f"{row:14s} {counts[row]:10,d} instructions per call  {to_floor}", flush=True)
 
