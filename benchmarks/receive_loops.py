@@ -12,7 +12,9 @@ wake-ups per package (voluntary context switches, every thread). Rows, in every 
   as UR's rtde.py does); ur_rtde's RTDEReceiveInterface once, when installed;
 - floors: a bare `recv()` loop that decodes nothing (what one wake-up per package
   costs this machine), the same loop with one `struct` unpack per package, and
-  batched `recv` + `struct` tuples (no names, no checks, no thread).
+  batched `recv` + `struct` tuples (no names, no checks, no thread); and the bare loop
+  in C (`recv_floor.c`, built with the machine's C compiler when it has one): what a
+  wake-up costs with no interpreter, below which no Python loop can go.
 
 The rows run in turn, in a rotated order each round (no row always follows the same
 one); medians and the spread (lowest-highest) are reported, ratios are taken within
@@ -158,6 +160,43 @@ report(time.process_time() - c0, got / size, _switches() - w0)
 """
 )
 
+FLOOR_C = (
+    """
+import os, socket, struct, sys
+port, seconds, names, binary = int(sys.argv[1]), sys.argv[2], sys.argv[3], sys.argv[5]
+size = 4 + int(sys.argv[4])
+"""
+    + HANDSHAKE
+    + """s.recv(65536)
+os.set_inheritable(s.fileno(), True)
+os.execv(binary, [binary, str(s.fileno()), seconds, str(size)])  # the same process, no interpreter
+"""
+)
+
+
+def c_floor() -> str | None:
+    """`recv_floor.c` built once per run in a temporary directory; None without a C compiler."""
+    global _C_FLOOR
+    if _C_FLOOR is None:
+        compiler = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
+        _C_FLOOR = ""
+        if compiler is not None:
+            out = Path(tempfile.mkdtemp(prefix="recv-floor-")) / "recv_floor"
+            built = subprocess.run(
+                [compiler, "-O2", "-o", str(out), str(Path(__file__).with_name("recv_floor.c"))],
+                capture_output=True,
+                text=True,
+            )
+            _C_FLOOR = str(out) if built.returncode == 0 else ""
+            if built.returncode:
+                print(f"(the C floor row is left out: {compiler} failed: {built.stderr.strip()[:200]})")
+        else:
+            print("(the C floor row is left out: no C compiler on this machine)")
+    return _C_FLOOR or None
+
+
+_C_FLOOR: str | None = None
+
 FLOOR_BATCHED = (
     f"BATCH = {BATCH}\n"
     + """
@@ -202,6 +241,7 @@ LABELS = {
     "floor": "floor: bare recv() loop, nothing decoded",
     "floor_unpack": "floor: recv() + one struct unpack",
     "floor_b": f"floor, batch={BATCH}: recv + struct tuples",
+    "floor_c": "floor: bare recv() loop in C",
 }
 
 
@@ -242,6 +282,8 @@ def specs(
 ) -> dict[str, Any]:
     """Each row's child code and arguments."""
     joined, here, span = ",".join(names), str(Path(__file__).parent), str(seconds)
+    binary = c_floor()
+    in_c = {"floor_c": (FLOOR_C, str(port), span, joined, str(size), binary)} if binary else {}
     return {
         "iterate": (OURS, str(port), span, joined, "iterate"),
         "receive": (OURS, str(port), span, joined, "receive"),
@@ -252,6 +294,7 @@ def specs(
         "batched": (OURS, str(port), span, joined, "callback-batched"),
         "floor_b": (FLOOR_BATCHED, str(port), span, joined, str(size), fmt),
         "longer": (OURS, str(port), span, joined, "callback-batched", str(BATCH_LONG)),
+        **in_c,
     }
 
 
@@ -413,10 +456,19 @@ def receive_rows(
         f"than UR style ({vs_ur:.1f}x): {'met' if hit else 'MISSED'}"
     )
     floor = med("floor")
+    in_c = f", {med('floor_c'):.1f} µs in C" if "floor_c" in us else ""
     print(
-        f"  the floor of one wake-up per package on this machine now: {floor:.1f} µs (bare recv() loop); "
+        f"  the floor of one wake-up per package on this machine now: {floor:.1f} µs "
+        f"(bare recv() loop{in_c}); "
         f"<= {TARGET_ITER_US} µs {'is' if floor <= TARGET_ITER_US else 'is NOT'} reachable waking per package"
     )
+    if "floor_c" in us:
+        ur = med("ur")
+        print(
+            f"  >= {TARGET_ITER_VS_UR}x less than UR style is {ur / TARGET_ITER_VS_UR:.1f} µs a package "
+            f"(the C loop waking per package: {med('floor_c'):.1f} µs); >= {TARGET_BATCH_VS_UR}x is "
+            f"{ur / TARGET_BATCH_VS_UR:.1f} µs (batched recv + struct tuples: {med('floor_b'):.1f} µs)"
+        )
     return verdicts
 
 
