@@ -16,12 +16,14 @@ from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated import primary_models as gen
 from rtde_spec._generated.constants import PRIMARY_BYTE_ORDER as ORDER
-from rtde_spec._generated.constants import PRODUCT_LINES
 from rtde_spec.errors import DecodeError, EncodeError
 from rtde_spec.metamodel.versions import Version
+from rtde_spec.primary.compiled import Decoder
+from rtde_spec.primary.compiled_tagged import TagReader, decode_member, family_decoders
 from rtde_spec.primary.families import FamilyView, PrimaryView, primary_view
 from rtde_spec.primary.fast_models import build, with_groups
 from rtde_spec.primary.robot_state import Reuse, RobotStateReader
+from rtde_spec.primary.version_warnings import warnings_for
 from rtde_spec.wire.framing import PackageFramer, Skipped, check_header
 from rtde_spec.wire.layout import Layout
 from rtde_spec.wire.primary_base import (
@@ -47,6 +49,8 @@ class _Family:
     prefix: Layout | None
     members: dict[int, tuple[type[PrimaryPart], Layout]] = field(default_factory=dict)
     older: dict[int, list[tuple[Version, Layout]]] = field(default_factory=dict)  # oldest range first
+    fast: dict[int, Decoder] = field(default_factory=dict)  # tag -> generated decoder (compiled_tagged.py)
+    tag_at: TagReader | None = None
 
 
 class PrimaryCodec:
@@ -94,6 +98,9 @@ class PrimaryCodec:
                     ]
                     entry.older[member.type] = sorted(ranges, key=lambda r: r[0])
             self.families[fam.type] = entry
+            if prefix is not None and fam.tag:  # the members' generated decoders
+                found = family_decoders(entry.members, entry.older, prefix, fam.tag, self.values)
+                entry.tag_at, entry.fast = found
         # Robot State: generated decoders per sub-package and per message shape (robot_state.py)
         self.state_type = gen.FAMILY_TYPES["robot_state"]
         state = self.families[self.state_type]
@@ -132,15 +139,19 @@ class PrimaryCodec:
             return self.robot_state.decode(buf, hsize, size, version, reuse)
         fam = self.families.get(mtype)
         if fam is None:
-            return UnknownMessage(type=mtype, size=size, raw=buf[:size])
+            return build(UnknownMessage, {"type": mtype, "size": size, "raw": buf[:size]})
         layout = fam.spec.layout
         if layout == "opaque":
-            return OpaqueMessage(family=fam.spec.name, type=mtype, raw=buf[hsize:size])
+            return build(OpaqueMessage, {"family": fam.spec.name, "type": mtype, "raw": buf[hsize:size]})
         if layout == "subpackages":
             return self.robot_state.decode(buf, hsize, size, version, reuse)
         return self._tagged(fam, buf, hsize, size)
 
     def _tagged(self, fam: _Family, buf: bytes, pos: int, end: int) -> PrimaryMessage:
+        if fam.tag_at is not None:  # the member's generated decoder, if any
+            made = decode_member(fam.tag_at, fam.fast, buf, pos, end)
+            if made is not None:
+                return made  # type: ignore[no-any-return]
         assert fam.prefix is not None
         prefix, missing, pos = fam.prefix.decode(buf, pos, end)
         if missing:
@@ -153,7 +164,8 @@ class PrimaryCodec:
         tag = prefix[fam.spec.tag or ""]
         member = fam.members.get(tag)
         if member is None:
-            return UnknownMember(family=fam.spec.name, type=tag, prefix=prefix, raw=buf[pos:end])
+            values = {"family": fam.spec.name, "type": tag, "prefix": prefix, "raw": buf[pos:end]}
+            return build(UnknownMember, values)
         cls, layout = member
         return self._part(cls, layout, buf, pos, end, prefix)
 
@@ -320,60 +332,9 @@ class PrimaryStreamDecoder:
                 )
             out.append((offset, message))
 
-    def _unexpected_missing(self, parts: list[Any]) -> list[str]:
-        """Missing fields that the controller's version should have sent (by the fields' `since`)."""
-        if self.version is None:
-            return []
-        line = next((name for name, majors in PRODUCT_LINES.items() if self.version.major in majors), None)
-        if line is None:
-            return []  # outside the product lines: reported on its own
-        out = []
-        for part in parts:
-            for name in getattr(part, "missing", ()):
-                since = self.codec.field_since.get((part.NAME, name))
-                expected = since is not None and (line not in since or self.version < since[line])
-                if not expected:
-                    out.append(f"{part.NAME}.{name}")
-        return out
-
     def warnings_for(self, message: PrimaryMessage) -> list[str]:
-        """Why this message's values may be wrong: an unknown controller line, or layouts that disagree.
-
-        Shown with each message, so values are never presented as decoded when the
-        spec visibly does not describe the firmware that sent them.
-        """
-        out = []
-        if self.version is not None and not any(
-            self.version.major in majors for majors in PRODUCT_LINES.values()
-        ):
-            lines = ", ".join(f"{name} {'/'.join(map(str, m))}.x" for name, m in PRODUCT_LINES.items())
-            version = self.version
-            older = sorted(
-                m.NAME
-                for fam in self.codec.families.values()
-                for t, (m, _) in fam.members.items()
-                if any(version < before for before, _ in fam.older.get(t, []))
-            )
-            known = f" (older layouts from public sources used for {', '.join(older)})" if older else ""
-            out.append(
-                f"controller {version} is outside the spec's product lines ({lines}){known}; "
-                "other layouts are not described for it, so values may be wrong"
-            )
-        parts = message.sub_packages if isinstance(message, RobotStateMessage) else [message]
-        unexpected = self._unexpected_missing(parts)
-        if unexpected:
-            names = ", ".join(unexpected)
-            out.append(f"missing on controller {self.version}, which the spec says sends them: {names}")
-        if isinstance(message, RobotStateMessage):
-            shorter = [s.NAME for s in message.sub_packages if isinstance(s, PrimaryPart) and s.missing]
-            longer = [s.NAME for s in message.sub_packages if isinstance(s, PrimaryPart) and s.extra]
-            if shorter and longer:
-                out.append(
-                    "layouts disagree: some sub-packages are shorter than the spec "
-                    f"({', '.join(shorter)}) and others longer ({', '.join(longer)}); "
-                    "no single firmware sends that, so these values may be wrong"
-                )
-        return out
+        """Why this message's values may be wrong (`version_warnings.py`), shown with each message."""
+        return warnings_for(self.codec, self.version, message)
 
     @property
     def unframed(self) -> int:

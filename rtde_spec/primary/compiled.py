@@ -28,7 +28,7 @@ if TYPE_CHECKING:  # annotations only: the meta-model is not built at run time
 Decoder = Callable[[bytes, int, int], Any]
 
 
-class _Source:
+class Source:
     """Statements of one generated function, and the objects it names."""
 
     def __init__(self) -> None:
@@ -55,22 +55,24 @@ class _Source:
         building a dict and setting it as __dict__ (~10 % of a Robot State, by callgrind).
         """
         if set(cls.model_fields) != {e.split(":")[0].strip("'") for e in entries}:
-            raise _NotFixed
+            raise NotFixed
         var, name = self.name("m"), self.name("C", cls)
         self.add(f"{var} = _new({name})", f"d = {var}.__dict__")
         self.add(*(f"d[{key}] = {value}" for key, value in (e.split(": ", 1) for e in entries)))
         return var
 
 
-class _NotFixed(Exception):
+class NotFixed(Exception):
     """The layout has a part the generated code does not cover: the general path decodes it."""
 
 
-def _fields(src: _Source, fields: list[LayoutField], t: str | list[str], index: int) -> tuple[list[str], int]:
+def _fields(src: Source, fields: list[LayoutField], t: str | list[str], index: int) -> tuple[list[str], int]:
     """'name: expression' entries for fixed fields read from tuple `t` at `index`
     (or from the variables `t` names, one per value)."""
     entries = []
     for fld in fields:
+        if fld.scale is not None:  # the wire holds value x scale: the general walk divides
+            raise NotFixed
         if fld.kind == "value":
             count = fld.count or 1
             if isinstance(t, list):
@@ -86,15 +88,15 @@ def _fields(src: _Source, fields: list[LayoutField], t: str | list[str], index: 
                 made.append(src.model(gen.GROUPS[fld.group], values))
             entries.append(f"{fld.name!r}: ({', '.join(made)},)")
         else:
-            raise _NotFixed
+            raise NotFixed
     return entries, index
 
 
-def _unpack(src: _Source, layout: Layout, fields: list[LayoutField]) -> list[str]:
+def unpack_run(src: Source, layout: Layout, fields: list[LayoutField]) -> list[str]:
     """Statements reading one fixed run at p (None when the part is too short); its entries."""
     step = Layout(fields, layout.prims, order=layout.order)._single
     if step is None:
-        raise _NotFixed
+        raise NotFixed
     unpack, size = src.name("U", step.struct.unpack_from), step.struct.size
     names = [src.name("v") for _ in step.struct.unpack(bytes(size))]  # a local per value
     read = f"({', '.join(names)},) = {unpack}(buf, p)"
@@ -103,7 +105,7 @@ def _unpack(src: _Source, layout: Layout, fields: list[LayoutField]) -> list[str
     return entries
 
 
-def _body(src: _Source, layout: Layout) -> list[str]:
+def _body(src: Source, layout: Layout) -> list[str]:
     """Entries of every field: fixed runs, conditional fixed groups, a trailing rest of bytes/text."""
     entries: list[str] = []
     run: list[LayoutField] = []
@@ -112,14 +114,14 @@ def _body(src: _Source, layout: Layout) -> list[str]:
             run.append(fld)
             continue
         if run:
-            entries += _unpack(src, layout, run)
+            entries += unpack_run(src, layout, run)
             run = []
         if fld.kind == "optional" and fld.group is not None:
             flag = next(e.split(": ", 1)[1] for e in entries if e.startswith(repr(fld.when) + ":"))
             var = src.name("o")
             src.add(f"if {flag}:")
             src.indent += "    "
-            inner = _unpack(src, layout, fld.fields or [])
+            inner = unpack_run(src, layout, fld.fields or [])
             src.add(f"{var} = {src.model(gen.GROUPS[fld.group], inner)}")
             src.indent = src.indent[:-4]
             src.add("else:", f"    {var} = None")
@@ -128,13 +130,13 @@ def _body(src: _Source, layout: Layout) -> list[str]:
             src.add("rest = buf[p:end]", "p = end")
             entries.append(f"{fld.name!r}: rest")
         else:
-            raise _NotFixed
+            raise NotFixed
     if run:
-        entries += _unpack(src, layout, run)
+        entries += unpack_run(src, layout, run)
     return entries
 
 
-def _emit_part(src: _Source, cls: type[BaseModel], layout: Layout) -> str:
+def _emit_part(src: Source, cls: type[BaseModel], layout: Layout) -> str:
     """Statements decoding one part between `p` and `end`; returns the variable of its model."""
     entries = _body(src, layout)
     return src.model(cls, [*entries, "'missing': ()", "'extra': buf[p:end]"])
@@ -146,11 +148,11 @@ def compile_part(cls: type[BaseModel], layout: Layout) -> Decoder | None:
     None from compile_part itself: the layout has strings, switches or open-ended groups,
     which the general path decodes. Bytes after the layout are the part's `extra`.
     """
-    src = _Source()
+    src = Source()
     src.add("p = start")
     try:
         part = _emit_part(src, cls, layout)
-    except _NotFixed:
+    except NotFixed:
         return None
     body = "\n    ".join([*src.lines, f"return {part}"])
     exec(f"def decode(buf, start, end):\n    {body}\n", src.env)
@@ -186,7 +188,7 @@ class CompiledShape:
 
 
 def _fixed_part(
-    src: _Source, cls: type[BaseModel], layout: Layout, part: str, head: struct.Struct, whole: int, kind: int
+    src: Source, cls: type[BaseModel], layout: Layout, part: str, head: struct.Struct, whole: int, kind: int
 ) -> str | None:
     """A part of fixed fields (and perhaps trailing rest-of-part bytes) in the bytes `part`
     (its header included, `whole` of them): one unpack of its header and fields, the header
@@ -199,10 +201,10 @@ def _fixed_part(
         return None
     step = Layout(fields, layout.prims, order=layout.order)._single if fields else None
     if fields and step is None:
-        raise _NotFixed
+        raise NotFixed
     fmt = struct.Struct(head.format + (step.struct.format[1:] if step is not None else ""))
     if whole < fmt.size:  # shorter than its layout: the general walk names what is missing
-        raise _NotFixed
+        raise NotFixed
     names = [src.name("v") for _ in fmt.unpack(bytes(fmt.size))]
     src.add(
         f"({', '.join(names)},) = {src.name('U', fmt.unpack_from)}({part})",
@@ -232,7 +234,7 @@ def compile_shape(
     None from compile_shape: a part is shorter than its layout, or has a layout the
     generated code does not cover.
     """
-    src = _Source()
+    src = Source()
     made, blank, pieces, split = [], [], [], []
     try:
         for slot, (cls, layout, size) in enumerate(parts):
@@ -253,7 +255,7 @@ def compile_shape(
             src.lines[mark:mark] = [f"e = c[{slot}]", f"if {part} == e[0]:", f"    {var} = e[1]", "else:"]
             made.append(var)
             blank.append((None, None))
-    except _NotFixed:
+    except NotFixed:
         return None
     cut = src.name("B", struct.Struct(head.format[0] + "".join(pieces)).unpack_from)
     lines = [f"({', '.join(split)},) = {cut}(buf, pos)", *src.lines, f"return [{', '.join(made)}]"]

@@ -23,7 +23,7 @@ from typing import Any
 from rtde_spec.errors import DecodeError
 from rtde_spec.metamodel.versions import Version
 from rtde_spec.primary.compiled import CompiledShape, Decoder, compile_part, compile_shape
-from rtde_spec.primary.fast_models import maker
+from rtde_spec.primary.fast_models import build, maker
 from rtde_spec.wire.layout import Layout
 from rtde_spec.wire.primary_base import PrimaryPart, RobotStateMessage, UnknownSubPackage
 
@@ -150,7 +150,7 @@ class RobotStateReader:
         """A sub-package the generated decoders do not take: unknown, older or shorter."""
         member = self.members.get(sub_type)
         if member is None:
-            return UnknownSubPackage(type=sub_type, size=stop - pos, raw=buf[pos:stop])
+            return build(UnknownSubPackage, {"type": sub_type, "size": stop - pos, "raw": buf[pos:stop]})
         cls, layout = member
         if version is not None and sub_type in self.older:
             layout = next((lay for before, lay in self.older[sub_type] if version < before), layout)
