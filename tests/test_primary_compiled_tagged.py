@@ -147,3 +147,33 @@ def test_unknown_and_opaque_messages_behave_as_validated_ones() -> None:
         assert pickle.loads(pickle.dumps(decoded)) == copy.deepcopy(decoded) == validated
     assert type(codec.decode_message(modbus)).__name__ == "OpaqueMessage"
     assert codec.decode_message(member).prefix["robot_message_type"] == 200
+
+
+def test_decoded_global_variable_values_behave_as_validated_ones() -> None:
+    """Decoded values leave pydantic's bookkeeping slots unset too: equality, fields set, dumps,
+    copies and pickling match values built by validation, nested lists included."""
+    import copy
+    import pickle
+
+    from rtde_spec.wire.primary_values import VariableValue
+
+    update = gen.MEMBERS[("program_state", 1)]
+    values = [
+        VariableValue(type="NUM", value=1.5),
+        VariableValue(type="INT", value=-3),
+        VariableValue(type="POSE", value=(1.0, 2.0, 3.0, 0.5, 0.25, 0.0)),
+        VariableValue(type="VAR_STRING", value="héllo"),
+        VariableValue(
+            type="LIST", value=[VariableValue(type="INT", value=1), VariableValue(type="NUM", value=2.0)]
+        ),
+    ]
+    data = encode_message(update(timestamp=1, robot_message_type=1, start_index=0, variable_values=values))
+    decoded = default_codec().decode_message(data).variable_values  # type: ignore[union-attr]
+    assert decoded == values and values == decoded
+    for got, want in zip(decoded, values, strict=True):
+        assert got.model_fields_set == {"type", "value"}
+        assert got.model_dump() == want.model_dump() and got.model_dump_json() == want.model_dump_json()
+        assert pickle.loads(pickle.dumps(got)) == copy.deepcopy(got) == copy.copy(got) == want
+        assert repr(got) == repr(want)
+        with pytest.raises(AttributeError, match="no attribute 'nope'"):
+            got.nope  # noqa: B018

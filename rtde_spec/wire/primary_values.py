@@ -25,7 +25,8 @@ from rtde_spec.errors import DecodeError, EncodeError
 
 MAX_DEPTH = 32  # nested lists deeper than this are refused, not recursed into
 _set_dict = BaseModel.__dict__["__dict__"].__set__
-_set_slot = object.__setattr__
+_BOTH_SET = frozenset({"type", "value"})  # the fields set of every decoded value
+_UNSET = frozenset({"__pydantic_extra__", "__pydantic_private__"})
 _new = object.__new__
 
 
@@ -42,21 +43,23 @@ class VariableValue(BaseModel):
         bool | int | float | str | tuple[float, ...] | list[VariableValue] | list[list[VariableValue]] | None
     ) = None
 
-
-_BOTH_SET = {"type", "value"}  # shared: a frozen model's fields-set is only ever copied
+    def __getattr__(self, item: str) -> Any:
+        """Decoded values leave pydantic's bookkeeping slots unset (as `PrimaryModel`s do): their values."""
+        if item == "__pydantic_fields_set__":
+            return set(_BOTH_SET)
+        if item in _UNSET:
+            return None
+        return super().__getattr__(item)  # type: ignore[misc]
 
 
 def _made(name: str, value: Any) -> VariableValue:
-    """A decoded value, unvalidated (struct typed it): what model_construct does, in one step.
+    """A decoded value, unvalidated (struct typed it): one allocation and one dict.
 
     Validating the value union per element costs most of a decode and ~2x the memory
     (benchmarks/faults_bombs.py); the primary tests check these equal validated twins.
     """
     obj = _new(VariableValue)
     _set_dict(obj, {"type": name, "value": value})
-    _set_slot(obj, "__pydantic_fields_set__", _BOTH_SET)
-    _set_slot(obj, "__pydantic_extra__", None)
-    _set_slot(obj, "__pydantic_private__", None)
     return obj  # type: ignore[no-any-return]
 
 
@@ -84,6 +87,17 @@ class ValueTable:
                 self._shared[(vt.name, True)] = _made(vt.name, True)
         # fewest bytes one element of a LIST or MATRIX takes: its type byte and the smallest data
         self.min_element = 1 + min(self._min_data(vt) for vt in value_types)
+        # code -> (name, kind, the struct of its data (scalar) or of its length prefix, count)
+        self._plans: dict[int, tuple[str, str, struct.Struct, int]] = {
+            code: (vt.name, vt.kind, self._data_struct(vt), vt.count) for code, vt in self.by_code.items()
+        }
+
+    def _data_struct(self, vt: Any) -> struct.Struct:
+        if vt.kind == "none":
+            return self._struct("")
+        if vt.kind == "scalar":
+            return self._struct(self.prims[vt.element].struct * vt.count)
+        return self._prefix(vt.length)
 
     @cache  # noqa: B019 - one table per process
     def _struct(self, fmt: str) -> struct.Struct:
@@ -167,48 +181,51 @@ class ValueTable:
                 offset=pos,
                 expected=f"<= {MAX_DEPTH} levels",
             )
-        self._need(buf, pos, 1, end, field)
+        if pos >= end:
+            self._need(buf, pos, 1, end, field)
         code = buf[pos]
-        vt = self.by_code.get(code)
-        if vt is None:
+        plan = self._plans.get(code)
+        if plan is None:
             raise DecodeError(
                 f"unknown global variable type {code}",
                 field=field,
                 offset=pos,
                 expected=", ".join(f"{c} ({v.name})" for c, v in self.by_code.items()),
             )
+        name, kind, st, count = plan
         pos += 1
-        if vt.kind == "none":
-            return self._shared[(vt.name, None)], pos
-        if vt.kind == "scalar":
-            prim = self.prims[vt.element]
-            st = self._struct(prim.struct * vt.count)
-            self._need(buf, pos, st.size, end, field)
+        size = st.size
+        if kind == "none":
+            return self._shared[(name, None)], pos
+        if end - pos < size:
+            self._need(buf, pos, size, end, field)
+        if kind == "scalar":
             items = st.unpack_from(buf, pos)
-            if vt.count != 1:
-                return _made(vt.name, tuple(items)), pos + st.size
+            if count != 1:
+                return _made(name, items), pos + size
             value = items[0]
-            shared = self._shared.get((vt.name, value)) if type(value) is bool else None
-            return shared or _made(vt.name, value), pos + st.size
-        prefix = self._prefix(vt.length)
-        self._need(buf, pos, prefix.size, end, field)
-        (length,) = prefix.unpack_from(buf, pos)
-        pos += prefix.size
-        if vt.kind == "string":
-            self._need(buf, pos, length, end, field)
-            text = bytes(buf[pos : pos + length]).decode("utf-8", "surrogateescape")
-            return (self._shared[(vt.name, "")] if not text else _made(vt.name, text)), pos + length
-        if vt.kind == "list":
+            if type(value) is bool:
+                return self._shared[(name, value)], pos + size
+            return _made(name, value), pos + size
+        (length,) = st.unpack_from(buf, pos)
+        pos += size
+        if kind == "string":
+            if end - pos < length:
+                self._need(buf, pos, length, end, field)
+            if not length:
+                return self._shared[(name, "")], pos
+            return _made(name, str(buf[pos : pos + length], "utf-8", "surrogateescape")), pos + length
+        if kind == "list":
             self._check_count("list", length, 0, pos, end, field, budget)
             items_out = []
             for _ in range(length):
                 item, pos = self._decode_one(buf, pos, end, field, depth + 1, budget)
                 items_out.append(item)
-            return _made(vt.name, items_out), pos
+            return _made(name, items_out), pos
         # matrix: rows then columns, both of the length primitive
-        self._need(buf, pos, prefix.size, end, field)
-        (cols,) = prefix.unpack_from(buf, pos)
-        pos += prefix.size
+        self._need(buf, pos, size, end, field)
+        (cols,) = st.unpack_from(buf, pos)
+        pos += size
         self._check_count("matrix", length * cols, 0 if cols else length, pos, end, field, budget)
         rows = []
         for _ in range(length):
@@ -217,7 +234,7 @@ class ValueTable:
                 item, pos = self._decode_one(buf, pos, end, field, depth + 1, budget)
                 row.append(item)
             rows.append(row)
-        return _made(vt.name, rows), pos
+        return _made(name, rows), pos
 
     # --- encoding -----------------------------------------------------------
 
