@@ -125,7 +125,7 @@ class _Floor:
         flush()
 
 
-def floor_decoder(message: bytes) -> Callable[[bytes], object]:
+def floor_decoder(message: bytes) -> Callable[[bytes], tuple[Any, ...]]:
     """The floor for messages of this one's kind (Robot State: of its one sub-package's type)."""
     codec = default_codec()
     mtype = message[4]
