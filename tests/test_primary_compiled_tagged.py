@@ -177,3 +177,29 @@ def test_decoded_global_variable_values_behave_as_validated_ones() -> None:
         assert repr(got) == repr(want)
         with pytest.raises(AttributeError, match="no attribute 'nope'"):
             got.nope  # noqa: B018
+
+
+def test_a_fresh_process_dumps_decoded_messages() -> None:
+    """Decoded models are never validated, so their classes' schemas may be unbuilt when a
+    Robot State (sub-packages typed Any) is dumped: in a process that has validated nothing,
+    model_dump and model_dump_json of every kind of message work."""
+    import subprocess
+    import sys
+
+    from .helpers import ROOT
+
+    code = """
+import json, sys
+sys.path.insert(0, sys.argv[1])
+from ur5e_robot_state import ur5e_robot_state_bytes
+from rtde_spec import decode_message
+message = decode_message(ur5e_robot_state_bytes())
+dumped = message.model_dump()
+assert dumped["sub_packages"][1]["joints"][5]["joint_mode"] == 253
+assert json.loads(message.model_dump_json())["sub_packages"][0]["robot_mode"] == 7
+print("ok")
+"""
+    done = subprocess.run(
+        [sys.executable, "-c", code, str(ROOT / "benchmarks")], capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 0 and done.stdout.strip() == "ok", done.stderr[-2000:]
