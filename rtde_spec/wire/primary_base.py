@@ -16,8 +16,11 @@ _UNSET_SLOTS = frozenset({"__pydantic_extra__", "__pydantic_private__"})
 class PrimaryModel(BaseModel):
     """Frozen, no unknown keys; user construction fails with EncodeError."""
 
-    # schemas are built on first use: a capture or decode imports ~100 classes and uses a few
-    model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True)
+    # schemas are built on first use: a capture or decode imports ~100 classes and uses a few;
+    # bytes are hex in JSON: protocol bytes (extra, raw, data) are rarely UTF-8
+    model_config = ConfigDict(
+        extra="forbid", frozen=True, defer_build=True, ser_json_bytes="hex", val_json_bytes="hex"
+    )
     NAME: ClassVar[str] = "primary"
 
     def __init__(self, **data: Any) -> None:

@@ -24,8 +24,11 @@ if TYPE_CHECKING:
 class RtdeMessage(BaseModel):
     """One RTDE package: fields as the spec names them, plus class-level wire metadata."""
 
-    # schemas are built on first use: a capture or decode imports ~100 classes and uses a few
-    model_config = ConfigDict(extra="forbid", frozen=True, defer_build=True)
+    # schemas are built on first use: a capture or decode imports ~100 classes and uses a few;
+    # bytes are hex in JSON: protocol bytes (extra, raw, data) are rarely UTF-8
+    model_config = ConfigDict(
+        extra="forbid", frozen=True, defer_build=True, ser_json_bytes="hex", val_json_bytes="hex"
+    )
 
     NAME: ClassVar[str]
     PACKAGE_TYPE: ClassVar[int]
