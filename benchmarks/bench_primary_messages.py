@@ -30,6 +30,7 @@ import yaml
 
 from rtde_spec import decode_message
 from rtde_spec.primary.codec import default_codec
+from rtde_spec.primary.compiled_tagged import tag_reader
 
 GOLDEN = Path(__file__).resolve().parents[1] / "tests" / "data" / "primary_golden.yaml"
 TARGET_TO_FLOOR = 2.0
@@ -138,8 +139,9 @@ def floor_decoder(message: bytes) -> Callable[[bytes], tuple[Any, ...]]:
         floor.lines.append("p = 10")
         floor.run(list(layout.fields), codec.prims, "out", "")
     else:
-        assert fam.prefix is not None and fam.tag_at is not None
-        _, layout = fam.members[fam.tag_at[0](message, 5 + fam.tag_at[1])[0]]
+        reader = tag_reader(fam.prefix, fam.spec.tag) if fam.prefix is not None and fam.spec.tag else None
+        assert fam.prefix is not None and reader is not None
+        _, layout = fam.members[reader[0](message, 5 + reader[1])[0]]
         floor.lines.append("p = 5")
         floor.run([*fam.prefix.fields, *layout.fields], codec.prims, "out", "")
     head = struct.Struct(">IB").unpack_from

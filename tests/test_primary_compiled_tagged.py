@@ -52,7 +52,7 @@ def _outcome(codec: PrimaryCodec, data: bytes, strict: bool = True) -> Any:
 def test_every_tagged_member_has_a_generated_decoder() -> None:
     """Text, version, safety mode, robot comm, key, request value, runtime exception, program
     threads and both global-variable messages: none is left to the general walk."""
-    names = {f.spec.name for f in default_codec().families.values() if f.tag_at is not None}
+    names = {f.spec.name for f in default_codec().families.values() if f.direct is not None}
     assert names == set(TAGGED)
     for key in TAGGED_KEYS:
         assert key[1] in _family(key[0]).fast, f"{key} has no generated decoder"

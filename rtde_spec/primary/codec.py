@@ -19,7 +19,7 @@ from rtde_spec._generated.constants import PRIMARY_BYTE_ORDER as ORDER
 from rtde_spec.errors import DecodeError, EncodeError
 from rtde_spec.metamodel.versions import Version
 from rtde_spec.primary.compiled import Decoder
-from rtde_spec.primary.compiled_tagged import TagReader, decode_member, family_decoders
+from rtde_spec.primary.compiled_tagged import family_decoder
 from rtde_spec.primary.families import FamilyView, PrimaryView, primary_view
 from rtde_spec.primary.fast_models import build, with_groups
 from rtde_spec.primary.robot_state import Reuse, RobotStateReader
@@ -50,7 +50,7 @@ class _Family:
     members: dict[int, tuple[type[PrimaryPart], Layout]] = field(default_factory=dict)
     older: dict[int, list[tuple[Version, Layout]]] = field(default_factory=dict)  # oldest range first
     fast: dict[int, Decoder] = field(default_factory=dict)  # tag -> generated decoder (compiled_tagged.py)
-    tag_at: TagReader | None = None
+    direct: Decoder | None = None  # a tagged member through its generated decoder, or None
 
 
 class PrimaryCodec:
@@ -99,8 +99,8 @@ class PrimaryCodec:
                     entry.older[member.type] = sorted(ranges, key=lambda r: r[0])
             self.families[fam.type] = entry
             if prefix is not None and fam.tag:  # the members' generated decoders
-                found = family_decoders(entry.members, entry.older, prefix, fam.tag, self.values)
-                entry.tag_at, entry.fast = found
+                found = family_decoder(entry.members, entry.older, prefix, fam.tag, self.values)
+                entry.direct, entry.fast = found
         # Robot State: generated decoders per sub-package and per message shape (robot_state.py)
         self.state_type = gen.FAMILY_TYPES["robot_state"]
         state = self.families[self.state_type]
@@ -140,6 +140,10 @@ class PrimaryCodec:
         fam = self.families.get(mtype)
         if fam is None:
             return build(UnknownMessage, {"type": mtype, "size": size, "raw": buf[:size]})
+        if fam.direct is not None:  # a tagged member's generated decoder
+            made = fam.direct(buf, hsize, size)
+            if made is not None:
+                return made  # type: ignore[no-any-return]
         layout = fam.spec.layout
         if layout == "opaque":
             return build(OpaqueMessage, {"family": fam.spec.name, "type": mtype, "raw": buf[hsize:size]})
@@ -148,10 +152,6 @@ class PrimaryCodec:
         return self._tagged(fam, buf, hsize, size)
 
     def _tagged(self, fam: _Family, buf: bytes, pos: int, end: int) -> PrimaryMessage:
-        if fam.tag_at is not None:  # the member's generated decoder, if any
-            made = decode_member(fam.tag_at, fam.fast, buf, pos, end)
-            if made is not None:
-                return made  # type: ignore[no-any-return]
         assert fam.prefix is not None
         prefix, missing, pos = fam.prefix.decode(buf, pos, end)
         if missing:

@@ -186,15 +186,17 @@ def tag_reader(prefix: Layout, tag: str) -> TagReader | None:
     return None
 
 
-def family_decoders(
+def family_decoder(
     members: dict[int, tuple[type[Any], Layout]],
     older: dict[int, Any],
     prefix: Layout,
     tag: str,
     values: ValueTable | None,
-) -> tuple[TagReader | None, dict[int, Decoder]]:
-    """A tagged family's tag reader and its members' generated decoders, by tag (members with
-    older layouts, which a controller version picks, and members not covered are left out)."""
+) -> tuple[Decoder | None, dict[int, Decoder]]:
+    """decode(buf, pos, end) for a tagged family: the model of the member at `pos` from its
+    generated decoder, or None when there is none or it steps aside (the general walk then
+    decodes the member and names what is wrong); and the members' decoders by tag. Members
+    with older layouts, which a controller version picks, and members not covered are left out."""
     reader = tag_reader(prefix, tag)
     if reader is None:
         return None, {}
@@ -203,19 +205,19 @@ def family_decoders(
         decoder = None if tag_value in older else compile_member(cls, prefix, layout, values)
         if decoder is not None:
             fast[tag_value] = decoder
-    return reader, fast
-
-
-def decode_member(reader: TagReader, fast: dict[int, Decoder], buf: bytes, pos: int, end: int) -> Any:
-    """The model of the member at `pos` from its generated decoder; None when there is none or
-    it steps aside (the general walk then decodes the member and names what is wrong)."""
     unpack, offset, need = reader
-    if end - pos < need:
-        return None
-    decoder = fast.get(unpack(buf, pos + offset)[0])
-    if decoder is None:
-        return None
-    try:
-        return decoder(buf, pos, end)
-    except DecodeError:  # typed values: the general walk says it with the member's name
-        return None
+    get = fast.get
+    one_byte = need - offset == 1 and unpack(b"\xff", 0)[0] == 255  # an unsigned byte: buf[i] reads it
+
+    def decode(buf: bytes, pos: int, end: int) -> Any:
+        if end - pos < need:
+            return None
+        decoder = get(buf[pos + offset] if one_byte else unpack(buf, pos + offset)[0])
+        if decoder is None:
+            return None
+        try:
+            return decoder(buf, pos, end)
+        except DecodeError:  # typed values: the general walk says it with the member's name
+            return None
+
+    return decode, fast
