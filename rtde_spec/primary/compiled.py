@@ -14,7 +14,7 @@ strings, switches or open-ended groups are not compiled.
 from __future__ import annotations
 
 import struct
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel
@@ -105,17 +105,31 @@ def unpack_run(src: Source, layout: Layout, fields: list[LayoutField]) -> list[s
     return entries
 
 
-def _body(src: Source, layout: Layout) -> list[str]:
-    """Entries of every field: fixed runs, conditional fixed groups, a trailing rest of bytes/text."""
+def entries_of(
+    src: Source, layout: Layout, fields: Sequence[Any], other: Callable[[Any, list[str]], str]
+) -> list[str]:
+    """'name: expression' entries of `fields` in order: each run of fixed fields read by one
+    unpack, any other field by `other(field, entries so far)`, which returns its expression
+    (or raises NotFixed)."""
     entries: list[str] = []
-    run: list[LayoutField] = []
-    for i, fld in enumerate(layout.fields):
+    run: list[Any] = []
+    for fld in fields:
         if fld.kind == "value" or (fld.kind == "repeat" and isinstance(fld.repeat, int)):
             run.append(fld)
             continue
         if run:
             entries += unpack_run(src, layout, run)
             run = []
+        entries.append(f"{fld.name!r}: {other(fld, entries)}")
+    if run:
+        entries += unpack_run(src, layout, run)
+    return entries
+
+
+def _body(src: Source, layout: Layout) -> list[str]:
+    """Entries of every field: fixed runs, conditional fixed groups, a trailing rest of bytes/text."""
+
+    def other(fld: LayoutField, entries: list[str]) -> str:
         if fld.kind == "optional" and fld.group is not None:
             flag = next(e.split(": ", 1)[1] for e in entries if e.startswith(repr(fld.when) + ":"))
             var = src.name("o")
@@ -125,15 +139,13 @@ def _body(src: Source, layout: Layout) -> list[str]:
             src.add(f"{var} = {src.model(gen.GROUPS[fld.group], inner)}")
             src.indent = src.indent[:-4]
             src.add("else:", f"    {var} = None")
-            entries.append(f"{fld.name!r}: {var}")
-        elif fld.kind == "bytes" and fld.length == "rest" and i == len(layout.fields) - 1:
+            return var
+        if fld.kind == "bytes" and fld.length == "rest" and fld is layout.fields[-1]:
             src.add("rest = buf[p:end]", "p = end")
-            entries.append(f"{fld.name!r}: rest")
-        else:
-            raise NotFixed
-    if run:
-        entries += unpack_run(src, layout, run)
-    return entries
+            return "rest"
+        raise NotFixed
+
+    return entries_of(src, layout, layout.fields, other)
 
 
 def _emit_part(src: Source, cls: type[BaseModel], layout: Layout) -> str:

@@ -23,7 +23,7 @@ from pydantic import BaseModel
 
 from rtde_spec._generated import primary_models as gen
 from rtde_spec.errors import DecodeError
-from rtde_spec.primary.compiled import Decoder, NotFixed, Source, unpack_run
+from rtde_spec.primary.compiled import Decoder, NotFixed, Source, entries_of
 from rtde_spec.wire.layout import Layout, _text
 
 if TYPE_CHECKING:
@@ -110,30 +110,21 @@ def _switch(src: Source, layout: Layout, fld: FieldLike, entries: list[str]) -> 
 
 def _entries(src: Source, layout: Layout, fields: list[Any], values: ValueTable | None) -> list[str]:
     """'name: expression' entries of every field, in order, with the statements reading them."""
-    entries: list[str] = []
-    run: list[Any] = []
-    for fld in fields:
-        if fld.kind == "value" or (fld.kind == "repeat" and isinstance(fld.repeat, int)):
-            run.append(fld)
-            continue
-        if run:
-            entries += unpack_run(src, layout, run)
-            run = []
+
+    def other(fld: FieldLike, entries: list[str]) -> str:
         if fld.kind in ("string", "bytes"):
-            entries.append(f"{fld.name!r}: {_string(src, layout, fld)}")
-        elif fld.kind == "switch":
-            entries.append(f"{fld.name!r}: {_switch(src, layout, fld, entries)}")
-        elif fld.kind == "values" and values is not None:
+            return _string(src, layout, fld)
+        if fld.kind == "switch":
+            return _switch(src, layout, fld, entries)
+        if fld.kind == "values" and values is not None:
             var = src.name("x")
             src.add(f"{var} = {src.name('V', values.decode_all)}(buf, p, end, {fld.name!r})", "p = end")
-            entries.append(f"{fld.name!r}: {var}")
-        elif fld.kind == "repeat" and fld.repeat == "until_end" and fld.group is not None:
-            entries.append(f"{fld.name!r}: {_until_end(src, layout, fld, values)}")
-        else:
-            raise NotFixed
-    if run:
-        entries += unpack_run(src, layout, run)
-    return entries
+            return var
+        if fld.kind == "repeat" and fld.repeat == "until_end" and fld.group is not None:
+            return _until_end(src, layout, fld, values)
+        raise NotFixed
+
+    return entries_of(src, layout, fields, other)
 
 
 def _until_end(src: Source, layout: Layout, fld: FieldLike, values: ValueTable | None) -> str:
