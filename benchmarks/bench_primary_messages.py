@@ -127,25 +127,26 @@ class _Floor:
 
 
 def floor_decoder(message: bytes) -> Callable[[bytes], tuple[Any, ...]]:
-    """The floor for messages of this one's kind (Robot State: of its one sub-package's type)."""
+    """The floor for messages of this one's kind (Robot State: of its one sub-package's type).
+    Header sizes, byte order and types come from the codec, which reads them from the spec."""
     codec = default_codec()
-    mtype = message[4]
+    head, sub = codec.header, codec.sub_header
+    mtype = head.unpack_from(message)[1]
     fam = codec.families[mtype]
     floor = _Floor()
     if fam.spec.layout == "opaque":
-        floor.lines.append("out.append(b[5:end])")
+        floor.lines.append(f"out.append(b[{head.size}:end])")
     elif fam.spec.layout == "subpackages":
-        _, layout = fam.members[message[9]]
-        floor.lines.append("p = 10")
+        _, layout = fam.members[sub.unpack_from(message, head.size)[1]]
+        floor.lines.append(f"p = {head.size + sub.size}")
         floor.run(list(layout.fields), codec.prims, "out", "")
     else:
         reader = tag_reader(fam.prefix, fam.spec.tag) if fam.prefix is not None and fam.spec.tag else None
         assert fam.prefix is not None and reader is not None
-        _, layout = fam.members[reader[0](message, 5 + reader[1])[0]]
-        floor.lines.append("p = 5")
+        _, layout = fam.members[reader[0](message, head.size + reader[1])[0]]
+        floor.lines.append(f"p = {head.size}")
         floor.run([*fam.prefix.fields, *layout.fields], codec.prims, "out", "")
-    head = struct.Struct(">IB").unpack_from
-    floor.env["head"] = head
+    floor.env["head"] = head.unpack_from
     body = "\n    ".join(["end, t = head(b)", "out = []", *floor.lines, "return tuple(out)"])
     exec(f"def decode(b):\n    {body}\n", floor.env)
     return floor.env["decode"]  # type: ignore[no-any-return]
@@ -221,7 +222,10 @@ def main(argv: list[str] | None = None) -> int:
         floor = floor_decoder(data)
         # a Robot State repeated would be handed out as the model made from the same bytes last
         # time: its rows cycle through 64 messages that differ in their last byte, so each is decoded
-        changing = data[4] == 16 and len(data) > 10  # a body to change (not only headers)
+        codec = default_codec()
+        headers = codec.header.size + codec.sub_header.size
+        state = codec.header.unpack_from(data)[1] == codec.state_type
+        changing = state and len(data) > headers  # a body to change (not only headers)
         variants = [data[:-1] + bytes([i]) for i in range(64)] if changing else [data]
         assert all(len(floor(v)) >= 1 and decode_message(v) for v in variants)
         rows.append((name, variants, floor))

@@ -28,6 +28,7 @@ under `strace -c -f` (attached for a window once the loop runs), ours against th
 
 from __future__ import annotations
 
+import atexit
 import json
 import os
 import shutil
@@ -181,7 +182,9 @@ def c_floor() -> str | None:
         compiler = shutil.which(os.environ.get("CC", "cc")) or shutil.which("gcc")
         _C_FLOOR = ""
         if compiler is not None:
-            out = Path(tempfile.mkdtemp(prefix="recv-floor-")) / "recv_floor"
+            folder = tempfile.mkdtemp(prefix="recv-floor-")
+            atexit.register(shutil.rmtree, folder, ignore_errors=True)
+            out = Path(folder) / "recv_floor"
             built = subprocess.run(
                 [compiler, "-O2", "-o", str(out), str(Path(__file__).with_name("recv_floor.c"))],
                 capture_output=True,

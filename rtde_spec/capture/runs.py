@@ -136,5 +136,3 @@ class Run:
         direction.advance(len(data), data[-RECENT:])
         rows = np.frombuffer(data, dtype=np.uint8).reshape(len(self.segments), -1)
         self.decoder.feed_run(sender, self.codec, rows, np.array([s.time for s in self.segments]))
-
-

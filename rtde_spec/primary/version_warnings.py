@@ -16,14 +16,14 @@ if TYPE_CHECKING:
     from rtde_spec.metamodel.versions import Version
 
 
-class PrimaryCodec(Protocol):
+class CodecFacts(Protocol):
     """What these checks read of `codec.PrimaryCodec`."""
 
     field_since: dict[tuple[str, str], dict[str, Version]]  # (member, field) -> first version per line
     families: dict[int, Any]  # type -> its family: members and older layouts
 
 
-def _unexpected_missing(codec: PrimaryCodec, version: Version | None, parts: list[Any]) -> list[str]:
+def _unexpected_missing(codec: CodecFacts, version: Version | None, parts: list[Any]) -> list[str]:
     """Missing fields that the controller's version should have sent (by the fields' `since`)."""
     if version is None:
         return []
@@ -40,7 +40,7 @@ def _unexpected_missing(codec: PrimaryCodec, version: Version | None, parts: lis
     return out
 
 
-def warnings_for(codec: PrimaryCodec, version: Version | None, message: Any) -> list[str]:
+def warnings_for(codec: CodecFacts, version: Version | None, message: Any) -> list[str]:
     """Why this message's values may be wrong: an unknown controller line, or layouts that disagree.
 
     Shown with each message, so values are never presented as decoded when the
