@@ -31,6 +31,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_recipe_decode import UR_RTDE_DEFAULT_OUTPUTS
+from timing_client import TIMING
 
 HOST = "127.0.0.97"  # its own address: ur_rtde needs the fixed ports
 TARGET_P99_MS = 0.5
@@ -121,8 +122,6 @@ def run(
 ) -> bool:
     """One run; `realtime`: the emulator's loop at SCHED_FIFO this priority, `nice`: its niceness,
     `profile`: a file for cProfile's statistics of the emulator's loop while measured."""
-    from bench_emulator import TIMING
-
     options: dict[str, object] = {"realtime_priority": realtime} if realtime is not None else {}
     if profile:
         options["profile"] = profile
@@ -148,7 +147,7 @@ def run(
         names = ",".join(UR_RTDE_DEFAULT_OUTPUTS)
         readers = [
             subprocess.Popen(
-                [sys.executable, "-c", TIMING.replace("127.0.0.1", host), "30004", str(seconds + 1), names],
+                [sys.executable, "-c", TIMING, host, "30004", str(seconds + 1), names],
                 stdout=subprocess.PIPE, text=True,
             )
             for _ in range(4)

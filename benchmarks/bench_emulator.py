@@ -46,6 +46,7 @@ from typing import Any
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_recipe_decode import UR_RTDE_DEFAULT_OUTPUTS
 from receive_loops import receive_rows, specs, syscall_rows, ur_rtde_row, warm_rows
+from timing_client import TIMING
 
 TARGET_P99_MS = 1.0
 RATE = 500.0
@@ -65,44 +66,14 @@ def serve(host: str, port: int) -> tuple[subprocess.Popen[str], int]:
     return proc, int(re.search(r"rtde (\d+)", line).group(1))  # type: ignore[union-attr]
 
 
-TIMING = """
-import json, socket, struct, sys, time
-port, seconds, names = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3]
-s = socket.create_connection(("127.0.0.1", port))
-s.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-def send(t, body=b""):
-    s.sendall(struct.pack(">HB", 3 + len(body), t) + body)
-buf = b""
-def package():
-    global buf
-    while len(buf) < 3 or len(buf) < struct.unpack_from(">H", buf)[0]:
-        buf += s.recv(65536)
-    size = struct.unpack_from(">H", buf)[0]
-    p, buf = buf[:size], buf[size:]
-    return p
-send(ord("V"), struct.pack(">H", 2)); package()
-send(ord("O"), struct.pack(">d", 500.0) + names.encode()); package()
-send(ord("S")); package()
-stamps = []
-end = time.monotonic() + seconds
-while time.monotonic() < end:
-    p = package()
-    if p[2] == ord("U"):
-        stamps.append((time.perf_counter(), struct.unpack_from(">d", p, 4)[0]))
-a0, t0 = stamps[0]
-late = sorted(max(0.0, (a - a0) - (t - t0)) for a, t in stamps)
-steps = [round((b[1] - a[1]) * 500) for a, b in zip(stamps, stamps[1:])]
-print(json.dumps({"packages": len(stamps), "missed": sum(x - 1 for x in steps if x > 1),
-                  "p99_ms": late[int(len(late) * 0.99)] * 1000, "max_ms": late[-1] * 1000}))
-"""
-
-
 def four_clients(port: int, seconds: float) -> list[dict[str, float]]:
     """Four light client processes (raw sockets, a timestamp each), so the figure is the emulator's."""
     names = ",".join(UR_RTDE_DEFAULT_OUTPUTS)  # timestamp first: the client reads it at byte 4
     procs = [
         subprocess.Popen(
-            [sys.executable, "-c", TIMING, str(port), str(seconds), names], stdout=subprocess.PIPE, text=True
+            [sys.executable, "-c", TIMING, "127.0.0.1", str(port), str(seconds), names],
+            stdout=subprocess.PIPE,
+            text=True,
         )
         for _ in range(4)
     ]
@@ -152,7 +123,7 @@ def motion_run(seconds: float) -> bool:
         names = ",".join(UR_RTDE_DEFAULT_OUTPUTS)
         clients = [
             subprocess.Popen(
-                [sys.executable, "-c", TIMING, str(ports["rtde"]), str(seconds + 1), names],
+                [sys.executable, "-c", TIMING, "127.0.0.1", str(ports["rtde"]), str(seconds + 1), names],
                 stdout=subprocess.PIPE, text=True,
             )
             for _ in range(MOTION_CLIENTS)
