@@ -48,6 +48,7 @@ def emit_primary_models(spec: Spec) -> str:
         '"""\n\n',
         "from typing import Annotated, ClassVar\n\n",
         "from pydantic import Field\n\n",
+        "from rtde_spec.wire.model_types import WireText\n",
         "from rtde_spec.wire.primary_base import PrimaryGroup, PrimaryPart\n",
         "from rtde_spec.wire.primary_values import VariableValue\n\n",
         f"PORTS: dict[str, int] = {dict(pf.ports)!r}\n",

@@ -14,7 +14,7 @@ from .render import field_description
 
 def _case_annotation(case: str | CaseSpec, prims: dict[str, Primitive]) -> str:
     if isinstance(case, CaseSpec):
-        return "str"
+        return "WireText"
     prim = prims[case]
     return {"int": "int", "float": "float", "bool": "bool"}[prim.kind]
 
@@ -33,13 +33,16 @@ def annotation_of(fld: LayoutField, prims: dict[str, Primitive], text: str = "ut
             return "Annotated[list[CsvItem], Field(min_length=1)]"
         return "ShortAsciiStr" if fld.length == "uint8" else "AsciiStr"
     if kind == "string":
-        return "list[str]" if fld.format else "str"
+        return "list[WireText]" if fld.format else "WireText"
     if kind == "bytes":
         return "bytes"
     if kind == "values":
         return "list[VariableValue]"
     if kind == "switch":
-        options = sorted({_case_annotation(c, prims) for c in (fld.cases or {}).values()})
+        options = sorted(
+            {_case_annotation(c, prims) for c in (fld.cases or {}).values()},
+            key=lambda a: "str" if a == "WireText" else a,  # float, int, str: as with the builtin name
+        )
         return " | ".join(options)
     if kind == "optional":
         return f"{fld.group}"

@@ -53,3 +53,77 @@ def test_an_rtde_data_package_with_binary_payload_dumps_to_json_and_back() -> No
     dumped = package.model_dump_json()
     assert BINARY.hex() in dumped
     assert type(package).model_validate_json(dumped) == package
+
+
+def _robot_message(kind: int, body: bytes) -> bytes:
+    head = struct.pack(">QbB", 1000, -2, kind)
+    return struct.pack(">IB", 5 + len(head) + len(body), 20) + head + body
+
+
+NOT_UTF8 = b"caf\xe9 \xff!"  # Latin-1 text, as an old controller or a script may send
+
+
+def test_text_that_is_not_utf8_dumps_to_json_escaped_and_encodes_back_to_its_bytes() -> None:
+    """The decoder keeps bytes that are not UTF-8 (surrogate escapes), which pydantic's JSON
+    refuses: the dump failed. JSON now shows them as \\xNN; Python values and encoding keep them."""
+    from rtde_spec.primary.codec import default_codec
+
+    data = _robot_message(0, NOT_UTF8)
+    message = decode_message(data)
+    assert json.loads(message.model_dump_json())["text_message"] == "caf\\xe9 \\xff!"
+    assert message.model_dump()["text_message"] == NOT_UTF8.decode("utf-8", "surrogateescape")
+    assert default_codec().encode(message) == data
+    good = decode_message(_robot_message(0, "café".encode()))
+    assert json.loads(good.model_dump_json())["text_message"] == "café"  # UTF-8 text is untouched
+
+
+def test_a_none_global_variable_value_sets_the_fields_a_validated_one_sets() -> None:
+    from rtde_spec.primary.codec import default_codec
+    from rtde_spec.wire.primary_values import VariableValue
+
+    values = default_codec().values
+    code, _ = values.by_name["NONE"]
+    shared = values.decode_all(struct.pack(">BB", code, values.separator), 0, 2, "values")[0]
+    assert shared.type == "NONE" and shared.value is None
+    twin = VariableValue.model_validate(shared.model_dump())
+    assert shared.model_fields_set == twin.model_fields_set == {"type", "value"}
+    assert shared.model_dump(exclude_unset=True) == twin.model_dump(exclude_unset=True)
+
+
+FRESH = """
+import sys
+import pydantic_core
+from pydantic import TypeAdapter
+from rtde_spec import decode_message
+message = decode_message(bytes.fromhex(sys.argv[1]))
+assert pydantic_core.to_json(message)
+assert TypeAdapter(list).dump_json([message])
+print("ok")
+"""
+
+
+@pytest.mark.parametrize(
+    "data",
+    [
+        struct.pack(">IB", 5 + len(BINARY), 5) + BINARY,
+        struct.pack(">IB", 5 + len(BINARY), 99) + BINARY,
+        struct.pack(">IBQbB", 15 + len(BINARY), 20, 7, -2, 200) + BINARY,
+        _robot_message(0, b"hi"),
+        bytes.fromhex(
+            "00000034100000002f00000000000001e2400101010000010007003ff0000000000000"
+            "3fe00000000000003ff000000000000000"
+        ),
+    ],
+    ids=["opaque", "unknown-message", "unknown-member", "text", "robot-state"],
+)
+def test_pydantic_serializes_decoded_messages_in_a_fresh_process(data: bytes) -> None:
+    """Schemas are deferred until a class is validated, and decoded models never are: outside
+    their own dump methods (pydantic_core.to_json, a TypeAdapter, a parent model) pydantic-core
+    met a placeholder serializer. The decoders' set-up now builds each class's schema."""
+    import subprocess
+    import sys
+
+    done = subprocess.run(
+        [sys.executable, "-c", FRESH, data.hex()], capture_output=True, text=True, timeout=60
+    )
+    assert done.returncode == 0 and done.stdout.strip() == "ok", done.stderr[-2000:]

@@ -9,6 +9,7 @@ from typing import Annotated, ClassVar
 
 from pydantic import Field
 
+from rtde_spec.wire.model_types import WireText
 from rtde_spec.wire.primary_base import PrimaryGroup, PrimaryPart
 from rtde_spec.wire.primary_values import VariableValue
 
@@ -72,8 +73,8 @@ class ProgramThread(PrimaryGroup):
     ENUMS: ClassVar[dict[str, str]] = {}
 
     label_id: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)], Field(description='Last executed line label id')]
-    label_name: Annotated[str, Field(description='labelName: last executed line label name')]
-    thread_name: Annotated[str, Field(description='threadName: the name of the thread')]
+    label_name: Annotated[WireText, Field(description='labelName: last executed line label name')]
+    thread_name: Annotated[WireText, Field(description='threadName: the name of the thread')]
 
 
 class RobotModeData(PrimaryPart):
@@ -423,7 +424,7 @@ class TextMessage(PrimaryPart):
     timestamp: Annotated[Annotated[int, Field(ge=0, le=18446744073709551615)] | None, Field(description='Microseconds since the controller started [µs]')] = None
     source: Annotated[Annotated[int, Field(ge=-128, le=127)] | None, Field(description='source (Message Sources) (values: MessageSource)')] = None
     robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='robotMessageType: which sub-message follows (values: RobotMessageType)')] = 0
-    text_message: Annotated[str | None, Field(description='textMessage: the text, to the end of the message')] = None
+    text_message: Annotated[WireText | None, Field(description='textMessage: the text, to the end of the message')] = None
 
 
 class VersionMessage(PrimaryPart):
@@ -440,12 +441,12 @@ class VersionMessage(PrimaryPart):
     timestamp: Annotated[Annotated[int, Field(ge=0, le=18446744073709551615)] | None, Field(description='Microseconds since the controller started [µs]')] = None
     source: Annotated[Annotated[int, Field(ge=-128, le=127)] | None, Field(description='source (Message Sources) (values: MessageSource)')] = None
     robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='robotMessageType: which sub-message follows (values: RobotMessageType)')] = 3
-    project_name: Annotated[str | None, Field(description='projectName: the name of the software (e.g. URControl)')] = None
+    project_name: Annotated[WireText | None, Field(description='projectName: the name of the software (e.g. URControl)')] = None
     major_version: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='majorVersion of the controller software')] = None
     minor_version: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='minorVersion of the controller software')] = None
     bugfix_version: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='bugfixVersion of the controller software')] = None
     build_number: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='buildNumber of the controller software')] = None
-    build_date: Annotated[str | None, Field(description='buildDate: when the software was built, as text')] = None
+    build_date: Annotated[WireText | None, Field(description='buildDate: when the software was built, as text')] = None
 
 
 class SafetyModeMessage(PrimaryPart):
@@ -487,8 +488,8 @@ class RobotCommMessage(PrimaryPart):
     robot_message_argument: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='robotMessageArgument: argument of the code')] = None
     robot_message_report_level: Annotated[Annotated[int, Field(ge=-2147483648, le=2147483647)] | None, Field(description='robotMessageReportLevel (Report Levels) (values: ReportLevel)')] = None
     data_type: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='robotMessageDataType: the type of report_data (0-4 a 32-bit number, 5 a string) (values: ReportDataType)')] = None
-    report_data: Annotated[float | int | str | None, Field(description='robotMessageData: a value of the type data_type names; the last field is a 32-bit number for data types 0-4 or a variable length string for data type 5')] = None
-    report_text: Annotated[str | None, Field(description='Text after the report data: the 5.9/5.10 document lists it (robotCommTextMessage), the current one does not (empty when absent).')] = None
+    report_data: Annotated[float | int | WireText | None, Field(description='robotMessageData: a value of the type data_type names; the last field is a 32-bit number for data types 0-4 or a variable length string for data type 5')] = None
+    report_text: Annotated[WireText | None, Field(description='Text after the report data: the 5.9/5.10 document lists it (robotCommTextMessage), the current one does not (empty when absent).')] = None
 
 
 class KeyMessage(PrimaryPart):
@@ -507,8 +508,8 @@ class KeyMessage(PrimaryPart):
     robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='robotMessageType: which sub-message follows (values: RobotMessageType)')] = 7
     robot_message_code: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='robotMessageCode: code of the key event')] = None
     robot_message_argument: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='robotMessageArgument: argument of the code')] = None
-    robot_message_title: Annotated[str | None, Field(description='robotMessageTitle: the title')] = None
-    key_text_message: Annotated[str | None, Field(description='keyTextMessage: the text')] = None
+    robot_message_title: Annotated[WireText | None, Field(description='robotMessageTitle: the title')] = None
+    key_text_message: Annotated[WireText | None, Field(description='keyTextMessage: the text')] = None
 
 
 class RequestValueMessage(PrimaryPart):
@@ -527,7 +528,7 @@ class RequestValueMessage(PrimaryPart):
     robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='robotMessageType: which sub-message follows (values: RobotMessageType)')] = 9
     request_id: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='requestId: to send the answer back with')] = None
     requested_type: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='requestedType (Requested Types): what kind of value the program asks for (values: RequestedType)')] = None
-    request_text_message: Annotated[str | None, Field(description='requestTextMessage: the question shown to the user')] = None
+    request_text_message: Annotated[WireText | None, Field(description='requestTextMessage: the question shown to the user')] = None
 
 
 class RuntimeExceptionMessage(PrimaryPart):
@@ -546,7 +547,7 @@ class RuntimeExceptionMessage(PrimaryPart):
     robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='robotMessageType: which sub-message follows (values: RobotMessageType)')] = 10
     script_line_number: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='scriptLineNumber: line of the script where it failed')] = None
     script_column_number: Annotated[Annotated[int, Field(ge=0, le=4294967295)] | None, Field(description='scriptColumnNumber: column of the script where it failed')] = None
-    runtime_exception_text_message: Annotated[str | None, Field(description='runtimeExceptionTextMessage: the text of the exception')] = None
+    runtime_exception_text_message: Annotated[WireText | None, Field(description='runtimeExceptionTextMessage: the text of the exception')] = None
 
 
 class ProgramThreadsMessage(PrimaryPart):
@@ -580,7 +581,7 @@ class GlobalVariablesSetupMessage(PrimaryPart):
     timestamp: Annotated[Annotated[int, Field(ge=0, le=18446744073709551615)] | None, Field(description='Microseconds since the controller started [µs]')] = None
     robot_message_type: Annotated[Annotated[int, Field(ge=0, le=255)] | None, Field(description='robotMessageType: which program state message follows (values: ProgramStateMessageType)')] = 0
     start_index: Annotated[Annotated[int, Field(ge=0, le=65535)] | None, Field(description='startIndex: index of the first name in this message')] = None
-    variable_names: Annotated[list[str] | None, Field(description="variableNames: the list of names, each followed by a new line character ('\\n')")] = None
+    variable_names: Annotated[list[WireText] | None, Field(description="variableNames: the list of names, each followed by a new line character ('\\n')")] = None
 
 
 class GlobalVariablesUpdateMessage(PrimaryPart):

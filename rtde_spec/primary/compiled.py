@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 from pydantic import BaseModel
 
 from rtde_spec._generated import primary_models as gen
+from rtde_spec.primary.fast_models import complete
 from rtde_spec.wire.layout import Layout
 
 if TYPE_CHECKING:  # annotations only: the meta-model is not built at run time
@@ -56,6 +57,7 @@ class Source:
         """
         if set(cls.model_fields) != {e.split(":")[0].strip("'") for e in entries}:
             raise NotFixed
+        complete(cls)  # its serializer, before any instance exists (fast_models)
         var, name = self.name("m"), self.name("C", cls)
         self.add(f"{var} = _new({name})", f"d = {var}.__dict__")
         self.add(*(f"d[{key}] = {value}" for key, value in (e.split(": ", 1) for e in entries)))

@@ -8,6 +8,11 @@ pydantic's three bookkeeping slots (fields set, extra, private) unset:
 `PrimaryModel.__getattr__` answers for them, so each model costs one allocation
 and one dict. The tests check every decoded model equals its validated twin and
 survives copy, pickle and dumps. Only for frozen PrimaryModels.
+
+The models defer their schemas (`defer_build`) until first validated, which a decoded
+model never is: `complete` builds a class's schema when code that makes it unvalidated
+is set up (a maker here, a generated decoder in compiled.py), so pydantic-core finds a
+real serializer wherever it serializes one (`to_json`, a TypeAdapter, a parent model).
 """
 
 from __future__ import annotations
@@ -27,12 +32,19 @@ _new = object.__new__
 _MAKERS: dict[type[PrimaryModel], Callable[[dict[str, Any]], Any]] = {}
 
 
+def complete(cls: type[BaseModel]) -> None:
+    """Build `cls`'s deferred schema (validator and serializer), once."""
+    if not cls.__pydantic_complete__:
+        cls.model_rebuild()
+
+
 def maker(cls: type[M]) -> Callable[[dict[str, Any]], M]:
     """A function that builds `cls` from a dict of its values, unvalidated (made once per class)."""
     found = _MAKERS.get(cls)
     if found is not None:
         return found
     assert cls.model_config.get("frozen"), f"{cls.__name__} must be frozen"
+    complete(cls)
     fields = cls.model_fields
     count = len(fields)
     defaults = {n: i.default for n, i in fields.items() if not i.is_required()}

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Annotated
 
-from pydantic import AfterValidator, Field
+from pydantic import AfterValidator, Field, PlainSerializer
 
 
 def _ascii(value: str) -> str:
@@ -28,3 +28,19 @@ ShortAsciiStr = Annotated[str, Field(max_length=255), AfterValidator(_ascii)]
 
 CsvItem = Annotated[str, AfterValidator(_csv_item)]
 """One name of a comma-separated list."""
+
+
+def json_text(value: str) -> str:
+    """Text for JSON: bytes that were not UTF-8 on the wire as `\\xNN` escapes.
+
+    The decoders keep such bytes as surrogate escapes, so encoding gives the wire's bytes
+    back; JSON cannot hold lone surrogates (pydantic refuses them), so a dump shows them
+    as Python's backslashreplace does.
+    """
+    if value.isascii():
+        return value
+    return value.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+
+
+WireText = Annotated[str, PlainSerializer(json_text, return_type=str, when_used="json")]
+"""Primary-interface text: UTF-8, any bytes kept (surrogate escapes), escaped in JSON."""

@@ -103,14 +103,6 @@ class RobotStateMessage(PrimaryModel):
     NAME: ClassVar[str] = "robot_state"
     sub_packages: list[Any]
 
-    def model_dump(self, **options: Any) -> dict[str, Any]:
-        _built(self.sub_packages)
-        return super().model_dump(**options)
-
-    def model_dump_json(self, **options: Any) -> str:
-        _built(self.sub_packages)
-        return super().model_dump_json(**options)
-
     def get(self, name: str) -> Any:
         """The first sub-package of that spec name (e.g. "joint_data"), or None."""
         for sub in self.sub_packages:
@@ -123,15 +115,3 @@ class RobotStateMessage(PrimaryModel):
         if found is None:
             raise KeyError(name)
         return found
-
-
-def _built(parts: list[Any]) -> None:
-    """Build the schemas of the sub-packages' classes, if no instance was validated yet.
-
-    `sub_packages` is typed Any, so pydantic serializes each one by its own class's
-    serializer, which `defer_build` leaves a placeholder until the class is first validated;
-    decoded models are never validated, and a dump would fail inside pydantic-core.
-    """
-    for cls in {type(part) for part in parts}:
-        if issubclass(cls, BaseModel) and not cls.__pydantic_complete__:
-            cls.model_rebuild()

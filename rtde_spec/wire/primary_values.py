@@ -22,6 +22,7 @@ from pydantic import BaseModel, ConfigDict
 
 from rtde_spec._generated.constants import PRIMARY_BYTE_ORDER as ORDER
 from rtde_spec.errors import DecodeError, EncodeError
+from rtde_spec.wire.model_types import WireText
 
 MAX_DEPTH = 32  # nested lists deeper than this are refused, not recursed into
 _set_dict = BaseModel.__dict__["__dict__"].__set__
@@ -40,7 +41,14 @@ class VariableValue(BaseModel):
     model_config = ConfigDict(frozen=True)
     type: str
     value: (
-        bool | int | float | str | tuple[float, ...] | list[VariableValue] | list[list[VariableValue]] | None
+        bool
+        | int
+        | float
+        | WireText
+        | tuple[float, ...]
+        | list[VariableValue]
+        | list[list[VariableValue]]
+        | None
     ) = None
 
     def __getattr__(self, item: str) -> Any:
@@ -79,7 +87,7 @@ class ValueTable:
             self.by_code[codes[vt.name]] = vt
             self.by_name[vt.name] = (codes[vt.name], vt)
             if vt.kind == "none":
-                self._shared[(vt.name, None)] = VariableValue(type=vt.name)
+                self._shared[(vt.name, None)] = VariableValue(type=vt.name, value=None)
             elif vt.kind == "string":
                 self._shared[(vt.name, "")] = _made(vt.name, "")
             elif vt.kind == "scalar" and vt.count == 1 and self.prims[vt.element].struct == "?":
