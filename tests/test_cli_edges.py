@@ -126,6 +126,37 @@ def test_control_characters_are_escaped_in_primary_trees() -> None:
     assert "\x1b" not in result.stdout and "\\x1b]0;owned\\x07" in result.stdout
 
 
+def _text_message(text: bytes) -> bytes:
+    body = struct.pack(">QbB", 1, -2, 0) + text
+    return struct.pack(">IB", 5 + len(body), 20) + body
+
+
+@pytest.mark.parametrize("fmt", ["json", "jsonl", "csv", "mcap"])
+def test_text_that_is_not_utf8_is_written_with_its_bytes_beside_it(fmt: str, tmp_path: Path) -> None:
+    """A controller's text need not be UTF-8 (Latin-1 from a script): JSON and MCAP refused the
+    decoder's surrogate escapes with a traceback, CSV with an error. Like capture tables, the
+    text now has U+FFFD where the bytes are not UTF-8, and `<field>_raw` holds them in hex
+    ('' for a good text, so the rows of one message keep one shape)."""
+    stream = _text_message(b"ok") + _text_message(b"caf\xe9") + _text_message(b"done")
+    out = tmp_path / f"texts.{fmt}"
+    result = cli("decode", "--protocol", "primary", stream.hex(), "-o", str(out), "--format", fmt)
+    assert result.returncode == 0, result.stderr
+    if fmt == "mcap":
+        from mcap.reader import make_reader
+
+        with out.open("rb") as f:
+            rows = [json.loads(m.data) for _, _, m in make_reader(f).iter_messages()]
+    elif fmt == "csv":
+        import csv
+
+        rows = list(csv.DictReader(out.open(encoding="utf-8")))
+    else:
+        text = out.read_text(encoding="utf-8")
+        rows = json.loads(text) if fmt == "json" else [json.loads(line) for line in text.splitlines()]
+    assert [r["text_message"] for r in rows] == ["ok", "caf\ufffd", "done"]
+    assert [r["text_message_raw"] for r in rows] == ["", b"caf\xe9".hex(), ""]
+
+
 # 5. exit codes and help
 
 

@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING, Any
 
 from pydantic import BaseModel
 
+from rtde_spec.capture.tables.rows import RAW, text_columns
 from rtde_spec.cli.report import report_skipped
 from rtde_spec.errors import DecodeError, RtdeSpecError
 from rtde_spec.output.describe import describe
@@ -20,9 +21,14 @@ if TYPE_CHECKING:
 
 
 def as_json(value: Any) -> Any:
-    """Models as dicts keyed by field name (bookkeeping fields only when set)."""
+    """Models as dicts keyed by field name (bookkeeping fields only when set).
+
+    Text that is not UTF-8 (kept by the decoder as surrogate escapes, which no JSON, CSV
+    or MCAP writer takes) reads as in capture tables: U+FFFD where the bytes are not
+    UTF-8, and the bytes in hex in a `<name>_raw` key beside it.
+    """
     if isinstance(value, PrimaryPart):
-        out = {"package": value.NAME, **{k: as_json(v) for k, v in value.values().items()}}
+        out = {"package": value.NAME, **_fields(value.values())}
         if value.extra:
             out["extra"] = value.extra.hex()
         if value.missing:
@@ -31,17 +37,34 @@ def as_json(value: Any) -> Any:
     if isinstance(value, RobotStateMessage):
         return {"package": value.NAME, "sub_packages": [as_json(s) for s in value.sub_packages]}
     if isinstance(value, BaseModel):
-        return {
-            "name": getattr(value, "NAME", type(value).__name__),
-            **{k: as_json(getattr(value, k)) for k in type(value).model_fields},
-        }
+        fields = {k: getattr(value, k) for k in type(value).model_fields}
+        return {"name": getattr(value, "NAME", type(value).__name__), **_fields(fields)}
+    if isinstance(value, str):
+        return value if value.isascii() else text_columns("", value)[""]
     if isinstance(value, (list, tuple)):
         return [as_json(v) for v in value]
     if isinstance(value, dict):
-        return {k: as_json(v) for k, v in value.items()}
+        return _fields(value)
     if isinstance(value, bytes):
         return value.hex()
     return value
+
+
+def _fields(values: dict[str, Any]) -> dict[str, Any]:
+    """Each value as_json; a text field adds `<name>_raw`, its bytes in hex when they are not
+    UTF-8 (else ''), as capture tables do, so rows of one message keep one shape; a list of
+    texts adds it only when one of them is not UTF-8."""
+    out: dict[str, Any] = {}
+    for name, value in values.items():
+        if isinstance(value, str):
+            out.update(text_columns(name, value))
+            continue
+        out[name] = as_json(value)
+        if isinstance(value, (list, tuple)) and any(isinstance(v, str) and not v.isascii() for v in value):
+            raws = [text_columns("", v)[RAW] if isinstance(v, str) else "" for v in value]
+            if any(raws):
+                out[name + RAW] = raws
+    return out
 
 
 def _lines(value: Any, indent: str) -> list[str]:
