@@ -173,3 +173,26 @@ def test_packages_taken_one_per_read_still_count_in_the_offsets_of_a_later_fault
     peer.close()
     assert got == [1.0, 2.0, 3.0]
     assert caught.value.offset == start + 3 * 12
+
+
+def test_reading_before_connect_is_a_usage_error_at_once() -> None:
+    """A client never connected had no socket: iterating or receive() failed an assertion, and
+    the asyncio client waited its whole time-out before a TimeoutError."""
+    import asyncio
+
+    from rtde_spec.errors import UsageError
+    from rtde_spec.rtde.aio import AsyncRtdeClient
+
+    client = RtdeClient("127.0.0.1", 1, timeout=5.0)  # nothing is sent: no connection is made
+    start = time.monotonic()
+    with pytest.raises(UsageError, match="not connected: call connect"):
+        client.receive()
+    with pytest.raises(UsageError, match="not connected"):
+        list(client)
+
+    async def receive() -> None:
+        await AsyncRtdeClient("127.0.0.1", 1, timeout=5.0).receive()
+
+    with pytest.raises(UsageError, match="not connected"):
+        asyncio.run(receive())
+    assert time.monotonic() - start < 2.0

@@ -19,8 +19,8 @@ from collections.abc import AsyncIterator, Mapping, Sequence
 from typing import Any
 
 from rtde_spec._generated.constants import RTDE_PORT
-from rtde_spec.errors import ProtocolError, RtdeConnectionError, RtdeSpecError
-from rtde_spec.rtde.client_base import ClientBase
+from rtde_spec.errors import ProtocolError, RtdeConnectionError, RtdeSpecError, UsageError
+from rtde_spec.rtde.client_base import NOT_CONNECTED, ClientBase
 from rtde_spec.rtde.client_protocol import DataRun, InputRecipe, Reply, Text
 from rtde_spec.rtde.client_thread import LOG_LEVELS
 
@@ -90,6 +90,8 @@ class AsyncRtdeClient(ClientBase):
         while not data:
             if self._closed is not None:
                 raise self._closed
+            if self._writer is None:
+                raise UsageError(NOT_CONNECTED, subject=self.where)
             if loop.time() >= deadline:
                 raise TimeoutError(f"no data package from {self.where} in time")
             waiter = self._waiter = loop.create_future()

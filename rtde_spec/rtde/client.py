@@ -28,6 +28,7 @@ from typing import Any
 from rtde_spec._generated.constants import RTDE_PORT
 from rtde_spec.errors import ProtocolError, RtdeConnectionError, UsageError
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET
+from rtde_spec.rtde.client_base import NOT_CONNECTED
 from rtde_spec.rtde.client_protocol import InputRecipe, Reply
 from rtde_spec.rtde.client_thread import ThreadReads, _new_tuple
 
@@ -190,7 +191,8 @@ class RtdeClient(ThreadReads):
         """One read of the socket in the caller's thread (holding `_reading`), up to about `left` s:
         the record when the read was exactly one data package; else its events are handled."""
         sock = self._sock
-        assert sock is not None
+        if sock is None:
+            raise UsageError(NOT_CONNECTED, subject=self.where)
         try:
             if not ((self._sliced and left >= SLICE) or self._readable(sock, max(0.0, left))):
                 return None

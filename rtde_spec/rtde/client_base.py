@@ -13,6 +13,9 @@ from rtde_spec.metamodel.versions import Version
 from rtde_spec.rtde.client_events import Reply
 from rtde_spec.rtde.client_protocol import READ_SIZE, ClientProtocol
 
+NOT_CONNECTED = "not connected: call connect() first, or use the client in a with block"
+"""What receiving says before connect(): a usage error, not an end of data or a time-out."""
+
 
 class ClientBase:
     """What the blocking and asyncio clients share: the address, the core, the queue, the counters."""
