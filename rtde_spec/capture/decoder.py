@@ -22,6 +22,7 @@ from rtde_spec.capture.reading.packets import Segment, items
 from rtde_spec.capture.routing.classify import port_kinds
 from rtde_spec.capture.routing.flows import SCRIPT_KIND, Flow, FlowTable, classify
 from rtde_spec.capture.runs import Batcher
+from rtde_spec.capture.tables.signals import signals_held
 from rtde_spec.capture.tables.sink import ArrowSink, DirectorySink, TableSink, output_stem
 from rtde_spec.capture.tables.summary import CaptureSummary
 from rtde_spec.errors import OutputError
@@ -94,12 +95,28 @@ def _summary(path: str | Path, stats: dict[str, int], table: FlowTable) -> Captu
 
 
 class CaptureInterrupted(KeyboardInterrupt):
-    """Ctrl-C during a capture (a live pipe); `summary` says what was decoded before it,
-    and every table written is whole."""
+    """Ctrl-C (or SIGTERM) during a capture; `summary` says what was decoded before it.
 
-    def __init__(self, summary: CaptureSummary) -> None:
+    `kept`: whether that was written. A live pipe's tables are (Ctrl-C is how one ends);
+    a file's are not: its tables of an earlier, finished run stay as they were, never
+    replaced by the part read before the interrupt.
+    """
+
+    def __init__(self, summary: CaptureSummary, kept: bool = True) -> None:
         super().__init__()
         self.summary = summary
+        self.kept = kept
+
+    def __reduce__(self) -> tuple[Any, ...]:  # from a worker process (capture --jobs)
+        return (type(self), (self.summary, self.kept))
+
+
+def is_live(path: str | Path) -> bool:
+    """A pipe or standard input rather than a file: read once, as it comes, to its end."""
+    try:
+        return not Path(path).is_file()
+    except OSError:
+        return True
 
 
 def decode_to_directory(
@@ -120,6 +137,11 @@ def decode_to_directory(
     try:
         summary = decode_capture(path, sink, recipe=codec, **kw)
     except CaptureInterrupted as stop:
+        if not is_live(path):  # unfinished: its earlier tables stay, nothing half is put in place
+            with signals_held(replay=False):  # a second Ctrl-C must not cut the clean-up short
+                sink.abort()
+            stop.kept = False
+            raise
         sink.close()
         stop.summary.tables, stop.summary.paths = dict(sink.rows), [str(p) for p in sink.paths]
         raise

@@ -16,6 +16,7 @@ from rtde_spec.errors import RtdeSpecError, UsageError
 from rtde_spec.printable import safe_text
 
 if TYPE_CHECKING:
+    from rtde_spec.capture.decoder import CaptureInterrupted
     from rtde_spec.capture.tables.summary import CaptureSummary
 
 SUFFIXES = (".pcap", ".pcapng", ".cap")
@@ -36,8 +37,9 @@ NAME_raw.
 Exit codes: 0 every file decoded whole; 1 data packages need --recipe (or another
 error in the data); 2 usage error (no such file, not a capture); 3 decoded, but some
 input was damaged or skipped, or nothing was decoded: no UR connection, the TCP
-ports seen named (--port-map for moved ones) (0 with --lenient); 130 interrupted (the
-tables written so far are whole)."""
+ports seen named (--port-map for moved ones) (0 with --lenient); 130 interrupted
+(Ctrl-C, SIGTERM): files finished have their tables whole; a file cut short writes none
+and keeps those of an earlier run; a pipe (-) keeps what was decoded."""
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
@@ -180,18 +182,14 @@ def run(args: argparse.Namespace) -> int:
     }
     summaries: list[CaptureSummary] = []
     if args.jobs > 1 and len(files) > 1:
-        from rtde_spec.output.parquet import one_core_per_process
-
         if args.format == "parquet":  # imported once here: forked workers start with it loaded
             import pyarrow.parquet  # noqa: F401
 
-        from concurrent.futures import ProcessPoolExecutor  # only for several files in parallel
+        from rtde_spec.cli.capture_jobs import decode_in_workers
 
-        with ProcessPoolExecutor(max_workers=args.jobs, initializer=one_core_per_process) as pool:
-            futures = [
-                pool.submit(decode_to_directory, f, args.outdir, args.format, recipe, **kw) for f in files
-            ]
-            summaries = [f.result() for f in futures]
+        summaries, stopped = decode_in_workers(files, args.jobs, (args.outdir, args.format, recipe), kw)
+        if stopped is not None:
+            return _interrupted(summaries, stopped)
     else:
         if args.jobs > 1:  # one file on several cores: framing stays here, batches go to threads
             kw["workers"] = args.jobs - 1
@@ -201,10 +199,8 @@ def run(args: argparse.Namespace) -> int:
                 kw["progress"] = lambda done, bar=bar: bar.update(done - bar.n)
             try:
                 summaries.append(decode_to_directory(f, args.outdir, args.format, recipe, **kw))
-            except CaptureInterrupted as stop:  # Ctrl-C (a live pipe): report what was kept
-                _report([*summaries, stop.summary])
-                print("interrupted: the tables above are written whole", file=sys.stderr)
-                return 130
+            except CaptureInterrupted as stop:
+                return _interrupted([*summaries, stop.summary] if stop.kept else summaries, [stop])
             finally:
                 if bar is not None:
                     bar.close()
@@ -214,6 +210,24 @@ def run(args: argparse.Namespace) -> int:
     if any(s.damage() or empty(s) for s in summaries) and not args.lenient:
         return EXIT_DAMAGED
     return 0
+
+
+def _interrupted(finished: list[CaptureSummary], stops: list[CaptureInterrupted]) -> int:
+    """Ctrl-C or SIGTERM: what was finished is reported; a file cut short kept its earlier tables."""
+    if finished:
+        _report(finished, reread=False)
+    cut = [stop.summary.file for stop in stops if not stop.kept]
+    if cut:
+        print(
+            safe_text(
+                f"interrupted: {', '.join(cut)} not finished, so none of its tables was written "
+                "(files of earlier runs are as they were); the tables above are written whole"
+            ),
+            file=sys.stderr,
+        )
+    else:
+        print("interrupted: the tables above are written whole", file=sys.stderr)
+    return 130
 
 
 def verdict(s: CaptureSummary) -> str:
@@ -248,9 +262,15 @@ def ports_seen(path: str, most: int = 8) -> str:
     return shown + (f" and {len(counts) - most} more" if len(counts) > most else "")
 
 
-def nothing_found(s: CaptureSummary) -> str:
-    """Why a capture gave no rows, naming the ports it holds and --port-map."""
-    ports = ports_seen(s.file) if s.file != STDIN else "unknown (standard input)"
+def nothing_found(s: CaptureSummary, reread: bool = True) -> str:
+    """Why a capture gave no rows, naming the ports it holds and --port-map (read again: only a
+    regular file, and not after an interrupt)."""
+    if s.file == STDIN:
+        ports = "unknown (standard input)"
+    elif not reread or not Path(s.file).is_file():
+        ports = "unknown (not read again)"
+    else:
+        ports = ports_seen(s.file)
     what = "no RTDE, primary, real-time, dashboard or driver connection" if not s.connections else "no rows"
     return (
         f"{what} found; TCP ports seen: {ports}. If one of them is a UR interface on a moved port, "
@@ -258,7 +278,7 @@ def nothing_found(s: CaptureSummary) -> str:
     )
 
 
-def _report(summaries: list[CaptureSummary]) -> None:
+def _report(summaries: list[CaptureSummary], reread: bool = True) -> None:
     """stdout: files, connections and tables written; stderr: each file's summary and problems."""
     tables: dict[str, int] = {}
     for s in summaries:
@@ -276,7 +296,7 @@ def _report(summaries: list[CaptureSummary]) -> None:
         if line.startswith(f"{s.file}: ok: "):
             line = f"{s.file}: {verdict(s)}: " + line[len(f"{s.file}: ok: ") :]
         print(safe_text(f"summary {line}"), file=sys.stderr)
-        problems = s.problems() + ([nothing_found(s)] if empty(s) else [])
+        problems = s.problems() + ([nothing_found(s, reread)] if empty(s) else [])
         for problem in distinct(problems):
             print(safe_text(f"  problem: {problem}"), file=sys.stderr)
 

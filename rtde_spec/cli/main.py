@@ -8,7 +8,7 @@ Exit codes, the same for every subcommand:
   3    capture read every input to its end, but some was damaged or skipped, or
        nothing decoded (the summary on stderr says what and where, and the TCP ports
        seen; --lenient makes it 0)
-  130  interrupted (Ctrl-C); what was written so far is whole
+  130  interrupted (Ctrl-C, SIGTERM, SIGHUP); what was written so far is whole
 Errors print `error: WHAT: WHY; WHAT TO DO` on stderr; --debug shows the traceback.
 tests/test_cli_errors.py holds each error a user can cause, with its message and code.
 Subcommand modules import their heavy parts only when they run, so help and start-up
@@ -19,8 +19,10 @@ from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
 from collections.abc import Callable
+from typing import Any
 
 from rtde_spec import __version__
 from rtde_spec.cli import (
@@ -89,6 +91,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     args.extra_fields = [*args.extra_fields, *getattr(args, GLOBAL_AFTER, [])]
     run: Callable[[argparse.Namespace], int] = args.run
+    previous = _stop_on_terminate()
     try:
         return run(args)
     except BrokenPipeError:
@@ -108,6 +111,31 @@ def main(argv: list[str] | None = None) -> int:
             raise
         print(f"error: {safe_text(str(exc))}", file=sys.stderr)  # errors quote the wire: escaped
         return EXIT_ERROR
+    finally:
+        for signum, handler in previous.items():
+            signal.signal(signum, handler)
+
+
+def _interrupt(signum: int, frame: object) -> None:
+    raise KeyboardInterrupt
+
+
+def _stop_on_terminate() -> dict[int, Any]:
+    """SIGTERM and SIGHUP (a service manager, a closed terminal) stop a command as Ctrl-C does,
+    so its cleanup runs: temp files removed, workers stopped, old outputs kept. By default
+    they would end the process where it stands. Commands with their own handling (record)
+    set theirs while they run."""
+    previous: dict[int, Any] = {}
+    for name in ("SIGTERM", "SIGHUP"):
+        signum = getattr(signal, name, None)
+        if signum is None:
+            continue
+        try:
+            if signal.getsignal(signum) is signal.SIG_DFL:
+                previous[signum] = signal.signal(signum, _interrupt)
+        except ValueError:  # not the main thread (main() called from a thread): left as it is
+            break
+    return previous
 
 
 if __name__ == "__main__":

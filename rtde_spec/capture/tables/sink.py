@@ -20,6 +20,7 @@ from pathlib import Path
 from typing import Any
 
 from rtde_spec.capture.tables.ordered_writes import PREPARED, OrderedWrites
+from rtde_spec.capture.tables.signals import signals_held
 from rtde_spec.errors import OutputError, require
 from rtde_spec.output.base import Writer, flat_columns, flatten
 from rtde_spec.output.partfile import write_failed, write_whole
@@ -251,14 +252,12 @@ class DirectorySink(TableSink):
             self.abort()
             raise
         failed: BaseException | None = None
-        for writer in [
-            *self.finished,
-            *self.writers.values(),
-        ]:  # every table put in place, even after one fails
-            try:
-                writer.commit()
-            except Exception as exc:
-                failed = failed or exc
+        with signals_held():  # renames only: all of this run's tables, or (before) none
+            for writer in [*self.finished, *self.writers.values()]:  # each put in place, even after one fails
+                try:
+                    writer.commit()
+                except Exception as exc:
+                    failed = failed or exc
         if failed is not None:
             raise failed
         self._remove_stale_parts()

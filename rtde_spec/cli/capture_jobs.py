@@ -1,0 +1,133 @@
+"""`capture --jobs N` over several files: one worker process per core, stopped cleanly.
+
+A worker stopped by a signal must not leave half-written tables or hidden temp files, and
+must not outlive the command. So the parent forwards Ctrl-C and SIGTERM to its workers
+(they get none when the signal went to the parent alone); a worker reading a capture stops
+as the one-process path does (the file's tables dropped, its earlier ones kept) and returns
+what it has, an idle one exits; pending files are cancelled, not started; and a worker
+whose parent died (SIGKILL) gets SIGTERM from the kernel (Linux) instead of waiting on a
+queue forever.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import sys
+from collections.abc import Sequence
+from pathlib import Path
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    from types import FrameType
+
+    from rtde_spec.capture.decoder import CaptureInterrupted
+    from rtde_spec.capture.tables.summary import CaptureSummary
+
+_busy = False  # a worker is decoding a file: a signal stops the file, else it ends the worker
+_stopping = False  # that file is being stopped: later signals change nothing
+_parent = 0  # the pid of the command that started this worker
+_STOPS = ("SIGINT", "SIGTERM", "SIGHUP")
+
+
+def decode_in_workers(
+    files: Sequence[Path], jobs: int, target: tuple[Any, ...], kw: dict[str, Any]
+) -> tuple[list[CaptureSummary], list[CaptureInterrupted] | None]:
+    """Each file decoded by `decode_to_directory(file, *target, **kw)` in a worker, in order.
+
+    Returns the summaries of the files finished and, after an interrupt, the stops of the
+    files cut short (None when nothing was interrupted).
+    """
+    from concurrent.futures import ProcessPoolExecutor
+
+    pool = ProcessPoolExecutor(max_workers=jobs, initializer=_start_worker)
+    futures = [pool.submit(_decode_one, f, target, kw) for f in files]
+    try:
+        summaries = [f.result() for f in futures]
+    except KeyboardInterrupt:
+        return _stop(pool, futures)
+    except BaseException:
+        pool.shutdown(wait=True, cancel_futures=True)
+        raise
+    pool.shutdown(wait=True)
+    return summaries, None
+
+
+def _stop(pool: Any, futures: list[Any]) -> tuple[list[CaptureSummary], list[CaptureInterrupted]]:
+    """Stop every worker between or inside files, and collect what each finished."""
+    from rtde_spec.capture.decoder import CaptureInterrupted
+
+    for future in futures:
+        future.cancel()  # not started: never started
+    for pid in list(getattr(pool, "_processes", None) or {}):
+        try:
+            os.kill(pid, signal.SIGINT)  # a signal sent to the parent alone reaches them too
+        except OSError:
+            pass
+    pool.shutdown(wait=True, cancel_futures=True)
+    finished: list[CaptureSummary] = []
+    stops: list[CaptureInterrupted] = []
+    for future in futures:
+        if future.cancelled() or not future.done() or future.exception() is not None:
+            continue
+        got = future.result()
+        if isinstance(got, CaptureInterrupted):
+            stops.append(got)
+            if got.kept:
+                finished.append(got.summary)
+        else:
+            finished.append(got)
+    return finished, stops
+
+
+def _start_worker() -> None:
+    """In each worker: Parquet in its own thread, signals handled, ended with its parent."""
+    from rtde_spec.output.parquet import one_core_per_process
+
+    one_core_per_process()
+    for name in _STOPS:
+        if hasattr(signal, name):
+            signal.signal(getattr(signal, name), _on_signal)
+    _end_with_parent()
+
+
+def _on_signal(signum: int, frame: FrameType | None) -> None:
+    global _stopping
+    if _busy:
+        if _stopping:  # the same stop again (to the group, and forwarded by the parent)
+            return
+        _stopping = True
+        raise KeyboardInterrupt  # decode_to_directory drops the file's tables, keeps the old ones
+    os._exit(128 + signum)  # idle: nothing of ours is open
+
+
+def _end_with_parent() -> None:
+    """SIGTERM from the kernel when the parent process dies (Linux's PR_SET_PDEATHSIG)."""
+    global _parent
+    parent = _parent = os.getppid()
+    if not sys.platform.startswith("linux"):
+        return
+    try:
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGTERM))  # 1: PR_SET_PDEATHSIG
+    except (OSError, AttributeError):
+        return
+    if os.getppid() != parent:  # it died before the request took effect
+        os._exit(128 + int(signal.SIGTERM))
+
+
+def _decode_one(path: Path, target: tuple[Any, ...], kw: dict[str, Any]) -> Any:
+    """One file in a worker: its summary, or the CaptureInterrupted that stopped it."""
+    global _busy, _stopping
+    from rtde_spec.capture.decoder import CaptureInterrupted, decode_to_directory
+
+    _busy, _stopping = True, False
+    try:
+        return decode_to_directory(path, *target, **kw)
+    except CaptureInterrupted as stop:
+        return stop
+    finally:
+        _busy = False
+        if os.getppid() != _parent:  # the parent died (its SIGTERM stopped this file): no one
+            os._exit(128 + int(signal.SIGTERM))  # takes the result or sends more work

@@ -1,0 +1,145 @@
+"""`capture` stopped by a signal in the middle of its files: nothing half-written, nothing left behind.
+
+Before: SIGTERM ended the process where it stood (exit 143, hidden `.part` files left for
+good); Ctrl-C put the part of the file being read in place of that file's complete tables
+from an earlier run; with `--jobs 2` a signal to the command alone let its workers decode
+every remaining file, and a killed command left its workers waiting forever. Each run
+here starts from the tables of a finished earlier run and must leave them byte for byte.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from .helpers import ROOT
+
+DRIVER = ROOT / "rtde_spec" / "examples" / "files" / "driver.pcap"  # every port of a driver session
+COPIES = 48
+
+
+@pytest.fixture(scope="module")
+def earlier(tmp_path_factory: pytest.TempPathFactory) -> tuple[Path, Path]:
+    """COPIES captures, and the tables of a finished run over them."""
+    base = tmp_path_factory.mktemp("signals")
+    inputs = base / "in"
+    inputs.mkdir()
+    for k in range(COPIES):
+        shutil.copyfile(DRIVER, inputs / f"d{k:02d}.pcap")
+    out = base / "out"
+    done = subprocess.run(_command(inputs, out, 1), capture_output=True, text=True, timeout=300)
+    assert done.returncode == 0, done.stderr[-2000:]
+    return inputs, out
+
+
+def _command(inputs: Path, out: Path, jobs: int) -> list[str]:
+    return [sys.executable, "-m", "rtde_spec", "capture", str(inputs), "-o", str(out), "--jobs", str(jobs)]
+
+
+def digests(folder: Path) -> dict[str, str]:
+    """Every file under `folder` (hidden temp files too) by its path, with its content's hash."""
+    return {
+        str(p.relative_to(folder)): hashlib.sha256(p.read_bytes()).hexdigest()
+        for p in sorted(folder.rglob("*"))
+        if p.is_file()
+    }
+
+
+def _rewritten(folder: Path, since: float) -> int:
+    return sum(1 for p in folder.rglob("*") if p.is_file() and p.stat().st_mtime > since)
+
+
+def _start_and_wait(inputs: Path, out: Path, jobs: int) -> subprocess.Popen[str]:
+    """The capture started again over the same files, once it has put several files' tables in place."""
+    start = time.time()
+    proc = subprocess.Popen(
+        _command(inputs, out, jobs), stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True
+    )
+    deadline = time.monotonic() + 60
+    while _rewritten(out, start) < 40 and proc.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.01)
+    assert proc.poll() is None, "the capture ended before it could be interrupted"
+    return proc
+
+
+def _children(pid: int) -> list[int]:
+    path = Path(f"/proc/{pid}/task/{pid}/children")
+    return [int(c) for c in path.read_text().split()] if path.exists() else []
+
+
+def _alive(pid: int) -> bool:
+    try:
+        return Path(f"/proc/{pid}/stat").read_text().split()[2] != "Z"
+    except OSError:
+        return False
+
+
+@pytest.fixture
+def copy_of(earlier: tuple[Path, Path], tmp_path: Path) -> tuple[Path, Path, dict[str, str]]:
+    inputs, out = earlier
+    mine = tmp_path / "out"
+    shutil.copytree(out, mine)
+    return inputs, mine, digests(mine)
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT], ids=["SIGTERM", "SIGINT"])
+def test_a_signal_keeps_the_tables_of_an_earlier_run_and_leaves_no_temp_files(
+    copy_of: tuple[Path, Path, dict[str, str]], sig: signal.Signals
+) -> None:
+    inputs, out, before = copy_of
+    proc = _start_and_wait(inputs, out, 1)
+    proc.send_signal(sig)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err[-2000:]
+    assert digests(out) == before  # finished files rewritten as they were; the one cut short untouched
+    assert "interrupted" in err
+
+
+def test_jobs_stop_with_the_command_when_it_alone_gets_the_signal(
+    copy_of: tuple[Path, Path, dict[str, str]],
+) -> None:
+    inputs, out, before = copy_of
+    proc = _start_and_wait(inputs, out, 2)
+    workers = _children(proc.pid)
+    assert workers, "no worker processes"
+    stopped = time.time()
+    proc.send_signal(signal.SIGINT)  # to the command only, as `kill -INT PID` does
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 130, err[-2000:]
+    later = [p for p in out.rglob("*") if p.is_file() and p.stat().st_mtime > stopped + 0.5]
+    assert not later, f"files written after the stop: {later[:3]}"  # pending files were not started
+    assert digests(out) == before
+    deadline = time.monotonic() + 10
+    while any(_alive(w) for w in workers) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert not any(_alive(w) for w in workers)
+
+
+def test_workers_of_a_killed_command_end_and_leave_no_temp_files(
+    copy_of: tuple[Path, Path, dict[str, str]],
+) -> None:
+    inputs, out, before = copy_of
+    proc = _start_and_wait(inputs, out, 2)
+    workers = _children(proc.pid)
+    assert workers, "no worker processes"
+    proc.kill()  # SIGKILL: no clean-up of its own; the kernel tells the workers (Linux)
+    proc.wait(timeout=60)  # (not communicate: the workers hold its output pipes while they live)
+    deadline = time.monotonic() + 10
+    while any(_alive(w) for w in workers) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    leftover = [w for w in workers if _alive(w)]
+    for w in leftover:  # do not leave them to the next test
+        os.kill(w, signal.SIGKILL)
+    for stream in (proc.stdout, proc.stderr):
+        assert stream is not None
+        stream.close()
+    assert not leftover, "workers outlived the command"
+    assert digests(out) == before
