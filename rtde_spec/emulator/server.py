@@ -32,6 +32,7 @@ from rtde_spec.emulator.controller.model import ControllerModel
 from rtde_spec.emulator.controller.scenario import Scenario
 from rtde_spec.emulator.ports.dashboard import DashboardConnection, DashboardHub
 from rtde_spec.emulator.ports.guard import ClientLimits, Port
+from rtde_spec.emulator.ports.listener import Descriptors, Listener
 from rtde_spec.emulator.ports.primary_server import PrimaryConnection, PrimaryHub
 from rtde_spec.emulator.ports.realtime_server import RealtimeConnection, RealtimeHub
 from rtde_spec.emulator.ports.rtde_server import RtdeConnection, RtdeHub
@@ -104,10 +105,12 @@ class Emulator:
         self.realtime = RealtimeHub(self.model, self.primary)
         self.faults = FaultSchedule(self.config.scenario.faults, self.model)
         self._silenced = False
-        self.servers: list[asyncio.AbstractServer] = []
+        self.servers: list[Listener] = []
+        self.descriptors = Descriptors()  # one held in reserve; running out logged once
         self.ports: dict[str, int] = {}
         self.clients: dict[str, Port] = {}  # port name -> its connections, under the limits
         self._loop_task: asyncio.Task[None] | None = None
+        self._clock: StepClock | None = None
         self._serving = False
         self.late_steps = 0
         # per step, when step_timing is set: how late it woke, how late its packages were all
@@ -153,7 +156,9 @@ class Emulator:
             _real_time(c.realtime_priority)
         _serving(+1, c)
         self._serving = True
-        self._loop_task = loop.create_task(self._control_loop())
+        self._clock = StepClock()  # its timerfd before the reserve: steps on time matter more
+        self._loop_task = loop.create_task(self._control_loop(self._clock))
+        self.descriptors.start()
 
     def _port(self, name: str) -> Port:
         self.clients[name] = Port(name, self.config.limits)
@@ -179,13 +184,14 @@ class Emulator:
         return lambda: PrimaryConnection(self.primary, port, self.ports[name], read_only, messages)
 
     async def _listen(self, name: str, port: int, factory) -> None:  # type: ignore[no-untyped-def]
-        server = await asyncio.get_running_loop().create_server(factory, self.config.host, port)
+        """Listen with our own accept loop, not asyncio's: out of file descriptors it floods the
+        log with tracebacks and leaves clients waiting (ports/listener.py)."""
+        server = await Listener.open(self.config.host, port, factory, self.descriptors)
         self.servers.append(server)
-        self.ports[name] = server.sockets[0].getsockname()[1]
+        self.ports[name] = server.port
         log.info("%s on %s:%d", name, self.config.host, self.ports[name])
 
-    async def _control_loop(self) -> None:
-        clock = StepClock()
+    async def _control_loop(self, clock: StepClock) -> None:
         try:
             await self._steps(clock)
         finally:
@@ -255,6 +261,9 @@ class Emulator:
                     conn.transport.abort()
         for server in self.servers:
             await server.wait_closed()
+        if self._clock is not None:  # a loop task cancelled before it ran never closed it
+            self._clock.close()
+        self.descriptors.release()
 
     async def serve_forever(self) -> None:
         await self.start()

@@ -96,7 +96,10 @@ def socket_open(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Waiti
     table = sockets_of(runner)
     if name in table:
         table.pop(name).close()
-    sock = socket.socket(socket.AF_INET6 if ":" in address else socket.AF_INET, socket.SOCK_STREAM)
+    try:
+        sock = socket.socket(socket.AF_INET6 if ":" in address else socket.AF_INET, socket.SOCK_STREAM)
+    except OSError:  # out of file descriptors: the program's socket_open fails, as on a controller
+        return _done(False)
     sock.setblocking(False)
     sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
     code = sock.connect_ex((address, port))
