@@ -143,3 +143,34 @@ def test_workers_of_a_killed_command_end_and_leave_no_temp_files(
         stream.close()
     assert not leftover, "workers outlived the command"
     assert digests(out) == before
+
+
+def test_out_of_file_descriptors_says_the_limit_and_what_to_do(
+    earlier: tuple[Path, Path], tmp_path: Path
+) -> None:
+    """Was `error: [Errno 24] Too many open files: '.../capture/protocols/dashboard.py'`: the
+    file the process happened to open, a module of ours, not the limit."""
+    import resource
+
+    inputs, _ = earlier
+    files = [str(inputs / "d00.pcap"), str(inputs / "d01.pcap")]
+    command = [
+        sys.executable,
+        "-m",
+        "rtde_spec",
+        "capture",
+        *files,
+        "-o",
+        str(tmp_path / "out"),
+        "--jobs",
+        "2",
+    ]
+
+    def low() -> None:
+        resource.setrlimit(resource.RLIMIT_NOFILE, (12, resource.getrlimit(resource.RLIMIT_NOFILE)[1]))
+
+    done = subprocess.run(command, capture_output=True, text=True, timeout=120, preexec_fn=low)
+    assert done.returncode == 1, done.stderr[-2000:]
+    assert "out of file descriptors (ulimit -n 12): raise the limit" in done.stderr
+    assert "Traceback" not in done.stderr
+    assert not list((tmp_path / "out").rglob(".*part*"))  # (none if the folder was never made)

@@ -18,11 +18,17 @@ stay fast.
 from __future__ import annotations
 
 import argparse
+import errno
 import os
 import signal
 import sys
 from collections.abc import Callable
 from typing import Any
+
+try:  # now: out of descriptors, an import then would fail too
+    import resource
+except ImportError:  # not POSIX
+    resource = None  # type: ignore[assignment]
 
 from rtde_spec import __version__
 from rtde_spec.cli import (
@@ -109,11 +115,26 @@ def main(argv: list[str] | None = None) -> int:
     except (RtdeSpecError, OSError, ValueError) as exc:
         if args.debug:
             raise
-        print(f"error: {safe_text(str(exc))}", file=sys.stderr)  # errors quote the wire: escaped
+        print(f"error: {safe_text(_worded(exc))}", file=sys.stderr)  # errors quote the wire: escaped
         return EXIT_ERROR
     finally:
         for signum, handler in previous.items():
             signal.signal(signum, handler)
+
+
+def _worded(exc: BaseException) -> str:
+    """The error's text; out of file descriptors, what the limit is and what to do (the bare
+    OSError names whatever file the process happened to open: a module, a socket)."""
+    if isinstance(exc, OSError) and exc.errno in (errno.EMFILE, errno.ENFILE):
+        try:
+            limit = str(resource.getrlimit(resource.RLIMIT_NOFILE)[0]) if resource else "?"
+        except (OSError, ValueError):
+            limit = "?"
+        return (
+            f"out of file descriptors (ulimit -n {limit}): raise the limit (e.g. ulimit -n 1024) "
+            "or run fewer --jobs"
+        )
+    return str(exc)
 
 
 def _interrupt(signum: int, frame: object) -> None:
