@@ -14,6 +14,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING
 
 from rtde_spec.errors import RtdeSpecError, UsageError
+from rtde_spec.output.partfile import kind_of
 
 if TYPE_CHECKING:
     from rtde_spec.metamodel.catalogue import Catalogue
@@ -38,7 +39,7 @@ def catalogue_for(args: argparse.Namespace) -> Catalogue:
 def existing_file(arg: str) -> Path | None:
     """The path if `arg` names an existing regular file; None if not (a too-long name is not a file).
 
-    A directory is a usage error: it is neither a file nor data.
+    A directory, a FIFO or a device is a usage error: it is neither a file nor data.
     """
     if not arg or arg == "-" or "\x00" in arg:
         return None
@@ -48,6 +49,9 @@ def existing_file(arg: str) -> Path | None:
             return path
         if path.is_dir():
             raise UsageError("is a directory, not a file", subject=f"file {arg}")
+        kind = kind_of(path)  # a FIFO, a device: read once, never seekable, often never ending
+        if kind is not None:
+            raise UsageError(f"is {kind}, not a regular file; give a file", subject=f"file {arg}")
     except OSError:  # e.g. ENAMETOOLONG for a long hex string: not a file
         return None
     return None

@@ -21,9 +21,9 @@ from rtde_spec._generated.constants import (
     RTDE_PROTOCOLS,
     RTDE_SENDERS,
 )
-from rtde_spec.cli.arguments import existing_file, recipe_file
+from rtde_spec.cli.arguments import RECIPE_FILE_HELP, existing_file, recipe_file
 from rtde_spec.cli.conventions import describe, output_file
-from rtde_spec.cli.inputs import from_hex_text, read_input, reject_capture
+from rtde_spec.cli.inputs import from_hex_text, read_input, refuse_special, reject_capture
 from rtde_spec.cli.options import add_lenient
 from rtde_spec.cli.report import report_skipped
 from rtde_spec.errors import DecodeError, RtdeSpecError
@@ -129,6 +129,10 @@ def recipe_codec(args: argparse.Namespace) -> RecipeCodec | None:
 
     direction = cast(Direction, RTDE_DIRECTIONS[args.sender])
     cat = catalogue_for(args)
+    # a pipe or device named as the recipe is neither a file to read nor a list of field names
+    refuse_special(
+        args.recipe, "a recipe file", f"give {RECIPE_FILE_HELP}, or field names as a comma list", "--recipe"
+    )
     path = recipe_file(args.recipe)
     if path is not None:
         inputs, outputs = set(cat.names("input")), set(cat.names("output"))

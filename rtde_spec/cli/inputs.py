@@ -50,8 +50,36 @@ def reject_capture(head: bytes, source: str) -> None:
         )
 
 
+def not_a_file(arg: str | Path) -> str | None:
+    """What `arg` is when it names something that exists but is not a regular file ("a FIFO (named
+    pipe)", "a character device", "a directory"); None when it is a file or nothing is there."""
+    from rtde_spec.output.partfile import kind_of
+
+    text = str(arg)
+    if not text or text == "-" or "\x00" in text:
+        return None
+    return kind_of(Path(text))
+
+
+def refuse_special(arg: str | Path, wanted: str, instead: str, option: str = "file") -> None:
+    """A usage error when `arg` exists but is no regular file: it says what the path is and why it
+    cannot be used (a pipe or device is not read by name: it may wait for a writer, or be empty)."""
+    kind = not_a_file(arg)
+    if kind is None:
+        return
+    why = {
+        "a directory": "",
+        "a FIFO (named pipe)": "; a pipe is read once and waits for a writer, so it is not read by name",
+        "a character device": "; a device is not a file of data (/dev/null reads as nothing)",
+    }.get(kind, "")
+    raise UsageError(f"is {kind}, not {wanted}{why}; {instead}", subject=f"{option} {str(arg)[:200]}")
+
+
 def read_input(arg: str) -> bytes:
     """HEX_OR_FILE: '-' is stdin, an existing file is read (hex text or binary), else hex."""
+    refuse_special(
+        arg, "a file of packages", f"give a file, hex, or - with the bytes on standard input (- < {arg[:80]})"
+    )
     path = existing_file(arg)
     if arg == "-":
         data = sys.stdin.buffer.read()

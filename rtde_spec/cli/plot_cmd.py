@@ -173,6 +173,10 @@ def _check_output(output: Path) -> None:
             f"the folder {output.parent} does not exist; create it or write the image elsewhere",
             subject=f"-o {output}",
         )
+    if output.is_dir():
+        raise UsageError(
+            f"is a directory; give the image's file name (e.g. {output / 'plot.png'})", subject=f"-o {output}"
+        )
 
 
 def run(args: argparse.Namespace) -> int:

@@ -188,14 +188,19 @@ def run(args: argparse.Namespace) -> int:
 def _spec_to_compare(args: argparse.Namespace) -> Any:
     """The spec the document is compared with: the checkout's (--spec-dir, or ./spec), else the
     installed package's own; --write needs a checkout's."""
+    from rtde_spec.cli.inputs import refuse_special
     from rtde_spec.metamodel.loader import load_spec
 
+    wanted = (
+        "give the published document (an RTDE guide or the primary interface document) as text, "
+        "Markdown or HTML"
+    )
+    refuse_special(args.document, "a document", wanted)  # a pipe, a device, a folder: say which
     if not args.document.is_file():
-        raise UsageError(
-            "no such file; give the published document (an RTDE guide or the primary interface "
-            "document) as text, Markdown or HTML",
-            subject=f"file {args.document}",
-        )
+        raise UsageError(f"no such file; {wanted}", subject=f"file {args.document}")
+    if args.document.stat().st_size == 0:
+        raise UsageError(f"the file is empty; {wanted}", subject=f"file {args.document}")
+    _check_overlay_path(args.overlay)
     if args.spec_dir is None and Path("spec", "rtde").is_dir():
         args.spec_dir = Path("spec")
     if args.spec_dir is None and not args.write:  # an installed package: compare with its own spec
@@ -213,6 +218,14 @@ def _spec_to_compare(args: argparse.Namespace) -> Any:
         spec = load_spec(args.spec_dir)
     args.loaded_spec = spec
     return spec
+
+
+def _check_overlay_path(overlay: Path | None) -> None:
+    """-o names a file (not a folder): said before the document is read, not after the work."""
+    if overlay is not None and overlay.is_dir():
+        raise UsageError(
+            "is a directory; give the overlay's file name (e.g. new_fields.yaml)", subject=f"-o {overlay}"
+        )
 
 
 def _diff(args: argparse.Namespace, doc: Any, spec: Any) -> dict[str, list[Change]]:

@@ -21,7 +21,6 @@ from __future__ import annotations
 import argparse
 import contextlib
 import math
-import os
 import re
 import shutil
 import signal
@@ -37,6 +36,7 @@ from importlib import resources
 from pathlib import Path
 
 from rtde_spec import RtdeClient
+from rtde_spec.output.partfile import Part
 
 # A driver beside a simulator on one machine: both on 127.0.0.1 (a robot's program connects back
 # from the machine's own address, so a loopback address of its own would not show on those ports)
@@ -269,26 +269,31 @@ def dumpcap(path: Path, ports: list[int]) -> Iterator[None]:
     exe = shutil.which("dumpcap")
     if exe is None:
         raise RuntimeError("dumpcap is not installed (Debian package tshark)")
-    part = path.with_name(f".{path.name}.part-{os.getpid()}")
+    out = Part(path)  # as every output: beside the name until whole, then renamed (through a symlink)
+    part = out.temp
     only = " or ".join(f"tcp port {port}" for port in ports)
     proc = subprocess.Popen([exe, "-q", "-P", "-i", "lo", "-f", only, "-w", str(part)],
                             stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)  # fmt: skip
     try:
-        deadline = time.monotonic() + 10
-        while not (part.exists() and part.stat().st_size > 0):  # until dumpcap has opened its file
-            if proc.poll() is not None or time.monotonic() > deadline:
-                raise RuntimeError(f"dumpcap did not start: {proc.stderr.read() if proc.stderr else ''}")
-            time.sleep(0.05)
-        time.sleep(0.5)
-        yield
-        time.sleep(0.5)  # the last segments and FINs
+        try:
+            deadline = time.monotonic() + 10
+            while not (part.exists() and part.stat().st_size > 0):  # until dumpcap has opened its file
+                if proc.poll() is not None or time.monotonic() > deadline:
+                    raise RuntimeError(f"dumpcap did not start: {proc.stderr.read() if proc.stderr else ''}")
+                time.sleep(0.05)
+            time.sleep(0.5)
+            yield
+            time.sleep(0.5)  # the last segments and FINs
+        finally:
+            if proc.poll() is None:
+                proc.send_signal(signal.SIGTERM)
+            proc.wait(10)
+        if proc.returncode not in (0, -signal.SIGTERM):  # it stopped on its own: a full disk, say
+            raise RuntimeError(f"dumpcap failed: {proc.stderr.read() if proc.stderr else proc.returncode}")
+        out.commit()
     except BaseException:
-        part.unlink(missing_ok=True)  # a failed recording leaves nothing behind
+        out.discard()  # a failed recording leaves nothing behind, and the file that was there as it was
         raise
-    finally:
-        proc.send_signal(signal.SIGTERM)
-        proc.wait(10)
-    os.replace(part, path)
 
 
 def _wait_free(host: str, ports: list[int], seconds: float = 600.0) -> None:

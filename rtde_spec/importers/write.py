@@ -54,29 +54,17 @@ def _dump(yaml: Any, data: Any) -> str:
     return buf.getvalue()
 
 
-def _mode_for(path: Path) -> int:
-    """The file's own mode; for a new file, what the umask gives (mkstemp would make it 0600)."""
-    if path.exists():
-        return stat.S_IMODE(path.stat().st_mode)
-    mask = os.umask(0)
-    os.umask(mask)
-    return 0o666 & ~mask
-
-
 def replace_text(path: Path, text: str) -> None:
-    """Write beside `path` and rename into place, keeping its mode; a read-only file is refused."""
+    """Write beside `path` and rename into place, keeping its mode; a read-only file is refused.
+
+    The project's one way of writing a file (`partfile`): a failure leaves the old file as it was
+    and no temporary file, names `path`, and a symlink is written through."""
+    from rtde_spec.output.partfile import write_with
+
     if path.exists() and (not os.access(path, os.W_OK) or not path.stat().st_mode & stat.S_IWUSR):
         raise UsageError(f"{path} is read-only; nothing written")
-    mode = _mode_for(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as out:
-            out.write(text)
-        os.chmod(tmp, mode)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
+    data = text.encode("utf-8")
+    write_with(path, lambda out: out.write(data), keep_mode=True)
 
 
 def check_tree(spec_dir: Path, rel: str, text: str) -> None:
@@ -347,7 +335,12 @@ def write_overlay(changes: list[Change], doc: Document, spec: Spec, path: Path) 
     out.yaml_set_start_comment(f"Fields {doc.path} adds to the built-in spec (rtde-spec spec import -o)")
     text = _dump(yaml, out)
     _check_overlay(text, spec)
-    path.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:  # a full disk, a file where a folder should be: named as a write error
+        from rtde_spec.output.partfile import write_failed
+
+        raise write_failed(exc, path) from None
     replace_text(path, text)
     return count
 

@@ -15,16 +15,20 @@ already in place is cut back to its last whole batch, so no reader meets a torn 
 
 from __future__ import annotations
 
+import errno
 import io
 import os
 import stat
 from collections.abc import Callable
 from pathlib import Path
+from typing import BinaryIO, cast
 
 from rtde_spec.errors import OutputError
 
 PART_MARK = ".part-"
 SPILL = 8 << 20  # held bytes handed to the file before a flush, so memory stays bounded
+# write errors of the data, not of the path given (a full disk, a failing device): exit 1, not 2
+NO_ROOM = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO})
 
 
 def temp_path(target: Path) -> Path:
@@ -39,6 +43,25 @@ def is_special(target: Path) -> bool:
     except OSError:
         return False
     return not stat.S_ISREG(mode) and not stat.S_ISDIR(mode)
+
+
+KINDS = {
+    stat.S_IFIFO: "a FIFO (named pipe)",
+    stat.S_IFCHR: "a character device",
+    stat.S_IFBLK: "a block device",
+    stat.S_IFSOCK: "a socket",
+    stat.S_IFDIR: "a directory",
+}
+
+
+def kind_of(path: Path) -> str | None:
+    """What an existing path that is not a regular file is ("a FIFO (named pipe)"), for errors that
+    say why it cannot be used; None for a regular file or nothing there."""
+    try:
+        mode = path.stat().st_mode
+    except (OSError, ValueError):  # nothing there, a name too long, a NUL: not a special file
+        return None
+    return None if stat.S_ISREG(mode) else KINDS.get(stat.S_IFMT(mode), "not a regular file")
 
 
 def leftovers(target: Path) -> list[Path]:
@@ -284,35 +307,71 @@ class DeviceStream(io.RawIOBase):
 
 def device_failed(exc: OSError, target: Path) -> OSError:
     """A write error of a file written directly: a full disk named as one, anything else as it was."""
-    import errno
-
     failed = write_failed(exc, target)
-    return failed if failed.errno in (errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO) else exc
+    return failed if failed.errno in NO_ROOM else exc
 
 
 def write_failed(exc: BaseException, target: Path) -> OutputError:
-    """The error of a write to `target`, naming the file and, for a full disk, saying so."""
-    import errno
-
+    """The error of a write to `target`, naming the file (never its temporary file) and saying why
+    in words: a full disk as such, a read-only file system, a folder in the way."""
+    if isinstance(exc, OutputError):  # already said, about the same file
+        return exc
     code = getattr(exc, "errno", None)
     if code in (errno.ENOSPC, errno.EDQUOT) or "No space left" in str(exc):
         code, why = code or errno.ENOSPC, "the disk is full"
-    elif code == errno.EFBIG:
-        why = "the file is larger than the file system allows"
     else:
-        why = getattr(exc, "strerror", None) or str(exc)
+        why = (_WHY.get(code) if code is not None else None) or getattr(exc, "strerror", None) or str(exc)
     return OutputError(f"writing failed: {why}", errno=code, subject=f"file {target}")
+
+
+_WHY = {
+    errno.EFBIG: "the file is larger than the file system allows",
+    errno.EROFS: "the file system is read-only",
+    errno.EISDIR: "a directory has that name; give a file name",
+    errno.ENOTDIR: "a part of the path is a file, not a folder",
+    errno.ENOENT: "its folder does not exist",
+    errno.EACCES: "permission denied (the folder or file is not writable)",
+    errno.EPERM: "the operation is not permitted there",
+    errno.EIO: "an input/output error of the device",
+    errno.ENAMETOOLONG: "the name is too long",
+}
 
 
 def write_whole(target: str | Path, data: bytes, *, durable: bool = False) -> None:
     """A small file written at once (a listing, a summary), appearing only complete."""
+    write_with(target, lambda out: out.write(data), durable=durable)
+
+
+def write_with(
+    target: str | Path,
+    fill: Callable[[BinaryIO], object],
+    *,
+    durable: bool = False,
+    keep_mode: bool = False,
+) -> None:
+    """A file that `fill` writes to a binary file object (an image, a copy, a document), appearing
+    only complete: an existing file stays byte-identical if anything fails, no temporary file stays,
+    and the error names `target`. A symlink is written through, as every output is; `keep_mode`
+    gives the new file the mode of the one it replaces (a file edited in place)."""
     part = Part(target, durable=durable)
-    if is_special(part.target):
-        part.target.write_bytes(data)
+    if is_special(part.target):  # -o /dev/null, a pipe: nothing to replace
+        with DeviceStream(part.target) as device:
+            fill(cast(BinaryIO, device))
         return
+    stream = PartStream(part, batched=False)  # a failed open is a write error naming target
     try:
-        part.temp.write_bytes(data)
-        part.commit()
-    except BaseException:
+        try:
+            fill(cast(BinaryIO, stream))
+        finally:
+            stream.close()
+        if keep_mode and part.replaces and part.failed is None:
+            try:
+                os.chmod(part.temp, stat.S_IMODE(part.target.stat().st_mode))
+            except OSError as exc:
+                part.failed = write_failed(exc, part.target)
+        part.commit()  # raises the first write error, if one happened
+    except BaseException as exc:
         part.discard()
+        if isinstance(exc, OSError) and part.failed not in (None, exc):  # a writer that wrapped ours
+            raise cast(OutputError, part.failed) from exc
         raise

@@ -2,12 +2,12 @@
 
 from __future__ import annotations
 
-import os
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
 from rtde_spec.errors import UsageError, require
+from rtde_spec.output.partfile import write_with
 
 
 def components(columns: Mapping[str, Any], field: str) -> list[str]:
@@ -29,7 +29,7 @@ def plot_columns(
 
     `columns` is one table's columns, or {label: columns} for several (e.g. one per
     robot of a dataset), drawn in the same panels with the label in the legend. The
-    image appears only whole: drawn beside `path` and renamed into place.
+    image appears only whole: drawn beside `path` and renamed into place (see `partfile`).
     """
     from rtde_spec.metamodel.catalogue import Catalogue
 
@@ -66,11 +66,8 @@ def plot_columns(
             axes[0, 0].set_title(title)
         fig.tight_layout()
         target = Path(path)
-        part = target.with_name(f".{target.name}.part")
-        try:
-            fig.savefig(part, dpi=100, format=target.suffix.lstrip(".") or "png")
-            os.replace(part, target)
-        finally:
-            part.unlink(missing_ok=True)
+        kind = target.suffix.lstrip(".").lower() or "png"
+        # as every output: beside the name, renamed when whole, through a symlink, errors naming it
+        write_with(target, lambda out: fig.savefig(out, dpi=100, format=kind))
     finally:
         plt.close(fig)

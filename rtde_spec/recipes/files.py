@@ -53,10 +53,20 @@ def _uncommented(text: str) -> list[str]:
 
 
 def read_text_bounded(path: Path) -> str:
+    """The file's text, refused before reading when it is too large or no regular file (a pipe
+    would wait for a writer, a device has no size to bound it by)."""
+    from rtde_spec.output.partfile import kind_of
+
     try:
         size = path.stat().st_size
     except OSError as exc:
         raise RecipeError(f"cannot read recipe file: {exc.strerror}", subject=f"file {path}") from None
+    kind = kind_of(path)
+    if kind is not None:
+        raise RecipeError(
+            f"is {kind}, not a recipe file; give a regular file (UR's XML, YAML, JSON, or one name per line)",
+            subject=f"file {path}",
+        )
     if size > MAX_FILE_BYTES:
         raise RecipeError(
             "recipe file too large",
