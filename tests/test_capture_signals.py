@@ -70,6 +70,14 @@ def _start_and_wait(inputs: Path, out: Path, jobs: int) -> subprocess.Popen[str]
     return proc
 
 
+def _started_with_workers(inputs: Path, out: Path) -> tuple[subprocess.Popen[str], list[int]]:
+    """A `--jobs 2` capture under way, and its worker processes."""
+    proc = _start_and_wait(inputs, out, 2)
+    workers = _children(proc.pid)
+    assert workers, "no worker processes"
+    return proc, workers
+
+
 def _children(pid: int) -> list[int]:
     path = Path(f"/proc/{pid}/task/{pid}/children")
     return [int(c) for c in path.read_text().split()] if path.exists() else []
@@ -80,6 +88,14 @@ def _alive(pid: int) -> bool:
         return Path(f"/proc/{pid}/stat").read_text().split()[2] != "Z"
     except OSError:
         return False
+
+
+def _still_alive(pids: list[int], wait: float = 10.0) -> list[int]:
+    """The processes of `pids` still running after up to `wait` seconds."""
+    deadline = time.monotonic() + wait
+    while any(_alive(p) for p in pids) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    return [p for p in pids if _alive(p)]
 
 
 @pytest.fixture
@@ -107,9 +123,7 @@ def test_jobs_stop_with_the_command_when_it_alone_gets_the_signal(
     copy_of: tuple[Path, Path, dict[str, str]],
 ) -> None:
     inputs, out, before = copy_of
-    proc = _start_and_wait(inputs, out, 2)
-    workers = _children(proc.pid)
-    assert workers, "no worker processes"
+    proc, workers = _started_with_workers(inputs, out)
     stopped = time.time()
     proc.send_signal(signal.SIGINT)  # to the command only, as `kill -INT PID` does
     _, err = proc.communicate(timeout=60)
@@ -117,25 +131,17 @@ def test_jobs_stop_with_the_command_when_it_alone_gets_the_signal(
     later = [p for p in out.rglob("*") if p.is_file() and p.stat().st_mtime > stopped + 0.5]
     assert not later, f"files written after the stop: {later[:3]}"  # pending files were not started
     assert digests(out) == before
-    deadline = time.monotonic() + 10
-    while any(_alive(w) for w in workers) and time.monotonic() < deadline:
-        time.sleep(0.05)
-    assert not any(_alive(w) for w in workers)
+    assert not _still_alive(workers)
 
 
 def test_workers_of_a_killed_command_end_and_leave_no_temp_files(
     copy_of: tuple[Path, Path, dict[str, str]],
 ) -> None:
     inputs, out, before = copy_of
-    proc = _start_and_wait(inputs, out, 2)
-    workers = _children(proc.pid)
-    assert workers, "no worker processes"
+    proc, workers = _started_with_workers(inputs, out)
     proc.kill()  # SIGKILL: no clean-up of its own; the kernel tells the workers (Linux)
     proc.wait(timeout=60)  # (not communicate: the workers hold its output pipes while they live)
-    deadline = time.monotonic() + 10
-    while any(_alive(w) for w in workers) and time.monotonic() < deadline:
-        time.sleep(0.05)
-    leftover = [w for w in workers if _alive(w)]
+    leftover = _still_alive(workers)
     for w in leftover:  # do not leave them to the next test
         os.kill(w, signal.SIGKILL)
     for stream in (proc.stdout, proc.stderr):

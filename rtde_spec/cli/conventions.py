@@ -10,6 +10,8 @@ checks each subcommand's parser against them.
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
+from importlib.abc import Traversable
 from pathlib import Path
 from typing import Any
 
@@ -92,3 +94,23 @@ def output_file(text: str, option: str = "-o") -> Path:
 def names_folder(text: str) -> bool:
     """-o names a folder when it ends in / or is an existing folder."""
     return text.endswith(("/", "\\")) or Path(text).is_dir()
+
+
+def place_copy(source: Path | Traversable, target: Path, refuse: Callable[[str], UsageError]) -> None:
+    """`source`'s bytes as `target`, as every output is written (`partfile`: beside the name,
+    renamed when whole, through a symlink; a failed write leaves no temporary file and the
+    file that was there as it was). A full disk raises the write error, naming the file
+    (exit 1); any other failure `refuse(why)`: the folder given is the problem (exit 2)."""
+    import shutil
+
+    from rtde_spec.output.partfile import NO_ROOM, write_failed, write_with
+
+    try:
+        target.parent.mkdir(parents=True, exist_ok=True)
+        with source.open("rb") as src:
+            write_with(target, lambda out: shutil.copyfileobj(src, out))
+    except OSError as exc:
+        failed = write_failed(exc, target)
+        if failed.errno in NO_ROOM:
+            raise failed from None
+        raise refuse(failed.reason.removeprefix("writing failed: ")) from None

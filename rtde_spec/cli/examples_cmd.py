@@ -8,14 +8,12 @@ Existing files are never overwritten unless --force says so.
 from __future__ import annotations
 
 import argparse
-import shutil
 from importlib import resources
 from importlib.abc import Traversable
 from pathlib import Path
 
-from rtde_spec.cli.conventions import describe
+from rtde_spec.cli.conventions import describe, place_copy
 from rtde_spec.errors import UsageError
-from rtde_spec.output.partfile import NO_ROOM, write_failed, write_with
 
 FILES = "files"
 
@@ -77,22 +75,14 @@ def run(args: argparse.Namespace) -> int:
             subject=given,
         )
     for name, resource in files:
-        target = folder / name
-        try:
-            target.parent.mkdir(parents=True, exist_ok=True)
-            # as every output (`partfile`): beside the name, renamed when whole, through a symlink;
-            # a failed write leaves no temporary file and the file that was there as it was
-            with resource.open("rb") as src:
-                write_with(target, lambda out: shutil.copyfileobj(src, out))
-        except OSError as exc:
-            failed = write_failed(exc, target)
-            if failed.errno in NO_ROOM:  # a full disk: an error of the write (exit 1), naming the file
-                raise failed from None
-            why = failed.reason.removeprefix("writing failed: ")
-            raise UsageError(  # a folder that cannot be written to: the folder given is the problem
+
+        def refuse(why: str, name: str = name) -> UsageError:  # the folder given is the problem
+            return UsageError(
                 f"cannot write the examples there ({name}: {why}); give a folder you can write to",
                 subject=given,
-            ) from None
+            )
+
+        place_copy(resource, folder / name, refuse)
     print(f"wrote {len(files)} example files to {folder}/: {', '.join(name for name, _ in files)}")
     print(f"run the README's commands from there: cd {folder}")
     return 0

@@ -3,13 +3,11 @@
 from __future__ import annotations
 
 import argparse
-import shutil
 from importlib import resources
 from pathlib import Path
 
-from rtde_spec.cli.conventions import describe
+from rtde_spec.cli.conventions import describe, place_copy
 from rtde_spec.errors import UsageError
-from rtde_spec.output.partfile import NO_ROOM, write_failed, write_with
 
 PLUGIN = "rtde_spec.lua"
 DEFAULT_DIR = Path.home() / ".local" / "lib" / "wireshark" / "plugins"
@@ -55,21 +53,14 @@ def run(args: argparse.Namespace) -> int:
             f"is a file, not a folder; give -o the plugins folder to install {PLUGIN} into",
             subject=f"-o {args.dir}",
         )
-    try:
-        args.dir.mkdir(parents=True, exist_ok=True)
-        # as every output: written beside the name and renamed when whole, so a failed write leaves
-        # a dissector already there as it was (a cut-off one would break Wireshark's next start)
-        with source.open("rb") as src:
-            write_with(target, lambda out: shutil.copyfileobj(src, out))
-    except OSError as exc:
-        failed = write_failed(exc, target)
-        if failed.errno in NO_ROOM:  # a full disk: an error of the write (exit 1), naming the file
-            raise failed from None
-        why = failed.reason.removeprefix("writing failed: ")
-        raise UsageError(  # a folder that cannot be written to: the -o given is the problem
+    place_copy(  # a folder that cannot be written to: the -o given is the problem
+        source,
+        target,
+        lambda why: UsageError(
             f"cannot install the dissector there ({target.name}: {why}); give -o a folder you can write "
             f"to (or load it without installing: tshark -X lua_script:{source})",
             subject=f"-o {args.dir}",
-        ) from None
+        ),
+    )
     print(f"installed {target}; Wireshark and tshark load it at their next start")
     return 0
