@@ -197,6 +197,28 @@ def test_probe_tells_real_time_like_streams_and_silent_ports() -> None:
     assert found["other"].kind == "unknown" and "53 53 48 2d" in found["other"].detail
 
 
+def test_a_server_that_closes_at_once_is_not_said_to_speak_another_protocol() -> None:
+    """A controller (or the emulator) at its client limit or out of descriptors accepts and
+    closes at once: that was "does not speak RTDE: it sends nothing", sending users to check
+    a port that was right."""
+    from rtde_spec.cli.port_probe import wrong_port
+
+    def closes(conn: socket.socket) -> None:
+        conn.close()
+
+    server, thread = _serve(closes)
+    with server:
+        found = probe("127.0.0.1", server.getsockname()[1], 1.0)
+    thread.join(5)
+    assert found.kind == "refused" and "closed the connection at once" in found.detail
+    server, thread = _serve(closes)
+    with server:  # what a refused `record` prints
+        said = wrong_port("127.0.0.1", server.getsockname()[1], "rtde", 1.0)
+    thread.join(5)
+    assert said is not None and "does not speak" not in said
+    assert "try again once another client has left" in said
+
+
 def test_decode_with_ur_configuration_picks_the_recipe_of_the_sender(
     capsys: pytest.CaptureFixture[str],
 ) -> None:

@@ -41,7 +41,25 @@ def probe(host: str, port: int, timeout: float = 2.0) -> PortKind:
         head = _read_for(sock, min(timeout, FIRST_BYTES_WAIT))
         if head:
             return _unprompted(head)
+        if _peer_closed(sock):
+            return _REFUSED
         return _rtde_answer(sock, min(timeout, 3.0))
+
+
+_REFUSED = PortKind(
+    "refused",
+    "the server closed the connection at once, unread: at its client limit, or out of file descriptors",
+)
+
+
+def _peer_closed(sock: socket.socket) -> bool:
+    """Whether the peer has closed its side (an end of stream waits), without waiting."""
+    try:
+        return sock.recv(1, socket.MSG_PEEK | getattr(socket, "MSG_DONTWAIT", 0)) == b""
+    except (BlockingIOError, InterruptedError, TimeoutError):
+        return False
+    except OSError:  # reset by the peer: closed as well
+        return True
 
 
 def unreachable(host: str, exc: OSError) -> PortKind:
@@ -153,6 +171,8 @@ def _rtde_answer(sock: socket.socket, timeout: float) -> PortKind:
         return PortKind("rtde", "it answered an RTDE protocol version request")
     if reply:
         return PortKind("unknown", f"it answered an RTDE request with {reply[:16].hex(' ')}, not RTDE")
+    if _peer_closed(sock):
+        return _REFUSED
     return PortKind("silent", f"it sends nothing and did not answer an RTDE request within {timeout:g} s")
 
 
@@ -186,6 +206,8 @@ def wrong_port(host: str, port: int, wanted: str, timeout: float = 2.0) -> str |
         return f"--host {host}: {found.detail}"
     if found.kind == "closed":
         return f"{host}:{port}: {found.detail}; check --host and --port: {where}"
+    if found.kind == "refused":  # it may well speak `wanted`: it served no one just now
+        return f"{host}:{port}: {found.detail}; try again once another client has left"
     return f"{host}:{port} does not speak {NAMES[wanted]}: {found.detail}; {where}"
 
 
