@@ -23,7 +23,7 @@ import pytest
 from rtde_spec.cli.main import main
 from rtde_spec.errors import OutputError
 from rtde_spec.output.partfile import PART_MARK, write_whole
-from tests.faults.tmpfs import mounted_tmpfs
+from tests.faults.tmpfs import fill, mounted_tmpfs
 from tests.test_cli import cli
 
 LUA = "rtde_spec.lua"
@@ -45,21 +45,6 @@ def read_only(tmp_path: Path) -> Iterator[Path]:
     where.mkdir()
     with mounted_tmpfs(where, "size=64k,ro"):
         yield where
-
-
-def fill(disk: Path, leave: int = 0) -> None:
-    """Leave about `leave` bytes free on `disk` (nothing at all with 0)."""
-    stat = os.statvfs(disk)
-    todo = max(0, stat.f_bavail * stat.f_frsize - leave) if leave else 1 << 40
-    block = b"\0" * 65536
-    fd = os.open(disk / "filler", os.O_WRONLY | os.O_CREAT | os.O_APPEND)
-    try:
-        while todo > 0:
-            todo -= os.write(fd, block[: min(todo, len(block))])
-    except OSError:  # full: what was asked
-        pass
-    finally:
-        os.close(fd)
 
 
 def state(folder: Path) -> dict[str, str]:

@@ -26,7 +26,7 @@ from rtde_spec.output.partfile import PartStream
 from rtde_spec.output.writers import open_writer
 from tests import capture_files
 from tests.faults.record_run import emulator, run, temp_files
-from tests.faults.tmpfs import mounted_tmpfs
+from tests.faults.tmpfs import fill, mounted_tmpfs
 
 FORMATS = ["parquet", "csv", "jsonl", "mcap"]
 
@@ -43,15 +43,6 @@ def small_disk(tmp_path: Path) -> Iterator[Path]:
     where.mkdir()
     with mounted_tmpfs(where, "size=384k"):
         yield where
-
-
-def fill(disk: Path, leave: int) -> None:
-    """Leave about `leave` bytes free on `disk`."""
-    import os
-
-    stat = os.statvfs(disk)
-    free = stat.f_bavail * stat.f_frsize
-    (disk / "filler").write_bytes(b"\0" * max(0, free - leave))
 
 
 def digest(path: Path) -> str:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import subprocess
 import uuid
 from collections.abc import Iterator
@@ -26,3 +27,18 @@ def mounted_tmpfs(where: Path, options: str) -> Iterator[Path]:
         yield where
     finally:
         subprocess.run(["umount", "-l", str(where)], check=False)
+
+
+def fill(disk: Path, leave: int = 0) -> None:
+    """Leave about `leave` bytes free on `disk` (nothing at all with 0)."""
+    stat = os.statvfs(disk)
+    todo = max(0, stat.f_bavail * stat.f_frsize - leave) if leave else 1 << 40
+    block = b"\0" * 65536
+    fd = os.open(disk / "filler", os.O_WRONLY | os.O_CREAT | os.O_APPEND)
+    try:
+        while todo > 0:
+            todo -= os.write(fd, block[: min(todo, len(block))])
+    except OSError:  # full: what was asked
+        pass
+    finally:
+        os.close(fd)
