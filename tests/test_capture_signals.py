@@ -78,6 +78,18 @@ def _started_with_workers(inputs: Path, out: Path) -> tuple[subprocess.Popen[str
     return proc, workers
 
 
+def _running_on(out: Path) -> list[int]:
+    """Processes whose command line names `out` (a capture's workers, whoever their parent now is)."""
+    found = []
+    for proc in Path("/proc").iterdir():
+        try:
+            if proc.name.isdigit() and str(out).encode() in (proc / "cmdline").read_bytes():
+                found.append(int(proc.name))
+        except OSError:
+            continue
+    return found
+
+
 def _children(pid: int) -> list[int]:
     path = Path(f"/proc/{pid}/task/{pid}/children")
     return [int(c) for c in path.read_text().split()] if path.exists() else []
@@ -141,6 +153,7 @@ def test_workers_of_a_killed_command_end_and_leave_no_temp_files(
     proc, workers = _started_with_workers(inputs, out)
     proc.kill()  # SIGKILL: no clean-up of its own; the kernel tells the workers (Linux)
     proc.wait(timeout=60)  # (not communicate: the workers hold its output pipes while they live)
+    workers = sorted({*workers, *_running_on(out)})  # any worker started after the first look too
     leftover = _still_alive(workers)
     for w in leftover:  # do not leave them to the next test
         os.kill(w, signal.SIGKILL)
