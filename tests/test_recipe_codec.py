@@ -336,15 +336,41 @@ def mixed_values(draw: st.DrawFn) -> tuple[RecipeCodec, dict]:
         st.none(),
         st.text(max_size=2),
     )
+    numpy_scalar = st.sampled_from([np.float64, np.float32, np.int64, np.uint8, np.bool_])
     for name in draw(st.lists(st.sampled_from(list(values)), max_size=3, unique=True)):
         value = values[name]
         if isinstance(value, tuple) and draw(st.booleans()):
             items = list(value)
             items[draw(st.integers(0, len(items) - 1))] = draw(odd)
             values[name] = draw(st.sampled_from([tuple, list]))(items)
+        elif isinstance(value, tuple) and draw(st.booleans()):  # the right length, another container
+            values[name] = draw(st.sampled_from(VECTOR_CONTAINERS))(value)
+        elif draw(st.booleans()) and not isinstance(value, tuple):  # the right value, a numpy scalar
+            values[name] = _as_numpy(draw(numpy_scalar), value)
         else:
             values[name] = draw(odd)
     return codec, values
+
+
+def _as_numpy(kind: type, value: object) -> object:
+    """`value` as a numpy scalar of `kind` (cast as numpy casts), or itself where numpy refuses."""
+    try:
+        with np.errstate(all="ignore"):
+            return kind(value)
+    except (OverflowError, ValueError, TypeError):
+        return value
+
+
+VECTOR_CONTAINERS = [
+    np.array,
+    lambda v: np.array([v]),  # 2-D
+    set,
+    dict.fromkeys,
+    lambda v: bytes(x % 256 for x in v) if all(type(x) is int for x in v) else list(v),
+    lambda v: "".join(map(str, v)),
+    lambda v: iter(v),  # no length
+    lambda v: {x: 0 for x in v}.keys(),
+]
 
 
 @settings(max_examples=examples(300), deadline=None)
@@ -362,6 +388,73 @@ def test_compiled_path_agrees_with_the_per_value_checks(case: tuple[RecipeCodec,
         except EncodeError as exc:
             outcomes.append(("error", exc.field))
     assert outcomes[0] == outcomes[1]
+
+
+@pytest.mark.parametrize("strict", [False, True])
+@pytest.mark.parametrize(
+    ("value", "reason"),
+    [
+        (dict.fromkeys((0.0, 1.0, 2.0, 3.0, 4.0, 5.0)), "a mapping would send its keys"),
+        ({0.0, 1.0, 2.0, 3.0, 4.0, 5.0}, "a set has no order"),
+        (frozenset({0.0, 1.0, 2.0, 3.0, 4.0, 5.0}), "a set has no order"),
+        (dict.fromkeys((0.0, 1.0, 2.0, 3.0, 4.0, 5.0)).keys(), "a set has no order"),
+        (b"abcdef", "text or bytes"),
+        (bytearray(b"abcdef"), "text or bytes"),
+        ("012345", "text or bytes"),
+        (np.zeros((6, 1)), "an array of 2 dimensions"),
+        (np.zeros((1, 6)), "an array of 2 dimensions"),
+        (iter([0.0] * 6), "not a list, tuple or 1-D array"),
+        (np.zeros(5), "5 given"),
+    ],
+)
+def test_what_unpacks_but_is_no_vector_is_refused_in_both_modes(
+    value: object, reason: str, strict: bool
+) -> None:
+    """A dict, set, string or bytes of the right length unpacks: the default mode sent a
+    dict's keys, a set's values in hash order and bytes as character codes."""
+    with pytest.raises(EncodeError) as info:
+        OUT.encode_package({**GOOD_OUT, "actual_q": value}, recipe_id=1, strict=strict)
+    assert info.value.field == "actual_q"
+    assert reason in str(info.value) and "needs exactly 6 values" in str(info.value)
+
+
+def test_numpy_vectors_and_scalars_encode_as_their_values_and_errors_name_the_bad_field() -> None:
+    """A 1-D numpy array is a vector and numpy scalars are numbers, as `struct` takes them;
+    a bad value elsewhere is named, not the array (the per-value checks refused any array)."""
+    import array
+    from decimal import Decimal
+    from fractions import Fraction
+    from types import MappingProxyType
+
+    plain = OUT.encode(GOOD_OUT)
+    given = {
+        "timestamp": np.float32(1.5),
+        "actual_q": np.zeros(6),
+        "joint_mode": np.full(6, 253, dtype=np.int32),
+        "output_int_register_0": np.int64(0),
+    }
+    others = {
+        "timestamp": Fraction(3, 2),
+        "actual_q": array.array("d", [0.0] * 6),
+        "joint_mode": [np.uint8(253)] * 6,
+        "output_int_register_0": np.float64(0.0),  # an integral float, as for a plain float
+    }
+    for values in (given, others, {**GOOD_OUT, "timestamp": Decimal("1.5")}):
+        for container in (dict, MappingProxyType):  # the one-call path, the per-value checks
+            assert OUT.encode(container(values)) == plain
+    with pytest.raises(EncodeError) as info:
+        OUT.encode({**given, "output_int_register_0": np.int64(2**40)})
+    assert info.value.field == "output_int_register_0" and "out of range for INT32" in str(info.value)
+    with pytest.raises(EncodeError) as info:
+        OUT.encode({**given, "output_int_register_0": 2.5})
+    assert info.value.field == "output_int_register_0" and "not an integer" in str(info.value)
+    bits = RecipeCodec.for_names(["input_bit_register_64"], "input")
+    numpy_true = bits.encode({"input_bit_register_64": np.bool_(True)})
+    assert numpy_true == bits.encode({"input_bit_register_64": True})
+    with pytest.raises(EncodeError, match="not a bool"):
+        bits.encode({"input_bit_register_64": np.bool_(True)}, strict=True)
+    with pytest.raises(EncodeError, match="not a bool"):
+        bits.encode({"input_bit_register_64": np.int64(2)})
 
 
 def test_strict_costs_about_what_the_default_mode_costs() -> None:

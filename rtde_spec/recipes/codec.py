@@ -253,11 +253,14 @@ class RecipeCodec:
     def encode(self, values: Mapping[str, Any] | BaseModel | tuple[Any, ...], strict: bool = False) -> bytes:
         """The payload from a dict, a record or a model; EncodeError names a bad field.
 
-        strict: BOOL takes only bool, integers only int, DOUBLE only int or float
-        (a bool is not a number; NaN and infinities are doubles), vectors only lists
-        or tuples; otherwise 0/1 pass for BOOL, integral floats for integers and
-        bools for numbers. Both modes check ranges, at the same speed order: the
-        checks are compiled into the one-call path (benchmarks/bench_recipe_encode.py).
+        A vector is a list, a tuple, a 1-D numpy array or another sequence, never a
+        dict, set, string or bytes. strict: BOOL takes only bool, integers only int,
+        DOUBLE only int or float (a bool is not a number; NaN and infinities are
+        doubles); otherwise numbers are taken as `struct` takes them (numpy scalars,
+        Fraction, Decimal), 0/1 and numpy bools pass for BOOL, integral floats for
+        integers. Both modes check ranges, at the same speed order: the checks are
+        compiled into the one-call path for lists and tuples of builtin numbers
+        (benchmarks/bench_recipe_encode.py).
         """
         return self._encoder.payload(values, strict)
 

@@ -2,20 +2,24 @@
 
 `struct` already refuses integers out of range and non-numbers, so a valid input
 costs one generated flatten and one pack. What `struct` would let through (a
-vector of the wrong length, a BOOL that is not 0/1) is checked inline; strict
-mode adds one C-level type check per wire kind (`{float, int}` for doubles,
-`{int}` for integers, `{bool}` for BOOL) over the flat tuple. Anything that
-fails goes through the per-value checks, which either convert it (an integral
-float for an integer, a subclass such as an IntEnum) or raise EncodeError naming
-the field, the limit and the value. NaN and infinities are valid doubles: the
+vector that is not a list or tuple, or of the wrong length, a BOOL that is not
+0/1) is checked inline; strict mode adds one C-level type check per wire kind
+(`{float, int}` for doubles, `{int}` for integers, `{bool}` for BOOL) over the
+flat tuple. Anything that fails goes through the per-value checks, which either
+convert it (an integral float for an integer, a numpy scalar or 1-D array, an
+IntEnum) or raise EncodeError naming the field, the limit and the value. A dict,
+set, string or bytes is never a vector: unpacking one would send its keys, an
+arbitrary order or character codes. NaN and infinities are valid doubles: the
 spec sets no range for DOUBLE fields and the controller takes IEEE 754 values.
 """
 
 from __future__ import annotations
 
+import math
+import operator
 import struct
 import sys
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping, Sequence, Set
 from dataclasses import dataclass
 from operator import itemgetter
 from typing import Any
@@ -73,13 +77,10 @@ def _strict_checks(
     """
     vectors = [x for x, item in zip(names, items, strict=True) if item.wire.count > 1]
     lines = []
-    if vectors:  # lists or tuples, as the per-value checks want (not sets, arrays, strings)
-        scope["sequences"] = _STRICT_TYPES["vector"]
+    if vectors:  # their own types were checked with their lengths
         kinds = [_CANONICAL[i.wire.kind] for i in items for _ in range(i.wire.count)]
         scope["canon"] = [int] * leading + kinds
-        inline = " and ".join(f"type({x}) in sequences" for x in vectors)
-        lines.append(f"    if not ({inline}): raise Refused")
-        lines.append("    if list(map(type, t)) != canon:")
+        lines.append("    if [*map(type, t)] != canon:")
     else:  # float, int, bool: the builtins' names in the code
         pairs = zip(names, items, strict=True)
         inline = " and ".join(f"type({x}) is {_CANONICAL[i.wire.kind].__name__}" for x, i in pairs)
@@ -113,9 +114,12 @@ def _compile_encode(
         scope["get"] = itemgetter(*(item.name for item in items))
         lines.append(f"    {', '.join(names)} = get(v)")
     vectors = [x for x, item in zip(names, items, strict=True) if item.wire.count > 1]
-    if vectors:  # each vector's length in one C loop (struct checks only the total)
+    if vectors:  # lists or tuples (a dict, set or str would unpack), each of its length in one C loop
         scope["lengths"] = [item.wire.count for item in items if item.wire.count > 1]
-        lines.append(f"    if list(map(len, ({', '.join(vectors)},))) != lengths: raise Refused")
+        scope["sequences"] = _STRICT_TYPES["vector"]
+        inline = " and ".join(f"type({x}) in sequences" for x in vectors)  # cheaper than any C loop found
+        lines.append(f"    if not ({inline}): raise Refused")
+        lines.append(f"    if [*map(len, ({', '.join(vectors)},))] != lengths: raise Refused")
     parts = []
     for x, item in zip(names, items, strict=True):
         parts.append(x if item.wire.count == 1 else f"*{x}")
@@ -196,9 +200,10 @@ class Encoder:
                 raise EncodeError("missing value", package="data_package", field=item.name)
             value = values[item.name]
             if item.wire.count > 1:
-                if not isinstance(value, (list, tuple)) or len(value) != item.wire.count:
+                problem = _not_a_vector(value, item.wire.count)
+                if problem is not None:
                     raise EncodeError(
-                        f"{item.wire.name} needs exactly {item.wire.count} values",
+                        f"{item.wire.name} needs exactly {item.wire.count} values in order: {problem}",
                         package="data_package",
                         field=item.name,
                         expected=f"{item.wire.count} values",
@@ -222,34 +227,83 @@ def _bounds(code: str) -> tuple[int, int]:
     return (0, (1 << bits) - 1) if code.isupper() else (-(1 << (bits - 1)), (1 << (bits - 1)) - 1)
 
 
+def _not_a_vector(value: Any, count: int) -> str | None:
+    """Why `value` is not `count` values in order (None when it is): what unpacking would get wrong.
+
+    Lists, tuples, 1-D numpy arrays, `array.array`, ranges and other sequences are
+    vectors; a mapping would send its keys, a set its values in no set order, a
+    string or bytes its character codes."""
+    if isinstance(value, (str, bytes, bytearray, memoryview)):
+        return "text or bytes, not numbers"
+    if isinstance(value, Mapping):
+        return "a mapping would send its keys"
+    if isinstance(value, Set):
+        return "a set has no order"
+    ndim = getattr(value, "ndim", 1)
+    if ndim != 1:
+        return f"an array of {ndim} dimensions, not 1"
+    if not (isinstance(value, Sequence) or hasattr(value, "__array__")):
+        return f"a {type(value).__name__}, not a list, tuple or 1-D array"
+    if len(value) != count:
+        return f"{len(value)} given"
+    return None
+
+
+def _is_numpy_bool(value: Any) -> bool:
+    kind = getattr(getattr(value, "dtype", None), "kind", None)
+    return kind == "b" and getattr(value, "ndim", None) == 0
+
+
 def _checked(item: RecipeItem, value: Any, strict: bool, index: int | None) -> Any:
+    """One value as the wire type takes it, or EncodeError.
+
+    Without strict, a value is taken as `struct` takes it (anything with `__index__`
+    for an integer, with `__float__` or `__index__` for a double: numpy scalars,
+    Fraction, Decimal), so the one-call path and these checks agree; integral
+    floats become integers and 0/1 (numpy bools too) BOOLs."""
     wire = item.wire
     field = item.name if index is None else f"{item.name}[{index}]"
 
     def fail(reason: str, expected: Any) -> EncodeError:
         return EncodeError(reason, package="data_package", field=field, expected=expected, actual=repr(value))
 
+    kind = type(value)
+    text = issubclass(kind, (str, bytes, bytearray))
     if wire.kind == "bool":
         if isinstance(value, bool):
             return value
-        if not strict and isinstance(value, int) and value in (0, 1):
-            return bool(value)
+        if not strict and not text:
+            if _is_numpy_bool(value):
+                return bool(value)
+            if hasattr(kind, "__index__") and operator.index(value) in (0, 1):
+                return bool(operator.index(value))
         raise fail("not a bool", "True or False" if strict else "a bool, 0 or 1")
+    if strict:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            what = "an integer" if wire.kind == "int" else "a number"
+            raise fail(f"not {what} for {wire.name}", wire.name)
+    elif text or not (hasattr(kind, "__index__") or hasattr(kind, "__float__")):
+        what = "an integer" if wire.kind == "int" else "a number"
+        raise fail(f"not {what} for {wire.name}", wire.name)
     if wire.kind == "int":
-        if (strict and isinstance(value, bool)) or not isinstance(value, (int, float)):
-            raise fail(f"not an integer for {wire.name}", wire.name)
-        if isinstance(value, float):
-            if strict or not value.is_integer():
+        if hasattr(kind, "__index__"):
+            value = operator.index(value)
+        else:
+            try:
+                number = float(value)
+            except (TypeError, ValueError, OverflowError):
+                number = math.nan
+            if strict or not number.is_integer():
                 raise fail(f"not an integer for {wire.name}", wire.name)
-            value = int(value)
+            value = int(number)
         assert wire.bounds is not None
         low, high = wire.bounds
         if not low <= value <= high:
             raise fail(f"out of range for {wire.name}", f"{low}..{high}")
         return value
-    if (strict and isinstance(value, bool)) or not isinstance(value, (int, float)):
-        raise fail(f"not a number for {wire.name}", wire.name)
     try:
         return float(value)
     except OverflowError:  # an int beyond the largest double
         raise fail(f"out of range for {wire.name}", f"|value| <= {sys.float_info.max!r}") from None
+    except (TypeError, ValueError):  # its __float__ refused
+        raise fail(f"not a number for {wire.name}", wire.name) from None
