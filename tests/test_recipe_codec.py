@@ -445,6 +445,10 @@ def test_numpy_vectors_and_scalars_encode_as_their_values_and_errors_name_the_ba
     with pytest.raises(EncodeError) as info:
         OUT.encode({**given, "output_int_register_0": np.int64(2**40)})
     assert info.value.field == "output_int_register_0" and "out of range for INT32" in str(info.value)
+    for one_value_array in (np.array([3]), np.array([3.0])):  # __index__ or __float__, refused by both
+        with pytest.raises(EncodeError) as info:
+            OUT.encode({**given, "output_int_register_0": one_value_array})
+        assert info.value.field == "output_int_register_0" and "not an integer" in str(info.value)
     with pytest.raises(EncodeError) as info:
         OUT.encode({**given, "output_int_register_0": 2.5})
     assert info.value.field == "output_int_register_0" and "not an integer" in str(info.value)
@@ -453,8 +457,9 @@ def test_numpy_vectors_and_scalars_encode_as_their_values_and_errors_name_the_ba
     assert numpy_true == bits.encode({"input_bit_register_64": True})
     with pytest.raises(EncodeError, match="not a bool"):
         bits.encode({"input_bit_register_64": np.bool_(True)}, strict=True)
-    with pytest.raises(EncodeError, match="not a bool"):
-        bits.encode({"input_bit_register_64": np.int64(2)})
+    for not_a_bool in (np.int64(2), np.array([1]), "1"):
+        with pytest.raises(EncodeError, match="not a bool"):
+            bits.encode({"input_bit_register_64": not_a_bool})
 
 
 def test_strict_costs_about_what_the_default_mode_costs() -> None:

@@ -154,3 +154,80 @@ def test_random_text_gives_recipes_or_recipe_error(tmp_path: Path, fmt: str) -> 
         assert isinstance(report.valid, bool)
 
     check()
+
+
+UR_XML = """<?xml version="1.0"{decl}?>
+<!-- {comment} -->
+<rtde_config>
+  <recipe key="state">
+    <field name="timestamp" type="DOUBLE"/>
+    <field name="actual_q
+" type="VECTOR6D"/>
+  </recipe>
+</rtde_config>
+"""
+
+
+@pytest.mark.parametrize(
+    ("name", "data"),
+    [
+        ("bom.txt", "\ufefftimestamp\r\nactual_q\r\n".encode()),
+        ("bom.csv", "\ufefftimestamp,actual_q\r\n".encode()),
+        ("bom.json", '\ufeff["timestamp", "actual_q"]'.encode()),
+        ("bom.yaml", "\ufefffields: [timestamp, actual_q]\n".encode()),
+        ("quoted.csv", b'"timestamp","actual_q"\r\n'),
+        ("semicolons.csv", b"timestamp;actual_q;\n"),
+        ("semicolons.txt", b"timestamp; actual_q\n"),
+        ("bom.xml", ("\ufeff" + UR_XML.format(decl="", comment="Notepad")).encode()),
+        ("bom-xml.txt", ("\ufeff" + UR_XML.format(decl="", comment="saved as .txt")).encode()),
+        ("utf16.xml", UR_XML.format(decl=' encoding="UTF-16"', comment="Größe").encode("utf-16")),
+        ("cp1252.xml", UR_XML.format(decl=' encoding="windows-1252"', comment="Größe €").encode("cp1252")),
+        ("latin1.xml", UR_XML.format(decl=" encoding='ISO-8859-1'", comment="Größe").encode("latin-1")),
+    ],
+)
+def test_files_as_editors_save_them(tmp_path: Path, name: str, data: bytes) -> None:
+    """A byte-order mark (Notepad, PowerShell, Excel), UTF-16, an XML declaration's encoding,
+    quoted or semicolon-separated CSV, a line break inside an XML name: the same two names.
+    Before, the mark became part of the first name and the declared encoding was ignored."""
+    path = tmp_path / name
+    path.write_bytes(data)
+    (recipe,) = load_recipes(path)
+    assert recipe.names == ("timestamp", "actual_q")
+
+
+def test_text_in_no_encoding_it_claims_is_named(tmp_path: Path) -> None:
+    path = tmp_path / "r.xml"
+    path.write_bytes(UR_XML.format(decl=' encoding="no-such-codec"', comment="x").encode())
+    with pytest.raises(RecipeError, match="unknown encoding 'no-such-codec'"):
+        load_recipes(path)
+    path.write_bytes(b"timestamp\n\xff\xfeactual_q\n")
+    with pytest.raises(RecipeError, match="not utf-8 text at byte 10: save it as UTF-8"):
+        load_recipes(path)
+
+
+@pytest.mark.parametrize("suffix", [".json", ".yaml"])
+def test_numeric_keys_are_chosen_by_their_text(tmp_path: Path, suffix: str) -> None:
+    """`key: 1` in YAML or JSON is the number 1; `--recipe-key 1` took the first recipe instead."""
+    from rtde_spec.recipes.files import pick_recipe
+
+    path = tmp_path / f"keys{suffix}"
+    path.write_text(
+        '{"recipes": [{"key": 2, "fields": ["timestamp"]}, {"key": 1, "fields": ["actual_qd"]}]}'
+    )
+    recipes = load_recipes(path)
+    assert [r.key for r in recipes] == ["2", "1"]
+    chosen = pick_recipe(recipes, "1", "output", set(), {"timestamp", "actual_qd"}, where=str(path))
+    assert chosen.names == ("actual_qd",)
+
+
+@pytest.mark.parametrize(
+    "text", ["controller: 5.10\nfields: [timestamp]\n", '{"controller": 5.10, "fields": ["timestamp"]}']
+)
+def test_a_controller_version_read_as_a_number_is_refused(tmp_path: Path, text: str) -> None:
+    """YAML and JSON read 5.10 as 5.1: validated for the wrong controller, before."""
+    path = tmp_path / ("r.yaml" if text.startswith("c") else "r.json")
+    path.write_text(text)
+    with pytest.raises(RecipeError, match=r"controller must be a version in quotes \('5.10'"):
+        load_recipes(path)
+    path.write_text(text.replace("5.10", '"5.10"'))
+    assert load_recipes(path)[0].controller == "5.10"

@@ -194,6 +194,23 @@ def test_demo_whose_plot_does_not_fit_names_the_image(disk: Path, tmp_path: Path
 # 4. a folder in the way, a read-only file system: the output named, the reason in words
 
 
+def test_save_recipes_on_a_full_disk_keeps_the_file_there(disk: Path) -> None:
+    """`save_recipes` wrote in place: a full disk left the recipe file cut off."""
+    from rtde_spec.recipes.files import save_recipes
+    from rtde_spec.recipes.model import Recipe
+
+    path = disk / "outputs.xml"
+    save_recipes([Recipe(("timestamp", "actual_q"), key="state")], path)
+    before = state(disk)
+    fill(disk)
+    many = Recipe(tuple(f"output_double_register_{i}" for i in range(48)) * 200, key="state")
+    with pytest.raises(OutputError) as info:
+        save_recipes([many], path)
+    said(str(info.value), path, "the disk is full")
+    assert state(disk) == before
+    no_temp_files(disk)
+
+
 def test_plot_and_spec_import_to_a_folder_say_so(
     tmp_path: Path, table: Path, guide: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

@@ -249,12 +249,20 @@ def _not_a_vector(value: Any, count: int) -> str | None:
     return None
 
 
+def _index_or_none(value: Any) -> int | None:
+    """The integer `value` stands for (`__index__`, as struct takes it), or None."""
+    try:
+        return operator.index(value)
+    except TypeError:
+        return None
+
+
 def _is_numpy_bool(value: Any) -> bool:
     kind = getattr(getattr(value, "dtype", None), "kind", None)
     return kind == "b" and getattr(value, "ndim", None) == 0
 
 
-def _checked(item: RecipeItem, value: Any, strict: bool, index: int | None) -> Any:
+def _checked(item: RecipeItem, value: Any, strict: bool, at: int | None) -> Any:
     """One value as the wire type takes it, or EncodeError.
 
     Without strict, a value is taken as `struct` takes it (anything with `__index__`
@@ -262,7 +270,7 @@ def _checked(item: RecipeItem, value: Any, strict: bool, index: int | None) -> A
     Fraction, Decimal), so the one-call path and these checks agree; integral
     floats become integers and 0/1 (numpy bools too) BOOLs."""
     wire = item.wire
-    field = item.name if index is None else f"{item.name}[{index}]"
+    field = item.name if at is None else f"{item.name}[{at}]"
 
     def fail(reason: str, expected: Any) -> EncodeError:
         return EncodeError(reason, package="data_package", field=field, expected=expected, actual=repr(value))
@@ -275,8 +283,9 @@ def _checked(item: RecipeItem, value: Any, strict: bool, index: int | None) -> A
         if not strict and not text:
             if _is_numpy_bool(value):
                 return bool(value)
-            if hasattr(kind, "__index__") and operator.index(value) in (0, 1):
-                return bool(operator.index(value))
+            index = _index_or_none(value)
+            if index in (0, 1):
+                return bool(index)
         raise fail("not a bool", "True or False" if strict else "a bool, 0 or 1")
     if strict:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -287,7 +296,10 @@ def _checked(item: RecipeItem, value: Any, strict: bool, index: int | None) -> A
         raise fail(f"not {what} for {wire.name}", wire.name)
     if wire.kind == "int":
         if hasattr(kind, "__index__"):
-            value = operator.index(value)
+            try:
+                value = operator.index(value)
+            except TypeError:  # a numpy array of one value has __index__ but refuses it
+                raise fail(f"not an integer for {wire.name}", wire.name) from None
         else:
             try:
                 number = float(value)

@@ -8,7 +8,9 @@ every file is size-bounded before it is parsed.
 
 from __future__ import annotations
 
+import codecs
 import json
+import re
 from pathlib import Path
 from typing import Any
 from xml.etree.ElementTree import Element, SubElement, tostring
@@ -44,7 +46,7 @@ def detect_format(path: Path, text: str) -> str:
     if any(line.strip().startswith(("recipes:", "fields:", "- ")) for line in text.splitlines()):
         return "yaml"
     first = next((line for line in _uncommented(text) if line), "")
-    return "csv" if "," in first else "lines"
+    return "csv" if "," in first or ";" in first else "lines"
 
 
 def _uncommented(text: str) -> list[str]:
@@ -75,9 +77,37 @@ def read_text_bounded(path: Path) -> str:
             actual=f"{size} bytes",
         )
     try:
-        return path.read_text(encoding="utf-8")
+        data = path.read_bytes()
+    except OSError as exc:
+        raise RecipeError(f"cannot read recipe file: {exc.strerror}", subject=f"file {path}") from None
+    return decoded_text(data, f"file {path}")
+
+
+_XML_ENCODING = re.compile(rb"""^<\?xml[^>]*?\sencoding\s*=\s*["']([A-Za-z0-9._-]+)["']""")
+
+
+def decoded_text(data: bytes, subject: str) -> str:
+    """A recipe file's text as editors save it: UTF-8 with or without a byte-order mark (Notepad,
+    PowerShell, Excel), UTF-16 with one, or the encoding an XML declaration names."""
+    if data.startswith(codecs.BOM_UTF8):
+        encoding, data = "utf-8", data[len(codecs.BOM_UTF8) :]
+    elif data.startswith((codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)):
+        encoding = "utf-16"
+    else:
+        declared = _XML_ENCODING.match(data.lstrip())
+        encoding = declared.group(1).decode("ascii") if declared else "utf-8"
+    try:
+        codecs.lookup(encoding)
+    except LookupError:
+        raise RecipeError(
+            f"its XML declaration names an unknown encoding {encoding!r}", subject=subject
+        ) from None
+    try:
+        return data.decode(encoding)
     except UnicodeDecodeError as exc:
-        raise RecipeError(f"not UTF-8 text at byte {exc.start}", subject=f"file {path}") from None
+        raise RecipeError(
+            f"not {encoding} text at byte {exc.start}: save it as UTF-8", subject=subject
+        ) from None
 
 
 def load_recipes(path: str | Path, fmt: str | None = None) -> list[Recipe]:
@@ -99,17 +129,22 @@ def load_recipes(path: str | Path, fmt: str | None = None) -> list[Recipe]:
 
 
 def _from_csv(text: str, where: str) -> list[Recipe]:
-    joined = ",".join(line.rstrip(",") for line in _uncommented(text) if line)
-    return [Recipe.parse(joined)]
+    """Commas, or semicolons as spreadsheets write CSV in many locales; names in quotes or not."""
+    lines = [line.replace(";", ",").rstrip(",") for line in _uncommented(text) if line]
+    recipe = Recipe.parse(",".join(lines))
+    return [recipe.with_(names=tuple(n.strip().strip('"').strip("'").strip() for n in recipe.names))]
 
 
 def _from_lines(text: str, where: str) -> list[Recipe]:
     return [Recipe(tuple(n for n in _uncommented(text) if n))]
 
 
+_XML_DECLARATION = re.compile(r"^\s*<\?xml[^>]*\?>")
+
+
 def _from_xml(text: str, where: str) -> list[Recipe]:
-    try:
-        root = SafeET.fromstring(text, forbid_dtd=True)
+    try:  # the text is decoded already: a declaration naming its encoding would be refused
+        root = SafeET.fromstring(_XML_DECLARATION.sub("", text, count=1), forbid_dtd=True)
     except DefusedXmlException as exc:
         raise RecipeError(f"unsafe XML refused: {exc}", subject=at(where)) from None
     except SafeET.ParseError as exc:
@@ -123,7 +158,7 @@ def _from_xml(text: str, where: str) -> list[Recipe]:
         names: list[str] = []
         declared: dict[str, str] = {}
         for fld in element.findall("field"):
-            name = fld.get("name")
+            name = (fld.get("name") or "").strip()  # XML turns a line break in a value into a space
             if not name:
                 raise RecipeError(f"<field> without a name in recipe {key or number}", subject=at(where))
             names.append(name)
@@ -137,7 +172,7 @@ def _from_xml(text: str, where: str) -> list[Recipe]:
 
 def _recipe_from_mapping(item: Any, where: str, index: int) -> Recipe:
     if isinstance(item, list):
-        return Recipe(tuple(str(n) for n in item))
+        return Recipe(tuple(str(n).strip() for n in item))
     if not isinstance(item, dict):
         raise RecipeError(f"recipe {index} must be a mapping or a list of names", subject=at(where))
     known = {"key", "direction", "frequency", "controller", "fields", "names"}
@@ -155,11 +190,11 @@ def _recipe_from_mapping(item: Any, where: str, index: int) -> Recipe:
     declared: dict[str, str] = {}
     for entry in raw:
         if isinstance(entry, dict):
-            names.append(str(entry.get("name")))
+            names.append(str(entry.get("name")).strip())
             if entry.get("type"):
                 declared[names[-1]] = str(entry["type"])
         else:
-            names.append(str(entry))
+            names.append(str(entry).strip())
     direction = item.get("direction")
     if direction not in (None, "input", "output"):
         raise RecipeError(
@@ -172,12 +207,25 @@ def _recipe_from_mapping(item: Any, where: str, index: int) -> Recipe:
         raise RecipeError(
             f"recipe {index}: frequency must be a number", subject=at(where), actual=repr(frequency)[:80]
         ) from None
+    controller = item.get("controller")
+    if isinstance(controller, float):  # YAML and JSON read 5.10 as the number 5.1
+        raise RecipeError(
+            f"recipe {index}: controller must be a version in quotes ('5.10', not 5.10: "
+            f"read as the number {controller!r})",
+            subject=at(where),
+            actual=repr(controller),
+        )
+    key = item.get("key")
+    if isinstance(key, (list, dict)):
+        raise RecipeError(
+            f"recipe {index}: key must be a name or number", subject=at(where), actual=repr(key)
+        )
     return Recipe(
         tuple(names),
         direction=direction,
         frequency=hz,
-        controller=str(item["controller"]) if item.get("controller") is not None else None,
-        key=item.get("key"),
+        controller=str(controller) if controller is not None else None,
+        key=str(key) if key is not None else None,  # `key: 1` is chosen by --recipe-key 1
         declared_types=declared,
     )
 
@@ -265,9 +313,14 @@ def save_recipes(
     fmt: str | None = None,
     types: dict[str, str] | None = None,
 ) -> None:
+    """Write `recipes` to `path`, appearing only complete (an existing file stays as it was if
+    anything fails); the format from `fmt` or the file's suffix."""
+    from rtde_spec.output.partfile import write_with
+
     p = Path(path)
     kind = fmt or detect_format(p, "")
-    p.write_text(dumps_recipes(recipes, kind, types), encoding="utf-8")
+    data = dumps_recipes(recipes, kind, types).encode("utf-8")
+    write_with(p, lambda out: out.write(data))
 
 
 def _single(recipes: list[Recipe], fmt: str) -> None:
