@@ -15,7 +15,7 @@ import pytest
 
 from rtde_spec import AsyncRtdeClient, EmulatorConfig, EmulatorThread, PrimaryClient, RtdeClient
 from rtde_spec.emulator.controller.scenario import Scenario
-from rtde_spec.errors import RecipeError, RtdeConnectionError, UsageError
+from rtde_spec.errors import EncodeError, RecipeError, RtdeConnectionError, UsageError
 from rtde_spec.rtde.codec import build, decode_stream
 from rtde_spec.wire.primary_base import PrimaryPart, RobotStateMessage
 
@@ -253,6 +253,73 @@ def test_unknown_and_unavailable_names_are_refused_before_sending(emu: EmulatorT
             client.setup_outputs(["timestamp", "actual_qq"], 125)
         with pytest.raises(RecipeError, match="input"):
             client.setup_outputs(["speed_slider_mask"], 125)  # an input, not an output
+
+
+def test_what_user_code_passes_to_setup_and_send(emu: EmulatorThread) -> None:
+    """Names as one comma string or a generator, values as a pandas row, a dataclass, a record or
+    a model: each sent as given. Before, a string was set up a character a name, a generator
+    was used up by the offline check (an empty setup, refused by the controller), and send took
+    only a mapping (a pandas row raised "truth value ... ambiguous", a model "not a mapping")."""
+    import dataclasses
+
+    import numpy as np
+    import pandas as pd
+
+    names = ["input_int_register_24", "input_double_register_24"]
+    with RtdeClient("127.0.0.1", emu.ports["rtde"]) as client:
+        output = client.setup_outputs("timestamp, input_int_register_24,input_double_register_24", 125)
+        assert output.names == ("timestamp", "input_int_register_24", "input_double_register_24")
+        recipe = client.setup_inputs(n for n in names)
+        assert recipe.names == tuple(names)
+        client.start()
+
+        @dataclasses.dataclass
+        class Inputs:
+            input_int_register_24: int
+            input_double_register_24: float
+
+        row = pd.DataFrame({"input_int_register_24": [3], "input_double_register_24": [0.5]}).iloc[0]
+        record = recipe.codec.decode_record(recipe.codec.encode({names[0]: 4, names[1]: 1.5}))
+        sent = [
+            (row, {}, (3, 0.5)),
+            (Inputs(5, 2.5), {}, (5, 2.5)),
+            (record, {}, (4, 1.5)),
+            (recipe.codec.model_type(input_int_register_24=6, input_double_register_24=3.5), {}, (6, 3.5)),
+            (row, {"input_int_register_24": np.int64(7)}, (7, 0.5)),  # the names given win
+        ]
+        for values, named, expected in sent:
+            client.send(recipe, values, **named)
+            deadline = time.monotonic() + 2
+            got = None
+            while time.monotonic() < deadline and got != expected:
+                got = tuple(getattr(client.receive(), n) for n in names)
+            assert got == expected, (values, got)
+        with pytest.raises(UsageError, match="send takes the InputRecipe that setup_inputs returned"):
+            client.send(output, {"input_int_register_24": 1})  # type: ignore[arg-type]
+        with pytest.raises(EncodeError, match="values must be a dict, a record, a model or a dataclass"):
+            client.send(recipe, [1, 0.5])
+        client.pause()
+
+
+@pytest.mark.parametrize("frequency", ["125", None, True, b"125"])
+def test_a_frequency_that_is_no_number_is_named(emu: EmulatorThread, frequency: object) -> None:
+    from rtde_spec.recipes.model import Recipe
+    from rtde_spec.recipes.validation import validate_recipes
+
+    with RtdeClient("127.0.0.1", emu.ports["rtde"]) as client:
+        if frequency is not None:  # None is validate_recipes' "the recipe's own frequency"
+            with pytest.raises(UsageError, match="frequency must be a number of Hz"):
+                validate_recipes([Recipe(("timestamp",))], frequency=frequency)  # type: ignore[arg-type]
+        with pytest.raises(UsageError, match="frequency must be a number of Hz"):
+            client.setup_outputs(["timestamp"], frequency)  # type: ignore[arg-type]
+
+
+def test_recipe_names_that_are_no_names_are_named(emu: EmulatorThread) -> None:
+    with RtdeClient("127.0.0.1", emu.ports["rtde"]) as client:
+        with pytest.raises(UsageError, match="recipe names must be text: 3 is a int"):
+            client.setup_outputs(["timestamp", 3], 125)  # type: ignore[list-item]
+        with pytest.raises(UsageError, match="recipe names must be a list of names, not bytes"):
+            client.setup_inputs(b"speed_slider_mask")  # type: ignore[arg-type]
 
 
 def test_emulator_answers_not_found_in_use_and_refuses_start(emu: EmulatorThread) -> None:

@@ -15,6 +15,7 @@ spec sets no range for DOUBLE fields and the controller takes IEEE 754 values.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import operator
 import struct
@@ -184,16 +185,7 @@ class Encoder:
 
     def checked(self, values: Any, strict: bool) -> list[Any]:
         """Every value checked against its wire type; the first problem raises, naming the field."""
-        if hasattr(values, "model_dump"):  # a pydantic model (pydantic is imported only when used)
-            values = values.model_dump()
-        elif isinstance(values, tuple):
-            if not hasattr(values, "_asdict"):
-                raise EncodeError(
-                    "a plain tuple has no field names; pass a record, dict or model", package="data_package"
-                )
-            values = values._asdict()
-        if not isinstance(values, Mapping):
-            raise EncodeError("values must be a dict, a record or a model", package="data_package")
+        values = as_mapping(values)
         flat: list[Any] = []
         for item in self.items:
             if item.name not in values:
@@ -220,6 +212,29 @@ class Encoder:
                 field=sorted(extra)[0],
             )
         return flat
+
+
+def as_mapping(values: Any) -> Mapping[str, Any]:
+    """Values by name from a dict, a record (a namedtuple), a pydantic model, a dataclass or
+    anything with `keys()` (a pandas row); EncodeError for anything else."""
+    if isinstance(values, Mapping):
+        return values
+    if hasattr(values, "model_dump"):  # a pydantic model (pydantic is imported only when used)
+        return values.model_dump()  # type: ignore[no-any-return]
+    if isinstance(values, tuple):
+        if not hasattr(values, "_asdict"):
+            raise EncodeError(
+                "a plain tuple has no field names; pass a record, dict or model", package="data_package"
+            )
+        return values._asdict()  # type: ignore[no-any-return]
+    if dataclasses.is_dataclass(values) and not isinstance(values, type):
+        return {f.name: getattr(values, f.name) for f in dataclasses.fields(values)}
+    if callable(getattr(values, "keys", None)) and hasattr(values, "__getitem__"):
+        return {key: values[key] for key in values.keys()}
+    raise EncodeError(
+        f"values must be a dict, a record, a model or a dataclass, not {type(values).__name__}",
+        package="data_package",
+    )
 
 
 def _bounds(code: str) -> tuple[int, int]:

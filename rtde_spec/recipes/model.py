@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import numbers
+from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
-from typing import Literal
+from typing import Any, Literal
+
+from rtde_spec.errors import UsageError
 
 Direction = Literal["input", "output"]
 FILE_FORMATS = ("xml", "lines", "csv", "yaml", "json")
@@ -42,3 +46,30 @@ class Recipe:
     def wire_text(self) -> str:
         """The names as the setup package carries them."""
         return ",".join(self.names)
+
+
+def recipe_names(names: Iterable[str] | str) -> tuple[str, ...]:
+    """The names a client subscribes to, taken once: a generator would be used up by the offline
+    check before the setup request, and one string is read as the setup package's comma list
+    ("timestamp,actual_q"), not as one name a character."""
+    if isinstance(names, str):
+        return Recipe.parse(names).names
+    if isinstance(names, (bytes, bytearray)) or not isinstance(names, Iterable):
+        raise UsageError(f"recipe names must be a list of names, not {type(names).__name__} {names!r:.80}")
+    taken = tuple(names)
+    odd = [n for n in taken if not isinstance(n, str)]
+    if odd:
+        raise UsageError(f"recipe names must be text: {odd[0]!r} is a {type(odd[0]).__name__}")
+    return taken
+
+
+def checked_frequency(frequency: Any, *, required: bool = False) -> float | None:
+    """`frequency` as a float, or UsageError naming it: a str or a bool is no rate in Hz; None
+    is "not given", unless `required` (a client's setup request carries a rate)."""
+    if frequency is None and not required:
+        return None
+    if isinstance(frequency, (str, bytes, bool)) or not isinstance(frequency, numbers.Real):
+        raise UsageError(
+            f"frequency must be a number of Hz, not {type(frequency).__name__} {frequency!r:.80}"
+        )
+    return float(frequency)

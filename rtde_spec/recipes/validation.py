@@ -20,7 +20,7 @@ from rtde_spec._generated.constants import RTDE_LIMITS as LIMITS
 from rtde_spec.metamodel.catalogue import Catalogue, FieldInfo
 from rtde_spec.metamodel.versions import Version
 from rtde_spec.recipes.files import infer_direction
-from rtde_spec.recipes.model import Direction, Recipe
+from rtde_spec.recipes.model import Direction, Recipe, checked_frequency
 
 Severity = Literal["error", "warning", "info"]
 NOT_FOUND = RTDE_ANSWERS["not_found"]
@@ -231,6 +231,7 @@ def validate_recipe(
     _checker: _Checker | None = None,
 ) -> RecipeReport:
     """Check one recipe; controller/frequency/direction override what the recipe says."""
+    frequency = checked_frequency(frequency)
     cat = catalogue or Catalogue.default()
     checker = _checker or _Checker(cat, controller or recipe.controller)
     dirn = direction or infer_direction(recipe, checker.all_names["input"], checker.all_names["output"])
@@ -295,6 +296,7 @@ def validate_recipes(
     catalogue: Catalogue | None = None,
 ) -> ValidationReport:
     """Check the recipes of one client together (e.g. all recipes of an XML file)."""
+    frequency = checked_frequency(frequency)
     cat = catalogue or Catalogue.default()
     # each recipe is checked against --controller, else the version its file names
     checkers: dict[str | None, _Checker] = {}

@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import asyncio
 import logging
-from collections.abc import AsyncIterator, Mapping, Sequence
+from collections.abc import AsyncIterator, Sequence
 from typing import Any
 
 from rtde_spec._generated.constants import RTDE_PORT
@@ -56,11 +56,11 @@ class AsyncRtdeClient(ClientBase):
         await self._request(self.core.get_controller_version())
         return self
 
-    async def setup_outputs(self, names: Sequence[str], frequency: float = 125.0) -> Any:
+    async def setup_outputs(self, names: Sequence[str] | str, frequency: float = 125.0) -> Any:
         await self._request(self.core.setup_outputs(names, frequency))
         return self.core.output
 
-    async def setup_inputs(self, names: Sequence[str]) -> InputRecipe:
+    async def setup_inputs(self, names: Sequence[str] | str) -> InputRecipe:
         await self._request(self.core.setup_inputs(names))
         return self.core.inputs[max(self.core.inputs)]
 
@@ -76,8 +76,8 @@ class AsyncRtdeClient(ClientBase):
     async def pause(self) -> None:
         await self._request(self.core.pause())
 
-    async def send(self, recipe: InputRecipe, values: Mapping[str, Any] | None = None, **named: Any) -> None:
-        await self._write(self.core.send_inputs(recipe, {**(values or {}), **named}))
+    async def send(self, recipe: InputRecipe, values: Any = None, **named: Any) -> None:
+        await self._write(self.core.send_inputs(recipe, values, named))
 
     async def receive(self, timeout: float | None = None) -> Any:
         """The next record; waits on one future with a timer (no task per wait, as wait_for makes)."""

@@ -22,7 +22,7 @@ import struct
 import sys
 import threading
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from rtde_spec._generated.constants import RTDE_PORT
@@ -99,12 +99,12 @@ class RtdeClient(ThreadReads):
 
     # --- requests -----------------------------------------------------------
 
-    def setup_outputs(self, names: Sequence[str], frequency: float = 125.0) -> Any:
+    def setup_outputs(self, names: Sequence[str] | str, frequency: float = 125.0) -> Any:
         """Subscribe to outputs (validated offline first); returns the recipe's codec."""
         self._request(self.core.setup_outputs(names, frequency))
         return self.core.output
 
-    def setup_inputs(self, names: Sequence[str]) -> InputRecipe:
+    def setup_inputs(self, names: Sequence[str] | str) -> InputRecipe:
         self._request(self.core.setup_inputs(names))
         return self.core.inputs[max(self.core.inputs)]
 
@@ -117,9 +117,9 @@ class RtdeClient(ThreadReads):
     def pause(self) -> None:
         self._request(self.core.pause())
 
-    def send(self, recipe: InputRecipe, values: Mapping[str, Any] | None = None, **named: Any) -> None:
+    def send(self, recipe: InputRecipe, values: Any = None, **named: Any) -> None:
         """Write inputs by field name: send(recipe, speed_slider_mask=1, speed_slider_fraction=0.5)."""
-        self._write(self.core.send_inputs(recipe, {**(values or {}), **named}))
+        self._write(self.core.send_inputs(recipe, values, named))
 
     def send_text(self, text: str, level: int = 3) -> None:
         self._write(self.core.text_message(text, level))

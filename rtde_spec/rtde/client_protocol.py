@@ -23,12 +23,19 @@ from rtde_spec._generated.constants import (
     RTDE_LIMITS,
     RTDE_PACKAGES,
 )
-from rtde_spec.errors import DecodeError, ProtocolError, RecipeError, RtdeConnectionError, RtdeSpecError
+from rtde_spec.errors import (
+    DecodeError,
+    ProtocolError,
+    RecipeError,
+    RtdeConnectionError,
+    RtdeSpecError,
+    UsageError,
+)
 from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.metamodel.versions import Version
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
-from rtde_spec.recipes.encoding import PREFIX
-from rtde_spec.recipes.model import Recipe
+from rtde_spec.recipes.encoding import PREFIX, as_mapping
+from rtde_spec.recipes.model import Recipe, checked_frequency, recipe_names
 from rtde_spec.rtde.client_events import DataRun, Event, InputRecipe, Reply, Request, Text
 from rtde_spec.rtde.data_forms import implied_recipe_id, lacks_recipe_id, with_recipe_id
 from rtde_spec.rtde.packages import (
@@ -104,17 +111,20 @@ class ClientProtocol:
     def get_controller_version(self) -> bytes:
         return self._ask("get_urcontrol_version", {})
 
-    def setup_outputs(self, names: Sequence[str], frequency: float) -> bytes:
+    def setup_outputs(self, names: Sequence[str] | str, frequency: float) -> bytes:
         """Validate offline (names, direction, version, rate), then the setup request."""
-        self._validate(names, "output", frequency)
+        names = recipe_names(names)
+        hz = checked_frequency(frequency, required=True)
+        self._validate(names, "output", hz)
         if self.state.version == 1:
-            return self._ask("setup_outputs_v1", {"variable_names": list(names)}, ("output", tuple(names)))
-        values = {"output_frequency": float(frequency), "variable_names": list(names)}
-        return self._ask("setup_outputs_v2", values, ("output", tuple(names)))
+            return self._ask("setup_outputs_v1", {"variable_names": list(names)}, ("output", names))
+        values = {"output_frequency": hz, "variable_names": list(names)}
+        return self._ask("setup_outputs_v2", values, ("output", names))
 
-    def setup_inputs(self, names: Sequence[str]) -> bytes:
+    def setup_inputs(self, names: Sequence[str] | str) -> bytes:
+        names = recipe_names(names)
         self._validate(names, "input", None)
-        return self._ask("setup_inputs", {"variable_names": list(names)}, ("input", tuple(names)))
+        return self._ask("setup_inputs", {"variable_names": list(names)}, ("input", names))
 
     def start(self) -> bytes:
         return self._ask("start", {})
@@ -178,8 +188,18 @@ class ClientProtocol:
             )
         return RtdeConnectionError(cause, subject=where)
 
-    def send_inputs(self, recipe: InputRecipe, values: Mapping[str, Any]) -> bytes:
-        return recipe.codec.encode_package(dict(values), recipe.recipe_id)
+    def send_inputs(self, recipe: InputRecipe, values: Any, named: Mapping[str, Any]) -> bytes:
+        """One input data package: `values` (a dict, record, model, dataclass or pandas row) and
+        the values `named`, the latter winning; the codec names whatever is wrong."""
+        if not isinstance(recipe, InputRecipe):
+            raise UsageError(
+                f"send takes the InputRecipe that setup_inputs returned, not a {type(recipe).__name__}"
+            )
+        if values is None:
+            values = named
+        elif named:
+            values = {**as_mapping(values), **named}
+        return recipe.codec.encode_package(values, recipe.recipe_id)
 
     def text_message(self, text: str, level: int, source: str = "rtde_spec") -> bytes:
         from rtde_spec.rtde.codec import message_by_name  # the model checks the user's text
