@@ -240,6 +240,45 @@ def test_decode_with_ur_configuration_picks_the_recipe_of_the_sender(
     assert (row["input_double_register_24"], row["input_double_register_25"]) == (0.5, -1.0)
 
 
+def test_decode_to_dash_writes_standard_output_and_capture_to_dash_is_refused(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """`-o -` wrote a file named `-`; record refused it. Now it is standard output where one
+    file goes to it, and refused where the output is a folder."""
+    import json
+
+    from rtde_spec.recipes.codec import RecipeCodec
+
+    monkeypatch.chdir(tmp_path)
+    package = RecipeCodec.for_names(["timestamp"], "output").encode_package({"timestamp": 2.5}, 1)
+    assert main(["decode", package.hex(), "--recipe", "timestamp", "--format", "json", "-o", "-"]) == 0
+    assert [row["timestamp"] for row in json.loads(capsys.readouterr().out)] == [2.5]
+    assert main(["demo", "-o", "-"]) == 2
+    assert "-o -: standard output cannot hold a folder of files" in capsys.readouterr().err
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_fields_given_twice_are_both_recorded(
+    emu: EmulatorThread, capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    """The second --fields replaced the first, silently."""
+    out = tmp_path / "f.csv"
+    code, err = record(
+        capsys,
+        emu,
+        "--fields",
+        "timestamp,actual_q",
+        "--fields",
+        "robot_mode",
+        "--samples",
+        "3",
+        "-o",
+        str(out),
+    )
+    assert code == 0, err
+    assert header(out) == ["timestamp", *(f"actual_q_{i}" for i in range(6)), "robot_mode"]
+
+
 @pytest.mark.parametrize("frequency", ["125", "500"])
 def test_a_duration_is_that_many_seconds_of_the_controllers_rows(
     emu: EmulatorThread, capsys: pytest.CaptureFixture[str], tmp_path: Path, frequency: str

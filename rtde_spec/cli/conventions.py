@@ -59,7 +59,12 @@ def plural(count: int, word: str, many: str | None = None) -> str:
 
 
 def output_folder(text: str, option: str = "-o") -> Path:
-    """A folder output: refused when it names an existing file (a folder is made when missing)."""
+    """A folder output: refused when it names an existing file (a folder is made when missing) or
+    is `-`, which means standard output everywhere else."""
+    if text == "-":
+        raise UsageError(
+            "standard output cannot hold a folder of files; give a folder", subject=f"{option} -"
+        )
     path = Path(text)
     if path.exists() and not path.is_dir():
         raise UsageError(

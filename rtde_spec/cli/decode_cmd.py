@@ -109,7 +109,9 @@ def _add_output_options(p: argparse.ArgumentParser) -> None:
         help="output format; json is always one array of objects, one per package, whatever their "
         "number (jsonl: one object per line) (default: from the -o suffix, else table)",
     )
-    p.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout (default: stdout)")
+    p.add_argument(
+        "-o", "--output", metavar="FILE", help="write to FILE instead of stdout (default, or -: stdout)"
+    )
     p.add_argument(
         "--json", action="store_true", help="the same as --format json: a JSON array (default: off)"
     )
@@ -213,6 +215,8 @@ def _progress(total: int, args: argparse.Namespace) -> Any:
 def run(args: argparse.Namespace) -> int:
     from rtde_spec.output.writers import format_for, open_writer
 
+    if args.output == "-":  # the usual spelling of standard output, the default
+        args.output = None
     if args.output:
         output_file(args.output)
     fmt = "json" if args.json and not args.format else format_for(args.output, args.format)

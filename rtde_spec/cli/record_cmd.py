@@ -69,7 +69,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help=f"{RECIPE_FILE_HELP}; --config as UR's record.py names it (required: this or --fields)",
     )
     what.add_argument(
-        "--fields", metavar="A,B,...", help="output names, comma-separated (required: this or --recipe)"
+        "--fields",
+        action="append",
+        metavar="A,B,...",
+        help="output names, comma-separated, or the option given again (required: this or --recipe)",
     )
     p.add_argument(
         "--recipe-key",
@@ -122,8 +125,8 @@ def _add_stop_and_output(p: argparse.ArgumentParser) -> None:
 
 def names_of(args: argparse.Namespace, alternative: str = ", or the names with --fields A,B") -> list[str]:
     """The output names of --fields, or of the --recipe file's recipe (--recipe-key picks one)."""
-    if args.fields:
-        return [n.strip() for n in args.fields.split(",") if n.strip()]
+    if args.fields:  # --fields a,b --fields c: all three, in order
+        return [n.strip() for given in args.fields for n in given.split(",") if n.strip()]
     from rtde_spec.cli.arguments import catalogue_for
     from rtde_spec.recipes.files import load_recipes, pick_recipe
 
