@@ -255,6 +255,9 @@ def test_decode_to_dash_writes_standard_output_and_capture_to_dash_is_refused(
     assert [row["timestamp"] for row in json.loads(capsys.readouterr().out)] == [2.5]
     assert main(["demo", "-o", "-"]) == 2
     assert "-o -: standard output cannot hold a folder of files" in capsys.readouterr().err
+    record_argv = ["record", "--host", "127.0.0.1", "--port", "1", "--fields", "timestamp", "--format", "csv"]
+    assert main([*record_argv, "-o", "-"]) == 2
+    assert "-o -: this output is a file, written whole at the end" in capsys.readouterr().err
     assert list(tmp_path.iterdir()) == []
 
 

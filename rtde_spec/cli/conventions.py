@@ -77,7 +77,12 @@ def output_folder(text: str, option: str = "-o") -> Path:
 
 def output_file(text: str, option: str = "-o") -> Path:
     """A file output: its folder must exist (and be a folder); a folder is refused. Checked before
-    anything connects or is read, so the error names the path the user gave, in plain words."""
+    anything connects or is read, so the error names the path the user gave, in plain words.
+    `-` (standard output) is refused: a command that writes there takes it before asking."""
+    if text == "-":
+        raise UsageError(
+            "this output is a file, written whole at the end; give a file name", subject=f"{option} -"
+        )
     path = Path(text)
     if names_folder(text):
         raise UsageError(
