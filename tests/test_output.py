@@ -244,3 +244,27 @@ def test_a_small_file_written_whole_replaces_the_old_one_or_leaves_it(tmp_path: 
     assert listing.read_bytes() == b"[old]\n" and leftover_temps(tmp_path) == []
     write_whole(listing, b"[new]\n", durable=True)
     assert listing.read_bytes() == b"[new]\n" and leftover_temps(tmp_path) == []
+
+
+def test_an_output_whose_name_leaves_no_room_for_the_temporary_mark_is_written(tmp_path: Path) -> None:
+    """A legal 244-byte name (Linux takes 255) was refused as "too long": its temporary name
+    beside it, `.NAME.part-PID`, went past 255 bytes. A stale one of a killed run is found."""
+    import os
+    import subprocess
+
+    from rtde_spec.output.partfile import leftovers, temp_path, write_with
+
+    target = tmp_path / ("é" * 100 + "x" * 40 + ".csv")
+    assert len(os.fsencode(target.name)) == 244
+    write_with(target, lambda out: out.write(b"timestamp\n0.5\n"))
+    assert target.read_bytes() == b"timestamp\n0.5\n"
+    assert [p.name for p in tmp_path.iterdir()] == [target.name]
+    done = cli("decode", "00045601", "--from", "controller", "--format", "csv", "-o", str(target))
+    assert done.returncode == 0, done.stderr
+    assert [p.name for p in tmp_path.iterdir()] == [target.name]
+    assert b"protocol_version" in target.read_bytes()
+    dead = subprocess.Popen(["true"])  # a process that has ended: the run that left a file
+    dead.wait()
+    stale = temp_path(target).with_name(temp_path(target).name.rpartition("-")[0] + f"-{dead.pid}")
+    stale.write_bytes(b"cut off")
+    assert leftovers(target) == [stale]

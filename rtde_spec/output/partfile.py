@@ -19,6 +19,7 @@ import errno
 import io
 import os
 import stat
+import zlib
 from collections.abc import Callable
 from pathlib import Path
 from typing import BinaryIO, cast
@@ -31,9 +32,24 @@ SPILL = 8 << 20  # held bytes handed to the file before a flush, so memory stays
 NO_ROOM = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EFBIG, errno.EIO})
 
 
+NAME_MAX = 255  # bytes of one file name on Linux's file systems (and macOS's)
+
+
 def temp_path(target: Path) -> Path:
     """Where `target` is written until it is renamed into place."""
-    return target.with_name(f".{target.name}{PART_MARK}{os.getpid()}")
+    return target.with_name(f"{_temp_stem(target.name)}{PART_MARK}{os.getpid()}")
+
+
+def _temp_stem(name: str) -> str:
+    """The temporary file's name before its mark: `.NAME`, or for a name too long to take the
+    mark and a process id (a legal 244-byte output), its start and a checksum of the whole."""
+    stem = f".{name}"
+    room = NAME_MAX - len(PART_MARK) - 10  # a pid has at most 7 digits on Linux; 3 to spare
+    raw = os.fsencode(stem)
+    if len(raw) <= room:
+        return stem
+    check = f"~{zlib.crc32(raw):08x}"
+    return raw[: room - len(check)].decode("utf-8", "ignore") + check  # no character cut in two
 
 
 def is_special(target: Path) -> bool:
@@ -73,7 +89,13 @@ def leftovers(target: Path) -> list[Path]:
         names = os.listdir(folder)
     except OSError:
         return []
+    shortened = _temp_stem(target.name)
     for name in names:
+        head, _, pid = name.rpartition(PART_MARK)
+        if head == shortened and shortened != f".{target.name}":  # a long name's temporary file
+            if pid.isdigit() and not _alive(int(pid)):
+                found.append(folder / name)
+            continue
         if not name.startswith(f".{stem}") or PART_MARK not in name:
             continue
         real, _, pid = name[1:].rpartition(PART_MARK)
