@@ -50,19 +50,27 @@ def _detect(detect: Detect | None) -> str:
         return "."
     lines = ", ".join(f"`{line}`" for line in detect.script_lines)
     sent = "the program sent to the script sender"
-    return f". Capture picks it when {sent} has the lines {lines} ({detect.source})."
+    without = ", ".join(f"`{line}`" for line in detect.without)
+    absent = f" and not the lines {without}" if detect.without else ""
+    anyvalue = ", ".join(f"`{name}`" for name in detect.any_multipliers)
+    values = f"; {anyvalue} may hold any value" if detect.any_multipliers else ""
+    return f". Capture picks it when {sent} has the lines {lines}{absent}{values} ({detect.source})."
 
 
-def _choice_note() -> str:
+def _choice_note(protocol: str, example: str) -> str:
+    proto = f"urcl_{protocol}"
     return (
-        "\nWithout the program in the capture, `rtde-spec capture` keeps the layouts the records "
+        "\nA program names a layout when it has all of the layout's lines, none of its `without` "
+        "lines, and sets no multiplier (`MULT_...`) they do not name but those that may hold any "
+        "value; capture uses a layout when the program names it and no other. "
+        "Without such a program in the capture, `rtde-spec capture` keeps the layouts the records "
         "themselves allow (segments of whole records of its size, every enum word a known value): "
         "one left is taken, else the newest of them; its summary names the layout and why.\n"
         "\nThe Wireshark dissector (`rtde-spec wireshark`) chooses the same way from a program it "
         "has seen earlier in the capture (else the newest), or as its preference "
-        "`urcl_trajectory.layout` says (`-o urcl_trajectory.layout:point_type_21`); each record "
-        "shows `urcl_trajectory.layout` and `urcl_trajectory.layout_reason`, and an older "
-        "layout's fields are `urcl_trajectory.<layout>.<field>`.\n"
+        f"`{proto}.layout` says (`-o {proto}.layout:{example}`); each record "
+        f"shows `{proto}.layout` and `{proto}.layout_reason`, and an older "
+        f"layout's fields are `{proto}.<layout>.<field>`.\n"
     )
 
 
@@ -95,7 +103,7 @@ def _markdown(spec: ExternalControlFile, prims: dict[str, Primitive]) -> str:
                     out.append(_variant_head(old.selector, v) if len(old.variants) > 1 else "\n")
                     out.append(md_table(headers, _variant_rows(v, prims)))
             if m.older:
-                out.append(_choice_note())
+                out.append(_choice_note(p.name, m.older[-1].name))
     out.append("\n## Enums\n")
     for e in spec.enums:
         out.append(f"\n### {e.name}\n\n{e.doc or ''}{' (' + e.doc_ref + ')' if e.doc_ref else ''}\n\n")

@@ -3,12 +3,13 @@ the reverse, trajectory and script command records (`urcl_reverse.*`, `urcl_traj
 `urcl_script_command.*`: scaled words shown in SI units) and the script sender
 (`urcl_script_sender.*`).
 
-A message with `older` layouts (the trajectory point) is decoded with the layout its session
-uses: the protocol's preference names one, or in `auto` the program the driver sent the same
-robot on the script sender port earlier in the capture does, by the spec's `detect` lines and
-the rule capture uses (rtde_spec/external/layouts.py), else the newest. Each record shows the
-layout and why as generated fields (`<proto>.layout`, `<proto>.layout_reason`); an older
-layout's fields are named `<proto>.<layout>.<field>`, with that layout's scales.
+A message with `older` layouts (the reverse command, the trajectory point, the script command)
+is decoded with the layout its session uses: the protocol's preference names one, or in `auto`
+the program the driver sent the same robot on the script sender port earlier in the capture
+does, by the spec's `detect` lines and the rule capture uses (rtde_spec/external/layouts.py),
+else the newest. Each record shows the layout and why as generated fields (`<proto>.layout`,
+`<proto>.layout_reason`); an older layout's fields are named `<proto>.<layout>.<field>`, with
+that layout's scales.
 """
 
 from __future__ import annotations
@@ -90,6 +91,12 @@ def _layout(
     if rec.detect is not None:
         lines = ", ".join(lua_str(line) for line in sorted(rec.detect.lines))
         head += f"detect = {{ {lines} }}, "
+        if rec.detect.absent:
+            without = ", ".join(lua_str(line) for line in sorted(rec.detect.absent))
+            head += f"without = {{ {without} }}, "
+        if rec.detect.any_multipliers:
+            names = ", ".join(f"[{lua_str(name)}] = true" for name in sorted(rec.detect.any_multipliers))
+            head += f"any_mult = {{ {names} }}, "
     sel = "nil" if sel_at is None else str(sel_at)
     return (
         f"{{ {head}size = {rec.record_bytes}, sel_at = {sel}, default = {default},\n"
@@ -144,8 +151,9 @@ local function urcl_program_add(robot, port, number, text)
   p.version = p.version + 1
 end
 
--- The layouts whose detect lines a program has, unless it sets a multiplier (MULT_...) they do
--- not name: lines compared without whitespace and `#` comments; a last line without its
+-- The layouts whose detect lines a program has and whose `without` lines it has not, unless it
+-- sets a multiplier (MULT_...) they do not name and whose value matters to them (not in
+-- any_mult): lines compared without whitespace and `#` comments; a last line without its
 -- newline is not read yet (it may be cut short).
 local function urcl_named(layouts, text)
   local lines, mult = {}, {}
@@ -153,13 +161,17 @@ local function urcl_named(layouts, text)
   for line in text:sub(1, last or 0):gmatch("([^\\n]*)\\n") do
     line = line:gsub("#.*", ""):gsub("%s", "")
     lines[line] = true
-    if line:match("^MULT_[%w_]*=") then mult[line] = true end
+    local name = line:match("^(MULT_[%w_]*)=")
+    if name then mult[line] = name end
   end
   local named = {}
   for _, l in ipairs(layouts) do
     local ok = l.detect ~= nil
     for _, line in ipairs(l.detect or {}) do ok = ok and lines[line] == true end
-    for line in pairs(mult) do ok = ok and l.detect_set[line] == true end
+    for _, line in ipairs(l.without or {}) do ok = ok and lines[line] ~= true end
+    for line, name in pairs(mult) do
+      ok = ok and (l.detect_set[line] == true or (l.any_mult or {})[name] == true)
+    end
     if ok then table.insert(named, l.name) end
   end
   return named

@@ -237,7 +237,7 @@ def test_without_the_program_84_byte_points_are_read_as_the_newest_and_it_says_s
     assert trajectory_tables(tables) == {"urcl_trajectory_points"}
     assert (
         "trajectory layout motion_type_us (assumed: newest of the layouts the records fit, "
-        "motion_type_us, motion_type_ms, point_type_21; no script seen)"
+        "motion_type_us, motion_type_blocks_us, motion_type_ms, point_type_21; no script seen)"
     ) in err
 
 
@@ -248,7 +248,7 @@ def test_a_program_that_names_no_layout_leaves_the_choice_to_the_records(tmp_pat
     assert len(tables["urcl_trajectory_splines"]) == 2
     assert (
         "trajectory layout motion_type_us (assumed: newest of the layouts the records fit, motion_type_us, "
-        "motion_type_ms; the script on 50002 names none)"
+        "motion_type_blocks_us, motion_type_ms; the script on 50002 names none)"
     ) in err
 
 
@@ -301,7 +301,7 @@ def test_every_layout_of_the_trajectory_point_has_detect_lines_and_a_table() -> 
     message = external_spec().protocol("trajectory").messages[0]
     layouts = message.layouts()
     assert [name for _, name, _, _ in layouts] == [
-        "motion_type_us", "motion_type_ms", "point_type_21", "cartesian_flag_9",
+        "motion_type_us", "motion_type_blocks_us", "motion_type_ms", "point_type_21", "cartesian_flag_9",
     ]  # fmt: skip
     assert all(detect is not None and detect.source for _, _, detect, _ in layouts)
     tables = {v.table for o in message.older for v in o.variants}

@@ -130,6 +130,17 @@ EXTERNAL_CONTROL: dict[str, Any] = {'doc_ref': 'Universal_Robots_Client_Library 
                               'sender': 'driver',
                               'record_bytes': 32,
                               'selector': 'control_mode',
+                              'layout': 'read_timeout_ms',
+                              'detect': {'source': 'resources/external_control.urscript at tag '
+                                                   '1.3.4 (commit d150af4e; URCL pull request 178, '
+                                                   "commit c3bead7d, 'watchdog configuration for "
+                                                   "the reverse socket') to 2.14.0 and commit "
+                                                   '00468670: read_timeout = params_mult[1] / '
+                                                   '1000.0; MULT_jointstate is '
+                                                   'ReverseInterface::MULT_JOINTSTATE',
+                                         'script_lines': ['read_timeout = params_mult[1] / 1000.0',
+                                                          'MULT_jointstate = 1000000'],
+                                         'any_multipliers': ['MULT_time']},
                               'variants': [{'name': 'motion_target',
                                             'table': 'urcl_reverse',
                                             'doc': 'SERVOJ, SPEEDJ, SPEEDL, POSE, TORQUE (and IDLE '
@@ -197,7 +208,91 @@ EXTERNAL_CONTROL: dict[str, Any] = {'doc_ref': 'Universal_Robots_Client_Library 
                                                         'count': 5},
                                                        {'name': 'control_mode',
                                                         'type': 'int32',
-                                                        'enum': 'UrclControlMode'}]}]}]},
+                                                        'enum': 'UrclControlMode'}]}],
+                              'older': [{'name': 'keepalive',
+                                         'source': 'src/control/reverse_interface.cpp at tag 1.3.3 '
+                                                   '(commit b304e41a: ReverseInterface::write, '
+                                                   'writeTrajectoryControlMessage, '
+                                                   "writeFreedriveControlMessage, 'The first "
+                                                   "element is always the keepalive signal', "
+                                                   'keepalive_count_) and '
+                                                   'include/ur_client_library/comm/reverse_interface.h '
+                                                   'at tag 0.2.0 (the same first word); '
+                                                   'resources/external_control.urscript at 1.3.3 '
+                                                   '(keepalive = params_mult[1]; each read that '
+                                                   'times out after 0.02 s counts it down, the '
+                                                   'program stops at 0)',
+                                         'detect': {'source': 'resources/external_control.urscript '
+                                                              'at tags 0.2.0 to 1.3.3 (keepalive = '
+                                                              'params_mult[1]; read_timeout only '
+                                                              'from 1.3.4)',
+                                                    'script_lines': ['keepalive = params_mult[1]',
+                                                                     'MULT_jointstate = 1000000'],
+                                                    'any_multipliers': ['MULT_time']},
+                                         'record_bytes': 32,
+                                         'selector': 'control_mode',
+                                         'variants': [{'name': 'motion_target',
+                                                       'table': 'urcl_reverse_v0',
+                                                       'doc': 'SERVOJ, SPEEDJ, SPEEDL, POSE (and '
+                                                              'IDLE / STOPPED with zeros)',
+                                                       'fields': [{'name': 'keepalive_count',
+                                                                   'type': 'int32',
+                                                                   'doc': 'Reads of 0.02 s the '
+                                                                          'robot may miss before '
+                                                                          'its program stops '
+                                                                          '(ReverseInterface::setKeepaliveCount, '
+                                                                          '1 by default), not '
+                                                                          'scaled'},
+                                                                  {'name': 'target',
+                                                                   'type': 'int32',
+                                                                   'count': 6,
+                                                                   'scale': 1000000.0,
+                                                                   'doc': 'Joint positions [rad] '
+                                                                          '(SERVOJ), joint '
+                                                                          'velocities [rad/s] '
+                                                                          '(SPEEDJ), pose [m, rad] '
+                                                                          '(POSE), Cartesian '
+                                                                          'velocity [m/s, rad/s] '
+                                                                          '(SPEEDL)'},
+                                                                  {'name': 'control_mode',
+                                                                   'type': 'int32',
+                                                                   'enum': 'UrclControlMode'}]},
+                                                      {'name': 'trajectory_control',
+                                                       'when': [3],
+                                                       'table': 'urcl_reverse_trajectory_v0',
+                                                       'doc': 'FORWARD mode '
+                                                              '(writeTrajectoryControlMessage, '
+                                                              'from 0.3.0)',
+                                                       'fields': [{'name': 'keepalive_count',
+                                                                   'type': 'int32'},
+                                                                  {'name': 'trajectory_action',
+                                                                   'type': 'int32',
+                                                                   'enum': 'TrajectoryControlMessage'},
+                                                                  {'name': 'point_count',
+                                                                   'type': 'int32'},
+                                                                  {'name': 'unused',
+                                                                   'type': 'int32',
+                                                                   'count': 4},
+                                                                  {'name': 'control_mode',
+                                                                   'type': 'int32',
+                                                                   'enum': 'UrclControlMode'}]},
+                                                      {'name': 'freedrive_control',
+                                                       'when': [6],
+                                                       'table': 'urcl_reverse_freedrive_v0',
+                                                       'doc': 'FREEDRIVE mode '
+                                                              '(writeFreedriveControlMessage, from '
+                                                              '1.3.2)',
+                                                       'fields': [{'name': 'keepalive_count',
+                                                                   'type': 'int32'},
+                                                                  {'name': 'freedrive_action',
+                                                                   'type': 'int32',
+                                                                   'enum': 'FreedriveControlMessage'},
+                                                                  {'name': 'unused',
+                                                                   'type': 'int32',
+                                                                   'count': 5},
+                                                                  {'name': 'control_mode',
+                                                                   'type': 'int32',
+                                                                   'enum': 'UrclControlMode'}]}]}]}]},
                {'name': 'script_sender',
                 'port': 50002,
                 'doc': "ScriptSender: the robot (a URCap's program node) sends the line below; the "
@@ -317,16 +412,127 @@ EXTERNAL_CONTROL: dict[str, Any] = {'doc_ref': 'Universal_Robots_Client_Library 
                                                        {'name': 'motion_type',
                                                         'type': 'int32',
                                                         'enum': 'MotionType'}]}],
-                              'older': [{'name': 'motion_type_ms',
+                              'older': [{'name': 'motion_type_blocks_us',
+                                         'source': 'src/control/trajectory_point_interface.cpp and '
+                                                   'include/ur_client_library/control/trajectory_point_interface.h '
+                                                   'at tags 2.10.0 (commit 632088c2) and 2.11.0 '
+                                                   '(020cb559): writeMotionPrimitive fills the '
+                                                   'words as motion_type_ms has them (MOVEJ, '
+                                                   'MOVEL, MOVEP and OPTIMOVE*: the velocity in '
+                                                   'words 6-11, the acceleration in 12-17; MOVEC: '
+                                                   'via pose, then velocity, acceleration, arc '
+                                                   "mode; a spline's type in word 19), but "
+                                                   'duration and blend radius are times MULT_TIME '
+                                                   '1000000 (URCL pull request 482, commit '
+                                                   '02540beb); resources/external_control.urscript '
+                                                   'at 2.10.0 (trajectoryThread: velocity = '
+                                                   'raw_point[7], acceleration = raw_point[13]; '
+                                                   'duration and blend radius divided by '
+                                                   'MULT_time)',
+                                         'detect': {'source': 'resources/external_control.urscript '
+                                                              'at tags 2.10.0 and 2.11.0 '
+                                                              '(MOTION_TYPE_SPLINE = 51 as from '
+                                                              '2.0.0; MOTION_TYPE_MOVEJ_POSE = 6 '
+                                                              'only from pull request 491, commit '
+                                                              '8f35234a, tag 2.12.0, which kept '
+                                                              'the other lines); MULT_time is '
+                                                              'TrajectoryPointInterface::MULT_TIME, '
+                                                              '1000000 from pull request 482',
+                                                    'script_lines': ['MOTION_TYPE_SPLINE = 51',
+                                                                     'MULT_time = 1000000',
+                                                                     'MULT_jointstate = 1000000'],
+                                                    'without': ['MOTION_TYPE_MOVEJ_POSE = 6']},
+                                         'record_bytes': 84,
+                                         'selector': 'motion_type',
+                                         'variants': [{'name': 'motion_primitive',
+                                                       'table': 'urcl_trajectory_points_v2',
+                                                       'fields': [{'name': 'target',
+                                                                   'type': 'int32',
+                                                                   'count': 6,
+                                                                   'scale': 1000000.0,
+                                                                   'doc': 'Joint positions [rad] '
+                                                                          '(MOVEJ, OPTIMOVEJ) or '
+                                                                          'pose [m, rad], by '
+                                                                          'motion_type'},
+                                                                  {'name': 'velocity_or_via',
+                                                                   'type': 'int32',
+                                                                   'count': 6,
+                                                                   'scale': 1000000.0,
+                                                                   'doc': 'MOVEC: the via pose; '
+                                                                          'the other motion types: '
+                                                                          'the velocity in every '
+                                                                          'word'},
+                                                                  {'name': 'acceleration_or_movec',
+                                                                   'type': 'int32',
+                                                                   'count': 6,
+                                                                   'scale': 1000000.0,
+                                                                   'doc': 'MOVEC: velocity, '
+                                                                          'acceleration, arc mode, '
+                                                                          'then zeros as the '
+                                                                          'library writes them '
+                                                                          '(its script reads the '
+                                                                          'first two as '
+                                                                          'acceleration, '
+                                                                          'velocity); the other '
+                                                                          'motion types: the '
+                                                                          'acceleration in every '
+                                                                          'word'},
+                                                                  {'name': 'duration',
+                                                                   'type': 'int32',
+                                                                   'unit': 's',
+                                                                   'scale': 1000000.0,
+                                                                   'doc': 'Segment time '
+                                                                          '(MULT_TIME: '
+                                                                          'microseconds on the '
+                                                                          'wire); 0 = by speed'},
+                                                                  {'name': 'blend_radius',
+                                                                   'type': 'int32',
+                                                                   'unit': 'm',
+                                                                   'scale': 1000000.0},
+                                                                  {'name': 'motion_type',
+                                                                   'type': 'int32',
+                                                                   'enum': 'MotionType'}]},
+                                                      {'name': 'spline_point',
+                                                       'when': [51],
+                                                       'table': 'urcl_trajectory_splines',
+                                                       'fields': [{'name': 'positions',
+                                                                   'type': 'int32',
+                                                                   'count': 6,
+                                                                   'unit': 'rad',
+                                                                   'scale': 1000000.0},
+                                                                  {'name': 'velocities',
+                                                                   'type': 'int32',
+                                                                   'count': 6,
+                                                                   'unit': 'rad/s',
+                                                                   'scale': 1000000.0},
+                                                                  {'name': 'accelerations',
+                                                                   'type': 'int32',
+                                                                   'count': 6,
+                                                                   'unit': 'rad/s^2',
+                                                                   'scale': 1000000.0,
+                                                                   'doc': 'QUINTIC only'},
+                                                                  {'name': 'duration',
+                                                                   'type': 'int32',
+                                                                   'unit': 's',
+                                                                   'scale': 1000000.0,
+                                                                   'doc': 'Microseconds on the '
+                                                                          'wire'},
+                                                                  {'name': 'spline_type',
+                                                                   'type': 'int32',
+                                                                   'enum': 'SplineType'},
+                                                                  {'name': 'motion_type',
+                                                                   'type': 'int32',
+                                                                   'enum': 'MotionType'}]}]},
+                                        {'name': 'motion_type_ms',
                                          'source': 'src/control/trajectory_point_interface.cpp and '
                                                    'include/ur_client_library/control/trajectory_point_interface.h '
                                                    'of the motion-type URCL before pull request '
                                                    '482 (writeMotionPrimitive: MOVEJ, MOVEL, MOVEP '
                                                    'and OPTIMOVE* fill words 6-11 with the '
                                                    'velocity and 12-17 with the acceleration; '
-                                                   'MOVEC: via pose, then acceleration, velocity, '
-                                                   'arc mode; MULT_TIME 1000), '
-                                                   'resources/external_control.urscript at '
+                                                   'MOVEC: via pose, then velocity, acceleration, '
+                                                   'arc mode; MULT_TIME 1000; tags 2.0.0 to '
+                                                   '2.9.0), resources/external_control.urscript at '
                                                    '0b21a189 (trajectoryThread reads them so)',
                                          'detect': {'source': 'resources/external_control.urscript '
                                                               'at 0b21a189 (MOTION_TYPE_SPLINE = '
@@ -361,9 +567,14 @@ EXTERNAL_CONTROL: dict[str, Any] = {'doc_ref': 'Universal_Robots_Client_Library 
                                                                    'type': 'int32',
                                                                    'count': 6,
                                                                    'scale': 1000000.0,
-                                                                   'doc': 'MOVEC: acceleration, '
-                                                                          'velocity, arc mode, '
-                                                                          'then zeros; the other '
+                                                                   'doc': 'MOVEC: velocity, '
+                                                                          'acceleration, arc mode, '
+                                                                          'then zeros as the '
+                                                                          'library writes them '
+                                                                          '(its script reads the '
+                                                                          'first two as '
+                                                                          'acceleration, '
+                                                                          'velocity); the other '
                                                                           'motion types: the '
                                                                           'acceleration in every '
                                                                           'word'},
@@ -416,9 +627,11 @@ EXTERNAL_CONTROL: dict[str, Any] = {'doc_ref': 'Universal_Robots_Client_Library 
                                         {'name': 'point_type_21',
                                          'source': 'src/control/trajectory_point_interface.cpp at '
                                                    'commit '
-                                                   '00d568be9e5beb7237d61e5310cc93b9f3257391 (URCL '
-                                                   "1.3.3 on: 'spline interpolation with end point "
-                                                   "velocities'; MULT_TIME 1000)",
+                                                   '00d568be9e5beb7237d61e5310cc93b9f3257391 '
+                                                   "('spline interpolation with end point "
+                                                   "velocities', merged as URCL pull request 151, "
+                                                   'commit 57c1a6a4: tags 1.3.2 to 1.9.0, '
+                                                   'MESSAGE_LENGTH 21; MULT_TIME 1000)',
                                          'detect': {'source': 'resources/external_control.urscript '
                                                               'at 00d568be '
                                                               '(TRAJECTORY_POINT_JOINT_SPLINE = 2, '
@@ -458,7 +671,8 @@ EXTERNAL_CONTROL: dict[str, Any] = {'doc_ref': 'Universal_Robots_Client_Library 
                                          'source': 'src/control/trajectory_point_interface.cpp at '
                                                    'commit '
                                                    '22a5c7bfd04483708733cb3b2d5ee992727f2789 (URCL '
-                                                   '0.3.0, 2021-06-18, to 1.3.2; MULT_TIME 1000)',
+                                                   '0.3.0, 2021-06-18, to 1.3.1; tag 1.3.2 has the '
+                                                   '21-word point_type_21; MULT_TIME 1000)',
                                          'detect': {'source': 'resources/external_control.urscript '
                                                               'at 93800a58 '
                                                               '(TRAJECTORY_DATA_DIMENSION = 7: '
@@ -500,9 +714,9 @@ EXTERNAL_CONTROL: dict[str, Any] = {'doc_ref': 'Universal_Robots_Client_Library 
                {'name': 'script_command',
                 'port': 50004,
                 'doc': "ScriptCommandInterface: one-shot commands run by a thread of the robot's "
-                       'program without interrupting motion. 28 words each: the command, then its '
-                       'arguments, the rest zero. The robot answers one word when tool contact '
-                       'ends.',
+                       'program without interrupting motion. 28 words each (26 from URCL 1.3.2 to '
+                       '1.4.0, 5 before): the command, then its arguments, the rest zero. The '
+                       'robot answers one word when tool contact ends.',
                 'source': 'src/control/script_command_interface.cpp at 0b21a189, '
                           'resources/external_control.urscript at 00468670 (thread '
                           'script_commands)',
@@ -510,6 +724,16 @@ EXTERNAL_CONTROL: dict[str, Any] = {'doc_ref': 'Universal_Robots_Client_Library 
                               'sender': 'driver',
                               'record_bytes': 112,
                               'selector': 'command',
+                              'layout': 'words_28',
+                              'detect': {'source': 'resources/external_control.urscript at tags '
+                                                   '1.5.0 (commit 4daad9b8; URCL pull request 208, '
+                                                   "commit d3baa8b3, added force mode's damping "
+                                                   'and gain scaling) to 2.14.0 and commit '
+                                                   '00468670: SCRIPT_COMMAND_DATA_DIMENSION = 28 '
+                                                   '(ScriptCommandInterface::MAX_MESSAGE_LENGTH)',
+                                         'script_lines': ['SCRIPT_COMMAND_DATA_DIMENSION = 28',
+                                                          'MULT_jointstate = 1000000'],
+                                         'any_multipliers': ['MULT_time']},
                               'variants': [{'name': 'zero_ft_sensor',
                                             'when': [0],
                                             'table': 'urcl_script_commands',
@@ -701,7 +925,187 @@ EXTERNAL_CONTROL: dict[str, Any] = {'doc_ref': 'Universal_Robots_Client_Library 
                                                         'enum': 'ScriptCommand'},
                                                        {'name': 'words',
                                                         'type': 'int32',
-                                                        'count': 27}]}]},
+                                                        'count': 27}]}],
+                              'older': [{'name': 'words_26',
+                                         'source': 'src/control/script_command_interface.cpp and '
+                                                   'include/ur_client_library/control/script_command_interface.h '
+                                                   'at tags 1.3.2 (commit 692e274a) to 1.4.0 '
+                                                   '(173f1936): MAX_MESSAGE_LENGTH 26, commands 0 '
+                                                   'to 6 (URCL pull request 138, commit 8dbe2a13); '
+                                                   'startForceMode writes 25 argument words, '
+                                                   'without damping and gain scaling; values '
+                                                   'truncated toward zero at 1.3.2, rounded from '
+                                                   '1.3.3; resources/external_control.urscript at '
+                                                   '1.3.2 (thread script_commands reads them so)',
+                                         'detect': {'source': 'resources/external_control.urscript '
+                                                              'at tags 1.3.2 to 1.4.0 '
+                                                              '(SCRIPT_COMMAND_DATA_DIMENSION = '
+                                                              '26)',
+                                                    'script_lines': ['SCRIPT_COMMAND_DATA_DIMENSION '
+                                                                     '= 26',
+                                                                     'MULT_jointstate = 1000000'],
+                                                    'any_multipliers': ['MULT_time']},
+                                         'record_bytes': 104,
+                                         'selector': 'command',
+                                         'variants': [{'name': 'zero_ft_sensor',
+                                                       'when': [0],
+                                                       'table': 'urcl_script_commands',
+                                                       'fields': [{'name': 'command',
+                                                                   'type': 'int32',
+                                                                   'enum': 'ScriptCommand'}]},
+                                                      {'name': 'set_payload',
+                                                       'when': [1],
+                                                       'table': 'urcl_script_commands',
+                                                       'fields': [{'name': 'command',
+                                                                   'type': 'int32',
+                                                                   'enum': 'ScriptCommand'},
+                                                                  {'name': 'mass',
+                                                                   'type': 'int32',
+                                                                   'unit': 'kg',
+                                                                   'scale': 1000000.0},
+                                                                  {'name': 'cog',
+                                                                   'type': 'int32',
+                                                                   'count': 3,
+                                                                   'unit': 'm',
+                                                                   'scale': 1000000.0,
+                                                                   'doc': 'Center of gravity from '
+                                                                          'the tool flange'}]},
+                                                      {'name': 'set_tool_voltage',
+                                                       'when': [2],
+                                                       'table': 'urcl_script_commands',
+                                                       'fields': [{'name': 'command',
+                                                                   'type': 'int32',
+                                                                   'enum': 'ScriptCommand'},
+                                                                  {'name': 'voltage',
+                                                                   'type': 'int32',
+                                                                   'unit': 'V',
+                                                                   'scale': 1000000.0,
+                                                                   'doc': '0, 12 or 24'}]},
+                                                      {'name': 'start_force_mode',
+                                                       'when': [3],
+                                                       'table': 'urcl_script_commands',
+                                                       'fields': [{'name': 'command',
+                                                                   'type': 'int32',
+                                                                   'enum': 'ScriptCommand'},
+                                                                  {'name': 'task_frame',
+                                                                   'type': 'int32',
+                                                                   'count': 6,
+                                                                   'scale': 1000000.0,
+                                                                   'doc': 'Pose [m, rad]'},
+                                                                  {'name': 'selection_vector',
+                                                                   'type': 'int32',
+                                                                   'count': 6,
+                                                                   'scale': 1000000.0,
+                                                                   'doc': '1 = compliant axis'},
+                                                                  {'name': 'wrench',
+                                                                   'type': 'int32',
+                                                                   'count': 6,
+                                                                   'scale': 1000000.0,
+                                                                   'doc': 'Forces [N] and torques '
+                                                                          '[N m]'},
+                                                                  {'name': 'force_type',
+                                                                   'type': 'int32',
+                                                                   'scale': 1000000.0,
+                                                                   'doc': "1, 2 or 3 (force_mode's "
+                                                                          'type)'},
+                                                                  {'name': 'limits',
+                                                                   'type': 'int32',
+                                                                   'count': 6,
+                                                                   'scale': 1000000.0}]},
+                                                      {'name': 'end_force_mode',
+                                                       'when': [4],
+                                                       'table': 'urcl_script_commands',
+                                                       'fields': [{'name': 'command',
+                                                                   'type': 'int32',
+                                                                   'enum': 'ScriptCommand'}]},
+                                                      {'name': 'start_tool_contact',
+                                                       'when': [5],
+                                                       'table': 'urcl_script_commands',
+                                                       'fields': [{'name': 'command',
+                                                                   'type': 'int32',
+                                                                   'enum': 'ScriptCommand'}]},
+                                                      {'name': 'end_tool_contact',
+                                                       'when': [6],
+                                                       'table': 'urcl_script_commands',
+                                                       'fields': [{'name': 'command',
+                                                                   'type': 'int32',
+                                                                   'enum': 'ScriptCommand'}]},
+                                                      {'name': 'unknown_command',
+                                                       'table': 'urcl_script_commands',
+                                                       'doc': 'A command this layout does not '
+                                                              'know; its argument words as they '
+                                                              'are',
+                                                       'fields': [{'name': 'command',
+                                                                   'type': 'int32',
+                                                                   'enum': 'ScriptCommand'},
+                                                                  {'name': 'words',
+                                                                   'type': 'int32',
+                                                                   'count': 25}]}]},
+                                        {'name': 'words_5',
+                                         'source': 'src/control/script_command_interface.cpp and '
+                                                   'include/ur_client_library/control/script_command_interface.h '
+                                                   'at tags 0.4.0 (commit bbbae030) and 1.2.0 '
+                                                   '(ae42e4b1) to 1.3.1 (b921d14c): '
+                                                   'MAX_MESSAGE_LENGTH 5, commands 0 to 2 (URCL '
+                                                   'pull request 111, commit ba604f75), values '
+                                                   'truncated toward zero; '
+                                                   'resources/external_control.urscript at 1.2.0 '
+                                                   '(thread script_commands). Tags 1.0.0 and 1.1.0 '
+                                                   'have no script command interface',
+                                         'detect': {'source': 'resources/external_control.urscript '
+                                                              'at tags 0.4.0 and 1.2.0 to 1.3.1 '
+                                                              '(SCRIPT_COMMAND_DATA_DIMENSION = 5)',
+                                                    'script_lines': ['SCRIPT_COMMAND_DATA_DIMENSION '
+                                                                     '= 5',
+                                                                     'MULT_jointstate = 1000000'],
+                                                    'any_multipliers': ['MULT_time']},
+                                         'record_bytes': 20,
+                                         'selector': 'command',
+                                         'variants': [{'name': 'zero_ft_sensor',
+                                                       'when': [0],
+                                                       'table': 'urcl_script_commands',
+                                                       'fields': [{'name': 'command',
+                                                                   'type': 'int32',
+                                                                   'enum': 'ScriptCommand'}]},
+                                                      {'name': 'set_payload',
+                                                       'when': [1],
+                                                       'table': 'urcl_script_commands',
+                                                       'fields': [{'name': 'command',
+                                                                   'type': 'int32',
+                                                                   'enum': 'ScriptCommand'},
+                                                                  {'name': 'mass',
+                                                                   'type': 'int32',
+                                                                   'unit': 'kg',
+                                                                   'scale': 1000000.0},
+                                                                  {'name': 'cog',
+                                                                   'type': 'int32',
+                                                                   'count': 3,
+                                                                   'unit': 'm',
+                                                                   'scale': 1000000.0,
+                                                                   'doc': 'Center of gravity from '
+                                                                          'the tool flange'}]},
+                                                      {'name': 'set_tool_voltage',
+                                                       'when': [2],
+                                                       'table': 'urcl_script_commands',
+                                                       'fields': [{'name': 'command',
+                                                                   'type': 'int32',
+                                                                   'enum': 'ScriptCommand'},
+                                                                  {'name': 'voltage',
+                                                                   'type': 'int32',
+                                                                   'unit': 'V',
+                                                                   'scale': 1000000.0,
+                                                                   'doc': '0, 12 or 24'}]},
+                                                      {'name': 'unknown_command',
+                                                       'table': 'urcl_script_commands',
+                                                       'doc': 'A command this layout does not '
+                                                              'know; its argument words as they '
+                                                              'are',
+                                                       'fields': [{'name': 'command',
+                                                                   'type': 'int32',
+                                                                   'enum': 'ScriptCommand'},
+                                                                  {'name': 'words',
+                                                                   'type': 'int32',
+                                                                   'count': 4}]}]}]},
                              {'name': 'tool_contact_result',
                               'sender': 'robot',
                               'record_bytes': 4,

@@ -1367,8 +1367,9 @@ local function urcl_program_add(robot, port, number, text)
   p.version = p.version + 1
 end
 
--- The layouts whose detect lines a program has, unless it sets a multiplier (MULT_...) they do
--- not name: lines compared without whitespace and `#` comments; a last line without its
+-- The layouts whose detect lines a program has and whose `without` lines it has not, unless it
+-- sets a multiplier (MULT_...) they do not name and whose value matters to them (not in
+-- any_mult): lines compared without whitespace and `#` comments; a last line without its
 -- newline is not read yet (it may be cut short).
 local function urcl_named(layouts, text)
   local lines, mult = {}, {}
@@ -1376,13 +1377,17 @@ local function urcl_named(layouts, text)
   for line in text:sub(1, last or 0):gmatch("([^\n]*)\n") do
     line = line:gsub("#.*", ""):gsub("%s", "")
     lines[line] = true
-    if line:match("^MULT_[%w_]*=") then mult[line] = true end
+    local name = line:match("^(MULT_[%w_]*)=")
+    if name then mult[line] = name end
   end
   local named = {}
   for _, l in ipairs(layouts) do
     local ok = l.detect ~= nil
     for _, line in ipairs(l.detect or {}) do ok = ok and lines[line] == true end
-    for line in pairs(mult) do ok = ok and l.detect_set[line] == true end
+    for _, line in ipairs(l.without or {}) do ok = ok and lines[line] ~= true end
+    for line, name in pairs(mult) do
+      ok = ok and (l.detect_set[line] == true or (l.any_mult or {})[name] == true)
+    end
     if ok then table.insert(named, l.name) end
   end
   return named
@@ -1481,6 +1486,8 @@ end
 local p_urcl_reverse = Proto("urcl_reverse", "URCL reverse")
 local F_urcl_reverse = {}
 F_urcl_reverse["variant"] = ProtoField.string("urcl_reverse.variant", "variant")
+F_urcl_reverse["layout"] = ProtoField.string("urcl_reverse.layout", "layout")
+F_urcl_reverse["layout_reason"] = ProtoField.string("urcl_reverse.layout_reason", "layout reason")
 F_urcl_reverse["read_timeout"] = ProtoField.double("urcl_reverse.read_timeout", "read_timeout")
 F_urcl_reverse["target"] = ProtoField.double("urcl_reverse.target", "target")
 F_urcl_reverse["control_mode"] = ProtoField.int32("urcl_reverse.control_mode", "control_mode", base.DEC, vs_urcl_UrclControlMode)
@@ -1489,9 +1496,19 @@ F_urcl_reverse["point_count"] = ProtoField.int32("urcl_reverse.point_count", "po
 F_urcl_reverse["move_id"] = ProtoField.int32("urcl_reverse.move_id", "move_id", base.DEC)
 F_urcl_reverse["unused"] = ProtoField.int32("urcl_reverse.unused", "unused", base.DEC)
 F_urcl_reverse["freedrive_action"] = ProtoField.int32("urcl_reverse.freedrive_action", "freedrive_action", base.DEC, vs_urcl_FreedriveControlMessage)
+F_urcl_reverse["keepalive.keepalive_count"] = ProtoField.int32("urcl_reverse.keepalive.keepalive_count", "keepalive_count", base.DEC)
+F_urcl_reverse["keepalive.target"] = ProtoField.double("urcl_reverse.keepalive.target", "target")
+F_urcl_reverse["keepalive.control_mode"] = ProtoField.int32("urcl_reverse.keepalive.control_mode", "control_mode", base.DEC, vs_urcl_UrclControlMode)
+F_urcl_reverse["keepalive.trajectory_action"] = ProtoField.int32("urcl_reverse.keepalive.trajectory_action", "trajectory_action", base.DEC, vs_urcl_TrajectoryControlMessage)
+F_urcl_reverse["keepalive.point_count"] = ProtoField.int32("urcl_reverse.keepalive.point_count", "point_count", base.DEC)
+F_urcl_reverse["keepalive.unused"] = ProtoField.int32("urcl_reverse.keepalive.unused", "unused", base.DEC)
+F_urcl_reverse["keepalive.freedrive_action"] = ProtoField.int32("urcl_reverse.keepalive.freedrive_action", "freedrive_action", base.DEC, vs_urcl_FreedriveControlMessage)
 local REC_urcl_reverse = {
-  driver = { size = 32, sel_at = 28, default = { name = "motion_target", fields = { { f = "read_timeout", size = 4, count = 1, scale = 1000.0 }, { f = "target", size = 4, count = 6, scale = 1000000.0 }, { f = "control_mode", size = 4, count = 1, scale = nil } } },
+  driver = { pref = "Reverse command layout", layouts = {
+    { name = "read_timeout_ms", detect = { "MULT_jointstate=1000000", "read_timeout=params_mult[1]/1000.0" }, any_mult = { ["MULT_time"] = true }, size = 32, sel_at = 28, default = { name = "motion_target", fields = { { f = "read_timeout", size = 4, count = 1, scale = 1000.0 }, { f = "target", size = 4, count = 6, scale = 1000000.0 }, { f = "control_mode", size = 4, count = 1, scale = nil } } },
     variants = { [3] = { name = "trajectory_control", fields = { { f = "read_timeout", size = 4, count = 1, scale = 1000.0 }, { f = "trajectory_action", size = 4, count = 1, scale = nil }, { f = "point_count", size = 4, count = 1, scale = nil }, { f = "move_id", size = 4, count = 1, scale = nil }, { f = "unused", size = 4, count = 3, scale = nil }, { f = "control_mode", size = 4, count = 1, scale = nil } } }, [6] = { name = "freedrive_control", fields = { { f = "read_timeout", size = 4, count = 1, scale = 1000.0 }, { f = "freedrive_action", size = 4, count = 1, scale = nil }, { f = "unused", size = 4, count = 5, scale = nil }, { f = "control_mode", size = 4, count = 1, scale = nil } } } } },
+    { name = "keepalive", detect = { "MULT_jointstate=1000000", "keepalive=params_mult[1]" }, any_mult = { ["MULT_time"] = true }, size = 32, sel_at = 28, default = { name = "motion_target", fields = { { f = "keepalive.keepalive_count", size = 4, count = 1, scale = nil }, { f = "keepalive.target", size = 4, count = 6, scale = 1000000.0 }, { f = "keepalive.control_mode", size = 4, count = 1, scale = nil } } },
+    variants = { [3] = { name = "trajectory_control", fields = { { f = "keepalive.keepalive_count", size = 4, count = 1, scale = nil }, { f = "keepalive.trajectory_action", size = 4, count = 1, scale = nil }, { f = "keepalive.point_count", size = 4, count = 1, scale = nil }, { f = "keepalive.unused", size = 4, count = 4, scale = nil }, { f = "keepalive.control_mode", size = 4, count = 1, scale = nil } } }, [6] = { name = "freedrive_control", fields = { { f = "keepalive.keepalive_count", size = 4, count = 1, scale = nil }, { f = "keepalive.freedrive_action", size = 4, count = 1, scale = nil }, { f = "keepalive.unused", size = 4, count = 5, scale = nil }, { f = "keepalive.control_mode", size = 4, count = 1, scale = nil } } } } } } },
 }
 urcl_records(p_urcl_reverse, F_urcl_reverse, REC_urcl_reverse, 50001, "URCL_REVERSE")
 
@@ -1532,6 +1549,16 @@ F_urcl_trajectory["positions"] = ProtoField.double("urcl_trajectory.positions", 
 F_urcl_trajectory["velocities"] = ProtoField.double("urcl_trajectory.velocities", "velocities")
 F_urcl_trajectory["accelerations"] = ProtoField.double("urcl_trajectory.accelerations", "accelerations")
 F_urcl_trajectory["spline_type"] = ProtoField.int32("urcl_trajectory.spline_type", "spline_type", base.DEC, vs_urcl_SplineType)
+F_urcl_trajectory["motion_type_blocks_us.target"] = ProtoField.double("urcl_trajectory.motion_type_blocks_us.target", "target")
+F_urcl_trajectory["motion_type_blocks_us.velocity_or_via"] = ProtoField.double("urcl_trajectory.motion_type_blocks_us.velocity_or_via", "velocity_or_via")
+F_urcl_trajectory["motion_type_blocks_us.acceleration_or_movec"] = ProtoField.double("urcl_trajectory.motion_type_blocks_us.acceleration_or_movec", "acceleration_or_movec")
+F_urcl_trajectory["motion_type_blocks_us.duration"] = ProtoField.double("urcl_trajectory.motion_type_blocks_us.duration", "duration")
+F_urcl_trajectory["motion_type_blocks_us.blend_radius"] = ProtoField.double("urcl_trajectory.motion_type_blocks_us.blend_radius", "blend_radius")
+F_urcl_trajectory["motion_type_blocks_us.motion_type"] = ProtoField.int32("urcl_trajectory.motion_type_blocks_us.motion_type", "motion_type", base.DEC, vs_urcl_MotionType)
+F_urcl_trajectory["motion_type_blocks_us.positions"] = ProtoField.double("urcl_trajectory.motion_type_blocks_us.positions", "positions")
+F_urcl_trajectory["motion_type_blocks_us.velocities"] = ProtoField.double("urcl_trajectory.motion_type_blocks_us.velocities", "velocities")
+F_urcl_trajectory["motion_type_blocks_us.accelerations"] = ProtoField.double("urcl_trajectory.motion_type_blocks_us.accelerations", "accelerations")
+F_urcl_trajectory["motion_type_blocks_us.spline_type"] = ProtoField.int32("urcl_trajectory.motion_type_blocks_us.spline_type", "spline_type", base.DEC, vs_urcl_SplineType)
 F_urcl_trajectory["motion_type_ms.target"] = ProtoField.double("urcl_trajectory.motion_type_ms.target", "target")
 F_urcl_trajectory["motion_type_ms.velocity_or_via"] = ProtoField.double("urcl_trajectory.motion_type_ms.velocity_or_via", "velocity_or_via")
 F_urcl_trajectory["motion_type_ms.acceleration_or_movec"] = ProtoField.double("urcl_trajectory.motion_type_ms.acceleration_or_movec", "acceleration_or_movec")
@@ -1557,6 +1584,8 @@ local REC_urcl_trajectory = {
   driver = { pref = "Trajectory point layout", layouts = {
     { name = "motion_type_us", detect = { "MOTION_TYPE_MOVEJ_POSE=6", "MULT_jointstate=1000000", "MULT_time=1000000" }, size = 84, sel_at = 80, default = { name = "motion_primitive", fields = { { f = "target", size = 4, count = 6, scale = 1000000.0 }, { f = "via_or_q_near", size = 4, count = 6, scale = 1000000.0 }, { f = "velocity", size = 4, count = 1, scale = 1000000.0 }, { f = "acceleration", size = 4, count = 1, scale = 1000000.0 }, { f = "mode_or_has_q_near", size = 4, count = 1, scale = 1000000.0 }, { f = "unused", size = 4, count = 3, scale = nil }, { f = "duration", size = 4, count = 1, scale = 1000000.0 }, { f = "blend_radius", size = 4, count = 1, scale = 1000000.0 }, { f = "motion_type", size = 4, count = 1, scale = nil } } },
     variants = { [51] = { name = "spline_point", fields = { { f = "positions", size = 4, count = 6, scale = 1000000.0 }, { f = "velocities", size = 4, count = 6, scale = 1000000.0 }, { f = "accelerations", size = 4, count = 6, scale = 1000000.0 }, { f = "duration", size = 4, count = 1, scale = 1000000.0 }, { f = "spline_type", size = 4, count = 1, scale = nil }, { f = "motion_type", size = 4, count = 1, scale = nil } } } } },
+    { name = "motion_type_blocks_us", detect = { "MOTION_TYPE_SPLINE=51", "MULT_jointstate=1000000", "MULT_time=1000000" }, without = { "MOTION_TYPE_MOVEJ_POSE=6" }, size = 84, sel_at = 80, default = { name = "motion_primitive", fields = { { f = "motion_type_blocks_us.target", size = 4, count = 6, scale = 1000000.0 }, { f = "motion_type_blocks_us.velocity_or_via", size = 4, count = 6, scale = 1000000.0 }, { f = "motion_type_blocks_us.acceleration_or_movec", size = 4, count = 6, scale = 1000000.0 }, { f = "motion_type_blocks_us.duration", size = 4, count = 1, scale = 1000000.0 }, { f = "motion_type_blocks_us.blend_radius", size = 4, count = 1, scale = 1000000.0 }, { f = "motion_type_blocks_us.motion_type", size = 4, count = 1, scale = nil } } },
+    variants = { [51] = { name = "spline_point", fields = { { f = "motion_type_blocks_us.positions", size = 4, count = 6, scale = 1000000.0 }, { f = "motion_type_blocks_us.velocities", size = 4, count = 6, scale = 1000000.0 }, { f = "motion_type_blocks_us.accelerations", size = 4, count = 6, scale = 1000000.0 }, { f = "motion_type_blocks_us.duration", size = 4, count = 1, scale = 1000000.0 }, { f = "motion_type_blocks_us.spline_type", size = 4, count = 1, scale = nil }, { f = "motion_type_blocks_us.motion_type", size = 4, count = 1, scale = nil } } } } },
     { name = "motion_type_ms", detect = { "MOTION_TYPE_SPLINE=51", "MULT_jointstate=1000000", "MULT_time=1000" }, size = 84, sel_at = 80, default = { name = "motion_primitive", fields = { { f = "motion_type_ms.target", size = 4, count = 6, scale = 1000000.0 }, { f = "motion_type_ms.velocity_or_via", size = 4, count = 6, scale = 1000000.0 }, { f = "motion_type_ms.acceleration_or_movec", size = 4, count = 6, scale = 1000000.0 }, { f = "motion_type_ms.duration", size = 4, count = 1, scale = 1000.0 }, { f = "motion_type_ms.blend_radius", size = 4, count = 1, scale = 1000.0 }, { f = "motion_type_ms.motion_type", size = 4, count = 1, scale = nil } } },
     variants = { [51] = { name = "spline_point", fields = { { f = "motion_type_ms.positions", size = 4, count = 6, scale = 1000000.0 }, { f = "motion_type_ms.velocities", size = 4, count = 6, scale = 1000000.0 }, { f = "motion_type_ms.accelerations", size = 4, count = 6, scale = 1000000.0 }, { f = "motion_type_ms.duration", size = 4, count = 1, scale = 1000.0 }, { f = "motion_type_ms.spline_type", size = 4, count = 1, scale = nil }, { f = "motion_type_ms.motion_type", size = 4, count = 1, scale = nil } } } } },
     { name = "point_type_21", detect = { "MULT_jointstate=1000000", "MULT_time=1000", "TRAJECTORY_POINT_JOINT_SPLINE=2" }, size = 84, sel_at = nil, default = { name = "point", fields = { { f = "point_type_21.positions", size = 4, count = 6, scale = 1000000.0 }, { f = "point_type_21.velocities", size = 4, count = 6, scale = 1000000.0 }, { f = "point_type_21.accelerations", size = 4, count = 6, scale = 1000000.0 }, { f = "point_type_21.duration", size = 4, count = 1, scale = 1000.0 }, { f = "point_type_21.blend_radius", size = 4, count = 1, scale = 1000.0 }, { f = "point_type_21.point_type", size = 4, count = 1, scale = nil } } },
@@ -1571,6 +1600,8 @@ urcl_records(p_urcl_trajectory, F_urcl_trajectory, REC_urcl_trajectory, 50003, "
 local p_urcl_script_command = Proto("urcl_script_command", "URCL script command")
 local F_urcl_script_command = {}
 F_urcl_script_command["variant"] = ProtoField.string("urcl_script_command.variant", "variant")
+F_urcl_script_command["layout"] = ProtoField.string("urcl_script_command.layout", "layout")
+F_urcl_script_command["layout_reason"] = ProtoField.string("urcl_script_command.layout_reason", "layout reason")
 F_urcl_script_command["command"] = ProtoField.int32("urcl_script_command.command", "command", base.DEC, vs_urcl_ScriptCommand)
 F_urcl_script_command["mass"] = ProtoField.double("urcl_script_command.mass", "mass")
 F_urcl_script_command["cog"] = ProtoField.double("urcl_script_command.cog", "cog")
@@ -1594,10 +1625,30 @@ F_urcl_script_command["kp"] = ProtoField.double("urcl_script_command.kp", "kp")
 F_urcl_script_command["kd"] = ProtoField.double("urcl_script_command.kd", "kd")
 F_urcl_script_command["max_joint_torques"] = ProtoField.double("urcl_script_command.max_joint_torques", "max_joint_torques")
 F_urcl_script_command["words"] = ProtoField.int32("urcl_script_command.words", "words", base.DEC)
+F_urcl_script_command["words_26.command"] = ProtoField.int32("urcl_script_command.words_26.command", "command", base.DEC, vs_urcl_ScriptCommand)
+F_urcl_script_command["words_26.mass"] = ProtoField.double("urcl_script_command.words_26.mass", "mass")
+F_urcl_script_command["words_26.cog"] = ProtoField.double("urcl_script_command.words_26.cog", "cog")
+F_urcl_script_command["words_26.voltage"] = ProtoField.double("urcl_script_command.words_26.voltage", "voltage")
+F_urcl_script_command["words_26.task_frame"] = ProtoField.double("urcl_script_command.words_26.task_frame", "task_frame")
+F_urcl_script_command["words_26.selection_vector"] = ProtoField.double("urcl_script_command.words_26.selection_vector", "selection_vector")
+F_urcl_script_command["words_26.wrench"] = ProtoField.double("urcl_script_command.words_26.wrench", "wrench")
+F_urcl_script_command["words_26.force_type"] = ProtoField.double("urcl_script_command.words_26.force_type", "force_type")
+F_urcl_script_command["words_26.limits"] = ProtoField.double("urcl_script_command.words_26.limits", "limits")
+F_urcl_script_command["words_26.words"] = ProtoField.int32("urcl_script_command.words_26.words", "words", base.DEC)
+F_urcl_script_command["words_5.command"] = ProtoField.int32("urcl_script_command.words_5.command", "command", base.DEC, vs_urcl_ScriptCommand)
+F_urcl_script_command["words_5.mass"] = ProtoField.double("urcl_script_command.words_5.mass", "mass")
+F_urcl_script_command["words_5.cog"] = ProtoField.double("urcl_script_command.words_5.cog", "cog")
+F_urcl_script_command["words_5.voltage"] = ProtoField.double("urcl_script_command.words_5.voltage", "voltage")
+F_urcl_script_command["words_5.words"] = ProtoField.int32("urcl_script_command.words_5.words", "words", base.DEC)
 F_urcl_script_command["result"] = ProtoField.int32("urcl_script_command.result", "result", base.DEC, vs_urcl_ToolContactResult)
 local REC_urcl_script_command = {
-  driver = { size = 112, sel_at = 0, default = { name = "unknown_command", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "words", size = 4, count = 27, scale = nil } } },
+  driver = { pref = "Script command layout", layouts = {
+    { name = "words_28", detect = { "MULT_jointstate=1000000", "SCRIPT_COMMAND_DATA_DIMENSION=28" }, any_mult = { ["MULT_time"] = true }, size = 112, sel_at = 0, default = { name = "unknown_command", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "words", size = 4, count = 27, scale = nil } } },
     variants = { [0] = { name = "zero_ft_sensor", fields = { { f = "command", size = 4, count = 1, scale = nil } } }, [1] = { name = "set_payload", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "mass", size = 4, count = 1, scale = 1000000.0 }, { f = "cog", size = 4, count = 3, scale = 1000000.0 } } }, [2] = { name = "set_tool_voltage", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "voltage", size = 4, count = 1, scale = 1000000.0 } } }, [3] = { name = "start_force_mode", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "task_frame", size = 4, count = 6, scale = 1000000.0 }, { f = "selection_vector", size = 4, count = 6, scale = 1000000.0 }, { f = "wrench", size = 4, count = 6, scale = 1000000.0 }, { f = "force_type", size = 4, count = 1, scale = 1000000.0 }, { f = "limits", size = 4, count = 6, scale = 1000000.0 }, { f = "damping_factor", size = 4, count = 1, scale = 1000000.0 }, { f = "gain_scaling", size = 4, count = 1, scale = 1000000.0 } } }, [4] = { name = "end_force_mode", fields = { { f = "command", size = 4, count = 1, scale = nil } } }, [5] = { name = "start_tool_contact", fields = { { f = "command", size = 4, count = 1, scale = nil } } }, [6] = { name = "end_tool_contact", fields = { { f = "command", size = 4, count = 1, scale = nil } } }, [7] = { name = "set_friction_compensation", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "enabled", size = 4, count = 1, scale = nil } } }, [8] = { name = "ft_rtde_input_enable", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "enabled", size = 4, count = 1, scale = nil }, { f = "sensor_mass", size = 4, count = 1, scale = 1000000.0 }, { f = "sensor_offset", size = 4, count = 3, scale = 1000000.0 }, { f = "sensor_cog", size = 4, count = 3, scale = 1000000.0 } } }, [9] = { name = "set_gravity", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "gravity", size = 4, count = 3, scale = 1000000.0 } } }, [10] = { name = "set_tcp_offset", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "offset", size = 4, count = 6, scale = 1000000.0 } } }, [11] = { name = "set_friction_scales", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "viscous_scale", size = 4, count = 6, scale = 1000000.0 }, { f = "coulomb_scale", size = 4, count = 6, scale = 1000000.0 } } }, [12] = { name = "set_pd_controller_gains", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "kp", size = 4, count = 6, scale = 1000000.0 }, { f = "kd", size = 4, count = 6, scale = 1000000.0 } } }, [13] = { name = "set_max_joint_torques", fields = { { f = "command", size = 4, count = 1, scale = nil }, { f = "max_joint_torques", size = 4, count = 6, scale = 1000000.0 } } } } },
+    { name = "words_26", detect = { "MULT_jointstate=1000000", "SCRIPT_COMMAND_DATA_DIMENSION=26" }, any_mult = { ["MULT_time"] = true }, size = 104, sel_at = 0, default = { name = "unknown_command", fields = { { f = "words_26.command", size = 4, count = 1, scale = nil }, { f = "words_26.words", size = 4, count = 25, scale = nil } } },
+    variants = { [0] = { name = "zero_ft_sensor", fields = { { f = "words_26.command", size = 4, count = 1, scale = nil } } }, [1] = { name = "set_payload", fields = { { f = "words_26.command", size = 4, count = 1, scale = nil }, { f = "words_26.mass", size = 4, count = 1, scale = 1000000.0 }, { f = "words_26.cog", size = 4, count = 3, scale = 1000000.0 } } }, [2] = { name = "set_tool_voltage", fields = { { f = "words_26.command", size = 4, count = 1, scale = nil }, { f = "words_26.voltage", size = 4, count = 1, scale = 1000000.0 } } }, [3] = { name = "start_force_mode", fields = { { f = "words_26.command", size = 4, count = 1, scale = nil }, { f = "words_26.task_frame", size = 4, count = 6, scale = 1000000.0 }, { f = "words_26.selection_vector", size = 4, count = 6, scale = 1000000.0 }, { f = "words_26.wrench", size = 4, count = 6, scale = 1000000.0 }, { f = "words_26.force_type", size = 4, count = 1, scale = 1000000.0 }, { f = "words_26.limits", size = 4, count = 6, scale = 1000000.0 } } }, [4] = { name = "end_force_mode", fields = { { f = "words_26.command", size = 4, count = 1, scale = nil } } }, [5] = { name = "start_tool_contact", fields = { { f = "words_26.command", size = 4, count = 1, scale = nil } } }, [6] = { name = "end_tool_contact", fields = { { f = "words_26.command", size = 4, count = 1, scale = nil } } } } },
+    { name = "words_5", detect = { "MULT_jointstate=1000000", "SCRIPT_COMMAND_DATA_DIMENSION=5" }, any_mult = { ["MULT_time"] = true }, size = 20, sel_at = 0, default = { name = "unknown_command", fields = { { f = "words_5.command", size = 4, count = 1, scale = nil }, { f = "words_5.words", size = 4, count = 4, scale = nil } } },
+    variants = { [0] = { name = "zero_ft_sensor", fields = { { f = "words_5.command", size = 4, count = 1, scale = nil } } }, [1] = { name = "set_payload", fields = { { f = "words_5.command", size = 4, count = 1, scale = nil }, { f = "words_5.mass", size = 4, count = 1, scale = 1000000.0 }, { f = "words_5.cog", size = 4, count = 3, scale = 1000000.0 } } }, [2] = { name = "set_tool_voltage", fields = { { f = "words_5.command", size = 4, count = 1, scale = nil }, { f = "words_5.voltage", size = 4, count = 1, scale = 1000000.0 } } } } } } },
   robot = { size = 4, sel_at = nil, default = { name = "result", fields = { { f = "result", size = 4, count = 1, scale = nil } } },
     variants = {  } },
 }

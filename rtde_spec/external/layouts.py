@@ -1,10 +1,12 @@
 """Which layout of a URCL message a session sends, and why: capture's choice for a message
-with `older` layouts in the spec (the trajectory point).
+with `older` layouts in the spec (the reverse command, the trajectory point, the script
+command).
 
 The program the driver sent to the robot (the script sender's reply) says it best: each
 layout's `detect` lines (spec/external_control/protocols.yaml) are lines of the program,
-the multipliers the driver writes into it included. Without that program (a capture
-started late, a program no layout's lines name) the records themselves rule layouts
+the multipliers the driver writes into it included, and its `without` lines must not be
+in it (a later version kept the older lines and added one). Without that program (a
+capture started late, a program no layout's lines name) the records themselves rule layouts
 out, and only where the wire leaves no doubt: URCL writes each record with one write of
 the whole record, so the TCP segments of a layout hold whole records of its size; and a
 record of a layout carries only the enum values that layout has. What no segment and no
@@ -14,15 +16,12 @@ order, newest first), and the reason says it was assumed.
 
 from __future__ import annotations
 
-import re
 from collections.abc import Sequence
 from dataclasses import dataclass
 
 from rtde_spec.external.codec import record_codec
 from rtde_spec.external.programs import Programs
 from rtde_spec.metamodel.external import RecordMessage, program_line
-
-MULTIPLIER = re.compile(r"MULT_\w*=")  # a multiplier the program sets (a line as program_line gives it)
 
 
 @dataclass(frozen=True)
@@ -33,15 +32,10 @@ class Choice:
 
 
 def named_by(message: RecordMessage, text: bytes) -> list[str]:
-    """Names of the layouts whose detect lines the program has, unless it sets a multiplier they
-    do not name (scales the spec does not know)."""
-    lines = {program_line(line) for line in text.decode("utf-8", "replace").splitlines()}
-    multipliers = {line for line in lines if MULTIPLIER.match(line)}
-    return [
-        name
-        for _, name, detect, _ in message.layouts()
-        if detect is not None and detect.lines <= lines and multipliers <= detect.lines
-    ]
+    """Names of the layouts whose detect lines the program has and whose `without` lines it has
+    not, unless it sets a multiplier they do not name (scales the spec does not know)."""
+    lines = frozenset(program_line(line) for line in text.decode("utf-8", "replace").splitlines())
+    return [name for _, name, detect, _ in message.layouts() if detect is not None and detect.matches(lines)]
 
 
 def fitting(protocol: str, message: RecordMessage, segments: Sequence[bytes]) -> list[str]:

@@ -9,6 +9,7 @@ then writes the validated file to `_generated/external_control.py`.
 
 from __future__ import annotations
 
+import re
 from functools import cache
 from pathlib import Path
 from typing import Annotated, Literal
@@ -33,20 +34,49 @@ class Variant(StrictModel):
 
 
 class Detect(StrictModel):
-    """How a capture recognises a layout: lines of the program the driver sent (script sender)."""
+    """How a capture recognises a layout: lines of the program the driver sent (script sender).
+
+    `script_lines` must all be in the program, `without` none of them (a later version keeps
+    the lines and adds one); `any_multipliers` names multipliers (`MULT_time`) whose value does
+    not matter to this layout's words, so the program may set them to anything.
+    """
 
     source: str
     script_lines: Annotated[list[str], Field(min_length=1)]
+    without: list[str] = Field(default_factory=list)
+    any_multipliers: list[Annotated[str, Field(pattern=r"^MULT_\w+$")]] = Field(default_factory=list)
 
     @property
     def lines(self) -> frozenset[str]:
         """The lines as a program is compared with them: whitespace and `#` comments removed."""
         return frozenset(program_line(line) for line in self.script_lines)
 
+    @property
+    def absent(self) -> frozenset[str]:
+        """The lines the program must not have, compared as `lines` are."""
+        return frozenset(program_line(line) for line in self.without)
+
+    def matches(self, program: frozenset[str] | set[str]) -> bool:
+        """Whether a program (its lines as `program_line` gives them) names this layout: all of
+        its lines, none of its absent ones, and no multiplier it does not name (an unknown
+        multiplier: scales the spec does not know) but those whose value it leaves open."""
+        open_ = self.any_multipliers
+        multipliers = {line for line in program if (name := multiplier(line)) and name not in open_}
+        return self.lines <= program and not self.absent & program and multipliers <= self.lines
+
 
 def program_line(line: str) -> str:
     """A URScript line as `detect` compares it: no comment, no whitespace."""
     return "".join(line.split("#", 1)[0].split())
+
+
+MULTIPLIER = re.compile(r"(MULT_\w*)=")  # a line setting a multiplier, as program_line gives it
+
+
+def multiplier(line: str) -> str | None:
+    """The multiplier (`MULT_...`) a program line (as `program_line` gives it) sets, if any."""
+    found = MULTIPLIER.match(line)
+    return found.group(1) if found else None
 
 
 class OlderRecord(StrictModel):
@@ -135,12 +165,18 @@ def _check_layouts(where: str, message: RecordMessage) -> list[tuple[str, str]]:
         issues.append((where, "a layout name is given twice (`layout` and the `older` names)"))
     if any(d is not None for _, _, d, _ in layouts) and message.layout is None:
         issues.append((where, "layouts with `detect` need `layout`, the newest's name, to report it by"))
-    found = [(name, d.lines) for _, name, d, _ in layouts if d is not None]
-    for i, (a, lines_a) in enumerate(found):
-        if any(not line for line in lines_a):
+    found = [(name, d) for _, name, d, _ in layouts if d is not None]
+    for i, (a, da) in enumerate(found):
+        if any(not line for line in da.lines | da.absent):
             issues.append((f"{where}.detect({a})", "an empty script line"))
-        for b, lines_b in found[i + 1 :]:
-            if lines_a <= lines_b or lines_b <= lines_a:
+        if da.lines & da.absent:
+            issues.append((f"{where}.detect({a})", "a line both required and `without`: no program has it"))
+        if {multiplier(line) for line in da.lines} & set(da.any_multipliers):
+            named = "a multiplier both in `script_lines` and `any_multipliers`"
+            issues.append((f"{where}.detect({a})", named))
+        for b, db in found[i + 1 :]:
+            ruled_out = da.absent & db.lines or db.absent & da.lines  # a program with b's lines is not a's
+            if not ruled_out and (da.lines <= db.lines or db.lines <= da.lines):
                 issues.append((where, f"the detect lines of {a} and {b} cannot tell them apart"))
     return issues
 
