@@ -23,7 +23,7 @@ from rtde_spec.capture.routing.classify import port_kinds
 from rtde_spec.capture.routing.flows import SCRIPT_KIND, Flow, FlowTable, classify
 from rtde_spec.capture.runs import Batcher
 from rtde_spec.capture.tables.signals import signals_held
-from rtde_spec.capture.tables.sink import ArrowSink, DirectorySink, TableSink, output_stem
+from rtde_spec.capture.tables.sink import ArrowSink, DirectorySink, PreparedTables, TableSink, output_stem
 from rtde_spec.capture.tables.summary import CaptureSummary
 from rtde_spec.errors import OutputError
 from rtde_spec.metamodel.catalogue import Catalogue
@@ -31,6 +31,7 @@ from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
 
 RUN_HEAD = PAYLOAD_OFFSET  # size, type, recipe id: the bytes every data package of one run shares
 RUN_MIN, RUN_MAX = 16, 4096  # shorter runs go segment by segment; longer ones are cut
+PLACE_ATTEMPTS = 8  # decodings of one file whose names other captures took meanwhile, before giving up
 
 
 def decode_capture(
@@ -131,9 +132,46 @@ def decode_to_directory(
 
     `workers`: threads that prepare batches and write them in order while the capture is
     read on (`ordered_writes.OrderedWrites`; Parquet): the same files, on more cores.
+    Its tables go in place under the names the folder gives their recipes (`tables/names.py`);
+    when another capture placed a new recipe under one of them meanwhile, the file is decoded
+    again (a pipe cannot be: that is an error, nothing of it placed).
     """
+    for _ in range(PLACE_ATTEMPTS):
+        sink = directory_sink(path, outdir, fmt, workers)
+        try:
+            summary, prepared = decode_prepared(path, sink, recipe_names, **kw)
+            if place(prepared, path):
+                return summary
+        except BaseException:
+            sink.abort()  # tables decoded but not placed (a stop came between) go too
+            raise
+        if is_live(path):
+            raise OutputError(
+                f"another capture gave a table name this one was written under to another recipe while "
+                f"{path} was read, and a pipe cannot be read again: nothing of it was put in place",
+                subject=f"folder {outdir}",
+            )
+    raise OutputError(
+        f"other captures kept taking the table names of {path} ({PLACE_ATTEMPTS} times): nothing of it "
+        "was put in place",
+        subject=f"folder {outdir}",
+    )
+
+
+def directory_sink(
+    path: str | Path, outdir: str | Path, fmt: str = "parquet", workers: int = 0
+) -> DirectorySink:
+    """The sink of one file's tables in OUTDIR, named after the file (`output_stem`)."""
+    return DirectorySink(outdir, fmt, output_stem(path), workers=workers)
+
+
+def decode_prepared(
+    path: str | Path, sink: DirectorySink, recipe_names: Sequence[str] | None = None, **kw: Any
+) -> tuple[CaptureSummary, PreparedTables]:
+    """One file decoded into `sink`, its tables finished beside their names but not yet in place
+    (`place`): `capture --jobs N` decodes files in workers and places them in input order. After
+    any error, `sink.abort()` drops whatever of it is not in place."""
     codec = RecipeCodec.for_names(recipe_names, "output") if recipe_names else None
-    sink = DirectorySink(outdir, fmt, output_stem(path), workers=workers)
     try:
         summary = decode_capture(path, sink, recipe=codec, **kw)
     except CaptureInterrupted as stop:
@@ -142,23 +180,46 @@ def decode_to_directory(
                 sink.abort()
             stop.kept = False
             raise
-        sink.close()
+        place(_prepared(sink, path), path)  # a pipe's tables: what was decoded is kept
         stop.summary.tables, stop.summary.paths = dict(sink.rows), [str(p) for p in sink.paths]
         raise
     except OutputError as exc:  # a full disk: no table of this capture is kept half-written
         sink.abort()
         raise dropped_tables(exc, path) from exc
     except BaseException:
-        sink.close()
+        try:  # what was decoded before the error is kept, where its names are still right
+            place(_prepared(sink, path), path)
+        except OutputError:
+            pass
         raise
+    prepared = _prepared(sink, path)
+    summary.tables = dict(sink.rows)
+    summary.paths = [str(p) for p in sink.paths]
+    return summary, prepared
+
+
+def _prepared(sink: DirectorySink, path: str | Path) -> PreparedTables:
     try:
-        sink.close()
+        return sink.prepare()
     except OutputError as exc:
         sink.abort()
         raise dropped_tables(exc, path) from exc
-    summary.tables = dict(sink.rows)
-    summary.paths = [str(p) for p in sink.paths]
-    return summary
+
+
+def place(prepared: PreparedTables, path: str | Path) -> bool:
+    """Put a decoded file's tables in place; False (nothing placed, nothing left) when the folder
+    now gives one of its recipes' names to another recipe: the file is to be decoded again."""
+    try:
+        placed = prepared.place()
+    except OutputError as exc:
+        prepared.discard()
+        raise dropped_tables(exc, path) from exc
+    except BaseException:
+        prepared.discard()
+        raise
+    if not placed:
+        prepared.discard()
+    return placed
 
 
 def dropped_tables(exc: OutputError, path: str | Path) -> OutputError:

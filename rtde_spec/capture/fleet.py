@@ -19,7 +19,10 @@ from rtde_spec.errors import require
 def capture_bag(
     paths: Sequence[str | Path], outdir: str | Path, fmt: str = "parquet", recipe: Sequence[str] | None = None
 ) -> Any:
-    """A dask.bag of CaptureSummary: each file decoded into OUTDIR by whichever worker takes it."""
+    """A dask.bag of CaptureSummary: each file decoded into OUTDIR by whichever worker takes it.
+
+    A table name still holds one recipe (`tables/names.py`), but a recipe new to OUTDIR is
+    numbered in the order the tasks finish: for names in input order, `rtde-spec capture --jobs N`."""
     bag = require("dask.bag", "dask", "capture_bag")
     names = list(recipe) if recipe else None
     return bag.from_sequence([str(p) for p in paths], npartitions=max(1, len(paths))).map(

@@ -28,6 +28,11 @@ recipes-STEM-HASH.json), HASH being 8 hex digits of the input's absolute path: a
 and b/x.pcap never overwrite each other, and re-running on the same file replaces only
 that file's outputs. Standard input gets the start time instead of HASH.
 
+Table names: a table of data packages holds one recipe across the whole FOLDER,
+rtde_outputs_1 the first met, each other recipe the next free number, in input order
+(whatever --jobs is), kept by later runs into FOLDER; recipes-STEM-HASH.json lists each
+capture's tables and fields. A FOLDER whose table already mixes recipes is refused.
+
 Damage: a capture is decoded around what is damaged (records cut off, impossible
 timestamps, TCP gaps, packages cut or garbled); stderr gets one summary line per file
 (frames, packages, gaps, bytes skipped, truncated records) and a line per problem.

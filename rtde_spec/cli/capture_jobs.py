@@ -27,35 +27,63 @@ if TYPE_CHECKING:
 _busy = False  # a worker is decoding a file: a signal stops the file, else it ends the worker
 _stopping = False  # that file is being stopped: later signals change nothing
 _parent = 0  # the pid of the command that started this worker
+_unplaced: list[Path] = []  # temp files of tables this worker prepared, for its parent to place
 _STOPS = ("SIGINT", "SIGTERM", "SIGHUP")
 
 
 def decode_in_workers(
     files: Sequence[Path], jobs: int, target: tuple[Any, ...], kw: dict[str, Any]
 ) -> tuple[list[CaptureSummary], list[CaptureInterrupted] | None]:
-    """Each file decoded by `decode_to_directory(file, *target, **kw)` in a worker, in order.
+    """Each file decoded by `decode_prepared(file, *target, **kw)` in a worker, its tables put
+    in place here, in input order: a table's name is given to its recipe as `--jobs 1` gives
+    it, whichever worker finishes first (`capture/tables/names.py`). A file whose names an
+    earlier file took (both met new recipes) is decoded again here, under the right ones.
 
     Returns the summaries of the files finished and, after an interrupt, the stops of the
     files cut short (None when nothing was interrupted).
     """
     from concurrent.futures import ProcessPoolExecutor
 
+    from rtde_spec.capture.decoder import decode_to_directory, place
+
     pool = ProcessPoolExecutor(max_workers=jobs, initializer=_start_worker)
     futures = [pool.submit(_decode_one, f, target, kw) for f in files]
+    summaries: list[CaptureSummary] = []
     try:
-        summaries = [f.result() for f in futures]
+        for path, future in zip(files, futures, strict=True):
+            got = future.result()
+            if not isinstance(got, tuple):  # interrupted in the worker (a signal to it alone)
+                raise KeyboardInterrupt
+            summary, prepared = got
+            if not place(prepared, path):
+                summary = decode_to_directory(path, *target, **kw)
+            summaries.append(summary)
     except KeyboardInterrupt:
-        return _stop(pool, futures)
+        return _stop(pool, futures, summaries)
     except BaseException:
         pool.shutdown(wait=True, cancel_futures=True)
+        _discard_unplaced(futures[len(summaries) :])
         raise
     pool.shutdown(wait=True)
     return summaries, None
 
 
-def _stop(pool: Any, futures: list[Any]) -> tuple[list[CaptureSummary], list[CaptureInterrupted]]:
-    """Stop every worker between or inside files, and collect what each finished."""
+def _discard_unplaced(futures: list[Any]) -> None:
+    """Files decoded but not put in place (an earlier one failed or was stopped): their temp files go."""
+    for future in futures:
+        if future.done() and not future.cancelled() and future.exception() is None:
+            got = future.result()
+            if isinstance(got, tuple):
+                got[1].discard()
+
+
+def _stop(
+    pool: Any, futures: list[Any], placed: list[CaptureSummary]
+) -> tuple[list[CaptureSummary], list[CaptureInterrupted]]:
+    """Stop every worker between or inside files; the files put in place are finished, every
+    other one is not (its tables dropped, those of an earlier run kept)."""
     from rtde_spec.capture.decoder import CaptureInterrupted
+    from rtde_spec.capture.tables.signals import signals_held
 
     for future in futures:
         future.cancel()  # not started: never started
@@ -65,19 +93,19 @@ def _stop(pool: Any, futures: list[Any]) -> tuple[list[CaptureSummary], list[Cap
         except OSError:
             pass
     pool.shutdown(wait=True, cancel_futures=True)
-    finished: list[CaptureSummary] = []
     stops: list[CaptureInterrupted] = []
-    for future in futures:
+    for future in futures[len(placed) :]:
         if future.cancelled() or not future.done() or future.exception() is not None:
             continue
         got = future.result()
         if isinstance(got, CaptureInterrupted):
             stops.append(got)
-            if got.kept:
-                finished.append(got.summary)
-        else:
-            finished.append(got)
-    return finished, stops
+        else:  # decoded, waiting for an earlier file to be placed first: dropped with the stop
+            summary, prepared = got
+            with signals_held(replay=False):
+                prepared.discard()
+            stops.append(CaptureInterrupted(summary, kept=False))
+    return placed, stops
 
 
 def _start_worker() -> None:
@@ -97,8 +125,8 @@ def _on_signal(signum: int, frame: FrameType | None) -> None:
         if _stopping:  # the same stop again (to the group, and forwarded by the parent)
             return
         _stopping = True
-        raise KeyboardInterrupt  # decode_to_directory drops the file's tables, keeps the old ones
-    os._exit(128 + signum)  # idle: nothing of ours is open
+        raise KeyboardInterrupt  # decode_prepared drops the file's tables, keeps the old ones
+    _exit(128 + signum)  # idle: nothing of ours is open
 
 
 def _end_with_parent() -> None:
@@ -118,16 +146,39 @@ def _end_with_parent() -> None:
 
 
 def _decode_one(path: Path, target: tuple[Any, ...], kw: dict[str, Any]) -> Any:
-    """One file in a worker: its summary, or the CaptureInterrupted that stopped it."""
+    """One file in a worker: its summary and its tables prepared for the parent to place, or
+    the CaptureInterrupted that stopped it."""
     global _busy, _stopping
-    from rtde_spec.capture.decoder import CaptureInterrupted, decode_to_directory
+    from rtde_spec.capture.decoder import CaptureInterrupted, decode_prepared, directory_sink
+    from rtde_spec.capture.tables.summary import CaptureSummary
 
+    outdir, fmt, recipe = target
     _busy, _stopping = True, False
+    sink = None
     try:
-        return decode_to_directory(path, *target, **kw)
+        sink = directory_sink(path, outdir, fmt)
+        summary, prepared = decode_prepared(path, sink, recipe, **kw)
+        _unplaced.extend(part.temp for part in prepared.parts)
+        return summary, prepared
     except CaptureInterrupted as stop:
         return stop
+    except KeyboardInterrupt:  # the stop came after the file was decoded: it is dropped all the same
+        if sink is not None:
+            sink.abort()
+        return CaptureInterrupted(CaptureSummary(str(path)), kept=False)
     finally:
         _busy = False
         if os.getppid() != _parent:  # the parent died (its SIGTERM stopped this file): no one
-            os._exit(128 + int(signal.SIGTERM))  # takes the result or sends more work
+            _exit(128 + int(signal.SIGTERM))  # takes the result or sends more work
+
+
+def _exit(code: int) -> None:
+    """End the worker; the temp files of tables it prepared that the parent did not place go
+    first (the parent died: nobody will place or drop them)."""
+    if os.getppid() != _parent:
+        for temp in _unplaced:
+            try:
+                temp.unlink()
+            except OSError:  # placed (renamed) or dropped already
+                pass
+    os._exit(code)

@@ -76,7 +76,8 @@ def runs(records: Records) -> list[tuple[int, int]]:
     tcp = ip + ihl
     ok &= (ihl >= IP_MIN) & (tcp + TCP_MIN <= cap_end)
     pay = tcp + (at(tcp + 12) >> 4) * 4
-    end = ip + be(ip + 2, 2)
+    total = be(ip + 2, 2)
+    end = np.where(total == 0, cap_end, ip + total)  # 0: segmentation offload, the frame's length
     size = end - pay
     ok &= (end <= cap_end) & (size > 4) & ((at(tcp + 13) & NOT_DATA) == 0)
     ok &= (at(pay + TYPE_AT) == DATA_PACKAGE_TYPE) & (be(pay + SIZE_AT, SIZE_BYTES) == size)

@@ -31,10 +31,11 @@ class Fragments:
         if pieces is None:
             pieces = self.pending[key] = {}
             if len(self.pending) > MAX_DATAGRAMS:
-                old, _ = self.pending.popitem(last=False)
+                old, lost = self.pending.popitem(last=False)
                 self.heads.pop(old, None)
                 self.ends.pop(old, None)
                 counts["ip_fragments_dropped"] = counts.get("ip_fragments_dropped", 0) + 1
+                counts["ip_fragments_lost"] = counts.get("ip_fragments_lost", 0) + len(lost)
         pieces[offset] = frame[at + header : at + total]
         if offset == 0:
             self.heads[key] = frame[at : at + header]
@@ -49,6 +50,15 @@ class Fragments:
         head[2:4] = (len(head) + len(whole)).to_bytes(2, "big")
         head[6:8] = b"\0\0"
         return ETHERNET_IPV4 + bytes(head) + whole
+
+    def finish(self) -> None:
+        """The end of the capture: fragments of datagrams never completed are counted as lost."""
+        waiting = sum(len(pieces) for pieces in self.pending.values())
+        if waiting:
+            self.counts["ip_fragments_lost"] = self.counts.get("ip_fragments_lost", 0) + waiting
+        self.pending.clear()
+        self.heads.clear()
+        self.ends.clear()
 
     def _whole(self, key: bytes) -> bytes | None:
         end = self.ends.get(key)

@@ -2,7 +2,9 @@
 
 Link types: Ethernet (with 802.1Q/802.1ad tags), Linux cooked (SLL and SLL2), BSD
 loopback/null and raw IP; IPv4 (fragments put back together) and IPv6 (hop-by-hop, routing and
-destination options skipped). Anything else is counted, not decoded.
+destination options skipped). Anything else is counted, not decoded: other protocols as
+`not_tcp`; frames that claim IP but whose headers cannot be read as `undecodable`, and link
+types not read here as `unknown_link` (both reported as damage by the summary).
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ ACK_PSH = 0x18  # the flags a run's segments stand for (a run has no FIN, SYN or
 IPV4, IPV6, VLAN = 0x0800, 0x86DD, (0x8100, 0x88A8)
 TCP = 6
 IPV6_OPTION_HEADERS = {0, 43, 60}  # hop-by-hop, routing, destination options: skipped over
+IPV6_FRAGMENT = 44
 _TCP = struct.Struct(">HHI4xBB")  # ports, seq, (ack), data offset byte, flags
 
 
@@ -36,12 +39,26 @@ class Segment(NamedTuple):
     payload: bytes
 
 
-def _ip_start(linktype: int, frame: bytes) -> tuple[int, int] | None:
-    """(ethertype-like IP version tag, offset of the IP header) of a frame; None for other traffic."""
+class UnknownLink(Exception):
+    """A frame of a link type this reader does not decode (or of an interface the file never described)."""
+
+
+LINK_HEADERS = {1: 14, 113: 16, 276: 20, 0: 4, 108: 4}  # bytes before the IP header (Ethernet: untagged)
+
+
+def _ip_start(linktype: int, frame: bytes) -> tuple[int, int]:
+    """(ethertype-like IP version tag, offset of the IP header) of a frame.
+
+    Raises UnknownLink for a link type not read here, ValueError for a frame shorter than its
+    link header (unreadable, not "not TCP")."""
+    if len(frame) < LINK_HEADERS.get(linktype, 0):
+        raise ValueError("shorter than its link header")
     if linktype == 1:  # Ethernet
         at, ethertype = 12, int.from_bytes(frame[12:14], "big")
         while ethertype in VLAN:
             at += 4
+            if len(frame) < at + 2:
+                raise ValueError("shorter than its VLAN tags")
             ethertype = int.from_bytes(frame[at : at + 2], "big")
         return ethertype, at + 2
     if linktype == 113:  # Linux cooked v1: protocol at 14, IP at 16
@@ -52,41 +69,57 @@ def _ip_start(linktype: int, frame: bytes) -> tuple[int, int] | None:
         return (IPV4 if len(frame) > 4 and frame[4] >> 4 == 4 else IPV6), 4
     if linktype in (101, 12, 14, 228, 229):  # raw IP
         return (IPV4 if frame and frame[0] >> 4 == 4 else IPV6), 0
-    return None
+    raise UnknownLink(linktype)
 
 
 def _tcp_of(linktype: int, frame: bytes, book: Addresses) -> tuple[str, str, int, int, bytes] | None:
     """(src, dst, TCP header offset, end of the TCP segment, the frame they are in); None when the
-    frame is not TCP, or a fragment of a datagram not yet whole."""
-    start = _ip_start(linktype, frame)
-    if start is None:
-        return None
-    kind, at = start
+    frame is not TCP (another protocol), or a fragment of a datagram not yet whole.
+
+    A frame that claims IP (by its link header) but whose IP or TCP header cannot be one raises
+    ValueError: it is counted as unreadable, never passed over as "not TCP". An IPv4 total length
+    of 0 (or an IPv6 payload length of 0) is a segment that TCP segmentation offload had not cut
+    yet when the sending host captured it: its length is the frame's, as Wireshark takes it."""
+    kind, at = _ip_start(linktype, frame)
     if kind == IPV4:
-        if len(frame) < at + 20 or frame[at] >> 4 != 4:
-            return None
+        if len(frame) < at + 20 or frame[at] >> 4 != 4 or frame[at] & 0x0F < 5:
+            raise ValueError("no IPv4 header")
         if frame[at + 9] != TCP:
             return None
         if int.from_bytes(frame[at + 6 : at + 8], "big") & 0x3FFF:  # more fragments, or an offset
             whole = book.fragments.add(frame, at)
             return None if whole is None else _tcp_of(1, whole, book)
-        end = min(len(frame), at + int.from_bytes(frame[at + 2 : at + 4], "big"))  # not the padding
-        src, dst, family = frame[at + 12 : at + 16], frame[at + 16 : at + 20], socket.AF_INET
+        total = int.from_bytes(frame[at + 2 : at + 4], "big")
         tcp = at + (frame[at] & 0x0F) * 4
+        if total == 0:  # segmentation offload: the frame's length
+            end = len(frame)
+        elif at + total < tcp:
+            raise ValueError("IPv4 total length shorter than its header")
+        else:
+            end = min(len(frame), at + total)  # not the padding
+        src, dst, family = frame[at + 12 : at + 16], frame[at + 16 : at + 20], socket.AF_INET
     elif kind == IPV6:
         if len(frame) < at + 40 or frame[at] >> 4 != 6:
-            return None
-        end = min(len(frame), at + 40 + int.from_bytes(frame[at + 4 : at + 6], "big"))
+            raise ValueError("no IPv6 header")
+        payload = int.from_bytes(frame[at + 4 : at + 6], "big")
+        if payload == 0 and frame[at + 6] != 59:  # a jumbogram or an offloaded segment (59: nothing next)
+            end = len(frame)
+        else:
+            end = min(len(frame), at + 40 + payload)
         src, dst, family = frame[at + 8 : at + 24], frame[at + 24 : at + 40], socket.AF_INET6
         nxt, tcp = frame[at + 6], at + 40
-        while nxt in IPV6_OPTION_HEADERS and tcp + 2 <= end:
+        while nxt in IPV6_OPTION_HEADERS:
+            if tcp + 2 > end:
+                raise ValueError("IPv6 extension headers beyond the packet")
             nxt, tcp = frame[tcp], tcp + (frame[tcp + 1] + 1) * 8
+        if nxt == IPV6_FRAGMENT and tcp < end and frame[tcp] == TCP:
+            raise ValueError("a fragment of an IPv6 TCP segment (not put back together)")
         if nxt != TCP:
             return None
     else:
         return None
-    if tcp + 20 > end:
-        return None
+    if tcp + 20 > end or frame[tcp + 12] >> 4 < 5:
+        raise ValueError("no whole TCP header")
     names = book.names
     for raw in (src, dst):
         if raw not in names:
@@ -99,10 +132,14 @@ def _tcp_of(linktype: int, frame: bytes, book: Addresses) -> tuple[str, str, int
 def _segment(
     ts: float, linktype: int, frame: bytes, book: Addresses, counts: dict[str, int]
 ) -> Segment | None:
-    """The TCP segment in one frame; None (counted) when it is not one."""
+    """The TCP segment in one frame; None (counted) when it is not one, or cannot be read."""
     fragments = counts.get("ip_fragments", 0)
     try:
         found = _tcp_of(linktype, frame, book)
+    except UnknownLink:
+        counts["unknown_link"] = counts.get("unknown_link", 0) + 1
+        counts["unknown_link_type"] = linktype
+        return None
     except (IndexError, ValueError, OSError):
         counts["undecodable"] = counts.get("undecodable", 0) + 1
         return None
@@ -152,6 +189,7 @@ def items(
                 done = end
             if progress is not None:
                 progress(records.upto)
+    book.fragments.finish()
 
 
 def segments(

@@ -12,7 +12,7 @@ without a Python step per record.
 Classic pcap in either byte order with micro- or nanosecond stamps; pcapng sections
 (either byte order), interfaces (link type, `if_tsresol`), enhanced and simple packet
 blocks; other blocks are skipped. A cut-off last record is counted in
-`stats['truncated']`.
+`stats['truncated']`; frames a snap length cut in `stats['cut_frames']` (`headers.py`).
 """
 
 from __future__ import annotations
@@ -25,6 +25,7 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from typing import IO, Any
 
+from rtde_spec.capture.reading.headers import count_cut, interface, snap_length
 from rtde_spec.capture.reading.recordsync import MAX_BLOCK, next_pcap_record, next_pcapng_block, pcap_limit
 from rtde_spec.errors import UsageError
 
@@ -261,7 +262,9 @@ def _pcap(
     linktype = struct.unpack(order + "I", rest[16:20])[0] & 0x0FFFFFFF  # upper bits: FCS flags
     size_at = struct.Struct(order + "I").unpack_from  # a record header's captured length, at +8
     u32 = np.dtype(order + "u4")
-    limit = pcap_limit(struct.unpack(order + "I", rest[12:16])[0])  # from the snap length
+    snaplen = struct.unpack(order + "I", rest[12:16])[0]
+    limit = pcap_limit(snaplen)  # from the snap length
+    snap_length(stats, snaplen)
     fractions = 1_000_000 if unit == 1e-6 else 1_000_000_000
     last_secs: list[int] = []  # of the last whole record: where to look after damage
 
@@ -279,9 +282,11 @@ def _pcap(
             if pos + stride > end:
                 break
             same = _same_run(buf, pos, stride, (end - pos) // stride, 8, caplen, u32)
-            secs, fracs = (_strided(buf, pos + at, stride, same, u32) for at in (0, 4))
+            secs, fracs, origs = (_strided(buf, pos + at, stride, same, u32) for at in (0, 4, 12))
             starts = pos + 16 + np.arange(same, dtype=np.int64) * stride
-            found.add(starts, np.full(same, caplen, dtype=np.int64), secs + fracs * unit, linktype)
+            lengths = np.full(same, caplen, dtype=np.int64)
+            found.add(starts, lengths, secs + fracs * unit, linktype)
+            count_cut(stats, lengths, origs)
             last_secs[:] = [int(secs[-1])]
             pos += same * stride
         return pos
@@ -355,18 +360,21 @@ def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int], lag: i
                 same = min(same, _same_run(buf, pos, length, same, 0, EPB, u32))
                 same = min(same, _same_run(buf, pos, length, same, 8, iface, u32))
                 linktype, unit = interfaces[iface] if iface < len(interfaces) else (-1, 1e-6)
-                high, low, caplen = (_strided(buf, pos + at, length, same, u32) for at in (12, 16, 20))
+                columns = (_strided(buf, pos + at, length, same, u32) for at in (12, 16, 20, 24))
+                high, low, caplen, origs = columns  # time, captured and original length
                 starts = pos + 28 + np.arange(same, dtype=np.int64) * length
-                found.add(starts, np.minimum(caplen, length - 32), ((high << 32) | low) * unit, linktype)
+                lengths = np.minimum(caplen, length - 32)
+                found.add(starts, lengths, ((high << 32) | low) * unit, linktype)
+                count_cut(stats, lengths, origs)
                 pos += same * length
                 continue
             if btype == IDB:
-                linktype = struct.unpack_from(order + "H", buf, pos + 8)[0]
-                interfaces.append((linktype, _resolution(buf[pos + 16 : pos + length - 4], order)))
+                interfaces.append(interface(buf, pos, length, order, stats))
             elif btype == SPB and interfaces:  # no time, interface 0, cut at the snap length
                 (origlen,) = struct.unpack_from(order + "I", buf, pos + 8)
-                size = max(0, min(origlen, length - 16))
-                found.add(np.array([pos + 12]), np.array([size]), np.array([0.0]), interfaces[0][0])
+                size = np.array([max(0, min(origlen, length - 16))])
+                found.add(np.array([pos + 12]), size, np.array([0.0]), interfaces[0][0])
+                count_cut(stats, size, np.array([origlen]))
             pos += length
         return pos
 
@@ -374,17 +382,3 @@ def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int], lag: i
         return int(struct.unpack_from(order + "I", buf, pos + 4)[0]) if len(buf) - pos >= 8 else 0
 
     yield from _by_block(f, first, 0, stats, parse, claim, lag)
-
-
-def _resolution(options: bytes, order: str) -> float:
-    """Seconds per timestamp unit from an interface's if_tsresol option (default microseconds)."""
-    pos = 0
-    while pos + 4 <= len(options):
-        code, size = struct.unpack(order + "HH", options[pos : pos + 4])
-        if code == 0:
-            break
-        if code == 9 and size >= 1:
-            value = options[pos + 4]
-            return 2.0 ** -(value & 0x7F) if value & 0x80 else 10.0**-value
-        pos += 4 + size + (-size % 4)
-    return 1e-6

@@ -9,8 +9,6 @@ appears complete: the writers write beside the name and rename into place at clo
 
 from __future__ import annotations
 
-import glob
-import json
 import os
 import stat
 import time
@@ -19,15 +17,13 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
+from rtde_spec.capture.tables.names import Recipe, Register
 from rtde_spec.capture.tables.ordered_writes import PREPARED, OrderedWrites
-from rtde_spec.capture.tables.signals import signals_held
+from rtde_spec.capture.tables.placing import EXTENSIONS, NamesTaken, PreparedTables
 from rtde_spec.errors import OutputError, require
 from rtde_spec.output.base import Writer, flat_columns, flatten
-from rtde_spec.output.partfile import write_failed, write_whole
+from rtde_spec.output.partfile import write_failed
 from rtde_spec.output.writers import open_writer
-
-EXTENSIONS = {"parquet": "parquet", "csv": "csv", "jsonl": "jsonl", "mcap": "mcap"}
-
 
 UNKNOWN_DAY = "unknown"  # the partition of rows whose capture time is no date (a damaged record)
 
@@ -67,17 +63,22 @@ def _sha1(data: bytes) -> Any:
 
 
 class TableSink:
-    """Rows and columnar batches by table name; `robot` and `day` pick the partition."""
+    """Rows and columnar batches by table name; `robot` and `day` pick the partition.
 
-    def __init__(self) -> None:
+    `register`: the recipes the output folder's tables hold already (`names.Register`); a
+    recipe's table is named by it, so one name never holds two recipes. None (in memory):
+    numbered per capture in the order met."""
+
+    def __init__(self, register: Register | None = None) -> None:
         self.rows: dict[str, int] = {}
-        self.recipes: dict[tuple[str, tuple[str, ...]], str] = {}  # (direction, names) -> table
+        self.recipes: dict[Recipe, str] = {}  # (direction, names) -> table, in the order met
+        self.register = register if register is not None else Register(Path("."))
         self.lag = 0  # blocks of a mapped input this sink may still read after it is given them
 
     def table_for_recipe(self, direction: str, names: tuple[str, ...]) -> str:
         key = (direction, names)
         if key not in self.recipes:
-            self.recipes[key] = f"rtde_{direction}s_{sum(1 for d, _ in self.recipes if d == direction) + 1}"
+            self.recipes[key] = self.register.table_for(key, self.recipes)
         return self.recipes[key]
 
     def row(self, table: str, robot: str, day: str, record: Mapping[str, Any]) -> None:
@@ -139,7 +140,7 @@ class DirectorySink(TableSink):
         workers: int = 0,
         part_bytes: int = PART_METADATA_BYTES,
     ) -> None:
-        super().__init__()
+        super().__init__(Register.read(outdir))
         self.outdir, self.fmt, self.stem = Path(outdir), fmt, stem
         self.writers: dict[tuple[str, str, str], Writer] = {}
         self.paths: list[Path] = []
@@ -152,6 +153,7 @@ class DirectorySink(TableSink):
         self._pinned_keys: set[tuple[str, str, str]] = set()
         self._open: OrderedDict[tuple[str, str, str], Writer] = OrderedDict()  # suspendable, by last use
         self.ahead = OrderedWrites(workers, self._write) if workers > 0 and fmt in PREPARED else None
+        self.prepared: PreparedTables | None = None  # the tables finished by `prepare`, until placed
         if self.ahead is not None:  # batches are views of the file, prepared while it is read on
             self.lag = self.ahead.depth
 
@@ -231,7 +233,8 @@ class DirectorySink(TableSink):
         writer.prepare()  # its footer written and its memory given back; in place at close
 
     def abort(self) -> None:
-        """Drop every table of this capture: files of earlier runs stay as they were."""
+        """Drop every table of this capture not in place yet (prepared ones too): files of earlier
+        runs stay as they were."""
         if self.ahead is not None:
             self.ahead.drop()
         for writer in self.writers.values():
@@ -240,9 +243,27 @@ class DirectorySink(TableSink):
             writer.discard()
         self.writers.clear()
         self.finished.clear()
+        if self.prepared is not None:
+            self.prepared.discard()
 
     def close(self) -> None:
-        """Every table finished first, then all put in place: a write error keeps none of them."""
+        """Every table finished first, then all put in place: a write error keeps none of them.
+
+        Raises NamesTaken (nothing put in place) when the folder gave one of its recipes' names
+        to another recipe while this capture was decoded: decode it again."""
+        prepared = self.prepare()
+        try:
+            placed = prepared.place()
+        except BaseException:
+            prepared.discard()
+            raise
+        if not placed:
+            prepared.discard()
+            raise NamesTaken(f"{self.outdir}: a recipe's table name was taken while {self.stem} was decoded")
+
+    def prepare(self) -> PreparedTables:
+        """Every table finished beside its name, to be put in place by `PreparedTables.place`
+        (in this process or another: the parent of `capture --jobs N` places files in input order)."""
         try:
             if self.ahead is not None:
                 self.ahead.finish()
@@ -251,39 +272,17 @@ class DirectorySink(TableSink):
         except BaseException:
             self.abort()
             raise
-        failed: BaseException | None = None
-        with signals_held():  # renames only: all of this run's tables, or (before) none
-            for writer in [*self.finished, *self.writers.values()]:  # each put in place, even after one fails
-                try:
-                    writer.commit()
-                except Exception as exc:
-                    failed = failed or exc
-        if failed is not None:
-            raise failed
-        self._remove_stale_parts()
-        if self.recipes:
-            listing = [{"table": t, "direction": d, "names": list(n)} for (d, n), t in self.recipes.items()]
-            target = self.outdir / f"recipes-{self.stem}.json"
-            try:
-                write_whole(target, (json.dumps(listing, indent=2) + "\n").encode())  # whole or not at all
-            except OSError as exc:
-                failed = write_failed(exc, target)
-                kept = "the tables are in place; this listing of their recipes is not"
-                raise OutputError(
-                    f"{failed.reason}; {kept}", errno=failed.errno, subject=failed.subject
-                ) from exc
-
-    def _remove_stale_parts(self) -> None:
-        """Parts STEM_NNNN of an earlier run of this input that this run did not write (it was
-        shorter): left, they would read as rows of this capture."""
-        written = {str(p) for p in self.paths}
-        for folder in {p.parent for p in self.paths}:
-            for old in folder.glob(f"{glob.escape(self.stem)}_[0-9][0-9][0-9][0-9].{EXTENSIONS[self.fmt]}"):
-                if str(old) not in written:
-                    try:
-                        old.unlink()
-                    except OSError:  # gone already, or not ours to remove: the summary lists ours
-                        pass
+        prepared = self.prepared = PreparedTables(
+            self.outdir, self.stem, EXTENSIONS[self.fmt], [], list(self.paths), dict(self.recipes)
+        )  # held here first: `abort` drops its files, however far this got
+        for writer in [*self.finished, *self.writers.values()]:
+            if writer.rows > 0 and writer.part is not None:
+                prepared.parts.append(writer.part)
+                writer.part = None  # its file is the PreparedTables' to place or drop now
+            writer.commit()  # a writer without rows drops its temp file
+        self.writers.clear()
+        self.finished.clear()
+        return prepared
 
 
 class ArrowSink(TableSink):

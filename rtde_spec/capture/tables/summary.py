@@ -1,6 +1,7 @@
 """What a capture gave and what it lost, per file and per connection: the summary `capture` prints.
 
 Damage is anything the input lacked or garbled: records cut off or unreadable,
+frames cut by a snap length, frames whose headers or link type cannot be read,
 impossible timestamps, TCP gaps, bytes passed over to find the next package, packages
 cut by a gap or by the end of the capture, packages that do not decode. A capture
 that starts in the middle of a connection is not damaged: the bytes before its first
@@ -44,10 +45,33 @@ class CaptureSummary:
     def packages(self) -> int:
         return sum(c.packages for c in self.connections)
 
+    def cut_by_snap_length(self) -> str | None:
+        """Why frames hold less than they had, when they do: the capture's snap length (or another
+        cut). First among the problems: the TCP gaps, cut packages and missing setup it causes
+        are its consequences, and capturing again with -s 0 is the remedy."""
+        r = self.reading
+        cut = r.get("cut_frames", 0)
+        if not cut:
+            return None
+        low, high, snap = r.get("cut_at_min", 0), r.get("cut_at_max", 0), r.get("snaplen", 0)
+        frames = f"{cut} frame{'' if cut == 1 else 's'}"
+        if low == high == snap:
+            how = f"{frames} cut at {snap} bytes by the capture's snap length"
+        else:
+            kept = f"{low}" if low == high else f"{low} to {high}"
+            how = f"{frames} captured shorter than they were ({kept} bytes of each kept)"
+        return (
+            f"{how}: the rest of their TCP payload is not in the file (the gaps and cut packages "
+            "below); capture with -s 0 (tcpdump, dumpcap, tshark) to keep whole frames"
+        )
+
     def damage(self) -> list[str]:
         """What was lost or garbled, one line each; empty for an undamaged input."""
         out = []
         r = self.reading
+        cut = self.cut_by_snap_length()
+        if cut:
+            out.append(cut)
         if r.get("truncated"):
             where = f" at byte {r['stopped_at']}" if "stopped_at" in r else ""
             claim = f" (it claims {r['claimed']} bytes)" if r.get("claimed") else ""
@@ -61,7 +85,19 @@ class CaptureSummary:
         if r.get("bad_times"):
             out.append(f"{r['bad_times']} frames with an impossible capture time (kept; date=unknown)")
         if r.get("undecodable"):
-            out.append(f"{r['undecodable']} frames whose IP/TCP headers do not decode")
+            out.append(f"{r['undecodable']} frames whose IP/TCP headers do not decode (skipped)")
+        if r.get("unknown_link"):
+            link = r.get("unknown_link_type", -1)
+            kind = "of an interface the file never describes" if link < 0 else f"of link type {link}"
+            out.append(
+                f"{r['unknown_link']} frames {kind}, which this reader does not decode (skipped; it reads "
+                "Ethernet, Linux cooked SLL/SLL2, BSD loopback and raw IP)"
+            )
+        if r.get("ip_fragments_lost"):
+            out.append(
+                f"{r['ip_fragments_lost']} IPv4 fragments of datagrams whose other fragments never came "
+                "(skipped)"
+            )
         for c in self.connections:
             if c.gaps:
                 out.append(f"{c.name}: {c.gaps} TCP gaps, {c.lost_bytes} bytes never captured")
@@ -76,20 +112,31 @@ class CaptureSummary:
                     f"({c.conflict_bytes} bytes; the first copy was decoded)"
                 )
             out += [f"{c.name}: {e}" for e in c.errors]
+        if cut:  # the setup exchange may be in the frames cut: no reason to think it was not captured
+            out += self._without_recipe(
+                "its setup exchange may be in the cut frames: capture with -s 0, or "
+                "give the recipe with --recipe FILE"
+            )
         return out
 
     def needs_recipe(self) -> list[str]:
-        """Data packages that need `--recipe` to decode (a capture that starts after setup)."""
+        """Data packages that need `--recipe` to decode (a capture that starts after setup).
+
+        Not when frames were cut by a snap length: then that is the cause (in `damage`)."""
+        if self.reading.get("cut_frames"):
+            return []
+        return self._without_recipe(
+            "the capture starts after the setup exchange: give the recipe with --recipe FILE"
+        )
+
+    def _without_recipe(self, why: str) -> list[str]:
         out = []
         for c in self.connections:
             if c.unknown_recipe_sizes:
                 sizes = ", ".join(
                     f"{n} of {size} bytes" for size, n in sorted(c.unknown_recipe_sizes.items())
                 )
-                out.append(
-                    f"{c.name}: data packages without a recipe ({sizes}); the capture starts after the "
-                    "setup exchange: give the recipe with --recipe FILE"
-                )
+                out.append(f"{c.name}: data packages without a recipe ({sizes}); {why}")
         return out
 
     def problems(self) -> list[str]:

@@ -1,0 +1,55 @@
+"""What a capture file's headers say about its frames: each interface's link type and time
+resolution (pcapng), the snap length, and the frames that snap length cut.
+
+A capture taken with a snap length (`tcpdump -s 80`, `dumpcap -s 80`) keeps only the first
+bytes of each frame; its record says how long the frame was. Decoded as it is, the rest of
+each TCP payload reads as lost segments and a setup exchange never seen; the counts here let
+the summary say what happened and how to capture instead (`-s 0`).
+"""
+
+from __future__ import annotations
+
+import struct
+from typing import Any
+
+
+def snap_length(stats: dict[str, int], snaplen: int) -> None:
+    """The smallest snap length the file's header (or an interface) declares; 0: none."""
+    if snaplen and (not stats.get("snaplen") or snaplen < stats["snaplen"]):
+        stats["snaplen"] = snaplen
+
+
+def count_cut(stats: dict[str, int], lengths: Any, origs: Any) -> None:
+    """Records that hold less of their frame than it had (orig_len > incl_len): a snap length cut
+    them, and the rest of their TCP payload is not in the file. Counted, with where they end, so
+    the summary names the cause rather than only the gaps it leaves."""
+    cut = origs > lengths
+    if not cut.any():
+        return
+    kept = lengths[cut]
+    stats["cut_frames"] = stats.get("cut_frames", 0) + int(cut.sum())
+    low, high = int(kept.min()), int(kept.max())
+    stats["cut_at_min"] = min(stats.get("cut_at_min", low), low)
+    stats["cut_at_max"] = max(stats.get("cut_at_max", high), high)
+
+
+def interface(buf: Any, pos: int, length: int, order: str, stats: dict[str, int]) -> tuple[int, float]:
+    """(link type, seconds per timestamp unit) of an interface block; its snap length to `stats`."""
+    if length >= 20:  # a whole interface block: its snap length at +12
+        snap_length(stats, struct.unpack_from(order + "I", buf, pos + 12)[0])
+    linktype = struct.unpack_from(order + "H", buf, pos + 8)[0]
+    return linktype, resolution(buf[pos + 16 : pos + length - 4], order)
+
+
+def resolution(options: bytes, order: str) -> float:
+    """Seconds per timestamp unit from an interface's if_tsresol option (default microseconds)."""
+    pos = 0
+    while pos + 4 <= len(options):
+        code, size = struct.unpack(order + "HH", options[pos : pos + 4])
+        if code == 0:
+            break
+        if code == 9 and size >= 1:
+            value = options[pos + 4]
+            return 2.0 ** -(value & 0x7F) if value & 0x80 else 10.0**-value
+        pos += 4 + size + (-size % 4)
+    return 1e-6

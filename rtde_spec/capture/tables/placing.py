@@ -1,0 +1,113 @@
+"""A capture's tables put in place: under names checked against the folder, all or none of them.
+
+A capture's files are written beside their names and finished (`DirectorySink.prepare`);
+`PreparedTables` then puts them in place, in this process or in the parent of `capture
+--jobs N`, which places files in input order so table names do not depend on N
+(`names.py`). Placing holds the folder's lock, checks that the folder still gives each
+recipe the table its rows were written under, writes the capture's listing first (a table
+in place is always in a listing), then renames the files with signals held.
+"""
+
+from __future__ import annotations
+
+import glob
+import json
+from dataclasses import dataclass
+from pathlib import Path
+
+from rtde_spec.capture.tables.names import Recipe, Register, folder_lock, listing_name
+from rtde_spec.capture.tables.signals import signals_held
+from rtde_spec.errors import OutputError
+from rtde_spec.output.partfile import Part, write_failed, write_whole
+
+EXTENSIONS = {"parquet": "parquet", "csv": "csv", "jsonl": "jsonl", "mcap": "mcap"}  # format -> files' suffix
+
+
+class NamesTaken(OutputError):
+    """A capture's tables were not put in place: the folder gave a name they were written under
+    to another recipe meanwhile (another capture placed first). Decoding it again names them right."""
+
+
+@dataclass
+class PreparedTables:
+    """A capture's tables, finished beside their names: put in place (`place`) once their names
+    are checked against the folder, or dropped (`discard`). Plain data, so the process that
+    decoded them need not be the one that places them."""
+
+    outdir: Path
+    stem: str
+    ext: str  # of the files (the format's)
+    parts: list[Part]  # the files with rows, in the order they were finished
+    paths: list[Path]
+    recipes: dict[Recipe, str]  # each recipe's table, in the order the capture met them
+
+    def place(self) -> bool:
+        """Under the folder's lock: when the folder still gives each recipe the table it was
+        written under, the listing and then every table go in place (each even after one fails:
+        the first error is raised); False, with nothing touched, when it does not."""
+        with folder_lock(self.outdir):
+            register = Register.read(self.outdir)
+            if register.assign(list(self.recipes)) != self.recipes:
+                return False
+            earlier = register.tables_of(listing_name(self.stem))
+            self._write_listing()  # first: a table in place is always in a listing
+            failed: BaseException | None = None
+            with signals_held():  # renames only: all of this run's tables, or (before) none
+                for part in self.parts:
+                    try:
+                        part.commit()
+                    except Exception as exc:
+                        part.discard()
+                        failed = failed or exc
+            self.parts = []
+            if failed is not None:
+                raise failed
+            self._remove_stale_parts()
+            self._remove_dropped_tables(earlier - set(self.recipes.values()))
+        return True
+
+    def discard(self) -> None:
+        """Drop every table of this capture: files of earlier runs stay as they were."""
+        for part in self.parts:
+            part.discard()
+        self.parts = []
+
+    def _write_listing(self) -> None:
+        target = self.outdir / listing_name(self.stem)
+        if not self.recipes:  # none now: an earlier run's listing would hold names for nothing
+            target.unlink(missing_ok=True)
+            return
+        listing = [{"table": t, "direction": d, "names": list(n)} for (d, n), t in self.recipes.items()]
+        try:
+            write_whole(target, (json.dumps(listing, indent=2) + "\n").encode())  # whole or not at all
+        except OSError as exc:
+            self.discard()
+            failed = write_failed(exc, target)
+            kept = "the listing says which recipe each table holds, so none of the tables was put in place"
+            raise OutputError(f"{failed.reason}: {kept}", errno=failed.errno, subject=failed.subject) from exc
+
+    def _remove_stale_parts(self) -> None:
+        """Parts STEM_NNNN of an earlier run of this input that this run did not write (it was
+        shorter): left, they would read as rows of this capture."""
+        written = {str(p) for p in self.paths}
+        for folder in {p.parent for p in self.paths}:
+            for old in folder.glob(f"{glob.escape(self.stem)}_[0-9][0-9][0-9][0-9].{self.ext}"):
+                if str(old) not in written:
+                    _remove(old)
+
+    def _remove_dropped_tables(self, tables: set[str]) -> None:
+        """This input's files in recipe tables an earlier run of it wrote and this one did not (the
+        file changed): left, they would hold rows of a recipe the listings no longer give that name."""
+        stem = glob.escape(self.stem)
+        for table in sorted(tables):
+            for ext in EXTENSIONS.values():  # whichever format an earlier run wrote
+                for pattern in (f"{stem}.{ext}", f"{stem}_[0-9][0-9][0-9][0-9].{ext}"):
+                    for old in (self.outdir / table).glob(f"*/*/{pattern}"):
+                        _remove(old)
+
+
+def _remove(path: Path) -> None:
+    try:
+        path.unlink()
+    except OSError:  # gone already, or not ours to remove: the summary lists ours
+        pass
