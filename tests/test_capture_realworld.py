@@ -15,6 +15,7 @@ from __future__ import annotations
 import hashlib
 import json
 import struct
+from collections.abc import Iterator
 from pathlib import Path
 
 import pyarrow.parquet as pq
@@ -152,6 +153,41 @@ def test_tables_whose_name_another_capture_took_meanwhile_are_not_placed(
     assert not list(out.rglob(".*")) and not list(out.rglob("c-*")), "nothing of c, no temp file"
     assert "rtde_outputs_2" in decode_to_directory(c, out).tables
     assert recipes_by_table(out) == {"rtde_outputs_1": X, "rtde_outputs_2": Z}
+
+
+def test_a_rerun_stopped_before_its_renames_keeps_every_table_in_a_listing(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """A re-run of a capture whose recipe changed, stopped after its listing was written but
+    before its files were renamed (a signal, a failing rename): the listing named only the new
+    table, so the earlier run's files sat in a table no listing held, and the next capture's
+    new recipe was given that name: a mixed table."""
+    import contextlib
+
+    import rtde_spec.capture.tables.placing as placing
+    from rtde_spec.capture.decoder import decode_to_directory
+
+    out = tmp_path / "out"
+    x = session(tmp_path / "x.pcap", [X], 5)
+    decode_to_directory(x, out)  # X -> rtde_outputs_1
+    session(x, [Y], 5)  # the same capture file, recorded again with another recipe
+
+    @contextlib.contextmanager
+    def signal_first() -> Iterator[None]:  # SIGINT just before the renames
+        raise KeyboardInterrupt
+        yield
+
+    monkeypatch.setattr(placing, "signals_held", signal_first)
+    with pytest.raises(KeyboardInterrupt):
+        decode_to_directory(x, out)
+    monkeypatch.undo()
+    z_tables = decode_to_directory(session(tmp_path / "z.pcap", [Z], 5), out).tables
+    assert "rtde_outputs_1" not in z_tables and "rtde_outputs_2" not in z_tables  # both held
+    assert {tuple(pq.read_schema(f).names[2:]) for f in (out / "rtde_outputs_1").rglob("*.parquet")} == {
+        tuple(columns_of(X))
+    }
+    decode_to_directory(x, out)  # run again to the end: its listing holds only Y now
+    assert recipes_by_table(out) == {"rtde_outputs_2": Y, "rtde_outputs_3": Z}
 
 
 # --- IPv4 total length 0: segments captured on the sending host before offload cut them ---

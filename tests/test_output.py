@@ -268,3 +268,22 @@ def test_an_output_whose_name_leaves_no_room_for_the_temporary_mark_is_written(t
     stale = temp_path(target).with_name(temp_path(target).name.rpartition("-")[0] + f"-{dead.pid}")
     stale.write_bytes(b"cut off")
     assert leftovers(target) == [stale]
+
+
+def test_a_killed_split_run_of_a_long_name_leaves_its_parts_found(tmp_path: Path) -> None:
+    """The parts' shortened temporary names were not matched: `record --split` killed with a
+    240-byte output name neither reported nor removed them."""
+    import subprocess
+
+    from rtde_spec.output.partfile import leftovers, temp_path
+    from rtde_spec.output.split import part_path
+
+    target = tmp_path / ("p" * 236 + ".csv")
+    dead = subprocess.Popen(["true"])
+    dead.wait()
+    stale = []
+    for path in (target, part_path(target, 0), part_path(target, 7)):
+        temp = temp_path(path)
+        stale.append(temp.with_name(temp.name.rpartition("-")[0] + f"-{dead.pid}"))
+        stale[-1].write_bytes(b"cut off")
+    assert leftovers(target) == sorted(stale)

@@ -183,6 +183,7 @@ UR_XML = """<?xml version="1.0"{decl}?>
         ("utf16.xml", UR_XML.format(decl=' encoding="UTF-16"', comment="Größe").encode("utf-16")),
         ("cp1252.xml", UR_XML.format(decl=' encoding="windows-1252"', comment="Größe €").encode("cp1252")),
         ("latin1.xml", UR_XML.format(decl=" encoding='ISO-8859-1'", comment="Größe").encode("latin-1")),
+        ("dotnet.xml", UR_XML.format(decl=' encoding="utf-16"', comment="Größe").encode()),  # UTF-8 after all
     ],
 )
 def test_files_as_editors_save_them(tmp_path: Path, name: str, data: bytes) -> None:

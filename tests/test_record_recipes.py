@@ -255,6 +255,12 @@ def test_decode_to_dash_writes_standard_output_and_capture_to_dash_is_refused(
     assert [row["timestamp"] for row in json.loads(capsys.readouterr().out)] == [2.5]
     assert main(["demo", "-o", "-"]) == 2
     assert "-o -: standard output cannot hold a folder of files" in capsys.readouterr().err
+    (tmp_path / "in.bin").write_bytes(b"")
+    with pytest.raises(SystemExit) as refused:  # argparse's own exit for a bad option value
+        main(["capture", str(tmp_path / "in.bin"), "-o", "-"])
+    assert refused.value.code == 2
+    assert "standard output cannot hold a folder of tables" in capsys.readouterr().err
+    (tmp_path / "in.bin").unlink()
     record_argv = ["record", "--host", "127.0.0.1", "--port", "1", "--fields", "timestamp", "--format", "csv"]
     assert main([*record_argv, "-o", "-"]) == 2
     assert "-o -: this output is a file, written whole at the end" in capsys.readouterr().err

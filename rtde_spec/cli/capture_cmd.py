@@ -131,6 +131,8 @@ def _add_port_options(p: argparse.ArgumentParser) -> None:
 def output_folder_arg(text: str) -> str:
     """-o of capture is a folder: an existing file, or a name with a table file's suffix that is
     not a folder yet (-o out.parquet), is refused rather than made into a folder silently."""
+    if text == "-":
+        raise argparse.ArgumentTypeError("standard output cannot hold a folder of tables; give a folder")
     path = Path(text)
     if path.exists() and not path.is_dir():
         raise argparse.ArgumentTypeError(

@@ -89,10 +89,10 @@ def leftovers(target: Path) -> list[Path]:
         names = os.listdir(folder)
     except OSError:
         return []
-    shortened = _temp_stem(target.name)
+    shortened = _long_temp_stems(target) if _temp_stem(target.name) != f".{target.name}" else set()
     for name in names:
         head, _, pid = name.rpartition(PART_MARK)
-        if head == shortened and shortened != f".{target.name}":  # a long name's temporary file
+        if head in shortened:  # a long name's temporary file (or one of its parts')
             if pid.isdigit() and not _alive(int(pid)):
                 found.append(folder / name)
             continue
@@ -104,6 +104,12 @@ def leftovers(target: Path) -> list[Path]:
         if real == target.name or real[len(stem) :].lstrip("_").removesuffix(suffix).isdigit():
             found.append(folder / name)
     return sorted(found)
+
+
+def _long_temp_stems(target: Path) -> set[str]:
+    """The shortened temporary stems of a long `target` and of its split parts (NAME_0000...)."""
+    names = [target.name] + [f"{target.stem}_{index:04d}{target.suffix}" for index in range(10000)]
+    return {_temp_stem(name) for name in names}
 
 
 def _alive(pid: int) -> bool:

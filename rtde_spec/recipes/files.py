@@ -97,7 +97,10 @@ def decoded_text(data: bytes, subject: str) -> str:
         declared = _XML_ENCODING.match(data.lstrip())
         encoding = declared.group(1).decode("ascii") if declared else "utf-8"
     try:
-        codecs.lookup(encoding)
+        if codecs.lookup(encoding).name.startswith(("utf-16", "utf-32")) and not data.startswith(
+            (codecs.BOM_UTF16_LE, codecs.BOM_UTF16_BE)
+        ):  # the declaration was read as ASCII: the file is not UTF-16 (.NET's StringWriter says so)
+            encoding = "utf-8"
     except LookupError:
         raise RecipeError(
             f"its XML declaration names an unknown encoding {encoding!r}", subject=subject

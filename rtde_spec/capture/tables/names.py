@@ -68,7 +68,7 @@ class Register:
             ) from exc
         for name in names:
             if name.startswith(LISTING_PREFIX) and name.endswith(LISTING_SUFFIX):
-                for table, recipe in _listing(outdir / name):
+                for table, recipe in listing_entries(outdir / name):
                     register.holders.setdefault(table, {}).setdefault(recipe, []).append(name)
         return register
 
@@ -117,7 +117,7 @@ class Register:
         )
 
 
-def _listing(path: Path) -> list[tuple[str, Recipe]]:
+def listing_entries(path: Path) -> list[tuple[str, Recipe]]:
     """(table, recipe) of one listing, read once per version of the file."""
     try:
         st = path.stat()

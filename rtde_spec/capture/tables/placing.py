@@ -12,10 +12,11 @@ from __future__ import annotations
 
 import glob
 import json
+from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-from rtde_spec.capture.tables.names import Recipe, Register, folder_lock, listing_name
+from rtde_spec.capture.tables.names import Recipe, Register, folder_lock, listing_entries, listing_name
 from rtde_spec.capture.tables.signals import signals_held
 from rtde_spec.errors import OutputError
 from rtde_spec.output.partfile import Part, write_failed, write_whole
@@ -50,7 +51,9 @@ class PreparedTables:
             if register.assign(list(self.recipes)) != self.recipes:
                 return False
             earlier = register.tables_of(listing_name(self.stem))
-            self._write_listing()  # first: a table in place is always in a listing
+            # first, this run's tables beside the earlier run's: whatever stops the renames, every
+            # table of either run stays in a listing, so no other capture is given its name
+            self._write_listing(keep=listing_entries(self.outdir / listing_name(self.stem)))
             failed: BaseException | None = None
             with signals_held():  # renames only: all of this run's tables, or (before) none
                 for part in self.parts:
@@ -64,6 +67,7 @@ class PreparedTables:
                 raise failed
             self._remove_stale_parts()
             self._remove_dropped_tables(earlier - set(self.recipes.values()))
+            self._write_listing()  # this run's tables alone, now that the earlier run's are gone
         return True
 
     def discard(self) -> None:
@@ -72,12 +76,16 @@ class PreparedTables:
             part.discard()
         self.parts = []
 
-    def _write_listing(self) -> None:
+    def _write_listing(self, keep: Sequence[tuple[str, Recipe]] = ()) -> None:
+        """The capture's listing: its recipes' tables, and those of `keep` (an earlier run's
+        entries) it does not give another recipe."""
         target = self.outdir / listing_name(self.stem)
-        if not self.recipes:  # none now: an earlier run's listing would hold names for nothing
+        entries = [(t, recipe) for recipe, t in self.recipes.items()]
+        entries += [(t, recipe) for t, recipe in keep if (t, recipe) not in entries]
+        if not entries:  # none now: an earlier run's listing would hold names for nothing
             target.unlink(missing_ok=True)
             return
-        listing = [{"table": t, "direction": d, "names": list(n)} for (d, n), t in self.recipes.items()]
+        listing = [{"table": t, "direction": d, "names": list(n)} for t, (d, n) in entries]
         try:
             write_whole(target, (json.dumps(listing, indent=2) + "\n").encode())  # whole or not at all
         except OSError as exc:
