@@ -137,22 +137,35 @@ def test_a_folder_whose_table_already_mixes_recipes_is_refused_naming_it(
     assert digests(out) == before, "nothing of the capture was written"
 
 
-def test_tables_whose_name_another_capture_took_meanwhile_are_not_placed(
-    inputs: Path, tmp_path: Path
+@pytest.mark.parametrize("fmt", ["parquet", "mcap"])
+def test_tables_whose_name_another_capture_took_meanwhile_go_to_the_name_the_folder_gives(
+    inputs: Path, tmp_path: Path, fmt: str
 ) -> None:
-    """Two captures decoded side by side (Dask tasks, two commands): the one placed second finds
-    its recipe's name taken, puts nothing in place, and is decoded again under a free one."""
+    """Two captures decoded side by side (Dask tasks, two commands, a live pipe): the one placed
+    second finds its recipe's name taken. Its files move to the name the folder gives now (rows
+    hold no table name; a pipe cannot be read again, and its tables were lost before); MCAP
+    files, which name their table inside, put nothing in place and are decoded again."""
     from rtde_spec.capture.decoder import decode_prepared, decode_to_directory, directory_sink, place
 
     out = tmp_path / "out"
     c = inputs / "c.pcapng"
-    _, prepared = decode_prepared(c, directory_sink(c, out))
+    summary, prepared = decode_prepared(c, directory_sink(c, out, fmt))
     assert prepared.recipes == {("output", Z): "rtde_outputs_1"}  # the folder was empty
-    decode_to_directory(inputs / "a.pcap", out)  # X placed first under that name
-    assert not place(prepared, c)
-    assert not list(out.rglob(".*")) and not list(out.rglob("c-*")), "nothing of c, no temp file"
-    assert "rtde_outputs_2" in decode_to_directory(c, out).tables
-    assert recipes_by_table(out) == {"rtde_outputs_1": X, "rtde_outputs_2": Z}
+    decode_to_directory(inputs / "a.pcap", out, fmt)  # X placed first under that name
+    if fmt == "mcap":
+        assert not place(prepared, c, summary)
+        assert not list(out.rglob(".*")) and not list(out.rglob("c-*")), "nothing of c, no temp file"
+        summary = decode_to_directory(c, out, fmt)
+    else:
+        assert place(prepared, c, summary)
+        assert not list(out.rglob(".*")), "no temp file left"
+        assert recipes_by_table(out) == {"rtde_outputs_1": X, "rtde_outputs_2": Z}
+    assert summary.tables["rtde_outputs_2"] == 50 and "rtde_outputs_1" not in summary.tables
+    assert not [p for p in summary.paths if "rtde_outputs_1" in p]
+    assert list((out / "rtde_outputs_2").rglob(f"c-*.{fmt}")) and not list(
+        out.rglob("rtde_outputs_1/*/*/c-*")
+    )
+    assert not [p for p in (out / "rtde_outputs_1").rglob("*") if p.is_dir() and not any(p.iterdir())]
 
 
 def test_a_rerun_stopped_before_its_renames_keeps_every_table_in_a_listing(
@@ -325,3 +338,43 @@ def test_a_capture_cut_at_a_snap_length_says_so_and_keeps_what_decodes(tmp_path:
         piped.returncode == 3
         and [line for line in piped.stderr.splitlines() if "problem:" in line] == problems
     )
+
+
+def test_a_live_capture_stopped_after_another_took_its_tables_name_keeps_its_rows(tmp_path: Path) -> None:
+    """`capture - -o out` from a pipe held open, while a capture of another recipe into the same
+    folder takes rtde_outputs_1, then Ctrl-C: the pipe's rows were dropped, with "the tables
+    above are written whole" printed over them. A pipe cannot be read again: its tables go to
+    the name the folder gives now."""
+    import fcntl
+    import signal
+    import subprocess
+    import sys
+    import termios
+    import time
+
+    out = tmp_path / "out"
+    x = session(tmp_path / "x.pcap", [X], 500)
+    y = session(tmp_path / "y.pcap", [Y], 50)
+    command = [sys.executable, "-m", "rtde_spec", "capture"]
+    live = subprocess.Popen(
+        [*command, "-", "-o", str(out)], stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE
+    )
+    assert live.stdin is not None
+    live.stdin.write(x.read_bytes())
+    live.stdin.flush()
+    unread = bytearray(4)
+    deadline = time.monotonic() + 60
+    while time.monotonic() < deadline:  # until the capture has read the pipe dry (Linux: FIONREAD)
+        fcntl.ioctl(live.stdin.fileno(), termios.FIONREAD, unread)
+        if int.from_bytes(unread, sys.byteorder) == 0:
+            break
+        time.sleep(0.05)
+    other = subprocess.run([*command, str(y), "-o", str(out)], capture_output=True, text=True)
+    assert other.returncode == 0, other.stderr
+    time.sleep(0.5)
+    live.send_signal(signal.SIGINT)
+    said, err = (text.decode() for text in live.communicate(timeout=60))
+    assert live.returncode == 130, err
+    assert "rtde_outputs_2 (500 rows)" in said, said
+    assert recipes_by_table(out) == {"rtde_outputs_1": Y, "rtde_outputs_2": X}
+    assert pq.read_table(out / "rtde_outputs_2").num_rows == 500

@@ -133,14 +133,15 @@ def decode_to_directory(
     `workers`: threads that prepare batches and write them in order while the capture is
     read on (`ordered_writes.OrderedWrites`; Parquet): the same files, on more cores.
     Its tables go in place under the names the folder gives their recipes (`tables/names.py`);
-    when another capture placed a new recipe under one of them meanwhile, the file is decoded
-    again (a pipe cannot be: that is an error, nothing of it placed).
+    when another capture placed a new recipe under one of them meanwhile, its files move to the
+    names the folder gives now; MCAP files, which hold their table's name, are decoded again (a
+    pipe cannot be: that is an error, nothing of it placed).
     """
     for _ in range(PLACE_ATTEMPTS):
         sink = directory_sink(path, outdir, fmt, workers)
         try:
             summary, prepared = decode_prepared(path, sink, recipe_names, **kw)
-            if place(prepared, path):
+            if place(prepared, path, summary):
                 return summary
         except BaseException:
             sink.abort()  # tables decoded but not placed (a stop came between) go too
@@ -180,8 +181,10 @@ def decode_prepared(
                 sink.abort()
             stop.kept = False
             raise
-        place(_prepared(sink, path), path)  # a pipe's tables: what was decoded is kept
         stop.summary.tables, stop.summary.paths = dict(sink.rows), [str(p) for p in sink.paths]
+        if not place(_prepared(sink, path), path, stop.summary):  # a pipe's tables: what was decoded is kept
+            stop.kept = False  # MCAP files named for a table another capture has taken since
+            stop.summary.tables, stop.summary.paths = {}, []
         raise
     except OutputError as exc:  # a full disk: no table of this capture is kept half-written
         sink.abort()
@@ -206,9 +209,10 @@ def _prepared(sink: DirectorySink, path: str | Path) -> PreparedTables:
         raise dropped_tables(exc, path) from exc
 
 
-def place(prepared: PreparedTables, path: str | Path) -> bool:
-    """Put a decoded file's tables in place; False (nothing placed, nothing left) when the folder
-    now gives one of its recipes' names to another recipe: the file is to be decoded again."""
+def place(prepared: PreparedTables, path: str | Path, summary: CaptureSummary | None = None) -> bool:
+    """Put a decoded file's tables in place, under the names the folder gives their recipes now
+    (`summary`'s tables and paths say where); False (nothing placed, nothing left) when those
+    differ from the ones its MCAP files were written with: the file is to be decoded again."""
     try:
         placed = prepared.place()
     except OutputError as exc:
@@ -219,6 +223,9 @@ def place(prepared: PreparedTables, path: str | Path) -> bool:
         raise
     if not placed:
         prepared.discard()
+    elif summary is not None:
+        summary.tables = {prepared.renamed.get(t, t): n for t, n in summary.tables.items()}
+        summary.paths = [str(p) for p in prepared.paths]
     return placed
 
 

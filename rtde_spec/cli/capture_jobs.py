@@ -55,7 +55,7 @@ def decode_in_workers(
             if not isinstance(got, tuple):  # interrupted in the worker (a signal to it alone)
                 raise KeyboardInterrupt
             summary, prepared = got
-            if not place(prepared, path):
+            if not place(prepared, path, summary):
                 summary = decode_to_directory(path, *target, **kw)
             summaries.append(summary)
     except KeyboardInterrupt:

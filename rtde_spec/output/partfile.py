@@ -155,6 +155,19 @@ class Part:
             self.published = True
             self._placed()
 
+    def move_to(self, target: Path) -> None:
+        """Another name for a file not yet in place: its temporary file moves beside `target`
+        (a capture's table renamed before it is placed; the folder is made)."""
+        if self.published:
+            raise ValueError(f"{self.target} is in place already")
+        temp = temp_path(target)
+        try:
+            temp.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(self.temp, temp)
+        except OSError as exc:
+            raise write_failed(exc, target) from exc
+        self.target, self.temp, self.replaces = target, temp, target.exists()
+
     def commit(self) -> None:
         """The written file becomes the target (synced first when `durable`)."""
         if self.failed is not None:

@@ -13,7 +13,7 @@ from __future__ import annotations
 import glob
 import json
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from rtde_spec.capture.tables.names import Recipe, Register, folder_lock, listing_entries, listing_name
@@ -41,6 +41,7 @@ class PreparedTables:
     parts: list[Part]  # the files with rows, in the order they were finished
     paths: list[Path]
     recipes: dict[Recipe, str]  # each recipe's table, in the order the capture met them
+    renamed: dict[str, str] = field(default_factory=dict)  # table written -> table placed, where they differ
 
     def place(self) -> bool:
         """Under the folder's lock: when the folder still gives each recipe the table it was
@@ -48,8 +49,11 @@ class PreparedTables:
         the first error is raised); False, with nothing touched, when it does not."""
         with folder_lock(self.outdir):
             register = Register.read(self.outdir)
-            if register.assign(list(self.recipes)) != self.recipes:
-                return False
+            names = register.assign(list(self.recipes))
+            if names != self.recipes:
+                if self.ext == "mcap":  # its files name their table inside: decode it again
+                    return False
+                self._rename_tables(names)
             earlier = register.tables_of(listing_name(self.stem))
             # first, this run's tables beside the earlier run's: whatever stops the renames, every
             # table of either run stays in a listing, so no other capture is given its name
@@ -69,6 +73,26 @@ class PreparedTables:
             self._remove_dropped_tables(earlier - set(self.recipes.values()))
             self._write_listing()  # this run's tables alone, now that the earlier run's are gone
         return True
+
+    def _rename_tables(self, names: dict[Recipe, str]) -> None:
+        """Move the files of recipes the folder now names otherwise (another capture placed a new
+        recipe under the name this one guessed) to their tables: rows hold no table name."""
+        moved = {
+            self.recipes[recipe]: table for recipe, table in names.items() if self.recipes[recipe] != table
+        }
+        for part in self.parts:
+            before = part.temp.parent
+            target = _renamed(part.target, self.outdir, moved)
+            if target != part.target:
+                part.move_to(target)
+                for empty in (before, before.parent):  # robot=, date= folders it alone needed
+                    try:
+                        empty.rmdir()
+                    except OSError:
+                        break
+        self.paths = [_renamed(path, self.outdir, moved) for path in self.paths]
+        self.renamed.update(moved)
+        self.recipes = dict(names)
 
     def discard(self) -> None:
         """Drop every table of this capture: files of earlier runs stay as they were."""
@@ -112,6 +136,12 @@ class PreparedTables:
                 for pattern in (f"{stem}.{ext}", f"{stem}_[0-9][0-9][0-9][0-9].{ext}"):
                     for old in (self.outdir / table).glob(f"*/*/{pattern}"):
                         _remove(old)
+
+
+def _renamed(path: Path, outdir: Path, moved: dict[str, str]) -> Path:
+    """`path` (OUTDIR/TABLE/...) in the table `moved` gives its table, if it gives one."""
+    table, *rest = path.relative_to(outdir).parts
+    return outdir.joinpath(moved[table], *rest) if table in moved else path
 
 
 def _remove(path: Path) -> None:
