@@ -9,9 +9,9 @@ table the register holds it in, else the lowest number no listing uses, in the o
 capture meets its recipes. Captures are put in place one at a time, in input order (`capture
 --jobs N` decodes in parallel but places in order), each after checking its names against
 the register under the folder's lock: the names depend on the inputs and the folder, never on
-N or on which file is decoded first. A capture whose names were taken meanwhile is decoded
-again under the right ones (`PreparedTables.place` says so); nothing is put in place under a
-name that holds another recipe.
+N or on which file is decoded first. The files of a capture whose names were taken meanwhile
+move to the right ones (MCAP files, which name their table inside, are decoded again:
+`PreparedTables.place` says so); nothing is put in place under a name that holds another recipe.
 """
 
 from __future__ import annotations
