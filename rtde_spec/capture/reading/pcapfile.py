@@ -282,11 +282,14 @@ def _pcap(
             if pos + stride > end:
                 break
             same = _same_run(buf, pos, stride, (end - pos) // stride, 8, caplen, u32)
-            secs, fracs, origs = (_strided(buf, pos + at, stride, same, u32) for at in (0, 4, 12))
+            secs, fracs = (_strided(buf, pos + at, stride, same, u32) for at in (0, 4))
             starts = pos + 16 + np.arange(same, dtype=np.int64) * stride
             lengths = np.full(same, caplen, dtype=np.int64)
             found.add(starts, lengths, secs + fracs * unit, linktype)
-            count_cut(stats, lengths, origs)
+            if same > 1:
+                count_cut(stats, lengths, _strided(buf, pos + 12, stride, same, u32))
+            elif size_at(buf, pos + 12)[0] > caplen:  # one record (lengths alternate): no numpy
+                count_cut(stats, lengths, np.array(size_at(buf, pos + 12)))
             last_secs[:] = [int(secs[-1])]
             pos += same * stride
         return pos
@@ -360,12 +363,14 @@ def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int], lag: i
                 same = min(same, _same_run(buf, pos, length, same, 0, EPB, u32))
                 same = min(same, _same_run(buf, pos, length, same, 8, iface, u32))
                 linktype, unit = interfaces[iface] if iface < len(interfaces) else (-1, 1e-6)
-                columns = (_strided(buf, pos + at, length, same, u32) for at in (12, 16, 20, 24))
-                high, low, caplen, origs = columns  # time, captured and original length
+                high, low, caplen = (_strided(buf, pos + at, length, same, u32) for at in (12, 16, 20))
                 starts = pos + 28 + np.arange(same, dtype=np.int64) * length
                 lengths = np.minimum(caplen, length - 32)
                 found.add(starts, lengths, ((high << 32) | low) * unit, linktype)
-                count_cut(stats, lengths, origs)
+                if same > 1:  # original lengths: a snap length cut these records
+                    count_cut(stats, lengths, _strided(buf, pos + 24, length, same, u32))
+                elif struct.unpack_from(order + "I", buf, pos + 24)[0] > int(lengths[0]):
+                    count_cut(stats, lengths, np.array(struct.unpack_from(order + "I", buf, pos + 24)))
                 pos += same * length
                 continue
             if btype == IDB:
