@@ -28,7 +28,7 @@ from rtde_spec.errors import OutputError
 Recipe = tuple[str, tuple[str, ...]]  # (direction, field names in order): the columns of a table
 LISTING_PREFIX, LISTING_SUFFIX = "recipes-", ".json"
 _CACHE_MAX = 1 << 16
-_listings: dict[str, tuple[tuple[int, int], list[tuple[str, Recipe]]]] = {}  # path -> (stat, entries)
+_listings: dict[str, tuple[tuple[int, int, int], list[tuple[str, Recipe]]]] = {}  # path -> (stat, entries)
 
 
 def listing_name(stem: str) -> str:
@@ -121,7 +121,7 @@ def listing_entries(path: Path) -> list[tuple[str, Recipe]]:
     """(table, recipe) of one listing, read once per version of the file."""
     try:
         st = path.stat()
-        key = (st.st_mtime_ns, st.st_size)
+        key = (st.st_ino, st.st_mtime_ns, st.st_size)  # a rewrite is a new file (renamed in)
         cached = _listings.get(str(path))
         if cached is not None and cached[0] == key:
             return cached[1]
