@@ -252,7 +252,8 @@ def test_an_output_whose_name_leaves_no_room_for_the_temporary_mark_is_written(t
     import os
     import subprocess
 
-    from rtde_spec.output.partfile import leftovers, temp_path, write_with
+    from rtde_spec.output.partfile import write_with
+    from rtde_spec.output.tempnames import leftovers, temp_path
 
     target = tmp_path / ("é" * 100 + "x" * 40 + ".csv")
     assert len(os.fsencode(target.name)) == 244
@@ -275,8 +276,8 @@ def test_a_killed_split_run_of_a_long_name_leaves_its_parts_found(tmp_path: Path
     240-byte output name neither reported nor removed them."""
     import subprocess
 
-    from rtde_spec.output.partfile import leftovers, temp_path
     from rtde_spec.output.split import part_path
+    from rtde_spec.output.tempnames import leftovers, temp_path
 
     target = tmp_path / ("p" * 236 + ".csv")
     dead = subprocess.Popen(["true"])

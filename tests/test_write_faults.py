@@ -22,7 +22,8 @@ import pytest
 
 from rtde_spec.cli.main import main
 from rtde_spec.errors import OutputError
-from rtde_spec.output.partfile import PART_MARK, write_whole
+from rtde_spec.output.partfile import write_whole
+from rtde_spec.output.tempnames import PART_MARK
 from tests.faults.tmpfs import fill, mounted_tmpfs
 from tests.test_cli import cli
 

@@ -225,7 +225,7 @@ def _checked_format(args: argparse.Namespace) -> str:
 
 def _note_leftovers(output: Path, fmt: str) -> None:
     """Say what a recording killed before it closed left beside the output; drop empty ones."""
-    from rtde_spec.output.partfile import leftovers
+    from rtde_spec.output.tempnames import leftovers
 
     for path in leftovers(output):
         if _empty(path):  # killed before its first batch reached the file: nothing to keep

@@ -24,7 +24,7 @@ import pytest
 
 from rtde_spec.capture.decoder import decode_to_directory
 from rtde_spec.errors import OutputError
-from rtde_spec.output import partfile
+from rtde_spec.output import partfile, tempnames
 from rtde_spec.output.writers import open_writer
 from tests.capture_files import rtde_packages
 from tests.faults.many_files import fleet_capture
@@ -121,7 +121,7 @@ def no_new_files(monkeypatch: pytest.MonkeyPatch) -> None:
     real = open
 
     def refuse(path: object, mode: str = "r", *args: object, **kw: object) -> object:
-        if partfile.PART_MARK in str(path) and "w" in mode:
+        if tempnames.PART_MARK in str(path) and "w" in mode:
             raise OSError(errno.ENOSPC, "No space left on device", str(path))
         return real(path, mode, *args, **kw)  # type: ignore[call-overload]
 
@@ -158,7 +158,7 @@ def test_injected_no_room_for_a_capture_table_keeps_the_earlier_run(
     real = open
 
     def third_fails(path: object, mode: str = "r", *args: object, **kw: object) -> object:
-        if partfile.PART_MARK in str(path) and "w" in mode:
+        if tempnames.PART_MARK in str(path) and "w" in mode:
             made.append(str(path))
             if len(made) >= 3:  # two tables made, the third finds the disk full
                 raise OSError(errno.ENOSPC, "No space left on device", str(path))

@@ -286,10 +286,7 @@ def _pcap(
             starts = pos + 16 + np.arange(same, dtype=np.int64) * stride
             lengths = np.full(same, caplen, dtype=np.int64)
             found.add(starts, lengths, secs + fracs * unit, linktype)
-            if same > 1:
-                count_cut(stats, lengths, _strided(buf, pos + 12, stride, same, u32))
-            elif size_at(buf, pos + 12)[0] > caplen:  # one record (lengths alternate): no numpy
-                count_cut(stats, lengths, np.array(size_at(buf, pos + 12)))
+            _count_cut(stats, buf, pos + 12, stride, same, lengths, u32)
             last_secs[:] = [int(secs[-1])]
             pos += same * stride
         return pos
@@ -298,6 +295,22 @@ def _pcap(
         return int(size_at(buf, pos + 8)[0]) + 16 if len(buf) - pos >= 16 else 0
 
     yield from _by_block(f, b"", 24, stats, parse, claim, lag)  # after the file header
+
+
+def _count_cut(
+    stats: dict[str, int], buf: Any, at: int, stride: int, same: int, lengths: Any, u32: Any
+) -> None:
+    """Records of a run that a snap length cut (their original length, at `at`, over what the
+    file holds). A run of one record (data and ACK frames alternate: most of a real session's)
+    is one `struct` read, not numpy calls."""
+    if same > 1:
+        count_cut(stats, lengths, _strided(buf, at, stride, same, u32))
+        return
+    original = struct.unpack_from(u32.str[0] + "I", buf, at)[0]  # the byte order of the file
+    if original > int(lengths[0]):
+        import numpy as np
+
+        count_cut(stats, lengths, np.array([original]))
 
 
 def _strided(buf: Any, start: int, stride: int, count: int, dtype: Any) -> Any:
@@ -367,10 +380,7 @@ def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int], lag: i
                 starts = pos + 28 + np.arange(same, dtype=np.int64) * length
                 lengths = np.minimum(caplen, length - 32)
                 found.add(starts, lengths, ((high << 32) | low) * unit, linktype)
-                if same > 1:  # original lengths: a snap length cut these records
-                    count_cut(stats, lengths, _strided(buf, pos + 24, length, same, u32))
-                elif struct.unpack_from(order + "I", buf, pos + 24)[0] > int(lengths[0]):
-                    count_cut(stats, lengths, np.array(struct.unpack_from(order + "I", buf, pos + 24)))
+                _count_cut(stats, buf, pos + 24, length, same, lengths, u32)
                 pos += same * length
                 continue
             if btype == IDB:
