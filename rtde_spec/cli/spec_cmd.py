@@ -20,6 +20,10 @@ if TYPE_CHECKING:
     from rtde_spec.importers.changes import Change
 
 
+#: the document forms --form names (rtde_spec.importers.FORMATS; not imported at start-up)
+FORMS = ("cb3-text", "tab-text", "e-series-text", "rendered-text", "markdown", "html", "xlsx", "primary-text")
+
+
 def add_parser(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("spec", help="work on spec/: import a published UR document")
     inner = p.add_subparsers(dest="spec_command", metavar="ACTION")
@@ -68,7 +72,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     )
     imp.add_argument(
         "--form",
-        choices=("cb3-text", "e-series-text", "rendered-text", "markdown", "html", "xlsx", "primary-text"),
+        choices=FORMS,
         help="the document's form (default: detected from its content)",
     )
     imp.add_argument(
@@ -174,6 +178,16 @@ def run(args: argparse.Namespace) -> int:
         _print_json(args, doc, spec, new, known)
     else:
         _print_report(args, doc, spec, new, known)
+    for problem in doc.problems:
+        print(f"warning: {args.document}: {problem}", file=sys.stderr)
+    if args.write and doc.problems:
+        # a copy that stops inside a table, or a table whose direction it does not say, is not the
+        # whole document: what it lacks would be taken out of (or not checked against) the spec
+        raise UsageError(
+            f"{len(doc.problems)} problems reading the document (said above); nothing written: "
+            "import a complete copy",
+            subject=f"file {args.document}",
+        )
     if args.write:
         changes = _write(args, doc, spec, by_interface)
         new = [c for c in changes if c.known is None]
@@ -182,7 +196,7 @@ def run(args: argparse.Namespace) -> int:
 
         count = write_overlay(changes, doc, spec, args.overlay)
         print(f"wrote {count} added fields to {args.overlay}", file=sys.stderr)
-    return EXIT_ERROR if args.check and new else 0
+    return EXIT_ERROR if args.check and (new or doc.problems) else 0
 
 
 def _spec_to_compare(args: argparse.Namespace) -> Any:
@@ -262,6 +276,7 @@ def _print_json(
         "realtime": [_realtime_record(t, doc, args) for t in doc.realtime],
         "unlisted": doc.unlisted,
         "remarks": doc.remarks,
+        "problems": doc.problems,
         "added": [c.record() for c in new if c.kind == "added"],
         "removed": [c.record() for c in new if c.kind == "removed"],
         "changed": [c.record() for c in new if c.kind == "changed"],

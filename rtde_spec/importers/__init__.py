@@ -5,6 +5,7 @@ Imported only by `rtde-spec spec import`: nothing here runs at CLI start-up.
 
 from __future__ import annotations
 
+import codecs
 import re
 from pathlib import Path
 
@@ -17,7 +18,7 @@ from rtde_spec.importers import (
     realtime_tables,
     rendered_text,
 )
-from rtde_spec.importers.cells import Lines, parse_name
+from rtde_spec.importers.cells import Lines, parse_name, visible
 from rtde_spec.importers.edition import newest, versions_named
 from rtde_spec.importers.model import Document
 from rtde_spec.importers.rows import field_rows, main_line
@@ -25,7 +26,16 @@ from rtde_spec.importers.tables import MAX_BYTES
 from rtde_spec.metamodel.schema import Spec
 from rtde_spec.metamodel.versions import Version
 
-FORMATS = ("cb3-text", "e-series-text", "rendered-text", "markdown", "html", "xlsx", "primary-text")
+FORMATS = (
+    "cb3-text",
+    "tab-text",
+    "e-series-text",
+    "rendered-text",
+    "markdown",
+    "html",
+    "xlsx",
+    "primary-text",
+)
 #: what a document must hold to be read, for the error when none is found
 LOOKED_FOR = (
     "an RTDE field table (header cells Name, Type, Comment[, Introduced in version] under a heading "
@@ -63,7 +73,7 @@ def detect_format(text: str) -> str:
     if re.search(r"^\s*Name\s*\|\s*$", text, re.MULTILINE):
         return "e-series-text"
     if re.search(r"^\s*Name\tType\t", text, re.MULTILINE):
-        return "cb3-text"
+        return "cb3-text" if _cb3_era(text) else "tab-text"
     if rendered_text.HEADER.search(text):
         return "rendered-text"
     raise UsageError(
@@ -71,6 +81,36 @@ def detect_format(text: str) -> str:
         "pipe-terminated text, rendered text with a cell per line, Markdown or HTML tables, the "
         "client-interface .xlsx) or the primary interface document; --form names the form"
     )
+
+
+#: a version in a tab-separated cell, by major: 3.x is the CB3 guide's, 5.x/10.x the e-Series guide's
+_TAB_VERSION = re.compile(r"\t[^\t\n]*?(?<![\d.])(3|5|10)\.\d+(?:\.\d+)?(?![\d.])")
+
+
+def _cb3_era(text: str) -> bool:
+    """Whether tab-separated tables are the CB3-era guide's, not the e-Series guide copied from a
+    browser (which comes as tabs too): the CB3 guide's version cells name 3.x (3.3, [0..23] 3.4.0),
+    the e-Series guide's 5.x and 10.x; its prose says 500 Hz and e-Series, the CB3 guide's 125 Hz."""
+    majors = [m.group(1) for m in _TAB_VERSION.finditer(text)]
+    cb3 = majors.count("3")
+    newer = len(majors) - cb3
+    if cb3 != newer:
+        return cb3 > newer
+    return not re.search(r"\b500\s*Hz\b|\be-Series\b", text, re.I)
+
+
+#: the source id of an RTDE guide by the product line it is written for: recorded conflicts are
+#: keyed to it, so the same guide saved under another file name must get the same id
+_GUIDE_SOURCE = {"cb3": "cb3-guide", "e-series": "e-series-guide", "polyscope-x": "e-series-guide"}
+
+
+#: what only UR's RTDE guide says: its tables' headings and its title (a client's README has others)
+_GUIDE_SIGN = re.compile(r"\brobot controller (?:in|out)puts\b|\(RTDE\) Guide\b", re.I)
+
+
+def _is_guide(doc: Document, text: str) -> bool:
+    """Whether the document is UR's RTDE guide in some copy, not another list of fields."""
+    return any(_GUIDE_SIGN.search(t.heading) for t in doc.tables) or bool(_GUIDE_SIGN.search(text[:4096]))
 
 
 def _slug(path: Path) -> str:
@@ -95,11 +135,50 @@ def _text(path: Path) -> str:
         size = path.stat().st_size
         if size > MAX_BYTES:
             raise UsageError(f"{path}: {size} bytes; UR's documents are under {MAX_BYTES} bytes")
-        return path.read_text(encoding="utf-8", errors="replace")
+        return visible(decode(path.read_bytes(), path))
     except FileNotFoundError:
         raise UsageError(f"no such document: {path}") from None
     except IsADirectoryError:
         raise UsageError(f"{path} is a directory, not a document") from None
+
+
+_BOMS = ((codecs.BOM_UTF8, "utf-8-sig"), (codecs.BOM_UTF16_LE, "utf-16"), (codecs.BOM_UTF16_BE, "utf-16"))
+#: `<meta charset="windows-1252">` or `<meta http-equiv="Content-Type" content="text/html; charset=...">`
+_CHARSET = re.compile(rb"<meta\b[^>]*?charset\s*=\s*[\"']?\s*([A-Za-z0-9_.:-]+)", re.I)
+
+
+def decode(data: bytes, path: Path | str = "") -> str:
+    """The document's text in the charset it declares: a byte-order mark first, then an HTML
+    `<meta>` charset; else UTF-8, and Windows-1252 (what a Windows browser's "save as" writes)
+    only when the bytes are no UTF-8. Reading a cp1252 page as UTF-8 would put U+FFFD in names."""
+    for bom, codec in _BOMS:
+        if data.startswith(bom):
+            return _decode_as(data, codec, path, "its byte-order mark")
+    declared = _CHARSET.search(data[:4096])
+    if declared is not None:
+        name = declared.group(1).decode("ascii", "replace").lower()
+        try:
+            codec = codecs.lookup(name).name
+        except LookupError:
+            codec = ""
+        if codec and not codec.startswith("utf-16"):  # a UTF-16 page without a BOM lies
+            # browsers read a page declared latin-1/ascii as windows-1252 (the WHATWG rule)
+            codec = "cp1252" if codec in ("latin-1", "iso8859-1", "ascii") else codec
+            return _decode_as(data, codec, path, f"its <meta> charset {name!r}")
+    try:
+        return data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("cp1252", errors="replace")
+
+
+def _decode_as(data: bytes, codec: str, path: Path | str, why: str) -> str:
+    try:
+        return data.decode(codec)
+    except UnicodeDecodeError as exc:
+        raise UsageError(
+            f"{path}: not {codec} as {why} says (byte {exc.start}: {data[exc.start : exc.start + 1]!r}); "
+            "save the document as UTF-8"
+        ) from None
 
 
 def read_document(
@@ -144,8 +223,8 @@ def read_document(
         doc.line = line or _text_line(named) or "e-series"
         doc.edition = str(Version.parse(edition)) if edition else named.get(doc.line)
         return doc
-    if kind == "cb3-text":
-        tables = cb3_text.read_tables(text)
+    if kind in ("cb3-text", "tab-text"):
+        tables = cb3_text.read_tables(text, notes=doc.remarks)
     elif kind in ("e-series-text", "rendered-text"):
 
         def starts_row(name: str, type_: str) -> bool:
@@ -156,8 +235,12 @@ def read_document(
                 and (lines.type_name(type_) in lines.types.values())
             )
 
-        reader = rendered_text if kind == "rendered-text" else eseries_text
-        tables = [eseries_text.split_rows(t, starts_row) for t in reader.read_tables(text)]
+        read = (
+            rendered_text.read_tables(text)
+            if kind == "rendered-text"
+            else eseries_text.read_tables(text, notes=doc.remarks)
+        )
+        tables = [eseries_text.split_rows(t, starts_row) for t in read]
         links = realtime_tables.chapter_titles(text)
         doc.realtime = (
             realtime_tables.read_paragraphs(text, lines, links)
@@ -167,8 +250,8 @@ def read_document(
     elif kind == "markdown":
         tables = markdown.read_tables(text)
     else:
-        tables = html_doc.read_tables(text)
-    if kind in ("markdown", "html", "cb3-text"):
+        tables = html_doc.read_tables(text, doc.problems)
+    if kind in ("markdown", "html", "cb3-text", "tab-text"):
         doc.realtime = realtime_tables.tables_in(tables, lines)
         doc.members = _primary_tables(tables, lines)
         if doc.members and source is None:
@@ -176,7 +259,12 @@ def read_document(
     if doc.realtime and source is None:
         doc.source = "realtime-guide"
     default = "cb3" if kind == "cb3-text" else "e-series"
-    return finish(doc, tables, lines, line, edition, default, text, spec)
+    finish(doc, tables, lines, line, edition, default, text, spec)
+    if source is None and doc.fields and not doc.realtime and not doc.members and _is_guide(doc, text):
+        # the guide's own id whatever the file is called (guide (1).html, rtde.md): decided by the
+        # line it is written for, as when the seed is imported, so recorded conflicts still match
+        doc.source = _GUIDE_SOURCE.get(doc.line, doc.source)
+    return doc
 
 
 def _primary_tables(tables: list, lines: Lines) -> list:
@@ -270,6 +358,14 @@ def finish(
     """Fields of the tables into `doc`, its line and edition; exit 2 when no table of any
     interface (RTDE fields, real-time rows, primary sub-packages) is read."""
     doc.fields = field_rows(tables, lines, doc.tables)
+    for table in tables:
+        if table.is_field_table and table.direction is None and table.rows:
+            # never dropped silently: a table the copy does not say the direction of (a heading
+            # naming neither or both) is not compared, and the spec's fields would look removed
+            doc.problems.append(
+                f"the field table at line {table.line} ({len(table.rows)} rows, heading "
+                f"{table.heading or 'none'!r}) names no direction (inputs or outputs): not read"
+            )
     if not doc.fields and not doc.realtime and not doc.members:
         seen = f" ({len(tables)} other tables seen)" if tables else ""
         raise UsageError(f"{doc.path} ({doc.format}): no field read{seen}; looked for {LOOKED_FOR}")

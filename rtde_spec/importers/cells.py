@@ -14,10 +14,22 @@ from dataclasses import dataclass
 from rtde_spec.importers.model import VersionNote
 from rtde_spec.metamodel.schema import Spec
 
-_SPAN = r"\[\s*(\d+)\s*\.\.\s*(\d+)\s*\]"
-_TOKEN = re.compile(rf"({_SPAN})|(\d+\.\d+(?:\.\d+){{0,2}})|(/|;|,)|(\S+)")
+#: the dashes a word processor puts where a range or a pair of versions has `..`, `-` or `/`
+DASHES = "\u2010\u2011\u2012\u2013\u2014\u2212"
+_SPAN = rf"\[\s*(\d+)\s*(?:\.\.|[-{DASHES}])\s*(\d+)\s*\]"
+_TOKEN = re.compile(rf"({_SPAN})|(\d+\.\d+(?:\.\d+){{0,2}})|(/|;|,|[-{DASHES}])|(\S+)")
 # a version expression inside free text: three-part versions only ("exceeds 1.0" is no version)
-_IN_TEXT = re.compile(rf"(?:{_SPAN}\s*)?\d+\.\d+\.\d+(?:\s*/\s*\d+\.\d+\.\d+)*")
+_IN_TEXT = re.compile(rf"(?:{_SPAN}\s*)?\d+\.\d+\.\d+(?:\s*[/{DASHES}]\s*\d+\.\d+\.\d+)*")
+#: characters a copy puts inside names that no reader sees: zero-width space/joiners, soft
+#: hyphen, byte-order mark, word joiner; they cut `actual_\u200bq` into `actual_`
+INVISIBLE = re.compile("[\u00ad\u200b\u200c\u200d\u2060\ufeff]")
+
+
+def visible(text: str) -> str:
+    """The text without the invisible characters that would cut a name in two."""
+    return INVISIBLE.sub("", text)
+
+
 _FAMILY = re.compile(r"^([A-Za-z0-9_]+?)_[Xx]\b\s*(?:\(\s*(?:X\s*=\s*)?" + _SPAN + r"\s*\))?")
 _WORD = re.compile(r"[A-Za-z0-9_]+")
 
@@ -72,6 +84,7 @@ def parse_versions(text: str, lines: Lines) -> tuple[list[VersionNote], str]:
     current: dict[str, str] = {}
     rest = ""
     pending_span = False
+    dashed = False  # "5.30.0 – 5.31.0": a range of versions; the first is the one introducing it
     for match in _TOKEN.finditer(text):
         marker, low, high, version, sep, word = match.groups()
         if marker:
@@ -83,12 +96,16 @@ def parse_versions(text: str, lines: Lines) -> tuple[list[VersionNote], str]:
             if line is None:
                 rest = text[match.start() :].strip()
                 break
+            if line in current and dashed:
+                dashed = False
+                continue
             if line in current:
                 notes.append(VersionNote(span, current))
                 current = {}
             current[line] = full_version(version)
-            pending_span = False
+            pending_span = dashed = False
         elif sep:
+            dashed = sep not in "/;,"
             continue
         elif word:
             rest = text[match.start() :].strip()
@@ -112,7 +129,7 @@ def versions_in_text(text: str, lines: Lines) -> tuple[list[VersionNote], str]:
 
 def parse_name(cell: str) -> tuple[str, tuple[int, int] | None, bool]:
     """(name with {X}, index range written in the name, is it a family) of a name cell."""
-    text = cell.strip().strip("`").strip()
+    text = visible(cell).strip().strip("`*").strip()
     match = _FAMILY.match(text)
     if match and (match.end() == len(text) or text[match.end() :].strip() == ""):
         base, low, high = match.group(1), match.group(2), match.group(3)

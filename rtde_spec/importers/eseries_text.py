@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import re
 
-from rtde_spec.importers.tables import Table, check_rows, is_heading
+from rtde_spec.importers.tables import PAGE_MARK, Table, check_rows, continues, is_heading
 
 #: a paragraph standing for left-out rows
 _ELLIPSIS = re.compile(r"^\s*(…|\.\.\.)|\band more\b", re.I)
@@ -26,14 +26,21 @@ def _cells(line: str) -> list[str] | None:
     return [text[:-1].strip()]
 
 
-def read_tables(text: str, is_type: object = None) -> list[Table]:
-    """Tables with their cells in document order; rows are split by `split_rows`."""
+def read_tables(text: str, is_type: object = None, notes: list[str] | None = None) -> list[Table]:
+    """Tables with their cells in document order; rows are split by `split_rows`.
+
+    A page break inside a table ("Page 7 of 9", a running header, the header cells repeated)
+    carries the table on: its direction stays the one of the heading above its start. Each
+    carry-over is said in `notes`.
+    """
     tables: list[Table] = []
     heading = ""
     cells: list[tuple[int, str]] = []
     header: list[str] = []
     start = 0
     in_table = False
+    gap: list[str] | None = None  # lines since the table's last cell line
+    resumed = -1  # where in `cells` the table went on after a page break (a header may repeat)
 
     def close() -> None:
         if header:
@@ -44,17 +51,35 @@ def read_tables(text: str, is_type: object = None) -> list[Table]:
     for number, raw in enumerate(text.splitlines(), start=1):
         got = _cells(raw)
         if got is None:
-            if in_table:
-                close()
-                in_table, header, cells = False, [], []
+            if in_table and gap is None:
+                gap = []
+            if gap is not None:
+                gap.append(raw)
+                continue
             if is_heading(raw):
                 heading = raw.strip()
             continue
+        if gap is not None:
+            current = Table(heading, list(header), start)
+            if header and continues(current, gap):
+                resumed = len(cells)
+                if notes is not None:
+                    notes.append(f"line {number}: the table {heading!r} goes on after a page break")
+            else:
+                close()
+                in_table, header, cells = False, [], []
+                for line in gap:
+                    if is_heading(line) and not PAGE_MARK.match(line):
+                        heading = line.strip()
+            gap = None
         if not in_table:
-            in_table, start, header, cells = True, number, [], []
+            in_table, start, header, cells, resumed = True, number, [], [], -1
         if raw.strip().startswith("|-") or raw.strip().startswith("|:"):
-            header = [c for _, c in cells]
-            cells = []
+            if not header:
+                header = [c for _, c in cells]
+                cells = []
+            elif resumed >= 0 and [c.lower() for _, c in cells[resumed:]] == [h.lower() for h in header]:
+                del cells[resumed:]  # the header repeated at the top of the next page
             continue
         cells.extend((number, c) for c in got)
         check_rows(len(cells) // 4, number)

@@ -13,9 +13,10 @@ import re
 from html.parser import HTMLParser
 
 from rtde_spec.errors import UsageError
+from rtde_spec.importers.cells import visible
 from rtde_spec.importers.tables import Table, check_rows
 
-_KEEP = re.compile(r"</?(?:table|tr|td|th|h[1-6]|br|p|li|div)\b[^<>]*>", re.I)
+_KEEP = re.compile(r"</?(?:table|tr|td|th|h[1-6]|br|p|li|div|sup)\b[^<>]*>", re.I)
 _TAG = re.compile(r"<[^<>]*>")
 
 _HEADINGS = {"h1", "h2", "h3", "h4", "h5", "h6"}
@@ -33,6 +34,7 @@ class _Reader(HTMLParser):
         self._cell: list[str] | None = None
         self._depth = 0  # nested tables are read as text of their cell
         self._count = 0
+        self._sup = 0  # inside <sup>: a footnote marker when in a name cell (actual_q<sup>1</sup>)
 
     def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
         if tag in _HEADINGS:
@@ -49,6 +51,8 @@ class _Reader(HTMLParser):
             self._cell = []
         elif tag == "br" and self._cell is not None:
             self._cell.append(" ")
+        elif tag == "sup":
+            self._sup += 1
 
     def handle_endtag(self, tag: str) -> None:
         if tag in _HEADINGS and self._heading_text is not None:
@@ -61,6 +65,8 @@ class _Reader(HTMLParser):
                 self.tables.append(self._table)
                 self._table = None
             self._depth = max(0, self._depth - 1)
+        elif tag == "sup":
+            self._sup = max(0, self._sup - 1)
         elif self._depth == 1 and tag in ("td", "th"):
             self._close_cell()
         elif self._depth == 1 and tag == "tr":
@@ -68,7 +74,7 @@ class _Reader(HTMLParser):
 
     def _close_cell(self) -> None:
         if self._cell is not None and self._row is not None:
-            self._row.append(" ".join("".join(self._cell).split()))
+            self._row.append(" ".join(visible("".join(self._cell)).split()))
         self._cell = None
 
     def _close_row(self) -> None:
@@ -85,8 +91,10 @@ class _Reader(HTMLParser):
     def handle_data(self, data: str) -> None:
         if self._heading_text is not None:
             self._heading_text.append(data)
-        if self._cell is not None:
-            self._cell.append(data)
+        if self._cell is not None and not (
+            self._sup and self._row == [] and self._table and self._table.header
+        ):
+            self._cell.append(data)  # a <sup> in a row's first (name) cell is a footnote marker, dropped
 
 
 def _drop_comments(text: str) -> str:
@@ -130,7 +138,9 @@ def _escape(body: str) -> str:
     return "".join(out)
 
 
-def read_tables(text: str) -> list[Table]:
+def read_tables(text: str, problems: list[str] | None = None) -> list[Table]:
+    """The page's tables; one the page ends inside (a download cut short) is kept with the rows
+    read, and said in `problems`: its rows after the cut are missing, not removed."""
     reader = _Reader()
     try:
         reader.feed(simplify(text))
@@ -139,4 +149,19 @@ def read_tables(text: str) -> list[Table]:
         raise
     except Exception as exc:  # html.parser's own assertion on markup it cannot read
         raise UsageError(f"the HTML could not be read: {type(exc).__name__}: {exc}") from None
+    table = reader._table
+    if table is not None and table.header:  # a <table> cut before its first row holds nothing
+        # the row the page stops in may have lost its last cells (VECTOR6D cut to VECTOR): dropped
+        partial = reader._row is not None
+        partial_line = reader._row_line
+        reader._row = reader._cell = None
+        table.cut = True
+        reader.tables.append(table)
+        if problems is not None:
+            dropped = f"; the row at line {partial_line} it stops in is not read" if partial else ""
+            problems.append(
+                f"the page ends inside the table {table.heading or 'without a heading'!r} (<table> at "
+                f"line {table.line} is never closed, {len(table.rows)} rows read{dropped}): a download "
+                "cut short; the spec's fields after the cut are not reported as removed"
+            )
     return reader.tables

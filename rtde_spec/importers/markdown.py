@@ -12,6 +12,8 @@ import re
 from rtde_spec.importers.tables import Table, check_rows
 
 _KNOWN_HEADS = (("name", "type", "comment"), ("meaning", "type", "number of values"))
+#: a footnote reference (`**timestamp**[^1]`): no part of the cell's text
+_FOOTNOTE = re.compile(r"\[\^[^\]\s]*\]")
 _RULER = re.compile(r"^\s*\|?\s*:?-{3,}:?\s*(\|\s*:?-{3,}:?\s*)*\|?\s*$")
 
 
@@ -22,7 +24,7 @@ def _split(line: str) -> list[str]:
     if text.endswith("|") and not text.endswith("\\|"):
         text = text[:-1]
     cells = re.split(r"(?<!\\)\|", text)
-    return [c.strip().replace("\\|", "|") for c in cells]
+    return [_FOOTNOTE.sub("", c).strip().replace("\\|", "|") for c in cells]
 
 
 def read_tables(text: str) -> list[Table]:

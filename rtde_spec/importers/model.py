@@ -75,6 +75,7 @@ class TableReport:
     fields: int = 0
     skipped: list[tuple[int, str]] = field(default_factory=list)  # (line, cell) of placeholder rows
     names: list[str] = field(default_factory=list)  # the fields read from it
+    cut: bool = False  # the copy ends inside it: the spec fields it does not list are not removals
 
 
 @dataclass
@@ -110,7 +111,7 @@ class Document:
     """A document as read: its format, the product line it speaks for, and its tables."""
 
     path: str
-    format: str  # cb3-text | e-series-text | rendered-text | markdown | html | xlsx | primary-text
+    format: str  # cb3-text | tab-text | e-series-text | rendered-text | markdown | html | xlsx | primary-text
     source: str  # the id recorded in `sources` (cb3-guide, e-series-guide, ...)
     line: str = ""  # the product line whose versions the document lists first
     fields: list[DocField] = field(default_factory=list)
@@ -121,6 +122,9 @@ class Document:
     unlisted: dict[str, list[str]] = field(default_factory=dict)
     remarks: list[str] = field(default_factory=list)  # what was read but is no change (blank/CB3-only cells)
     realtime: list[DocRealtimeTable] = field(default_factory=list)  # real-time interface tables
+    #: what makes the reading incomplete (the copy ends inside a table, a table with no direction):
+    #: --check and --write refuse while there are any, since "0 removed" would not be true
+    problems: list[str] = field(default_factory=list)
 
     @property
     def interfaces(self) -> list[str]:

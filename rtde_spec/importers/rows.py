@@ -5,7 +5,7 @@ from __future__ import annotations
 import re
 from collections import Counter
 
-from rtde_spec.importers.cells import Lines, parse_name, parse_versions, spans_in, versions_in_text
+from rtde_spec.importers.cells import DASHES, Lines, parse_name, parse_versions, spans_in, versions_in_text
 from rtde_spec.importers.model import DocField, TableReport
 from rtde_spec.importers.tables import Table
 
@@ -26,7 +26,7 @@ def field_rows(tables: list[Table], lines: Lines, reports: list[TableReport] | N
         direction = table.direction
         if not table.is_field_table or direction is None:
             continue
-        report = TableReport(table.heading, direction, table.line)
+        report = TableReport(table.heading, direction, table.line, cut=table.cut)
         for line, cells in table.rows:
             if not cells or not cells[0].strip():
                 continue
@@ -47,7 +47,10 @@ def field_rows(tables: list[Table], lines: Lines, reports: list[TableReport] | N
 #: "48 general purpose integer registers", "64 general-purpose bits": how many a family holds
 _COUNT = re.compile(r"\b(\d+)\s+(?:general[- ]purpose\s+)?(?:\w+\s+)?(?:registers|bits)\b", re.I)
 
-_VERSION_TOKEN = r"(\[\s*\d+\s*\.\.\s*\d+\s*\]|\d+\.\d+(\.\d+)*|/|,|;|and|cb3|e-series|polyscope[- ]x|sw)"
+_VERSION_TOKEN = (
+    rf"(\[\s*\d+\s*(\.\.|[-{DASHES}])\s*\d+\s*\]|\d+\.\d+(\.\d+)*|/|,|;|[{DASHES}]|and|cb3|e-series"
+    r"|polyscope[- ]x|sw)"
+)
 _VERSIONISH = re.compile(rf"\s*({_VERSION_TOKEN}\s*)*", re.I)
 
 

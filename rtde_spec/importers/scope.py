@@ -58,8 +58,9 @@ def expected_names(spec: Spec, doc: Document, direction: str) -> list[str]:
 
 
 def stops_early(doc: Document) -> set[str]:
-    """Directions whose table has a placeholder row ("… and more"): it does not list them all."""
-    return {t.direction for t in doc.tables if t.skipped}
+    """Directions whose table has a placeholder row ("… and more") or is cut short (the copy
+    ends inside it): it does not list them all."""
+    return {t.direction for t in doc.tables if t.skipped or t.cut}
 
 
 def directions(doc: Document) -> set[str]:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 
 from rtde_spec.errors import UsageError
@@ -28,6 +29,7 @@ class Table:
     header: list[str]
     line: int
     rows: list[tuple[int, list[str]]] = field(default_factory=list)
+    cut: bool = False  # the copy ends inside it: rows after the last one read are missing
 
     @property
     def is_field_table(self) -> bool:
@@ -43,6 +45,37 @@ class Table:
         if "output" in text and "input" not in text:
             return "output"
         return None
+
+
+#: the marks a page break leaves in a text copy: "Page 7 of 9", "4/9", the page's address, the
+#: browser's date line ("5/14/24, 10:15 AM"), a form feed
+PAGE_MARK = re.compile(
+    r"^\s*(?:\f|page\s+\d+(?:\s*(?:of|/)\s*\d+)?|\d+\s*/\s*\d+|https?://\S+"
+    r"|\d{1,2}/\d{1,2}/\d{2,4},?\s+\d{1,2}:\d{2}(?:\s*[AP]M)?)\s*$",
+    re.I,
+)
+_DIRECTION_WORD = re.compile(r"\b(?:in|out)puts?\b", re.I)
+
+
+def continues(previous: Table, gap: list[str]) -> bool:
+    """Whether a table after these lines is `previous` carried over a page: the lines hold a page
+    mark and no heading of the guide's own kind (named as `previous`'s, the direction aside:
+    "Robot Controller Outputs" after "Robot Controller Inputs" is the next section; a running header
+    "RTDE Guide: inputs" is not), or a heading saying "(continued)"."""
+    texts = [g.strip() for g in gap if g.strip()]
+    if any("continued" in t.lower() and _same_kind(previous.heading, t) for t in texts):
+        return True
+    if not any(PAGE_MARK.match(g) for g in gap):
+        return False
+    return not any(is_heading(t) and _same_kind(previous.heading, t) and t != previous.heading for t in texts)
+
+
+def _same_kind(a: str, b: str) -> bool:
+    def shape(text: str) -> str:
+        text = re.sub(r"\(continued\)", "", text, flags=re.I)
+        return " ".join(_DIRECTION_WORD.sub("~", text).lower().split())
+
+    return bool(a.strip()) and shape(a) == shape(b)
 
 
 def is_heading(line: str) -> bool:

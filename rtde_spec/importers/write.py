@@ -101,6 +101,22 @@ class WriteResult:
     held: list[tuple[Change, str]] = field(default_factory=list)
 
 
+def refuse_unreadable(changes: list[Change], doc: Document) -> None:
+    """Nothing read through a wrong charset (U+FFFD, the replacement character) goes into the
+    spec: a name or doc with it is a decoding accident, not UR's text."""
+    for change in changes:
+        if change.known is not None:
+            continue
+        row = change.extra.get("row")
+        values = [change.field, change.new, getattr(row, "doc", ""), getattr(row, "name", "")]
+        if any("\ufffd" in str(v) for v in values if v is not None):
+            raise UsageError(
+                f"{doc.path} line {change.line}: {change.field} ({change.where}) holds U+FFFD, a byte "
+                "the document's charset could not decode; nothing written. Save the document as "
+                "UTF-8 (or declare its charset) and import it again"
+            )
+
+
 def _add_source(entry: Any, source: str) -> None:
     sources = entry.get("sources")
     if sources is None:
@@ -289,6 +305,7 @@ def write_changes(
 
     Removals need `allow_removals`; more than HANDFUL of them without it refuses the whole write.
     """
+    refuse_unreadable(changes, doc)
     rel = "primary/interface.yaml" if doc.interface == "primary" else "rtde/fields.yaml"
     path = spec_dir / rel
     result = WriteResult()
@@ -321,6 +338,7 @@ def write_changes(
 
 def write_overlay(changes: list[Change], doc: Document, spec: Spec, path: Path) -> int:
     """The fields the document adds, as a file for --extra-fields / RTDE_SPEC_EXTRA_FIELDS."""
+    refuse_unreadable(changes, doc)
     yaml = _yaml()
     data: dict[str, Any] = {}
     count = 0
