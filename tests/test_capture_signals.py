@@ -54,7 +54,15 @@ def digests(folder: Path) -> dict[str, str]:
 
 
 def _rewritten(folder: Path, since: float) -> int:
-    return sum(1 for p in folder.rglob("*") if p.is_file() and p.stat().st_mtime > since)
+    """Files under `folder` written since `since`, counted while a capture renames its temporary
+    files into place (one renamed between the listing and its `stat` is passed over)."""
+    count = 0
+    for path in folder.rglob("*"):
+        try:
+            count += path.is_file() and path.stat().st_mtime > since
+        except FileNotFoundError:
+            continue
+    return count
 
 
 def _start_and_wait(inputs: Path, out: Path, jobs: int) -> subprocess.Popen[str]:
