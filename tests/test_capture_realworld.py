@@ -378,3 +378,17 @@ def test_a_live_capture_stopped_after_another_took_its_tables_name_keeps_its_row
     assert "rtde_outputs_2 (500 rows)" in said, said
     assert recipes_by_table(out) == {"rtde_outputs_1": Y, "rtde_outputs_2": X}
     assert pq.read_table(out / "rtde_outputs_2").num_rows == 500
+
+
+def test_an_interface_block_cut_inside_its_time_resolution_option_is_no_crash(tmp_path: Path) -> None:
+    """An if_tsresol option whose value byte the block does not hold raised a bare IndexError
+    out of `capture`: the interface keeps the default resolution (microseconds)."""
+    from rtde_spec.capture.reading.headers import resolution
+    from rtde_spec.cli.main import main
+
+    assert resolution(struct.pack("<HH", 9, 1), "<") == 1e-6
+    shb = struct.pack("<IIIHHq", 0x0A0D0D0A, 28, 0x1A2B3C4D, 1, 0, -1) + struct.pack("<I", 28)
+    idb = struct.pack("<IIHHI", 1, 24, 1, 0, 0) + struct.pack("<HH", 9, 1) + struct.pack("<I", 24)
+    path = tmp_path / "cut_option.pcapng"
+    path.write_bytes(shb + idb)
+    assert main(["capture", str(path), "-o", str(tmp_path / "out")]) in (0, 1, 3)

@@ -48,7 +48,7 @@ def resolution(options: bytes, order: str) -> float:
         code, size = struct.unpack(order + "HH", options[pos : pos + 4])
         if code == 0:
             break
-        if code == 9 and size >= 1:
+        if code == 9 and size >= 1 and pos + 4 < len(options):  # its value byte, if the block holds it
             value = options[pos + 4]
             return 2.0 ** -(value & 0x7F) if value & 0x80 else 10.0**-value
         pos += 4 + size + (-size % 4)
