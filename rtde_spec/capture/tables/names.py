@@ -129,23 +129,26 @@ def listing_entries(path: Path) -> list[tuple[str, Recipe]]:
     except FileNotFoundError:  # removed since the folder was listed (its capture re-run elsewhere)
         return []
     except (OSError, ValueError) as exc:
-        raise OutputError(
+        why = (
             f"cannot be read ({exc}): it says which recipe each table of its capture holds, so no "
-            "table name can be given safely: restore it, or remove it with that capture's files",
-            subject=f"file {path}",
-        ) from exc
+            "table name can be given safely"
+        )
+        raise _unusable(path, why) from exc
     try:
         entries = [(str(e["table"]), (str(e["direction"]), tuple(str(n) for n in e["names"]))) for e in data]
     except (TypeError, KeyError) as exc:
-        raise OutputError(
-            f"is not a list of tables with their direction and field names (no {exc}): restore it, or "
-            "remove it with that capture's files",
-            subject=f"file {path}",
+        raise _unusable(
+            path, f"is not a list of tables with their direction and field names (no {exc})"
         ) from exc
     if len(_listings) >= _CACHE_MAX:
         _listings.clear()
     _listings[str(path)] = (key, entries)
     return entries
+
+
+def _unusable(path: Path, why: str) -> OutputError:
+    """A listing no name can be checked against: what to do about it."""
+    return OutputError(f"{why}: restore it, or remove it with that capture's files", subject=f"file {path}")
 
 
 @contextmanager
