@@ -54,6 +54,7 @@ class ParquetWriter(Writer):
         self.schema: Any = (
             None  # the file's columns; None: the first batch's (a table's next part: its last's)
         )
+        self.declared: Any = None  # `declare`: the schema every file of the table has
         self._groups = 0  # row groups handed to pyarrow: its footer holds each one's column chunks
         self.threaded: bool | None = None  # this file's `THREADED` (False: it is written on a worker)
 
@@ -70,9 +71,18 @@ class ParquetWriter(Writer):
             self.stream, schema, use_dictionary=dictionary, write_statistics=stats, compression=compression
         )
 
+    def declare(self, columns: Mapping[str, str]) -> None:
+        pa = self._pa
+        types = {"str": pa.string()}
+        fields = [
+            pa.field(n, types.get(t) or pa.from_numpy_dtype(t), nullable=True) for n, t in columns.items()
+        ]
+        self.declared = pa.schema(fields)
+
     def _add(self, table_: Any) -> None:
         if self._writer is None:
-            self._open(self.schema if self.schema is not None else table_.schema)
+            schema = self.schema if self.schema is not None else self.declared
+            self._open(schema if schema is not None else table_.schema)
         if table_.schema != self._writer.schema:
             table_ = self._conformed(table_)
         self._tables.append(table_)
@@ -90,8 +100,15 @@ class ParquetWriter(Writer):
         first batch had none in that column is an error naming it, not a corrupt file."""
         schema = self._writer.schema
         missing = [n for n in schema.names if n not in table_.column_names]
-        if missing:
+        if missing and self.declared is not None:  # declared: what this batch's source does not send
+            pa = self._pa
+            for name in missing:
+                table_ = table_.append_column(name, pa.nulls(table_.num_rows, schema.field(name).type))
+        elif missing:
             raise UsageError(f"a batch lacks the file's columns {missing[:5]}", subject=WHERE)
+        extra = [n for n in table_.column_names if n not in schema.names]
+        if extra:  # select() would drop them: values lost with no word
+            raise UsageError(f"a batch has columns the file has not: {extra[:5]}", subject=WHERE)
         try:
             return table_.select(schema.names).cast(schema)
         except (ValueError, self._pa.ArrowInvalid) as exc:

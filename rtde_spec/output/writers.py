@@ -131,26 +131,41 @@ class CsvWriter(Writer):
 
         self._csv = csv.writer(self._text, lineterminator="\n")  # as pyarrow ends its rows: one ending
         self._header: list[str] | None = None
+        self._declared: list[str] | None = None  # `declare`: the header of every file of the table
 
-    def _start(self, names: list[str]) -> None:
+    def declare(self, columns: Mapping[str, str]) -> None:
+        self._declared = list(columns)
+
+    def _start(self, names: list[str]) -> bool:
+        """The header written with the first row; whether these columns need padding to it."""
         if self._header is None:
-            self._header = names
-            self._csv.writerow(names)
-        elif names != self._header:
-            raise UsageError(
-                "rows of different shapes cannot share one CSV table "
-                f"(first: {len(self._header)} columns, now {len(names)}); use --format jsonl"
-            )
+            self._header = self._declared or names
+            self._csv.writerow(self._header)
+        if names == self._header:
+            return False
+        if self._declared and set(names) <= set(self._declared):
+            return True
+        raise UsageError(
+            "rows of different shapes cannot share one CSV table "
+            f"(first: {len(self._header)} columns, now {len(names)}); use --format jsonl"
+        )
 
     def write(self, record: Mapping[str, Any]) -> None:
         flat = flatten(record)
-        self._start(list(flat))
+        if self._start(list(flat)):
+            flat = {name: flat.get(name) for name in self._header or ()}
         self._csv.writerow(flat.values())
         self.rows += 1
 
     def write_columns(self, columns: Mapping[str, Any]) -> None:
         flat = flat_columns(columns)
-        self._start(list(flat))
+        if self._start(list(flat)):  # what this source does not send: empty cells
+            import numpy as np
+
+            size = len(next(iter(flat.values())))
+            flat = {
+                n: flat[n] if n in flat else np.full(size, None, dtype=object) for n in self._header or ()
+            }
         try:
             import pyarrow.csv as pacsv
         except ImportError:

@@ -1,4 +1,5 @@
-"""Records of real-time connections (port 30003/30013): one row per message, table `realtime`.
+"""Records of real-time connections (port 30003/30013): one row per message, table `realtime`
+(every version's columns in every file: `layout.all_columns`).
 
 A real-time message has a size and no type; a controller sends every message of one
 connection at the same size (its version's layout), so the connection is framed as
@@ -19,7 +20,7 @@ from rtde_spec.capture.tables.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
 from rtde_spec.errors import RtdeSpecError
 from rtde_spec.realtime import decode, known_sizes, layout_for_size
-from rtde_spec.realtime.layout import RealtimeLayout
+from rtde_spec.realtime.layout import RealtimeLayout, all_columns
 
 TABLE = "realtime"
 SIZE = 4  # the size field leads each message
@@ -30,6 +31,7 @@ WINDOW = 64 << 10  # bytes held looking for the message size (a message is at mo
 class RealtimeConnection:
     def __init__(self, name: str, robot: str, sink: TableSink) -> None:
         self.name, self.robot, self.sink = name, robot, sink
+        sink.declare(TABLE, {"connection": "str", "capture_time": "f8", **all_columns()})
         self.counts = Counts()
         self.held: list[Chunk] = []  # chunks before the message size is known
         self.held_bytes = 0

@@ -74,6 +74,12 @@ class TableSink:
         self.recipes: dict[Recipe, str] = {}  # (direction, names) -> table, in the order met
         self.register = register if register is not None else Register(Path("."))
         self.lag = 0  # blocks of a mapped input this sink may still read after it is given them
+        self.declared: dict[str, dict[str, str]] = {}  # table -> every column it can have, numpy types
+
+    def declare(self, table: str, columns: dict[str, str]) -> None:
+        """The columns every file of `table` holds, in order (a row without one: null there), so
+        files of different sources (controller versions) read as one table with one schema."""
+        self.declared[table] = columns
 
     def table_for_recipe(self, direction: str, names: tuple[str, ...]) -> str:
         key = (direction, names)
@@ -180,6 +186,8 @@ class DirectorySink(TableSink):
             self.writers[key] = writer
             if self.ahead is not None:  # written on a worker already: row groups encoded in it
                 writer.threaded = False  # type: ignore[attr-defined]
+            if table in self.declared:
+                writer.declare(self.declared[table])
             if key in self.schemas:  # the table's next part: the columns of the parts before
                 writer.schema = self.schemas[key]  # type: ignore[attr-defined]
             if pinned:
@@ -291,19 +299,34 @@ class ArrowSink(TableSink):
     def __init__(self) -> None:
         super().__init__()
         self.pa = require("pyarrow", "arrow", "capture tables")
-        self.row_parts: dict[str, list[dict[str, Any]]] = {}
-        self.table_parts: dict[str, list[Any]] = {}
+        self.pending: dict[str, list[dict[str, Any]]] = {}  # rows since the table's last batch
+        self.parts: dict[str, list[Any]] = {}  # each table's batches, in the order given
 
     def _row(self, table: str, robot: str, day: str, record: Mapping[str, Any]) -> None:
-        self.row_parts.setdefault(table, []).append({**flatten(record), "robot": robot, "date": day})
+        self.pending.setdefault(table, []).append({**flatten(record), "robot": robot, "date": day})
 
     def _columns(self, table: str, robot: str, day: str, columns: Mapping[str, Any]) -> None:
+        self._rows_to_part(table)
         flat = flat_columns(columns)
         size = len(next(iter(flat.values())))
         batch = self.pa.table({**flat, "robot": [robot] * size, "date": [day] * size})
-        self.table_parts.setdefault(table, []).append(batch)
+        self.parts.setdefault(table, []).append(batch)
+
+    def _rows_to_part(self, table: str) -> None:
+        rows = self.pending.pop(table, None)
+        if rows:
+            from rtde_spec.output.tables import rows_table
+
+            self.parts.setdefault(table, []).append(rows_table(rows))
 
     def tables(self) -> dict[str, Any]:
-        out = {name: self.pa.Table.from_pylist(rows) for name, rows in self.row_parts.items()}
-        out.update({name: self.pa.concat_tables(parts) for name, parts in self.table_parts.items()})
+        """One table each; batches of different columns (sources of several versions, rows beside
+        batches) in one: a column one lacks is null there, a narrower integer widened."""
+        for table in list(self.pending):
+            self._rows_to_part(table)
+        out = {}
+        for name, parts in self.parts.items():
+            out[name] = (
+                parts[0] if len(parts) == 1 else self.pa.concat_tables(parts, promote_options="permissive")
+            )
         return out
