@@ -27,6 +27,7 @@ from typing import IO, Any
 
 from rtde_spec.capture.reading.headers import count_cut, interface, snap_length
 from rtde_spec.capture.reading.recordsync import MAX_BLOCK, next_pcap_record, next_pcapng_block, pcap_limit
+from rtde_spec.capture.reading.strides import count_cut_run, same_run, strided
 from rtde_spec.errors import UsageError
 
 BLOCK = 8 << 20
@@ -281,12 +282,16 @@ def _pcap(
             stride = 16 + caplen
             if pos + stride > end:
                 break
-            same = _same_run(buf, pos, stride, (end - pos) // stride, 8, caplen, u32)
-            secs, fracs = (_strided(buf, pos + at, stride, same, u32) for at in (0, 4))
+            same = same_run(buf, pos, stride, (end - pos) // stride, 8, caplen, u32)
+            if not caplen:  # no frame in them (a zero-filled stretch of the file reads as these)
+                stats["empty_records"] = stats.get("empty_records", 0) + same
+                pos += same * stride
+                continue
+            secs, fracs = (strided(buf, pos + at, stride, same, u32) for at in (0, 4))
             starts = pos + 16 + np.arange(same, dtype=np.int64) * stride
             lengths = np.full(same, caplen, dtype=np.int64)
             found.add(starts, lengths, secs + fracs * unit, linktype)
-            _count_cut(stats, buf, pos + 12, stride, same, lengths, u32)
+            count_cut_run(stats, buf, pos + 12, stride, same, lengths, u32)
             last_secs[:] = [int(secs[-1])]
             pos += same * stride
         return pos
@@ -295,47 +300,6 @@ def _pcap(
         return int(size_at(buf, pos + 8)[0]) + 16 if len(buf) - pos >= 16 else 0
 
     yield from _by_block(f, b"", 24, stats, parse, claim, lag)  # after the file header
-
-
-def _count_cut(
-    stats: dict[str, int], buf: Any, at: int, stride: int, same: int, lengths: Any, u32: Any
-) -> None:
-    """Records of a run that a snap length cut (their original length, at `at`, over what the
-    file holds). A run of one record (data and ACK frames alternate: most of a real session's)
-    is one `struct` read, not numpy calls."""
-    if same > 1:
-        count_cut(stats, lengths, _strided(buf, at, stride, same, u32))
-        return
-    original = struct.unpack_from(u32.str[0] + "I", buf, at)[0]  # the byte order of the file
-    if original > int(lengths[0]):
-        import numpy as np
-
-        count_cut(stats, lengths, np.array([original]))
-
-
-def _strided(buf: Any, start: int, stride: int, count: int, dtype: Any) -> Any:
-    """`count` values of `dtype` at `start`, `start + stride`, ... as int64."""
-    import numpy as np
-
-    return np.ndarray((count,), dtype=dtype, buffer=buf, offset=start, strides=(stride,)).astype(np.int64)
-
-
-def _same_run(buf: Any, pos: int, stride: int, count: int, at: int, value: int, dtype: Any) -> int:
-    """How many records of `stride` bytes from `pos` on hold `value` at offset `at` (at least 1).
-
-    Looked at in windows growing 4x (16, 64, 256, ...), so finding a run costs its length,
-    not the rest of the block: short runs of many sizes (many small connections) stay linear."""
-    if count <= 1:
-        return 1
-    done, window = 0, 16
-    while done < count:
-        n = min(window, count - done)
-        differs = _strided(buf, pos + done * stride + at, stride, n, dtype) != value
-        if differs.any():
-            return max(1, done + int(differs.argmax()))
-        done += n
-        window *= 4
-    return count
 
 
 def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int], lag: int = 0) -> Iterator[Records]:
@@ -371,16 +335,16 @@ def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int], lag: i
             if btype == EPB and length >= 32:
                 u32 = np.dtype(order + "u4")
                 iface = struct.unpack_from(order + "I", buf, pos + 8)[0]
-                same = _same_run(buf, pos, length, (end - pos) // length, 4, length, u32)
-                same = min(same, _same_run(buf, pos, length, same, length - 4, length, u32))  # its end
-                same = min(same, _same_run(buf, pos, length, same, 0, EPB, u32))
-                same = min(same, _same_run(buf, pos, length, same, 8, iface, u32))
+                same = same_run(buf, pos, length, (end - pos) // length, 4, length, u32)
+                same = min(same, same_run(buf, pos, length, same, length - 4, length, u32))  # its end
+                same = min(same, same_run(buf, pos, length, same, 0, EPB, u32))
+                same = min(same, same_run(buf, pos, length, same, 8, iface, u32))
                 linktype, unit = interfaces[iface] if iface < len(interfaces) else (-1, 1e-6)
-                high, low, caplen = (_strided(buf, pos + at, length, same, u32) for at in (12, 16, 20))
+                high, low, caplen = (strided(buf, pos + at, length, same, u32) for at in (12, 16, 20))
                 starts = pos + 28 + np.arange(same, dtype=np.int64) * length
                 lengths = np.minimum(caplen, length - 32)
                 found.add(starts, lengths, ((high << 32) | low) * unit, linktype)
-                _count_cut(stats, buf, pos + 24, length, same, lengths, u32)
+                count_cut_run(stats, buf, pos + 24, length, same, lengths, u32)
                 pos += same * length
                 continue
             if btype == IDB:

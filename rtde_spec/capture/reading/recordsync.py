@@ -9,6 +9,7 @@ on from there, and the bytes passed over are counted.
 
 from __future__ import annotations
 
+import re
 import struct
 from typing import Any
 
@@ -68,8 +69,24 @@ def block_fits(buf: Any, at: int, end: int, order: str) -> bool | None:
 
 
 def next_pcapng_block(buf: Any, start: int, end: int, order: str) -> int | None:
-    """The first 4-aligned position from `start` of a block `block_fits` does not refuse."""
-    for at in range(start, end - 11, 4):
+    """The first 4-aligned position from `start` of a block `block_fits` does not refuse.
+
+    No block type is 0: a stretch of zeros (a preallocated file's unwritten end) is passed in
+    one C search for its end, not looked at a word at a time."""
+    at = start
+    while at <= end - 12:
+        if not _WORD.unpack_from(buf, at)[0]:
+            nonzero = _NONZERO.search(buf, at, end)
+            if nonzero is None:
+                return None
+            at += (nonzero.start() - at) // 4 * 4  # the word holding it, on the blocks' alignment
+            if at > end - 12:
+                return None
         if block_fits(buf, at, end, order) is not False:
             return at
+        at += 4
     return None
+
+
+_WORD = struct.Struct("I")  # a zero word reads as zero in either byte order
+_NONZERO = re.compile(rb"[^\x00]")

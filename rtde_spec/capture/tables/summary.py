@@ -82,6 +82,11 @@ class CaptureSummary:
                 f"{r['bad_records']} records whose length cannot be one: "
                 f"{r.get('skipped_file_bytes', 0)} bytes skipped to the next whole record"
             )
+        if r.get("empty_records"):
+            out.append(
+                f"{r['empty_records']} records that hold no frame (skipped): a stretch of zeros, as a "
+                "preallocated or unfinished capture file ends, reads as such records"
+            )
         if r.get("bad_times"):
             out.append(f"{r['bad_times']} frames with an impossible capture time (kept; date=unknown)")
         if r.get("undecodable"):
