@@ -45,7 +45,8 @@ def test_every_layout_only_adds_columns_of_one_type() -> None:
             for i in range(c)
         ]
         assert flat == [n for n in columns if n in set(flat)], version  # same order
-    assert columns["payload_mass"] == "f8" and columns["robot_mode"] == "i8"
+    assert columns["payload_mass"] == "f8?" and columns["robot_mode"] == "i8"  # since 5.10: nullable
+    assert columns["q_actual_0"] == "f8"  # in every version: never null
 
 
 def test_a_folder_of_two_versions_reads_every_column_from_the_first_file_on(tmp_path: Path) -> None:

@@ -88,8 +88,9 @@ class Writer:
         raise NotImplementedError
 
     def declare(self, columns: Mapping[str, str]) -> None:
-        """Every column the file holds, in order, with its numpy type (before the first row): a
-        row or batch without one has it null. Formats without a fixed column set ignore it."""
+        """Every column the file holds, in order, with its numpy type ("f8?": nullable), before
+        the first row: a row or batch without one has it null. Formats without a fixed column
+        set ignore it."""
 
     def flush(self) -> None:
         """Everything written so far is in the file (the recorder calls this per batch)."""

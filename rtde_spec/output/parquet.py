@@ -73,11 +73,13 @@ class ParquetWriter(Writer):
 
     def declare(self, columns: Mapping[str, str]) -> None:
         pa = self._pa
-        types = {"str": pa.string()}
-        fields = [
-            pa.field(n, types.get(t) or pa.from_numpy_dtype(t), nullable=True) for n, t in columns.items()
-        ]
-        self.declared = pa.schema(fields)
+
+        def field(name: str, kind: str) -> Any:
+            code = kind.rstrip("?")
+            arrow = pa.string() if code == "str" else pa.from_numpy_dtype(code)
+            return pa.field(name, arrow, nullable=kind.endswith("?"))
+
+        self.declared = pa.schema([field(n, t) for n, t in columns.items()])
 
     def _add(self, table_: Any) -> None:
         if self._writer is None:
@@ -96,21 +98,27 @@ class ParquetWriter(Writer):
             self._write_held()
 
     def _conformed(self, table_: Any) -> Any:
-        """A later batch in the file's schema (its first batch's); a value missing where the
-        first batch had none in that column is an error naming it, not a corrupt file."""
+        """A later batch in the file's schema (its first batch's, or the declared one: columns
+        this batch's source does not send are null); a column the file has not, or a value
+        missing where the file has none, is an error naming it, not a corrupt file or lost data."""
         schema = self._writer.schema
-        missing = [n for n in schema.names if n not in table_.column_names]
+        present, names = set(table_.column_names), set(schema.names)
+        missing = [n for n in schema.names if n not in present]
         if missing and self.declared is not None:  # declared: what this batch's source does not send
             pa = self._pa
             for name in missing:
                 table_ = table_.append_column(name, pa.nulls(table_.num_rows, schema.field(name).type))
         elif missing:
             raise UsageError(f"a batch lacks the file's columns {missing[:5]}", subject=WHERE)
-        extra = [n for n in table_.column_names if n not in schema.names]
+        extra = [n for n in table_.column_names if n not in names]
         if extra:  # select() would drop them: values lost with no word
             raise UsageError(f"a batch has columns the file has not: {extra[:5]}", subject=WHERE)
         try:
-            return table_.select(schema.names).cast(schema)
+            table_ = table_.select(schema.names)
+            fits = all(f.nullable or not c.null_count for f, c in zip(schema, table_.columns, strict=True))
+            if fits and table_.schema.types == schema.types:  # nullability alone differs: no copy
+                return self._pa.Table.from_arrays(table_.columns, schema=schema)
+            return table_.cast(schema)
         except (ValueError, self._pa.ArrowInvalid) as exc:
             raise UsageError(f"a batch does not fit the file's columns: {exc}", subject=WHERE) from exc
 

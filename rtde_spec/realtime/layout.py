@@ -142,15 +142,21 @@ def layout_for_size(size: int) -> RealtimeLayout | None:
 def all_columns() -> dict[str, str]:
     """Every layout's columns as tables hold them (vectors as name_0..name_N), in order, each
     with its numpy type: one column set for every version, so files of controllers of several
-    versions read as one table (a column a version does not send is null in its files)."""
+    versions read as one table. A column some version does not send is nullable ("f8?"): null
+    in that version's files; the rest are never null (Parquet stores them faster)."""
     columns: dict[str, str] = {"message_size": "i4"}  # the size field, as the struct plan reads it
+    sets = []
     for plan in sorted(_all(), key=lambda p: p.size):
+        names = []
         for name, count in zip(plan.names, plan.counts, strict=True):
             kind = "i8" if name in plan.integers else "f8"
             for flat in [name] if count == 1 else [f"{name}_{i}" for i in range(count)]:
                 if columns.setdefault(flat, kind) != kind:
                     raise AssertionError(f"real-time field {flat} changes type between layouts")
-    return columns
+                names.append(flat)
+        sets.append(set(names))
+    everywhere = set.intersection(*sets)
+    return {n: t if n in everywhere or n == "message_size" else t + "?" for n, t in columns.items()}
 
 
 def known_sizes() -> tuple[int, ...]:

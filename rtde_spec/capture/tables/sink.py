@@ -77,8 +77,9 @@ class TableSink:
         self.declared: dict[str, dict[str, str]] = {}  # table -> every column it can have, numpy types
 
     def declare(self, table: str, columns: dict[str, str]) -> None:
-        """The columns every file of `table` holds, in order (a row without one: null there), so
-        files of different sources (controller versions) read as one table with one schema."""
+        """The columns every file of `table` holds, in order, so files of different sources
+        (controller versions) read as one table with one schema: name -> numpy type, ending in
+        "?" where a source may not send it (null in that source's rows)."""
         self.declared[table] = columns
 
     def table_for_recipe(self, direction: str, names: tuple[str, ...]) -> str:
