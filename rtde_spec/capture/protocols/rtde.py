@@ -3,7 +3,9 @@
 The session (protocol version, recipes from the setup exchange) is followed by
 `SessionDecoder`; data packages of a known recipe are batched and decoded together, or
 come as whole runs from the bulk path (`run_codec` / `feed_run`). A resynchronisation
-candidate is checked against a known recipe's id and size.
+candidate is checked against a known recipe's id and size. Packages reach the session in
+the order they depend on each other (`rtde_order.py`): a merged capture can hold a setup
+reply before its request.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from rtde_spec._generated.constants import (
 )
 from rtde_spec.capture.framing.sized import NO, STRONG, WEAK, Check, Framing
 from rtde_spec.capture.protocols.base import Counts
+from rtde_spec.capture.protocols.rtde_order import CausalOrder
 from rtde_spec.capture.tables.rows import wide_values
 from rtde_spec.capture.tables.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
@@ -53,6 +56,12 @@ class RtdeConnection:
         self.counts = Counts()
         self.last_time = 0.0
         self.batches: dict[tuple[str, int], tuple[RecipeCodec, Any, Any]] = {}  # packages: bytes list or rows
+        self.order = CausalOrder()
+
+    @property
+    def notes(self) -> list[str]:
+        """Packages decoded without their other half (a reply without its request): the summary's."""
+        return self.order.notes()
 
     def feed(self, sender: str, chunk: Chunk) -> None:
         self.last_time = chunk.time
@@ -63,14 +72,19 @@ class RtdeConnection:
         for n, package in enumerate(packages):
             time = now if times is None else times[n]  # a package held back: when it was completed
             self.counts.packages += 1
-            if package[TYPE_AT] == DATA_PACKAGE_TYPE:
-                package = self.session.guide_form(sender, package) or package  # protocol 1, without its id
-            if package[TYPE_AT] == DATA_PACKAGE_TYPE and len(package) > RECIPE_ID_AT:
-                codec = self._codec(sender, package)
-                if codec is not None:
-                    self._batch(sender, package[RECIPE_ID_AT], codec, package, time)
-                    continue
-            self._control(sender, package, time)
+            for released in self.order.take(sender, package, time):
+                self._decode(*released)
+
+    def _decode(self, sender: str, package: bytes, time: float) -> None:
+        """One package, in the order the session needs them: batched by recipe, or a control row."""
+        if package[TYPE_AT] == DATA_PACKAGE_TYPE:
+            package = self.session.guide_form(sender, package) or package  # protocol 1, without its id
+        if package[TYPE_AT] == DATA_PACKAGE_TYPE and len(package) > RECIPE_ID_AT:
+            codec = self._codec(sender, package)
+            if codec is not None:
+                self._batch(sender, package[RECIPE_ID_AT], codec, package, time)
+                return
+        self._control(sender, package, time)
 
     def _check(self, sender: str) -> Check:
         """A resynchronisation candidate that is a data package must be of a recipe this direction
@@ -105,14 +119,17 @@ class RtdeConnection:
         """The end of the capture: packages held back for confirmation are decoded."""
         for sender, framing in self.framing.items():
             self._packages(sender, framing.finish(), framing.times, self.last_time)
+        for released in self.order.finish():
+            self._decode(*released)
 
     def run_codec(self, sender: str, package: bytes) -> RecipeCodec | None:
         """The codec for a run of whole data packages like `package`, one per segment, from here on.
 
-        Only when nothing is held in the framing (the run starts on a package boundary).
+        Only when nothing is held in the framing (the run starts on a package boundary) nor waits
+        for the other direction (the run goes behind what waits).
         """
         framing = self.framing[sender]
-        if framing.buf or not framing.synced:
+        if framing.buf or not framing.synced or self.order.holds(sender):
             return None
         return self._codec(sender, package)
 
@@ -201,5 +218,7 @@ class RtdeConnection:
                 self.counts.errors.append(f"{sender} {message.name} at {time:.6f}: {decoded.problem}")
 
     def close(self) -> None:
+        for released in self.order.finish():  # stopped early (Ctrl-C): what waits reaches the tables too
+            self._decode(*released)
         for key in list(self.batches):
             self._flush(key)
