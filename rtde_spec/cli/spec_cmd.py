@@ -21,7 +21,17 @@ if TYPE_CHECKING:
 
 
 #: the document forms --form names (rtde_spec.importers.FORMATS; not imported at start-up)
-FORMS = ("cb3-text", "tab-text", "e-series-text", "rendered-text", "markdown", "html", "xlsx", "primary-text")
+FORMS = (
+    "cb3-text",
+    "tab-text",
+    "e-series-text",
+    "rendered-text",
+    "columns-text",
+    "markdown",
+    "html",
+    "xlsx",
+    "primary-text",
+)
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:

@@ -10,15 +10,8 @@ import re
 from pathlib import Path
 
 from rtde_spec.errors import UsageError
-from rtde_spec.importers import (
-    cb3_text,
-    eseries_text,
-    html_doc,
-    markdown,
-    realtime_tables,
-    rendered_text,
-)
-from rtde_spec.importers.cells import Lines, parse_name, visible
+from rtde_spec.importers import columns_text, html_doc, markdown, realtime_tables, rendered_text
+from rtde_spec.importers.cells import Lines, visible
 from rtde_spec.importers.edition import newest, versions_named
 from rtde_spec.importers.model import Document
 from rtde_spec.importers.rows import field_rows, main_line
@@ -31,6 +24,7 @@ FORMATS = (
     "tab-text",
     "e-series-text",
     "rendered-text",
+    "columns-text",
     "markdown",
     "html",
     "xlsx",
@@ -74,12 +68,15 @@ def detect_format(text: str) -> str:
         return "e-series-text"
     if re.search(r"^\s*Name\tType\t", text, re.MULTILINE):
         return "cb3-text" if _cb3_era(text) else "tab-text"
+    if columns_text.SIGN.search(text):
+        return "columns-text"
     if rendered_text.HEADER.search(text):
         return "rendered-text"
     raise UsageError(
         "cannot tell the document's form: expected an RTDE guide (tab-separated text, "
-        "pipe-terminated text, rendered text with a cell per line, Markdown or HTML tables, the "
-        "client-interface .xlsx) or the primary interface document; --form names the form"
+        "pipe-terminated text, rendered text with a cell per line, columns aligned with spaces as "
+        "pdftotext -layout gives them, Markdown or HTML tables, the client-interface .xlsx) or the "
+        "primary interface document; --form names the form"
     )
 
 
@@ -223,30 +220,17 @@ def read_document(
         doc.line = line or _text_line(named) or "e-series"
         doc.edition = str(Version.parse(edition)) if edition else named.get(doc.line)
         return doc
-    if kind in ("cb3-text", "tab-text"):
-        tables = cb3_text.read_tables(text, notes=doc.remarks)
-    elif kind in ("e-series-text", "rendered-text"):
+    if kind in ("cb3-text", "tab-text", "e-series-text", "rendered-text", "columns-text"):
+        from rtde_spec.importers.text_tables import read_text_tables
 
-        def starts_row(name: str, type_: str) -> bool:
-            word, _, _ = parse_name(name)
-            return (
-                bool(re.fullmatch(r"[A-Za-z_][A-Za-z0-9_{}]*", word))
-                and type_.strip() != ""
-                and (lines.type_name(type_) in lines.types.values())
+        tables = read_text_tables(kind, text, doc, lines, spec)
+        if kind in ("e-series-text", "rendered-text"):
+            links = realtime_tables.chapter_titles(text)
+            doc.realtime = (
+                realtime_tables.read_paragraphs(text, lines, links)
+                or realtime_tables.read_paragraphs(realtime_tables.joined_cells(text), lines, links)
+                or realtime_tables.read_spaced(text, lines)
             )
-
-        read = (
-            rendered_text.read_tables(text)
-            if kind == "rendered-text"
-            else eseries_text.read_tables(text, notes=doc.remarks)
-        )
-        tables = [eseries_text.split_rows(t, starts_row) for t in read]
-        links = realtime_tables.chapter_titles(text)
-        doc.realtime = (
-            realtime_tables.read_paragraphs(text, lines, links)
-            or realtime_tables.read_paragraphs(realtime_tables.joined_cells(text), lines, links)
-            or realtime_tables.read_spaced(text, lines)
-        )
     elif kind == "markdown":
         tables = markdown.read_tables(text)
     else:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from rtde_spec.importers.eseries_text import stops_in
 from rtde_spec.importers.tables import PAGE_MARK, Table, check_rows, continues, is_heading
 
 
@@ -13,6 +14,7 @@ def read_tables(text: str, notes: list[str] | None = None) -> list[Table]:
     current: Table | None = None
     last: Table | None = None  # the table a page break may have cut
     gap: list[str] = []
+    gap_at = 0  # the line the gap starts at
     count = 0
     for number, raw in enumerate(text.splitlines(), start=1):
         line = raw.rstrip("\r\n")
@@ -20,7 +22,7 @@ def read_tables(text: str, notes: list[str] | None = None) -> list[Table]:
             continue
         if "\t" not in line:
             if current is not None:
-                last, gap = current, []
+                last, gap, gap_at = current, [], number
             current = None
             gap.append(line)
             if is_heading(line) and not PAGE_MARK.match(line):
@@ -45,4 +47,7 @@ def read_tables(text: str, notes: list[str] | None = None) -> list[Table]:
             current.rows.append((number, cells))
             count += 1
             check_rows(count, number)
+    ends_in = current or last
+    if ends_in is not None:
+        stops_in(ends_in, gap, gap_at)
     return tables

@@ -11,6 +11,7 @@ from __future__ import annotations
 import re
 
 from rtde_spec.importers.tables import PAGE_MARK, Table, check_rows, continues, is_heading
+from rtde_spec.importers.wrapped import FRAGMENT
 
 #: a paragraph standing for left-out rows
 _ELLIPSIS = re.compile(r"^\s*(…|\.\.\.)|\band more\b", re.I)
@@ -85,14 +86,29 @@ def read_tables(text: str, is_type: object = None, notes: list[str] | None = Non
         check_rows(len(cells) // 4, number)
     if in_table:
         close()
+        if tables and header:
+            stops_in(tables[-1], gap or [], tables[-1].rows[-1][0] + 1 if tables[-1].rows else 0)
     return tables
+
+
+def stops_in(table: Table, after: list[str], line: int) -> None:
+    """Mark a table the text ends in: nothing after its last cell, or one line (from `line`; a cell
+    cut before its end mark: a name is the row's stub, other text leaves the last row to be judged)."""
+    rest = [line.strip() for line in after if line.strip()]
+    if len(rest) > 1:
+        return
+    table.open_end = True
+    if rest and FRAGMENT.fullmatch(rest[0]) and "_" in rest[0]:
+        table.stub = (line + next(k for k, raw in enumerate(after) if raw.strip()), rest[0])
 
 
 def split_rows(table: Table, starts_row: object) -> Table:
     """Group a table's cells into rows: a row starts at a name cell followed by a type cell."""
     assert callable(starts_row)
     flat = [(n, row[0]) for n, row in table.rows]
-    out = Table(table.heading, table.header, table.line)
+    out = Table(
+        table.heading, table.header, table.line, cut=table.cut, open_end=table.open_end, stub=table.stub
+    )
     i = 0
     while i < len(flat):
         if _ELLIPSIS.search(flat[i][1]) and len(flat[i][1]) <= 60:

@@ -54,6 +54,11 @@ _VERSION_TOKEN = (
 _VERSIONISH = re.compile(rf"\s*({_VERSION_TOKEN}\s*)*", re.I)
 
 
+def is_version_text(text: str) -> bool:
+    """Whether a cell holds versions only ("5.23.0 / 10.11.0", "[24..47] 5.3.0"): a version cell."""
+    return bool(re.search(r"\d", text)) and bool(_VERSIONISH.fullmatch(text))
+
+
 def _version_start(cells: list[str]) -> int:
     """Where the version cells begin: the trailing cells that hold only versions (a comment of
     several paragraphs comes as several cells in the text forms); at least after the comment."""

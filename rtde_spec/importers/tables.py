@@ -30,6 +30,8 @@ class Table:
     line: int
     rows: list[tuple[int, list[str]]] = field(default_factory=list)
     cut: bool = False  # the copy ends inside it: rows after the last one read are missing
+    open_end: bool = False  # the text ends in it (nothing after its last row): cut unless that row is whole
+    stub: tuple[int, str] | None = None  # (line, text) of a row the text stops in, too short to read
 
     @property
     def is_field_table(self) -> bool:
@@ -54,6 +56,65 @@ PAGE_MARK = re.compile(
     r"|\d{1,2}/\d{1,2}/\d{2,4},?\s+\d{1,2}:\d{2}(?:\s*[AP]M)?)\s*$",
     re.I,
 )
+FORM_FEED = "\f"  # pdftotext ends every page with one
+
+
+def is_page_mark(text: str) -> bool:
+    """A page number, a page's address or date line, or a form feed: never a cell."""
+    return FORM_FEED in text or bool(PAGE_MARK.match(text))
+
+
+def split_form_feeds(text: str) -> list[tuple[int, str]]:
+    """(line number, line) of a text, a form feed on a line of its own (pdftotext starts the next
+    page's first line with it: "\fReal-Time Data Exchange (RTDE) Guide"). Lines are counted as an
+    editor counts them (str.splitlines would end a line at the form feed, and count one more)."""
+    out: list[tuple[int, str]] = []
+    for number, raw in enumerate(text.split("\n"), start=1):
+        parts = raw.rstrip("\r").split(FORM_FEED)
+        for k, part in enumerate(parts):
+            if k:
+                out.append((number, FORM_FEED))
+            if part.strip() or not k:
+                out.append((number, part))
+    return out
+
+
+#: what a cell holds and a running header never does: a version, a snake_case name
+_CELL_LIKE = re.compile(r"\d+\.\d+|^\S*_\S*$")
+
+
+def running_lines(lines: list[str]) -> frozenset[str]:
+    """The running header and footer of a paged copy: lines of words (a space in them, no version,
+    no name) within two lines of a page break (a run of page marks), beside at least two breaks and
+    half of them, or the document's first line (its title) beside one. Cells differ from page to
+    page; a type or a version beside every break stays a cell."""
+    texts = [t.strip() for t in lines]
+    at = [i for i, t in enumerate(texts) if t]
+    title = texts[at[0]] if at else ""
+    seen: dict[str, int] = {}
+    breaks = 0
+    k = 0
+    while k < len(at):
+        if not is_page_mark(lines[at[k]]):
+            k += 1
+            continue
+        end = k
+        while end + 1 < len(at) and is_page_mark(lines[at[end + 1]]):
+            end += 1
+        breaks += 1
+        for text in {texts[j] for j in at[max(0, k - 2) : k] + at[end + 1 : end + 3]}:
+            seen[text] = seen.get(text, 0) + 1
+        k = end + 1
+    return frozenset(
+        t
+        for t, n in seen.items()
+        if is_heading(t)
+        and " " in t
+        and not _CELL_LIKE.search(t)
+        and ((n >= 2 and 2 * n >= breaks) or t == title)
+    )
+
+
 _DIRECTION_WORD = re.compile(r"\b(?:in|out)puts?\b", re.I)
 
 
