@@ -61,7 +61,9 @@ def _wide(value: Any) -> Any:
 
 
 def flatten_part(part: PrimaryPart) -> dict[str, Any]:
-    """A sub-package or message as one flat row: groups and vectors spread into numbered columns."""
+    """A sub-package or message as one flat row: groups and vectors of a fixed length (tuples)
+    spread into numbered columns; a list, whose length varies from message to message (program
+    threads, variable values), is one JSON column, so the table's columns never depend on it."""
     from pydantic import BaseModel  # loaded with the primary models that reach here
 
     out: dict[str, Any] = {}
@@ -71,7 +73,10 @@ def flatten_part(part: PrimaryPart) -> dict[str, Any]:
             unsigned = uint64_fields(type(value))
             for key in type(value).model_fields:
                 put(f"{prefix}_{key}", getattr(value, key), key in unsigned)
-        elif isinstance(value, (list, tuple)) and value and not isinstance(value[0], (str, dict)):
+        elif isinstance(value, list):
+            dumped = [v.model_dump(mode="json") if isinstance(v, BaseModel) else v for v in value]
+            out[prefix] = json.dumps(plain(dumped))
+        elif isinstance(value, tuple) and value and not isinstance(value[0], (str, dict)):
             for i, item in enumerate(value):
                 put(f"{prefix}_{i}", item, wide)
         elif isinstance(value, (list, tuple, dict)):
