@@ -9,23 +9,17 @@ for a reply) on a loopback address of its own, since ur_rtde's ports are fixed.
 
 from __future__ import annotations
 
-import os
-import re
-import subprocess
-import sys
 import time
 from collections.abc import Iterator
-from dataclasses import dataclass
-from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pytest
 
-import rtde_spec
 from rtde_spec import PrimaryClient
 from rtde_spec.emulator.arm import kinematics as kin
 from rtde_spec.metamodel.arms import arm_model
+
+from .ur_rtde_robot import Robot, serve, settle_until, ur_rtde_robot
 
 rtde_control = pytest.importorskip("rtde_control", reason="ur_rtde is installed by the test extra")
 rtde_receive = pytest.importorskip("rtde_receive", reason="ur_rtde is installed by the test extra")
@@ -43,58 +37,10 @@ pytestmark = [
 ]
 
 
-@dataclass
-class Robot:
-    control: Any
-    receive: Any
-    proc: subprocess.Popen[str]
-
-
-def serve(host: str) -> subprocess.Popen[str]:
-    """`rtde-spec serve` of the rtde_spec these tests import (a worktree's, not an installed one's)."""
-    tree = str(Path(rtde_spec.__file__).resolve().parents[1])
-    env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (tree, os.environ.get("PYTHONPATH")) if p)}
-    proc = subprocess.Popen(
-        [
-            sys.executable,
-            "-m",
-            "rtde_spec",
-            "serve",
-            "--host",
-            host,
-            "--dashboard-port",
-            "29999",
-            "--controller",
-            "5.15.0",
-            "--model",
-            "UR5e",
-        ],
-        stdout=subprocess.PIPE,
-        stderr=subprocess.PIPE,
-        text=True,
-        env=env,
-    )
-    assert proc.stdout is not None
-    line = proc.stdout.readline()
-    assert re.search(r"realtime 30003", line), proc.stderr.read() if proc.stderr else line
-    return proc
-
-
 @pytest.fixture(scope="module")
 def robot() -> Iterator[Robot]:
-    proc = serve(HOST)
-    try:
-        control = rtde_control.RTDEControlInterface(HOST)
-        receive = rtde_receive.RTDEReceiveInterface(HOST)
-        try:
-            yield Robot(control, receive, proc)
-        finally:
-            control.stopScript()
-            control.disconnect()
-            receive.disconnect()
-    finally:
-        proc.terminate()
-        proc.wait(10)
+    with ur_rtde_robot(HOST, rtde_control, rtde_receive) as robot:
+        yield robot
 
 
 def settle(robot: Robot, seconds: float = 0.1) -> None:
@@ -247,7 +193,7 @@ def test_force_mode_and_teach_mode_hold_the_arm_and_end(robot: Robot) -> None:
 
 def test_rtde_io_setters_show_in_the_outputs() -> None:
     host = "127.0.0.72"
-    proc = serve(host)
+    proc, _ = serve(host)
     try:
         io = rtde_io.RTDEIOInterface(host)
         receive = rtde_receive.RTDEReceiveInterface(host)
@@ -269,13 +215,6 @@ def test_rtde_io_setters_show_in_the_outputs() -> None:
     finally:
         proc.terminate()
         proc.wait(10)
-
-
-def settle_until(done: Any, seconds: float = 5.0) -> None:
-    deadline = time.monotonic() + seconds
-    while not done():
-        assert time.monotonic() < deadline, "the outputs never showed it"
-        time.sleep(0.01)
 
 
 def test_trigger_protective_stop_stops_the_arm(robot: Robot) -> None:

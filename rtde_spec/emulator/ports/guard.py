@@ -5,7 +5,9 @@ no whole package (or script, or command line) yet is held up to a limit; a packa
 began must be finished within a time-out; an RTDE client must send its first package
 soon after connecting; what is queued for a client that stopped reading is bounded;
 each port takes a limited number of clients. A client over a limit is dropped with
-one log line (WARNING) naming it and why, as a controller closes such a connection.
+one log line (WARNING) naming it and why, as a controller closes such a connection. A stream
+whose client may rightly never read (`skips_when_behind`: the real-time port, where ur_rtde's
+script client only sends) misses messages instead, its queue kept at the limit.
 A client that is connected and only reads (a primary-port monitor, a dashboard
 client between commands) is never dropped for being quiet unless `idle_timeout` is set.
 """
@@ -53,6 +55,7 @@ class GuardedConnection(asyncio.Protocol):
     """A connection that keeps its port's limits; subclasses say what they hold with `received`."""
 
     needs_handshake = False  # an RTDE client must send a whole package within handshake_timeout
+    skips_when_behind = False  # a client that stopped reading misses messages instead of being dropped
 
     def __init__(self, port: Port) -> None:
         self.port = port
@@ -67,6 +70,8 @@ class GuardedConnection(asyncio.Protocol):
         self.pending = 0
         self.handshaken = not self.needs_handshake
         self.bad_messages = 0
+        self.behind = False  # (skips_when_behind) its messages are being skipped
+        self.skipped = 0
 
     # --- asyncio ------------------------------------------------------------
 
@@ -148,7 +153,7 @@ class GuardedConnection(asyncio.Protocol):
         if lim.idle_timeout is not None and now - self.last_input > lim.idle_timeout:
             return f"nothing received for {lim.idle_timeout:g} s"
         backlog = self.backlog()
-        if backlog > lim.max_send_backlog:
+        if backlog > lim.max_send_backlog and not self.skips_when_behind:
             return f"it stopped reading ({backlog} bytes queued, limit {lim.max_send_backlog})"
         return None
 
@@ -175,8 +180,30 @@ class GuardedConnection(asyncio.Protocol):
         if transport is None or self.dropped or transport.is_closing():
             return False
         backlog = transport.get_write_buffer_size()
-        if backlog > self.limits.max_send_backlog:
-            self.drop(f"it stopped reading ({backlog} bytes queued, limit {self.limits.max_send_backlog})")
+        limit = self.limits.max_send_backlog
+        # one that fell behind resumes once half its queue is gone: a slow reader does not flap
+        if self.skips_when_behind and (backlog > limit or (self.behind and backlog > limit // 2)):
+            self._skip(backlog)
             return False
+        if backlog > limit:
+            self.drop(f"it stopped reading ({backlog} bytes queued, limit {limit})")
+            return False
+        if self.behind:
+            self.behind = False
+            log.info("%s client %s reads again (%d skipped)", self.port.name, self.peer, self.skipped)
         transport.write(data)
         return True
+
+    def _skip(self, backlog: int) -> None:
+        """A message not queued for a client that stopped reading: one log line when it falls behind."""
+        self.skipped += 1
+        if not self.behind:
+            self.behind = True
+            log.warning(
+                "%s client %s stopped reading (%d bytes queued, limit %d): its messages are skipped "
+                "until it reads again",
+                self.port.name,
+                self.peer,
+                backlog,
+                self.limits.max_send_backlog,
+            )

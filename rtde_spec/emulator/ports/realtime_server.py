@@ -4,7 +4,9 @@ The message is the controller version's layout from the spec (rtde_spec.realtime
 fields filled from the RTDE outputs the spec names as carrying the same quantity, so
 the three interfaces show one robot. Built once per step and only while a client is
 connected. What a client sends on 30003 is URScript, cut and run as on the primary
-ports (script_framer.py); the read-only port drops it. Clients keep guard.py's limits.
+ports (script_framer.py); the read-only port drops it. Clients keep guard.py's limits, but one
+that stopped reading keeps its connection and misses messages: ur_rtde's script client never
+reads 30003 and sends its path moves and re-uploads through it for as long as it runs.
 """
 
 from __future__ import annotations
@@ -77,6 +79,8 @@ class RealtimeHub:
 
 class RealtimeConnection(ScriptPort):
     """One client of a real-time port: the stream of messages; on 30003 its scripts run."""
+
+    skips_when_behind = True  # a script sender that never reads keeps its connection, as on a robot
 
     def __init__(self, hub: RealtimeHub, port: Port, number: int, read_only: bool) -> None:
         super().__init__(port)

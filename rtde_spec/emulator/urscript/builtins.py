@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from rtde_spec.emulator.arm import kinematics as kin
+from rtde_spec.emulator.arm.motion import JointMove, LinearMove
 from rtde_spec.emulator.urscript import calls as script_calls
 from rtde_spec.emulator.urscript import sockets
 from rtde_spec.emulator.urscript.builtins_modes import MODES, settings_of
@@ -226,7 +227,8 @@ BUILTINS["get_joint_torques"] = _values("_joint_torques", (0.0,) * 6)
 BUILTINS["get_target_payload"] = _values("payload", 0.0)
 BUILTINS["get_target_payload_cog"] = _values("payload_cog", (0.0,) * 3)
 BUILTINS["get_target_payload_inertia"] = _values("payload_inertia", (0.0,) * 6)
-BUILTINS["get_freedrive_status"] = _values("_freedrive", 0)
+# the Script Manual's 0 (normal operation; 1, 2: near a singularity, which is not modelled)
+BUILTINS["get_freedrive_status"] = lambda runner, stmt, args, kwargs: 0
 BUILTINS["get_actual_joint_speeds"] = _values("actual_qd", (0.0,) * 6)
 BUILTINS["get_target_joint_speeds"] = _values("target_qd", (0.0,) * 6)
 BUILTINS["get_tcp_force"] = _values("actual_TCP_force", (0.0,) * 6)
@@ -243,10 +245,23 @@ def _flange(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose:
     return Pose(kin.forward(arm.model, list(arm.state.q)))
 
 
-@builtin("get_actual_joint_positions_history", "get_target_waypoint")
+@builtin("get_actual_joint_positions_history")
 def _history(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
     arm = runner.robot.arm  # the emulator keeps no history: the present position
-    return Pose(arm.pose()) if stmt.name == "get_target_waypoint" else [float(v) for v in arm.state.q]
+    return [float(v) for v in arm.state.q]
+
+
+@builtin("get_target_waypoint")
+def _waypoint(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose:
+    """Where the active movej/movel/movep goes (a relative move after a blend starts from it), not
+    the pose of this step; with no such move, the target TCP pose."""
+    arm = runner.robot.arm
+    motion = arm.motion
+    if isinstance(motion, LinearMove):
+        return Pose(motion.pose_at(motion.length))
+    if isinstance(motion, JointMove):
+        return Pose(kin.forward(arm.model, motion.start.q + motion.delta, arm.tcp))
+    return Pose(arm.pose())
 
 
 BUILTINS.update(sockets.SENDERS)

@@ -82,11 +82,17 @@ def six(stmt: Stmt, value: Any, name: str) -> list[float]:
 
 
 def _start(program: Runner, stmt: Stmt, motion: Motion, blend: float = 0.0) -> WaitFactory:
+    """Run `motion`; the wait ends once it is done (or blends), never before the next control step:
+    a move to where the arm already is takes its step too, as on the controller, so a thread that
+    repeats one (ur_rtde's servoc thread) yields instead of spinning."""
     arm = program.robot.arm
     motion.blend, motion.line = max(0.0, blend), stmt.line
     arm.move(motion)
+    started = program.clock
 
     def arrived(blend_next: bool) -> bool:
+        if program.clock <= started:
+            return False
         if arm.motion is not motion or motion.done:
             return True
         return blend_next and motion.blend > 0 and motion.remaining <= motion.blend
@@ -302,6 +308,12 @@ def _pose_op(fn: Callable[[np.ndarray, np.ndarray], np.ndarray]) -> Callable[[An
 def call_function(program: Runner, stmt: Stmt, name: str, args: Args, kwargs: Kwargs) -> Any:
     arm = program.robot.arm
     values = program.robot.values
+
+    def _tcp(index: int) -> Any:
+        """The `tcp` argument (get_forward_kin's 2nd, get_inverse_kin's 5th), else the active TCP."""
+        tcp = arg(stmt, args, kwargs, index, "tcp", None)
+        return arm.tcp if tcp is None else six(stmt, tcp, "tcp")
+
     table: dict[str, Callable[[], Any]] = {
         "d2r": lambda: math.radians(args[0]),
         "r2d": lambda: math.degrees(args[0]),
@@ -317,9 +329,11 @@ def call_function(program: Runner, stmt: Stmt, name: str, args: Args, kwargs: Kw
         "get_target_joint_positions": lambda: [float(v) for v in arm.state.q],
         "get_actual_tcp_pose": lambda: Pose(arm.pose()),
         "get_target_tcp_pose": lambda: Pose(arm.pose()),
-        "get_forward_kin": lambda: Pose(arm.pose(arg(stmt, args, kwargs, 0, "q", list(arm.state.q)))),
+        "get_forward_kin": lambda: Pose(
+            kin.forward(arm.model, six(stmt, arg(stmt, args, kwargs, 0, "q", [*arm.state.q]), "q"), _tcp(1))
+        ),
         "get_inverse_kin": lambda: list(
-            kin.nearest(arm.model, args[0], arg(stmt, args, kwargs, 1, "qnear", list(arm.state.q)), arm.tcp)
+            kin.nearest(arm.model, args[0], arg(stmt, args, kwargs, 1, "qnear", list(arm.state.q)), _tcp(4))
         ),
         "pose_trans": lambda: _pose_op(lambda a, b: a @ b)(args[0], args[1]),
         "pose_inv": lambda: Pose(
