@@ -5,7 +5,8 @@ table): a greeting line on connect, then one reply line per command line. `power
 `brake release`, `power off`, `load`/`play`/`pause`/`stop` and `unlock protective stop`
 act through the model's mode methods, so what they do shows on RTDE and the primary
 ports too. `load NAME` reads a URScript program from the programs directory: NAME
-itself when it is a script, or the `.script` PolyScope saves beside a `.urp`.
+itself when it is a script, the `.script` PolyScope saves beside a `.urp`, or else the
+`.urp`'s program tree, translated (`emulator/urp.py`).
 A command the controller version does not have gets the `unknown` reply, as a
 controller answers it. Each client is held to the port's limits (guard.py).
 """
@@ -148,10 +149,11 @@ class DashboardHub:
         return path
 
     def _load(self, name: str) -> str:
-        """Load `name` from the programs directory: a script, or the .script saved beside a .urp."""
+        """Load `name` from the programs directory: a script, the .script saved beside a .urp, or
+        else the .urp itself, translated as PolyScope would run it (`emulator/urp.py`)."""
         path = self._find(name, ".script")
         if not isinstance(path, Path):
-            return path
+            return self._load_urp(name) if Path(name).suffix == ".urp" else path
         try:
             if path.stat().st_size > MAX_PROGRAM_BYTES:
                 return "failed"
@@ -160,6 +162,26 @@ class DashboardHub:
             return "not_found"
         except UnicodeDecodeError:
             return "failed"
+        return self._loaded(name, text)
+
+    def _load_urp(self, name: str) -> str:
+        from rtde_spec.emulator.urp import UrpError, urp_to_script
+
+        path = self._find(name)
+        if not isinstance(path, Path):
+            return path
+        try:
+            if path.stat().st_size > MAX_PROGRAM_BYTES:
+                return "failed"
+            text = urp_to_script(path.read_bytes(), Path(name).stem)
+        except OSError:
+            return "not_found"
+        except UrpError as exc:  # the dashboard only says it failed: the log says why
+            log.warning("load %s: %s", name, exc)
+            return "failed"
+        return self._loaded(name, text)
+
+    def _loaded(self, name: str, text: str) -> str:
         model: Any = self.model
         model.load_program(text)
         self.program = Path(name).name

@@ -132,6 +132,7 @@ def _watchdog(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
     name = _arg(stmt, args, kwargs, 0, "variable_name")
     hz = number(stmt, _arg(stmt, args, kwargs, 1, "min_frequency"), "min_frequency")
     action = _arg(stmt, args, kwargs, 2, "action", "pause")
+    action = action.lower() if isinstance(action, str) else action  # UR's own example says "PAUSE"
     if not isinstance(name, str) or action not in ("ignore", "pause", "stop"):
         raise ScriptFault(f"{stmt.name}: needs an input name and ignore, pause or stop", stmt.line, 1)
     if hz <= 0:
