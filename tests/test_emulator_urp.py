@@ -1,5 +1,5 @@
 """PolyScope programs (.urp) the dashboard's `load` finds without their `.script`: the program
-tree translated as PolyScope runs it (rtde_spec/emulator/urp.py).
+tree translated as PolyScope runs it (rtde_spec/emulator/controller/urp.py).
 
 The control loop is the one UR's RTDE client ships as its example (`rtde_control_loop.urp` with
 `example_control_loop.py`): a before-start sequence that sets a 1 Hz watchdog ("PAUSE", in
@@ -20,8 +20,8 @@ from pathlib import Path
 
 import pytest
 
+from rtde_spec.emulator.controller.urp import UrpError, urp_to_script
 from rtde_spec.emulator.server import EmulatorConfig, EmulatorThread
-from rtde_spec.emulator.urp import UrpError, urp_to_script
 from rtde_spec.rtde.client import RtdeClient
 
 SETP1 = [-0.12, -0.43, 0.14, 0.0, 3.11, 0.04]

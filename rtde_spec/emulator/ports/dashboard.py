@@ -6,7 +6,7 @@ table): a greeting line on connect, then one reply line per command line. `power
 act through the model's mode methods, so what they do shows on RTDE and the primary
 ports too. `load NAME` reads a URScript program from the programs directory: NAME
 itself when it is a script, the `.script` PolyScope saves beside a `.urp`, or else the
-`.urp`'s program tree, translated (`emulator/urp.py`).
+`.urp`'s program tree, translated (`emulator/controller/urp.py`).
 A command the controller version does not have gets the `unknown` reply, as a
 controller answers it. Each client is held to the port's limits (guard.py).
 """
@@ -150,7 +150,7 @@ class DashboardHub:
 
     def _load(self, name: str) -> str:
         """Load `name` from the programs directory: a script, the .script saved beside a .urp, or
-        else the .urp itself, translated as PolyScope would run it (`emulator/urp.py`)."""
+        else the .urp itself, translated as PolyScope would run it (`emulator/controller/urp.py`)."""
         path = self._find(name, ".script")
         if not isinstance(path, Path):
             return self._load_urp(name) if Path(name).suffix == ".urp" else path
@@ -165,7 +165,7 @@ class DashboardHub:
         return self._loaded(name, text)
 
     def _load_urp(self, name: str) -> str:
-        from rtde_spec.emulator.urp import UrpError, urp_to_script
+        from rtde_spec.emulator.controller.urp import UrpError, urp_to_script
 
         path = self._find(name)
         if not isinstance(path, Path):
