@@ -87,6 +87,10 @@ class Writer:
     def write(self, record: Mapping[str, Any]) -> None:
         raise NotImplementedError
 
+    def hint(self, types: Mapping[str, str]) -> None:
+        """The types (numpy codes, "str") of columns that may hold only nulls in a batch: a typed
+        format gives them that type rather than none. Formats without column types ignore it."""
+
     def declare(self, columns: Mapping[str, str]) -> None:
         """Every column the file holds, in order, with its numpy type ("f8?": nullable), before
         the first row: a row or batch without one has it null. Formats without a fixed column

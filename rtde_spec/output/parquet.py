@@ -10,7 +10,7 @@ from typing import IO, Any
 from rtde_spec.errors import OutputError, UsageError, require
 from rtde_spec.output.base import Writer, flat_columns, flatten
 from rtde_spec.output.partfile import Part, device_failed, is_special, write_failed
-from rtde_spec.output.tables import arrow_table, rows_table
+from rtde_spec.output.tables import arrow_table, arrow_type, rows_table
 
 _PARQUET_BATCH_ROWS = 16384
 CHUNK_METADATA_BYTES = 860  # what pyarrow holds per column chunk written, until the file closes
@@ -55,6 +55,7 @@ class ParquetWriter(Writer):
             None  # the file's columns; None: the first batch's (a table's next part: its last's)
         )
         self.declared: Any = None  # `declare`: the schema every file of the table has
+        self.types: dict[str, str] = {}  # `hint`: the type of a column that may hold only nulls
         self._groups = 0  # row groups handed to pyarrow: its footer holds each one's column chunks
         self.threaded: bool | None = None  # this file's `THREADED` (False: it is written on a worker)
 
@@ -75,11 +76,12 @@ class ParquetWriter(Writer):
         pa = self._pa
 
         def field(name: str, kind: str) -> Any:
-            code = kind.rstrip("?")
-            arrow = pa.string() if code == "str" else pa.from_numpy_dtype(code)
-            return pa.field(name, arrow, nullable=kind.endswith("?"))
+            return pa.field(name, arrow_type(kind), nullable=kind.endswith("?"))
 
         self.declared = pa.schema([field(n, t) for n, t in columns.items()])
+
+    def hint(self, types: Mapping[str, str]) -> None:
+        self.types.update(types)
 
     def _add(self, table_: Any) -> None:
         if self._writer is None:
@@ -181,7 +183,7 @@ class ParquetWriter(Writer):
     def _flush_rows(self) -> None:
         if self._rows:
             rows, self._rows = self._rows, []
-            self._add(rows_table(rows))
+            self._add(rows_table(rows, self.types))
 
     def write_columns(self, columns: Mapping[str, Any]) -> None:
         self.write_prepared(prepared_columns(columns))

@@ -157,10 +157,13 @@ def _validity(values: list[Any]) -> Any:
     return pa.py_buffer(np.packbits(np.array([v is not None for v in values]), bitorder="little"))
 
 
-def rows_table(rows: Sequence[Mapping[str, Any]]) -> Any:
-    """Row dicts as an Arrow table, as `pa.Table.from_pylist` makes it but for two things: every
+def rows_table(rows: Sequence[Mapping[str, Any]], types: Mapping[str, str] | None = None) -> Any:
+    """Row dicts as an Arrow table, as `pa.Table.from_pylist` makes it but for three things: every
     key of every row is a column (from_pylist keeps only the first row's keys: the rest were
-    lost), and no pandas is imported (a third of a second at every capture's start)."""
+    lost); a column of nulls only has the type `types` gives it (numpy codes, "str"; a file whose
+    column is of Arrow's null type makes pandas, pyarrow and DuckDB refuse a folder whose other
+    files hold values there); and no pandas is imported (a third of a second at every capture's
+    start)."""
     import pyarrow as pa
 
     from rtde_spec.errors import EncodeError
@@ -169,7 +172,19 @@ def rows_table(rows: Sequence[Mapping[str, Any]]) -> Any:
     arrays = []
     for name in names:
         try:
-            arrays.append(_column_of_values([row.get(name) for row in rows]))
+            column = _column_of_values([row.get(name) for row in rows])
+            if types and column.type == pa.null() and name in types:
+                column = pa.nulls(len(column), arrow_type(types[name]))
+            arrays.append(column)
         except (pa.ArrowException, OverflowError, ValueError, TypeError, UnicodeError) as exc:
             raise EncodeError(f"no table column can hold these values: {exc}", field=name) from None
     return pa.Table.from_arrays(arrays, names=names)
+
+
+def arrow_type(kind: str) -> Any:
+    """The Arrow type of a column kind: a numpy type code ("f8", "i8", "b1"; a trailing "?" marks
+    it nullable and is ignored here) or "str"."""
+    import pyarrow as pa
+
+    code = kind.rstrip("?")
+    return pa.string() if code == "str" else pa.from_numpy_dtype(code)

@@ -11,7 +11,7 @@ from typing import Any
 
 from rtde_spec.capture.framing.sized import STRONG, WEAK, Check, Framing
 from rtde_spec.capture.protocols.base import Counts
-from rtde_spec.capture.tables.rows import flatten_part, text_columns
+from rtde_spec.capture.tables.rows import column_types, flatten_part, text_columns
 from rtde_spec.capture.tables.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
 from rtde_spec.errors import RtdeSpecError
@@ -32,6 +32,7 @@ class PrimaryConnection:
         self.framing = Framing(codec.size_bytes, codec.header.size, families, codec.max_size, _tiled(codec))
         self.counts = Counts()
         self.last_time = 0.0
+        self.typed: set[type] = set()  # the part classes whose column types the sink was given
 
     def feed(self, sender: str, chunk: Chunk) -> None:
         base = {"connection": self.name, "capture_time": chunk.time}
@@ -74,13 +75,15 @@ class PrimaryConnection:
                 continue
             parts = message.sub_packages if isinstance(message, RobotStateMessage) else [message]
             for part in parts:
-                name = getattr(part, "NAME", "unknown")
-                values = (
-                    flatten_part(part)
-                    if isinstance(part, PrimaryPart)
-                    else {"raw": bytes(getattr(part, "raw", b"")).hex()}
-                )
-                self.sink.row(f"primary_{name}", self.robot, day, {**base, **values})
+                table = f"primary_{getattr(part, 'NAME', 'unknown')}"
+                if not isinstance(part, PrimaryPart):
+                    hexed = bytes(getattr(part, "raw", b"")).hex()
+                    self.sink.row(table, self.robot, day, {**base, "raw": hexed})
+                    continue
+                if type(part) not in self.typed:  # a field its version does not send is typed all the same
+                    self.typed.add(type(part))
+                    self.sink.hint(table, column_types(type(part)))
+                self.sink.row(table, self.robot, day, {**base, **flatten_part(part)})
 
     def close(self) -> None:
         pass

@@ -12,6 +12,7 @@ Two kinds of value need care on their way to a table:
 from __future__ import annotations
 
 import json
+import types
 import typing
 from functools import cache
 from typing import TYPE_CHECKING, Any
@@ -52,6 +53,68 @@ def _bounds(tp: Any) -> set[int]:
             if isinstance(le, int):
                 found.add(le)
     return found
+
+
+@cache
+def column_types(cls: type[BaseModel]) -> dict[str, str]:
+    """The type of each column `flatten_part` makes of a `cls` (numpy codes, "str"), for the
+    columns a batch may hold only nulls in: a field the controller's version does not send.
+    What has no one type (a union) is left out: its column is typed by its values."""
+    out: dict[str, str] = {}
+    unsigned = uint64_fields(cls)
+    for key, info in cls.model_fields.items():
+        if key not in ("extra", "missing"):
+            _column_type(out, key, info.annotation, key in unsigned)
+    return out
+
+
+def _column_type(out: dict[str, str], name: str, annotation: Any, wide: bool) -> None:
+    from pydantic import BaseModel
+
+    tp, length = _bare(annotation)
+    args = typing.get_args(tp)
+    if isinstance(tp, type) and issubclass(tp, BaseModel):
+        unsigned = uint64_fields(tp)
+        for key, info in tp.model_fields.items():
+            _column_type(out, f"{name}_{key}", info.annotation, key in unsigned)
+    elif typing.get_origin(tp) is tuple and length is not None and args[1:] == (Ellipsis,):
+        if _bare(args[0])[0] is str:  # texts: one JSON column
+            out[name] = "str"
+        else:
+            for i in range(length):
+                _column_type(out, f"{name}_{i}", args[0], wide)
+    elif typing.get_origin(tp) is list or tp is bytes:
+        out[name] = "str"  # JSON text, hex
+    elif isinstance(tp, type) and issubclass(tp, str):
+        out[name] = out[name + RAW] = "str"
+    elif tp is bool:
+        out[name] = "b1"
+    elif isinstance(tp, type) and issubclass(tp, int):
+        out[name] = "u8" if wide else "i8"
+    elif tp is float:
+        out[name] = "f8"
+
+
+def _bare(annotation: Any) -> tuple[Any, int | None]:
+    """An annotation without Optional and Annotated, and the fixed length its metadata gives."""
+    length = None
+    tp = annotation
+    while True:
+        origin = typing.get_origin(tp)
+        if origin is typing.Annotated:
+            items = [i for m in tp.__metadata__ for i in getattr(m, "metadata", [m])]
+            low = [i.min_length for i in items if getattr(i, "min_length", None) is not None]
+            high = [i.max_length for i in items if getattr(i, "max_length", None) is not None]
+            if low and high and low[0] == high[0]:
+                length = low[0]
+            tp = typing.get_args(tp)[0]
+        elif origin in (typing.Union, types.UnionType):
+            options = [a for a in typing.get_args(tp) if a is not type(None)]
+            if len(options) != 1:
+                return None, None  # a union: no one type
+            tp = options[0]
+        else:
+            return tp, length
 
 
 def _wide(value: Any) -> Any:

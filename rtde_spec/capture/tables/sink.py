@@ -75,12 +75,18 @@ class TableSink:
         self.register = register if register is not None else Register(Path("."))
         self.lag = 0  # blocks of a mapped input this sink may still read after it is given them
         self.declared: dict[str, dict[str, str]] = {}  # table -> every column it can have, numpy types
+        self.hints: dict[str, dict[str, str]] = {}  # table -> column types for columns of nulls only
 
     def declare(self, table: str, columns: dict[str, str]) -> None:
         """The columns every file of `table` holds, in order, so files of different sources
         (controller versions) read as one table with one schema: name -> numpy type, ending in
         "?" where a source may not send it (null in that source's rows)."""
         self.declared[table] = columns
+
+    def hint(self, table: str, types: Mapping[str, str]) -> None:
+        """The types of `table`'s columns a batch may hold only nulls in (a field the controller's
+        version does not send): typed, not of Arrow's null type, in every file."""
+        self.hints.setdefault(table, {}).update(types)
 
     def table_for_recipe(self, direction: str, names: tuple[str, ...]) -> str:
         key = (direction, names)
@@ -189,6 +195,8 @@ class DirectorySink(TableSink):
                 writer.threaded = False  # type: ignore[attr-defined]
             if table in self.declared:
                 writer.declare(self.declared[table])
+            if table in self.hints:
+                writer.hint(self.hints[table])
             if key in self.schemas:  # the table's next part: the columns of the parts before
                 writer.schema = self.schemas[key]  # type: ignore[attr-defined]
             if pinned:
@@ -200,6 +208,12 @@ class DirectorySink(TableSink):
         while len(self._open) > self.budget - len(self._pinned_keys):
             self._open.popitem(last=False)[1].suspend()
         return writer
+
+    def hint(self, table: str, types: Mapping[str, str]) -> None:
+        super().hint(table, types)
+        for (name, _, _), writer in self.writers.items():
+            if name == table:
+                writer.hint(types)
 
     def _row(self, table: str, robot: str, day: str, record: Mapping[str, Any]) -> None:
         if self.ahead is not None:
@@ -318,7 +332,7 @@ class ArrowSink(TableSink):
         if rows:
             from rtde_spec.output.tables import rows_table
 
-            self.parts.setdefault(table, []).append(rows_table(rows))
+            self.parts.setdefault(table, []).append(rows_table(rows, self.hints.get(table)))
 
     def tables(self) -> dict[str, Any]:
         """One table each; batches of different columns (sources of several versions, rows beside
