@@ -198,3 +198,31 @@ def test_a_capture_with_connections_but_no_rows_is_exit_3_naming_the_ports(
     code, out, err = run(capsys, "capture", str(capture), "-o", str(tmp_path / "out"))
     assert code == 3 and "1 connection\n" in out and "tables: none" in out
     assert ": ok:" not in err and "no rows found; TCP ports seen: 30004" in err and "--port-map" in err
+
+
+def test_ctrl_c_ends_the_demo_early_with_what_it_recorded(tmp_path: Path) -> None:
+    """Ctrl-C in the middle of the demo's recording: its rows so far are written, summarised and
+    plotted, and the demo says it stopped early (a terminal's Ctrl-C: SIGINT as the default)."""
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "rtde_spec", "demo", "-o", str(tmp_path / "out"), "--seconds", "60"],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.STDOUT,
+        text=True,
+        preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL),  # as a shell's foreground job
+    )
+    assert proc.stdout is not None
+    for line in proc.stdout:  # recording runs once the program is announced
+        if line.startswith("Sending this URScript"):
+            break
+    time.sleep(1.5)
+    proc.send_signal(signal.SIGINT)
+    out = proc.stdout.read()
+    assert proc.wait(20) == 0, out
+    rows = (tmp_path / "out" / "joints.csv").read_text().splitlines()
+    assert len(rows) > 100  # 125 Hz for 1.5 s at least, the header besides
+    assert "stopped early by Ctrl-C" in out and "actual_q_0" in out

@@ -67,7 +67,9 @@ def run_online(args: argparse.Namespace) -> int:
                 timer.cancel()
                 timer.join()
                 writer.close()
-    print(f"\nWrote {plural(result.rows, 'row')} to {csv_path} (skipped {result.skipped})")
+    interrupted = result.stopped_by == "interrupt"
+    early = f"; stopped early by Ctrl-C after {result.seconds:.1f} s" if interrupted else ""
+    print(f"\nWrote {plural(result.rows, 'row')} to {csv_path} (skipped {result.skipped}{early})")
     rows = _read(csv_path)
     _summary(rows)
     _plot(rows, png_path)
