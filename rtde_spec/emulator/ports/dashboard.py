@@ -14,6 +14,7 @@ controller answers it. Each client is held to the port's limits (guard.py).
 from __future__ import annotations
 
 import logging
+import os
 import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -153,7 +154,7 @@ class DashboardHub:
         else the .urp itself, translated as PolyScope would run it (`emulator/controller/urp.py`)."""
         path = self._find(name, ".script")
         if not isinstance(path, Path):
-            return self._load_urp(name) if Path(name).suffix == ".urp" else path
+            return self._load_urp(name) if self._without_script(name) else path
         try:
             if path.stat().st_size > MAX_PROGRAM_BYTES:
                 return "failed"
@@ -163,6 +164,16 @@ class DashboardHub:
         except UnicodeDecodeError:
             return "failed"
         return self._loaded(name, text)
+
+    def _without_script(self, name: str) -> bool:
+        """A .urp with no .script beside it at all: one that is there but refused (a link out of
+        the folder) stays refused, the .urp is not run in its place."""
+        if self.programs is None or Path(name).suffix != ".urp" or "\0" in name:
+            return False
+        try:
+            return not os.path.lexists(self.programs / Path(name).with_suffix(".script"))
+        except (OSError, ValueError):
+            return False
 
     def _load_urp(self, name: str) -> str:
         from rtde_spec.emulator.controller.urp import UrpError, urp_to_script
