@@ -26,6 +26,7 @@ class Robot:
     receive: Any
     proc: subprocess.Popen[str]
     log: list[str] = field(default_factory=list)
+    controller: str = "5.15.0"  # the version the emulator plays
 
 
 def serve(host: str, controller: str = "5.15.0") -> tuple[subprocess.Popen[str], list[str]]:
@@ -49,14 +50,16 @@ def serve(host: str, controller: str = "5.15.0") -> tuple[subprocess.Popen[str],
 
 
 @contextmanager
-def ur_rtde_robot(host: str, rtde_control: Any, rtde_receive: Any) -> Iterator[Robot]:
+def ur_rtde_robot(
+    host: str, rtde_control: Any, rtde_receive: Any, controller: str = "5.15.0"
+) -> Iterator[Robot]:
     """ur_rtde's control and receive interfaces on a fresh emulator; all stopped at the end."""
-    proc, log = serve(host)
+    proc, log = serve(host, controller)
     try:
         control = rtde_control.RTDEControlInterface(host)
         receive = rtde_receive.RTDEReceiveInterface(host)
         try:
-            yield Robot(control, receive, proc, log)
+            yield Robot(control, receive, proc, log, controller)
         finally:
             control.stopScript()
             control.disconnect()

@@ -3,7 +3,8 @@
 
 from typing import Any
 
-URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Language (Script Manual), CB3 3.15 and e-Series 5.15',
+URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Language (Script Manual), CB3 3.15 and e-Series 5.15; 5.23 '
+            "and 5.25.1 for direct torque control and the arm's model",
  'product_lines': ['cb3', 'e-series'],
  'functions': [{'name': 'movej',
                 'section': 'motion',
@@ -151,7 +152,10 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'returns': 'int',
                 'since': {'e-series': '5.10.0'},
                 'checked': False,
-                'doc': 'Whether freedrive is active'},
+                'doc': "Freedrive's state near singularities: 0 normal operation; 1 and 2 near a "
+                       'singularity (not whether freedrive is on)',
+                'emulation': 'always 0: the emulated arm is never moved by hand into a '
+                             'singularity'},
                {'name': 'teach_mode',
                 'section': 'motion',
                 'returns': 'none',
@@ -169,6 +173,22 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'since': {'cb3': '3.10.0', 'e-series': '5.4.0'},
                 'checked': False,
                 'doc': "Protective stop of the arm, as the safety system's"},
+               {'name': 'direct_torque',
+                'section': 'motion',
+                'params': [{'name': 'torque'},
+                           {'name': 'viscous_scale', 'default': [0.9, 0.9, 0.8, 0.9, 0.9, 0.9]},
+                           {'name': 'coulomb_scale', 'default': [0.8, 0.8, 0.7, 0.8, 0.8, 0.8]},
+                           {'name': 'friction_comp', 'default': True}],
+                'returns': 'none',
+                'since': {'e-series': '5.23.0'},
+                'doc': 'Target joint torques (N m, six, gravity compensated by the controller) for '
+                       'this control step: called every step, else the arm returns to position '
+                       'control. viscous_scale and coulomb_scale (0 to 1 a joint: how much of the '
+                       "friction model compensates) came with 5.25.1; friction_comp is 5.23's "
+                       'switch (direct_torque(torque, friction_comp=True)), deprecated then',
+                'emulation': 'takes its control step and shows control mode TORQUE while called; '
+                             'the arm holds where it is (no dynamics: torques move nothing, as on '
+                             "UR's simulator)"},
                {'name': 'tool_contact',
                 'section': 'motion',
                 'params': [{'name': 'direction'}],
@@ -344,6 +364,57 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'since': {'cb3': '3.0.0', 'e-series': '5.0.0'},
                 'checked': False,
                 'doc': 'Speed slider'},
+               {'name': 'get_target_joint_accelerations',
+                'section': 'internals',
+                'returns': 'array',
+                'since': {'e-series': '5.23.0'},
+                'checked': False,
+                'doc': "Target joint accelerations (rad/s², six): the trajectory's, as RTDE's "
+                       'target_qdd',
+                'emulation': "the running motion's (zero when still)"},
+               {'name': 'get_jacobian',
+                'section': 'internals',
+                'params': [{'name': 'q', 'default': 'current'},
+                           {'name': 'tcp', 'default': 'active TCP'}],
+                'returns': 'array',
+                'since': {'e-series': '5.23.0'},
+                'checked': False,
+                'doc': "6x6 matrix: the TCP's velocity in Base (rows vx, vy, vz in m/s, then wx, "
+                       'wy, wz in rad/s) per joint velocity (column j for joint j), so J * qd is '
+                       'the TCP speed'},
+               {'name': 'get_jacobian_time_derivative',
+                'section': 'internals',
+                'params': [{'name': 'q', 'default': 'current'},
+                           {'name': 'qd', 'default': 'current'},
+                           {'name': 'tcp', 'default': 'active TCP'}],
+                'returns': 'array',
+                'since': {'e-series': '5.23.0'},
+                'checked': False,
+                'doc': '6x6 matrix: the time derivative of get_jacobian while the joints move at '
+                       'qd (rad/s)'},
+               {'name': 'get_mass_matrix',
+                'section': 'internals',
+                'params': [{'name': 'q', 'default': 'current'},
+                           {'name': 'include_rotors_inertia', 'default': False}],
+                'returns': 'array',
+                'since': {'e-series': '5.23.0'},
+                'checked': False,
+                'doc': '6x6 joint-space mass matrix (kg m²) at q, with the active payload; '
+                       "include_rotors_inertia adds the motors' inertia through their gears",
+                'emulation': "a simple model, not the arm's inertia: 1 kg a link at its distal "
+                             'joint (spec/arms has no masses) plus the payload; symmetric, '
+                             'positive definite, consistent with '
+                             'get_coriolis_and_centrifugal_torques (docs/decisions.md)'},
+               {'name': 'get_coriolis_and_centrifugal_torques',
+                'section': 'internals',
+                'params': [{'name': 'q', 'default': 'current'},
+                           {'name': 'qd', 'default': 'current'}],
+                'returns': 'array',
+                'since': {'e-series': '5.23.0'},
+                'checked': False,
+                'doc': 'Joint torques (N m, six) of the Coriolis and centrifugal effects at q '
+                       'moving at qd',
+                'emulation': "those of get_mass_matrix's simple model"},
                {'name': 'get_target_payload',
                 'section': 'internals',
                 'returns': 'float',
@@ -633,6 +704,21 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'returns': 'pose',
                 'since': {'cb3': '3.0.0', 'e-series': '5.0.0'},
                 'doc': 'Pose a fraction alpha of the way'},
+               {'name': 'inv',
+                'section': 'maths',
+                'params': [{'name': 'm'}],
+                'returns': 'array',
+                'since': {'cb3': '3.14.0', 'e-series': '5.9.0'},
+                'checked': False,
+                'doc': 'Inverse of a square, non-singular matrix, or of a pose (the inverse '
+                       'transformation, a pose)'},
+               {'name': 'transpose',
+                'section': 'maths',
+                'params': [{'name': 'm'}],
+                'returns': 'array',
+                'since': {'cb3': '3.14.0', 'e-series': '5.9.0'},
+                'checked': False,
+                'doc': 'Transpose of a matrix (its rows as columns)'},
                {'name': 'norm',
                 'section': 'maths',
                 'params': [{'name': 'a'}],

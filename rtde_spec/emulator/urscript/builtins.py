@@ -1,7 +1,8 @@
 """The built-in functions a program calls for a value or an effect, beyond script_calls' motions
 and I/O: the RTDE registers (bound to the RTDE server's input and output registers), the pose
-maths, kinematics queries, the sockets (sockets.py) and the modes and settings (builtins_modes.py)
-(docs/reference/urscript.md lists each function with its source in UR's Script Manual).
+maths, kinematics queries, the sockets (sockets.py), the modes and settings (builtins_modes.py) and
+the arm's model and matrices (builtins_dynamics.py) (docs/reference/urscript.md lists each function
+with its source in UR's Script Manual).
 """
 
 from __future__ import annotations
@@ -17,6 +18,7 @@ from rtde_spec.emulator.arm import kinematics as kin
 from rtde_spec.emulator.arm.motion import JointMove, LinearMove
 from rtde_spec.emulator.urscript import calls as script_calls
 from rtde_spec.emulator.urscript import sockets
+from rtde_spec.emulator.urscript.builtins_dynamics import DYNAMICS
 from rtde_spec.emulator.urscript.builtins_modes import MODES, settings_of
 from rtde_spec.emulator.urscript.calls import Pose, number, six, type_name
 from rtde_spec.emulator.urscript.interfaces import Runner
@@ -267,6 +269,7 @@ def _waypoint(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose:
 
 BUILTINS.update(sockets.SENDERS)
 BUILTINS.update(MODES)
+BUILTINS.update(DYNAMICS)
 BUILTINS["socket_close"] = sockets.socket_close
 BUILTINS["get_joint_positions"] = lambda runner, stmt, args, kwargs: [
     float(v) for v in runner.robot.arm.state.q

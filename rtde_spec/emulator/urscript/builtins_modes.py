@@ -50,9 +50,16 @@ def _mode(name: str, value: Any) -> Builtin:
 
 def control_mode(program: object) -> int:
     """The control mode a running program's modes put the arm in (the Robot Mode Data's
-    control_mode): TEACH in freedrive or teach mode, FORCE in force mode, else POSITION. A program
-    that ends takes its modes with it, as the controller ends them with the program."""
+    control_mode): TEACH in freedrive or teach mode, FORCE in force mode, TORQUE while
+    direct_torque is called every control step (a step without it is position control again, as
+    on a robot), else POSITION. A program that ends takes its modes with it, as the controller
+    ends them with the program."""
     settings = getattr(program, "settings", None) or {}
+    torque = settings.get("_direct_torque")
+    if torque is not None:
+        step = 1.0 / float(getattr(getattr(program, "robot", None), "base_hz", 500))
+        if float(getattr(program, "clock", 0.0)) - torque[0] <= step * 1.5:
+            return int(ControlMode.TORQUE)
     if settings.get("_freedrive"):
         return int(ControlMode.TEACH)
     if settings.get("_force_mode"):

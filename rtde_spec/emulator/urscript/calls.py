@@ -53,7 +53,8 @@ DIGITAL = {
 }
 ANALOG = {"set_standard_analog_out": 2, "set_analog_out": 2}
 MOVES = {"movej", "movel", "movep", "movec", "servoj", "servoc", "speedj", "speedl"}
-WAITS = MOVES | {"stopj", "stopl", "sleep", "sync", "halt"}  # the commands a program waits on
+# the commands a program waits on (direct_torque: builtins_dynamics.py)
+WAITS = MOVES | {"stopj", "stopl", "sleep", "sync", "halt", "direct_torque"}
 
 
 def arg(stmt: Stmt, args: Args, kwargs: Kwargs, index: int, name: str, default: Any = ...) -> Any:

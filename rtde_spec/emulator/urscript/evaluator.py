@@ -15,7 +15,7 @@ from collections.abc import Callable, Generator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from rtde_spec.emulator.urscript import builtins
+from rtde_spec.emulator.urscript import builtins, matrices
 from rtde_spec.emulator.urscript import calls as script_calls
 from rtde_spec.emulator.urscript import values as urscript_ops
 from rtde_spec.emulator.urscript.interfaces import Robot
@@ -27,7 +27,7 @@ if TYPE_CHECKING:
 Frame = dict[str, Any]
 MAX_CALL_DEPTH = 64  # user functions calling user functions; deeper is a runaway recursion
 MAX_NESTING = 3  # lists in lists in lists (an array of poses is 2)
-MAX_ELEMENTS = 1 << 16  # elements of one value, through its lists (one held twice counts twice)
+MAX_ELEMENTS = matrices.MAX_ELEMENTS  # elements of one value, through its lists (one held twice counts twice)
 MANY = 256  # items of one list or call between looks at the statement's CPU time
 STATEMENT_SECONDS = 0.004  # CPU one statement's list or arguments may take (two e-Series steps)
 
@@ -151,7 +151,10 @@ class Evaluator:
             return
         if name not in where:
             raise ScriptFault(f"compile_error_name_not_found:{name}", stmt.line, stmt.column)
-        positions = [self.value(e, frame) for e in stmt.index]
+        positions = [
+            self.value(e, frame) if e.kind != "pair" else tuple(self.value(i, frame) for i in e.items)
+            for e in stmt.index
+        ]  # a matrix's row and column are one subscript, a tuple
         changed = urscript_ops.replaced(where[name], positions, value, stmt.line, stmt.column)
         if isinstance(value, list):  # `a[0] = a` must not nest a value deeper each turn
             check_shape(changed, stmt.line, stmt.column)
@@ -192,9 +195,12 @@ class Evaluator:
             if type(right) is not bool:
                 right = self._operand(right, expr, 1)
             return left != right if word == "xor" else right
-        if kind == "pose" and len(expr.items) == 1 and ("p" in frame or "p" in self.globals):
+        if kind == "pose" and len(expr.items) < 3 and ("p" in frame or "p" in self.globals):
             variable = frame["p"] if "p" in frame else self.globals["p"]  # `p[0]` of a variable named p
-            return urscript_ops.index(variable, self.value(expr.items[0], frame), expr.line, expr.column)
+            at = [self.value(e, frame) for e in expr.items]
+            if len(at) == 2:
+                return matrices.cell(variable, at[0], at[1], expr.line, expr.column)
+            return urscript_ops.index(variable, at[0], expr.line, expr.column)
         if kind == "run":
             return self.start_thread(expr.value, expr.line, expr.column)
         items = expr.items
@@ -295,6 +301,8 @@ class Evaluator:
         if kind == "compare":
             return urscript_ops.compare(expr.value, values[0], values[1], line, column)
         if kind == "index":
+            if len(values) == 3:  # m[i, j]
+                return matrices.cell(values[0], values[1], values[2], line, column)
             return urscript_ops.index(values[0], values[1], line, column)
         if kind == "field":
             return builtins.field(values[0], expr.value, line, column)

@@ -1,4 +1,5 @@
-"""URScript's parser: tokens to the syntax tree, by recursive descent over grammar.ebnf.
+"""URScript's parser: tokens to the syntax tree, by recursive descent over grammar.ebnf (statements
+here; expressions in expression_parser.py, the token stream and its errors in token_stream.py).
 
 Line breaks end a statement only where it can end: after `=`, an operator, an open bracket
 or a comma the statement goes on (`global x = # comment` with the value on the next line), and
@@ -10,16 +11,12 @@ may nest; they are hoisted into one table, as the controller resolves names prog
 
 from __future__ import annotations
 
-from rtde_spec.emulator.urscript.lexer import Token, tokenize
+from rtde_spec.emulator.urscript.expression_parser import ExpressionParser
+from rtde_spec.emulator.urscript.lexer import Token
 from rtde_spec.emulator.urscript.nodes import Branch, Expr, Function, Script, ScriptFault, Stmt
+from rtde_spec.emulator.urscript.token_stream import KEYWORDS
 
-MAX_NESTING = 100  # brackets, operators and blocks inside one another
 MAX_PROGRAM = 4 << 20  # characters of one program (a controller refuses much smaller ones)
-KEYWORDS = {
-    "and", "or", "xor", "not", "if", "elif", "else", "while", "end", "return", "break",
-    "continue", "def", "sec", "thread", "run", "kill", "join", "local", "global",
-}  # fmt: skip
-COMPARISONS = {"==", "!=", "<", "<=", ">", ">="}
 _BARE = {"halt", "enter_critical", "exit_critical"}
 _BLOCK_END = {"end", "elif", "else"}
 
@@ -31,61 +28,13 @@ def parse(text: str) -> Script:
     return _Parser(text).script()
 
 
-class _Parser:
+class _Parser(ExpressionParser):
     def __init__(self, text: str) -> None:
-        self.tokens = tokenize(text)
-        self.lines = text.split("\n")
-        self.last_line = len(text.splitlines()) or 1
-        self.i = 0
-        self.nest = 0  # open brackets: inside them line breaks are only spacing
-        self.depth = 0
+        super().__init__(text)
         self.functions: dict[str, Function] = {}
         self.loops = 0
         self.in_def = 0
         self.top: list[Function] = []  # the defs not inside another, in order
-
-    # --- tokens ------------------------------------------------------------------------------
-
-    def peek(self) -> Token:
-        return self.tokens[self.i]
-
-    def next(self) -> Token:
-        tok = self.tokens[self.i]
-        self.i += 1
-        return tok
-
-    def at(self, *texts: str) -> bool:
-        tok = self.tokens[self.i]
-        return tok.kind in ("op", "name") and tok.text in texts
-
-    def take(self, text: str) -> Token:
-        if not self.at(text):
-            raise self.fail()
-        return self.next()
-
-    def source(self, line: int) -> str:
-        return self.lines[line - 1].strip() if 0 < line <= len(self.lines) else ""
-
-    def fail(self) -> ScriptFault:
-        """The syntax error at the next token; one on a later line is missing from the line before."""
-        tok = self.peek()
-        if tok.nl and self.i > 0:
-            prev = self.tokens[self.i - 1]
-            line, column = prev.line, prev.column + len(prev.text)
-        else:
-            line, column = tok.line, tok.column
-        return ScriptFault(f"syntax_error_on_line:{line}:{self.source(line)}", line, column)
-
-    def fail_at(self, tok: Token) -> ScriptFault:
-        return ScriptFault(f"syntax_error_on_line:{tok.line}:{self.source(tok.line)}", tok.line, tok.column)
-
-    def deeper(self) -> None:
-        self.depth += 1
-        if self.depth > MAX_NESTING:
-            tok = self.peek()
-            raise ScriptFault(
-                f"syntax_error_on_line:{tok.line}:nested more than {MAX_NESTING} levels", tok.line, tok.column
-            )
 
     # --- statements --------------------------------------------------------------------------
 
@@ -166,13 +115,14 @@ class _Parser:
         return Stmt("call", first.line, text, target.value, target, column=start.column)
 
     def target(self, expr: Expr, start: Token) -> tuple[str, tuple[Expr, ...]]:
-        """The variable and subscripts an assignment writes: `x`, `q[0]`, `m[1][2]`, `p[0]`."""
+        """The variable and subscripts an assignment writes: `x`, `q[0]`, `m[1][2]`, `m[1, 2]`,
+        `p[0]`; a matrix's row and column are one subscript, a `pair`."""
         index: list[Expr] = []
         while expr.kind == "index":
-            index.insert(0, expr.items[1])
+            index.insert(0, _subscript(expr.items[1:], expr))
             expr = expr.items[0]
-        if expr.kind == "pose" and expr.value == "p" and len(expr.items) == 1:
-            return "p", (expr.items[0], *index)
+        if expr.kind == "pose" and expr.value == "p" and len(expr.items) in (1, 2):
+            return "p", (_subscript(expr.items, expr), *index)
         if expr.kind != "name":
             raise self.fail_at(start)
         return expr.value, tuple(index)
@@ -251,150 +201,9 @@ class _Parser:
             word, head.line, self.source(head.line), word, column=head.column, branches=tuple(branches)
         )
 
-    # --- expressions -------------------------------------------------------------------------
 
-    def binary(self, texts: set[str] | tuple[str, ...]) -> Token | None:
-        """The next token if it is one of these operators and may continue the expression."""
-        tok = self.tokens[self.i]
-        if tok.text in texts and tok.kind in ("op", "name") and (self.nest or not tok.nl):
-            self.i += 1
-            return tok
-        return None
-
-    def expr(self) -> Expr:
-        self.deeper()
-        left = self.conjunction()
-        while (tok := self.binary(("or", "xor"))) is not None:
-            left = Expr("logic", tok.text, (left, self.conjunction()), column=tok.column, line=tok.line)
-        self.depth -= 1
-        return left
-
-    def conjunction(self) -> Expr:
-        left = self.negation()
-        while (tok := self.binary(("and",))) is not None:
-            left = Expr("logic", "and", (left, self.negation()), column=tok.column, line=tok.line)
-        return left
-
-    def negation(self) -> Expr:
-        if self.at("not"):
-            tok = self.next()
-            self.deeper()
-            inner = self.negation()
-            self.depth -= 1
-            return Expr("not", items=(inner,), column=tok.column, line=tok.line)
-        return self.comparison()
-
-    def comparison(self) -> Expr:
-        left = self.sum()
-        while (tok := self.binary(COMPARISONS)) is not None:
-            left = Expr("compare", tok.text, (left, self.sum()), column=tok.column, line=tok.line)
-        return left
-
-    def sum(self) -> Expr:
-        left = self.term()
-        while (tok := self.binary(("+", "-"))) is not None:
-            left = Expr("binop", tok.text, (left, self.term()), column=tok.column, line=tok.line)
-        return left
-
-    def term(self) -> Expr:
-        left = self.unary()
-        while (tok := self.binary(("*", "/", "%"))) is not None:
-            left = Expr("binop", tok.text, (left, self.unary()), column=tok.column, line=tok.line)
-        return left
-
-    def unary(self) -> Expr:
-        if self.peek().kind == "op" and self.at("+", "-"):
-            tok = self.next()
-            self.deeper()
-            inner = self.unary()
-            self.depth -= 1
-            return inner if tok.text == "+" else Expr("neg", items=(inner,), column=tok.column, line=tok.line)
-        return self.postfix()
-
-    def postfix(self) -> Expr:
-        value = self.atom()
-        while True:
-            if (tok := self.binary(("[",))) is not None:
-                self.nest += 1
-                index = self.expr()
-                self.take("]")
-                self.nest -= 1
-                value = Expr("index", items=(value, index), column=tok.column, line=tok.line)
-            elif (tok := self.binary((".",))) is not None:
-                name = self.next()
-                if name.kind != "name":
-                    raise self.fail_at(name)
-                value = Expr("field", name.text, (value,), column=name.column, line=name.line)
-            else:
-                return value
-
-    def atom(self) -> Expr:
-        tok = self.next()
-        kind, text, line, column = tok.kind, tok.text, tok.line, tok.column
-        if kind == "num":
-            number = float(text) if any(c in text for c in ".eE") else int(text)
-            return Expr("num", number, column=column, line=line)
-        if kind == "str":
-            return Expr("str", text[1:-1], column=column, line=line)
-        if kind == "name":
-            if text == "run":
-                name = self.next()
-                if name.kind != "name" or name.text in KEYWORDS:
-                    raise self.fail_at(name)
-                self.take("(")
-                self.take(")")
-                return Expr("run", name.text, column=column, line=line)
-            if text in KEYWORDS:
-                self.i -= 1
-                raise self.fail()
-            if text in ("True", "False", "true", "false"):
-                return Expr("bool", text.lower() == "true", column=column, line=line)
-            if text == "p" and self.at("["):
-                return Expr("pose", "p", self.sequence("]"), column=column, line=line)
-            if self.at("(") and (self.nest or not self.peek().nl):
-                args, kwargs = self.arguments()
-                return Expr("call", text, args, kwargs, column=column, line=line)
-            return Expr("name", text, column=column, line=line)
-        if text == "[":
-            self.i -= 1
-            return Expr("list", items=self.sequence("]"), column=column, line=line)
-        if text == "(":
-            self.nest += 1
-            inner = self.expr()
-            self.take(")")
-            self.nest -= 1
-            return inner
-        self.i -= 1
-        raise self.fail()
-
-    def sequence(self, close: str) -> tuple[Expr, ...]:
-        self.next()  # the open bracket
-        self.nest += 1
-        items: list[Expr] = []
-        while not self.at(close):
-            items.append(self.expr())
-            if not self.at(close):
-                self.take(",")
-        self.next()
-        self.nest -= 1
-        return tuple(items)
-
-    def arguments(self) -> tuple[tuple[Expr, ...], tuple[tuple[str, Expr], ...]]:
-        self.take("(")
-        self.nest += 1
-        args: list[Expr] = []
-        kwargs: list[tuple[str, Expr]] = []
-        while not self.at(")"):
-            tok = self.peek()
-            if tok.kind == "name" and self.tokens[self.i + 1].text == "=":
-                self.i += 2
-                kwargs.append((tok.text, self.expr()))
-            elif kwargs:
-                raise self.fail()  # a positional argument after a named one
-            else:
-                args.append(self.expr())
-            if not self.at(")"):
-                self.take(",")
-        self.next()
-        self.nest -= 1
-        return tuple(args), tuple(kwargs)
+def _subscript(indices: tuple[Expr, ...], where: Expr) -> Expr:
+    """One subscript of an assignment target: its index, or a `pair` of row and column."""
+    if len(indices) == 1:
+        return indices[0]
+    return Expr("pair", items=indices, column=where.column, line=where.line)

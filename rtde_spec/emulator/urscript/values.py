@@ -13,6 +13,7 @@ import operator
 from collections.abc import Callable
 from typing import Any
 
+from rtde_spec.emulator.urscript import matrices
 from rtde_spec.emulator.urscript.nodes import ScriptFault
 
 
@@ -54,6 +55,8 @@ def arithmetic(op: str, left: Any, right: Any, line: int, column: int) -> Any:
         if len(left) + len(right) > MAX_TEXT:
             raise ScriptFault(f"String too long (over {MAX_TEXT} characters)", line, column)
         return left + right
+    if matrices.is_matrix(left) or matrices.is_matrix(right):
+        return matrices.arithmetic(op, left, right, line, column, arithmetic)
     if op in "+-*/" and (isinstance(left, list) or isinstance(right, list)):
         return _elementwise(op, left, right, line, column)
     raise ScriptFault(f"Type error: {type_name(left)} {op} {type_name(right)}", line, column)
@@ -110,7 +113,7 @@ def truth(value: Any, what: str, line: int, column: int) -> bool:
 
 
 def index(value: Any, position: Any, line: int, column: int) -> Any:
-    """`value[position]` of an array or pose."""
+    """`value[position]` of an array or pose (`m[i, j]` of a matrix: matrices.cell)."""
     if not isinstance(value, list):
         raise ScriptFault(f"Type error: {type_name(value)} cannot be indexed", line, column)
     if not _is_number(position) or not isinstance(position, int):
@@ -121,9 +124,14 @@ def index(value: Any, position: Any, line: int, column: int) -> Any:
 
 
 def replaced(value: Any, positions: list[Any], new: Any, line: int, column: int) -> Any:
-    """A copy of `value` with the element at `positions` (one per subscript) set to `new`."""
-    index(value, positions[0], line, column)  # the same checks as reading it
-    copy = list(value)
+    """A copy of `value` with the element at `positions` (one per subscript, a matrix's row and
+    column a tuple) set to `new`."""
     here = positions[0]
+    if isinstance(here, tuple):  # m[i, j]: an entry, so the last subscript
+        if len(positions) > 1:
+            raise ScriptFault("Type error: a matrix entry cannot be indexed", line, column)
+        return matrices.with_cell(value, here[0], here[1], new, line, column)
+    index(value, here, line, column)  # the same checks as reading it
+    copy = list(value)
     copy[here] = new if len(positions) == 1 else replaced(copy[here], positions[1:], new, line, column)
     return make_pose(copy, line, column) if isinstance(value, Pose) else copy
