@@ -356,17 +356,32 @@ def test_what_cannot_be_compiled_names_its_line_and_nothing_runs(
 @pytest.mark.parametrize(
     ("condition", "line", "column", "text"),
     [
-        ("if n:", 4, 6, "a condition must be a bool, not int"),
+        ('if "one":', 4, 6, "a condition must be a bool, not string"),
         ("while [1]:", 4, 9, "a condition must be a bool, not array"),
         ("if n > 0 and n:", 4, 16, "and's operand must be a bool, not int"),
         ("if n == 'one':", 4, 8, "Type error: int == string"),
         ("if [1][3] == 1:", 4, 9, "Index out of bounds: 3"),
     ],
 )
-def test_a_condition_that_is_not_a_bool_is_a_runtime_exception_with_its_line(
+def test_a_condition_that_is_no_bool_nor_number_is_a_runtime_exception_with_its_line(
     condition: str, line: int, column: int, text: str
 ) -> None:
     _, events = run(f'def prog():\n  n = 1\n  textmsg("ran")\n  {condition}\n    sync()\n  end\nend')
     assert said(events) == ["ran"]  # a run-time fault: what came before ran
     [(got, got_line, got_column)] = faults(events)
     assert text in got and (got_line, got_column) == (line, column)
+
+
+def test_a_number_as_a_condition_is_true_unless_zero() -> None:
+    """As in the ROS driver's program (UR's client library: `has_qnear = raw_point[15] /
+    MULT_jointstate` then `if has_qnear:`), which runs on URSim in that library's tests."""
+    script = (
+        "def prog():\n  has_qnear = 1 / 1000000.0\n  none = 0\n"
+        '  if has_qnear:\n    textmsg("float taken")\n  end\n'
+        '  if none:\n    textmsg("zero taken")\n  elif 2:\n    textmsg("int taken")\n  end\n'
+        "  k = 3\n  while k:\n    k = k - 1\n  end\n"
+        '  textmsg("done")\nend'
+    )
+    _, events = run(script)
+    assert said(events) == ["float taken", "int taken", "done"]
+    assert not faults(events)

@@ -164,7 +164,7 @@ class Evaluator:
         assert branch.cond is not None
         cond = branch.cond
         value = self.value(cond, frame) if not cond.user else (yield from self.steps(cond, frame))
-        return urscript_ops.truth(value, "a condition", branch.line, branch.column)
+        return urscript_ops.condition(value, branch.line, branch.column)
 
     # --- expressions --------------------------------------------------------------------------
 

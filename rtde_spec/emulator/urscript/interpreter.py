@@ -298,7 +298,7 @@ class Program(Evaluator):
                     return (yield from self._block(branch.body, frame))
                 if not cond.user:
                     value = self.value(cond, frame)
-                    taken = urscript_ops.truth(value, "a condition", branch.line, branch.column)
+                    taken = urscript_ops.condition(value, branch.line, branch.column)
                 else:
                     taken = yield from self.condition(branch, frame)
                 if taken:

@@ -112,6 +112,15 @@ def truth(value: Any, what: str, line: int, column: int) -> bool:
     raise ScriptFault(f"Type error: {what} must be a bool, not {type_name(value)}", line, column)
 
 
+def condition(value: Any, line: int, column: int) -> bool:
+    """An `if`/`elif`/`while` condition: a bool, or a number (true unless 0), as the controller takes
+    it: UR's client library writes `if has_qnear:` of a float in the ROS driver's program, and its
+    tests run that against URSim. Anything else is the type error `truth` gives."""
+    if type(value) in (int, float):
+        return bool(value)
+    return truth(value, "a condition", line, column)
+
+
 def index(value: Any, position: Any, line: int, column: int) -> Any:
     """`value[position]` of an array or pose (`m[i, j]` of a matrix: matrices.cell)."""
     if not isinstance(value, list):
