@@ -17,7 +17,10 @@ import numpy as np
 from rtde_spec.emulator.arm import kinematics as kin
 from rtde_spec.emulator.arm.motion import JointMove, LinearMove
 from rtde_spec.emulator.urscript import calls as script_calls
-from rtde_spec.emulator.urscript import sockets
+from rtde_spec.emulator.urscript import (
+    optimove,  # noqa: F401 - registers optimovej/optimovel
+    sockets,
+)
 from rtde_spec.emulator.urscript.builtins_dynamics import DYNAMICS
 from rtde_spec.emulator.urscript.builtins_modes import MODES, settings_of
 from rtde_spec.emulator.urscript.calls import Pose, number, six, type_name

@@ -52,7 +52,7 @@ DIGITAL = {
     "set_tool_digital_out": ("tool", 2),
 }
 ANALOG = {"set_standard_analog_out": 2, "set_analog_out": 2}
-MOVES = {"movej", "movel", "movep", "movec", "servoj", "servoc", "speedj", "speedl"}
+MOVES = {"movej", "movel", "movep", "movec", "servoj", "servoc", "speedj", "speedl", "optimovej", "optimovel"}
 # the commands a program waits on (direct_torque: builtins_dynamics.py)
 WAITS = MOVES | {"stopj", "stopl", "sleep", "sync", "halt", "direct_torque"}
 
