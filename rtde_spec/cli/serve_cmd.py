@@ -40,8 +40,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     p.add_argument(
         "--programs",
         metavar="DIR",
-        help="where the dashboard's `load NAME` finds programs: NAME as URScript, or the .script "
-        "beside NAME.urp (default: none, so `load` answers File not found)",
+        help="where the dashboard's `load NAME` finds programs: NAME as URScript, the .script "
+        "beside NAME.urp, or NAME.urp translated (default: none, so `load` answers File not found)",
+    )
+    p.add_argument(
+        "--external-control",
+        metavar="HOST[:PORT]",
+        help="the driver a .urp's External Control node (the ROS driver's URCap) asks for its "
+        "program when played (default: the dashboard client that plays it, port 50002)",
     )
     p.add_argument(
         "--max-clients",
@@ -204,6 +210,7 @@ def _config(args: argparse.Namespace) -> EmulatorConfig:
         dashboard_port=_dashboard_port(args.dashboard_port, dashboard_spec().port),
         dashboard_optional=args.dashboard_port is None,  # the default port may be taken: then none
         programs=Path(args.programs) if args.programs else None,
+        external_control=args.external_control,
         realtime_port=_dashboard_port(args.realtime_port, REALTIME_PORTS["realtime"]),
         realtime_read_only_port=args.realtime_read_only_port,
         realtime_optional=args.realtime_port is None,  # the default port may be taken: then none

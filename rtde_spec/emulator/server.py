@@ -63,6 +63,9 @@ class EmulatorConfig:
     realtime_read_only_port: int | None = None
     realtime_optional: bool = False  # a real-time port in use is logged and skipped, not an error
     programs: Path | None = None  # where the dashboard's `load` finds programs (none: "File not found")
+    # HOST[:PORT] of the driver an External Control node asks for its program (the ROS driver's
+    # URCap mode); None: the dashboard client that plays it, on port 50002
+    external_control: str | None = None
     limits: ClientLimits = field(default_factory=ClientLimits)  # what one client may cost, per port
     # after falling this far behind (s, a stalled machine) the loop skips steps rather than
     # sending them late in a burst; None: every step is sent, late if need be
@@ -101,7 +104,9 @@ class Emulator:
         self.model.calibrated = self.config.scenario.calibrated
         self.rtde = RtdeHub(self.model)
         self.primary = PrimaryHub(self.model)
-        self.dashboard = DashboardHub(self.model, self.config.programs)
+        self.dashboard = DashboardHub(
+            self.model, self.config.programs, external_control=self.config.external_control
+        )
         self.realtime = RealtimeHub(self.model, self.primary)
         self.faults = FaultSchedule(self.config.scenario.faults, self.model)
         self._silenced = False

@@ -232,6 +232,21 @@ class ControllerModel(RobotModes):
             return None
         return self._start(self._compile(text))
 
+    def run_script_later(self, make: Callable[[], str]) -> None:
+        """Start the program `make` returns once it has it, off the control loop (a program the
+        External Control node asks of the driver); its error (OSError) is a runtime exception."""
+
+        def compiled() -> Program | ScriptEvent:
+            try:
+                return self._compile(make())
+            except OSError as exc:
+                return ScriptEvent("runtime_exception", str(exc), 0, 0)
+
+        if len(self._parsing) >= MAX_PARSING:
+            self.emit(ScriptEvent("runtime_exception", "too many programs at once: refused", 0, 0))
+            return
+        self._parsing.append(_PARSER.submit(compiled))
+
     def _compile(self, text: str) -> Program | ScriptEvent:
         """The program, ready to run, or the event that refuses it (any thread may run this)."""
         try:

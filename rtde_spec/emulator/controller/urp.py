@@ -13,8 +13,10 @@ relative paths, resolved here).
 Nodes read: Assignment, Script (line or file), If / ElseIf / Else, Loop (forever, while,
 counted), Move (MoveJ, MoveL, MoveP) with fixed or variable waypoints, Wait (time or
 expression), Set (a digital output), Comment, Folder, Halt, Popup, SubProgram and Call,
-Thread. Any other node is a `UrpError` naming it and where it is: a program the emulator
-cannot run as PolyScope would is refused, never run in part.
+Thread, and the External Control URCap's node (the ROS driver's program, asked of the driver
+when the program is played: external_program.py). Any other node is a `UrpError` naming it
+and where it is: a program the emulator cannot run as PolyScope would is refused, never run in
+part.
 """
 
 from __future__ import annotations
@@ -22,6 +24,8 @@ from __future__ import annotations
 import re
 import zlib
 from xml.etree import ElementTree
+
+from rtde_spec.emulator.controller.external_program import EXTERNAL_CONTROL, HEADER_MARK, NODE_MARK
 
 MAX_XML_BYTES = 16 << 20  # a program tree past this is refused (a gzip bomb stops here)
 GLYPHS = {
@@ -75,6 +79,7 @@ class _Translator:
         self.lines: list[str] = []
         self.depth = 1
         self.loops = 0
+        self.external = False  # an External Control node (the ROS driver's URCap) is in the tree
 
     # --- the tree ------------------------------------------------------------
 
@@ -110,6 +115,8 @@ class _Translator:
             self.emit("while (True):")
             self.nested(_children(main))
             self.emit("end")
+        if self.external:  # the driver's definitions: the program's header
+            self.lines.insert(1, HEADER_MARK)
         self.lines.append("end")  # the one def a controller runs, as in the .script PolyScope saves
         return "\n".join(self.lines) + "\n"
 
@@ -190,6 +197,9 @@ class _Translator:
         elif tag == "Popup":
             text = (node.get("message") or "").replace('"', "'")
             self.emit(f'popup("{text}", "Message", False, False, blocking=False)')
+        elif tag == "Contributed" and node.get("strategyClass") == EXTERNAL_CONTROL:
+            self.external = True  # the driver's program goes here when played (external_program.py)
+            self.emit(NODE_MARK)
         elif tag == "Call":
             self.emit(f"{_identifier(node.get('subprogram') or node.get('name') or '')}()")
         else:

@@ -40,7 +40,11 @@ class DashboardHub:
     """What the dashboard connections share: the model, the loaded program's name, the stop clock."""
 
     def __init__(
-        self, model: ControllerModel, programs: Path | None = None, serial_number: str = SERIAL_NUMBER
+        self,
+        model: ControllerModel,
+        programs: Path | None = None,
+        serial_number: str = SERIAL_NUMBER,
+        external_control: str | None = None,
     ) -> None:
         self.model = model
         self.table = dashboard_spec()
@@ -53,6 +57,9 @@ class DashboardHub:
         self.operational_mode = "NONE"  # e-Series: no client controls it until `set operational mode`
         self.reports = 0
         self.available = model.line.id in self.table.product_lines
+        self.external_control = external_control  # HOST[:PORT] of the driver (None: the one who plays)
+        self.waiting_for_driver: str | None = None  # a loaded .urp whose External Control node needs it
+        self.peer = "127.0.0.1"  # the client of the command being answered
 
     def observe(self, now: float) -> None:
         """Called a few times a second: when the current protective stop began."""
@@ -62,8 +69,10 @@ class DashboardHub:
         elif self.protective_since is None:
             self.protective_since = now
 
-    def answer(self, line: str) -> tuple[str, bool]:
-        """The reply to one command line, and whether the connection closes after it."""
+    def answer(self, line: str, peer: str = "127.0.0.1") -> tuple[str, bool]:
+        """The reply to one command line (from the client at `peer`), and whether the connection
+        closes after it."""
+        self.peer = peer
         found = self.table.find(line)
         if found is None or not available(found[0].since, self.model.version, self.model.catalogue):
             return self.table.unknown.format(line=line), False
@@ -113,6 +122,8 @@ class DashboardHub:
         elif action == "brake_release":
             model.release_brakes()
         elif action == "play":
+            if self.waiting_for_driver is not None and model.program is None:
+                return self._play_external(self.waiting_for_driver)
             return "ok" if model.play() else "failed"
         elif action == "pause":
             return "ok" if model.pause_program() else "failed"
@@ -193,9 +204,24 @@ class DashboardHub:
         return self._loaded(name, text)
 
     def _loaded(self, name: str, text: str) -> str:
+        from rtde_spec.emulator.controller.external_program import NODE_MARK
+
         model: Any = self.model
         model.load_program(text)
         self.program = Path(name).name
+        self.waiting_for_driver = text if NODE_MARK in text else None
+        return "ok"
+
+    def _play_external(self, script: str) -> str:
+        """Play a program with the External Control node: its program is asked of the driver off
+        the control loop, as PolyScope asks for it, and the program starts once it is there."""
+        from rtde_spec.emulator.controller import external_program
+
+        model: Any = self.model
+        if not model.can_move():
+            return "failed"
+        host, port = external_program.address(self.external_control, self.peer)
+        model.run_script_later(lambda: external_program.insert(script, external_program.fetch(host, port)))
         return "ok"
 
     def _safety_normal(self) -> None:
@@ -287,10 +313,16 @@ class DashboardConnection(GuardedConnection):
             line = raw.decode("utf-8", "replace").strip()
             if not line:
                 continue
-            reply, close = self.hub.answer(line)
+            peername = self.transport.get_extra_info("peername") if self.transport is not None else None
+            reply, close = self.hub.answer(line, _host(peername))
             log.info("dashboard %s: %r -> %r", self.peer, line[:80], reply)
             self.write(reply.encode("utf-8", "replace") + b"\n")
             if close:
                 assert self.transport is not None
                 self.transport.close()
                 return
+
+
+def _host(peername: object) -> str:
+    """The address of a connection's peer (transport's peername: (host, port, ...))."""
+    return str(peername[0]) if isinstance(peername, tuple) and peername else "127.0.0.1"
