@@ -15,11 +15,10 @@ from collections.abc import Iterator
 import numpy as np
 import pytest
 
-from rtde_spec import PrimaryClient
 from rtde_spec.emulator.arm import kinematics as kin
 from rtde_spec.metamodel.arms import arm_model
 
-from .ur_rtde_robot import Robot, serve, settle_until, ur_rtde_robot
+from .ur_rtde_robot import Robot, control_mode, serve, settle_until, ur_rtde_robot
 
 rtde_control = pytest.importorskip("rtde_control", reason="ur_rtde is installed by the test extra")
 rtde_receive = pytest.importorskip("rtde_receive", reason="ur_rtde is installed by the test extra")
@@ -157,31 +156,21 @@ def test_set_tcp_and_set_payload_show_in_the_outputs(robot: Robot) -> None:
     # the next test reads the pose first: under load the outputs showed the 0.12 m TCP for a while
 
 
-def control_mode(host: str = HOST) -> int:
-    """The control mode of the next Robot State on the primary port (URCL's primary client reads it)."""
-    with PrimaryClient(host, 30001, timeout=5) as client:
-        for message in client:
-            if message.NAME == "robot_state":
-                mode = next(p for p in message.sub_packages if type(p).__name__ == "RobotModeData")
-                return int(mode.control_mode)
-    raise AssertionError("the primary port closed before a Robot State")
-
-
 def test_force_mode_and_teach_mode_hold_the_arm_and_end(robot: Robot) -> None:
     q = robot.receive.getActualQ()
     pose = robot.receive.getActualTCPPose()
-    assert control_mode() == POSITION
+    assert control_mode(HOST) == POSITION
     assert robot.control.forceMode(
         [0.0] * 6, [0, 0, 1, 0, 0, 0], [0, 0, -2, 0, 0, 0], 2, [2, 2, 1.5, 1, 1, 1]
     )
-    settle_until(lambda: control_mode() == FORCE)
+    settle_until(lambda: control_mode(HOST) == FORCE)
     time.sleep(0.3)
     assert robot.control.forceModeStop()
-    settle_until(lambda: control_mode() == POSITION)
+    settle_until(lambda: control_mode(HOST) == POSITION)
     assert robot.control.teachMode()
-    settle_until(lambda: control_mode() == TEACH)
+    settle_until(lambda: control_mode(HOST) == TEACH)
     assert robot.control.endTeachMode()
-    settle_until(lambda: control_mode() == POSITION)
+    settle_until(lambda: control_mode(HOST) == POSITION)
     settle(robot)
     assert robot.receive.getActualTCPPose() == pytest.approx(pose, abs=1e-9)  # approximated: held still
     target = [q[0] + 0.05, *q[1:]]

@@ -22,11 +22,10 @@ from collections.abc import Callable, Iterator
 import numpy as np
 import pytest
 
-from rtde_spec import PrimaryClient
 from rtde_spec.emulator.arm import dynamics, jacobian
 from rtde_spec.metamodel.arms import arm_model
 
-from .ur_rtde_robot import Robot, settle_until, ur_rtde_robot
+from .ur_rtde_robot import Robot, control_mode, settle_until, ur_rtde_robot
 
 rtde_control = pytest.importorskip("rtde_control", reason="ur_rtde is installed by the test extra")
 rtde_receive = pytest.importorskip("rtde_receive", reason="ur_rtde is installed by the test extra")
@@ -124,13 +123,3 @@ def test_direct_torque_holds_the_arm_and_the_script_runs_on(torque_robot: Robot)
     settle_until(lambda: control_mode(TORQUE_HOST) == TORQUE)
     assert robot.control.isProgramRunning()
     assert robot.receive.getActualQ() == pytest.approx(here, abs=1e-9)  # no dynamics: the arm holds
-
-
-def control_mode(host: str) -> int:
-    """The control mode of the next Robot State on the primary port."""
-    with PrimaryClient(host, 30001, timeout=5) as client:
-        for message in client:
-            if message.NAME == "robot_state":
-                mode = next(p for p in message.sub_packages if type(p).__name__ == "RobotModeData")
-                return int(mode.control_mode)
-    raise AssertionError("the primary port closed before a Robot State")

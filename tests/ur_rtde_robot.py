@@ -76,3 +76,15 @@ def settle_until(
     while not done():
         assert time.monotonic() < deadline, what
         time.sleep(0.01)
+
+
+def control_mode(host: str) -> int:
+    """The control mode of the next Robot State on the primary port (URCL's primary client reads it)."""
+    from rtde_spec import PrimaryClient
+
+    with PrimaryClient(host, 30001, timeout=5) as client:
+        for message in client:
+            if message.NAME == "robot_state":
+                mode = next(p for p in message.sub_packages if type(p).__name__ == "RobotModeData")
+                return int(mode.control_mode)
+    raise AssertionError("the primary port closed before a Robot State")
