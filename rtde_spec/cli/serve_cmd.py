@@ -215,6 +215,13 @@ def _config(args: argparse.Namespace) -> EmulatorConfig:
         realtime_read_only_port=args.realtime_read_only_port,
         realtime_optional=args.realtime_port is None,  # the default port may be taken: then none
     )
+    if args.external_control:
+        from rtde_spec.emulator.controller.external_program import address
+
+        try:
+            address(args.external_control, "")
+        except ValueError:
+            raise UsageError(f"--external-control {args.external_control}: give HOST or HOST:PORT") from None
     if args.realtime_priority is not None:
         if not 1 <= args.realtime_priority <= 99:
             raise UsageError(f"--realtime-priority {args.realtime_priority}: give 1..99")

@@ -16,7 +16,6 @@ import time
 EXTERNAL_CONTROL = "com.fzi.externalcontrol.ExternalControlNode"  # the node's strategyClass
 NODE_MARK = "# rtde-spec: the External Control program"
 HEADER_MARK = "# rtde-spec: the External Control header"
-DEFAULT_PORT = 50002
 MAX_PROGRAM_BYTES = 1 << 20
 QUIET_SECONDS = 0.5  # nothing more for this long after the program began: it is all there
 CONNECT_SECONDS = 5.0
@@ -26,13 +25,22 @@ class ExternalProgramError(OSError):
     """The driver's program could not be had: where it was asked and why."""
 
 
+def _script_sender() -> tuple[int, bytes]:
+    """The script sender's port and the request the URCap sends it (spec/external_control)."""
+    from rtde_spec.metamodel.external import external_spec
+
+    sender = external_spec().protocol("script_sender")
+    return int(sender.port), (sender.request or "").encode()
+
+
 def address(text: str | None, default_host: str) -> tuple[str, int]:
     """HOST[:PORT] of the driver's script sender (`serve --external-control`), else the default
-    host (the dashboard client that plays the program) on port 50002."""
+    host (the dashboard client that plays the program) on the spec's port (50002)."""
+    port = _script_sender()[0]
     if not text:
-        return default_host, DEFAULT_PORT
-    host, _, port = text.rpartition(":") if text.count(":") == 1 else (text, "", "")
-    return (host or text), int(port) if port else DEFAULT_PORT
+        return default_host, port
+    host, _, given = text.rpartition(":") if text.count(":") == 1 else (text, "", "")
+    return (host or text), int(given) if given else port
 
 
 def fetch(host: str, port: int) -> str:
@@ -40,7 +48,7 @@ def fetch(host: str, port: int) -> str:
     where = f"{host}:{port}"
     try:
         with socket.create_connection((host, port), timeout=CONNECT_SECONDS) as sock:
-            sock.sendall(b"request_program\n")
+            sock.sendall(_script_sender()[1])
             data = bytearray()
             sock.settimeout(CONNECT_SECONDS)
             deadline = time.monotonic() + 30.0
