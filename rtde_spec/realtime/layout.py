@@ -144,9 +144,12 @@ def all_columns() -> dict[str, str]:
     with its numpy type: one column set for every version, so files of controllers of several
     versions read as one table. A column some version does not send is nullable ("f8?"): null
     in that version's files; the rest are never null (Parquet stores them faster)."""
-    columns: dict[str, str] = {"message_size": "i4"}  # the size field, as the struct plan reads it
+    plans = sorted(_all(), key=lambda p: p.size)
+    code = plans[0].plan.format.lstrip("<>!=@")[0]  # the size field, as the struct plan reads it
+    size = f"{'i' if code.islower() else 'u'}{struct.calcsize('=' + code)}"
+    columns: dict[str, str] = {"message_size": size}
     sets = []
-    for plan in sorted(_all(), key=lambda p: p.size):
+    for plan in plans:
         names = []
         for name, count in zip(plan.names, plan.counts, strict=True):
             kind = "i8" if name in plan.integers else "f8"
