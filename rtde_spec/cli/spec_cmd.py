@@ -14,13 +14,14 @@ from typing import TYPE_CHECKING, Any
 from rtde_spec.cli.conventions import describe
 from rtde_spec.cli.report import EXIT_ERROR
 from rtde_spec.errors import UsageError
+from rtde_spec.metamodel.document_forms import FORMATS
 from rtde_spec.output.text import print_json, table
 
 if TYPE_CHECKING:
     from rtde_spec.importers.changes import Change
 
 
-#: the document forms --form names (rtde_spec.importers.FORMATS; not imported at start-up)
+FORMS = FORMATS  # the document forms --form names
 FORMS = (
     "cb3-text",
     "tab-text",

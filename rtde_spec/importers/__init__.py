@@ -16,20 +16,10 @@ from rtde_spec.importers.edition import newest, versions_named
 from rtde_spec.importers.model import Document
 from rtde_spec.importers.rows import field_rows, main_line
 from rtde_spec.importers.tables import MAX_BYTES
+from rtde_spec.metamodel.document_forms import FORMATS
 from rtde_spec.metamodel.schema import Spec
 from rtde_spec.metamodel.versions import Version
 
-FORMATS = (
-    "cb3-text",
-    "tab-text",
-    "e-series-text",
-    "rendered-text",
-    "columns-text",
-    "markdown",
-    "html",
-    "xlsx",
-    "primary-text",
-)
 #: what a document must hold to be read, for the error when none is found
 LOOKED_FOR = (
     "an RTDE field table (header cells Name, Type, Comment[, Introduced in version] under a heading "
