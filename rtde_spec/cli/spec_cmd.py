@@ -22,17 +22,6 @@ if TYPE_CHECKING:
 
 
 FORMS = FORMATS  # the document forms --form names
-FORMS = (
-    "cb3-text",
-    "tab-text",
-    "e-series-text",
-    "rendered-text",
-    "columns-text",
-    "markdown",
-    "html",
-    "xlsx",
-    "primary-text",
-)
 
 
 def add_parser(sub: argparse._SubParsersAction) -> None:
