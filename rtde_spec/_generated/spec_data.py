@@ -127,14 +127,14 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                         'type': 'UINT8',
                         'doc': 'Tool digital output bit mask',
                         'bits': 'ToolDigitalBits',
-                        'since': {'e-series': '5.0.0'},
-                        'sources': ['third-party']},
+                        'since': {'cb3': '3.14.3', 'e-series': '5.0.0'},
+                        'sources': ['third-party', 'urcl-ci']},
                        {'name': 'tool_digital_output',
                         'type': 'UINT8',
                         'doc': 'Tool digital outputs',
                         'bits': 'ToolDigitalBits',
-                        'since': {'e-series': '5.0.0'},
-                        'sources': ['third-party']},
+                        'since': {'cb3': '3.14.3', 'e-series': '5.0.0'},
+                        'sources': ['third-party', 'urcl-ci']},
                        {'name': 'standard_analog_output_mask',
                         'type': 'UINT8',
                         'doc': 'Standard analog output mask (bits 0-1: standard_analog_output_0, '
@@ -333,8 +333,16 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                          'doc': 'Actual TCP offset (x,y,z,rx,ry,rz): transformation from the '
                                 'output flange coordinate system to the TCP',
                          'unit': 'm, rad',
-                         'since': {'e-series': '5.0.0'},
-                         'sources': ['e-series-guide']},
+                         'since': {'cb3': '3.14.3', 'e-series': '5.0.0'},
+                         'sources': ['e-series-guide', 'urcl-ci'],
+                         'conflicts': [{'what': 'removed',
+                                        'sources': ['cb3-guide'],
+                                        'decision': 'The CB3 guide has no such row, but URSim '
+                                                    "3.14.3 serves it: URCL's CI runs every "
+                                                    'example there with it in the output recipe, '
+                                                    'and URCL stops on a field the controller does '
+                                                    'not know. Kept on CB3 from 3.14.3, the '
+                                                    'earliest version known to have it.'}]},
                         {'name': 'actual_TCP_acceleration',
                          'type': 'VECTOR6D',
                          'doc': 'Actual TCP acceleration calculated from joint velocities and '

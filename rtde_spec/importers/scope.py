@@ -11,8 +11,9 @@ from rtde_spec.importers.model import Document
 from rtde_spec.metamodel.schema import FieldSpec, Spec
 from rtde_spec.metamodel.versions import Version
 
-#: sources that are not documents a guide would be expected to repeat
-UNDOCUMENTED = {"third-party", "user"}
+#: sources that are not documents a guide would be expected to repeat (urcl-ci: what UR's
+#: client library's CI shows a URSim version has, spec/rtde/fields.yaml)
+UNDOCUMENTED = {"third-party", "user", "urcl-ci"}
 
 
 def first_on(since: dict[str, str] | None, line: str, spec: Spec) -> str | None:
