@@ -79,7 +79,8 @@ def test_greeting_power_and_brakes_show_on_rtde_and_primary(emu: EmulatorThread)
         state = primary_state(emu)
         assert state["robot_mode_data"].robot_mode == 3 and not state["robot_mode_data"].is_robot_power_on
         assert dash.ask("brake release") == "Brake releasing"
-        assert dash.ask("robotmode") == "Robotmode: POWER_OFF"  # no brakes to release without power
+        assert dash.ask("robotmode") == "Robotmode: RUNNING"  # powered on, then released, as URSim does
+        assert dash.ask("power off") == "Powering off"
         assert dash.ask("power on") == "Powering on"
         assert dash.ask("robotmode") == "Robotmode: IDLE"
         assert dash.ask("brake release") == "Brake releasing"

@@ -6,8 +6,9 @@
 - Kinematics Info: URCL's calibration example calls an arm calibrated when
   calibration_status is 2 (linearised); URSim 5.8 reports 0 with all-ones checksums.
 - Dashboard: every command URCL's e-Series/CB3 client sends (dashboard_client_implementation_g5.cpp)
-  gets a reply its pattern accepts; `isProgramSaved` is `true NAME.urp` on e-Series (URCL's
-  pattern) and `True NAME.urp` on CB3 (ur_rtde's isProgramSaved looks for "True").
+  gets a reply its pattern accepts; `isProgramSaved` is `true NAME.urp` and `running` is
+  `Program running: false` on e-Series and CB3 alike (URCL's patterns, which its integration
+  tests hold URSim CB3 3.14.3 to as well).
 Real sockets on 127.0.0.1 throughout; the patterns below are written from those clients' checks.
 """
 
@@ -54,7 +55,11 @@ def urcl_key_message(message: bytes) -> tuple[str, str] | None:
 
 def test_program_started_and_stopped_key_messages_carry_the_name_as_urcl_reads_it() -> None:
     config = EmulatorConfig(
-        rtde_port=None, primary_port=0, secondary_port=None, controller="5.15.0", realtime_port=None,
+        rtde_port=None,
+        primary_port=0,
+        secondary_port=None,
+        controller="5.15.0",
+        realtime_port=None,
         dashboard_port=None,
     )
     with EmulatorThread(config) as emu:
@@ -82,7 +87,9 @@ def test_kinematics_info_reports_a_calibrated_arm_unless_the_scenario_says_not(
         rtde_port=None,
         primary_port=None,
         secondary_port=0,
-        scenario=Scenario(controller="5.8.0", calibrated=calibrated), realtime_port=None, dashboard_port=None,
+        scenario=Scenario(controller="5.8.0", calibrated=calibrated),
+        realtime_port=None,
+        dashboard_port=None,
     )
     with EmulatorThread(config) as emu:
         with socket.create_connection(("127.0.0.1", emu.ports["secondary"]), timeout=5) as sock:
@@ -147,7 +154,8 @@ def dashboard_emulator(tmp_path: Path, version: str) -> EmulatorThread:
         secondary_port=None,
         dashboard_port=0,
         programs=programs,
-        controller=version, realtime_port=None,
+        controller=version,
+        realtime_port=None,
     )
     return EmulatorThread(config).start()
 
@@ -168,13 +176,13 @@ def test_every_command_urcls_dashboard_client_sends_gets_a_reply_it_accepts(tmp_
         emu.stop()
 
 
-def test_cb3_says_true_as_cb3_controllers_do_and_knows_user_roles(tmp_path: Path) -> None:
+def test_cb3_says_true_in_lower_case_as_urcl_expects_of_it_and_knows_user_roles(tmp_path: Path) -> None:
     emu = dashboard_emulator(tmp_path, "3.15.8")
     dash = Dashboard(emu.ports["dashboard"])
     try:
         assert dash.ask("load prog.urp") == "Loading program: prog.urp"
-        assert dash.ask("isProgramSaved") == "True prog.urp"
-        assert dash.ask("running") == "Program running: False"
+        assert dash.ask("isProgramSaved") == "true prog.urp"
+        assert dash.ask("running") == "Program running: false"
         assert dash.ask("setUserRole operator") == "Setting user role: operator"
         assert dash.ask("getUserRole") == "OPERATOR"
         assert dash.ask("setUserRole admin") == "Failed setting user role: admin"
@@ -185,14 +193,15 @@ def test_cb3_says_true_as_cb3_controllers_do_and_knows_user_roles(tmp_path: Path
         emu.stop()
 
 
-def test_ur_rtde_is_program_saved_on_a_cb3(tmp_path: Path) -> None:
+def test_ur_rtde_is_program_saved_on_a_cb3_says_false_as_it_would_of_ursim(tmp_path: Path) -> None:
+    """ur_rtde looks for "True", which a CB3 3.14 does not say (URCL's tests hold it to lower case)."""
     dashboard_client = pytest.importorskip("dashboard_client", reason="ur_rtde is not installed")
     emu = dashboard_emulator(tmp_path, "3.15.8")
     client = dashboard_client.DashboardClient("127.0.0.1", emu.ports["dashboard"])
     try:
         client.connect()
         client.loadURP("prog.urp")
-        assert client.isProgramSaved() is True
+        assert client.isProgramSaved() is False
     finally:
         client.disconnect()
         emu.stop()

@@ -5,7 +5,9 @@ emulator's logging); and the control and receive interfaces connected to it."""
 
 from __future__ import annotations
 
+import json
 import os
+import queue
 import re
 import subprocess
 import sys
@@ -29,11 +31,14 @@ class Robot:
     controller: str = "5.15.0"  # the version the emulator plays
 
 
-def serve(host: str, controller: str = "5.15.0") -> tuple[subprocess.Popen[str], list[str]]:
+def serve(
+    host: str, controller: str = "5.15.0", model: str = "UR5e", programs: Path | None = None
+) -> tuple[subprocess.Popen[str], list[str]]:
     """The emulator of the rtde_spec these tests import (a worktree's, not an installed one's)."""
     tree = str(Path(rtde_spec.__file__).resolve().parents[1])
     env = {**os.environ, "PYTHONPATH": os.pathsep.join(p for p in (tree, os.environ.get("PYTHONPATH")) if p)}
-    args = ["--host", host, "--dashboard-port", "29999", "--controller", controller, "--model", "UR5e"]
+    args = ["--host", host, "--dashboard-port", "29999", "--controller", controller, "--model", model]
+    args += ["--programs", str(programs)] if programs is not None else []
     proc = subprocess.Popen(
         [sys.executable, "-m", "rtde_spec", "serve", *args],
         stdout=subprocess.PIPE,
@@ -88,3 +93,54 @@ def control_mode(host: str) -> int:
                 mode = next(p for p in message.sub_packages if type(p).__name__ == "RobotModeData")
                 return int(mode.control_mode)
     raise AssertionError("the primary port closed before a Robot State")
+
+
+class ClientError(Exception):
+    """An exception a ur_rtde client raised in the worker: its class name and message."""
+
+    def __init__(self, kind: str, message: str) -> None:
+        super().__init__(f"{kind}: {message}")
+        self.kind, self.message = kind, message
+
+
+class Clients:
+    """ur_rtde's clients in a process of their own (tests/ur_rtde_worker.py): every call is answered
+    within `deadline` seconds or the test fails saying which call hung (the worker is then killed)."""
+
+    def __init__(self, deadline: float = 10.0) -> None:
+        worker = str(Path(__file__).with_name("ur_rtde_worker.py"))
+        self.deadline = deadline
+        self.proc = subprocess.Popen(
+            [sys.executable, worker], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
+        )
+        self.replies: queue.Queue[str] = queue.Queue()
+        threading.Thread(target=self._read, daemon=True).start()
+
+    def _read(self) -> None:
+        assert self.proc.stdout is not None
+        for line in self.proc.stdout:
+            if line.startswith("@ur_rtde_worker "):
+                self.replies.put(line.split(" ", 1)[1])
+
+    def _ask(self, request: dict[str, Any], what: str) -> Any:
+        assert self.proc.stdin is not None
+        self.proc.stdin.write(json.dumps(request) + "\n")
+        self.proc.stdin.flush()
+        try:
+            reply = json.loads(self.replies.get(timeout=self.deadline))
+        except queue.Empty:
+            self.close()
+            raise AssertionError(f"{what} gave no answer within {self.deadline} s") from None
+        if "error" in reply:
+            raise ClientError(reply["error"], reply["message"])
+        return reply["ok"]
+
+    def new(self, name: str, module: str, cls: str, *args: Any) -> None:
+        self._ask({"name": name, "new": [module, cls], "args": list(args)}, f"{cls}{args}")
+
+    def call(self, name: str, method: str, *args: Any) -> Any:
+        return self._ask({"name": name, "method": method, "args": list(args)}, f"{name}.{method}{args}")
+
+    def close(self) -> None:
+        self.proc.kill()
+        self.proc.wait(10)

@@ -20,11 +20,9 @@ DASHBOARD: dict[str, Any] = {'doc_ref': 'Dashboard Server e-Series, port 29999',
             'program_state': {'doc': 'STOPPED, PLAYING or PAUSED, as the dashboard names the '
                                      'runtime state'},
             'program': {'doc': 'file name of the loaded program, <unnamed> when none'},
-            'running': {'doc': 'true while a program runs: lower case on e-Series, True/False on '
-                               "CB3 (ur_rtde compares 'Program running: True')"},
-            'saved': {'doc': "whether the loaded program is saved: lower case on e-Series (UR's "
-                             "C++ client library matches '(false|true) NAME.urp'), True/False on "
-                             "CB3 (ur_rtde's isProgramSaved looks for 'True')"},
+            'running': {'doc': 'true while a program runs, else false (lower case on both lines)'},
+            'saved': {'doc': 'whether the loaded program is saved: true or false (lower case on '
+                             'both lines)'},
             'installation': {'doc': 'file name of the loaded installation'},
             'user_role': {'doc': 'the user role set with setUserRole (CB3), upper case: '
                                  'PROGRAMMER, OPERATOR, NONE, LOCKED, RESTRICTED'},
@@ -42,7 +40,10 @@ DASHBOARD: dict[str, Any] = {'doc_ref': 'Dashboard Server e-Series, port 29999',
                'action': 'load',
                'since': {'cb3': '3.0.0', 'e-series': '5.0.0'},
                'doc': 'Load a program (a .urp; the emulator runs the .script saved beside it). '
-                      'Returns when loaded.',
+                      'Returns when loaded; a program that runs is stopped first, so '
+                      '`programState` then answers `STOPPED <program>`. A path may be absolute in '
+                      "the controller's programs folder (/programs on a robot, /ursim/programs on "
+                      "URSim: URCL's test load_program_in_subdir_works loads one).",
                'replies': {'ok': 'Loading program: {program}',
                            'not_found': 'File not found: {program}',
                            'failed': 'Error while loading program: {program}'}},
@@ -154,8 +155,10 @@ DASHBOARD: dict[str, Any] = {'doc_ref': 'Dashboard Server e-Series, port 29999',
                'argument': None,
                'action': 'brake_release',
                'since': {'cb3': '3.0.0', 'e-series': '5.0.0'},
-               'doc': 'Release the brakes of a powered arm (robot mode RUNNING); ignored while '
-                      'powered off.',
+               'doc': 'Release the brakes (robot mode RUNNING); a powered-off arm is powered on '
+                      "first, as URSim does (UR's client library's integration test power_cycle: "
+                      '`brake release` from POWER_OFF must reach RUNNING, on CB3 3.14 and e-Series '
+                      '5.9 alike).',
                'replies': {'ok': 'Brake releasing'}},
               {'command': 'safetymode',
                'argument': None,

@@ -6,7 +6,10 @@ table): a greeting line on connect, then one reply line per command line. `power
 act through the model's mode methods, so what they do shows on RTDE and the primary
 ports too. `load NAME` reads a URScript program from the programs directory: NAME
 itself when it is a script, the `.script` PolyScope saves beside a `.urp`, or else the
-`.urp`'s program tree, translated (`emulator/controller/urp.py`).
+`.urp`'s program tree, translated (`emulator/controller/urp.py`); a path into the
+controller's own folder (/programs, URSim's /ursim/programs) names the file in it. A
+program that runs stops first, so `programState` answers `STOPPED NAME` (what UR's client
+library waits for).
 A command the controller version does not have gets the `unknown` reply, as a
 controller answers it. Each client is held to the port's limits (guard.py).
 """
@@ -34,6 +37,8 @@ UNLOCK_AFTER = 5.0  # s a protective stop must last before it may be unlocked
 MAX_PROGRAM_BYTES = 1 << 20
 NO_PROGRAM = "<unnamed>"
 USER_ROLES = ("PROGRAMMER", "OPERATOR", "NONE", "LOCKED", "RESTRICTED")
+# where a robot and URSim keep their programs: a path into them names the file in ours
+CONTROLLER_PROGRAMS = (Path("/programs"), Path("/ursim/programs"))
 
 
 class DashboardHub:
@@ -119,7 +124,8 @@ class DashboardHub:
             model.power_on()
         elif action in ("power_off", "shutdown"):
             model.power_off()
-        elif action == "brake_release":
+        elif action == "brake_release":  # from power off too: powered on, then released (URSim does)
+            model.power_on()
             model.release_brakes()
         elif action == "play":
             if self.waiting_for_driver is not None and model.program is None:
@@ -130,6 +136,7 @@ class DashboardHub:
         elif action == "stop":
             model.stop_program()
         elif action == "unlock_protective_stop":
+            self.observe(time.monotonic())  # a stop since the last look counts from now, not as unseen
             since = self.protective_since
             if since is not None and time.monotonic() - since < UNLOCK_AFTER:
                 return "failed"
@@ -150,7 +157,7 @@ class DashboardHub:
             return "not_found"
         try:
             base = self.programs.resolve(strict=True)
-            wanted = Path(name)
+            wanted = _in_programs(name)
             if suffix is not None and wanted.suffix == ".urp":
                 wanted = wanted.with_suffix(suffix)
             path = (base / wanted).resolve(strict=True)  # every link followed, to the file itself
@@ -182,7 +189,7 @@ class DashboardHub:
         if self.programs is None or Path(name).suffix != ".urp" or "\0" in name:
             return False
         try:
-            return not os.path.lexists(self.programs / Path(name).with_suffix(".script"))
+            return not os.path.lexists(self.programs / _in_programs(name).with_suffix(".script"))
         except (OSError, ValueError):
             return False
 
@@ -207,6 +214,8 @@ class DashboardHub:
         from rtde_spec.emulator.controller.external_program import NODE_MARK
 
         model: Any = self.model
+        if model.program is not None:  # the running program stops: what is loaded is then STOPPED
+            model.stop_program()
         model.load_program(text)
         self.program = Path(name).name
         self.waiting_for_driver = text if NODE_MARK in text else None
@@ -248,20 +257,15 @@ class DashboardHub:
             ProgramState.PAUSING: "PAUSED",
         }
         kind, _ = robot_type(arm_parameters(self.model))
-        cb3 = self.model.line.id == "cb3"  # CB3 says True/False, e-Series true/false
-
-        def boolean(value: bool) -> str:
-            text = "true" if value else "false"
-            return text.capitalize() if cb3 else text
-
+        running = "true" if runtime == ProgramState.RUNNING else "false"  # lower case on CB3 too
         return {
             "robot_mode": _name(RobotMode, mode),
             "safety_mode": _name(SafetyMode, safety),
             "safety_status": _name(SafetyStatus, status),
             "program_state": state.get(runtime, "STOPPED"),  # type: ignore[call-overload]
             "program": self.program or NO_PROGRAM,
-            "running": boolean(runtime == ProgramState.RUNNING),
-            "saved": boolean(True),
+            "running": running,
+            "saved": "true",
             "installation": self.installation,
             "user_role": self.user_role,
             "operational_mode": self.operational_mode,
@@ -272,6 +276,16 @@ class DashboardHub:
             "serial_number": self.serial_number,
             "robot_model": _robot_model(kind),
         }
+
+
+def _in_programs(name: str) -> Path:
+    """`name` relative to the programs directory: `/programs/x.urp` (a robot's folder, as URCL's
+    tests load from URSim's /ursim/programs) is `x.urp`; other names are left as they are."""
+    wanted = Path(name)
+    for folder in CONTROLLER_PROGRAMS:
+        if wanted.is_relative_to(folder):
+            return wanted.relative_to(folder)
+    return wanted
 
 
 def _name(enum: Any, value: int) -> str:
