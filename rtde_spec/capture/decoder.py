@@ -23,7 +23,14 @@ from rtde_spec.capture.routing.classify import port_kinds
 from rtde_spec.capture.routing.flows import SCRIPT_KIND, Flow, FlowTable, classify
 from rtde_spec.capture.runs import Batcher
 from rtde_spec.capture.tables.signals import signals_held
-from rtde_spec.capture.tables.sink import ArrowSink, DirectorySink, PreparedTables, TableSink, output_stem
+from rtde_spec.capture.tables.sink import (
+    ArrowSink,
+    DirectorySink,
+    PreparedTables,
+    TableSink,
+    output_stem,
+    series_stem,
+)
 from rtde_spec.capture.tables.summary import CaptureSummary
 from rtde_spec.errors import OutputError
 from rtde_spec.metamodel.catalogue import Catalogue
@@ -34,8 +41,23 @@ RUN_MIN, RUN_MAX = 16, 4096  # shorter runs go segment by segment; longer ones a
 PLACE_ATTEMPTS = 8  # decodings of one file whose names other captures took meanwhile, before giving up
 
 
+CapturePath = str | Path | Sequence[str | Path]  # a file, a pipe, or a split capture's parts in order
+
+
+def first_part(path: CapturePath) -> str | Path:
+    """The file a capture is named after: itself, or a split capture's first part."""
+    return path if isinstance(path, (str, Path)) else path[0]
+
+
+def label(path: CapturePath) -> str:
+    """How messages name a capture: its path, or its first and last parts."""
+    if isinstance(path, (str, Path)):
+        return str(path)
+    return str(path[0]) if len(path) == 1 else f"{path[0]} .. {path[-1]} ({len(path)} parts)"
+
+
 def decode_capture(
-    path: str | Path,
+    path: CapturePath,
     sink: TableSink,
     *,
     recipe: RecipeCodec | None = None,
@@ -48,6 +70,7 @@ def decode_capture(
     """Decode one capture file into the sink; the summary says what was found and what went wrong.
 
     `port_map` (port -> protocol, see classify.KINDS) adds to and overrides the spec's default ports.
+    A list of paths is the parts of one split capture (`reading/series.py`), decoded as one.
     """
     cat = catalogue or Catalogue.default()
     ports = port_kinds(rtde_ports, primary_ports, port_map)
@@ -89,8 +112,8 @@ def _finish(flow: Flow) -> None:
     decoder.close()
 
 
-def _summary(path: str | Path, stats: dict[str, int], table: FlowTable) -> CaptureSummary:
-    summary = CaptureSummary(str(path), stats.get("frames", 0), reading=dict(stats))
+def _summary(path: CapturePath, stats: dict[str, int], table: FlowTable) -> CaptureSummary:
+    summary = CaptureSummary(label(path), stats.get("frames", 0), reading=dict(stats))
     summary.connections = table.summaries()
     return summary
 
@@ -112,16 +135,16 @@ class CaptureInterrupted(KeyboardInterrupt):
         return (type(self), (self.summary, self.kept))
 
 
-def is_live(path: str | Path) -> bool:
+def is_live(path: CapturePath) -> bool:
     """A pipe or standard input rather than a file: read once, as it comes, to its end."""
     try:
-        return not Path(path).is_file()
+        return not Path(first_part(path)).is_file()
     except OSError:
         return True
 
 
 def decode_to_directory(
-    path: str | Path,
+    path: CapturePath,
     outdir: str | Path,
     fmt: str = "parquet",
     recipe_names: Sequence[str] | None = None,
@@ -149,25 +172,27 @@ def decode_to_directory(
         if is_live(path):
             raise OutputError(
                 f"another capture gave a table name this one was written under to another recipe while "
-                f"{path} was read, and a pipe cannot be read again: nothing of it was put in place",
+                f"{label(path)} was read, and a pipe cannot be read again: nothing of it was put in place",
                 subject=f"folder {outdir}",
             )
     raise OutputError(
-        f"other captures kept taking the table names of {path} ({PLACE_ATTEMPTS} times): nothing of it "
-        "was put in place",
+        f"other captures kept taking the table names of {label(path)} ({PLACE_ATTEMPTS} times): "
+        "nothing of it was put in place",
         subject=f"folder {outdir}",
     )
 
 
 def directory_sink(
-    path: str | Path, outdir: str | Path, fmt: str = "parquet", workers: int = 0
+    path: CapturePath, outdir: str | Path, fmt: str = "parquet", workers: int = 0
 ) -> DirectorySink:
-    """The sink of one file's tables in OUTDIR, named after the file (`output_stem`)."""
-    return DirectorySink(outdir, fmt, output_stem(path), workers=workers)
+    """The sink of one capture's tables in OUTDIR, named after its file (`output_stem`), or the
+    series of a split capture's parts (`series_stem`)."""
+    stem = output_stem(path) if isinstance(path, (str, Path)) else series_stem(path)
+    return DirectorySink(outdir, fmt, stem, workers=workers)
 
 
 def decode_prepared(
-    path: str | Path, sink: DirectorySink, recipe_names: Sequence[str] | None = None, **kw: Any
+    path: CapturePath, sink: DirectorySink, recipe_names: Sequence[str] | None = None, **kw: Any
 ) -> tuple[CaptureSummary, PreparedTables]:
     """One file decoded into `sink`, its tables finished beside their names but not yet in place
     (`place`): `capture --jobs N` decodes files in workers and places them in input order. After
@@ -201,7 +226,7 @@ def decode_prepared(
     return summary, prepared
 
 
-def _prepared(sink: DirectorySink, path: str | Path) -> PreparedTables:
+def _prepared(sink: DirectorySink, path: CapturePath) -> PreparedTables:
     try:
         return sink.prepare()
     except OutputError as exc:
@@ -209,7 +234,7 @@ def _prepared(sink: DirectorySink, path: str | Path) -> PreparedTables:
         raise dropped_tables(exc, path) from exc
 
 
-def place(prepared: PreparedTables, path: str | Path, summary: CaptureSummary | None = None) -> bool:
+def place(prepared: PreparedTables, path: CapturePath, summary: CaptureSummary | None = None) -> bool:
     """Put a decoded file's tables in place, under the names the folder gives their recipes now
     (`summary`'s tables and paths say where); False (nothing placed, nothing left) when those
     differ from the ones its MCAP files were written with: the file is to be decoded again."""
@@ -229,15 +254,16 @@ def place(prepared: PreparedTables, path: str | Path, summary: CaptureSummary | 
     return placed
 
 
-def dropped_tables(exc: OutputError, path: str | Path) -> OutputError:
+def dropped_tables(exc: OutputError, path: CapturePath) -> OutputError:
     """A write error of one table, said for the whole capture: none of its tables was kept."""
     reason = exc.reason.split("; ")[0]
-    kept = f"no table of {path} was kept; files of earlier runs are as they were"
+    kept = f"no table of {label(path)} was kept; files of earlier runs are as they were"
     return OutputError(f"{reason}; {kept}", errno=exc.errno, subject=exc.subject)
 
 
-def capture_tables(path: str | Path, recipe: Sequence[str] | None = None, **kw: Any) -> dict[str, Any]:
-    """The tables of one capture as pyarrow Tables (`.to_pandas()` for DataFrames)."""
+def capture_tables(path: CapturePath, recipe: Sequence[str] | None = None, **kw: Any) -> dict[str, Any]:
+    """The tables of one capture as pyarrow Tables (`.to_pandas()` for DataFrames); a list of paths
+    is the parts of one split capture, in order (`reading.series.group` orders them)."""
     codec = RecipeCodec.for_names(recipe, "output") if recipe else None
     sink = ArrowSink()
     decode_capture(path, sink, recipe=codec, **kw)

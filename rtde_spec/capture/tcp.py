@@ -65,7 +65,10 @@ class Direction:
 
     def feed(self, time: float, seq: int, payload: bytes, syn: bool = False) -> list[Chunk]:
         if syn:
-            self.base, self.pos = (seq + 1) % MOD, 0
+            # the SYN already seen, again (retransmitted, or the same frame from a second interface or
+            # capture point), is no new start: restarting would decode what followed it twice
+            if self.base != (seq + 1) % MOD:
+                self.base, self.pos = (seq + 1) % MOD, 0
             return []
         if not payload:
             return []

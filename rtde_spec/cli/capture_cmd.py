@@ -16,7 +16,7 @@ from rtde_spec.errors import RtdeSpecError, UsageError
 from rtde_spec.printable import safe_text
 
 if TYPE_CHECKING:
-    from rtde_spec.capture.decoder import CaptureInterrupted
+    from rtde_spec.capture.decoder import CaptureInterrupted, CapturePath
     from rtde_spec.capture.tables.summary import CaptureSummary
 
 SUFFIXES = (".pcap", ".pcapng", ".cap")
@@ -154,8 +154,10 @@ def expand(patterns: list[str]) -> list[Path]:
     files: list[Path] = []
     for pattern in patterns:
         path = Path(STDIN if pattern == "-" else pattern)
-        if path.is_dir():
-            files += sorted(p for p in path.rglob("*") if p.suffix in SUFFIXES)
+        if path.is_dir():  # .pcap, .pcapng, .cap, tcpdump -C's .pcapN, and those compressed whole
+            from rtde_spec.capture.reading.series import capture_files
+
+            files += capture_files(path)
         elif any(ch in pattern for ch in "*?["):  # a pattern the shell left as it was
             files += sorted(Path(f) for f in glob.glob(pattern, recursive=True))
         elif path.exists():  # a file, or a pipe (read to its end)
@@ -167,9 +169,18 @@ def expand(patterns: list[str]) -> list[Path]:
     if not files:
         raise UsageError(
             f"no capture files in {', '.join(patterns)} (folders are searched for "
-            f"{', '.join(SUFFIXES)}; a glob matched nothing)"
+            f"{', '.join(SUFFIXES)}, numbered or compressed; a glob matched nothing)"
         )
     return files
+
+
+def captures_of(files: list[Path]) -> list[CapturePath]:
+    """The files as captures: the parts of a split capture given together (a ring buffer,
+    `editcap -c`, `tcpdump -C`; `capture/reading/series.py`) are one capture, in their order,
+    so a connection that runs on from one part into the next keeps its setup exchange."""
+    from rtde_spec.capture.reading.series import group
+
+    return [parts[0] if len(parts) == 1 else parts for parts in group(files)]
 
 
 def run(args: argparse.Namespace) -> int:
@@ -177,7 +188,7 @@ def run(args: argparse.Namespace) -> int:
     from rtde_spec.capture.routing.classify import parse_port_map
     from rtde_spec.cli.record_cmd import names_of
 
-    files = expand(args.files)
+    files = captures_of(expand(args.files))
     options = argparse.Namespace(
         fields=None, recipe=args.recipe, recipe_key=args.recipe_key, extra_fields=args.extra_fields
     )
@@ -333,14 +344,25 @@ def distinct(problems: list[str]) -> list[str]:
     return lines
 
 
-def _progress(path: Path):  # type: ignore[no-untyped-def]
-    """A progress bar over the file's bytes, on a terminal, for files worth one."""
-    if not sys.stderr.isatty() or path.stat().st_size < 8 << 20:
+def _progress(capture: CapturePath):  # type: ignore[no-untyped-def]
+    """A progress bar over the capture's bytes (all its parts), on a terminal, for files worth one;
+    a compressed file's bar counts the bytes read out of it, with no total to reach."""
+    parts = [Path(capture)] if isinstance(capture, (str, Path)) else [Path(p) for p in capture]
+    size = sum(p.stat().st_size for p in parts)
+    if not sys.stderr.isatty() or size < 8 << 20:
         return None
     try:
         from tqdm import tqdm
     except ImportError:
         return None
+    from rtde_spec.capture.reading.compressed import SUFFIXES
+
+    whole = not any(p.suffix.lower() in SUFFIXES for p in parts)
     return tqdm(
-        total=path.stat().st_size, unit="B", unit_scale=True, desc=path.name, file=sys.stderr, leave=False
+        total=size if whole else None,
+        unit="B",
+        unit_scale=True,
+        desc=parts[0].name,
+        file=sys.stderr,
+        leave=False,
     )

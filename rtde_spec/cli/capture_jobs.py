@@ -21,7 +21,7 @@ from typing import TYPE_CHECKING, Any
 if TYPE_CHECKING:
     from types import FrameType
 
-    from rtde_spec.capture.decoder import CaptureInterrupted
+    from rtde_spec.capture.decoder import CaptureInterrupted, CapturePath
     from rtde_spec.capture.tables.summary import CaptureSummary
 
 _busy = False  # a worker is decoding a file: a signal stops the file, else it ends the worker
@@ -32,7 +32,7 @@ _STOPS = ("SIGINT", "SIGTERM", "SIGHUP")
 
 
 def decode_in_workers(
-    files: Sequence[Path], jobs: int, target: tuple[Any, ...], kw: dict[str, Any]
+    files: Sequence[CapturePath], jobs: int, target: tuple[Any, ...], kw: dict[str, Any]
 ) -> tuple[list[CaptureSummary], list[CaptureInterrupted] | None]:
     """Each file decoded by `decode_prepared(file, *target, **kw)` in a worker, its tables put
     in place here, in input order: a table's name is given to its recipe as `--jobs 1` gives
@@ -145,7 +145,7 @@ def _end_with_parent() -> None:
         os._exit(128 + int(signal.SIGTERM))
 
 
-def _decode_one(path: Path, target: tuple[Any, ...], kw: dict[str, Any]) -> Any:
+def _decode_one(path: CapturePath, target: tuple[Any, ...], kw: dict[str, Any]) -> Any:
     """One file in a worker: its summary and its tables prepared for the parent to place, or
     the CaptureInterrupted that stopped it."""
     global _busy, _stopping

@@ -4,12 +4,18 @@ Not through `pyarrow.dataset`: importing it imports pandas (pyarrow's pandas
 compatibility layer), a third of a second before a plot can start. The folders here
 are ours and simple: `key=value` folder names (robot, date) become text columns, the
 files' schemas are unified, and files still being written (`.NAME.part-PID`) are skipped.
+
+Partition values are percent-escaped in folder names as pyarrow writes them (and Hive and Spark
+escape): every byte but letters, digits and `-._~`, so an IPv6 robot `fd00::d3` is the folder
+`robot=fd00%3A%3Ad3`, which pyarrow, DuckDB, Polars and Spark read back as `fd00::d3`
+(docs/decisions.md).
 """
 
 from __future__ import annotations
 
 from pathlib import Path
 from typing import Any
+from urllib.parse import quote, unquote
 
 from rtde_spec.errors import DecodeError, require
 
@@ -21,15 +27,20 @@ def parquet_files(path: Path) -> list[Path]:
     return sorted(p for p in path.rglob("*.parquet") if not p.name.startswith("."))
 
 
+def partition_folder(key: str, value: str) -> str:
+    """The folder name `key=value` of a partition, its value percent-escaped as pyarrow writes it."""
+    return f"{key}={quote(value, safe='')}"
+
+
 def partitions(file: Path, root: Path) -> dict[str, str]:
-    """The `key=value` folders between `root` and `file`, as {key: value}."""
+    """The `key=value` folders between `root` and `file`, as {key: value} (values unescaped)."""
     if file == root:
         return {}
     keys: dict[str, str] = {}
     for part in file.relative_to(root).parts[:-1]:
         key, sep, value = part.partition("=")
         if sep and key:
-            keys[key] = value
+            keys[key] = unquote(value)
     return keys
 
 

@@ -19,10 +19,11 @@ def snap_length(stats: dict[str, int], snaplen: int) -> None:
         stats["snaplen"] = snaplen
 
 
-def count_cut(stats: dict[str, int], lengths: Any, origs: Any) -> None:
+def count_cut(stats: dict[str, int], lengths: Any, origs: Any, times: Any = None) -> None:
     """Records that hold less of their frame than it had (orig_len > incl_len): a snap length cut
-    them, and the rest of their TCP payload is not in the file. Counted, with where they end, so
-    the summary names the cause rather than only the gaps it leaves."""
+    them, and the rest of their TCP payload is not in the file. Counted, with where they end and
+    the capture times of the first and last (microseconds, `cut_first_us`, `cut_last_us`), so the
+    summary names the cause and where in the capture rather than only the gaps it leaves."""
     cut = origs > lengths
     if not cut.any():
         return
@@ -31,6 +32,13 @@ def count_cut(stats: dict[str, int], lengths: Any, origs: Any) -> None:
     low, high = int(kept.min()), int(kept.max())
     stats["cut_at_min"] = min(stats.get("cut_at_min", low), low)
     stats["cut_at_max"] = max(stats.get("cut_at_max", high), high)
+    if times is not None:
+        when = times[cut]
+        try:  # a time that is no number (a damaged record) leaves the times out
+            stats.setdefault("cut_first_us", round(float(when[0]) * 1e6))
+            stats["cut_last_us"] = round(float(when[-1]) * 1e6)
+        except (ValueError, OverflowError):
+            pass
 
 
 def interface(buf: Any, pos: int, length: int, order: str, stats: dict[str, int]) -> tuple[int, float]:

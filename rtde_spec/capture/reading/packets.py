@@ -11,11 +11,12 @@ from __future__ import annotations
 
 import socket
 import struct
-from collections.abc import Callable, Iterator
+from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import NamedTuple
 
 from rtde_spec.capture.reading.bulk import DataRun, run_of, runs
+from rtde_spec.capture.reading.compressed import open_capture
 from rtde_spec.capture.reading.ipfrag import Addresses
 from rtde_spec.capture.reading.pcapfile import blocks
 
@@ -157,7 +158,7 @@ def _segment(
 
 
 def items(
-    path: str | Path,
+    path: str | Path | Sequence[str | Path],
     stats: dict[str, int] | None = None,
     progress: Callable[[int], None] | None = None,
     lag: int = 0,
@@ -166,29 +167,36 @@ def items(
 
     Runs are found per block of the file among Ethernet frames (`capture/reading/bulk.py`); every
     other frame comes segment by segment. `lag`: blocks kept mapped after they are handed
-    on, for runs decoded later on other threads (`pcapfile.blocks`).
+    on, for runs decoded later on other threads (`pcapfile.blocks`). A list of paths is the
+    parts of one split capture (`series.py`), read one after the other as one capture.
     """
     counts = stats if stats is not None else {}
     counts.setdefault("frames", 0)
     book = Addresses(counts)  # raw address -> text, converted once per address; IPv4 fragments
-    with open(path, "rb") as f:
-        for records in blocks(f, str(path), counts, lag):
-            buf = records.buf
-            offsets, lengths = records.offsets.tolist(), records.lengths.tolist()
-            times, links = records.times.tolist(), records.links.tolist()
-            counts["frames"] += len(offsets)
-            done = 0
-            for first, end in [*runs(records), (len(offsets), len(offsets))]:
-                for k in range(done, first):
-                    frame = buf[offsets[k] : offsets[k] + lengths[k]]
-                    seg = _segment(times[k], links[k], frame, book, counts)
-                    if seg is not None:
-                        yield seg
-                if first < end:
-                    yield run_of(records, first, end)
-                done = end
-            if progress is not None:
-                progress(records.upto)
+    parts = [path] if isinstance(path, (str, Path)) else list(path)
+    before = 0  # bytes of the parts read already (progress counts the whole series)
+    for part in parts:
+        reached = 0
+        with open_capture(part, counts) as f:
+            for records in blocks(f, str(part), counts, lag):
+                buf = records.buf
+                offsets, lengths = records.offsets.tolist(), records.lengths.tolist()
+                times, links = records.times.tolist(), records.links.tolist()
+                counts["frames"] += len(offsets)
+                done = 0
+                for first, end in [*runs(records), (len(offsets), len(offsets))]:
+                    for k in range(done, first):
+                        frame = buf[offsets[k] : offsets[k] + lengths[k]]
+                        seg = _segment(times[k], links[k], frame, book, counts)
+                        if seg is not None:
+                            yield seg
+                    if first < end:
+                        yield run_of(records, first, end)
+                    done = end
+                reached = records.upto
+                if progress is not None:
+                    progress(before + reached)
+        before += reached
     book.fragments.finish()
 
 

@@ -23,6 +23,7 @@ import struct
 import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
+from pathlib import Path
 from typing import IO, Any
 
 from rtde_spec.capture.reading.headers import count_cut, interface, snap_length
@@ -42,6 +43,12 @@ PCAP_MAGIC = {  # magic as read little-endian -> (byte order, seconds per timest
     0x4D3CB2A1: (">", 1e-9),
 }
 EPB, IDB, SPB = 6, 1, 3  # pcapng block types read here
+OTHER_FORMATS = {  # magic as read little-endian -> what the file is, for the error that refuses it
+    0x34CDB2A1: ": a modified pcap, as a patched libpcap writes",
+    0xA1B2CD34: ": a modified pcap, as a patched libpcap writes",
+    0x55424D47: ": a Microsoft Network Monitor capture",
+    0x6F6F6E73: ": a snoop capture",
+}
 
 Frame = tuple[float, int, bytes]  # (capture time, link type, frame bytes)
 
@@ -98,7 +105,12 @@ def blocks(f: IO[bytes], name: str, stats: dict[str, int], lag: int = 0) -> Iter
     elif magic in PCAP_MAGIC:
         yield from _pcap(f, *PCAP_MAGIC[magic], name, stats, lag)
     else:
-        raise UsageError(f"not a pcap or pcapng file (magic {head.hex()})", subject=f"file {name}")
+        other = OTHER_FORMATS.get(magic, "")
+        raise UsageError(
+            f"not a pcap or pcapng file (magic {head.hex()}{other}); a capture Wireshark opens converts "
+            f"to pcapng with: editcap -F pcapng {name} {Path(name).stem}.pcapng",
+            subject=f"file {name}",
+        )
 
 
 def frames(f: IO[bytes], name: str, stats: dict[str, int]) -> Iterator[Frame]:
@@ -158,6 +170,9 @@ def _by_block(
         pos, window = reached, BLOCK
     if pos < size:
         _stopped(stats, pos, size - pos, claimed=claim(mapped, pos))
+    grown = os.fstat(f.fileno()).st_size - size
+    if grown > 0:  # a capture still being written: read as it was when opened
+        stats["grew_bytes"] = stats.get("grew_bytes", 0) + grown
 
 
 def _give_back(mapped: mmap.mmap, start: int, end: int) -> None:
@@ -290,8 +305,9 @@ def _pcap(
             secs, fracs = (strided(buf, pos + at, stride, same, u32) for at in (0, 4))
             starts = pos + 16 + np.arange(same, dtype=np.int64) * stride
             lengths = np.full(same, caplen, dtype=np.int64)
-            found.add(starts, lengths, secs + fracs * unit, linktype)
-            count_cut_run(stats, buf, pos + 12, stride, same, lengths, u32)
+            times = secs + fracs * unit
+            found.add(starts, lengths, times, linktype)
+            count_cut_run(stats, buf, pos + 12, stride, same, lengths, u32, times)
             last_secs[:] = [int(secs[-1])]
             pos += same * stride
         return pos
@@ -343,8 +359,9 @@ def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int], lag: i
                 high, low, caplen = (strided(buf, pos + at, length, same, u32) for at in (12, 16, 20))
                 starts = pos + 28 + np.arange(same, dtype=np.int64) * length
                 lengths = np.minimum(caplen, length - 32)
-                found.add(starts, lengths, ((high << 32) | low) * unit, linktype)
-                count_cut_run(stats, buf, pos + 24, length, same, lengths, u32)
+                times = ((high << 32) | low) * unit
+                found.add(starts, lengths, times, linktype)
+                count_cut_run(stats, buf, pos + 24, length, same, lengths, u32, times)
                 pos += same * length
                 continue
             if btype == IDB:

@@ -13,19 +13,19 @@ from rtde_spec.capture.reading.headers import count_cut
 
 
 def count_cut_run(
-    stats: dict[str, int], buf: Any, at: int, stride: int, same: int, lengths: Any, u32: Any
+    stats: dict[str, int], buf: Any, at: int, stride: int, same: int, lengths: Any, u32: Any, times: Any
 ) -> None:
     """Records of a run that a snap length cut (their original length, at `at`, over what the
-    file holds). A run of one record (data and ACK frames alternate: most of a real session's)
-    is one `struct` read, not numpy calls."""
+    file holds; `times` their capture times). A run of one record (data and ACK frames alternate:
+    most of a real session's) is one `struct` read, not numpy calls."""
     if same > 1:
-        count_cut(stats, lengths, strided(buf, at, stride, same, u32))
+        count_cut(stats, lengths, strided(buf, at, stride, same, u32), times)
         return
     original = struct.unpack_from(u32.str[0] + "I", buf, at)[0]  # the byte order of the file
     if original > int(lengths[0]):
         import numpy as np
 
-        count_cut(stats, lengths, np.array([original]))
+        count_cut(stats, lengths, np.array([original]), times)
 
 
 def strided(buf: Any, start: int, stride: int, count: int, dtype: Any) -> Any:

@@ -15,6 +15,7 @@ import json
 from collections.abc import Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
+from urllib.parse import unquote
 
 from rtde_spec.capture.tables.names import Recipe, Register, folder_lock, listing_entries, listing_name
 from rtde_spec.capture.tables.signals import signals_held
@@ -126,6 +127,25 @@ class PreparedTables:
             for old in folder.glob(f"{glob.escape(self.stem)}_[0-9][0-9][0-9][0-9].{self.ext}"):
                 if str(old) not in written:
                     _remove(old)
+            self._remove_unescaped(folder)
+
+    def _remove_unescaped(self, folder: Path) -> None:
+        """This input's files of an earlier version's run under the robot folder named with ':' as
+        '_' (`robot=fd00__d3`, not `robot=fd00%3A%3Ad3`): left, they would be a second robot."""
+        robot = folder.parent
+        key, _, value = robot.name.partition("=")
+        legacy = robot.with_name(f"{key}={unquote(value).replace(':', '_')}") / folder.name
+        if legacy == folder or not legacy.is_dir():
+            return
+        stem = glob.escape(self.stem)
+        for pattern in (f"{stem}.{self.ext}", f"{stem}_[0-9][0-9][0-9][0-9].{self.ext}"):
+            for old in legacy.glob(pattern):
+                _remove(old)
+        for empty in (legacy, legacy.parent):
+            try:
+                empty.rmdir()
+            except OSError:
+                break
 
     def _remove_dropped_tables(self, tables: set[str]) -> None:
         """This input's files in recipe tables an earlier run of it wrote and this one did not (the

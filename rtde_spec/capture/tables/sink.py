@@ -1,7 +1,8 @@
 """The sink, the last layer of a capture: a hive-partitioned directory of files, or Arrow tables.
 
 Files are laid out as OUTDIR/<table>/robot=<controller address>/date=<YYYY-MM-DD>/<stem>.<ext>,
-a dataset DuckDB, Polars and Spark read directly with hive partitioning. The stem names
+a dataset DuckDB, Polars and Spark read directly with hive partitioning (the address
+percent-escaped as they unescape it: `robot=fd00%3A%3Ad3` for `fd00::d3`, `output/hive.py`). The stem names
 the input and is unique to it (`output_stem`), so captures of the same name from different
 folders never overwrite each other, and a re-run replaces its own outputs only. Every file
 appears complete: the writers write beside the name and rename into place at close.
@@ -13,15 +14,17 @@ import os
 import stat
 import time
 from collections import OrderedDict
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+from rtde_spec.capture.reading.compressed import SUFFIXES as COMPRESSED
 from rtde_spec.capture.tables.names import Recipe, Register
 from rtde_spec.capture.tables.ordered_writes import PREPARED, OrderedWrites
 from rtde_spec.capture.tables.placing import EXTENSIONS, NamesTaken, PreparedTables
 from rtde_spec.errors import OutputError, require
 from rtde_spec.output.base import Writer, flat_columns, flatten
+from rtde_spec.output.hive import partition_folder
 from rtde_spec.output.partfile import write_failed
 from rtde_spec.output.writers import open_writer
 
@@ -36,7 +39,8 @@ def day_of(capture_time: float) -> str:
 
 
 def output_stem(path: str | Path) -> str:
-    """The name of one input's outputs: its stem and 8 hex digits of its absolute path.
+    """The name of one input's outputs: its stem (`x` of x.pcapng.gz too) and 8 hex digits of its
+    absolute path.
 
     Stable across re-runs of the same file (a re-run replaces its own outputs), and
     unique per input (a/x.pcap and b/x.pcap give x-<one>.parquet and x-<other>.parquet).
@@ -50,7 +54,26 @@ def output_stem(path: str | Path) -> str:
     if not regular:
         return f"{path.stem}-{time.strftime('%Y%m%dT%H%M%S', time.gmtime())}-{os.getpid()}"
     key = os.fsencode(os.path.realpath(path))
-    return f"{path.stem}-{_sha1(key).hexdigest()[:8]}"
+    name = path.with_suffix("") if path.suffix.lower() in COMPRESSED else path  # x.pcapng.gz: x
+    return f"{name.stem}-{_sha1(key).hexdigest()[:8]}"
+
+
+def series_stem(parts: Sequence[str | Path]) -> str:
+    """The name of a split capture's outputs: its series' prefix (`part` of dumpcap's
+    part_00001_....pcapng, `t` of tcpdump's t.pcap, t.pcap1, ...) and 8 hex digits of the
+    series' folder and name pattern. The same for every run over the series, whichever parts
+    it still holds: a re-run after a ring buffer dropped its oldest part replaces its outputs
+    instead of writing the parts both runs read a second time under another name."""
+    from rtde_spec.capture.reading.series import parts_of
+
+    found = next((part for part in map(parts_of, parts) if part is not None), None)
+    if found is None:  # no splitting tool's names: the first file names them
+        return output_stem(parts[0])
+    pattern = Path(found.series)
+    name = pattern.name.split("*")[0].rstrip("_.-")
+    name = Path(name).stem if "." in name else name  # tcpdump's t.pcap*: t
+    key = os.fsencode(os.path.join(os.path.realpath(pattern.parent), pattern.name))
+    return f"{name or 'capture'}-{_sha1(key).hexdigest()[:8]}"
 
 
 def _sha1(data: bytes) -> Any:
@@ -174,7 +197,7 @@ class DirectorySink(TableSink):
         key = (table, robot, day)
         writer = self.writers.get(key)
         if writer is None:
-            folder = self.outdir / table / f"robot={robot.replace(':', '_')}" / f"date={day}"
+            folder = self.outdir / table / partition_folder("robot", robot) / partition_folder("date", day)
             part = self.parts.get(key, 0)
             path = folder / f"{self.stem}{f'_{part:04d}' if part else ''}.{EXTENSIONS[self.fmt]}"
             pinned = len(self._pinned_keys) < self._pinned

@@ -12,6 +12,8 @@ not damage either: the user can decode them by giving `--recipe`.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
+from pathlib import Path
 
 
 @dataclass
@@ -61,9 +63,17 @@ class CaptureSummary:
             kept = f"{low}" if low == high else f"{low} to {high}"
             how = f"{frames} captured shorter than they were ({kept} bytes of each kept)"
         return (
-            f"{how}: the rest of their TCP payload is not in the file (the gaps and cut packages "
-            "below); capture with -s 0 (tcpdump, dumpcap, tshark) to keep whole frames"
+            f"{how}{self._cut_when()}: the rest of their TCP payload is not in the file (the gaps and cut "
+            "packages below); capture with -s 0 (tcpdump, dumpcap, tshark) to keep whole frames"
         )
+
+    def _cut_when(self) -> str:
+        """Where in the capture the cut frames are: the capture times of the first and last."""
+        r = self.reading
+        if "cut_first_us" not in r:
+            return ""
+        first, last = (_utc(r[key] / 1e6) for key in ("cut_first_us", "cut_last_us"))
+        return f", the first at {first}" + ("" if last == first else f", the last at {last}")
 
     def damage(self) -> list[str]:
         """What was lost or garbled, one line each; empty for an undamaged input."""
@@ -72,11 +82,7 @@ class CaptureSummary:
         cut = self.cut_by_snap_length()
         if cut:
             out.append(cut)
-        if r.get("truncated"):
-            where = f" at byte {r['stopped_at']}" if "stopped_at" in r else ""
-            claim = f" (it claims {r['claimed']} bytes)" if r.get("claimed") else ""
-            unread = f"; {r['unread_bytes']} bytes not read" if r.get("unread_bytes") else ""
-            out.append(f"the last record is cut off{where}{claim}{unread}")
+        out += self._ends()
         if r.get("bad_records"):
             out.append(
                 f"{r['bad_records']} records whose length cannot be one: "
@@ -124,14 +130,61 @@ class CaptureSummary:
             )
         return out
 
+    def _ends(self) -> list[str]:
+        """Where reading the file ended before its end: a record cut off, a file that grew while it
+        was read, a compressed stream cut short."""
+        out = []
+        r = self.reading
+        if r.get("truncated"):
+            where = f" at byte {r['stopped_at']}" if "stopped_at" in r else ""
+            claim = f" (it claims {r['claimed']} bytes)" if r.get("claimed") else ""
+            unread = f"; {r['unread_bytes']} bytes not read" if r.get("unread_bytes") else ""
+            out.append(f"the last record is cut off{where}{claim}{unread}")
+        if r.get("grew_bytes"):
+            out.append(
+                f"the file grew by {r['grew_bytes']} bytes while it was read (a capture still being "
+                "written): it was decoded as it was when opened; decode it again when the capture ends"
+            )
+        if "compressed_cut" in r:
+            out.append(
+                f"the compressed file ends early or is corrupt after {r['compressed_cut']} decompressed "
+                "bytes: what came before is decoded, the rest cannot be read"
+            )
+        return out
+
     def needs_recipe(self) -> list[str]:
         """Data packages that need `--recipe` to decode (a capture that starts after setup).
 
         Not when frames were cut by a snap length: then that is the cause (in `damage`)."""
         if self.reading.get("cut_frames"):
             return []
-        return self._without_recipe(
-            "the capture starts after the setup exchange: give the recipe with --recipe FILE"
+        late = "the capture starts after the setup exchange: give the recipe with --recipe FILE"
+        return self._without_recipe(self.split_part or late)
+
+    @cached_property
+    def split_part(self) -> str | None:
+        """Why a part of a split capture (a ring buffer, `editcap -c`) decoded alone has data
+        packages without their recipe, and how to decode the parts as one; None otherwise."""
+        from rtde_spec.capture.reading.series import earlier, parts_of
+
+        if not any(c.unknown_recipe_sizes for c in self.connections):
+            return None
+        try:
+            before = earlier(self.file) if Path(self.file).is_file() else []
+        except OSError:  # the folder cannot be listed
+            before = []
+        part = parts_of(self.file)
+        if not before or part is None:
+            return None
+        name = Path(self.file).name
+        shown = [p.name for p in before[:2]] + (["..."] if len(before) > 2 else [])
+        listed = [str(before[0]), *(["..."] if len(before) > 1 else []), self.file]
+        parts = part.series if part.in_order else " ".join(listed)
+        return (
+            f"{name} is a part of a split capture (dumpcap -b, editcap -c, tcpdump -C): its setup "
+            f"exchange is in an earlier part ({', '.join(shown)}); decode the parts as one capture: "
+            f"mergecap -a -w whole.pcapng {parts} (the parts in order), then rtde-spec capture "
+            "whole.pcapng; or give the recipe with --recipe FILE"
         )
 
     def _without_recipe(self, why: str) -> list[str]:
@@ -168,3 +221,14 @@ class CaptureSummary:
             f"{self.file}: {verdict}: {self.frames} frames, {self.packages} packages, {gaps} gaps "
             f"({lost} bytes lost), {skipped} bytes skipped, {truncated} truncated records{notes}"
         )
+
+
+def _utc(seconds: float) -> str:
+    """A capture time as UTC with microseconds, as Wireshark's "UTC date and time" shows it."""
+    import time
+
+    try:
+        whole, micros = divmod(round(seconds * 1e6), 1_000_000)
+        return time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime(whole)) + f".{micros:06d} UTC"
+    except (OverflowError, OSError, ValueError):
+        return f"{seconds:.6f} s"

@@ -1,0 +1,66 @@
+"""The robot partition of an IPv6 controller reads back as its address in every engine.
+
+Before: the folder was `robot=fd00__10` (':' made '_'), so pyarrow, DuckDB and Polars gave the
+robot as `fd00__10`, which is no address and could be another one's (`fd00::10` and a
+`fd00__10` alike). Now the value is percent-escaped as pyarrow writes hive partitions
+(`robot=fd00%3A%3A10`), which each engine unescapes (docs/decisions.md). A re-run over an
+output folder an earlier version wrote removes that input's files from the old-named folder.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import duckdb
+import polars as pl
+import pyarrow.dataset as ds
+
+from rtde_spec.capture.decoder import decode_to_directory
+from rtde_spec.output import hive
+from tests.capture_files import Conversation, rtde_packages, rtde_setup, write
+
+ROBOT = "fd00::10"
+
+
+def ipv6_capture(path: Path, robot: str = ROBOT) -> Path:
+    conv = Conversation(("fd00::2", 51000), (robot, 30004))
+    rtde_setup(conv)
+    for package in rtde_packages(20):
+        conv.send("server", package)
+    return write(path, [conv], "pcapng")
+
+
+def test_an_ipv6_robot_reads_back_as_its_address_in_every_engine(tmp_path: Path) -> None:
+    decode_to_directory(ipv6_capture(tmp_path / "v6.pcapng"), tmp_path / "out")
+    table = tmp_path / "out" / "rtde_outputs_1"
+    assert [p.name for p in table.iterdir()] == ["robot=fd00%3A%3A10"]
+    by_pyarrow = ds.dataset(table, format="parquet", partitioning="hive").to_table()
+    assert set(by_pyarrow.column("robot").to_pylist()) == {ROBOT}
+    query = f"SELECT DISTINCT robot FROM read_parquet('{table}/**/*.parquet', hive_partitioning=1)"
+    assert duckdb.sql(query).fetchall() == [(ROBOT,)]
+    by_polars = pl.scan_parquet(f"{table}/**/*.parquet", hive_partitioning=True).collect()
+    assert set(by_polars["robot"].to_list()) == {ROBOT}
+    assert set(hive.read_table(table).column("robot").to_pylist()) == {ROBOT}  # `rtde-spec plot`'s reader
+
+
+def test_partition_folder_names_round_trip() -> None:
+    for value in ("10.0.0.10", "fd00::10", "fe80::1%lo", "2001:db8::1", "unknown", "2026-11-26"):
+        folder = hive.partition_folder("robot", value)
+        assert "/" not in folder and ":" not in folder and folder.count("=") == 1
+        assert hive.partitions(Path("t") / folder / "f.parquet", Path("t")) == {"robot": value}
+    assert hive.partition_folder("robot", "10.0.0.10") == "robot=10.0.0.10"  # IPv4 folders as before
+
+
+def test_a_rerun_removes_the_files_an_earlier_version_wrote_under_the_old_name(tmp_path: Path) -> None:
+    capture, out = ipv6_capture(tmp_path / "v6.pcapng"), tmp_path / "out"
+    summary = decode_to_directory(capture, out)
+    (written,) = [Path(p) for p in summary.paths if "rtde_outputs_1" in p]
+    old = out / "rtde_outputs_1" / "robot=fd00__10" / written.parent.name / written.name
+    if written != old:  # as the earlier version left it
+        old.parent.mkdir(parents=True)
+        written.rename(old)
+        written.parent.rmdir()
+    decode_to_directory(capture, out)
+    assert not (out / "rtde_outputs_1" / "robot=fd00__10").exists()
+    rows = ds.dataset(out / "rtde_outputs_1", format="parquet", partitioning="hive").to_table()
+    assert rows.num_rows == 20 and set(rows.column("robot").to_pylist()) == {ROBOT}
