@@ -11,8 +11,6 @@ wireshark-common, which .ci/run installs with tshark.
 
 from __future__ import annotations
 
-import os
-import shutil
 import subprocess
 from pathlib import Path
 
@@ -20,13 +18,9 @@ import pytest
 
 from rtde_spec.capture.decoder import capture_tables
 from tests.capture_files import Conversation, rtde_packages, rtde_setup, run_capture, write
+from tests.wireshark_tools import wireshark_tool
 
-EDITCAP = shutil.which("editcap")
-if EDITCAP is None:
-    reason = "editcap is not installed (Debian package tshark; .ci/run installs it)"
-    if os.environ.get("CI"):
-        pytest.fail(reason, pytrace=False)
-    pytest.skip(reason, allow_module_level=True)
+EDITCAP = wireshark_tool("editcap")
 
 
 def plain(tmp_path: Path) -> Path:

@@ -12,9 +12,7 @@ installs with tshark).
 
 from __future__ import annotations
 
-import os
 import random
-import shutil
 import subprocess
 from pathlib import Path
 
@@ -24,13 +22,9 @@ import pytest
 from rtde_spec.capture.decoder import capture_tables
 from rtde_spec.capture.reading import series
 from tests.capture_files import SMALL, Conversation, rtde_packages, rtde_setup, run_capture, write
+from tests.wireshark_tools import wireshark_tool
 
-EDITCAP, MERGECAP = shutil.which("editcap"), shutil.which("mergecap")
-if EDITCAP is None or MERGECAP is None:
-    reason = "editcap/mergecap are not installed (Debian package tshark; .ci/run installs it)"
-    if os.environ.get("CI"):
-        pytest.fail(reason, pytrace=False)
-    pytest.skip(reason, allow_module_level=True)
+EDITCAP, MERGECAP = wireshark_tool("editcap"), wireshark_tool("mergecap")
 
 
 def whole(tmp_path: Path) -> Path:

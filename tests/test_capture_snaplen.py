@@ -10,22 +10,15 @@ editcap is Debian's wireshark-common, which .ci/run installs with tshark.
 
 from __future__ import annotations
 
-import os
-import shutil
 import subprocess
 from pathlib import Path
 
 import pyarrow.dataset as ds
-import pytest
 
 from tests.capture_files import Conversation, rtde_packages, rtde_setup, run_capture, write
+from tests.wireshark_tools import wireshark_tool
 
-EDITCAP = shutil.which("editcap")
-if EDITCAP is None:
-    reason = "editcap is not installed (Debian package tshark; .ci/run installs it)"
-    if os.environ.get("CI"):
-        pytest.fail(reason, pytrace=False)
-    pytest.skip(reason, allow_module_level=True)
+EDITCAP = wireshark_tool("editcap")
 
 START = 1_700_000_000.0  # 2023-11-14 22:13:20 UTC
 

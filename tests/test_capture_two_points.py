@@ -11,22 +11,14 @@ the two files are merged by mergecap (Debian's wireshark-common, which .ci/run i
 
 from __future__ import annotations
 
-import os
-import shutil
 import subprocess
 from pathlib import Path
 
-import pytest
-
 from rtde_spec.capture.decoder import capture_tables
 from tests.capture_files import Conversation, rtde_packages, rtde_setup, write
+from tests.wireshark_tools import wireshark_tool
 
-MERGECAP = shutil.which("mergecap")
-if MERGECAP is None:
-    reason = "mergecap is not installed (Debian package tshark; .ci/run installs it)"
-    if os.environ.get("CI"):
-        pytest.fail(reason, pytrace=False)
-    pytest.skip(reason, allow_module_level=True)
+MERGECAP = wireshark_tool("mergecap")
 
 LAG = 0.005  # the second copy of each frame: 5 ms later, the first copies of 2 data packages before it
 

@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-import shutil
 import signal
 import subprocess
 import time
@@ -13,17 +11,13 @@ import pytest
 
 from rtde_spec import RtdeClient
 from rtde_spec.capture.decoder import decode_to_directory
+from tests.wireshark_tools import wireshark_tool
 
 from .test_interop import serve
 
-DUMPCAP = shutil.which("dumpcap")
+DUMPCAP = wireshark_tool("dumpcap", ": no live capture test")
 HOST = "127.0.0.3"
 pytestmark = pytest.mark.fixed_ports(HOST)  # in turn with other runs (tests/fixed_ports.py)
-if DUMPCAP is None:
-    reason = "dumpcap is not installed (Debian package tshark; .ci/run installs it): no live capture test"
-    if os.environ.get("CI"):
-        pytest.fail(reason, pytrace=False)
-    pytest.skip(reason, allow_module_level=True)
 
 
 @pytest.mark.slow  # seconds of real time (recording, a 5 s rule, a move): CI runs it

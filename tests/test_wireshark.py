@@ -2,8 +2,6 @@
 
 from __future__ import annotations
 
-import os
-import shutil
 import subprocess
 import sys
 from pathlib import Path
@@ -12,18 +10,14 @@ import pytest
 
 from rtde_spec.capture.decoder import capture_tables
 from rtde_spec.cli.wireshark_cmd import dissector_path
+from tests.wireshark_tools import wireshark_tool
 
 from .capture_files import Conversation, write
 from .helpers import ROOT
 from .test_capture import data, session
 from .test_cli import cli
 
-TSHARK = shutil.which("tshark")
-if TSHARK is None:
-    reason = "tshark is not installed (Debian package tshark; .ci/run installs it): the dissector is untested"
-    if os.environ.get("CI"):
-        pytest.fail(reason, pytrace=False)
-    pytest.skip(reason, allow_module_level=True)
+TSHARK = wireshark_tool("tshark", ": the dissector is untested")
 
 
 def tshark(path: Path, display: str, *fields: str) -> list[list[str]]:
