@@ -2,12 +2,18 @@
 ports, the dashboard server and the control loop.
 
 The control loop keeps real time: each step is due at start + step / base rate
-(125 Hz for CB3 versions, 500 Hz for newer). It wakes at the due time (`controller/clock.py`: a
-timerfd on Linux, no spinning) and first sends what the step's state is, so packages
-leave on time whatever a program costs; then it computes the next step's state (the arm,
-the URScript program within its time slice, the scenario) in the time left before the next
-due time. `Emulator` runs in the caller's event loop; `EmulatorThread` runs one in a
-background thread (tests, the demo, applications that are not asyncio).
+(125 Hz for CB3 versions, 500 Hz for newer). As a controller reads its inputs at the start of a
+cycle and sends the cycle's state at its end, the loop wakes a lead before the due time
+(`controller/clock.py`: a timerfd on Linux, no spinning), computes the step's state (the arm,
+the URScript program in the time left before the due time, the scenario), and sends it at the
+due time: a client's command that came before the step was computed is answered in that step's
+package (ur_rtde reads the first package after it asks), and packages leave on time. The lead
+follows what the steps cost: the costliest recent step (its weight wearing off by NEED_DECAY a
+step) and a quarter again, at least LEAD_MIN of a step; a step whose program was preempted makes
+the next ones start at LEAD_MAX (URCL's script at a spline segment's start), so a program has
+most of the step when it needs it and the rest stays for the ports' reading. `Emulator` runs
+in the caller's event loop; `EmulatorThread` runs one in a background thread (tests, the demo,
+applications that are not asyncio).
 """
 
 from __future__ import annotations
@@ -36,10 +42,14 @@ from rtde_spec.emulator.ports.listener import Descriptors, Listener
 from rtde_spec.emulator.ports.primary_server import PrimaryConnection, PrimaryHub
 from rtde_spec.emulator.ports.realtime_server import RealtimeConnection, RealtimeHub
 from rtde_spec.emulator.ports.rtde_server import RtdeConnection, RtdeHub
+from rtde_spec.emulator.urscript.budgets import step_deadline
 from rtde_spec.metamodel.catalogue import Catalogue
 
 log = logging.getLogger("rtde_spec.emulator")
 STATE_HZ = 10
+LEAD_MIN, LEAD_MAX = 0.6, 0.8  # of a step: how long before its due time a step is computed
+SEND_RESERVE = 0.05  # of a step: kept before the due time for the arm's outputs and the send
+NEED_DECAY = 0.98  # per step: how fast a costly step's weight on the lead wears off
 
 
 @dataclass
@@ -208,21 +218,28 @@ class Emulator:
         timing = self.config.step_timing
         skip_after = self.config.skip_after
         model = self.model
+        period = 1.0 / base
+        lead, need = LEAD_MIN * period, 0.0
         start = time.perf_counter()
         step = 0
         while True:
             step += 1
             due = start + step / base
-            await clock.until(due)
+            await clock.until(due - lead)
             woke = time.perf_counter()
             if skip_after is not None and woke - due > skip_after:  # skip, don't burst
                 self.late_steps += 1
                 step = max(step, int((woke - start) * base))
+                due = start + step / base
             if timing:
-                self.step_lateness.append(woke - due)
-            if model.step != step:
-                model.tick(step)  # the first step, or after a skip: this step's state now
+                self.step_lateness.append(woke - (due - lead))
+            with step_deadline(due - SEND_RESERVE * period) as work:  # this step's state, now
+                model.tick(step)
                 self.faults.apply(model.time)
+            busy = time.perf_counter() - woke
+            need = period if work.cut else max(busy, need * NEED_DECAY)
+            lead = min(LEAD_MAX, max(LEAD_MIN, 1.25 * need / period + SEND_RESERVE)) * period
+            await clock.until(due)
             if not self._network(self.faults.silent(model.time)):  # a network drop: nothing goes out
                 self.rtde.send_outputs(step)
                 self.realtime.send()
@@ -233,12 +250,9 @@ class Emulator:
                     for port in self.clients.values():
                         port.check(now)
             if timing:
-                self.step_sent.append(time.perf_counter() - due)  # its packages are out
-            # the next step's state, in the time left before it is due (its program in a slice of it)
-            model.tick(step + 1)
-            self.faults.apply(model.time)
-            if timing:
-                self.step_busy.append(time.perf_counter() - woke)
+                sent = time.perf_counter() - due
+                self.step_sent.append(sent)  # its packages are out
+                self.step_busy.append(busy + max(0.0, sent))
 
     def _network(self, down: bool) -> bool:
         """Pause or resume reading from every client as a network drop begins or ends; True while down."""

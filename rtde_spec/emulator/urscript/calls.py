@@ -279,7 +279,9 @@ def to_str(value: Any) -> str:
 def _text_of(value: Any, parts: list[str], left: list[int], depth: int) -> None:
     if depth > 64:
         raise ValueError("to_str: a list nested more than 64 levels")
-    if isinstance(value, list):
+    if isinstance(value, Pose):  # before list: a pose is a list too, but shows as p[...]
+        parts.append("p[" + ", ".join(f"{v:.6g}" for v in value) + "]")
+    elif isinstance(value, list):
         parts.append("[")
         for i, item in enumerate(value):
             if i:
@@ -288,8 +290,6 @@ def _text_of(value: Any, parts: list[str], left: list[int], depth: int) -> None:
         parts.append("]")
     elif isinstance(value, bool):
         parts.append("True" if value else "False")
-    elif isinstance(value, Pose):
-        parts.append("p[" + ", ".join(f"{v:.6g}" for v in value) + "]")
     elif isinstance(value, float):
         parts.append(f"{value:.6g}")
     else:

@@ -3,9 +3,11 @@
 Each thread is a generator. Every control step (2 ms on e-Series, 8 ms on CB3) each live
 thread, in the order they were started, runs statements until it waits — a motion command
 for its step of motion, `sync()` or `sleep()` — then yields, as the controller's threads do.
-The interpreter has a slice of each step (SLICE of it, in CPU time, so a loaded machine does
-not change what a program does): a thread still running when the slice is over is preempted
-and goes on in the next step, so the control loop keeps its time. A thread that runs
+The interpreter has the time left before the step is due, and SLICE of the step in CPU time
+whatever the deadline, so a loaded machine does not change what a program does; the threads
+share it round robin (budgets.py): a thread still running when its share is over is
+preempted and goes on when time is left, else in the next step, so the control loop keeps its
+time and no thread starves the others. A thread that runs
 STEP_BUDGET statements without waiting (a function run inside an expression cannot be
 preempted: this bounds it), or one statement that takes STATEMENT_SECONDS of CPU (a call of
 64,000 arguments; evaluator.py), gets the controller's "Runtime is too much behind" runtime
@@ -20,7 +22,6 @@ step (`evaluator.py`).
 
 from __future__ import annotations
 
-import os
 import time
 from collections.abc import Callable, Generator, Iterator
 from dataclasses import dataclass, field
@@ -31,6 +32,7 @@ from rtde_spec.emulator.arm.motion import MotionError
 from rtde_spec.emulator.urscript import builtins, sockets
 from rtde_spec.emulator.urscript import calls as script_calls
 from rtde_spec.emulator.urscript import values as urscript_ops
+from rtde_spec.emulator.urscript.budgets import SLICE, Budget, resident_bytes
 from rtde_spec.emulator.urscript.checker import check
 from rtde_spec.emulator.urscript.evaluator import Evaluator, Frame, Return, Steps, runtime_text
 from rtde_spec.emulator.urscript.events import ScriptEvent
@@ -42,12 +44,11 @@ PROGRAM_ERRORS = (ArithmeticError, ValueError, TypeError, IndexError, KeyError, 
 """What a statement's Python may raise on a program's values: the program's runtime exception."""
 
 STEP_BUDGET = 10_000  # statements (and loop turns) one thread may run without waiting
-SLICE = 0.3  # of a control step: the interpreter's CPU time in it before threads are preempted
 MEMORY_BUDGET = 256 << 20  # bytes the process may grow while a program runs
 MEMORY_EVERY = 10  # control steps between looks at the process's memory
 MAX_THREADS = 64  # threads running at once
 
-__all__ = ["PROGRAM_ERRORS", "STEP_BUDGET", "Program", "runtime_text"]
+__all__ = ["PROGRAM_ERRORS", "SLICE", "STEP_BUDGET", "Program", "runtime_text"]
 
 
 class _Flow(Enum):
@@ -68,7 +69,8 @@ class _Thread:
     steps: Iterator[None]
     done: bool = False
     ran: int = 0  # statements since it last waited
-    preempted: bool = False  # its slice ran out: it goes on in the next step, not having waited
+    preempted: bool = False  # its share ran out: it goes on when time is left, not having waited
+    rested: bool = False  # a read it made rested for its share's end: it may go on in this step
     loops: list[_Loop] = field(default_factory=list)
 
 
@@ -86,8 +88,8 @@ class Program(Evaluator):
         self.steps_run = 0
         self.preemptions = 0  # threads sent on to the next step at the end of the slice
         self._epoch = 0
-        self._slice_end = 0.0  # perf_counter: the slice may be over (the CPU time says)
-        self._cpu_slice_end = 0.0  # thread_time: the slice is over
+        self._slice_end = 0.0  # perf_counter: the running thread's share may be over (the CPU time says)
+        self._cpu_slice_end = 0.0  # thread_time: the running thread's share is over
         hz = float(getattr(robot, "base_hz", 0) or 500)
         self.step_seconds = 1.0 / hz
         self._memory_start = resident_bytes()
@@ -104,30 +106,25 @@ class Program(Evaluator):
     def advance(self, dt: float = 0.0) -> None:
         if self.finished:
             return
-        started, cpu = time.perf_counter(), time.thread_time()
+        cpu = time.thread_time()
         self.clock += dt
         self._epoch += 1
         self.steps_run += 1
-        self._slice_end = started + SLICE * self.step_seconds
-        self._cpu_slice_end = cpu + SLICE * self.step_seconds
+        budget = Budget(self.step_seconds)
         try:
             self._watchdogs()
             if self.steps_run % MEMORY_EVERY == 0:
                 self._memory()
-            for thread in list(self.threads.values()):
-                if thread.done:
-                    continue
-                self.current = thread
-                if not thread.preempted:
+            threads = [t for t in self.threads.values() if not t.done]
+            for thread in threads:
+                if not thread.preempted:  # a thread preempted last step has not waited since
                     thread.ran = 0
-                thread.preempted = False
-                try:
-                    next(thread.steps)
-                except StopIteration:
-                    thread.done = True
-                    if thread.id == 0:
-                        self.finished = True
-                        break
+            self._round(threads, budget)
+            again = [t for t in threads if (t.preempted or t.rested) and not t.done]
+            if again and not self.finished and budget.left():  # round robin while time is left
+                self._round(again, budget)
+            if any(t.preempted and not t.done for t in threads):
+                budget.preempted()  # the program wanted more of this step than it had
         except ScriptFault as fault:
             self.fail(fault)
         except PROGRAM_ERRORS as exc:  # out of no statement (resuming a chain nested past the limit)
@@ -138,6 +135,22 @@ class Program(Evaluator):
             for key in [k for k, t in self.threads.items() if t.done]:
                 del self.threads[key]
             self.cpu += time.thread_time() - cpu
+
+    def _round(self, threads: list[_Thread], budget: Budget) -> None:
+        """Each thread in turn, until it waits or its share of what is left is over."""
+        for i, thread in enumerate(threads):
+            if thread.done or self.finished:
+                continue
+            self.current = thread
+            self._slice_end, self._cpu_slice_end = budget.share(len(threads) - i)
+            thread.preempted = thread.rested = False
+            try:
+                next(thread.steps)
+            except StopIteration:
+                thread.done = True
+                if thread.id == 0:
+                    self.finished = True
+                    return
 
     def _watchdogs(self) -> None:
         """rtde_set_watchdog: an RTDE input not written within 1/min_frequency s pauses or stops."""
@@ -167,12 +180,18 @@ class Program(Evaluator):
             )
 
     def slice_used(self) -> bool:
-        """Whether the running thread has used its slice of this control step (half the statement
-        budget, or the interpreter's CPU slice). A call that could wait (a socket read) then waits
-        for the next step before it returns, as the controller puts a thread that used its time
-        slice to rest until the next frame (Script Manual, thread scheduling): a driver's loop
-        reading a flood of records keeps up step by step instead of faulting."""
-        return self.current.ran > STEP_BUDGET // 2 or time.thread_time() > self._cpu_slice_end
+        """Whether the running thread has used its share of this control step (half the statement
+        budget, or its share of the step's time). A call that could wait (a socket read) then rests
+        until the other threads had their turn (it goes on in this step if time is left, else in
+        the next), as the controller puts a thread that used its time slice to rest (Script
+        Manual, thread scheduling): a driver's loop reading a flood of records keeps up step by
+        step instead of faulting, and the threads that move the arm keep their turns."""
+        if self.current.ran > STEP_BUDGET // 2:
+            return True
+        self.current.rested = (
+            time.perf_counter() > self._slice_end and time.thread_time() > self._cpu_slice_end
+        )
+        return self.current.rested
 
     def fail(self, fault: ScriptFault) -> None:
         # kept without its traceback: the frames it holds hold the program (a cycle that would keep
@@ -361,20 +380,6 @@ class Program(Evaluator):
     def wait_for(self, done: Callable[[], bool]) -> Wait:
         while not done():
             yield
-
-
-def resident_bytes() -> int:
-    """The process's resident memory (Linux /proc; elsewhere 0: the memory budget is not kept)."""
-    try:
-        if not _STATM:
-            _STATM.append(os.open("/proc/self/statm", os.O_RDONLY | getattr(os, "O_CLOEXEC", 0)))
-        return int(os.pread(_STATM[0], 128, 0).split()[1]) * _PAGE
-    except (OSError, ValueError, IndexError, AttributeError):
-        return 0
-
-
-_STATM: list[int] = []  # /proc/self/statm, opened once (read in a few µs, not opened each time)
-_PAGE = os.sysconf("SC_PAGE_SIZE") if hasattr(os, "sysconf") else 4096
 
 
 class _Killed(Exception):

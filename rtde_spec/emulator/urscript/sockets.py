@@ -5,12 +5,18 @@ ints (4 bytes, big-endian), bytes and strings, and reads binary integers or ASCI
 a time-out. Every socket is non-blocking: a read or a connect waits for its thread's next
 control steps, never the control loop, and a socket's buffer is bounded. Only IP addresses
 are accepted (no name look-ups from a control step). The program's sockets close with it.
+
+Reads take the records in order, as the Script Manual says, and each read takes all that has
+come (up to MAX_BUFFER held): a record already there costs no control step. A client that
+writes faster than the program reads (URCL's examples write without pacing) fills the buffer;
+that is said once in the log, since the program then acts on old records (docs/decisions.md).
 """
 
 from __future__ import annotations
 
 import errno
 import ipaddress
+import logging
 import re
 import select
 import socket
@@ -22,6 +28,7 @@ from rtde_spec.emulator.urscript.calls import arg, number, type_name
 from rtde_spec.emulator.urscript.interfaces import Runner
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
 
+log = logging.getLogger("rtde_spec.emulator")
 MAX_BUFFER = 1 << 20  # bytes a socket keeps unread
 OPEN_TIMEOUT = 2.0  # s a socket_open waits for the connection
 DEFAULT = "socket_0"
@@ -33,8 +40,9 @@ Waiting = Generator[None, None, Any]
 class ProgramSocket:
     """One named connection and what has arrived on it, unread."""
 
-    def __init__(self, sock: socket.socket) -> None:
-        self.sock, self.buffer, self.closed = sock, bytearray(), False
+    def __init__(self, sock: socket.socket, name: str = DEFAULT) -> None:
+        self.sock, self.buffer, self.closed, self.name = sock, bytearray(), False, name
+        self.behind = False  # the buffer was full: said once
 
     def pump(self) -> None:
         """Take what arrived (up to MAX_BUFFER), without waiting."""
@@ -50,6 +58,14 @@ class ProgramSocket:
                 self.closed = True
                 return
             self.buffer += data
+        if len(self.buffer) >= MAX_BUFFER and not self.behind:
+            self.behind = True
+            log.warning(
+                "program socket %r: %d kB unread, its client writes faster than the program reads "
+                "(records are read in order: the program acts on old ones)",
+                self.name,
+                MAX_BUFFER >> 10,
+            )
 
     def send(self, data: bytes) -> bool:
         try:
@@ -117,7 +133,7 @@ def _connecting(runner: Runner, name: str, sock: socket.socket, code: int, until
             code = sock.getsockopt(socket.SOL_SOCKET, socket.SO_ERROR) or 0
             if code in (errno.EINPROGRESS, errno.EALREADY):
                 code = errno.ECONNREFUSED
-    sockets_of(runner)[name] = ProgramSocket(sock)
+    sockets_of(runner)[name] = ProgramSocket(sock, name)
     return True
 
 
@@ -185,7 +201,7 @@ def _reading(
     failed = [0] + [-1] * count if take is _binary else [0] + [0.0] * count
     used = getattr(runner, "slice_used", None)
     if used is not None and used():
-        yield  # the thread's time slice is spent: the read returns in the next control step
+        yield  # the thread's share of the step is spent: it reads after the other threads' turns
     while sock is not None:
         sock.pump()
         got = take(sock, count)
