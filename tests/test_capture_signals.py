@@ -216,3 +216,35 @@ def test_out_of_file_descriptors_says_the_limit_and_what_to_do(
     assert "out of file descriptors (ulimit -n 12): raise the limit" in done.stderr
     assert "Traceback" not in done.stderr
     assert not list((tmp_path / "out").rglob(".*part*"))  # (none if the folder was never made)
+
+
+WORKER_AFTER_A_STOP = """
+import os, signal, sys
+from pathlib import Path
+from rtde_spec.cli import capture_jobs as jobs
+
+jobs._start_worker()  # as the pool starts each worker: its signal handlers, its parent
+os.kill(os.getpid(), signal.SIGINT)  # the command's stop reaches it idle, or sending a result
+print("alive", flush=True)
+got = jobs._decode_one(Path(sys.argv[1]), (sys.argv[2], "parquet", None), {})
+print(type(got).__name__, got.kept, len(list(Path(sys.argv[2]).rglob("*"))), flush=True)
+"""
+
+
+def test_a_worker_stopped_between_files_ends_with_the_pool_and_starts_no_other(tmp_path: Path) -> None:
+    """A worker that is not decoding when the command's stop reaches it (idle, or writing a
+    finished file's result to the parent) must not end there: ending in the middle of that
+    message left the pool's reader waiting for its rest, and `capture --jobs 2` never ended
+    (seen once in CI). It stays for the pool to end it, and a file queued to it before the stop
+    is not started."""
+    out = tmp_path / "out"
+    done = subprocess.run(
+        [sys.executable, "-c", WORKER_AFTER_A_STOP, str(DRIVER), str(out)],
+        capture_output=True,
+        text=True,
+        timeout=60,
+    )
+    assert done.stdout.split() == ["alive", "CaptureInterrupted", "False", "0"], (
+        done.returncode,
+        done.stderr,
+    )

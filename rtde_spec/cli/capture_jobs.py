@@ -26,6 +26,7 @@ if TYPE_CHECKING:
 
 _busy = False  # a worker is decoding a file: a signal stops the file, else it ends the worker
 _stopping = False  # that file is being stopped: later signals change nothing
+_halted = False  # the command is stopping: a file handed to this worker after that is not started
 _parent = 0  # the pid of the command that started this worker
 _unplaced: list[Path] = []  # temp files of tables this worker prepared, for its parent to place
 _STOPS = ("SIGINT", "SIGTERM", "SIGHUP")
@@ -120,13 +121,19 @@ def _start_worker() -> None:
 
 
 def _on_signal(signum: int, frame: FrameType | None) -> None:
-    global _stopping
+    global _stopping, _halted
+    _halted = True
     if _busy:
         if _stopping:  # the same stop again (to the group, and forwarded by the parent)
             return
         _stopping = True
         raise KeyboardInterrupt  # decode_prepared drops the file's tables, keeps the old ones
-    _exit(128 + signum)  # idle: nothing of ours is open
+    if signum == signal.SIGINT and os.getppid() == _parent:
+        # idle, or sending a finished file's result to the parent: ending here could cut that
+        # message short, and the pool's reader would wait for its rest for ever (a command that
+        # never ends). The parent stops the pool, which ends an idle worker cleanly.
+        return
+    _exit(128 + signum)  # idle, and the parent is gone or wants us gone: nothing of ours is open
 
 
 def _end_with_parent() -> None:
@@ -153,6 +160,8 @@ def _decode_one(path: CapturePath, target: tuple[Any, ...], kw: dict[str, Any]) 
     from rtde_spec.capture.tables.summary import CaptureSummary
 
     outdir, fmt, recipe = target
+    if _halted:  # queued before the stop (the pool hands on one more than it has workers)
+        return CaptureInterrupted(CaptureSummary(str(path)), kept=False)
     _busy, _stopping = True, False
     sink = None
     try:
