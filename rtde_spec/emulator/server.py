@@ -226,6 +226,11 @@ class Emulator:
             step += 1
             due = start + step / base
             await clock.until(due - lead)
+            # inputs already in the sockets are read before the step is computed, as a controller
+            # reads them at a cycle's start: one loop turn takes what was readable when it woke,
+            # the second what came in while this process waited for a core (a loaded machine)
+            await asyncio.sleep(0)
+            await asyncio.sleep(0)
             woke = time.perf_counter()
             if skip_after is not None and woke - due > skip_after:  # skip, don't burst
                 self.late_steps += 1
