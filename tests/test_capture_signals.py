@@ -248,3 +248,36 @@ def test_a_worker_stopped_between_files_ends_with_the_pool_and_starts_no_other(t
         done.returncode,
         done.stderr,
     )
+
+
+STUCK_WORKER = """
+import signal, time
+from concurrent.futures import ProcessPoolExecutor
+from rtde_spec.cli import capture_jobs as jobs
+
+def stuck():  # a worker that no stop reaches: it neither decodes to a stop point nor ends
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+    while True:
+        time.sleep(1)
+
+if __name__ == "__main__":
+    jobs.STOP_GRACE = 1.0
+    pool = ProcessPoolExecutor(max_workers=2)
+    futures = [pool.submit(stuck) for _ in range(4)]
+    time.sleep(1.0)
+    start = time.monotonic()
+    jobs._stop(pool, futures, [])
+    print("ended", round(time.monotonic() - start))
+"""
+
+
+def test_a_stop_ends_workers_that_do_not_end_themselves(tmp_path: Path) -> None:
+    """`capture --jobs` waits STOP_GRACE for its workers after a stop, then ends them: it used to
+    wait on the pool, which never returns while a worker lives (Python 3.11's pool, once one
+    worker has died, offers the others a stop on a full queue in an endless loop: a command was
+    seen spinning 40 minutes after its SIGINT)."""
+    script = tmp_path / "stuck.py"
+    script.write_text(STUCK_WORKER)
+    done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=60)
+    assert done.stdout.split()[:1] == ["ended"], (done.returncode, done.stderr[-2000:])
+    assert int(done.stdout.split()[1]) <= 5

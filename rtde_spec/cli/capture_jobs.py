@@ -14,7 +14,9 @@ from __future__ import annotations
 import os
 import signal
 import sys
+import time
 from collections.abc import Sequence
+from concurrent.futures import wait as wait_for
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -30,6 +32,7 @@ _halted = False  # the command is stopping: a file handed to this worker after t
 _parent = 0  # the pid of the command that started this worker
 _unplaced: list[Path] = []  # temp files of tables this worker prepared, for its parent to place
 _STOPS = ("SIGINT", "SIGTERM", "SIGHUP")
+STOP_GRACE = 20.0  # s a stopped worker has to drop its file and end before it is ended
 
 
 def decode_in_workers(
@@ -88,12 +91,15 @@ def _stop(
 
     for future in futures:
         future.cancel()  # not started: never started
-    for pid in list(getattr(pool, "_processes", None) or {}):
+    workers = list((getattr(pool, "_processes", None) or {}).values())
+    for worker in workers:
         try:
-            os.kill(pid, signal.SIGINT)  # a signal sent to the parent alone reaches them too
+            os.kill(worker.pid, signal.SIGINT)  # a signal sent to the parent alone reaches them too
         except OSError:
             pass
-    pool.shutdown(wait=True, cancel_futures=True)
+    pool.shutdown(wait=False, cancel_futures=True)
+    _end(workers)
+    wait_for(futures, timeout=STOP_GRACE)  # each settled once its worker has ended
     stops: list[CaptureInterrupted] = []
     for future in futures[len(placed) :]:
         if future.cancelled() or not future.done() or future.exception() is not None:
@@ -107,6 +113,23 @@ def _stop(
                 prepared.discard()
             stops.append(CaptureInterrupted(summary, kept=False))
     return placed, stops
+
+
+def _end(workers: list[Any]) -> None:
+    """Wait for the workers to end, STOP_GRACE at most, then end them. Not the pool's own wait:
+    once a worker has died (a pool CPython calls broken), Python 3.11's pool waits for the others
+    by offering each a stop on a full queue, in a loop that never ends while one lives (a
+    command seen spinning 40 minutes after its stop); with no worker left the loop ends."""
+    deadline = time.monotonic() + STOP_GRACE
+    for worker in workers:
+        worker.join(max(0.0, deadline - time.monotonic()))
+    for worker in workers:
+        if worker.is_alive():
+            worker.terminate()  # SIGTERM: the file it decodes is dropped, the old tables stay
+            worker.join(2.0)
+        if worker.is_alive():
+            worker.kill()
+            worker.join(2.0)
 
 
 def _start_worker() -> None:
