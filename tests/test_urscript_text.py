@@ -4,20 +4,14 @@ list of poses shows each as a pose; a joint list stays a plain `[...]`."""
 
 from __future__ import annotations
 
-from rtde_spec.emulator.controller.model import ControllerModel
+from .test_urscript_control import run
 
 
 def said(script: str, steps: int = 50) -> list[str]:
     """What the program says (textmsg and popup), stepped as the server steps it."""
-    model = ControllerModel("5.15.0")
-    model.run_script(script)
-    for _ in range(steps):
-        if model.program is None:
-            break
-        model.tick(model.step + 1)
-    events = model.drain_events()
-    assert not [e.text for e in events if e.kind == "runtime_exception"]
-    return [e.text for e in events if e.kind in ("text", "popup")]
+    _, events = run(script, steps)
+    assert not [text for kind, text, _, _ in events if kind == "runtime_exception"]
+    return [text for kind, text, _, _ in events if kind in ("text", "popup")]
 
 
 def test_a_pose_shows_as_p_and_its_six_numbers() -> None:
