@@ -14,10 +14,13 @@ from collections.abc import Sequence
 from pathlib import Path
 from typing import NamedTuple
 
+from rtde_spec.capture.reading.compressed import SUFFIXES as COMPRESSED
+
 # dumpcap/tshark -b and editcap -c/-i: PREFIX_NNNNN_YYYYMMDDhhmmss[.EXT]
 _NUMBERED = re.compile(r"^(?P<prefix>.+)_(?P<n>\d{5,})_(?P<when>\d{14})(?P<ext>(?:\.[A-Za-z0-9]+)*)$")
 # a capture's name: .pcap, .pcapng, .cap, tcpdump -C's numbered .pcapN, compressed whole or not
-CAPTURE_NAME = re.compile(r"\.(?:pcap|pcapng|cap)\d*(?:\.(?:gz|zst|lz4|xz|bz2))?$", re.IGNORECASE)
+_PACKED = "|".join(re.escape(suffix[1:]) for suffix in COMPRESSED)
+CAPTURE_NAME = re.compile(rf"\.(?:pcap|pcapng|cap)\d*(?:\.(?:{_PACKED}))?$", re.IGNORECASE)
 # tcpdump -C (and -W): NAME, NAME1, NAME2, ... (-W pads the numbers: NAME00, NAME01, ...)
 _TCPDUMP = re.compile(r"^(?P<prefix>.+\.(?:pcap|pcapng|cap))(?P<n>\d*)$")
 
