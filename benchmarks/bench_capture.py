@@ -33,6 +33,7 @@ sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "benchmarks"))
 from bench_decode_file import PEAK_MB, make_file  # noqa: E402
 from bench_recipe_decode import UR_RTDE_DEFAULT_OUTPUTS  # noqa: E402
+from bytecode import keep_bytecode  # noqa: E402
 
 from rtde_spec import Catalogue, RecipeCodec, build  # noqa: E402
 from rtde_spec.capture.decoder import decode_to_directory  # noqa: E402
@@ -357,6 +358,7 @@ def main(argv: list[str] | None = None) -> int:
         return one_file_main(args)
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
+        keep_bytecode(work)  # the children import as an installed package does
         capture = work / "one.pcap"
         warm = work / "warm.pcap"
         make_captures((capture, args.packages, "10.0.0.10"), (warm, WARM_PACKAGES, "10.0.0.10"))
@@ -428,6 +430,7 @@ def one_file_main(args: argparse.Namespace) -> int:
     """Issue 30.4: one big capture on two cores, and tshark with our dissector per CPU-second."""
     with tempfile.TemporaryDirectory() as tmp:
         work = Path(tmp)
+        keep_bytecode(work)  # the children import as an installed package does
         big, warm, small = work / "big.pcap", work / "warm.pcap", work / "small.pcap"
         make_captures((big, args.one_file, "10.0.0.10"), (warm, WARM_PACKAGES, "10.0.0.10"),
                       (small, 20_000, "10.0.0.10"))  # fmt: skip

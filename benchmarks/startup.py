@@ -9,9 +9,7 @@ them alike; the figure is the median over rounds of (command - `python -c pass`)
 The CPU column (user + system time of the child, the same difference) moves less
 than wall time on a loaded machine.
 
-The children keep byte code as an installed package does (in a temporary folder):
-with PYTHONDONTWRITEBYTECODE, set in some sandboxes and CI, every run would compile
-the package's modules, the 200 kB generated data modules among them, from source.
+The children keep byte code as an installed package does (`bytecode.py`).
 
     python3 benchmarks/startup.py [--rounds 15] [--assert-targets]
 """
@@ -27,6 +25,8 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from bytecode import keep_bytecode
 
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
@@ -100,8 +100,7 @@ def main() -> int:
     cli = [py, "-m", "rtde_spec"]
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(tmp)
-        env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
-        env["PYTHONPYCACHEPREFIX"] = str(folder / "pycache")
+        env = keep_bytecode(folder)
         pcap = one_package_pcap(folder)
         primary = primary_pcap(folder)  # no target: the typed primary models load (pydantic)
         port = str(closed_port())

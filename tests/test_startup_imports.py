@@ -245,3 +245,24 @@ def test_plot_of_a_capture_folder_imports_no_pandas(tmp_path: Path, one_package:
     assert code == 0, err
     assert (tmp_path / "p.png").stat().st_size > 1000
     assert "pandas" not in modules and "pyarrow._dataset" not in modules
+
+
+BLAS_THREADS = """
+import os, sys
+os.environ.pop("OPENBLAS_NUM_THREADS", None)
+if len(sys.argv) > 1:
+    os.environ["OPENBLAS_NUM_THREADS"] = sys.argv[1]
+import rtde_spec.cli.main
+import numpy
+print(os.environ["OPENBLAS_NUM_THREADS"], len(os.listdir("/proc/self/task")))
+"""
+
+
+@pytest.mark.skipif(not Path("/proc/self/task").is_dir(), reason="threads are counted in Linux's /proc")
+def test_a_command_loads_numpy_without_openblas_threads_spinning() -> None:
+    """OpenBLAS starts a thread per core when numpy loads, which spins ~0.1 s of CPU at every
+    start; the CLI asks for one (and keeps a user's own setting)."""
+    run = [sys.executable, "-c", BLAS_THREADS]
+    assert subprocess.run(run, capture_output=True, text=True, check=True).stdout.split() == ["1", "1"]
+    mine = subprocess.run([*run, "2"], capture_output=True, text=True, check=True).stdout.split()
+    assert mine[0] == "2"

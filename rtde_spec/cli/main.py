@@ -30,6 +30,11 @@ try:  # now: out of descriptors, an import then would fail too
 except ImportError:  # not POSIX
     resource = None  # type: ignore[assignment]
 
+# numpy's OpenBLAS starts a thread per core when it loads, and they spin ~0.1 s of CPU while a
+# command starts (40 % of a one-package capture's CPU). No command does linear algebra worth
+# sharing (the emulator's 6x6 kinematics), so one thread; a user's own setting wins.
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
 from rtde_spec import __version__
 from rtde_spec.cli import (
     capture_cmd,
