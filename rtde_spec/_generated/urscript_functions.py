@@ -584,6 +584,16 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'returns': 'none',
                 'since': {'cb3': '3.0.0', 'e-series': '5.0.0'},
                 'doc': 'Deprecated name of set_standard_analog_out'},
+               {'name': 'set_analog_outputdomain',
+                'section': 'interfaces',
+                'params': [{'name': 'port'}, {'name': 'domain'}],
+                'returns': 'none',
+                'since': {'cb3': '3.0.0', 'e-series': '5.0.0'},
+                'checked': False,
+                'doc': 'Domain of standard analog output port: 0 current (4-20 mA), 1 voltage '
+                       "(0-10 V); PolyScope's program preamble calls it from the installation",
+                'emulation': "sets the output's bit of analog_io_types (and the masterboard's "
+                             'domain); the level stays the fraction set_standard_analog_out gave'},
                {'name': 'read_input_integer_register',
                 'section': 'interfaces',
                 'params': [{'name': 'address'}],

@@ -52,6 +52,9 @@ DIGITAL = {
     "set_tool_digital_out": ("tool", 2),
 }
 ANALOG = {"set_standard_analog_out": 2, "set_analog_out": 2}
+# set_analog_outputdomain's domain argument, as the Script manual numbers it and RTDE's
+# standard_analog_output_type bits (and analog_io_types) encode it
+ANALOG_DOMAINS = {0: "current (4-20 mA)", 1: "voltage (0-10 V)"}
 MOVES = {"movej", "movel", "movep", "movec", "servoj", "servoc", "speedj", "speedl", "optimovej", "optimovel"}
 # the commands a program waits on (direct_torque: builtins_dynamics.py)
 WAITS = MOVES | {"stopj", "stopl", "sleep", "sync", "halt", "direct_torque"}
@@ -193,6 +196,25 @@ def analog_out(program: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
     program.applied.append(stmt.text)
 
 
+def analog_output_domain(program: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    """set_analog_outputdomain(port, domain): the output's domain, as RTDE's standard_analog_output_type
+    sets it for a masked output; its level (the fraction last set) is left as it is."""
+    port, domain = arg(stmt, args, kwargs, 0, "port"), arg(stmt, args, kwargs, 1, "domain")
+    if (
+        not isinstance(port, int)
+        or isinstance(port, bool)
+        or not 0 <= port < ANALOG["set_standard_analog_out"]
+    ):
+        raise ScriptFault(f"{stmt.name}: no analog output {port!r}", stmt.line, 1)
+    if not isinstance(domain, int) or isinstance(domain, bool) or domain not in ANALOG_DOMAINS:
+        known = ", ".join(f"{k} {v}" for k, v in ANALOG_DOMAINS.items())
+        raise ScriptFault(f"{stmt.name}: domain must be {known}, not {domain!r}", stmt.line, 1)
+    program.robot.apply_inputs(
+        {"standard_analog_output_mask": 1 << port, "standard_analog_output_type": domain << port}
+    )
+    program.applied.append(stmt.text)
+
+
 def set_tcp(program: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
     pose = arg(stmt, args, kwargs, 0, "pose")
     program.robot.arm.tcp = tuple(six(stmt, pose, "pose"))
@@ -255,6 +277,7 @@ COMMANDS: dict[str, Command] = {
     "sync": sync,
     **{name: digital_out for name in DIGITAL},
     **{name: analog_out for name in ANALOG},
+    "set_analog_outputdomain": analog_output_domain,
     "set_tcp": set_tcp,
     "set_payload": set_payload,
     "set_payload_mass": set_payload,
