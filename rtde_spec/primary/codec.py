@@ -248,13 +248,31 @@ def default_codec() -> PrimaryCodec:
     return PrimaryCodec()
 
 
-def decode_message(data: bytes | bytearray | memoryview, *, strict: bool = True) -> PrimaryMessage:
-    """One whole primary/secondary message (header included)."""
-    return default_codec().decode_message(data, strict=strict)
+def decode_message(
+    data: bytes | bytearray | memoryview, *, strict: bool = True, version: Version | str | None = None
+) -> PrimaryMessage:
+    """One whole primary/secondary message (header included).
+
+    `version` ("1.8", "3.2.0", a Version): the controller that sent it, when its Version message
+    is not at hand (a dump of one message, a stream joined late); it picks the spec's older
+    layouts as a stream decoder's Version message does. None: the newest layouts.
+    """
+    known = Version.parse(version) if version is not None else None
+    return default_codec().decode_message(data, strict=strict, version=known)
 
 
 def encode_message(message: PrimaryModel) -> bytes:
     return default_codec().encode(message)
+
+
+def announced_version(message: PrimaryMessage) -> Version | None:
+    """The controller version a Version message announces (None for any other message): the
+    context that picks older layouts for what follows on the same connection."""
+    if not isinstance(message, gen.VersionMessage) or message.major_version is None:
+        return None
+    return Version(
+        message.major_version, message.minor_version or 0, message.bugfix_version or 0, message.build_number
+    )
 
 
 class PrimaryStreamDecoder:
@@ -323,13 +341,9 @@ class PrimaryStreamDecoder:
                     raise exc.in_stream(offset, self.count) from None
                 self.skipped.add(offset, len(raw), str(exc.in_stream(offset, self.count)))
                 continue
-            if isinstance(message, gen.VersionMessage) and message.major_version is not None:
-                self.version = Version(
-                    message.major_version,
-                    message.minor_version or 0,
-                    message.bugfix_version or 0,
-                    message.build_number,
-                )
+            announced = announced_version(message)
+            if announced is not None:
+                self.version = announced
             out.append((offset, message))
 
     def warnings_for(self, message: PrimaryMessage) -> list[str]:

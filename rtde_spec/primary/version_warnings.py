@@ -40,6 +40,18 @@ def _unexpected_missing(codec: CodecFacts, version: Version | None, parts: list[
     return out
 
 
+def _older_names(codec: CodecFacts, version: Version | None) -> set[str]:
+    """The members `version` is decoded with an older layout of (none when it is unknown)."""
+    if version is None:
+        return set()
+    return {
+        m.NAME
+        for fam in codec.families.values()
+        for t, (m, _) in fam.members.items()
+        if any(version < before for before, _ in fam.older.get(t, []))
+    }
+
+
 def warnings_for(codec: CodecFacts, version: Version | None, message: Any) -> list[str]:
     """Why this message's values may be wrong: an unknown controller line, or layouts that disagree.
 
@@ -49,13 +61,8 @@ def warnings_for(codec: CodecFacts, version: Version | None, message: Any) -> li
     out = []
     if version is not None and not any(version.major in majors for majors in PRODUCT_LINES.values()):
         lines = ", ".join(f"{name} {'/'.join(map(str, m))}.x" for name, m in PRODUCT_LINES.items())
-        older = sorted(
-            m.NAME
-            for fam in codec.families.values()
-            for t, (m, _) in fam.members.items()
-            if any(version < before for before, _ in fam.older.get(t, []))
-        )
-        known = f" (older layouts from public sources used for {', '.join(older)})" if older else ""
+        used = sorted(_older_names(codec, version))
+        known = f" (older layouts from public sources used for {', '.join(used)})" if used else ""
         out.append(
             f"controller {version} is outside the spec's product lines ({lines}){known}; "
             "other layouts are not described for it, so values may be wrong"
@@ -66,8 +73,12 @@ def warnings_for(codec: CodecFacts, version: Version | None, message: Any) -> li
         names = ", ".join(unexpected)
         out.append(f"missing on controller {version}, which the spec says sends them: {names}")
     if isinstance(message, RobotStateMessage):
-        shorter = [s.NAME for s in message.sub_packages if isinstance(s, PrimaryPart) and s.missing]
-        longer = [s.NAME for s in message.sub_packages if isinstance(s, PrimaryPart) and s.extra]
+        # a part read with an older layout lacks the current fields and may carry bytes after its
+        # documented end (the spec's `older` says which): neither is a disagreement
+        odd = [s for s in message.sub_packages if isinstance(s, PrimaryPart) and (s.missing or s.extra)]
+        older = _older_names(codec, version) if odd else set()
+        shorter = [s.NAME for s in odd if s.missing and s.NAME not in older]
+        longer = [s.NAME for s in odd if s.extra and s.NAME not in older]
         if shorter and longer:
             out.append(
                 "layouts disagree: some sub-packages are shorter than the spec "

@@ -2,12 +2,17 @@
 
 What the client sends is URScript (kept as text, and as the robot's program when a driver
 in headless mode sends it here). A resynchronisation candidate of a family made of
-sub-packages is sure when their sizes fill it.
+sub-packages is sure when their sizes fill it. The Version message (the first one the
+controller sends) picks the spec's older layouts for what follows, as a stream decoder's
+does; why values may still be wrong (`primary/version_warnings.py`) goes into the
+connection's notes once each, and a message of a type the spec does not know keeps its
+family, type and prefix beside its bytes.
 """
 
 from __future__ import annotations
 
-from typing import Any
+import json
+from typing import TYPE_CHECKING, Any
 
 from rtde_spec.capture.framing.sized import STRONG, WEAK, Check, Framing
 from rtde_spec.capture.protocols.base import Counts
@@ -16,6 +21,14 @@ from rtde_spec.capture.tables.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
 from rtde_spec.errors import RtdeSpecError
 from rtde_spec.external.programs import MAX_PROGRAM_BYTES, ProgramSent, programs_of
+from rtde_spec.output.base import plain
+
+if TYPE_CHECKING:
+    from rtde_spec.metamodel.versions import Version
+    from rtde_spec.primary.robot_state import Reuse
+
+MAX_NOTES = 20  # distinct warnings kept per connection (each is said once, whatever the count)
+NO_VERSION = "no Version message before it in the capture (decoded with the newest layouts)"
 
 
 class PrimaryConnection:
@@ -33,6 +46,9 @@ class PrimaryConnection:
         self.counts = Counts()
         self.last_time = 0.0
         self.typed: set[type] = set()  # the part classes whose column types the sink was given
+        self.version: Version | None = None  # what the Version message announced: picks older layouts
+        self.reuse: Reuse = {}  # the last model of each Robot State sub-package (primary/robot_state.py)
+        self.notes: list[str] = []  # why values may be wrong, once each: the summary shows them
 
     def feed(self, sender: str, chunk: Chunk) -> None:
         base = {"connection": self.name, "capture_time": chunk.time}
@@ -61,6 +77,7 @@ class PrimaryConnection:
         self._messages(self.framing.finish(), self.framing.times, self.last_time)
 
     def _messages(self, raws: list[bytes], times: list[float] | None, now: float) -> None:
+        from rtde_spec.primary.codec import announced_version
         from rtde_spec.wire.primary_base import PrimaryPart, RobotStateMessage
 
         for n, raw in enumerate(raws):
@@ -69,24 +86,49 @@ class PrimaryConnection:
             day = day_of(time)
             self.counts.packages += 1
             try:
-                message = self.codec.decode_message(raw)
+                message = self.codec.decode_message(raw, version=self.version, reuse=self.reuse)
             except RtdeSpecError as exc:
                 self.counts.errors.append(f"message at {time:.6f}: {exc}")
                 continue
+            self.version = announced_version(message) or self.version
+            self._warnings(message)
             parts = message.sub_packages if isinstance(message, RobotStateMessage) else [message]
             for part in parts:
                 table = f"primary_{getattr(part, 'NAME', 'unknown')}"
                 if not isinstance(part, PrimaryPart):
-                    hexed = bytes(getattr(part, "raw", b"")).hex()
-                    self.sink.row(table, self.robot, day, {**base, "raw": hexed})
+                    self.sink.row(table, self.robot, day, {**base, **_unknown_columns(part)})
                     continue
                 if type(part) not in self.typed:  # a field its version does not send is typed all the same
                     self.typed.add(type(part))
                     self.sink.hint(table, column_types(type(part)))
                 self.sink.row(table, self.robot, day, {**base, **flatten_part(part)})
 
+    def _warnings(self, message: Any) -> None:
+        """Why `message`'s values may be wrong for the controller that sent it, into the notes once each."""
+        from rtde_spec.primary.version_warnings import warnings_for
+
+        for warning in warnings_for(self.codec, self.version, message):
+            note = warning if self.version is not None else f"{warning}; {NO_VERSION}"
+            if note not in self.notes and len(self.notes) < MAX_NOTES:
+                self.notes.append(note)
+
     def close(self) -> None:
         pass
+
+
+def _unknown_columns(part: Any) -> dict[str, Any]:
+    """A message or sub-package of a type the spec does not know (or an opaque one): what its model
+    holds, so rows of different ones can be told apart; the bytes in hex, a prefix as JSON."""
+    row: dict[str, Any] = {}
+    for key in type(part).model_fields:
+        value = getattr(part, key)
+        if isinstance(value, (bytes, bytearray)):
+            row[key] = bytes(value).hex()
+        elif isinstance(value, dict):
+            row[key] = json.dumps(plain(value))
+        else:
+            row[key] = value
+    return row
 
 
 def _tiled(codec: Any) -> Check:
