@@ -153,3 +153,59 @@ def test_a_dump_of_one_message_decodes_with_the_version_given() -> None:
     assert (mode.target_speed_fraction, mode.control_mode) == (1.0, None)
     assert board.robot_voltage_48v == pytest.approx(48.1)
     assert decode_message(cb2_robot_state()).sub_packages[0].control_mode == 63  # the newest layouts
+
+
+def test_controller_given_reads_a_capture_started_after_the_version_message(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A capture started late (no Version message) of a CB2: `--controller 1.8` picks its layouts,
+    as `--recipe` stands in for an RTDE setup the capture missed; without it the summary says how."""
+    cap = write(tmp_path / "late.pcap", [secondary([cb2_robot_state()] * 3)])
+    assert main(["capture", str(cap), "-o", str(tmp_path / "plain")]) == 0
+    assert "capture --controller VERSION gives the robot's" in capsys.readouterr().err
+    assert main(["capture", str(cap), "-o", str(tmp_path / "out"), "--controller", "1.8"]) == 0
+    err = capsys.readouterr().err
+    assert "layouts disagree" not in err and "no Version message" not in err
+    tables = capture_tables(cap, controller="1.8")
+    board = tables["primary_masterboard_data"].to_pylist()[-1]
+    assert board["robot_voltage_48v"] == pytest.approx(48.1)
+    assert {m["control_mode"] for m in tables["primary_robot_mode_data"].to_pylist()} == {None}
+
+
+def test_a_version_message_in_the_capture_wins_over_the_controller_given(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    messages = [version_message(1, 8, 14035, 0, b"Oct 1 2013"), cb2_robot_state()]
+    cap = write(tmp_path / "cb2.pcap", [secondary(messages)])
+    assert main(["capture", str(cap), "-o", str(tmp_path / "out"), "--controller", "5.15.0"]) == 0
+    assert (
+        "its Version message says 1.8.14035, --controller said 5.15.0: 1.8.14035 used"
+        in capsys.readouterr().err
+    )
+    board = capture_tables(cap, controller="5.15.0")["primary_masterboard_data"].to_pylist()[-1]
+    assert board["robot_voltage_48v"] == pytest.approx(48.1)
+
+
+def _supply(out: str) -> list[float]:
+    """The masterboard's 48 V supply in each Robot State `decode --format jsonl` printed."""
+    rows = [json.loads(line) for line in out.splitlines()]
+    subs = [sub for row in rows for sub in row.get("sub_packages", [])]
+    return [sub["robot_voltage_48v"] for sub in subs if sub["package"] == "masterboard_data"]
+
+
+def test_decode_of_a_dump_takes_the_controller_version(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    dump = tmp_path / "packet.bin"
+    dump.write_bytes(cb2_robot_state())
+    args = ["decode", "--protocol", "primary", str(dump), "--format", "jsonl"]
+    assert main([*args, "--controller", "1.8"]) == 0
+    assert _supply(capsys.readouterr().out) == [pytest.approx(48.1)]
+    assert main(args) == 0
+    assert _supply(capsys.readouterr().out) != [pytest.approx(48.1)]  # the newest layouts misread it
+    assert main(["decode", str(dump), "--controller", "1.8"]) == 2  # RTDE has no per-version layouts
+    assert "add --protocol primary" in capsys.readouterr().err
+    with pytest.raises(SystemExit) as usage:
+        main(["capture", str(dump), "-o", str(tmp_path / "o"), "--controller", "one"])
+    assert usage.value.code == 2
+    assert "is not a controller version" in capsys.readouterr().err

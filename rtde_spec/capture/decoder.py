@@ -34,6 +34,7 @@ from rtde_spec.capture.tables.sink import (
 from rtde_spec.capture.tables.summary import CaptureSummary
 from rtde_spec.errors import OutputError
 from rtde_spec.metamodel.catalogue import Catalogue
+from rtde_spec.metamodel.versions import Version
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
 
 RUN_HEAD = PAYLOAD_OFFSET  # size, type, recipe id: the bytes every data package of one run shares
@@ -66,16 +67,21 @@ def decode_capture(
     catalogue: Catalogue | None = None,
     progress: Callable[[int], None] | None = None,
     port_map: Mapping[int, str] | None = None,
+    controller: str | None = None,
 ) -> CaptureSummary:
     """Decode one capture file into the sink; the summary says what was found and what went wrong.
 
     `port_map` (port -> protocol, see classify.KINDS) adds to and overrides the spec's default ports.
+    `controller` ("1.8", "3.3.1"): the version of a primary connection whose Version message is not
+    in the capture (one started late); a Version message in the capture wins.
     A list of paths is the parts of one split capture (`reading/series.py`), decoded as one.
     """
     cat = catalogue or Catalogue.default()
     ports = port_kinds(rtde_ports, primary_ports, port_map)
     stats: dict[str, int] = {}
     session: dict[str, Any] = {}  # what this file's connections share (URCL programs: protocols/external.py)
+    if controller is not None:
+        session["controller"] = Version.parse(controller)
     table = FlowTable(lambda seg: classify(seg, sink, recipe, ports, cat, session))
     batcher = Batcher(table, _finish)
     try:

@@ -113,6 +113,20 @@ def controller_version(text: str) -> str:
     return text
 
 
+def primary_version(text: str) -> str:
+    """argparse type of capture's --controller: any MAJOR.MINOR[.BUGFIX], older firmware too (CB2's
+    1.x has primary layouts of its own); one outside the spec's lines is said in the summary."""
+    from rtde_spec.metamodel.versions import Version
+
+    try:
+        Version.parse(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(
+            f"{text!r} is not a controller version: give MAJOR.MINOR[.BUGFIX], e.g. 1.8, 3.3.1 or 5.15.0"
+        ) from None
+    return text
+
+
 def release_version(text: str) -> str:
     """argparse type of a release (MAJOR.MINOR allowed, as in `fields --diff 5.10 5.11`)."""
     from rtde_spec.metamodel.catalogue import Catalogue

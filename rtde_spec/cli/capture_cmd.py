@@ -10,6 +10,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
+from rtde_spec.cli.arguments import primary_version
 from rtde_spec.cli.conventions import describe, plural
 from rtde_spec.cli.options import add_lenient
 from rtde_spec.errors import RtdeSpecError, UsageError
@@ -87,6 +88,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         metavar="KEY",
         help="which recipe of a --recipe file with several (default: the only one, else the only "
         "output recipe)",
+    )
+    p.add_argument(
+        "--controller",
+        type=primary_version,
+        metavar="VERSION",
+        help="controller version of primary/secondary connections whose Version message is not in "
+        "the capture (one started late), e.g. 1.8 for a CB2: picks the spec's older layouts; a Version "
+        "message in the capture wins (default: the newest layouts)",
     )
     _add_port_options(p)
     p.add_argument(
@@ -197,6 +206,7 @@ def run(args: argparse.Namespace) -> int:
         "rtde_ports": tuple(args.rtde_port or (RTDE_PORT,)),
         "primary_ports": tuple(args.primary_port or PRIMARY_PORTS.values()),
         "port_map": parse_port_map(args.port_map or []),
+        "controller": args.controller,
     }
     summaries: list[CaptureSummary] = []
     if args.jobs > 1 and len(files) > 1:

@@ -21,12 +21,12 @@ from rtde_spec._generated.constants import (
     RTDE_PROTOCOLS,
     RTDE_SENDERS,
 )
-from rtde_spec.cli.arguments import RECIPE_FILE_HELP, existing_file, recipe_file
+from rtde_spec.cli.arguments import RECIPE_FILE_HELP, existing_file, primary_version, recipe_file
 from rtde_spec.cli.conventions import describe, output_file
 from rtde_spec.cli.inputs import from_hex_text, read_input, refuse_special, reject_capture
 from rtde_spec.cli.options import add_lenient
 from rtde_spec.cli.report import report_skipped
-from rtde_spec.errors import DecodeError, RtdeSpecError
+from rtde_spec.errors import DecodeError, RtdeSpecError, UsageError
 
 if TYPE_CHECKING:
     from rtde_spec.output.base import Writer
@@ -62,6 +62,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         choices=("rtde", "primary"),
         default="rtde",
         help=f"rtde (port {RTDE_PORT}) or primary (ports {ports}) (default: rtde)",
+    )
+    p.add_argument(
+        "--controller",
+        type=primary_version,
+        metavar="VERSION",
+        help="primary: the controller version when the input has no Version message (a dump of one "
+        "message, a stream joined late), e.g. 1.8 for a CB2; one in the input wins (default: the "
+        "newest layouts)",
     )
     p.add_argument(
         "--protocol-version",
@@ -220,11 +228,22 @@ def run(args: argparse.Namespace) -> int:
     if args.output:
         output_file(args.output)
     fmt = "json" if args.json and not args.format else format_for(args.output, args.format)
+    if args.controller is not None and args.protocol != "primary":
+        raise UsageError(
+            "picks the primary interface's layouts; RTDE packages have one layout per recipe, not per "
+            "version: add --protocol primary, or leave it out",
+            subject="--controller",
+        )
     if args.protocol == "primary":
         from rtde_spec.cli.primary_output import run_primary
 
         return run_primary(
-            chunks(args), fmt, args.output, lenient=args.lenient, left=partial(input_left, args)
+            chunks(args),
+            fmt,
+            args.output,
+            lenient=args.lenient,
+            left=partial(input_left, args),
+            version=args.controller,
         )
     codec = recipe_codec(args)
     writer = open_writer(fmt, args.output, background=True)

@@ -105,6 +105,7 @@ def run_primary(
     *,
     lenient: bool = False,
     left: Callable[[int | None], str] = lambda offset: "the rest of the input",
+    version: str | None = None,
 ) -> int:
     """Decode a primary/secondary stream as it arrives; every message before an error is written first.
 
@@ -112,7 +113,7 @@ def run_primary(
     stream that cannot be framed further ends the decode with a note, not an error.
     `left(offset)` says how much input there is from a framing fault on.
     """
-    decoder = PrimaryStreamDecoder(skip_errors=lenient)
+    decoder = PrimaryStreamDecoder(skip_errors=lenient, version=version)
     writer: Writer | None = None
     received = 0
     error: RtdeSpecError | None = None

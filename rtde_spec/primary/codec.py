@@ -279,13 +279,20 @@ class PrimaryStreamDecoder:
     """Frames a TCP byte stream into messages and decodes them in order.
 
     The Version message (the first one on every port) sets `version`, the
-    controller version context for what follows. A size that cannot be framed
+    controller version context for what follows; `version` given here stands for it
+    in a stream joined late (a Version message in the stream still wins). A size that cannot be framed
     raises after the messages before it are decoded (in `decoded`); with
     `skip_errors`, a framed message that does not decode is counted in `skipped`
     and the stream goes on.
     """
 
-    def __init__(self, codec: PrimaryCodec | None = None, *, skip_errors: bool = False) -> None:
+    def __init__(
+        self,
+        codec: PrimaryCodec | None = None,
+        *,
+        skip_errors: bool = False,
+        version: Version | str | None = None,
+    ) -> None:
         self.codec = codec or default_codec()
         self.skip_errors = skip_errors
         self.skipped = Skipped()
@@ -294,7 +301,7 @@ class PrimaryStreamDecoder:
             header_size=self.codec.header.size,
             max_size=self.codec.max_size,
         )
-        self.version: Version | None = None
+        self.version: Version | None = Version.parse(version) if version is not None else None
         self.count = 0
         self.decoded: list[tuple[int, PrimaryMessage]] = []  # of the last feed, up to an error
         self.reuse: Reuse = {}  # the last model of each Robot State sub-package (robot_state.py)

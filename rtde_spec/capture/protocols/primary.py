@@ -28,7 +28,10 @@ if TYPE_CHECKING:
     from rtde_spec.primary.robot_state import Reuse
 
 MAX_NOTES = 20  # distinct warnings kept per connection (each is said once, whatever the count)
-NO_VERSION = "no Version message before it in the capture (decoded with the newest layouts)"
+NO_VERSION = (
+    "no Version message before it in the capture (decoded with the newest layouts; "
+    "capture --controller VERSION gives the robot's)"
+)
 
 
 class PrimaryConnection:
@@ -46,7 +49,10 @@ class PrimaryConnection:
         self.counts = Counts()
         self.last_time = 0.0
         self.typed: set[type] = set()  # the part classes whose column types the sink was given
-        self.version: Version | None = None  # what the Version message announced: picks older layouts
+        # what the Version message announced, else what the user gave (capture --controller): picks
+        # older layouts
+        self.given: Version | None = (session or {}).get("controller")
+        self.version: Version | None = self.given
         self.reuse: Reuse = {}  # the last model of each Robot State sub-package (primary/robot_state.py)
         self.notes: list[str] = []  # why values may be wrong, once each: the summary shows them
 
@@ -90,7 +96,12 @@ class PrimaryConnection:
             except RtdeSpecError as exc:
                 self.counts.errors.append(f"message at {time:.6f}: {exc}")
                 continue
-            self.version = announced_version(message) or self.version
+            announced = announced_version(message)
+            if announced is not None:
+                if self.given is not None and announced != self.given:
+                    said = f"its Version message says {announced}, --controller said {self.given}"
+                    self._note(f"{said}: {announced} used")
+                self.version = announced
             self._warnings(message)
             parts = message.sub_packages if isinstance(message, RobotStateMessage) else [message]
             for part in parts:
@@ -108,9 +119,11 @@ class PrimaryConnection:
         from rtde_spec.primary.version_warnings import warnings_for
 
         for warning in warnings_for(self.codec, self.version, message):
-            note = warning if self.version is not None else f"{warning}; {NO_VERSION}"
-            if note not in self.notes and len(self.notes) < MAX_NOTES:
-                self.notes.append(note)
+            self._note(warning if self.version is not None else f"{warning}; {NO_VERSION}")
+
+    def _note(self, note: str) -> None:
+        if note not in self.notes and len(self.notes) < MAX_NOTES:
+            self.notes.append(note)
 
     def close(self) -> None:
         pass
