@@ -209,3 +209,21 @@ def test_decode_of_a_dump_takes_the_controller_version(
         main(["capture", str(dump), "-o", str(tmp_path / "o"), "--controller", "one"])
     assert usage.value.code == 2
     assert "is not a controller version" in capsys.readouterr().err
+
+
+def test_primary_bytes_on_the_real_time_port_name_the_port_map(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The forum post's CB3 3.3.1 session is labelled port 30003 but holds primary bytes (its
+    Version message first): the summary said only that the bytes hold no real-time message."""
+    date = b"Jul 08 2016, 16:07:20"
+    conv = Conversation(("10.8.64.1", 40003), ("10.8.64.249", 30003))
+    conv.handshake()
+    for message in [version_message(3, 3, 1, 60, date), *[cb2_robot_state()] * 40]:
+        conv.send("server", message, dt=0.1)
+    cap = write(tmp_path / "forum.pcap", [conv])
+    assert main(["capture", str(cap), "-o", str(tmp_path / "out")]) == 3
+    assert "they look like the primary interface: --port-map 30003=primary" in capsys.readouterr().err
+    mapped = ["capture", str(cap), "-o", str(tmp_path / "mapped"), "--port-map", "30003=primary"]
+    assert main(mapped) == 0
+    assert capture_tables(cap, port_map={30003: "primary"})["primary_version_message"].num_rows == 1

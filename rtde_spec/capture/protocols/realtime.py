@@ -26,6 +26,7 @@ TABLE = "realtime"
 SIZE = 4  # the size field leads each message
 BATCH = 2048  # messages decoded together into columns
 WINDOW = 64 << 10  # bytes held looking for the message size (a message is at most a few kB)
+OPENING = 64  # the controller's first bytes kept: what they look like when no size is found
 
 
 class RealtimeConnection:
@@ -44,6 +45,7 @@ class RealtimeConnection:
         self.searched = 0  # offsets of `search` already found to be no size (or unconfirmed)
         self.sizes = set(known_sizes())
         self.passed = 0  # bytes passed over without a known size
+        self.opening = b""  # the controller's first bytes (another interface on this port?)
 
     def feed(self, sender: str, chunk: Chunk) -> None:
         self.last_time = chunk.time
@@ -51,6 +53,8 @@ class RealtimeConnection:
             self.client_bytes += len(chunk.data)
             return
         if "controller" not in self.framing:
+            if len(self.opening) < OPENING:
+                self.opening += chunk.data[: OPENING - len(self.opening)]
             self.held.append(chunk)
             self.held_bytes += len(chunk.data)
             self.search += chunk.data
@@ -152,7 +156,9 @@ class RealtimeConnection:
             self.passed += self.held_bytes
             self.held = []
         if self.passed:
-            self.counts.errors.append(f"{self.passed} bytes hold no real-time message of a known size")
+            self.counts.errors.append(
+                f"{self.passed} bytes hold no real-time message of a known size{self._looks()}"
+            )
         if size is not None:
             self._start(size)
         framing = self.framing.get("controller")
@@ -162,6 +168,16 @@ class RealtimeConnection:
 
     def close(self) -> None:
         self._flush()
+
+    def _looks(self) -> str:
+        """What the bytes look like when they are another interface's (a port moved, or mislabelled)."""
+        from rtde_spec.capture.routing.classify import content_kind
+
+        kind = content_kind(self.opening)
+        if kind is None or kind == "realtime":
+            return ""
+        port = self.name.rsplit(":", 1)[-1]
+        return f"; they look like the {kind} interface: --port-map {port}={kind} decodes them as that"
 
 
 def _columns(layout: RealtimeLayout, data: bytes) -> dict[str, Any] | None:
