@@ -7,12 +7,16 @@ Before the emulator read `m[i, j]` and knew these functions, ur_rtde could not s
 ur_rtde reads back is held to what the emulator's arm model computes for the arm's joints; ur_rtde
 writes a 6x6 matrix column by column (`m[0, 0], m[1, 0], ...`), so its 36 numbers are column-major.
 
-ur_rtde sends these commands without waiting for the script to finish them and reads the output
-registers from the next RTDE package it receives. The emulator reads a step's inputs just before
-the step is due (server.py; tests/test_emulator_step_inputs.py asks once), but a command that
-comes while the step is computed is answered one package later than ur_rtde looks (on a robot it
-races too), and on a loaded machine the interpreter may not finish the 36 register writes in one
-step; so each answer is asked again until it comes, within `ANSWER` s.
+ur_rtde sends these commands without waiting for the script to finish them. getJacobian,
+getMassMatrix, getCoriolisAndCentrifugalTorques and getJacobianTimeDerivative then wait for a
+package one control step newer than the one they held and read the output registers there;
+getTargetJointAccelerations reads them at once, from a package that left before the command did
+(its first answer is the previous call's registers, on a robot too; see
+tests/test_ur_rtde_control_answers.py). The emulator reads a step's inputs just before the step is
+due (server.py; tests/test_emulator_step_inputs.py asks once), but a command that comes while the
+step is computed is answered one package later than ur_rtde looks (on a robot it races too), and
+on a loaded machine the interpreter may not finish the 36 register writes in one step; so each
+answer is asked again until it comes, within `ANSWER` s.
 """
 
 from __future__ import annotations

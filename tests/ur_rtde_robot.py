@@ -56,10 +56,10 @@ def serve(
 
 @contextmanager
 def ur_rtde_robot(
-    host: str, rtde_control: Any, rtde_receive: Any, controller: str = "5.15.0"
+    host: str, rtde_control: Any, rtde_receive: Any, controller: str = "5.15.0", model: str = "UR5e"
 ) -> Iterator[Robot]:
     """ur_rtde's control and receive interfaces on a fresh emulator; all stopped at the end."""
-    proc, log = serve(host, controller)
+    proc, log = serve(host, controller, model)
     try:
         control = rtde_control.RTDEControlInterface(host)
         receive = rtde_receive.RTDEReceiveInterface(host)

@@ -19,7 +19,12 @@ from typing import TYPE_CHECKING
 from rtde_spec._generated.enums import RobotMode
 from rtde_spec.emulator.ports.guard import Port
 from rtde_spec.emulator.ports.primary_commands import take_commands
-from rtde_spec.emulator.ports.robot_messages import event_messages, safety_mode_message, version_message
+from rtde_spec.emulator.ports.robot_messages import (
+    event_messages,
+    prepare,
+    safety_mode_message,
+    version_message,
+)
 from rtde_spec.emulator.ports.script import run_script
 from rtde_spec.emulator.ports.script_framer import ScriptPort
 from rtde_spec.emulator.ports.state_message import RobotStateBuilder
@@ -41,6 +46,7 @@ class PrimaryHub:
         self.state = RobotStateBuilder(model)
         self.states = 0
         self._safety_mode = self._robot_mode = -1
+        prepare()  # the messages' codec now, not in the control step of a program's start
 
     def run(self, port: int, text: str) -> None:
         """A whole script from a client: kept (the last few), its plain commands (`power on`, ...;
@@ -62,22 +68,24 @@ class PrimaryHub:
     def broadcast_state(self) -> None:
         """Every 100 ms: robot messages since the last time (primary ports), then Robot State."""
         values = self.model.values
-        micros = self._micros()
-        messages: list[bytes] = []
         drain = getattr(self.model, "drain_events", None)
-        for event in drain() if drain is not None else ():
-            messages += event_messages(event, micros)
+        events = drain() if drain is not None else ()
         safety, mode = int(values.get("safety_mode", 0)), int(values.get("robot_mode", 0))
-        if safety != self._safety_mode and self._safety_mode != -1:
-            messages.append(safety_mode_message(safety, micros))
+        safety_changed = safety != self._safety_mode and self._safety_mode != -1
         # leaving initialisation (powered on from off): Kinematics Info goes out again
         kinematics = self._robot_mode != -1 and self._robot_mode < RobotMode.IDLE <= mode
         self._safety_mode, self._robot_mode = safety, mode
         self.states += 1
         if not self.connections:
-            return
+            return  # the events are gone (a controller keeps none for later clients): none encoded
+        burst = b""
+        if any(conn.messages for conn in self.connections):
+            micros = self._micros()
+            messages = [m for event in events for m in event_messages(event, micros)]
+            if safety_changed:
+                messages.append(safety_mode_message(safety, micros))
+            burst = b"".join(messages)
         periodic = first = b""
-        burst = b"".join(messages)
         for conn in list(self.connections):
             if conn.fresh:
                 first = first or self.state.build(first=True)
