@@ -227,3 +227,22 @@ def test_primary_bytes_on_the_real_time_port_name_the_port_map(
     mapped = ["capture", str(cap), "-o", str(tmp_path / "mapped"), "--port-map", "30003=primary"]
     assert main(mapped) == 0
     assert capture_tables(cap, port_map={30003: "primary"})["primary_version_message"].num_rows == 1
+
+
+def test_decode_says_a_part_that_fits_no_layout_and_how_to_give_the_version(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """python-urx's packet.bin read with the newest layouts: each misread part was labelled both
+    "missing, older firmware" and "extra bytes, newer firmware", and nothing said how to fix it."""
+    dump = tmp_path / "packet.bin"
+    dump.write_bytes(cb2_robot_state())
+    assert main(["decode", "--protocol", "primary", str(dump)]) == 0
+    out = capsys.readouterr().out
+    assert "(not this layout: missing target_speed_fraction" in out
+    assert "older firmware" not in out and "newer firmware" not in out
+    assert "no Version message in the input before it: --controller VERSION gives the robot's" in out
+    assert main(["decode", "--protocol", "primary", str(dump), "--controller", "1.8"]) == 0
+    out = capsys.readouterr().out
+    assert "(missing, older firmware: control_mode" in out
+    assert "controller version (from --controller): 1.8.0" in out
+    assert "--controller VERSION gives" not in out

@@ -86,10 +86,13 @@ def _lines(value: Any, indent: str) -> list[str]:
         else:
             out.append(f"{indent}{name}: {describe(field_value, enums.get(name))}")
     if isinstance(value, PrimaryPart):
-        if value.missing:
-            out.append(f"{indent}(missing, older firmware: {', '.join(value.missing)})")
-        if value.extra:
-            out.append(f"{indent}(extra {len(value.extra)} bytes, newer firmware: {value.extra.hex()})")
+        missing, extra = ", ".join(value.missing), f"{len(value.extra)} bytes: {value.extra.hex()}"
+        if value.missing and value.extra:  # neither older nor newer: another layout altogether
+            out.append(f"{indent}(not this layout: missing {missing}; {extra} left over)")
+        elif value.missing:
+            out.append(f"{indent}(missing, older firmware: {missing})")
+        elif value.extra:
+            out.append(f"{indent}(extra {extra}, newer firmware)")
     return out
 
 
@@ -140,7 +143,8 @@ def run_primary(
         if writer is not None:
             writer.close()
     if fmt == "table" and decoder.version is not None:
-        print(f"controller version (from the version message): {decoder.version}")
+        source = "the version message" if decoder.announced else "--controller"
+        print(f"controller version (from {source}): {decoder.version}")
     if not received:
         raise RtdeSpecError("no packages in the input")
     fault = error if isinstance(error, DecodeError) and lenient else None
@@ -158,9 +162,18 @@ def _open(fmt: str, output: str | None) -> Writer:
 
 def _write(writer: Writer, messages: list[tuple[int, Any]], decoder: PrimaryStreamDecoder) -> None:
     for offset, message in messages:
-        warnings = decoder.warnings_for(message)
+        warnings = _warnings(decoder, message)
         extra = {"warnings": warnings} if warnings else {}
         writer.write({"offset": offset, **as_json(message), **extra})
+
+
+NO_VERSION = "no Version message in the input before it: --controller VERSION gives the robot's"
+
+
+def _warnings(decoder: PrimaryStreamDecoder, message: Any) -> list[str]:
+    """Why the message's values may be wrong; without a version, how to give one."""
+    warnings = decoder.warnings_for(message)
+    return [f"{w}; {NO_VERSION}" for w in warnings] if decoder.version is None else warnings
 
 
 def _print_tree(messages: list[tuple[int, Any]], decoder: PrimaryStreamDecoder) -> None:
@@ -172,6 +185,6 @@ def _print_tree(messages: list[tuple[int, Any]], decoder: PrimaryStreamDecoder) 
                 print(safe_text_lines(_lines(sub, "    ")))
         else:
             print(safe_text_lines(_lines(message, "  ")))
-        for warning in decoder.warnings_for(message):
+        for warning in _warnings(decoder, message):
             print(f"  warning: {warning}")
         print()

@@ -302,6 +302,7 @@ class PrimaryStreamDecoder:
             max_size=self.codec.max_size,
         )
         self.version: Version | None = Version.parse(version) if version is not None else None
+        self.announced = False  # a Version message in the stream set `version`
         self.count = 0
         self.decoded: list[tuple[int, PrimaryMessage]] = []  # of the last feed, up to an error
         self.reuse: Reuse = {}  # the last model of each Robot State sub-package (robot_state.py)
@@ -350,7 +351,7 @@ class PrimaryStreamDecoder:
                 continue
             announced = announced_version(message)
             if announced is not None:
-                self.version = announced
+                self.version, self.announced = announced, True
             out.append((offset, message))
 
     def warnings_for(self, message: PrimaryMessage) -> list[str]:
