@@ -171,7 +171,7 @@ class RealtimeConnection:
 
     def _looks(self) -> str:
         """What the bytes look like when they are another interface's (a port moved, or mislabelled)."""
-        from rtde_spec.capture.routing.classify import content_kind
+        from rtde_spec.capture.protocols.opening import content_kind
 
         kind = content_kind(self.opening)
         if kind is None or kind == "realtime":

@@ -16,9 +16,10 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from rtde_spec.capture.protocols.base import ConnectionDecoder
+from rtde_spec.capture.protocols.opening import content_kind
 from rtde_spec.capture.protocols.rtde import RTDE_HEADER
 from rtde_spec.capture.reading.packets import FIN, RST, SYN, Segment
-from rtde_spec.capture.routing.classify import ROBOT_CLIENT_KINDS, connection_for, content_kind
+from rtde_spec.capture.routing.classify import ROBOT_CLIENT_KINDS, connection_for
 from rtde_spec.capture.tables.sink import TableSink
 from rtde_spec.capture.tables.summary import ConnectionSummary
 from rtde_spec.capture.tcp import Direction
