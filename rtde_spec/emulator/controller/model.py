@@ -32,6 +32,7 @@ from rtde_spec._generated.enums import (
 )
 from rtde_spec.emulator.arm.motion import MotionError
 from rtde_spec.emulator.arm.state import Arm
+from rtde_spec.emulator.controller import runstate
 from rtde_spec.emulator.controller.modes import RobotModes
 from rtde_spec.emulator.controller.program import PROGRAM_ERRORS, Program, runtime_text
 from rtde_spec.emulator.urscript import ScriptFault, parse
@@ -89,6 +90,12 @@ BACKGROUND_PARSE = 16 << 10  # characters: a longer program is read in a worker 
 MAX_PARSING = 4  # programs being read at once; more are refused
 _PARSER = ThreadPoolExecutor(max_workers=1, thread_name_prefix="urscript-parser")
 SECONDARY_STEPS = 10_000  # a `sec` program runs at once; this bounds it
+# the Tool Communication Interface as a controller starts (off, PolyScope's default settings);
+# set_tool_communication changes it, the primary Tool Communication Info shows it
+TOOL_COMMUNICATION = {
+    "tool_communication_is_enabled": False, "baud_rate": 115200, "parity": 0, "stop_bits": 1,
+    "rx_idle_chars": 1.5, "tx_idle_chars": 3.5,
+}  # fmt: skip
 
 
 class ControllerModel(RobotModes):
@@ -118,6 +125,10 @@ class ControllerModel(RobotModes):
         self.calibrated = True  # the arm's kinematics calibration (a scenario may say it has none)
         self.events: deque[ScriptEvent] = deque(maxlen=MAX_EVENTS)
         self.inputs_seen: dict[str, float] = {}  # RTDE input name -> model time it was last written
+        self.tool_communication: dict[str, Any] = dict(TOOL_COMMUNICATION)
+        # (output group, pin) -> runstate choice (set_runstate_*_output_to_value): the controller keeps
+        # them beyond the program, and sets the outputs when a program starts and ends (runstate.py)
+        self.runstate_outputs: dict[tuple[str, int], int] = {}
         self._parsing: deque[Future[Program | ScriptEvent]] = deque()  # programs read off the loop
         self._published: tuple[Any, ...] = ()
         self._limits_checked = -1  # the arm revision whose joints were last checked against the limits
@@ -232,6 +243,15 @@ class ControllerModel(RobotModes):
             return None
         return self._start(self._compile(text))
 
+    def start_loaded(self) -> bool:
+        """Start the loaded program: True once it runs, or while a long one is read off the control
+        loop (PolyScope's generated programs, 40-100 kB with their URCaps' preambles, are): play
+        is accepted then, and a program that does not compile says so as a runtime exception."""
+        if self.loaded is None:
+            return False
+        reading = len(self._parsing)
+        return self.run_script(self.loaded) is not None or len(self._parsing) > reading
+
     def run_script_later(self, make: Callable[[], str]) -> None:
         """Start the program `make` returns once it has it, off the control loop (a program the
         External Control node asks of the driver); its error (OSError) is a runtime exception."""
@@ -279,6 +299,7 @@ class ControllerModel(RobotModes):
             self.stop_program()
         self.program, self.paused = program, False
         self._program_bits()
+        self._runstate("start")
         self.emit(ScriptEvent("program_started", program.name, program=program.name))
         program.advance(0.0)  # runs at once up to its first wait, as the controller does
         if program.finished:
@@ -294,6 +315,7 @@ class ControllerModel(RobotModes):
             self.arm.stop(getattr(motion, "a", 1.4))  # a held speed or a failed move decelerates
         self.paused = False
         self._program_bits()
+        self._runstate("fault" if program is not None and program.fault is not None else "stop")
         name = program.name if program is not None else ""
         self.emit(ScriptEvent("program_stopped", name, program=name))
 
@@ -334,6 +356,18 @@ class ControllerModel(RobotModes):
                     voltage = _ANALOG_OUT_VOLTAGE[i]
                     io_types = (io_types | voltage) if types & select else (io_types & ~voltage)
             values["analog_io_types"] = int(io_types)
+
+    def set_runstate(self, group: str, pin: int, state: int) -> None:
+        """How a digital output follows the program from now on (set_runstate_*_output_to_value)."""
+        self.runstate_outputs[(group, pin)] = state
+        self._runstate("running" if self.program is not None else "stop", only=(group, pin))
+
+    def _runstate(self, event: str, only: tuple[str, int] | None = None) -> None:
+        """A program started, runs, stopped or ended unscheduled (a runtime exception): the outputs
+        whose runstate choice says so change (runstate.py)."""
+        powered = self.robot_mode in (RobotMode.IDLE, RobotMode.RUNNING)
+        for (group, pin), level in runstate.levels(self.runstate_outputs, event, powered, only):
+            self._set_digital(group, 1 << pin, int(level) << pin)
 
     def _set_digital(self, group: str, mask: int, bits: int) -> None:
         shift = _SHIFT[group]

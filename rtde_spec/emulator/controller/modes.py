@@ -39,6 +39,9 @@ class RobotModes:
     def run_script(self, text: str) -> Program | None:
         raise NotImplementedError
 
+    def start_loaded(self) -> bool:
+        raise NotImplementedError
+
     def emit(self, event: ScriptEvent) -> None:
         raise NotImplementedError
 
@@ -135,7 +138,7 @@ class RobotModes:
             return True
         if self.program is not None:
             return True
-        return self.loaded is not None and self.run_script(self.loaded) is not None
+        return self.loaded is not None and self.start_loaded()
 
     def pause_program(self) -> bool:
         if self.program is None:

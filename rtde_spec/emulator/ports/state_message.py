@@ -154,14 +154,7 @@ class RobotStateBuilder:
             },
             "calibration_data": lambda: _internal(9, CALIBRATION_DATA_BYTES),
             "safety_data": lambda: _internal(10, SAFETY_DATA_BYTES),
-            "tool_comm_info": lambda: {
-                "tool_communication_is_enabled": False,
-                "baud_rate": 115200,
-                "parity": 0,
-                "stop_bits": 1,
-                "rx_idle_chars": 1.5,
-                "tx_idle_chars": 3.5,
-            },
+            "tool_comm_info": lambda: dict(self.model.tool_communication),  # set_tool_communication
             "tool_mode_info": self._tool_mode,
             "cumulative_runtime_data": lambda: {
                 "robot_energy_consumed_wh": 0.0,

@@ -19,9 +19,11 @@ from rtde_spec.emulator.arm.motion import JointMove, LinearMove
 from rtde_spec.emulator.urscript import calls as script_calls
 from rtde_spec.emulator.urscript import (
     optimove,  # noqa: F401 - registers optimovej/optimovel
+    rpc,
     sockets,
 )
 from rtde_spec.emulator.urscript.builtins_dynamics import DYNAMICS
+from rtde_spec.emulator.urscript.builtins_io import IO
 from rtde_spec.emulator.urscript.builtins_modes import MODES, settings_of
 from rtde_spec.emulator.urscript.calls import Pose, number, six, type_name
 from rtde_spec.emulator.urscript.interfaces import Runner
@@ -34,6 +36,8 @@ Builtin = Callable[[Runner, Stmt, Args, Kwargs], Any]
 BUILTINS: dict[str, Builtin] = {}
 WAITING: dict[str, Callable[[Runner, Stmt, Args, Kwargs], sockets.Waiting]] = dict(sockets.READERS)
 WAITING["socket_open"] = sockets.socket_open
+WAITING["socket_get_var"] = sockets.socket_get_var
+WAITING["socket_read_string"] = sockets.socket_read_string
 
 
 def builtin(*names: str) -> Callable[[Builtin], Builtin]:
@@ -110,6 +114,19 @@ def _read_input(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
         )
         return bool(int(bits) >> (n % 32) & 1) if n < 64 else False
     value = runner.robot.values.get(f"input_{rtde}_register_{n}", 0)
+    return float(value) if kind == "float" else int(value)
+
+
+@builtin("read_output_integer_register", "read_output_float_register", "read_output_boolean_register")
+def _read_output(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
+    """What the program (or an earlier one) wrote to an output register, as RTDE clients read it."""
+    kind = stmt.name.split("_")[2]
+    n = _register(stmt, args, kwargs)
+    values = runner.robot.values
+    if kind == "boolean":
+        bits = values.get("output_bit_registers0_to_31" if n < 32 else "output_bit_registers32_to_63", 0)
+        return bool(int(bits) >> (n % 32) & 1)
+    value = values.get(f"output_{'int' if kind == 'integer' else 'double'}_register_{n}", 0)
     return float(value) if kind == "float" else int(value)
 
 
@@ -273,7 +290,10 @@ def _waypoint(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose:
 BUILTINS.update(sockets.SENDERS)
 BUILTINS.update(MODES)
 BUILTINS.update(DYNAMICS)
+BUILTINS.update(IO)
 BUILTINS["socket_close"] = sockets.socket_close
+BUILTINS["socket_set_var"] = sockets.socket_set_var
+BUILTINS["rpc_factory"] = rpc.rpc_factory
 BUILTINS["get_joint_positions"] = lambda runner, stmt, args, kwargs: [
     float(v) for v in runner.robot.arm.state.q
 ]
@@ -319,6 +339,16 @@ for _name, _fn, _count in (
     ("log", lambda b, f: math.log(f, b), 2), ("floor", math.floor, 1), ("ceil", math.ceil, 1),
 ):  # fmt: skip
     BUILTINS[_name] = _math(_fn, _count)
+
+
+@builtin("length")
+def _length_of(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> int:
+    value = _arg(stmt, args, kwargs, 0, "v")
+    if isinstance(value, str):
+        return len(value)
+    if not isinstance(value, list):
+        raise ScriptFault(f"{stmt.name}: not a list or a text but {type_name(value)}", stmt.line, 1)
+    return len(value)
 
 
 @builtin("get_list_length")

@@ -1,17 +1,19 @@
 """The built-ins that set the arm's modes and settings: force, teach and freedrive modes (which the
 emulator approximates: it records the mode and holds the arm, since it models no forces), the tool
-voltage and the payload, and a protective stop. What a program sets that no RTDE output shows is
+voltage and the payload, a protective stop, and what a simulator has besides: set_pos (the joints
+placed at once) and time (a clock's reading). What a program sets that no RTDE output shows is
 kept with the program (`settings_of`), so it ends with it; the modes show in the Robot Mode Data's
 control mode (`control_mode`), the tool voltage and payload in their RTDE outputs.
 """
 
 from __future__ import annotations
 
+import time
 from collections.abc import Callable
 from typing import Any
 
 from rtde_spec._generated.enums import ControlMode
-from rtde_spec.emulator.urscript.calls import arg, number
+from rtde_spec.emulator.urscript.calls import arg, number, six
 from rtde_spec.emulator.urscript.interfaces import Runner
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
 
@@ -76,8 +78,39 @@ MODES["end_freedrive_mode"] = _mode("_freedrive", 0)
 for _name in (
     "force_mode_set_damping", "force_mode_set_gain_scaling", "zero_ftsensor", "ft_rtde_input_enable",
     "enable_external_ft_sensor", "set_gravity", "set_safety_mode_transition_hardness",
+    "tool_wrench_limit_disable",
 ):  # fmt: skip
     MODES[_name] = _mode(f"_{_name}", 1)
+CLOCKS = range(4)  # time(clock): POSIX clock ids (real time, monotonic, process and thread CPU time)
+
+
+@_builtin("motion_version_set")
+def _motion_version(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    version = arg(stmt, args, kwargs, 0, "version")
+    if not isinstance(version, int) or isinstance(version, bool) or version < 1:
+        raise ScriptFault(f"{stmt.name}: version must be a positive int, not {version!r}", stmt.line, 1)
+    settings_of(runner)["_motion_version"] = version  # one planner in the emulator: recorded
+
+
+@_builtin("set_pos")
+def _set_pos(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    """The simulated arm's joints set at once (no motion), within the arm model's limits."""
+    arm = runner.robot.arm
+    q = six(stmt, arg(stmt, args, kwargs, 0, "q"), "q")
+    for joint, (value, (low, high)) in enumerate(zip(q, arm.model.joint_limits, strict=True)):
+        if not low <= value <= high:
+            raise ScriptFault(f"{stmt.name}: joint {joint} at {value:g} rad is past its limits", stmt.line, 1)
+    arm.place(q)
+
+
+@_builtin("time")
+def _time(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> dict[str, int]:
+    clock = arg(stmt, args, kwargs, 0, "clock")
+    if not isinstance(clock, int) or isinstance(clock, bool) or clock not in CLOCKS:
+        raise ScriptFault(f"{stmt.name}: clock must be 0 to {len(CLOCKS) - 1}, not {clock!r}", stmt.line, 1)
+    nanoseconds = time.clock_gettime_ns(clock)
+    return {"sec": nanoseconds // 1_000_000_000, "nanosec": nanoseconds % 1_000_000_000}
+
 
 TOOL_VOLTAGES = (0, 12, 24)  # what the tool connector supplies (Script Manual, set_tool_voltage)
 

@@ -56,8 +56,8 @@ ANALOG = {"set_standard_analog_out": 2, "set_analog_out": 2}
 # standard_analog_output_type bits (and analog_io_types) encode it
 ANALOG_DOMAINS = {0: "current (4-20 mA)", 1: "voltage (0-10 V)"}
 MOVES = {"movej", "movel", "movep", "movec", "servoj", "servoc", "speedj", "speedl", "optimovej", "optimovel"}
-# the commands a program waits on (direct_torque: builtins_dynamics.py)
-WAITS = MOVES | {"stopj", "stopl", "sleep", "sync", "halt", "direct_torque"}
+# the commands a program waits on (direct_torque: builtins_dynamics.py; popup when it blocks)
+WAITS = MOVES | {"stopj", "stopl", "sleep", "sync", "halt", "direct_torque", "popup"}
 
 
 def arg(stmt: Stmt, args: Args, kwargs: Kwargs, index: int, name: str, default: Any = ...) -> Any:
@@ -244,7 +244,9 @@ def textmsg(program: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
     program.robot.emit(ScriptEvent("text", text, stmt.line, program=program.name))
 
 
-def popup(program: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+def popup(program: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> WaitFactory | None:
+    """A popup; a blocking one suspends the program until the operator goes on (the Script manual):
+    the program pauses there, as a dashboard `pause` does, and `play` continues it."""
     text = to_str(arg(stmt, args, kwargs, 0, "s"))
     title = to_str(arg(stmt, args, kwargs, 1, "title", "Popup"))
     warning, error = (
@@ -252,6 +254,12 @@ def popup(program: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
         bool(arg(stmt, args, kwargs, 3, "error", False)),
     )
     program.robot.emit(ScriptEvent("popup", text, stmt.line, title=title, warning=warning, error=error))
+    pause = getattr(program.robot, "pause_program", None)
+    if arg(stmt, args, kwargs, 4, "blocking", False) is not True or pause is None:
+        return None
+    pause()
+    shown = program.clock
+    return lambda _: program.wait_for(lambda: program.clock > shown)  # on when played again
 
 
 def halt(program: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> WaitFactory:

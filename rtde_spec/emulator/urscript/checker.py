@@ -2,16 +2,18 @@
 
 Every called name must be a function or thread of the program or a built-in the emulator
 implements (`compile_error_name_not_found:NAME` otherwise), `run` must name a thread, and a
-user function's arguments must fit its parameters. It also marks each expression that may call
-a user function (`Expr.user`): those the interpreter evaluates step by step, since the function
-may wait (ur_rtde's `keep_running = process_cmd(cmd)` runs a movej inside an expression).
+user function's arguments must fit its parameters (by position, then by name). A method call
+(`proxy.getTarget()`) is a remote procedure call: its name is the server's to know. It also
+marks each expression that may call a user function (`Expr.user`): those the interpreter
+evaluates step by step, since the function may wait (ur_rtde's `keep_running = process_cmd(cmd)`
+runs a movej inside an expression).
 """
 
 from __future__ import annotations
 
 from collections.abc import Collection
 
-from rtde_spec.emulator.urscript.nodes import Expr, Script, ScriptFault, Stmt
+from rtde_spec.emulator.urscript.nodes import Expr, Function, Script, ScriptFault, Stmt
 
 
 def check(script: Script, builtins: Collection[str], waits: Collection[str] = ()) -> None:
@@ -55,6 +57,8 @@ def _walk(body: list[Stmt], found: set[str], waits: Collection[str]) -> bool:
             if expr.kind == "call":
                 found.add(expr.value)
                 direct = direct or expr.value in waits
+            elif expr.kind == "method":  # a remote procedure call waits for its server
+                direct = True
             stack.extend(expr.items)
             stack.extend(e for _, e in expr.kwargs)
         for branch in stmt.branches:
@@ -90,22 +94,37 @@ class _Checker:
         if expr.kind == "call":
             function = self.functions.get(expr.value)
             if function is not None and not function.thread:
-                given = len(expr.items)
-                required = sum(1 for d in function.defaults if d is None)
-                if not required <= given <= len(function.params) or expr.kwargs:
-                    raise ScriptFault(
-                        f"compile_error: {expr.value} takes {len(function.params)} arguments, got {given}",
-                        where,
-                        expr.column,
-                    )
+                _arguments_fit(function, expr, where)
                 user = user or expr.value in self.waiting
             elif expr.value not in self.builtins:
                 raise ScriptFault(f"compile_error_name_not_found:{expr.value}", where, expr.column)
             else:
                 user = user or expr.value in self.waits
+        elif expr.kind == "method":  # proxy.name(...): a remote procedure call, answered by its server
+            user = True
         elif expr.kind == "run":
             function = self.functions.get(expr.value)
             if function is None or not function.thread:
                 raise ScriptFault(f"compile_error_name_not_found:{expr.value}", where, expr.column)
         expr.user = user
         return user
+
+
+def _arguments_fit(function: Function, expr: Expr, line: int) -> None:
+    """A user function's call: at most its parameters by position, then any of the rest by name
+    (`f(1, b=2)`), each once, and every parameter without a default given one way or the other."""
+    params = function.params
+    given = len(expr.items)
+    named = [name for name, _ in expr.kwargs]
+    unknown = [n for n in named if n not in params]
+    twice = [n for i, n in enumerate(named) if n in params[:given] or n in named[:i]]
+    rest = zip(params[given:], function.defaults[given:], strict=True)
+    missing = [p for p, default in rest if default is None and p not in named]
+    what = (
+        f"no parameter {unknown[0]}" if unknown
+        else f"{twice[0]} given twice" if twice
+        else f"takes {len(params)} arguments, got {given}" if given > len(params) or missing
+        else ""
+    )  # fmt: skip
+    if what:
+        raise ScriptFault(f"compile_error: {expr.value} {what}", line, expr.column)

@@ -15,7 +15,7 @@ from collections.abc import Callable, Generator
 from dataclasses import dataclass
 from typing import TYPE_CHECKING, Any
 
-from rtde_spec.emulator.urscript import builtins, matrices
+from rtde_spec.emulator.urscript import builtins, matrices, rpc
 from rtde_spec.emulator.urscript import calls as script_calls
 from rtde_spec.emulator.urscript import values as urscript_ops
 from rtde_spec.emulator.urscript.interfaces import Robot
@@ -99,11 +99,15 @@ def check_shape(values: list[Any], line: int, column: int) -> None:
 class Evaluator:
     """Expressions and calls of a program; the interpreter adds statements and threads."""
 
+    current: Any  # the interpreter's running thread (its id and name)
+    threads: dict[int, Any]  # the interpreter's live threads, by handle
+
     def __init__(self, script: Script, robot: Robot) -> None:
         self.script, self.robot = script, robot
         self.globals: Frame = {}
         self._depth = 0
         self._sync = 0  # > 0 while a function runs inside an expression (it cannot be preempted)
+        self.labels: dict[int, tuple[str, int, str]] = {}  # thread id -> (its name, last `$` label)
 
     # the interpreter's side
     def block(self, body: list[Stmt], frame: Frame) -> Steps:
@@ -235,10 +239,15 @@ class Evaluator:
             right = self._operand((yield from self.steps(expr.items[1], frame)), expr, 1)
             return left != right if word == "xor" else right
         values, kwargs = yield from self.arguments(expr, frame)
+        if kind == "method":  # proxy.name(args): the server's answer, waited for
+            result = yield from rpc.call(expr, values[0], values[1:], kwargs)
+            if isinstance(result, list):
+                check_shape(result, expr.line, expr.column)
+            return result
         if kind == "call":
             function = self.script.functions.get(expr.value)
             if function is not None:
-                result = yield from self.invoke(function, values, expr)
+                result = yield from self.invoke(function, values, expr, kwargs)
                 return result.value if isinstance(result, Return) else None
             waiting = builtins.WAITING.get(expr.value)
             if waiting is not None:
@@ -252,6 +261,10 @@ class Evaluator:
                     yield from wait(False)
                 return None
         return self.combine(expr, values, kwargs)
+
+    def thread_labels(self) -> list[tuple[str, int, str]]:
+        """(thread name, label number, label text) of each running thread that passed a label."""
+        return [label for key, label in self.labels.items() if key in self.threads]
 
     def arguments(self, expr: Expr, frame: Frame) -> Generator[None, None, tuple[list[Any], dict[str, Any]]]:
         values: list[Any] = []
@@ -275,7 +288,7 @@ class Evaluator:
         if kind == "call":  # the commonest first
             function = self.script.functions.get(expr.value)
             if function is not None:  # one that never waits (the checker says): run to its end now
-                steps = self.invoke(function, values, expr)
+                steps = self.invoke(function, values, expr, kwargs)
                 self._sync += 1  # it runs to its end here: no thread switch inside it
                 try:
                     next(steps)
@@ -310,16 +323,19 @@ class Evaluator:
 
     # --- calls --------------------------------------------------------------------------------
 
-    def invoke(self, function: Function, args: list[Any], expr: Expr) -> Steps:
+    def invoke(self, function: Function, args: list[Any], expr: Expr, kwargs: Frame = _NONE) -> Steps:
+        """A user function's run; `kwargs` its parameters by name (URCaps call `RG2(target_width=110)`)."""
         if self._depth >= MAX_CALL_DEPTH:
             raise ScriptFault(
                 f"{function.name}: calls nested deeper than {MAX_CALL_DEPTH}", expr.line, expr.column
             )
         params = function.params
         frame: Frame = dict(zip(params, args, strict=False))
-        if len(args) < len(params):
-            for name, default in zip(params[len(args) :], function.defaults[len(args) :], strict=True):
-                frame[name] = self.value(default, frame) if default is not None else None
+        frame.update(kwargs)  # the checker allowed only parameters not given by position
+        if len(frame) < len(params):
+            for name, default in zip(params, function.defaults, strict=True):
+                if name not in frame:
+                    frame[name] = self.value(default, frame) if default is not None else None
         self._depth += 1
         try:
             return (yield from self.block(function.body, frame))
@@ -348,15 +364,22 @@ class Evaluator:
         builtins.call(self, stmt, values, kwargs)  # type: ignore[arg-type]
 
     def call_statement(self, stmt: Stmt, frame: Frame, following: Stmt | None) -> Steps:
-        """A call as a statement: a user function, a command that may wait, or a value dropped."""
+        """A call as a statement: a user function, a command that may wait, or a value dropped
+        (and a program label, `$ 3 "MoveJ"`: where the running thread is now)."""
         expr = stmt.expr
         assert expr is not None
+        if stmt.kind == "label":
+            self.labels[self.current.id] = (self.current.name, expr.value, stmt.name)
+            return None
         if expr.kind == "run":
             return self.value(expr, frame)
+        if expr.kind == "method":  # a remote procedure call whose answer nobody keeps
+            yield from self.steps(expr, frame)
+            return None
         values, kwargs = yield from self.arguments(expr, frame)
         function = self.script.functions.get(stmt.name)
         if function is not None:
-            yield from self.invoke(function, values, expr)
+            yield from self.invoke(function, values, expr, kwargs)
             return None
         command = script_calls.COMMANDS.get(stmt.name)
         if command is not None:

@@ -1,7 +1,8 @@
 """URScript expressions, by recursive descent over grammar.ebnf's `expression` rules.
 
 Precedence is the grammar's, lowest first: or/xor, and, not, comparisons, + -, * / %, unary
-signs, then subscripts and fields after an atom. A subscript holds one index (`q[0]`) or two, a
+signs, then subscripts, fields and method calls (`camera.getTarget()`, a remote procedure call)
+after an atom. A subscript holds one index (`q[0]`) or two, a
 matrix's row and column (`m[1, 0]`, the Script Manual's matrix form since 3.14 / 5.9). Inside
 brackets a line break is only spacing; elsewhere an operator at the start of a line starts a new
 statement, as the controller reads it.
@@ -77,7 +78,12 @@ class ExpressionParser(TokenStream):
                 name = self.next()
                 if name.kind != "name":
                     raise self.fail_at(name)
-                value = Expr("field", name.text, (value,), column=name.column, line=name.line)
+                if self.at("(") and (self.nest or not self.peek().nl):  # proxy.getTarget(): an RPC call
+                    args, kwargs = self.arguments()
+                    items = (value, *args)
+                    value = Expr("method", name.text, items, kwargs, column=name.column, line=name.line)
+                else:
+                    value = Expr("field", name.text, (value,), column=name.column, line=name.line)
             else:
                 return value
 

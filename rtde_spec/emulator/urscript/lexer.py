@@ -2,7 +2,8 @@
 break came before it (the parser lets a statement continue over a break only where it cannot end).
 
 One pass over the text with one compiled pattern, so lexing is linear in the program's size.
-Comments (`#` to the end of the line) are dropped wherever they stand.
+Comments (`#` to the end of the line) are dropped wherever they stand; `$` starts a program label
+(`$ 3 "MoveJ"`, the line markers PolyScope writes into every program it generates).
 """
 
 from __future__ import annotations
@@ -17,7 +18,7 @@ _PATTERN = re.compile(
     r"|(?P<num>\d+\.\d*(?:[eE][-+]?\d+)?|\.\d+(?:[eE][-+]?\d+)?|\d+(?:[eE][-+]?\d+)?)"
     r"|(?P<str>\"(?:[^\"\\\n]|\\.)*\"|'(?:[^'\\\n]|\\.)*')"
     r"|(?P<name>[A-Za-z_]\w*)"
-    r"|(?P<op>==|!=|<=|>=|[-+*/%()\[\],=:<>.])"
+    r"|(?P<op>==|!=|<=|>=|[-+*/%()\[\],=:<>.$])"
 )
 
 

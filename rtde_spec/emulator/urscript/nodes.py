@@ -18,7 +18,8 @@ class ScriptFault(Exception):
 @dataclass(eq=False)
 class Expr:
     """kind: num, str, bool, name, list, pose, call, run, neg, binop, compare, logic (and/or/xor),
-    not, index (items: the value and one index, or a matrix's row and column), field, and in an
+    not, index (items: the value and one index, or a matrix's row and column), field, method (a
+    remote procedure call `handle.name(args)`: items the handle, then the arguments), and in an
     assignment's subscripts pair (a matrix's row and column). `user` is set by the checker when
     evaluating may call a user function (which may wait, so the interpreter evaluates it step by
     step)."""
@@ -46,7 +47,8 @@ class Branch:
 @dataclass(frozen=True)
 class Stmt:
     """One statement. kind: call (an expression statement), assign, if, while, return, break,
-    continue, kill, join, halt, enter_critical, exit_critical. `scope` is "local"/"global" when
+    continue, kill, join, halt, enter_critical, exit_critical, label (`$ 3 "MoveJ"`: name the text,
+    expr the number). `scope` is "local"/"global" when
     the assignment says so; `index` the subscripts of an assignment target `q[0] = ...` (`m[1, 0]`
     is one subscript, a `pair`)."""
 

@@ -7,6 +7,7 @@ a new statement may follow on the same line, as the controller reads it. Every t
 once and nothing backtracks, so parsing is linear in the program; nesting deeper than
 MAX_NESTING is a syntax error rather than a Python recursion fault. `def`, `sec` and `thread`
 may nest; they are hoisted into one table, as the controller resolves names program-wide.
+`$ N "text"` lines (program labels) are statements of their own.
 """
 
 from __future__ import annotations
@@ -72,6 +73,8 @@ class _Parser(ExpressionParser):
 
     def statement(self) -> Stmt | None:
         tok = self.peek()
+        if tok.kind == "op" and tok.text == "$":
+            return self.label()
         word = tok.text if tok.kind == "name" else ""
         if word in ("def", "sec", "thread"):
             self.definition()
@@ -110,9 +113,25 @@ class _Parser(ExpressionParser):
             name, index = self.target(target, start)
             value = self.expr()
             return Stmt("assign", first.line, text, name, value, start.column, index, scope=scope)
-        if scope or target.kind not in ("call", "run"):
+        if scope or target.kind not in ("call", "run", "method"):
             raise self.fail()
         return Stmt("call", first.line, text, target.value, target, column=start.column)
+
+    def label(self) -> Stmt:
+        """`$ 7 "MoveJ"` (PolyScope writes `$ 15 "Waypoint_1" "breakAfter"`): the program tree node a
+        thread is at, by its number and text; the texts after the first are PolyScope's flags."""
+        tok = self.next()
+        number = self.peek()
+        if number.kind != "num" or number.nl or any(c in number.text for c in ".eE"):
+            raise self.fail()  # (a number on the next line is missing from this one)
+        self.next()
+        texts: list[str] = []
+        while self.peek().kind == "str" and not self.peek().nl:
+            texts.append(self.next().text[1:-1])
+        if not texts:
+            raise self.fail()
+        label = Expr("num", int(number.text), column=number.column, line=number.line)
+        return Stmt("label", tok.line, self.source(tok.line), texts[0], label, column=tok.column)
 
     def target(self, expr: Expr, start: Token) -> tuple[str, tuple[Expr, ...]]:
         """The variable and subscripts an assignment writes: `x`, `q[0]`, `m[1][2]`, `m[1, 2]`,

@@ -1,10 +1,12 @@
 """URScript's socket functions: real TCP connections from the program to a client's host and port.
 
 A program opens named sockets (`socket_open("127.0.0.1", 50002, "reverse_socket")`), sends
-ints (4 bytes, big-endian), bytes and strings, and reads binary integers or ASCII floats with
-a time-out. Every socket is non-blocking: a read or a connect waits for its thread's next
-control steps, never the control loop, and a socket's buffer is bounded. Only IP addresses
-are accepted (no name look-ups from a control step). The program's sockets close with it.
+ints (4 bytes, big-endian), bytes and strings, and reads binary integers, bytes, ASCII floats or
+text with a time-out; socket_set_var and socket_get_var are the "SET name value" / "GET name"
+requests Robotiq's gripper preambles make. Every socket is non-blocking: a read or a connect
+waits for its thread's next control steps, never the control loop, and a socket's buffer is
+bounded. Only IP addresses are accepted (no name look-ups from a control step). The program's
+sockets close with it.
 
 Reads take the records in order, as the Script Manual says, and each read takes all that has
 come (up to MAX_BUFFER held): a record already there costs no control step. A client that
@@ -31,6 +33,7 @@ from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
 log = logging.getLogger("rtde_spec.emulator")
 MAX_BUFFER = 1 << 20  # bytes a socket keeps unread
 OPEN_TIMEOUT = 2.0  # s a socket_open waits for the connection
+REPLY_TIMEOUT = 2.0  # s socket_get_var waits for its reply
 DEFAULT = "socket_0"
 Args = list[Any]
 Kwargs = dict[str, Any]
@@ -198,7 +201,7 @@ def _reading(
     count: int, timeout: float,
 ) -> Waiting:  # fmt: skip
     until = runner.clock + timeout
-    failed = [0] + [-1] * count if take is _binary else [0] + [0.0] * count
+    failed = [0] + [-1] * count if take in (_binary, _bytes) else [0] + [0.0] * count
     used = getattr(runner, "slice_used", None)
     if used is not None and used():
         yield  # the thread's share of the step is spent: it reads after the other threads' turns
@@ -238,4 +241,101 @@ def _ascii(sock: ProgramSocket, count: int) -> list[Any] | None:
     return [len(values), *values] if len(values) == count else [0] + [0.0] * count
 
 
-READERS = {"socket_read_binary_integer": _reader(_binary), "socket_read_ascii_float": _reader(_ascii)}
+def _bytes(sock: ProgramSocket, count: int) -> list[Any] | None:
+    if len(sock.buffer) < count:
+        return None
+    values = list(sock.buffer[:count])
+    del sock.buffer[:count]
+    return [count, *values]
+
+
+READERS = {
+    "socket_read_binary_integer": _reader(_binary),
+    "socket_read_ascii_float": _reader(_ascii),
+    "socket_read_byte_list": _reader(_bytes),
+}
+
+
+# --- the text requests URCaps' preambles use (Robotiq's grippers: SET ACT 1, GET STA) ---------------
+
+MAX_STRING = 1024  # characters socket_read_string returns at most, its terminators included
+_ESCAPES = {"\\n": "\n", "\\r": "\r", "\\t": "\t"}
+
+
+def _text_arg(stmt: Stmt, value: Any, name: str) -> str:
+    if not isinstance(value, str):
+        raise ScriptFault(f"{stmt.name}: {name} must be a string, not {type_name(value)}", stmt.line, 1)
+    return value
+
+
+def socket_set_var(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    """Send "SET <name> <value>\\n"; no reply is read."""
+    name = _text_arg(stmt, arg(stmt, args, kwargs, 0, "name"), "name")
+    value = arg(stmt, args, kwargs, 1, "value")
+    if not isinstance(value, int) or isinstance(value, bool):
+        value = int(number(stmt, value, "value"))  # the manual sends an int
+    sock = sockets_of(runner).get(_name(stmt, args, kwargs, 2))
+    if sock is not None and not sock.closed:
+        sock.send(f"SET {name} {value}\n".encode("latin-1", "replace"))
+
+
+def socket_get_var(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Waiting:
+    """Send "GET <name>\\n" and read the reply line "<name> <int>" within 2 s; 0 on a time-out or a
+    reply that is not that (the line is taken all the same)."""
+    name = _text_arg(stmt, arg(stmt, args, kwargs, 0, "name"), "name")
+    sock = sockets_of(runner).get(_name(stmt, args, kwargs, 1))
+    if sock is None or sock.closed or not sock.send(f"GET {name}\n".encode("latin-1", "replace")):
+        return _done(0)
+    return _get_var(runner, sock, name)
+
+
+def _get_var(runner: Runner, sock: ProgramSocket, name: str) -> Waiting:
+    line = yield from _reading(runner, sock, _line, 1, REPLY_TIMEOUT)
+    parts = bytes(line[1]).split() if line[0] else []
+    if len(parts) == 2 and parts[0].decode("latin-1") == name and parts[1].lstrip(b"-").isdigit():
+        return int(parts[1])
+    return 0
+
+
+def _line(sock: ProgramSocket, count: int) -> list[Any] | None:
+    end = sock.buffer.find(b"\n")
+    if end < 0:
+        return None
+    line = bytes(sock.buffer[:end]).rstrip(b"\r")
+    del sock.buffer[: end + 1]
+    return [1, line]
+
+
+def socket_read_string(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Waiting:
+    """What has come as text, or the text between prefix and suffix; "" on a time-out."""
+    sock = sockets_of(runner).get(_name(stmt, args, kwargs, 0))
+    prefix = _text_arg(stmt, arg(stmt, args, kwargs, 1, "prefix", ""), "prefix").lstrip(" ")
+    suffix = _text_arg(stmt, arg(stmt, args, kwargs, 2, "suffix", ""), "suffix").lstrip(" ")
+    if arg(stmt, args, kwargs, 3, "interpret_escape", False) is True:
+        for escape, char in _ESCAPES.items():
+            prefix, suffix = prefix.replace(escape, char), suffix.replace(escape, char)
+    timeout = number(stmt, arg(stmt, args, kwargs, 4, "timeout", 2.0), "timeout")
+    start, end = prefix.encode("latin-1", "replace"), suffix.encode("latin-1", "replace")
+
+    def take(sock: ProgramSocket, count: int) -> list[Any] | None:
+        buffer, begin = sock.buffer, 0
+        if start:  # what comes before the prefix's end is dropped, once the message is whole
+            found = buffer.find(start)
+            if found < 0:
+                return None
+            begin = found + len(start)
+        if end:
+            stop = buffer.find(end, begin)
+            if stop < 0:
+                return None
+            text = bytes(buffer[begin:stop])
+            del buffer[: stop + len(end)]  # what follows the suffix stays
+        elif len(buffer) > begin:
+            text = bytes(buffer[begin : begin + MAX_STRING])
+            del buffer[: begin + MAX_STRING]
+        else:
+            return None
+        return [1, text[:MAX_STRING].decode("latin-1")]
+
+    got = yield from _reading(runner, sock, take, 1, timeout)
+    return got[1] if got[0] else ""
