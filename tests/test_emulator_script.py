@@ -54,7 +54,11 @@ def test_calls_a_controller_would_refuse_change_nothing(line: str) -> None:
 
 def test_a_script_on_the_primary_port_shows_on_rtde_and_not_from_a_read_only_port() -> None:
     config = EmulatorConfig(
-        rtde_port=0, primary_port=0, secondary_port=0, secondary_read_only_port=0, realtime_port=None,
+        rtde_port=0,
+        primary_port=0,
+        secondary_port=0,
+        secondary_read_only_port=0,
+        realtime_port=None,
         dashboard_port=None,
     )
     emu = EmulatorThread(config).start()
@@ -76,3 +80,31 @@ def test_a_script_on_the_primary_port_shows_on_rtde_and_not_from_a_read_only_por
         assert board.digital_output_bits == 1 << 2 and board.analog_output0 == 0.5 and board.safety_mode == 1
     finally:
         emu.stop()
+
+
+def test_serve_log_says_why_a_program_was_refused_and_when_a_long_one_is_read_later(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """ur_rtde's ScriptClient.sendScript() with no argument sends its 1,175-line control script
+    with its placeholders unfilled: the log said "(0 I/O calls run)" and nothing else, as a long
+    program is read off the control loop and its syntax error went only to primary clients (none
+    were listening)."""
+    config = EmulatorConfig(
+        rtde_port=None, primary_port=0, secondary_port=0, secondary_read_only_port=None, realtime_port=None,
+        dashboard_port=None,
+    )  # fmt: skip
+    body = "".join(f"  x{i} = {i}\n" for i in range(2500))  # over 16 kB
+    program = f"def rtde_control():\n  global reg_offset_float = # a placeholder left\n{body}end\n"
+    emu = EmulatorThread(config).start()
+    try:
+        with caplog.at_level("INFO", logger="rtde_spec.emulator"):
+            with PrimaryClient("127.0.0.1", emu.ports["secondary"]) as client:
+                client.send_script(program)
+                deadline = time.monotonic() + 10
+                while "program refused at line" not in caplog.text and time.monotonic() < deadline:
+                    time.sleep(0.05)
+    finally:
+        emu.stop()
+    assert "characters, read off the control loop" in caplog.text
+    assert "I/O calls run" not in caplog.text
+    assert "program refused at line 3:" in caplog.text and "syntax_error_on_line:3" in caplog.text

@@ -12,6 +12,7 @@ methods of `RobotModes`. Enum values and bit positions come from the generated t
 
 from __future__ import annotations
 
+import logging
 import math
 from collections import deque
 from collections.abc import Callable, Mapping
@@ -85,6 +86,7 @@ STATE = (
 )  # fmt: skip
 MAX_EVENTS = 1000  # messages kept for the servers to send; the oldest go first
 NOT_READY = "The robot is not ready: power it on, release the brakes and clear any safety stop"
+log = logging.getLogger("rtde_spec.emulator")
 BACKGROUND_PARSE = 16 << 10  # characters: a longer program is read in a worker thread, so the
 # control loop never waits for the parser (a 64,000-line call takes about half a second to read)
 MAX_PARSING = 4  # programs being read at once; more are refused
@@ -320,6 +322,9 @@ class ControllerModel(RobotModes):
         self.emit(ScriptEvent("program_stopped", name, program=name))
 
     def emit(self, event: ScriptEvent) -> None:
+        if event.kind == "runtime_exception":  # said in serve's log too: a client may not be listening
+            where = f" at line {event.line}:{event.column}" if event.line else ""
+            log.warning("program %s%s: %s", event.program or "refused", where, event.text[:200])
         self.events.append(event)
 
     def drain_events(self) -> list[ScriptEvent]:

@@ -17,6 +17,7 @@ from collections import deque
 from typing import TYPE_CHECKING
 
 from rtde_spec._generated.enums import RobotMode
+from rtde_spec.emulator.controller.model import BACKGROUND_PARSE
 from rtde_spec.emulator.ports.guard import Port
 from rtde_spec.emulator.ports.primary_commands import take_commands
 from rtde_spec.emulator.ports.robot_messages import (
@@ -56,7 +57,15 @@ class PrimaryHub:
         if not text:
             return
         applied = run_script(self.model, text)
-        log.info("URScript on port %d: %s (%d I/O calls run)", port, text.strip()[:80], len(applied))
+        if len(text) > BACKGROUND_PARSE:  # read off the control loop: it starts (or is refused) later
+            log.info(
+                "URScript on port %d: %s (%d characters, read off the control loop)",
+                port,
+                text.strip()[:80],
+                len(text),
+            )
+        else:
+            log.info("URScript on port %d: %s (%d I/O calls run)", port, text.strip()[:80], len(applied))
 
     def version_message(self) -> bytes:
         return version_message(self.model.version, self._micros())
