@@ -104,6 +104,32 @@ def test_the_register_functions_are_the_rtde_servers_registers() -> None:
         assert got.output_double_register_30 == 2.5 and got.output_bit_registers0_to_31 == 1 << 3
 
 
+def test_boolean_registers_64_to_127_are_rtdes_single_bit_fields() -> None:
+    """The Script Manual gives the boolean registers addresses 0 to 127; RTDE carries 64 to 127 as
+    BOOL fields of their own (input_/output_bit_register_X), the URCaps' range. Before, the emulator
+    took 0 to 47, as for integers, and address 64 stopped the program."""
+    config = EmulatorConfig(
+        rtde_port=0, primary_port=None, secondary_port=None, realtime_port=None, dashboard_port=None
+    )
+    with EmulatorThread(config) as emu, RtdeClient("127.0.0.1", emu.ports["rtde"]) as client:
+        client.setup_outputs(
+            ["output_bit_register_70", "output_bit_registers32_to_63", "output_int_register_30"], 125
+        )
+        inputs = client.setup_inputs(["input_bit_register_65"])
+        client.start()
+        client.send(inputs, input_bit_register_65=True)
+        emu.call(lambda: emu.model.run_script(
+            "write_output_boolean_register(70, True)\nwrite_output_boolean_register(33, True)\n"
+            "while not read_input_boolean_register(65):\n  sync()\nend\n"
+            "write_output_integer_register(30, 7)\n"))  # fmt: skip
+        deadline = time.monotonic() + 5
+        while (got := client.receive()).output_int_register_30 != 7:
+            assert time.monotonic() < deadline
+        assert got.output_bit_register_70 is True and got.output_bit_registers32_to_63 == 1 << 1
+    _, said_ = run("write_output_boolean_register(128, True)")
+    assert "no register 128 (0 to 127)" in str(said_)
+
+
 def test_sockets_connect_to_the_clients_port_and_carry_ints_strings_and_floats() -> None:
     with socket.create_server(("127.0.0.1", 0)) as server:
         port = server.getsockname()[1]

@@ -878,7 +878,9 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'params': [{'name': 'address'}],
                 'returns': 'bool',
                 'since': {'cb3': '3.4.0', 'e-series': '5.0.0'},
-                'doc': 'bit <address> of the input bit registers'},
+                'doc': 'boolean register <address> (0 to 127) as an RTDE client last wrote it: '
+                       '0-63 bits of input_bit_registers0_to_31/32_to_63, 64-127 '
+                       'input_bit_register_<address>'},
                {'name': 'write_output_integer_register',
                 'section': 'interfaces',
                 'params': [{'name': 'address'}, {'name': 'value'}],
@@ -896,7 +898,9 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'params': [{'name': 'address'}, {'name': 'value'}],
                 'returns': 'none',
                 'since': {'cb3': '3.4.0', 'e-series': '5.0.0'},
-                'doc': 'bit <address> of the output bit registers'},
+                'doc': 'boolean register <address> (0 to 127), as RTDE clients receive it: 0-63 '
+                       'bits of output_bit_registers0_to_31/32_to_63, 64-127 '
+                       'output_bit_register_<address>'},
                {'name': 'read_output_integer_register',
                 'section': 'interfaces',
                 'params': [{'name': 'address'}],
@@ -917,7 +921,7 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'returns': 'bool',
                 'since': {'cb3': '3.4.0', 'e-series': '5.0.0'},
                 'checked': False,
-                'doc': 'bit <address> of the output bit registers'},
+                'doc': 'boolean register <address> (0 to 127) as the program last wrote it'},
                {'name': 'rtde_set_watchdog',
                 'section': 'interfaces',
                 'params': [{'name': 'variable_name'},

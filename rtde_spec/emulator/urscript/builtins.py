@@ -8,7 +8,7 @@ with its source in UR's Script Manual).
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Mapping
 from functools import cache
 from typing import Any
 
@@ -93,11 +93,28 @@ def _arg(stmt: Stmt, args: Args, kwargs: Kwargs, index: int, name: str, default:
     return script_calls.arg(stmt, args, kwargs, index, name, default)
 
 
+# the registers' addresses: integers and floats 0 to 47, booleans 0 to 127 (RTDE's bit words hold
+# 0 to 63, single BOOL fields 64 to 127: spec/rtde/fields.yaml)
+LAST_REGISTER = {"integer": 47, "float": 47, "boolean": 127}
+BIT_WORDS = 64  # boolean registers below this are bits of the two 32-bit words
+
+
 def _register(stmt: Stmt, args: Args, kwargs: Kwargs) -> int:
     n = _arg(stmt, args, kwargs, 0, "address")
-    if not isinstance(n, int) or isinstance(n, bool) or not 0 <= n <= 47:
-        raise ScriptFault(f"{stmt.name}: no register {n!r} (0 to 47)", stmt.line, stmt.column or 1)
+    last = LAST_REGISTER[stmt.name.split("_")[2]]
+    if not isinstance(n, int) or isinstance(n, bool) or not 0 <= n <= last:
+        raise ScriptFault(f"{stmt.name}: no register {n!r} (0 to {last})", stmt.line, stmt.column or 1)
     return n
+
+
+def _bit(values: Mapping[str, Any], direction: str, n: int) -> bool:
+    """Boolean register `n` as RTDE carries it: a bit of a 32-bit word, or a BOOL field of its own."""
+    if n >= BIT_WORDS:
+        return bool(values.get(f"{direction}_bit_register_{n}", False))
+    word = values.get(
+        f"{direction}_bit_registers0_to_31" if n < 32 else f"{direction}_bit_registers32_to_63", 0
+    )
+    return bool(int(word) >> (n % 32) & 1)
 
 
 # --- RTDE registers: the same values the RTDE server reads and writes ----------------------------
@@ -109,10 +126,7 @@ def _read_input(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
     n = _register(stmt, args, kwargs)
     rtde = {"integer": "int", "float": "double", "boolean": "bit"}[kind]
     if kind == "boolean":
-        bits = runner.robot.values.get(
-            "input_bit_registers0_to_31" if n < 32 else "input_bit_registers32_to_63", 0
-        )
-        return bool(int(bits) >> (n % 32) & 1) if n < 64 else False
+        return _bit(runner.robot.values, "input", n)
     value = runner.robot.values.get(f"input_{rtde}_register_{n}", 0)
     return float(value) if kind == "float" else int(value)
 
@@ -124,8 +138,7 @@ def _read_output(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
     n = _register(stmt, args, kwargs)
     values = runner.robot.values
     if kind == "boolean":
-        bits = values.get("output_bit_registers0_to_31" if n < 32 else "output_bit_registers32_to_63", 0)
-        return bool(int(bits) >> (n % 32) & 1)
+        return _bit(values, "output", n)
     value = values.get(f"output_{'int' if kind == 'integer' else 'double'}_register_{n}", 0)
     return float(value) if kind == "float" else int(value)
 
@@ -136,6 +149,9 @@ def _write_output(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Non
     n = _register(stmt, args, kwargs)
     value = _arg(stmt, args, kwargs, 1, "value")
     values = runner.robot.values
+    if kind == "boolean" and n >= BIT_WORDS:
+        values[f"output_bit_register_{n}"] = bool(value)
+        return
     if kind == "boolean":
         key = "output_bit_registers0_to_31" if n < 32 else "output_bit_registers32_to_63"
         bit = 1 << (n % 32)
