@@ -17,6 +17,7 @@ test programs (`$` markers with no def).
 
 from __future__ import annotations
 
+import itertools
 import socket
 import threading
 import time
@@ -551,3 +552,48 @@ def test_a_long_generated_program_plays_from_the_dashboard_as_a_user_plays_it(tm
             assert ask("programState") == "PLAYING unnamed.urp"
     finally:
         emu.stop()
+
+
+LABELLED = """def prog():
+  $ 1 "BeforeStart"
+  thread Thread_1():
+    while True:
+      $ 7 "Thread_1"
+      sleep(0.3)
+      $ 8 "Wait: 0.3"
+      sleep(0.3)
+    end
+  end
+  threadId_Thread_1 = run Thread_1()
+  while True:
+    $ 2 "Robot Program"
+    $ 3 "MoveJ"
+    sleep(0.25)
+    $ 4 "Waypoint_1" "breakAfter"
+    sleep(0.25)
+  end
+end
+"""
+
+
+def test_the_primary_port_sends_program_threads_with_each_threads_last_label() -> None:
+    """The Program Threads message (robot message 14): each running thread's last `$` label, as
+    PolyScope shows where a program is. Before, the labels were kept and never sent."""
+    config = EmulatorConfig(
+        rtde_port=None, primary_port=0, secondary_port=None, secondary_read_only_port=None,
+        realtime_port=None, dashboard_port=None,
+    )  # fmt: skip
+    seen: list[list[tuple[str, int, str]]] = []
+    with EmulatorThread(config) as emu, PrimaryClient("127.0.0.1", emu.ports["primary"]) as client:
+        client.send_script(LABELLED)
+        end = time.monotonic() + 1.5
+        for message in client:
+            if message.NAME == "program_threads_message":
+                seen.append([(t.thread_name, t.label_id, t.label_name) for t in message.threads])
+            if time.monotonic() > end:
+                break
+    labels = {label for threads in seen for label in threads}
+    assert {("prog", 3, "MoveJ"), ("prog", 4, "Waypoint_1")} <= labels
+    assert {("Thread_1", 7, "Thread_1"), ("Thread_1", 8, "Wait: 0.3")} <= labels
+    assert all(len(threads) == 2 for threads in seen)
+    assert all(a != b for a, b in itertools.pairwise(seen))  # sent when a label changed

@@ -23,6 +23,7 @@ from rtde_spec.emulator.ports.primary_commands import take_commands
 from rtde_spec.emulator.ports.robot_messages import (
     event_messages,
     prepare,
+    program_threads_message,
     safety_mode_message,
     version_message,
 )
@@ -47,6 +48,7 @@ class PrimaryHub:
         self.state = RobotStateBuilder(model)
         self.states = 0
         self._safety_mode = self._robot_mode = -1
+        self._labels: list[tuple[str, int, str]] = []  # the threads' labels last sent (Program Threads)
         prepare()  # the messages' codec now, not in the control step of a program's start
 
     def run(self, port: int, text: str) -> None:
@@ -93,6 +95,10 @@ class PrimaryHub:
             messages = [m for event in events for m in event_messages(event, micros)]
             if safety_changed:
                 messages.append(safety_mode_message(safety, micros))
+            labels = self._program_labels()
+            if labels and labels != self._labels:
+                messages.append(program_threads_message(labels, micros))
+            self._labels = labels
             burst = b"".join(messages)
         periodic = first = b""
         for conn in list(self.connections):
@@ -106,6 +112,14 @@ class PrimaryHub:
                 )
                 data = periodic
             conn.send(burst + data if conn.messages else data)
+
+    def _program_labels(self) -> list[tuple[str, int, str]]:
+        """(thread, label number, label text) of the running program's threads that passed a label
+        (PolyScope writes `$ N "text"` before each program node): what the Program Threads message
+        reports; sent when it changed since the last broadcast, at most every 100 ms."""
+        program = getattr(self.model, "program", None)
+        labels = getattr(program, "thread_labels", None)
+        return labels() if labels is not None else []
 
     def _micros(self) -> int:
         return int(self.model.time * 1_000_000)

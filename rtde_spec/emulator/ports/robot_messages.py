@@ -116,6 +116,21 @@ def safety_mode_message(mode: int, micros: int) -> bytes:
     )
 
 
+def program_threads_message(labels: list[tuple[str, int, str]], micros: int) -> bytes:
+    """Program Threads (14): each running thread's last label (`$ N "text"`) as (thread, N, text)."""
+    return encode_message(
+        pm.ProgramThreadsMessage(
+            timestamp=micros,
+            source=_CONTROLLER,
+            robot_message_type=int(RobotMessageType.PROGRAM_LABEL_THREADS),
+            threads=[
+                pm.ProgramThread(label_id=number, label_name=text[:255], thread_name=thread[:65535])
+                for thread, number, text in labels
+            ],
+        )
+    )
+
+
 def global_variables_setup(names: list[str], micros: int) -> bytes:
     return encode_message(
         pm.GlobalVariablesSetupMessage(
