@@ -38,13 +38,14 @@ def _markdown(table: ScriptFunctions) -> str:
         "# URScript built-in functions\n\n",
         "The functions a program sent to the emulator may call without defining them, each as the\n",
         f"Script Manual lists it ({table.doc_ref}). `since` is the first version per product line\n",
-        "(a line not named does not have it); *unchecked* marks a `since` taken as the line's first\n",
+        "(a line not named does not have it, except PolyScope X, which has the e-Series ones from\n",
+        "10.0); *unchecked* marks a `since` taken as the line's first\n",
         "release where the editions on hand do not say. The emulator implements every one; where it\n",
         "cannot do what a robot does physically it approximates, as the last column says.\n\n",
         "The emulator's URScript: lexer, parser (grammar in `rtde_spec/emulator/urscript/grammar.ebnf`),\n",
         "checker and interpreter, with threads scheduled on the control step.\n",
     ]
-    for section in ("motion", "internals", "interfaces", "maths"):
+    for section in ("motion", "internals", "interfaces", "worldmodel", "maths"):
         rows = []
         for f in table.functions:
             if f.section != section:

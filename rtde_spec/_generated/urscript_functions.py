@@ -4,8 +4,10 @@
 from typing import Any
 
 URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Language (Script Manual), CB3 3.15 and e-Series 5.15; 5.23 '
-            "and 5.25.1 for direct torque control and the arm's model",
- 'product_lines': ['cb3', 'e-series'],
+            "and 5.25.1 for direct torque control and the arm's model; 5.21 and 10.7 for "
+            "rpy2rotvec and rotvec2rpy; UR's World Model API (MotionPlus documentation) for the "
+            'world model',
+ 'product_lines': ['cb3', 'e-series', 'polyscope-x'],
  'functions': [{'name': 'movej',
                 'section': 'motion',
                 'params': [{'name': 'q'},
@@ -497,10 +499,13 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'doc': 'Payload inertia'},
                {'name': 'set_tcp',
                 'section': 'interfaces',
-                'params': [{'name': 'pose'}],
+                'params': [{'name': 'pose'}, {'name': 'tcp_name', 'default': ''}],
                 'returns': 'none',
                 'since': {'cb3': '3.0.0', 'e-series': '5.0.0'},
-                'doc': 'Set the TCP offset'},
+                'doc': 'Set the TCP offset (the tcp frame of the world model follows it). '
+                       "PolyScope X's application script names the TCP second: set_tcp(p[0, 0, 0, "
+                       '0, 0, 0], "Tool_flange") (UR\'s client library\'s URSim 10.14 program)',
+                'emulation': 'the name is taken and not kept'},
                {'name': 'set_payload',
                 'section': 'interfaces',
                 'params': [{'name': 'm'}, {'name': 'cog', 'default': 'current'}],
@@ -1038,6 +1043,90 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                        'x, y, z, rx, ry, rz',
                 'emulation': 'calls are real XML-RPC over HTTP, made off the control loop (the '
                              'thread waits, 30 s at most); pstream URLs are refused when called'},
+               {'name': 'add_frame',
+                'section': 'worldmodel',
+                'params': [{'name': 'name'},
+                           {'name': 'pose'},
+                           {'name': 'ref_frame', 'default': 'base'}],
+                'returns': 'none',
+                'since': {'polyscope-x': '10.0.0'},
+                'checked': False,
+                'doc': "A new frame `name` at `pose` in ref_frame's coordinates, in the world but "
+                       'attached to "world", not to ref_frame (attach_frame attaches it); a name '
+                       'the world model has already is a runtime exception',
+                'emulation': "at most 1,024 frames added (the emulator's bound: the model outlives "
+                             'programs); a name is any text that is not empty'},
+               {'name': 'attach_frame',
+                'section': 'worldmodel',
+                'params': [{'name': 'child'}, {'name': 'parent'}],
+                'returns': 'none',
+                'since': {'polyscope-x': '10.0.0'},
+                'checked': False,
+                'doc': 'Attach child to parent where it stands in the world, so it moves with '
+                       'parent from then on (a frame attached to "tcp" moves with the tool); child '
+                       'cannot be world, flange, tcp or parent itself, and an attachment that '
+                       'closes a chain is a runtime exception',
+                'emulation': "a chain is at most 64 frames from the world (the emulator's bound: "
+                             'every pose is composed along it within one statement)'},
+               {'name': 'delete_frame',
+                'section': 'worldmodel',
+                'params': [{'name': 'frame'}],
+                'returns': 'none',
+                'since': {'polyscope-x': '10.0.0'},
+                'checked': False,
+                'doc': 'Delete a frame a program added (world, base, flange and tcp cannot be); '
+                       'frames attached to it are attached to "world" where they stand'},
+               {'name': 'delete_all_frames',
+                'section': 'worldmodel',
+                'returns': 'none',
+                'since': {'polyscope-x': '10.0.0'},
+                'checked': False,
+                'doc': 'Delete every frame programs added; frames attached to them are attached to '
+                       '"world" where they stand'},
+               {'name': 'move_frame',
+                'section': 'worldmodel',
+                'params': [{'name': 'frame'},
+                           {'name': 'pose'},
+                           {'name': 'ref_frame', 'default': 'base'}],
+                'returns': 'none',
+                'since': {'polyscope-x': '10.0.0'},
+                'checked': False,
+                'doc': "Move a frame to `pose` in ref_frame's coordinates, still attached to its "
+                       'parent (PolyScope X moves "base" so); world, flange and tcp cannot be '
+                       'moved'},
+               {'name': 'get_pose',
+                'section': 'worldmodel',
+                'params': [{'name': 'frame'}, {'name': 'ref_frame', 'default': 'base'}],
+                'returns': 'pose',
+                'since': {'polyscope-x': '10.0.0'},
+                'checked': False,
+                'doc': "The pose of `frame` in ref_frame's coordinates (in Base by default: "
+                       'PolyScope X passes get_pose(frame) to force_mode and pose_trans as a Base '
+                       'pose)'},
+               {'name': 'get_frame_parent',
+                'section': 'worldmodel',
+                'params': [{'name': 'frame'}],
+                'returns': 'string',
+                'since': {'polyscope-x': '10.0.0'},
+                'checked': False,
+                'doc': 'The name of the frame `frame` is attached to ("world" for a new frame and '
+                       'for base)',
+                'emulation': '"world" has no parent: asking is a runtime exception (what a '
+                             'controller answers is not documented)'},
+               {'name': 'convert_pose',
+                'section': 'worldmodel',
+                'params': [{'name': 'pose'}, {'name': 'from_frame'}, {'name': 'to_frame'}],
+                'returns': 'pose',
+                'since': {'polyscope-x': '10.0.0'},
+                'checked': False,
+                'doc': "A pose given in from_frame's coordinates, in to_frame's"},
+               {'name': 'reset_world_model',
+                'section': 'worldmodel',
+                'returns': 'none',
+                'since': {'polyscope-x': '10.0.0'},
+                'checked': False,
+                'doc': 'Delete every frame programs added and put base back at the world origin '
+                       '(the world model outlives programs until this is called)'},
                {'name': 'pose_add',
                 'section': 'maths',
                 'params': [{'name': 'p_1'}, {'name': 'p_2'}],
@@ -1095,6 +1184,30 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'since': {'cb3': '3.14.0', 'e-series': '5.9.0'},
                 'checked': False,
                 'doc': 'Transpose of a matrix (its rows as columns)'},
+               {'name': 'size',
+                'section': 'maths',
+                'params': [{'name': 'v'}],
+                'returns': 'array',
+                'since': {'polyscope-x': '10.0.0'},
+                'checked': False,
+                'doc': "[rows, columns] of a matrix, [length] of an array (PolyScope X's Center to "
+                       'Object smart skill reads size(dir_list)[0]; no edition on hand documents '
+                       'it)'},
+               {'name': 'rotvec2rpy',
+                'section': 'maths',
+                'params': [{'name': 'rotation_vector'}],
+                'returns': 'array',
+                'since': {'cb3': '3.0.0', 'e-series': '5.0.0'},
+                'checked': False,
+                'doc': 'Roll, pitch and yaw (rad; extrinsic X-Y-Z, R = Rz(yaw) Ry(pitch) Rx(roll)) '
+                       'of a rotation vector'},
+               {'name': 'rpy2rotvec',
+                'section': 'maths',
+                'params': [{'name': 'rpy_vector'}],
+                'returns': 'array',
+                'since': {'cb3': '3.0.0', 'e-series': '5.0.0'},
+                'checked': False,
+                'doc': 'The rotation vector of roll, pitch and yaw (rad; extrinsic X-Y-Z)'},
                {'name': 'norm',
                 'section': 'maths',
                 'params': [{'name': 'a'}],

@@ -20,7 +20,7 @@ from rtde_spec.metamodel.schema import Since, StrictModel
 
 SPEC_FILE = "urscript/functions.yaml"
 ValueType = Literal["none", "bool", "int", "float", "number", "string", "pose", "array", "struct", "handle"]
-Section = Literal["motion", "internals", "interfaces", "maths"]
+Section = Literal["motion", "internals", "interfaces", "worldmodel", "maths"]
 Name = Annotated[str, Field(pattern=r"^[A-Za-z_][A-Za-z0-9_]*$")]
 
 

@@ -1,7 +1,8 @@
 """The built-in functions a program calls for a value or an effect, beyond script_calls' motions
-and I/O: the RTDE registers (bound to the RTDE server's input and output registers), the pose
-maths, kinematics queries, the sockets (sockets.py), the modes and settings (builtins_modes.py) and
-the arm's model and matrices (builtins_dynamics.py) (docs/reference/urscript.md lists each function
+and I/O: the RTDE registers (bound to the RTDE server's input and output registers), the
+kinematics queries, the sockets (sockets.py), the modes and settings (builtins_modes.py), the
+arm's model and matrices (builtins_dynamics.py), the pose maths (builtins_poses.py) and the world
+model's frames (world_model.py) (docs/reference/urscript.md lists each function
 with its source in UR's Script Manual).
 """
 
@@ -25,9 +26,11 @@ from rtde_spec.emulator.urscript import (
 from rtde_spec.emulator.urscript.builtins_dynamics import DYNAMICS
 from rtde_spec.emulator.urscript.builtins_io import IO
 from rtde_spec.emulator.urscript.builtins_modes import MODES, settings_of
+from rtde_spec.emulator.urscript.builtins_poses import POSES
 from rtde_spec.emulator.urscript.calls import Pose, number, six, type_name
 from rtde_spec.emulator.urscript.interfaces import Runner
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
+from rtde_spec.emulator.urscript.world_model import WORLD
 from rtde_spec.errors import RtdeSpecError
 
 Args = list[Any]
@@ -55,9 +58,11 @@ def names() -> set[str]:
 
 
 @cache
-def names_for(line: str, version: str) -> frozenset[str]:
-    """The built-ins a controller of this product line and version has (spec/urscript's `since`);
-    a line the table does not cover (PolyScope X) gets every one the emulator runs."""
+def names_for(line: str, version: str, inherits: str | None = None) -> frozenset[str]:
+    """The built-ins a controller of this product line and version has (spec/urscript's `since`).
+    A function the line's `since` does not name is the line's from its first release when it names
+    the line this one `inherits` (PolyScope X grew out of the e-Series software,
+    spec/common/product_lines.yaml); a line the table does not cover gets every one the emulator runs."""
     from rtde_spec.metamodel.urscript import urscript_functions
     from rtde_spec.metamodel.versions import Version
 
@@ -66,7 +71,9 @@ def names_for(line: str, version: str) -> frozenset[str]:
         return frozenset(names())
     have = Version.parse(version)
     return frozenset(
-        f.name for f in table.functions if line in f.since and Version.parse(f.since[line]) <= have
+        f.name
+        for f in table.functions
+        if (Version.parse(f.since[line]) <= have if line in f.since else inherits in f.since)
     )
 
 
@@ -206,48 +213,6 @@ def movec(program: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> script_cal
 script_calls.COMMANDS["movec"] = movec
 
 
-# --- poses ------------------------------------------------------------------------------------
-
-
-def _pose(stmt: Stmt, value: Any) -> np.ndarray:
-    return kin.pose_to_matrix(six(stmt, value, "pose"))
-
-
-@builtin("pose_sub")
-def _pose_sub(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose:
-    a, b = _pose(stmt, args[0]), _pose(stmt, args[1])
-    out = np.eye(4)
-    out[:3, 3] = a[:3, 3] - b[:3, 3]
-    out[:3, :3] = a[:3, :3] @ b[:3, :3].T
-    return Pose(kin.matrix_to_pose(out))
-
-
-@builtin("pose_dist")
-def _pose_dist(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> float:
-    a, b = six(stmt, args[0], "p_from"), six(stmt, args[1], "p_to")
-    return math.dist(a[:3], b[:3])
-
-
-@builtin("point_dist")
-def _point_dist(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> float:
-    return _pose_dist(runner, stmt, args, kwargs)
-
-
-@builtin("interpolate_pose")
-def _interpolate(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose:
-    a, b = _pose(stmt, args[0]), _pose(stmt, args[1])
-    alpha = number(stmt, args[2], "alpha")
-    relative = a[:3, :3].T @ b[:3, :3]
-    vector = np.array(
-        kin.matrix_to_pose(np.block([[relative, np.zeros((3, 1))], [np.zeros((1, 3)), np.ones((1, 1))]]))[3:]
-    )
-    turn = kin.pose_to_matrix([0, 0, 0, *(vector * alpha)])[:3, :3]
-    out = np.eye(4)
-    out[:3, 3] = a[:3, 3] + (b[:3, 3] - a[:3, 3]) * alpha
-    out[:3, :3] = a[:3, :3] @ turn
-    return Pose(kin.matrix_to_pose(out))
-
-
 # --- the arm's state, settings and modes --------------------------------------------------------
 
 
@@ -307,6 +272,8 @@ BUILTINS.update(sockets.SENDERS)
 BUILTINS.update(MODES)
 BUILTINS.update(DYNAMICS)
 BUILTINS.update(IO)
+BUILTINS.update(POSES)
+BUILTINS.update(WORLD)
 BUILTINS["socket_close"] = sockets.socket_close
 BUILTINS["socket_set_var"] = sockets.socket_set_var
 BUILTINS["rpc_factory"] = rpc.rpc_factory

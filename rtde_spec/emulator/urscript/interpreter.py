@@ -94,7 +94,7 @@ class Program(Evaluator):
         self.step_seconds = 1.0 / hz
         self._memory_start = resident_bytes()
         line, version = getattr(robot, "line", None), getattr(robot, "version", None)
-        known = builtins.names_for(line.id, str(version)) if line is not None else builtins.names()
+        known = builtins.names_for(line.id, str(version), line.inherits) if line else builtins.names()
         check(script, known, script_calls.WAITS | set(builtins.WAITING))  # as this version compiles
         main = _Thread(0, self.name, self._main())
         self.threads: dict[int, _Thread] = {0: main}

@@ -1,0 +1,111 @@
+"""The pose maths a program calls for a value: differences, distances and interpolation of poses,
+the rotation vector in roll-pitch-yaw and back, and `size` of an array or matrix. Poses compose
+as 4x4 matrices (kinematics' pose_to_matrix), as pose_trans and pose_inv do in calls.py, so every
+pose function agrees with the others to the last digit.
+
+RPY is the Script Manual's (rotvec2rpy, rpy2rotvec; 5.21 and 10.7 editions): extrinsic rotations
+about X, Y, Z, R = Rz(yaw) Ry(pitch) Rx(roll), in radians.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from rtde_spec.emulator.arm import kinematics as kin
+from rtde_spec.emulator.urscript import matrices
+from rtde_spec.emulator.urscript.calls import Pose, arg, number, six, type_name
+from rtde_spec.emulator.urscript.interfaces import Runner
+from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
+
+Args = list[Any]
+Kwargs = dict[str, Any]
+Builtin = Callable[[Runner, Stmt, Args, Kwargs], Any]
+POSES: dict[str, Builtin] = {}
+
+
+def _builtin(*names: str) -> Callable[[Builtin], Builtin]:
+    def register(fn: Builtin) -> Builtin:
+        for name in names:
+            POSES[name] = fn
+        return fn
+
+    return register
+
+
+def _pose(stmt: Stmt, value: Any) -> np.ndarray:
+    return kin.pose_to_matrix(six(stmt, value, "pose"))
+
+
+def _three(stmt: Stmt, value: Any, name: str) -> list[float]:
+    if not isinstance(value, list) or len(value) != 3:
+        raise ScriptFault(f"{stmt.name}: {name} must be three numbers", stmt.line, stmt.column or 1)
+    return [number(stmt, v, name) for v in value]
+
+
+@_builtin("pose_sub")
+def _pose_sub(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose:
+    a, b = _pose(stmt, args[0]), _pose(stmt, args[1])
+    out = np.eye(4)
+    out[:3, 3] = a[:3, 3] - b[:3, 3]
+    out[:3, :3] = a[:3, :3] @ b[:3, :3].T
+    return Pose(kin.matrix_to_pose(out))
+
+
+@_builtin("pose_dist", "point_dist")
+def _pose_dist(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> float:
+    a, b = six(stmt, args[0], "p_from"), six(stmt, args[1], "p_to")
+    return math.dist(a[:3], b[:3])
+
+
+@_builtin("interpolate_pose")
+def _interpolate(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose:
+    a, b = _pose(stmt, args[0]), _pose(stmt, args[1])
+    alpha = number(stmt, args[2], "alpha")
+    relative = a[:3, :3].T @ b[:3, :3]
+    vector = np.array(
+        kin.matrix_to_pose(np.block([[relative, np.zeros((3, 1))], [np.zeros((1, 3)), np.ones((1, 1))]]))[3:]
+    )
+    turn = kin.pose_to_matrix([0, 0, 0, *(vector * alpha)])[:3, :3]
+    out = np.eye(4)
+    out[:3, 3] = a[:3, 3] + (b[:3, 3] - a[:3, 3]) * alpha
+    out[:3, :3] = a[:3, :3] @ turn
+    return Pose(kin.matrix_to_pose(out))
+
+
+@_builtin("rotvec2rpy")
+def _rotvec2rpy(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> list[float]:
+    """Roll in (-pi, pi], pitch in [-pi/2, pi/2], yaw in (-pi, pi] (the manual's example: [3.14,
+    1.57, 0] gives [-2.80856, -0.16202, 0.9])."""
+    r = kin.pose_to_matrix(
+        [0, 0, 0, *_three(stmt, arg(stmt, args, kwargs, 0, "rotation_vector"), "rotation_vector")]
+    )
+    pitch = math.atan2(-r[2, 0], math.hypot(r[0, 0], r[1, 0]))
+    if math.hypot(r[0, 0], r[1, 0]) < 1e-12:  # pitch of +-pi/2: roll and yaw turn about one axis
+        return [0.0, pitch, math.atan2(-r[0, 1], r[1, 1])]
+    return [math.atan2(r[2, 1], r[2, 2]), pitch, math.atan2(r[1, 0], r[0, 0])]
+
+
+@_builtin("rpy2rotvec")
+def _rpy2rotvec(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> list[float]:
+    roll, pitch, yaw = _three(stmt, arg(stmt, args, kwargs, 0, "rpy_vector"), "rpy_vector")
+    cr, sr, cp, sp, cy, sy = (f(a) for a in (roll, pitch, yaw) for f in (math.cos, math.sin))
+    rx = np.array([[1, 0, 0], [0, cr, -sr], [0, sr, cr]])
+    ry = np.array([[cp, 0, sp], [0, 1, 0], [-sp, 0, cp]])
+    rz = np.array([[cy, -sy, 0], [sy, cy, 0], [0, 0, 1]])
+    return [float(v) for v in kin.matrix_to_rotvec(rz @ ry @ rx)]
+
+
+@_builtin("size")
+def _size(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> list[int]:
+    """[rows, columns] of a matrix, [length] of an array: PolyScope X's smart skills read the
+    rows of a list of directions as `size(dir_list)[0]`."""
+    value = arg(stmt, args, kwargs, 0, "v")
+    if matrices.is_matrix(value):
+        return [len(value), len(value[0])]
+    if isinstance(value, list):
+        return [len(value)]
+    raise ScriptFault(f"{stmt.name}: needs an array or a matrix, not {type_name(value)}", stmt.line, 1)
