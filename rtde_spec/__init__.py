@@ -56,6 +56,7 @@ _EXPORTS: dict[str, str] = {
     "PrimaryClient": "rtde_spec.primary.client",
     "Emulator": "rtde_spec.emulator.server",
     "EmulatorThread": "rtde_spec.emulator.server",
+    "EmulatorProcess": "rtde_spec.emulator.server",
     "EmulatorConfig": "rtde_spec.emulator.server",
 }
 
@@ -65,6 +66,7 @@ __all__ = [
     "DecodeError",
     "Emulator",
     "EmulatorConfig",
+    "EmulatorProcess",
     "EmulatorThread",
     "EncodeError",
     "PrimaryClient",
@@ -114,7 +116,7 @@ def __dir__() -> list[str]:
 
 
 if TYPE_CHECKING:
-    from rtde_spec.emulator.server import Emulator, EmulatorConfig, EmulatorThread
+    from rtde_spec.emulator.server import Emulator, EmulatorConfig, EmulatorProcess, EmulatorThread
     from rtde_spec.errors import (
         DecodeError,
         EncodeError,

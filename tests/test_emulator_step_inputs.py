@@ -1,5 +1,5 @@
 """When the emulator reads a client's inputs: as a controller does, at the start of the cycle whose
-state it sends at the cycle's end (server.py computes a step just before it is due).
+state it sends at the cycle's end (server/loop.py computes a step just before it is due).
 
 ur_rtde asks its control script for the arm model's answers (`getJacobian`, `getMassMatrix`, ...)
 by writing a command into an input register and reading the output registers of the first

@@ -13,7 +13,7 @@ package one control step newer than the one they held and read the output regist
 getTargetJointAccelerations reads them at once, from a package that left before the command did
 (its first answer is the previous call's registers, on a robot too; see
 tests/test_ur_rtde_control_answers.py). The emulator reads a step's inputs just before the step is
-due (server.py; tests/test_emulator_step_inputs.py asks once), but a command that comes while the
+due (server/loop.py; tests/test_emulator_step_inputs.py asks once), but a command that comes while the
 step is computed is answered one package later than ur_rtde looks (on a robot it races too), and
 on a loaded machine the interpreter may not finish the 36 register writes in one step; so each
 answer is asked again until it comes, within `ANSWER` s.

@@ -1,5 +1,5 @@
 """A program's time in a control step, as the served emulator gives it: the time left before the
-step is due (server.py computes each step just before it is due), not a fixed 30% of the step.
+step is due (server/loop.py computes each step just before it is due), not a fixed 30% of the step.
 
 URCL's external-control script costs the interpreter 0.4 to 0.8 ms of a 2 ms step at a spline
 segment's start; a fixed slice of 0.6 ms preempted it there, the speedj of that step came a step

@@ -2,7 +2,7 @@
 the process's memory.
 
 The server computes a step's state just before the step is due and sends it at the due time
-(server.py), so a step's program has the time left until then: `step_deadline(until)` says when
+(server/loop.py), so a step's program has the time left until then: `step_deadline(until)` says when
 that is, for the steps computed inside it. A program run without one (a model stepped by hand,
 a program's first run when it arrives) has SLICE of a step. Either way a program always has
 SLICE of a step in CPU time, so a loaded machine slows a program down but does not change

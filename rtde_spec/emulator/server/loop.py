@@ -12,8 +12,8 @@ follows what the steps cost: the costliest recent step (its weight wearing off b
 step) and a quarter again, at least LEAD_MIN of a step; a step whose program was preempted makes
 the next ones start at LEAD_MAX (URCL's script at a spline segment's start), so a program has
 most of the step when it needs it and the rest stays for the ports' reading. `Emulator` runs
-in the caller's event loop; `EmulatorThread` runs one in a background thread (tests, the demo,
-applications that are not asyncio).
+in the caller's event loop; `embedded.py` runs one for code that is not asyncio (tests, the demo):
+in a background thread or in a process of its own.
 """
 
 from __future__ import annotations
@@ -23,7 +23,6 @@ import gc
 import logging
 import os
 import sys
-import threading
 import time
 from collections import deque
 from dataclasses import dataclass, field
@@ -234,6 +233,12 @@ class Emulator:
             woke = time.perf_counter()
             if skip_after is not None and woke - due > skip_after:  # skip, don't burst
                 self.late_steps += 1
+                if self.late_steps == 1:
+                    log.warning(
+                        "control loop %.0f ms behind: it skips steps (a stalled machine; in an "
+                        "EmulatorThread, another thread of the process holding the GIL)",
+                        (woke - due) * 1000,
+                    )
                 step = max(step, int((woke - start) * base))
                 due = start + step / base
             if timing:
@@ -327,66 +332,3 @@ def _real_time(priority: int) -> None:
         log.warning("control loop at normal priority: SCHED_FIFO %d refused (%s)", priority, exc)
     else:
         log.info("control loop at SCHED_FIFO priority %d", priority)
-
-
-class EmulatorThread:
-    """An Emulator in a background thread: `with EmulatorThread(config) as emu: ...`."""
-
-    def __init__(self, config: EmulatorConfig | None = None, catalogue: Catalogue | None = None) -> None:
-        self.emulator = Emulator(config, catalogue)
-        self._loop = asyncio.new_event_loop()
-        self._thread = threading.Thread(target=self._run, name="rtde-emulator", daemon=True)
-        self._ready = threading.Event()
-        self._error: BaseException | None = None
-
-    @property
-    def ports(self) -> dict[str, int]:
-        return self.emulator.ports
-
-    @property
-    def model(self) -> ControllerModel:
-        return self.emulator.model
-
-    def _run(self) -> None:
-        asyncio.set_event_loop(self._loop)
-        try:
-            self._loop.run_until_complete(self.emulator.start())
-        except BaseException as exc:
-            # the ports opened before the one that failed are closed: a failed start left them
-            # listening for the life of the process, so every later start there failed too
-            self._loop.run_until_complete(self.emulator.stop())
-            self._loop.close()
-            self._error = exc
-            self._ready.set()
-            return
-        self._ready.set()
-        self._loop.run_forever()
-
-    def start(self) -> EmulatorThread:
-        self._thread.start()
-        self._ready.wait(10)
-        if self._error is not None:
-            raise self._error
-        return self
-
-    def stop(self) -> None:
-        if not self._thread.is_alive():
-            return
-        future = asyncio.run_coroutine_threadsafe(self.emulator.stop(), self._loop)
-        future.result(10)
-        self._loop.call_soon_threadsafe(self._loop.stop)
-        self._thread.join(10)
-
-    def call(self, fn, *args):  # type: ignore[no-untyped-def]
-        """Run fn(*args) in the emulator's loop (its state is not thread-safe) and return the result."""
-
-        async def run():  # type: ignore[no-untyped-def]
-            return fn(*args)
-
-        return asyncio.run_coroutine_threadsafe(run(), self._loop).result(10)
-
-    def __enter__(self) -> EmulatorThread:
-        return self.start()
-
-    def __exit__(self, *exc: object) -> None:
-        self.stop()
