@@ -10,13 +10,21 @@ from __future__ import annotations
 import logging
 import re
 
-# C0 controls (tab and newline included: one message stays one line), DEL and C1 controls
-_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f]")
+# C0 controls (tab and newline included: one message stays one line), DEL and C1 controls, the
+# line and paragraph separators, and lone surrogates (undecodable bytes kept by surrogateescape:
+# no stream can encode them, and a log record holding one breaks whatever serialises it)
+_CONTROL = re.compile("[\x00-\x1f\x7f-\x9f\u2028\u2029\ud800-\udfff]")
+
+
+def _escape(match: re.Match[str]) -> str:
+    code = ord(match.group())
+    return f"\\x{code:02x}" if code <= 0xFF else f"\\u{code:04x}"
 
 
 def safe_text(text: str) -> str:
-    """Control characters as visible escapes (ESC -> \\x1b), so wire text cannot drive the terminal."""
-    return _CONTROL.sub(lambda m: f"\\x{ord(m.group()):02x}", text)
+    """Control characters as visible escapes (ESC -> \\x1b, a lone surrogate -> \\udcff), so wire
+    text cannot drive the terminal, nor break a stream or a log."""
+    return _CONTROL.sub(_escape, text)
 
 
 class SafeFormatter(logging.Formatter):

@@ -108,3 +108,17 @@ def test_serve_log_says_why_a_program_was_refused_and_when_a_long_one_is_read_la
     assert "characters, read off the control loop" in caplog.text
     assert "I/O calls run" not in caplog.text
     assert "program refused at line 3:" in caplog.text and "syntax_error_on_line:3" in caplog.text
+
+
+def test_a_refused_programs_log_line_holds_no_control_characters_or_lone_surrogates(
+    caplog: pytest.LogCaptureFixture,
+) -> None:
+    """A program's text is the client's: undecodable bytes (kept as lone surrogates) and escape
+    sequences. In the log line of its runtime exception they broke pytest-xdist's report of a passing
+    fuzz test (no UTF-8 encoding of a lone surrogate) and could drive a terminal."""
+    model = ControllerModel("5.15.0")
+    with caplog.at_level("WARNING", logger="rtde_spec.emulator"):
+        assert run_script(model, 'def p():\n  x = "\udcff\x1b[2J" +\nend\n') == []
+    (line,) = [r.getMessage() for r in caplog.records if "refused" in r.getMessage()]
+    line.encode("utf-8")  # no lone surrogate left
+    assert "\\udcff" in line and "\\x1b[2J" in line and "\x1b" not in line

@@ -41,6 +41,7 @@ from rtde_spec.emulator.urscript.events import ScriptEvent
 from rtde_spec.metamodel.arms import arm_model
 from rtde_spec.metamodel.catalogue import Catalogue, FieldInfo
 from rtde_spec.metamodel.versions import Version
+from rtde_spec.printable import safe_text
 
 HOME_Q = (0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0)
 DEFAULTS: dict[str, Any] = {
@@ -324,7 +325,8 @@ class ControllerModel(RobotModes):
     def emit(self, event: ScriptEvent) -> None:
         if event.kind == "runtime_exception":  # said in serve's log too: a client may not be listening
             where = f" at line {event.line}:{event.column}" if event.line else ""
-            log.warning("program %s%s: %s", event.program or "refused", where, event.text[:200])
+            text = safe_text(event.text[:200])  # a program's own text: controls and undecodable bytes
+            log.warning("program %s%s: %s", safe_text(event.program) or "refused", where, text)
         self.events.append(event)
 
     def drain_events(self) -> list[ScriptEvent]:

@@ -30,6 +30,7 @@ from rtde_spec.emulator.ports.robot_messages import (
 from rtde_spec.emulator.ports.script import run_script
 from rtde_spec.emulator.ports.script_framer import ScriptPort
 from rtde_spec.emulator.ports.state_message import RobotStateBuilder
+from rtde_spec.printable import safe_text
 
 if TYPE_CHECKING:
     from rtde_spec.emulator.controller.model import ControllerModel
@@ -63,11 +64,13 @@ class PrimaryHub:
             log.info(
                 "URScript on port %d: %s (%d characters, read off the control loop)",
                 port,
-                text.strip()[:80],
+                safe_text(text.strip()[:80]),
                 len(text),
             )
         else:
-            log.info("URScript on port %d: %s (%d I/O calls run)", port, text.strip()[:80], len(applied))
+            log.info(
+                "URScript on port %d: %s (%d I/O calls run)", port, safe_text(text.strip()[:80]), len(applied)
+            )
 
     def version_message(self) -> bytes:
         return version_message(self.model.version, self._micros())

@@ -21,6 +21,7 @@ from rtde_spec._generated.constants import RTDE_ANSWERS, RTDE_LIMITS
 from rtde_spec._generated.enums import TextMessageLevel
 from rtde_spec.emulator.ports.guard import GuardedConnection, Port
 from rtde_spec.errors import DecodeError, RtdeSpecError
+from rtde_spec.printable import safe_text
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
 from rtde_spec.rtde.codec import decode, observe, setup_names
 from rtde_spec.rtde.protocol_state import ProtocolState
@@ -144,7 +145,7 @@ class RtdeConnection(GuardedConnection):
         elif isinstance(message, gen.DataPackage):
             self._inputs(message)
         elif isinstance(message, (gen.TextMessage, gen.TextMessageV1Client)):
-            log.info("text from %s: %s", self.peer, message.message)
+            log.info("text from %s: %s", self.peer, safe_text(str(message.message)))
 
     def _names(self, names: list[str]) -> tuple[list[str], bool]:
         """The requested names (a trailing comma's empty name dropped), and whether they fit the limit."""
