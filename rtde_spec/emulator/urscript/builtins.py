@@ -100,15 +100,33 @@ def _arg(stmt: Stmt, args: Args, kwargs: Kwargs, index: int, name: str, default:
     return script_calls.arg(stmt, args, kwargs, index, name, default)
 
 
-# the registers' addresses: integers and floats 0 to 47, booleans 0 to 127 (RTDE's bit words hold
-# 0 to 63, single BOOL fields 64 to 127: spec/rtde/fields.yaml)
-LAST_REGISTER = {"integer": 47, "float": 47, "boolean": 127}
-BIT_WORDS = 64  # boolean registers below this are bits of the two 32-bit words
+# the RTDE field families the register functions read and write (their addresses: the spec's)
+_FAMILIES = {"integer": "int", "float": "double", "boolean": "bit"}
+
+
+@cache
+def _addresses(family: str) -> tuple[int, int]:
+    """(first, last) index of the RTDE output fields `output_<family>_register_{X}` (spec/rtde)."""
+    from rtde_spec.metamodel.catalogue import Catalogue
+
+    name = f"output_{family}_register_{{X}}"
+    found = [f.index for f in Catalogue.builtin().fields() if f.family == name and f.index is not None]
+    return min(found), max(found)
+
+
+def _last_register(kind: str) -> int:
+    """Integers and floats: RTDE's 0 to 47; booleans: up to RTDE's last single bit field (127)."""
+    return _addresses(_FAMILIES[kind])[1]
+
+
+def _bit_words() -> int:
+    """Boolean registers below this are bits of RTDE's two 32-bit words; from it, BOOL fields."""
+    return _addresses("bit")[0]
 
 
 def _register(stmt: Stmt, args: Args, kwargs: Kwargs) -> int:
     n = _arg(stmt, args, kwargs, 0, "address")
-    last = LAST_REGISTER[stmt.name.split("_")[2]]
+    last = _last_register(stmt.name.split("_")[2])
     if not isinstance(n, int) or isinstance(n, bool) or not 0 <= n <= last:
         raise ScriptFault(f"{stmt.name}: no register {n!r} (0 to {last})", stmt.line, stmt.column or 1)
     return n
@@ -116,7 +134,7 @@ def _register(stmt: Stmt, args: Args, kwargs: Kwargs) -> int:
 
 def _bit(values: Mapping[str, Any], direction: str, n: int) -> bool:
     """Boolean register `n` as RTDE carries it: a bit of a 32-bit word, or a BOOL field of its own."""
-    if n >= BIT_WORDS:
+    if n >= _bit_words():
         return bool(values.get(f"{direction}_bit_register_{n}", False))
     word = values.get(
         f"{direction}_bit_registers0_to_31" if n < 32 else f"{direction}_bit_registers32_to_63", 0
@@ -156,7 +174,7 @@ def _write_output(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Non
     n = _register(stmt, args, kwargs)
     value = _arg(stmt, args, kwargs, 1, "value")
     values = runner.robot.values
-    if kind == "boolean" and n >= BIT_WORDS:
+    if kind == "boolean" and n >= _bit_words():
         values[f"output_bit_register_{n}"] = bool(value)
         return
     if kind == "boolean":
