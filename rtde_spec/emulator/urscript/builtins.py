@@ -30,6 +30,7 @@ from rtde_spec.emulator.urscript.builtins_poses import POSES
 from rtde_spec.emulator.urscript.calls import Pose, number, six, type_name
 from rtde_spec.emulator.urscript.interfaces import Runner
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
+from rtde_spec.emulator.urscript.registry import registrar
 from rtde_spec.emulator.urscript.world_model import WORLD
 from rtde_spec.errors import RtdeSpecError
 
@@ -43,13 +44,7 @@ WAITING["socket_get_var"] = sockets.socket_get_var
 WAITING["socket_read_string"] = sockets.socket_read_string
 
 
-def builtin(*names: str) -> Callable[[Builtin], Builtin]:
-    def register(fn: Builtin) -> Builtin:
-        for name in names:
-            BUILTINS[name] = fn
-        return fn
-
-    return register
+builtin = registrar(BUILTINS)
 
 
 def names() -> set[str]:

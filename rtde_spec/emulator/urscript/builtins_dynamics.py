@@ -27,6 +27,7 @@ from rtde_spec.emulator.urscript.builtins_modes import settings_of
 from rtde_spec.emulator.urscript.calls import WaitFactory, arg, number, six
 from rtde_spec.emulator.urscript.interfaces import Runner
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
+from rtde_spec.emulator.urscript.registry import registrar
 from rtde_spec.emulator.urscript.values import Pose, type_name
 
 Args = list[Any]
@@ -37,13 +38,7 @@ VISCOUS_SCALE = (0.9, 0.9, 0.8, 0.9, 0.9, 0.9)  # direct_torque's defaults (Scri
 COULOMB_SCALE = (0.8, 0.8, 0.7, 0.8, 0.8, 0.8)
 
 
-def _builtin(*names: str) -> Callable[[Builtin], Builtin]:
-    def register(fn: Builtin) -> Builtin:
-        for name in names:
-            DYNAMICS[name] = fn
-        return fn
-
-    return register
+_builtin = registrar(DYNAMICS)
 
 
 def _rows(matrix: np.ndarray) -> list[list[float]]:

@@ -21,6 +21,7 @@ from rtde_spec.emulator.urscript.builtins_modes import settings_of
 from rtde_spec.emulator.urscript.calls import arg, number, type_name
 from rtde_spec.emulator.urscript.interfaces import Runner
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
+from rtde_spec.emulator.urscript.registry import registrar
 
 Args = list[Any]
 Kwargs = dict[str, Any]
@@ -42,13 +43,7 @@ _SHIFT = {
 _PINS = {"standard": 8, "configurable": 8, "tool": 2}
 
 
-def _builtin(*names: str) -> Callable[[Builtin], Builtin]:
-    def register(fn: Builtin) -> Builtin:
-        for name in names:
-            IO[name] = fn
-        return fn
-
-    return register
+_builtin = registrar(IO)
 
 
 def _int(stmt: Stmt, value: Any, name: str, allowed: Any) -> int:

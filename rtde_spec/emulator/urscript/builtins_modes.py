@@ -16,6 +16,7 @@ from rtde_spec._generated.enums import ControlMode
 from rtde_spec.emulator.urscript.calls import arg, number, six
 from rtde_spec.emulator.urscript.interfaces import Runner
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
+from rtde_spec.emulator.urscript.registry import registrar
 
 Args = list[Any]
 Kwargs = dict[str, Any]
@@ -23,13 +24,7 @@ Builtin = Callable[[Runner, Stmt, Args, Kwargs], Any]
 MODES: dict[str, Builtin] = {}
 
 
-def _builtin(*names: str) -> Callable[[Builtin], Builtin]:
-    def register(fn: Builtin) -> Builtin:
-        for name in names:
-            MODES[name] = fn
-        return fn
-
-    return register
+_builtin = registrar(MODES)
 
 
 def settings_of(runner: Runner) -> dict[str, Any]:

@@ -20,6 +20,7 @@ from rtde_spec.emulator.urscript import matrices
 from rtde_spec.emulator.urscript.calls import Pose, arg, number, six, type_name
 from rtde_spec.emulator.urscript.interfaces import Runner
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
+from rtde_spec.emulator.urscript.registry import registrar
 
 Args = list[Any]
 Kwargs = dict[str, Any]
@@ -27,13 +28,7 @@ Builtin = Callable[[Runner, Stmt, Args, Kwargs], Any]
 POSES: dict[str, Builtin] = {}
 
 
-def _builtin(*names: str) -> Callable[[Builtin], Builtin]:
-    def register(fn: Builtin) -> Builtin:
-        for name in names:
-            POSES[name] = fn
-        return fn
-
-    return register
+_builtin = registrar(POSES)
 
 
 def _pose(stmt: Stmt, value: Any) -> np.ndarray:

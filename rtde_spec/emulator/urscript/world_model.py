@@ -31,6 +31,7 @@ from rtde_spec.emulator.arm.state import Arm
 from rtde_spec.emulator.urscript.calls import Pose, arg, six, type_name
 from rtde_spec.emulator.urscript.interfaces import Robot, Runner
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
+from rtde_spec.emulator.urscript.registry import registrar
 
 Args = list[Any]
 Kwargs = dict[str, Any]
@@ -232,13 +233,7 @@ def world_of(robot: Robot) -> WorldModel:
 # --- the built-ins ---------------------------------------------------------------------------------
 
 
-def _builtin(*names: str) -> Callable[[Builtin], Builtin]:
-    def register(fn: Builtin) -> Builtin:
-        for name in names:
-            WORLD[name] = fn
-        return fn
-
-    return register
+_builtin = registrar(WORLD)
 
 
 def _name(stmt: Stmt, value: Any, what: str) -> str:
