@@ -178,9 +178,7 @@ def emu(tmp_path: Path) -> Iterator[EmulatorThread]:
     programs.mkdir()
     (programs / "rtde_control_loop.urp").write_bytes(gzip.compress(control_loop_urp().encode()))
     (programs / "broken.urp").write_text('<URProgram name="b"><children><Pallet/></children></URProgram>')
-    config = EmulatorConfig(
-        rtde_port=0, primary_port=0, secondary_port=0, dashboard_port=0, programs=programs
-    )
+    config = EmulatorConfig.free_ports(programs=programs)  # the real-time port too (it took 30003)
     emulator = EmulatorThread(config).start()
     yield emulator
     emulator.stop()
