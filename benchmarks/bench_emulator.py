@@ -8,7 +8,9 @@
    against the same emulator for `--seconds` / 2, `--rounds` rounds in a rotated order:
    ours waking per package (`for record in client`, `receive()`, `on_data`) and batched
    (`batch=50` / `100`, `on_data`); the UR-client-style loop; ur_rtde's
-   RTDEReceiveInterface (if installed); floors: a bare `recv()` loop, the same with one
+   RTDEReceiveInterface (if installed); UR's own client (`--ur-client CHECKOUT`: a checkout
+   of UR's RTDE_Python_Client_Library, which is not on PyPI; its `receive()` loop, as UR's
+   examples run it, becomes the peer of the issue-30 ratios); floors: a bare `recv()` loop, the same with one
    `struct` unpack, batched `recv` + `struct` tuples. Medians, spread, wake-ups per
    package, medians of per-round ratios, the load average. Then the warm in-process rows
    (our code's own cost over the floor) and system calls per package under strace.
@@ -28,7 +30,7 @@ and >= 6x less than the UR-client-style loop; batched <= 4 µs and >= 20x.
 4. With --control-script, only this: ur_rtde's control program with a servoJ stream at 500 Hz
    and four readers (bench_control_script.py).
 
-    python benchmarks/bench_emulator.py [--seconds 10] [--rounds 3]
+    python benchmarks/bench_emulator.py [--seconds 10] [--rounds 3] [--ur-client CHECKOUT]
         [--receive-only | --motion | --control-script]
     python benchmarks/bench_emulator.py --control-script --seconds 60 [--realtime 10] [--nice -10]
 """
@@ -197,6 +199,11 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--against", metavar="CHECKOUT", help="also run our per-package and batch=50 rows from this checkout"
     )
+    parser.add_argument(
+        "--ur-client",
+        metavar="CHECKOUT",
+        help="a checkout of UR's RTDE_Python_Client_Library (not on PyPI): its receive() loop is the peer",
+    )
     parser.add_argument("--no-warm", action="store_true", help="skip the warm in-process receive rows")
     parser.add_argument("--no-syscalls", action="store_true", help="skip the strace count of system calls")
     args = parser.parse_args(argv)
@@ -233,7 +240,7 @@ def main(argv: list[str] | None = None) -> int:
         codec = RecipeCodec.for_names(names, "output")
         fmt = codec.struct.format[1:]
         verdicts = receive_rows(
-            port, args.seconds / 2, args.rounds, names, types, codec.size, fmt, args.against
+            port, args.seconds / 2, args.rounds, names, types, codec.size, fmt, args.against, args.ur_client
         )
         proc.terminate()
         proc.wait(10)

@@ -222,6 +222,30 @@ report(time.process_time() - c0, got, _switches() - w0)
 """
 )
 
+UR_CLIENT = (
+    """
+import json, sys, time
+sys.path.insert(0, sys.argv[4])  # a checkout of UR's RTDE_Python_Client_Library (not on PyPI)
+import rtde.rtde as rtde
+"""
+    + RUSAGE
+    + """
+port, seconds, names = int(sys.argv[1]), float(sys.argv[2]), sys.argv[3].split(",")
+con = rtde.RTDE("127.0.0.1", port)
+con.connect()
+con.get_controller_version()
+con.negotiate_protocol_version()
+con.send_output_setup(names, frequency=500)
+con.send_start()
+con.receive(); ready()
+t0, c0, w0 = time.monotonic(), time.process_time(), _switches()
+first = con.receive().timestamp
+while time.monotonic() - t0 < seconds:
+    state = con.receive()  # the newest package; every package read is decoded (its DataObject)
+report(time.process_time() - c0, round((state.timestamp - first) * 500), _switches() - w0)
+"""
+)  # UR's own examples' loop (example_control_loop.py, plot.py): `receive()` a package at a time
+
 UR_RTDE = """
 import json, sys, time
 import rtde_receive
@@ -241,6 +265,7 @@ LABELS = {
     "batched": f"rtde_spec RtdeClient(batch={BATCH}), on_data",
     "longer": f"rtde_spec RtdeClient(batch={BATCH_LONG}), on_data",
     "ur": "UR-client-style loop (recv, unpack, dict)",
+    "ur_client": "UR's RTDE client (rtde.py), receive()",
     "floor": "floor: bare recv() loop, nothing decoded",
     "floor_unpack": "floor: recv() + one struct unpack",
     "floor_b": f"floor, batch={BATCH}: recv + struct tuples",
@@ -281,9 +306,15 @@ def child(code: str, *args: str, timeout: float = 120, tree: str | None = None) 
 
 
 def specs(
-    port: int, seconds: float, names: list[str], types: list[str], size: int, fmt: str
+    port: int,
+    seconds: float,
+    names: list[str],
+    types: list[str],
+    size: int,
+    fmt: str,
+    ur_client: str | None = None,
 ) -> dict[str, Any]:
-    """Each row's child code and arguments."""
+    """Each row's child code and arguments; UR's own client's row with a checkout of it."""
     joined, here, span = ",".join(names), str(Path(__file__).parent), str(seconds)
     binary = c_floor()
     in_c = {"floor_c": (FLOOR_C, str(port), span, joined, str(size), binary)} if binary else {}
@@ -298,6 +329,7 @@ def specs(
         "floor_b": (FLOOR_BATCHED, str(port), span, joined, str(size), fmt),
         "longer": (OURS, str(port), span, joined, "callback-batched", str(BATCH_LONG)),
         **in_c,
+        **({"ur_client": (UR_CLIENT, str(port), span, joined, ur_client)} if ur_client else {}),
     }
 
 
@@ -381,9 +413,11 @@ def receive_rows(
     size: int,
     fmt: str,
     against: str | None = None,
+    ur_client: str | None = None,
 ) -> dict[str, bool]:
-    """Every row in every round; prints the table and returns the issue-30 verdicts."""
-    spec = specs(port, seconds, names, types, size, fmt)
+    """Every row in every round; prints the table and returns the issue-30 verdicts (against UR's
+    own client when a checkout of it is given, else against the UR-style loop)."""
+    spec = specs(port, seconds, names, types, size, fmt, ur_client)
     if against is not None:  # ours from another checkout, in the same rounds: an A/B in one run
         twins = ("iterate", "callback", "batched")
         ordered: dict[str, Any] = {}
@@ -432,10 +466,13 @@ def receive_rows(
     print("  ratios (medians of per-round ratios):")
     for label, key, low in rows:
         over = statistics.median(x - y for x, y in zip(us[key], us[low], strict=True))
+        real = f"UR's client / ours {ratio('ur_client', key):5.1f}x, " if "ur_client" in us else ""
         print(
-            f"    {label:28s} UR style / ours {ratio('ur', key):5.1f}x, ours / floor {ratio(key, low):5.2f}x "
-            f"(+{over:.1f} µs over the floor)"
+            f"    {label:28s} {real}UR style / ours {ratio('ur', key):5.1f}x, ours / floor "
+            f"{ratio(key, low):5.2f}x (+{over:.1f} µs over the floor)"
         )
+    peer = "ur_client" if "ur_client" in us else "ur"
+    peer_name = "UR's client" if peer == "ur_client" else "UR style"
     over = statistics.median(x - y for x, y in zip(us["floor_unpack"], us["floor"], strict=True))
     print(f"    (one struct unpack, cold, in a per-package loop: +{over:.1f} µs over the bare recv() loop)")
     listed = "; ".join(f"{k} " + "/".join(f"{v:.1f}" for v in us[k]) for k in us)
@@ -446,17 +483,17 @@ def receive_rows(
         (f"batch={BATCH}", "batched", TARGET_BATCH_US, TARGET_BATCH_VS_UR),
         (f"batch={BATCH_LONG}", "longer", TARGET_BATCH_US, TARGET_BATCH_VS_UR),
     ):
-        got, vs_ur = med(key), ratio("ur", key)
+        got, vs_ur = med(key), ratio(peer, key)
         verdicts[label] = hit = got <= target and vs_ur >= vs
         print(
-            f"  targets (issue 30), {label}: <= {target} µs (got {got:.1f}), >= {vs}x less than UR style "
+            f"  targets (issue 30), {label}: <= {target} µs (got {got:.1f}), >= {vs}x less than {peer_name} "
             f"({vs_ur:.1f}x): {'met' if hit else 'MISSED'}"
         )
-    got, vs_ur = med("batched"), ratio("ur", "batched")
+    got, vs_ur = med("batched"), ratio(peer, "batched")
     verdicts["recording"] = hit = got <= TARGET_US and vs_ur >= TARGET_VS_UR
     print(
         f"  targets (recording), batch={BATCH}: <= {TARGET_US} µs (got {got:.1f}), >= {TARGET_VS_UR}x less "
-        f"than UR style ({vs_ur:.1f}x): {'met' if hit else 'MISSED'}"
+        f"than {peer_name} ({vs_ur:.1f}x): {'met' if hit else 'MISSED'}"
     )
     floor = med("floor")
     in_c = f", {med('floor_c'):.1f} µs in C" if "floor_c" in us else ""
@@ -466,9 +503,9 @@ def receive_rows(
         f"<= {TARGET_ITER_US} µs {'is' if floor <= TARGET_ITER_US else 'is NOT'} reachable waking per package"
     )
     if "floor_c" in us:
-        ur = med("ur")
+        ur = med(peer)
         print(
-            f"  >= {TARGET_ITER_VS_UR}x less than UR style is {ur / TARGET_ITER_VS_UR:.1f} µs a package "
+            f"  >= {TARGET_ITER_VS_UR}x less than {peer_name} is {ur / TARGET_ITER_VS_UR:.1f} µs a package "
             f"(the C loop waking per package: {med('floor_c'):.1f} µs); >= {TARGET_BATCH_VS_UR}x is "
             f"{ur / TARGET_BATCH_VS_UR:.1f} µs (batched recv + struct tuples: {med('floor_b'):.1f} µs)"
         )
