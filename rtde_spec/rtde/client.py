@@ -29,7 +29,7 @@ from rtde_spec._generated.constants import RTDE_PORT
 from rtde_spec.errors import ProtocolError, RtdeConnectionError, UsageError
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET
 from rtde_spec.rtde.client_base import NOT_CONNECTED
-from rtde_spec.rtde.client_protocol import InputRecipe, Reply
+from rtde_spec.rtde.client_protocol import READ_SIZE, InputRecipe, Reply
 from rtde_spec.rtde.client_thread import ThreadReads, _new_tuple
 
 LEASE = 0.2  # s: the reader thread keeps off the socket this long after the caller last read it
@@ -54,6 +54,10 @@ class RtdeClient(ThreadReads):
         self._nudge = threading.Event()  # wakes the reader thread out of a lease (close, a request)
         self._poll: Any = None  # the caller's poll object (select.poll objects are per thread)
         self._sliced = False  # SO_RCVTIMEO is SLICE: a read is one recv, no poll before it
+        # the caller's reads land here (only while it holds `_reading`): no 64 kB bytes object
+        # made and shrunk per read, ~3 µs of a package's CPU at 500 Hz on cold caches
+        self._into = bytearray(READ_SIZE)
+        self._view = memoryview(self._into)
 
     # --- connection ---------------------------------------------------------
 
@@ -145,13 +149,14 @@ class RtdeClient(ThreadReads):
             self._lease = time.monotonic() + LEASE
             if self._reading.acquire(False):
                 try:
-                    chunk = self._sock.recv(self._bufsize)  # type: ignore[union-attr]
+                    into = self._into
+                    got = self._sock.recv_into(into)  # type: ignore[union-attr]
                     core = self.core
-                    if len(chunk) == path.size and chunk.startswith(path.lead) and core.aligned:
-                        core.taken += path.size
+                    if got == path.size and into.startswith(path.lead) and core.aligned:
+                        core.taken += got
                         self.received += 1
-                        return _new_tuple(path.record_type, path.unpack(chunk, PAYLOAD_OFFSET))
-                    self._other_read(chunk)
+                        return _new_tuple(path.record_type, path.unpack(into, PAYLOAD_OFFSET))
+                    self._other_read(bytes(self._view[:got]))
                 except BlockingIOError:  # no data within SLICE
                     wait -= SLICE
                 except OSError as exc:
