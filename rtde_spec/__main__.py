@@ -1,7 +1,5 @@
 """python -m rtde_spec: the rtde-spec command line."""
 
-import sys
+from rtde_spec.cli.main import entry
 
-from rtde_spec.cli.main import main
-
-sys.exit(main())
+entry()
