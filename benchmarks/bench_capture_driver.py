@@ -24,7 +24,7 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
-from rtde_spec.capture.decoder import decode_to_directory  # noqa: E402
+from rtde_spec.capture.decoder import CaptureSummary, decode_to_directory  # noqa: E402
 from rtde_spec.cli.wireshark_cmd import dissector_path  # noqa: E402
 from tests.capture_files import Conversation, write  # noqa: E402
 
@@ -107,13 +107,15 @@ def main() -> None:
         path = work / "driver.pcap"
         sent = session(path, args.seconds)
         decode_to_directory(path, work / "warm", "parquet")  # imports and first-call set-up
-        times, summary = [], None
+        times: list[float] = []
+        summary: CaptureSummary | None = None
         for _ in range(3):
             shutil.rmtree(work / "out", ignore_errors=True)
             start = time.perf_counter()
             summary = decode_to_directory(path, work / "out", "parquet")
             times.append(time.perf_counter() - start)
-        assert summary is not None and not summary.damage(), summary.damage()
+        assert summary is not None
+        assert not summary.damage(), summary.damage()
         packages = summary.packages
         size = path.stat().st_size / 1e6
         print(f"driver session: {args.seconds} s, {size:.1f} MB, sent {sent}")

@@ -53,6 +53,7 @@ from ur5e_robot_state import MOVING, moving_robot_stream, ur5e_robot_state_bytes
 
 from rtde_spec import Catalogue, decode_message
 from rtde_spec.primary.codec import PrimaryCodec, PrimaryStreamDecoder
+from rtde_spec.wire.primary_base import RobotStateMessage
 
 TARGET_TO_FLOOR = 2.0  # issue 30.1, on the stream, through both APIs
 TARGET_VS_URX = 12.0
@@ -107,20 +108,20 @@ def bound_decoder(kind: str, learn: list[bytes]) -> Callable[[bytes], object]:
     The difference to `decode_message` is what filling the models' values costs."""
     from rtde_spec.primary import compiled
 
-    def model(src: compiled._Source, cls: type, entries: list[str]) -> str:
+    def model(src: compiled.Source, cls: type, entries: list[str]) -> str:
         var, name = src.name("m"), src.name("C", cls)
         values = ", ".join(e.split(": ", 1)[1] for e in entries)
         src.add(f"{var} = ({values},)" if kind == "values" else f"{var} = _new({name})")
         return var
 
     codec = PrimaryCodec(Catalogue.builtin().spec)
-    real = compiled._Source.model
-    compiled._Source.model = model  # type: ignore[assignment,method-assign]
+    real = compiled.Source.model
+    compiled.Source.model = model  # type: ignore[assignment,method-assign]
     try:
         for m in learn * 3:  # a shape is compiled the second time it is seen
             codec.decode_message(m)
     finally:
-        compiled._Source.model = real  # type: ignore[method-assign]
+        compiled.Source.model = real  # type: ignore[method-assign]
     assert codec.robot_state.shapes, "the bound's shape was not compiled"
     return codec.decode_message
 
@@ -192,9 +193,9 @@ def main(argv: list[str] | None = None) -> int:
     ones, ones12 = [data] * calls, [shared] * calls
     values, objects = (bound_decoder(kind, stream12[:2]) for kind in ("values", "objects"))
     bound_joints = values(stream12[5]).sub_packages[1][0]  # type: ignore[attr-defined]
-    assert [j[0] for j in bound_joints] == [
-        j.q_actual for j in decode_message(stream12[5])["joint_data"].joints
-    ]  # type: ignore[index]
+    decoded = decode_message(stream12[5])
+    assert isinstance(decoded, RobotStateMessage)
+    assert [j[0] for j in bound_joints] == [j.q_actual for j in decoded["joint_data"].joints]
     rows: list[Row] = [
         ("struct floor: tuples, no names, no checks (13)", over(baseline, stream), n, "stream"),
         ("rtde_spec: decode_message (13)", over(decode_message, stream), n, "stream"),

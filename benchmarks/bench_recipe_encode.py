@@ -65,7 +65,8 @@ def struct_floor(codec: RecipeCodec) -> Callable[[dict[str, object]], bytes]:
     src = f"def floor(v):\n    {body}"
     scope = {"get": itemgetter(*codec.names), "pack": packer.pack}
     exec(src, scope)
-    return scope["floor"]  # type: ignore[no-any-return]
+    floor: Callable[[dict[str, object]], bytes] = scope["floor"]  # type: ignore[assignment]
+    return floor
 
 
 def compare(label: str, names: list[str], direction: str, calls: int, rounds: int) -> list[bool]:

@@ -446,7 +446,7 @@ def receive_rows(
     for key in spec:
         spread = f"{min(us[key]):.1f}-{max(us[key]):.1f}"
         print(f"  {LABELS[key]:42s} {med(key):6.1f} µs {spread:>16s} {statistics.median(wakes[key]):13.3f}")
-    rows = (
+    rows: tuple[tuple[str, str, str], ...] = (
         ("for record in client", "iterate", "floor"),
         ("receive() loop", "receive", "floor"),
         ("on_data per package", "callback", "floor"),
