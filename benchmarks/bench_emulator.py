@@ -58,7 +58,18 @@ ROUNDS = 5  # of every receive-loop row, in a rotated order each round
 def serve(host: str, port: int) -> tuple[subprocess.Popen[str], int]:
     cmd = [sys.executable, "-m", "rtde_spec", "serve", "--host", host, "--rtde-port", str(port)]
     proc = subprocess.Popen(
-        [*cmd, "--primary-port", "0", "--secondary-port", "0"],
+        # no real-time or dashboard port: they would take 127.0.0.1:30003 and :29999 from the tests
+        [
+            *cmd,
+            "--primary-port",
+            "0",
+            "--secondary-port",
+            "0",
+            "--realtime-port",
+            "-1",
+            "--dashboard-port",
+            "-1",
+        ],
         stdout=subprocess.PIPE,
         stderr=subprocess.DEVNULL,
         text=True,

@@ -21,11 +21,10 @@ import argparse
 import errno
 import logging
 import os
-import signal
 import sys
 import threading
 from collections.abc import Callable
-from typing import Any, NoReturn
+from typing import NoReturn
 
 try:  # now: out of descriptors, an import then would fail too
     import resource
@@ -54,6 +53,7 @@ from rtde_spec.cli import (
 )
 from rtde_spec.cli.conventions import GLOBAL_AFTER, add_global_options, leaf_parsers
 from rtde_spec.cli.report import EXIT_ERROR, EXIT_USAGE
+from rtde_spec.cli.stop_signals import restore, stop_on_terminate
 from rtde_spec.errors import RtdeSpecError, UsageError
 from rtde_spec.printable import safe_text
 
@@ -104,7 +104,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     args.extra_fields = [*args.extra_fields, *getattr(args, GLOBAL_AFTER, [])]
     run: Callable[[argparse.Namespace], int] = args.run
-    previous = _stop_on_terminate()
+    previous = stop_on_terminate()
     try:
         return run(args)
     except BrokenPipeError:
@@ -125,8 +125,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"error: {safe_text(_worded(exc))}", file=sys.stderr)  # errors quote the wire: escaped
         return EXIT_ERROR
     finally:
-        for signum, handler in previous.items():
-            signal.signal(signum, handler)
+        restore(previous)
 
 
 def entry() -> NoReturn:
@@ -167,28 +166,6 @@ def _worded(exc: BaseException) -> str:
             "or run fewer --jobs"
         )
     return str(exc)
-
-
-def _interrupt(signum: int, frame: object) -> None:
-    raise KeyboardInterrupt
-
-
-def _stop_on_terminate() -> dict[int, Any]:
-    """SIGTERM and SIGHUP (a service manager, a closed terminal) stop a command as Ctrl-C does,
-    so its cleanup runs: temp files removed, workers stopped, old outputs kept. By default
-    they would end the process where it stands. Commands with their own handling (record)
-    set theirs while they run."""
-    previous: dict[int, Any] = {}
-    for name in ("SIGTERM", "SIGHUP"):
-        signum = getattr(signal, name, None)
-        if signum is None:
-            continue
-        try:
-            if signal.getsignal(signum) is signal.SIG_DFL:
-                previous[signum] = signal.signal(signum, _interrupt)
-        except ValueError:  # not the main thread (main() called from a thread): left as it is
-            break
-    return previous
 
 
 if __name__ == "__main__":

@@ -5,7 +5,8 @@ from __future__ import annotations
 import argparse
 import errno
 import re
-from typing import TYPE_CHECKING
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.cli.arguments import port_number, port_or_off
@@ -16,6 +17,8 @@ from rtde_spec.errors import UsageError
 from rtde_spec.realtime import REALTIME_PORTS
 
 if TYPE_CHECKING:
+    import asyncio
+
     from rtde_spec.emulator.server import EmulatorConfig
 
 
@@ -144,6 +147,14 @@ def run(args: argparse.Namespace) -> int:
     emulator = Emulator(config)
 
     async def main() -> None:
+        stop = asyncio.Event()
+        give_back = _stop_on_signals(asyncio.get_running_loop(), stop.set)
+        try:
+            await serve(stop)
+        finally:
+            give_back()  # before the loop closes its wake-up pipe, which its handlers write to
+
+    async def serve(stop: asyncio.Event) -> None:
         await emulator.start()
         ports = ", ".join(f"{name} {port}" for name, port in emulator.ports.items())
         print(f"emulating controller {emulator.model.version} on {args.host}: {ports}", flush=True)
@@ -155,7 +166,7 @@ def run(args: argparse.Namespace) -> int:
                 host = "127.0.0.1" if args.host in ("0.0.0.0", "::") else args.host
                 live = LiveView(host, emulator.ports["rtde"], emulator.ports["secondary"], args)
                 view = await asyncio.to_thread(live.start)
-            await asyncio.Event().wait()
+            await stop.wait()
         finally:
             if view is not None:
                 await asyncio.to_thread(view.stop)
@@ -175,6 +186,44 @@ def run(args: argparse.Namespace) -> int:
             "`rtde-spec serve`?) or give that port another number (0: any free port, printed)"
         ) from None
     return 0
+
+
+def _stop_on_signals(loop: asyncio.AbstractEventLoop, stop: Callable[[], None]) -> Callable[[], None]:
+    """SIGTERM and SIGHUP as callbacks of the event loop (`stop`); returns what puts the CLI's
+    handlers back, to call before the loop closes.
+
+    The CLI turns them into KeyboardInterrupt (`stop_signals`), raised wherever the loop stands:
+    raised between taking a task's next step off the loop's queue and running it, it loses that
+    step, and the task, cancelled then, is never run again: asyncio.run waited for it forever
+    (seen once in five stops of a benchmark's emulator). Ctrl-C is asyncio.run's own: it cancels
+    `main()`, whose `finally` stops the emulator. Where the loop cannot take signals (not the
+    main thread; Windows) the CLI's handling stays."""
+    import signal
+
+    from rtde_spec.cli.stop_signals import SIGNALS, stopping
+
+    def asked() -> None:
+        stopping()  # the CLI's handler ignores the ones that come while the emulator stops
+        stop()
+
+    taken: dict[int, Any] = {}
+    for name in SIGNALS:
+        signum = getattr(signal, name, None)
+        if signum is None:
+            continue
+        previous = signal.getsignal(signum)
+        try:
+            loop.add_signal_handler(signum, asked)
+        except (NotImplementedError, RuntimeError, ValueError):
+            break
+        taken[signum] = previous
+
+    def give_back() -> None:
+        for signum, previous in taken.items():
+            loop.remove_signal_handler(signum)
+            signal.signal(signum, previous if previous is not None else signal.SIG_DFL)
+
+    return give_back
 
 
 def _config(args: argparse.Namespace) -> EmulatorConfig:
