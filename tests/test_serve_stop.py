@@ -162,6 +162,7 @@ def test_while_serving_a_stop_signal_is_the_event_loops_not_an_exception() -> No
     assert "Traceback" not in done.stderr, done.stderr[-2000:]
 
 
+@pytest.mark.slow  # 12 starts of the emulator, ~11 s
 def test_stop_signals_at_random_moments_of_the_control_loop() -> None:
     """Stopped 12 times at moments spread over a 500 Hz step, clients streaming each time."""
     for n in range(12):
