@@ -192,12 +192,12 @@ def _stop_on_signals(loop: asyncio.AbstractEventLoop, stop: Callable[[], None]) 
     """SIGTERM and SIGHUP as callbacks of the event loop (`stop`); returns what puts the CLI's
     handlers back, to call before the loop closes.
 
-    The CLI turns them into KeyboardInterrupt (`stop_signals`), raised wherever the loop stands:
-    raised between taking a task's next step off the loop's queue and running it, it loses that
-    step, and the task, cancelled then, is never run again: asyncio.run waited for it forever
-    (seen once in five stops of a benchmark's emulator). Ctrl-C is asyncio.run's own: it cancels
-    `main()`, whose `finally` stops the emulator. Where the loop cannot take signals (not the
-    main thread; Windows) the CLI's handling stays."""
+    The CLI turns them into KeyboardInterrupt (`stop_signals`), raised wherever the loop stands;
+    raised between the loop taking a task's next step off its queue and running it, it loses
+    that step, and the task, cancelled then, never runs again: the likely way asyncio.run came to
+    wait forever after a SIGTERM (once in five stops of a benchmark's emulator). Ctrl-C is
+    asyncio.run's own: it cancels `main()`, whose `finally` stops the emulator. Where the loop
+    cannot take signals (not the main thread; Windows) the CLI's handling stays."""
     import signal
 
     from rtde_spec.cli.stop_signals import SIGNALS, stopping
