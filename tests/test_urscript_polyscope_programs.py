@@ -375,7 +375,10 @@ def test_robotiq_style_requests_go_out_and_their_answers_come_back(driver: Gripp
         '  textmsg(socket_read_string("1", prefix=">", suffix="<"))\n'
         '  textmsg(socket_read_string("1"))\nend\n'
     )
-    events += steps(model, 1000, lambda: model.program is None)
+    # steps paced in real time, as the server's control loop runs them: the driver's thread answers
+    # in real time, and 1,000 unpaced steps (its 2 s time-out in controller time) once passed
+    # before it had (a CI-like run beside a CPU hog)
+    events += steps(model, 1000, lambda: model.program is None, pace=0.002)
     assert faults(events) == []
     assert texts(events) == ["[3, 97, 99, 107]", "3", "GRP-1.2", "\nrest"]
     assert driver.received == [b"SET SID 9", b"GET STA", b"GET FWV"]
