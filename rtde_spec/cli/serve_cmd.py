@@ -30,7 +30,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         **describe(
             "Emulates a controller from the spec: RTDE, primary, secondary, real-time and the dashboard "
             "server, an arm that runs URScript, outputs a scenario file sets. Binds to 127.0.0.1 unless told "
-            "otherwise; port 0 picks a free port; the ports are printed when listening. Ctrl-C stops it.",
+            "otherwise; port 0 picks a free port; the ports are printed when listening. Ctrl-C, SIGTERM or "
+            "SIGHUP stops it (exit 0).",
             "rtde-spec serve",
             "rtde-spec serve --model UR10 --scenario moving.yaml",
             "rtde-spec serve --controller 3.15.8 --rtde-port 0 --primary-port 0 --secondary-port 0",
