@@ -270,7 +270,7 @@ def test_speed_pose_spline_cancel_and_freedrive_modes_move_the_arm_as_the_driver
     q0 = s.q()
     via = [q0[0] + 0.2, q0[1], q0[2] - 0.1, *q0[3:]]
     end = [q0[0] + 0.3, q0[1] + 0.1, q0[2] - 0.1, *q0[3:]]
-    late = s.emu.emulator.late_steps
+    late, cut = s.emu.emulator.late_steps, s.emu.emulator.cut_steps
     driver.trajectory_control("START", points=2)
     driver.write_spline_point(via, [0.15, 0.05, 0.0, 0.0, 0.0, 0.0], duration=0.8)
     driver.write_spline_point(end, [0.0] * 6, duration=0.8)
@@ -280,8 +280,8 @@ def test_speed_pose_spline_cancel_and_freedrive_modes_move_the_arm_as_the_driver
     # a server stalled past `skip_after` (a starved CI machine) skips steps, and by design the arm
     # stands still for them (ControllerModel.tick): each stall may cost one step at the spline's
     # speed (< 0.25 rad/s x 2 ms); with none, the arm ends exactly where the driver asked
-    stalls = s.emu.emulator.late_steps - late
-    assert s.q() == pytest.approx(end, abs=RAD + stalls * 0.25 * 0.002), f"{stalls} stalls"
+    stalls, cuts = s.emu.emulator.late_steps - late, s.emu.emulator.cut_steps - cut
+    assert s.q() == pytest.approx(end, abs=RAD + stalls * 0.25 * 0.002), f"{stalls} stalls, {cuts} cut steps"
 
     # FORWARD, canceled: the result says so and the arm stops short of the target
     q0 = s.q()

@@ -127,6 +127,8 @@ class Emulator:
         self._clock: StepClock | None = None
         self._serving = False
         self.late_steps = 0
+        # steps at whose end a program thread was still preempted (its work went on in the next)
+        self.cut_steps = 0
         # per step, when step_timing is set: how late it woke, how late its packages were all
         # written, and how long it was busy (sending, then the next step's arm, program, scenario)
         self.step_lateness: deque[float] = deque(maxlen=max(1, self.config.step_timing))
@@ -247,6 +249,8 @@ class Emulator:
                 model.tick(step)
                 self.faults.apply(model.time)
             busy = time.perf_counter() - woke
+            if work.cut:
+                self.cut_steps += 1
             need = period if work.cut else max(busy, need * NEED_DECAY)
             lead = min(LEAD_MAX, max(LEAD_MIN, 1.25 * need / period + SEND_RESERVE)) * period
             await clock.until(due)
