@@ -59,9 +59,7 @@ def busy_clients(ports: dict[str, int]) -> Iterator[list[int]]:
                     received[0] += 1
                     if done.is_set():
                         return
-        except (OSError, EOFError, ConnectionError, RuntimeError, ValueError):
-            return  # the server went away: what the test is about
-        except Exception:  # the client's own errors for a closed connection
+        except Exception:  # the server went away (the client's errors for a closed connection)
             return
 
     def reader(port: int) -> None:
@@ -102,10 +100,9 @@ def assert_stopped_cleanly(proc: subprocess.Popen[str], ports: dict[str, int]) -
         pytest.fail(f"serve still ran 10 s after the stop signals: {err[-2000:]}")
     assert proc.returncode == 0, err[-2000:]
     assert "Traceback" not in err, err[-2000:]
-    for name, port in ports.items():  # every port closed with it
+    for port in ports.values():  # every port closed with it
         with pytest.raises(ConnectionRefusedError), socket.create_connection((HOST, port), timeout=5):
             pass
-        del name
 
 
 @pytest.mark.parametrize("name", ["SIGTERM", "SIGHUP"])
