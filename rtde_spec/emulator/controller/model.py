@@ -165,6 +165,8 @@ class ControllerModel(RobotModes):
         """One control step of motion (slowed by the speed slider) and of the program."""
         slider = float(self.values.get("target_speed_fraction", 1.0))
         before = [float(v) for v in self.arm.state.q]
+        # a thread cut off at the last step's end commands this step's motion before the arm moves
+        budget = self.program.catch_up() if self.program is not None else None
         try:
             self.arm.step(dt * slider)
             if not all(math.isfinite(float(v)) for v in self.arm.state.q):
@@ -184,7 +186,7 @@ class ControllerModel(RobotModes):
                 return
         program = self.program
         if program is not None:
-            program.advance(dt)
+            program.advance(dt, budget if program is self.program else None)
             if program.finished:
                 self._end_program()
 

@@ -6,8 +6,8 @@ for its step of motion, `sync()` or `sleep()` — then yields, as the controller
 The interpreter has the time left before the step is due, and SLICE of the step in CPU time
 whatever the deadline, so a loaded machine does not change what a program does; the threads
 share it round robin (budgets.py): a thread still running when its share is over is
-preempted and goes on when time is left, else in the next step, so the control loop keeps its
-time and no thread starves the others. A thread that runs
+preempted and goes on when time is left, else at the next step's start (before the arm moves:
+`catch_up`), so the control loop keeps its time and no thread starves the others. A thread that runs
 STEP_BUDGET statements without waiting (a function run inside an expression cannot be
 preempted: this bounds it), or one statement that takes STATEMENT_SECONDS of CPU (a call of
 64,000 arguments; evaluator.py), gets the controller's "Runtime is too much behind" runtime
@@ -71,6 +71,7 @@ class _Thread:
     ran: int = 0  # statements since it last waited
     preempted: bool = False  # its share ran out: it goes on when time is left, not having waited
     rested: bool = False  # a read it made rested for its share's end: it may go on in this step
+    caught: bool = False  # it had its share of this step already, before the arm moved (catch_up)
     loops: list[_Loop] = field(default_factory=list)
 
 
@@ -86,7 +87,7 @@ class Program(Evaluator):
         self.fault: ScriptFault | None = None
         self.cpu = 0.0  # interpreter CPU seconds (its thread's), all steps: benchmarks report it per step
         self.steps_run = 0
-        self.preemptions = 0  # threads sent on to the next step at the end of the slice
+        self.preemptions = 0  # threads sent on to the next step, still preempted at a step's end
         self._epoch = 0
         self._slice_end = 0.0  # perf_counter: the running thread's share may be over (the CPU time says)
         self._cpu_slice_end = 0.0  # thread_time: the running thread's share is over
@@ -103,14 +104,48 @@ class Program(Evaluator):
 
     # --- scheduling --------------------------------------------------------------------------
 
-    def advance(self, dt: float = 0.0) -> None:
+    def catch_up(self) -> Budget | None:
+        """Run the threads preempted at the end of the last step on to their next wait, before
+        the arm takes this step; the step's budget it spent from, for `advance` to go on with.
+
+        The controller's interpreter finishes what a driver's thread computes between two
+        motions (a spline segment's coefficients) inside the step; this one is slower, and a
+        loaded machine can stall it there. The motion that thread then commands starts in
+        this step, as on the controller, instead of the arm holding the last one a step longer
+        (URCL's spline once ended one step at its via point's speed past its end). It is still
+        the last step's work: the clock does not move, and it spends this step's budget. Each
+        late thread gets the share it would have in the step's round, so a thread that never
+        waits does not take the step from the others (`advance` runs it again only if time is left).
+        """
+        live = [t for t in self.threads.values() if not t.done]
+        late = [t for t in live if t.preempted]
+        if not late or self.finished:
+            return None
+        cpu = time.thread_time()
+        budget = Budget(self.step_seconds)
+        try:
+            for thread in late:
+                thread.caught = True
+            self._round(late, budget, len(live))
+        except ScriptFault as fault:
+            self.fail(fault)
+        except PROGRAM_ERRORS as exc:
+            self.fail(ScriptFault(runtime_text(exc), 0, 0))
+        finally:
+            self._reap()
+            self.cpu += time.thread_time() - cpu
+        return budget
+
+    def advance(self, dt: float = 0.0, budget: Budget | None = None) -> None:
+        """One control step: the clock moves by `dt`, each thread runs until it waits (or its
+        share of `budget`, this step's, is over: a new one when None)."""
         if self.finished:
             return
         cpu = time.thread_time()
         self.clock += dt
         self._epoch += 1
         self.steps_run += 1
-        budget = Budget(self.step_seconds)
+        budget = budget or Budget(self.step_seconds)
         try:
             self._watchdogs()
             if self.steps_run % MEMORY_EVERY == 0:
@@ -119,30 +154,41 @@ class Program(Evaluator):
             for thread in threads:
                 if not thread.preempted:  # a thread preempted last step has not waited since
                     thread.ran = 0
-            self._round(threads, budget)
+            # a thread still preempted after its share in catch_up goes on only if time is left
+            first = [t for t in threads if not (t.caught and t.preempted)]
+            for thread in threads:
+                thread.caught = False
+            self._round(first, budget)
             again = [t for t in threads if (t.preempted or t.rested) and not t.done]
             if again and not self.finished and budget.left():  # round robin while time is left
                 self._round(again, budget)
-            if any(t.preempted and not t.done for t in threads):
+            cut = sum(t.preempted and not t.done for t in threads)
+            if cut:
+                self.preemptions += cut
                 budget.preempted()  # the program wanted more of this step than it had
         except ScriptFault as fault:
             self.fail(fault)
         except PROGRAM_ERRORS as exc:  # out of no statement (resuming a chain nested past the limit)
             self.fail(ScriptFault(runtime_text(exc), 0, 0))
         finally:
-            if self.finished:
-                self._end_threads()
-            for key in [k for k, t in self.threads.items() if t.done]:
-                del self.threads[key]
+            self._reap()
             self.cpu += time.thread_time() - cpu
 
-    def _round(self, threads: list[_Thread], budget: Budget) -> None:
-        """Each thread in turn, until it waits or its share of what is left is over."""
+    def _reap(self) -> None:
+        """Threads that ended leave the table; when the program ended, all of them."""
+        if self.finished:
+            self._end_threads()
+        for key in [k for k, t in self.threads.items() if t.done]:
+            del self.threads[key]
+
+    def _round(self, threads: list[_Thread], budget: Budget, sharing: int = 0) -> None:
+        """Each thread in turn, until it waits or its share of what is left is over (shared by
+        `sharing` threads, these first; 0: by these)."""
         for i, thread in enumerate(threads):
             if thread.done or self.finished:
                 continue
             self.current = thread
-            self._slice_end, self._cpu_slice_end = budget.share(len(threads) - i)
+            self._slice_end, self._cpu_slice_end = budget.share(max(sharing, len(threads)) - i)
             thread.preempted = thread.rested = False
             try:
                 next(thread.steps)
@@ -296,7 +342,6 @@ class Program(Evaluator):
         if self._sync:
             return False  # inside an expression: STEP_BUDGET statements bound it
         thread.preempted = True
-        self.preemptions += 1
         return True
 
     def _statement(self, stmt: Stmt, frame: Frame, following: Stmt | None) -> Steps:
