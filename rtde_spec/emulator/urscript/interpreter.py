@@ -23,9 +23,7 @@ step (`evaluator.py`).
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Generator, Iterator
-from dataclasses import dataclass, field
-from enum import Enum
+from collections.abc import Callable, Generator
 from typing import Any
 
 from rtde_spec.emulator.arm.motion import MotionError
@@ -38,6 +36,8 @@ from rtde_spec.emulator.urscript.evaluator import Evaluator, Frame, Return, Step
 from rtde_spec.emulator.urscript.events import ScriptEvent
 from rtde_spec.emulator.urscript.interfaces import Robot, Wait
 from rtde_spec.emulator.urscript.nodes import Script, ScriptFault, Stmt
+from rtde_spec.emulator.urscript.script_threads import Flow, Killed, LoopTurn, ScriptThread, close_thread
+from rtde_spec.emulator.urscript.watchdogs import check_watchdogs
 from rtde_spec.errors import RtdeSpecError
 
 PROGRAM_ERRORS = (ArithmeticError, ValueError, TypeError, IndexError, KeyError, RecursionError, MemoryError)
@@ -49,30 +49,6 @@ MEMORY_EVERY = 10  # control steps between looks at the process's memory
 MAX_THREADS = 64  # threads running at once
 
 __all__ = ["PROGRAM_ERRORS", "SLICE", "STEP_BUDGET", "Program", "runtime_text"]
-
-
-class _Flow(Enum):
-    BREAK = "break"
-    CONTINUE = "continue"
-
-
-@dataclass(eq=False)
-class _Loop:
-    stmt: Stmt
-    epoch: int  # the control step of its latest turn
-
-
-@dataclass(eq=False)
-class _Thread:
-    id: int
-    name: str
-    steps: Iterator[None]
-    done: bool = False
-    ran: int = 0  # statements since it last waited
-    preempted: bool = False  # its share ran out: it goes on when time is left, not having waited
-    rested: bool = False  # a read it made rested for its share's end: it may go on in this step
-    caught: bool = False  # it had its share of this step already, before the arm moved (catch_up)
-    loops: list[_Loop] = field(default_factory=list)
 
 
 class Program(Evaluator):
@@ -97,8 +73,8 @@ class Program(Evaluator):
         line, version = getattr(robot, "line", None), getattr(robot, "version", None)
         known = builtins.names_for(line.id, str(version), line.inherits) if line else builtins.names()
         check(script, known, script_calls.WAITS | set(builtins.WAITING))  # as this version compiles
-        main = _Thread(0, self.name, self._main())
-        self.threads: dict[int, _Thread] = {0: main}
+        main = ScriptThread(0, self.name, self._main())
+        self.threads: dict[int, ScriptThread] = {0: main}
         self.current = main
         self._next_id = 1
 
@@ -147,7 +123,7 @@ class Program(Evaluator):
         self.steps_run += 1
         budget = budget or Budget(self.step_seconds)
         try:
-            self._watchdogs()
+            check_watchdogs(getattr(self, "settings", {}).get("watchdogs"), self.robot, self.name)
             if self.steps_run % MEMORY_EVERY == 0:
                 self._memory()
             threads = [t for t in self.threads.values() if not t.done]
@@ -181,7 +157,7 @@ class Program(Evaluator):
         for key in [k for k, t in self.threads.items() if t.done]:
             del self.threads[key]
 
-    def _round(self, threads: list[_Thread], budget: Budget, sharing: int = 0) -> None:
+    def _round(self, threads: list[ScriptThread], budget: Budget, sharing: int = 0) -> None:
         """Each thread in turn, until it waits or its share of what is left is over (shared by
         `sharing` threads, these first; 0: by these)."""
         for i, thread in enumerate(threads):
@@ -197,25 +173,6 @@ class Program(Evaluator):
                 if thread.id == 0:
                     self.finished = True
                     return
-
-    def _watchdogs(self) -> None:
-        """rtde_set_watchdog: an RTDE input not written within 1/min_frequency s pauses or stops."""
-        watchdogs = getattr(self, "settings", {}).get("watchdogs")
-        if not watchdogs or self.finished:
-            return
-        now = float(getattr(self.robot, "time", 0.0))
-        seen = getattr(self.robot, "inputs_seen", {})
-        for name, (hz, action, since) in watchdogs.items():
-            if action == "ignore" or now - max(seen.get(name, since), since) <= 1.0 / hz:
-                continue
-            text = f"RTDE input watchdog: {name} not written at {hz:g} Hz"
-            if action == "stop":
-                raise ScriptFault(text, 0, 0)
-            pause = getattr(self.robot, "pause_program", None)
-            if pause is not None:
-                self.robot.emit(ScriptEvent("text", text, 0, program=self.name))
-                watchdogs[name] = (hz, action, now)  # once per silence
-                pause()
 
     def _memory(self) -> None:
         """The controller's out-of-memory fault for a program that holds more than MEMORY_BUDGET."""
@@ -259,7 +216,7 @@ class Program(Evaluator):
         sockets.close_all(self)
         for thread in list(self.threads.values()):
             if thread is not self.current:
-                _close(thread)
+                close_thread(thread)
         self.threads.clear()
 
     def start_thread(self, name: str, line: int, column: int) -> int:
@@ -269,7 +226,7 @@ class Program(Evaluator):
         function = self.script.functions[name]
         handle = self._next_id
         self._next_id += 1
-        self.threads[handle] = _Thread(handle, name, self._thread_body(function.body))
+        self.threads[handle] = ScriptThread(handle, name, self._thread_body(function.body))
         return handle
 
     def _kill(self, handle: Any) -> None:
@@ -277,8 +234,8 @@ class Program(Evaluator):
         if thread is None:
             return  # a thread that ended, or a handle of 0: nothing to do, as on the controller
         if thread is self.current:
-            raise _Killed
-        _close(thread)
+            raise Killed
+        close_thread(thread)
 
     def _main(self) -> Wait:
         if self.script.wrapped:  # the program def's own variables are the program's globals
@@ -289,7 +246,7 @@ class Program(Evaluator):
     def _thread_body(self, body: list[Stmt]) -> Wait:
         try:
             yield from self._block(body, {})
-        except _Killed:
+        except Killed:
             return
 
     # --- statements --------------------------------------------------------------------------
@@ -310,7 +267,7 @@ class Program(Evaluator):
                     self.call_now(stmt, frame)  # a call that cannot wait, at once
                     continue
                 signal = yield from self._statement(stmt, frame, body[i + 1] if i + 1 < len(body) else None)
-            except (ScriptFault, _Killed, GeneratorExit):
+            except (ScriptFault, Killed, GeneratorExit):
                 raise
             except MotionError as exc:
                 raise ScriptFault(str(exc), stmt.line, 1) from exc
@@ -371,7 +328,7 @@ class Program(Evaluator):
         if kind == "while":
             return (yield from self._while(stmt, frame))
         if kind in ("break", "continue"):
-            return _Flow(kind)
+            return Flow(kind)
         if kind == "return":
             if stmt.expr is None:
                 return Return(None)
@@ -403,7 +360,7 @@ class Program(Evaluator):
 
     def _while(self, stmt: Stmt, frame: Frame) -> Steps:
         branch = stmt.branches[0]
-        loop = _Loop(stmt, self._epoch)
+        loop = LoopTurn(stmt, self._epoch)
         loops = self.current.loops
         loops.append(loop)
         try:
@@ -414,7 +371,7 @@ class Program(Evaluator):
                 if not (yield from self.condition(branch, frame)):
                     return None
                 signal = yield from self._block(branch.body, frame)
-                if signal is _Flow.BREAK:
+                if signal is Flow.BREAK:
                     return None
                 if isinstance(signal, Return):
                     return signal
@@ -425,20 +382,6 @@ class Program(Evaluator):
     def wait_for(self, done: Callable[[], bool]) -> Wait:
         while not done():
             yield
-
-
-class _Killed(Exception):
-    """A thread killing itself: unwinds its own generator."""
-
-
-def _close(thread: _Thread) -> None:
-    thread.done = True
-    close = getattr(thread.steps, "close", None)
-    if close is not None:
-        try:
-            close()
-        except (ValueError, RuntimeError):  # running or refusing to close: it is done all the same
-            pass
 
 
 Runner = Generator[None, None, None]
