@@ -11,6 +11,7 @@ import pytest
 
 from . import durations
 from .fixed_ports import fixed_ports
+from .spinning_threads import spinning_after
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
@@ -40,3 +41,12 @@ def _fixed_ports(request: pytest.FixtureRequest) -> Iterator[None]:
         return
     with fixed_ports(*marker.args):
         yield
+
+
+@pytest.fixture(scope="module", autouse=True)
+def _no_thread_left_spinning(request: pytest.FixtureRequest) -> Iterator[None]:
+    """A thread an earlier module left running that keeps a core busy fails here, named
+    (tests/spinning_threads.py): it would slow every later test of this process."""
+    yield
+    spinning = spinning_after(request.module.__name__)
+    assert not spinning, "; ".join(spinning)
