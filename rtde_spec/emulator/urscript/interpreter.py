@@ -88,7 +88,7 @@ class Program(Evaluator):
         motions (a spline segment's coefficients) inside the step; this one is slower, and a
         loaded machine can stall it there. The motion that thread then commands starts in
         this step, as on the controller, instead of the arm holding the last one a step longer
-        (URCL's spline once ended one step at its via point's speed past its end). It is still
+        (a URCL-style spline once ended one step at its via point's speed past its end). It is still
         the last step's work: the clock does not move, and it spends this step's budget. Each
         late thread gets the share it would have in the step's round, so a thread that never
         waits does not take the step from the others (`advance` runs it again only if time is left).
