@@ -186,7 +186,7 @@ class ControllerModel(RobotModes):
                 return
         program = self.program
         if program is not None:
-            program.advance(dt, budget if program is self.program else None)
+            program.advance(dt, budget)
             if program.finished:
                 self._end_program()
 

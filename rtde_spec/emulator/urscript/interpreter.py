@@ -23,7 +23,8 @@ step (`evaluator.py`).
 from __future__ import annotations
 
 import time
-from collections.abc import Callable, Generator
+from collections.abc import Callable, Generator, Iterator
+from contextlib import contextmanager
 from typing import Any
 
 from rtde_spec.emulator.arm.motion import MotionError
@@ -97,19 +98,11 @@ class Program(Evaluator):
         late = [t for t in live if t.preempted]
         if not late or self.finished:
             return None
-        cpu = time.thread_time()
         budget = Budget(self.step_seconds)
-        try:
+        with self._running():
             for thread in late:
                 thread.caught = True
             self._round(late, budget, len(live))
-        except ScriptFault as fault:
-            self.fail(fault)
-        except PROGRAM_ERRORS as exc:
-            self.fail(ScriptFault(runtime_text(exc), 0, 0))
-        finally:
-            self._reap()
-            self.cpu += time.thread_time() - cpu
         return budget
 
     def advance(self, dt: float = 0.0, budget: Budget | None = None) -> None:
@@ -117,12 +110,11 @@ class Program(Evaluator):
         share of `budget`, this step's, is over: a new one when None)."""
         if self.finished:
             return
-        cpu = time.thread_time()
         self.clock += dt
         self._epoch += 1
         self.steps_run += 1
         budget = budget or Budget(self.step_seconds)
-        try:
+        with self._running():
             check_watchdogs(getattr(self, "settings", {}).get("watchdogs"), self.robot, self.name)
             if self.steps_run % MEMORY_EVERY == 0:
                 self._memory()
@@ -142,20 +134,24 @@ class Program(Evaluator):
             if cut:
                 self.preemptions += cut
                 budget.preempted()  # the program wanted more of this step than it had
+
+    @contextmanager
+    def _running(self) -> Iterator[None]:
+        """Around running threads: a fault ends the program; threads that ended leave the table
+        (all of them when the program ended); the interpreter's CPU time is counted."""
+        cpu = time.thread_time()
+        try:
+            yield
         except ScriptFault as fault:
             self.fail(fault)
         except PROGRAM_ERRORS as exc:  # out of no statement (resuming a chain nested past the limit)
             self.fail(ScriptFault(runtime_text(exc), 0, 0))
         finally:
-            self._reap()
+            if self.finished:
+                self._end_threads()
+            for key in [k for k, t in self.threads.items() if t.done]:
+                del self.threads[key]
             self.cpu += time.thread_time() - cpu
-
-    def _reap(self) -> None:
-        """Threads that ended leave the table; when the program ended, all of them."""
-        if self.finished:
-            self._end_threads()
-        for key in [k for k, t in self.threads.items() if t.done]:
-            del self.threads[key]
 
     def _round(self, threads: list[ScriptThread], budget: Budget, sharing: int = 0) -> None:
         """Each thread in turn, until it waits or its share of what is left is over (shared by
