@@ -11,7 +11,7 @@ import pytest
 
 from . import durations
 from .fixed_ports import fixed_ports
-from .spinning_threads import spinning_after
+from .spinning_threads import WATCH
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
@@ -48,5 +48,13 @@ def _no_thread_left_spinning(request: pytest.FixtureRequest) -> Iterator[None]:
     """A thread an earlier module left running that keeps a core busy fails here, named
     (tests/spinning_threads.py): it would slow every later test of this process."""
     yield
-    spinning = spinning_after(request.module.__name__)
+    spinning = WATCH.spinning_after(request.module.__name__)
+    assert not spinning, "; ".join(spinning)
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _no_thread_left_spinning_by_the_last_module() -> Iterator[None]:
+    """The same for the last module a process runs: no module comes after it to look."""
+    yield
+    spinning = WATCH.spinning_at_the_end()
     assert not spinning, "; ".join(spinning)
