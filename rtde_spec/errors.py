@@ -52,6 +52,10 @@ class RtdeSpecError(Exception):
         moved.args = (moved._render(),)
         return moved
 
+    def extend(self, more: str) -> None:
+        """Add what the fault meant further out (an output not written), after what it says."""
+        self.args = (f"{self.args[0]}; {more}",)
+
     def _render(self) -> str:
         where = [] if self.subject is None else [self.subject]
         if self.package is not None:

@@ -355,3 +355,66 @@ def test_a_recipe_or_a_recipe_list_that_is_a_fifo_or_a_device_is_named_as_such(t
         )
         assert done.returncode == 2, (argv, done.stderr)
         assert "not a regular file" in done.stderr and ("FIFO" in done.stderr or "device" in done.stderr)
+
+
+# a strict decode's fault: -o FILE is put in place only whole
+
+
+@pytest.mark.parametrize("suffix", ["csv", "parquet", "jsonl"])
+def test_a_decode_that_stops_at_a_fault_keeps_the_file_there(
+    tmp_path: Path, suffix: str, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """A truncated input ends a strict decode with its fault: the 19 whole packages before it do
+    not replace the good file of an earlier run, the error says so, no temporary file is left;
+    standard output still gets every package before the fault, and --lenient writes them."""
+    from rtde_spec.recipes.codec import RecipeCodec
+
+    names = ["timestamp", "robot_mode", "actual_q"]
+    codec = RecipeCodec.for_names(names, "output")
+    packages = b"".join(
+        codec.encode_package({"timestamp": i / 500, "robot_mode": 7, "actual_q": (0.1 * i,) * 6}, 1)
+        for i in range(20)
+    )
+    whole, cut = tmp_path / "whole.bin", tmp_path / "cut.bin"
+    whole.write_bytes(packages)
+    cut.write_bytes(packages[:-9])
+    out = tmp_path / f"out.{suffix}"
+    recipe = ",".join(names)
+    assert run(capsys, "decode", str(whole), "--recipe", recipe, "-o", str(out))[0] == 0
+    before = state(tmp_path)
+    code, err = run(capsys, "decode", str(cut), "--recipe", recipe, "-o", str(out))
+    assert code == 1
+    assert state(tmp_path) == before  # the file of the earlier run, byte for byte
+    assert f"the 19 packages before it were not written to {out}" in err, err
+    assert "the file that was there is as it was" in err and "--lenient" in err, err
+    no_temp_files(tmp_path)
+    fresh = tmp_path / f"fresh.{suffix}"
+    code, err = run(capsys, "decode", str(cut), "--recipe", recipe, "-o", str(fresh))
+    assert code == 1 and not fresh.exists() and "no partial file)" in err, err
+    if suffix == "jsonl":  # standard output has streamed them: they are there before the error
+        result = cli("decode", str(cut), "--recipe", recipe, "--jsonl")
+        assert result.returncode == 1 and len(result.stdout.splitlines()) == 19, result.stderr
+    assert run(capsys, "decode", str(cut), "--recipe", recipe, "-o", str(fresh), "--lenient")[0] == 0
+    assert fresh.exists()
+
+
+def test_a_primary_decode_that_stops_at_a_fault_keeps_the_file_there(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The same for primary/secondary messages: a message cut short keeps the earlier file."""
+    import yaml
+
+    from tests.helpers import DATA
+
+    golden = yaml.safe_load((DATA / "primary_golden.yaml").read_text())
+    stream = b"".join(bytes.fromhex(c["hex"]) for c in golden[:6])
+    whole, cut = tmp_path / "whole.bin", tmp_path / "cut.bin"
+    whole.write_bytes(stream)
+    cut.write_bytes(stream[:-3])
+    out = tmp_path / "out.jsonl"
+    assert run(capsys, "decode", "--protocol", "primary", str(whole), "-o", str(out))[0] == 0
+    before = state(tmp_path)
+    code, err = run(capsys, "decode", "--protocol", "primary", str(cut), "-o", str(out))
+    assert code == 1 and state(tmp_path) == before, err
+    assert "the 5 messages before it were not written" in err and "as it was" in err, err
+    no_temp_files(tmp_path)

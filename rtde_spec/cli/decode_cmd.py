@@ -1,8 +1,9 @@
 """rtde-spec decode HEX_OR_FILE: packages to a table, JSON, JSON Lines, CSV or Parquet, streaming.
 
 Files and stdin are read in pieces as they come (stdin as soon as bytes arrive), so
-memory follows what has arrived, never what a size field claims. Every package
-decoded before a fault is written before the error; --lenient skips and counts what
+memory follows what has arrived, never what a size field claims. On standard output every
+package decoded before a fault is written before the error; a file (-o) is put in place only
+whole, so a fault leaves a file already there as it was. --lenient skips and counts what
 does not decode instead (stderr says what, and where) and exits 0.
 """
 
@@ -25,7 +26,7 @@ from rtde_spec.cli.arguments import RECIPE_FILE_HELP, existing_file, primary_ver
 from rtde_spec.cli.conventions import describe, output_file
 from rtde_spec.cli.inputs import from_hex_text, read_input, refuse_special, reject_capture
 from rtde_spec.cli.options import add_lenient
-from rtde_spec.cli.report import report_skipped
+from rtde_spec.cli.report import close_output, report_skipped
 from rtde_spec.errors import DecodeError, RtdeSpecError, UsageError
 
 if TYPE_CHECKING:
@@ -47,7 +48,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
             "Decodes RTDE or primary/secondary packages from hex, a file of bytes (or hex text) or standard "
             "input, into a table, JSON (--json: one array), JSON Lines (--jsonl), CSV, Parquet or MCAP "
             "(-o FILE, the format from its suffix). The output streams, so files of any size decode in "
-            "constant memory; a fault stops with its byte offset after every package before it.",
+            "constant memory; a fault stops with its byte offset, on standard output after every package "
+            "before it; -o FILE is put in place only whole (a file there stays as it was).",
             "rtde-spec decode 00045601 --from controller",
             "rtde-spec decode session.bin --from client --jsonl",
             "rtde-spec decode data.bin --recipe outputs.txt -o data.parquet",
@@ -249,8 +251,10 @@ def run(args: argparse.Namespace) -> int:
     writer = open_writer(fmt, args.output, background=True)
     try:
         total = decode_into(writer, args, codec, fmt)
-    finally:
-        writer.close()
+    except BaseException as exc:
+        close_output(writer, exc, "package")
+        raise
+    close_output(writer, None, "package")
     if total == 0:
         raise RtdeSpecError("no packages in the input")
     return 0

@@ -8,7 +8,7 @@ from typing import TYPE_CHECKING, Any
 from pydantic import BaseModel
 
 from rtde_spec.capture.tables.rows import RAW, text_columns
-from rtde_spec.cli.report import report_skipped
+from rtde_spec.cli.report import close_output, report_skipped
 from rtde_spec.errors import DecodeError, RtdeSpecError
 from rtde_spec.output.describe import describe
 from rtde_spec.output.text import safe_text
@@ -139,15 +139,18 @@ def run_primary(
                 decoder.close()
             except RtdeSpecError as exc:
                 error = exc
-    finally:
+    except BaseException as exc:
         if writer is not None:
-            writer.close()
+            close_output(writer, exc, "message")
+        raise
+    fault = error if isinstance(error, DecodeError) and lenient else None
+    if writer is not None:
+        close_output(writer, error if fault is None else None, "message")
     if fmt == "table" and decoder.version is not None:
         source = "the version message" if decoder.announced else "--controller"
         print(f"controller version (from {source}): {decoder.version}")
     if not received:
         raise RtdeSpecError("no packages in the input")
-    fault = error if isinstance(error, DecodeError) and lenient else None
     if lenient:
         report_skipped(decoder.skipped, fault, left(fault.offset if fault else None), "message")
     if error is not None and fault is None:

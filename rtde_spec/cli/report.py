@@ -7,6 +7,7 @@ from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
     from rtde_spec.errors import DecodeError
+    from rtde_spec.output.base import Writer
     from rtde_spec.wire.framing import Skipped
 
 EXIT_OK, EXIT_ERROR, EXIT_USAGE = 0, 1, 2
@@ -31,4 +32,26 @@ def report_skipped(skipped: Skipped, fault: DecodeError | None, unframed: str, u
         print(
             f"note: --lenient: the input from byte {fault.offset} on ({unframed}) was not decoded: {fault}",
             file=sys.stderr,
+        )
+
+
+def close_output(writer: Writer, failure: BaseException | None, unit: str) -> None:
+    """End a decode's output. Standard output has streamed every `unit` before a fault: it is
+    flushed. A file is in place only when the run ended well: after a fault (strict), an error
+    or an interrupt it is dropped, a file that was there stays as it was, and the fault says
+    so (a partial file in place of a good one would be data lost with no word)."""
+    part = writer.part
+    if failure is None or part is None:
+        writer.close()
+        return
+    rows = writer.rows
+    writer.abort()
+    from rtde_spec.cli.conventions import plural
+    from rtde_spec.errors import RtdeSpecError
+
+    if rows and isinstance(failure, RtdeSpecError):
+        was = "; the file that was there is as it was" if part.replaces else ""
+        failure.extend(
+            f"the {plural(rows, unit)} before it were not written to {part.target} (no partial file{was}); "
+            "--lenient skips what does not decode and writes the rest"
         )
