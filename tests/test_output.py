@@ -288,3 +288,53 @@ def test_a_killed_split_run_of_a_long_name_leaves_its_parts_found(tmp_path: Path
         stale.append(temp.with_name(temp.name.rpartition("-")[0] + f"-{dead.pid}"))
         stale[-1].write_bytes(b"cut off")
     assert leftovers(target) == sorted(stale)
+
+
+def test_a_second_file_of_a_target_not_yet_in_place_gets_its_own_temporary_name(tmp_path: Path) -> None:
+    """`capture --jobs 2` given one capture twice: a worker's second decode truncated the tables
+    it had prepared for the parent to place (the same `.NAME.part-PID`), and the parent's second
+    rename failed as "its folder does not exist". Each file not yet in place has its own name,
+    and one a killed run left under the new name is found as a leftover."""
+    import os
+    import subprocess
+
+    from rtde_spec.output.partfile import Part
+    from rtde_spec.output.tempnames import leftovers, temp_path
+
+    target = tmp_path / "t.parquet"
+    first = Part(target)
+    first.temp.write_bytes(b"prepared, not yet placed")
+    second = Part(target)
+    assert second.temp != first.temp and second.temp.name == f"{first.temp.name}-2"
+    second.temp.write_bytes(b"the second")
+    first.commit()
+    assert target.read_bytes() == b"prepared, not yet placed"
+    second.commit()
+    assert target.read_bytes() == b"the second" and [p.name for p in tmp_path.iterdir()] == ["t.parquet"]
+    dead = subprocess.Popen(["true"])
+    dead.wait()
+    stale = tmp_path / temp_path(target).name.replace(f"-{os.getpid()}", f"-{dead.pid}-2")
+    stale.write_bytes(b"cut off")
+    assert leftovers(target) == [stale]
+
+
+def test_a_capture_given_twice_is_decoded_once(tmp_path: Path) -> None:
+    """A folder and a glob that both hold a capture: it was decoded twice into the same tables,
+    its rows counted twice in the report; with --jobs 2 the second could fail the command. A
+    glob that matches a folder searches it, as the folder given (it was an "Is a directory")."""
+    from rtde_spec import build
+    from tests.capture_files import Conversation, write
+
+    folder = tmp_path / "captures"
+    folder.mkdir()
+    conv = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30004))
+    conv.handshake()
+    conv.send("client", build("request_protocol_version", protocol_version=2))
+    write(folder / "one.pcap", [conv])
+    for jobs in ("1", "2"):
+        out = tmp_path / f"out{jobs}"
+        done = cli("capture", str(folder), str(folder / "*.pcap"), str(tmp_path / "capt*"), "-o", str(out),
+                   "--jobs", jobs, "--lenient")  # fmt: skip
+        assert done.returncode == 0, done.stderr
+        assert f"note: given more than once, decoded once: {folder / 'one.pcap'}" in done.stderr
+        assert done.stdout.count("one.pcap: ") == 1, done.stdout

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import argparse
 import glob
+import os
 import re
 import sys
 from pathlib import Path
@@ -168,7 +169,13 @@ def expand(patterns: list[str]) -> list[Path]:
 
             files += capture_files(path)
         elif any(ch in pattern for ch in "*?["):  # a pattern the shell left as it was
-            files += sorted(Path(f) for f in glob.glob(pattern, recursive=True))
+            for match in sorted(Path(f) for f in glob.glob(pattern, recursive=True)):
+                if match.is_dir():  # a folder it matched is searched as a folder given
+                    from rtde_spec.capture.reading.series import capture_files
+
+                    files += capture_files(match)
+                else:
+                    files.append(match)
         elif path.exists():  # a file, or a pipe (read to its end)
             files.append(path)
         else:
@@ -180,7 +187,24 @@ def expand(patterns: list[str]) -> list[Path]:
             f"no capture files in {', '.join(patterns)} (folders are searched for "
             f"{', '.join(SUFFIXES)}, numbered or compressed; a glob matched nothing)"
         )
-    return files
+    return once_each(files)
+
+
+def once_each(files: list[Path]) -> list[Path]:
+    """Each file once, where first given: a file given twice (by a folder and a glob, or two
+    names of it) would decode into the same tables twice, its rows counted twice."""
+    seen: dict[str, Path] = {}
+    again: list[Path] = []
+    for path in files:
+        key = str(path) if str(path) == STDIN else os.path.realpath(path)
+        if key in seen:
+            again.append(path)
+        else:
+            seen[key] = path
+    if again:
+        names = ", ".join(safe_text(str(p)) for p in dict.fromkeys(again))
+        print(f"note: given more than once, decoded once: {names}", file=sys.stderr)
+    return list(seen.values())
 
 
 def captures_of(files: list[Path]) -> list[CapturePath]:

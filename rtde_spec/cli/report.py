@@ -41,8 +41,8 @@ def close_output(writer: Writer, failure: BaseException | None, unit: str) -> No
     or an interrupt it is dropped, a file that was there stays as it was, and the fault says
     so (a partial file in place of a good one would be data lost with no word)."""
     part = writer.part
-    if failure is None or part is None:
-        writer.close()
+    if failure is None or part is None or part.failed is not None:
+        writer.close()  # a failed write (a full disk) raises here, saying what stays at the name
         return
     rows = writer.rows
     writer.abort()

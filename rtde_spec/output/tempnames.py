@@ -2,8 +2,10 @@
 finding those a killed run left behind (`record` says so and removes them).
 
 `.NAME.part-PID`, beside NAME: hidden, and the process id tells a live writer's file from a dead
-one's. A name too long to take the mark (a legal 244-byte output) is shortened, with a checksum
-of the whole so its parts' temporary names stay apart.
+one's. A second file of the same target while the first is not yet in place (a capture given
+twice, its first tables prepared for the parent to place) is `.NAME.part-PID-2`, and so on: one
+must not truncate the other. A name too long to take the mark (a legal 244-byte output) is
+shortened, with a checksum of the whole so its parts' temporary names stay apart.
 """
 
 from __future__ import annotations
@@ -17,15 +19,26 @@ NAME_MAX = 255  # bytes of one file name on Linux's file systems (and macOS's)
 
 
 def temp_path(target: Path) -> Path:
-    """Where `target` is written until it is renamed into place."""
-    return target.with_name(f"{_temp_stem(target.name)}{PART_MARK}{os.getpid()}")
+    """Where `target` is written until it is renamed into place: a name no file has yet."""
+    base = f"{_temp_stem(target.name)}{PART_MARK}{os.getpid()}"
+    path, count = target.with_name(base), 1
+    while os.path.lexists(path):  # this process's own, not yet in place: the same target again
+        count += 1
+        path = target.with_name(f"{base}-{count}")
+    return path
+
+
+def _pid(tail: str) -> int | None:
+    """The process id of a temporary name's tail after its mark (`PID` or `PID-N`)."""
+    pid = tail.split("-", 1)[0]
+    return int(pid) if pid.isdigit() else None
 
 
 def _temp_stem(name: str) -> str:
     """The temporary file's name before its mark: `.NAME`, or for a name too long to take the
     mark and a process id (a legal 244-byte output), its start and a checksum of the whole."""
     stem = f".{name}"
-    room = NAME_MAX - len(PART_MARK) - 10  # a pid has at most 7 digits on Linux; 3 to spare
+    room = NAME_MAX - len(PART_MARK) - 16  # a pid has at most 7 digits on Linux, then -N; 3 to spare
     raw = os.fsencode(stem)
     if len(raw) <= room:
         return stem
@@ -44,15 +57,16 @@ def leftovers(target: Path) -> list[Path]:
         return []
     shortened = _long_temp_stems(target) if _temp_stem(target.name) != f".{target.name}" else set()
     for name in names:
-        head, _, pid = name.rpartition(PART_MARK)
+        head, _, tail = name.rpartition(PART_MARK)
+        pid = _pid(tail)
         if head in shortened:  # a long name's temporary file (or one of its parts')
-            if pid.isdigit() and not _alive(int(pid)):
+            if pid is not None and not _alive(pid):
                 found.append(folder / name)
             continue
         if not name.startswith(f".{stem}") or PART_MARK not in name:
             continue
-        real, _, pid = name[1:].rpartition(PART_MARK)
-        if not real.endswith(suffix) or not pid.isdigit() or _alive(int(pid)):
+        real = name[1:].rpartition(PART_MARK)[0]
+        if not real.endswith(suffix) or pid is None or _alive(pid):
             continue
         if real == target.name or real[len(stem) :].lstrip("_").removesuffix(suffix).isdigit():
             found.append(folder / name)
