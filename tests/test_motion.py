@@ -211,3 +211,21 @@ def test_a_new_program_replaces_the_running_one() -> None:
     until_stopped(model)
     assert model.values["actual_q"][0] == pytest.approx(0.0)
     assert math.isclose(model.values["actual_TCP_pose"][0], kin.forward(arm_model("UR5e"), HOME_Q)[0])
+
+
+def test_a_servoj_stream_reports_the_speed_it_moves_at_and_rests_when_it_ends() -> None:
+    """ur_rtde's servoJ loop: one servoj(t=0.002) a control step, each reached within its step.
+    actual_qd and the TCP speed were 0 all through the stream, as if the arm stood still."""
+    model = ControllerModel("5.15.0")
+    rate = -0.2  # rad/s on the base joint
+    targets = [[q + (rate * (i + 1) / HZ if j == 0 else 0) for j, q in enumerate(HOME_Q)] for i in range(100)]
+    lines = [f"servoj({q}, t=0.002)" for q in targets]
+    model.run_script("def stream():\n  " + "\n  ".join(lines) + "\n  sync()\n  sync()\nend\n")
+    steps = until_stopped(model)
+    moving = [s for s in steps if s["actual_q"][0] != steps[-1]["actual_q"][0]]
+    assert len(moving) >= 90
+    speeds = [s["actual_qd"][0] for s in moving]
+    assert all(qd == pytest.approx(rate) for qd in speeds[5:]), speeds
+    assert max(abs(s["actual_TCP_speed"][1]) + abs(s["actual_TCP_speed"][0]) for s in moving) > 0.01
+    assert model.values["actual_q"][0] == pytest.approx(HOME_Q[0] + rate * 100 / HZ, abs=1e-3)
+    assert not np.any(model.values["actual_qd"])  # the stream ended: at rest

@@ -93,6 +93,7 @@ class Motion:
     blend: float = 0.0
     line: int = 0  # the script line that started it, for a fault on the way
     holds: bool = False  # speedj/speedl keep their velocity after the call returns
+    ends_moving: bool = False  # the step that ends it reports its speed; the arm rests a step later
 
     def __init__(self, start: State) -> None:
         self.start, self.t, self.last = start, 0.0, start
@@ -275,7 +276,13 @@ def _tool_speed(arm: ArmModel, tcp: Floats, start: State) -> np.ndarray:
 
 
 class Servo(Motion):
-    """servoj: straight to q over time t (the controller's own smoothing is not modelled)."""
+    """servoj: straight to q over time t (the controller's own smoothing is not modelled).
+
+    The step that reaches q still moved at the servo's speed, and reports it (`ends_moving`):
+    a stream of servoj, each reached within its step, is an arm moving at the stream's speed,
+    not one standing still (actual_qd and the TCP speed were 0 all through such a stream)."""
+
+    ends_moving = True
 
     def __init__(self, start: State, target: Floats, t: float) -> None:
         super().__init__(start)
@@ -283,7 +290,7 @@ class Servo(Motion):
 
     def sample(self, t: float) -> State:
         f = min(1.0, t / self.span)
-        qd = (self.target - self.start.q) / self.span if f < 1 else np.zeros(6)
+        qd = (self.target - self.start.q) / self.span
         return State(self.start.q + (self.target - self.start.q) * f, qd, np.zeros(6))
 
     @property

@@ -37,13 +37,18 @@ class Arm:
         self.motion = motion
 
     def step(self, dt: float) -> None:
-        """Advance the motion; a finished one (not a held speed) leaves the arm at rest."""
+        """Advance the motion; a finished one (not a held speed) leaves the arm at rest (a servo
+        target reached: at the next step, unless another servoj came)."""
         if self.motion is None:
+            if self.state.qd.any():  # a servo target reached last step, and no new one
+                self.state = rest(self.state.q)
+                self.revision += 1
             return
         self.revision += 1
         self.state = self.motion.step(dt)
         if self.motion.done and not self.motion.holds:
-            self.state = rest(self.state.q)
+            if not self.motion.ends_moving:
+                self.state = rest(self.state.q)
             self.motion = None
 
     def halt(self) -> None:
