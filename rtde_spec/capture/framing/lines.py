@@ -134,7 +134,14 @@ class LineFraming:
             self.skipped += len(self.buf)
             self.buf.clear()
             self.resync = True
-        return [bytes(line.rstrip(b"\r")) for line in lines]
+        out = []
+        for line in lines:
+            if len(line) > self.limit:  # dropped whole too: the same line in pieces is dropped above
+                self.too_long += 1
+                self.skipped += len(line) + 1
+                continue
+            out.append(bytes(line.rstrip(b"\r")))
+        return out
 
     def finish(self) -> list[bytes]:
         """A last line without its newline (a reply cut by the end of the capture) is kept."""
