@@ -390,3 +390,52 @@ def test_a_stream_of_a_newer_controller_takes_the_straight_line_decoders() -> No
         reader.walk = general
     assert walked == ["robot_mode_data", "masterboard_data"]  # only for the 1.8 stream
     assert message == decode_message(state)
+
+
+def closed(args: list[str], *redirect: str) -> subprocess.CompletedProcess[str]:
+    """The command run with its standard streams as a shell's `>&-` (closed) or `2<FILE` leave them."""
+    command = " ".join([sys.executable, "-m", "rtde_spec", *args, *redirect])
+    return subprocess.run(["sh", "-c", command], capture_output=True, text=True, cwd=ROOT)
+
+
+def test_a_command_started_with_stdout_or_stderr_closed_runs_and_refuses_only_data_it_would_lose(
+    tmp_path: Path,
+) -> None:
+    """`>&-`: every print failed with a traceback (exit 1 after a capture had written its tables);
+    a stderr descriptor a launcher had left on a read-only file (pyenv's shim) made every error
+    message fail, a usage error exit 1. Now messages go nowhere and exit codes stand; data for
+    standard output itself is refused, as it would be lost."""
+    from tests.capture_files import Conversation, write
+
+    capture = tmp_path / "one.pcap"
+    conv = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30004))
+    conv.handshake()
+    conv.send("client", build("request_protocol_version", protocol_version=2))
+    conv.send("server", build("request_protocol_version_reply", accepted=True))
+    write(capture, [conv])
+    assert closed(["fields"], ">&-").returncode == 0
+    done = closed(["decode", "00045601", "--jsonl"], ">&-")
+    assert done.returncode == 2 and "standard output is closed" in done.stderr, done.stderr
+    for redirect in (">&-", "2>&-"):
+        out = tmp_path / f"out{len(redirect)}"
+        done = closed(["capture", str(capture), "-o", str(out), "--lenient"], redirect)
+        assert done.returncode == 0, done.stderr
+        assert (out / "rtde_setup").is_dir() and "Traceback" not in done.stderr
+    assert closed(["decode", "nosuch.bin"], "2>&-").returncode == 2
+    assert closed(["decode", "nosuch.bin"], f"2<{capture}").returncode == 2  # a read-only descriptor 2
+
+
+def test_ctrl_c_while_the_command_starts_is_an_interrupt_not_a_traceback() -> None:
+    """A KeyboardInterrupt while `python -m rtde_spec` imports the command line: exit 130."""
+    code = (
+        "import builtins, runpy\n"
+        "real = builtins.__import__\n"
+        "def importing(name, *args, **kwargs):\n"
+        "    if name == 'rtde_spec.cli.main':\n"
+        "        raise KeyboardInterrupt\n"
+        "    return real(name, *args, **kwargs)\n"
+        "builtins.__import__ = importing\n"
+        "runpy.run_module('rtde_spec', run_name='__main__')\n"
+    )
+    done = subprocess.run([sys.executable, "-c", code, "fields"], capture_output=True, text=True, cwd=ROOT)
+    assert done.returncode == 130 and done.stderr == "interrupted\n", done.stderr

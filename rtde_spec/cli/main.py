@@ -27,8 +27,10 @@ from collections.abc import Callable
 from typing import NoReturn
 
 try:  # now: out of descriptors, an import then would fail too
+    import fcntl
     import resource
 except ImportError:  # not POSIX
+    fcntl = None  # type: ignore[assignment]
     resource = None  # type: ignore[assignment]
 
 # numpy's OpenBLAS starts a thread per core when it loads, and they spin ~0.1 s of CPU while a
@@ -136,6 +138,7 @@ def entry() -> NoReturn:
     By then every output is closed and in place; stdout and stderr are flushed here. Only when
     nothing else runs: a thread still alive, or an exception (a usage error's SystemExit
     included), leaves the usual way. Code calling `main()` itself is not affected."""
+    _stand_in_for_closed_streams()
     code = main()
     if threading.active_count() > 1:  # not ours to cut short: Python joins them as usual
         sys.exit(code)
@@ -151,6 +154,40 @@ def entry() -> NoReturn:
         pass
     logging.shutdown()  # a user's handlers (a file) flushed and closed, as at a normal exit
     os._exit(code)
+
+
+def _stand_in_for_closed_streams() -> None:
+    """Started with stdout or stderr closed (`>&-`), Python leaves `sys.stdout` None and every
+    print failed with a traceback (a capture that had written all its tables exited 1), and the
+    first file the command opened took descriptor 1 or 2, where a library's own messages would
+    land in it. The closed descriptors get /dev/null; summaries and messages go nowhere, as to a
+    closed terminal; data meant for standard output is refused by `output.writers.open_writer`
+    (`closed_stream`), as it would be lost."""
+    for fd, name in ((0, "stdin"), (1, "stdout"), (2, "stderr")):
+        if not _usable(fd):
+            null = os.open(os.devnull, os.O_RDWR)
+            if null != fd:
+                os.dup2(null, fd)
+                os.close(null)
+            if fd:  # the stream Python made of a file that took the descriptor: not ours to write
+                setattr(sys, name, None)
+        if getattr(sys, name) is None:
+            stand_in = open(fd, "r" if fd == 0 else "w", encoding="utf-8", closefd=False)
+            stand_in.closed_stream = True  # type: ignore[attr-defined]
+            setattr(sys, name, stand_in)
+
+
+def _usable(fd: int) -> bool:
+    """Open, and for output not read-only: a closed stderr's descriptor can be a file a
+    launcher opened (pyenv's shim script, read-only), and every message to it failed."""
+    try:
+        if fcntl is None:  # no access mode to read: open is all that is known
+            os.fstat(fd)
+            return True
+        flags = fcntl.fcntl(fd, fcntl.F_GETFL)
+    except OSError:
+        return False
+    return fd == 0 or flags & os.O_ACCMODE != os.O_RDONLY
 
 
 def _worded(exc: BaseException) -> str:

@@ -245,6 +245,8 @@ def open_writer(
     if path is None:
         if cls.NEEDS_PATH:
             raise UsageError(f"{fmt} output needs a file: add -o FILE.{fmt}")
+        if getattr(sys.stdout, "closed_stream", False) or sys.stdout is None:
+            raise UsageError("standard output is closed (>&-): what it would hold is lost; add -o FILE")
         out: IO[bytes] = BackgroundStream(sys.stdout.buffer) if background else sys.stdout.buffer  # type: ignore[assignment]
         return cls(out)
     if split is not None:
