@@ -20,6 +20,7 @@ from pathlib import Path
 
 import pytest
 
+from rtde_spec import build
 from rtde_spec.cli.main import main
 from rtde_spec.errors import OutputError
 from rtde_spec.output.partfile import write_whole
@@ -244,6 +245,30 @@ def test_a_read_only_file_system_is_named_for_the_output(
     with pytest.raises(OutputError, match="read-only") as caught:
         write_whole(read_only / "listing.json", b"{}\n")
     said(str(caught.value), read_only / "listing.json", "file system is read-only")
+
+
+def test_a_capture_into_its_earlier_tables_on_a_file_system_made_read_only_names_the_table(
+    disk: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """The second run's error was "[Errno 30] Read-only file system: '.robot-....parquet.part-N'":
+    removing the temporary file (never made) failed too, and its error took the place of the one
+    naming the table."""
+    from tests.capture_files import Conversation, write
+
+    capture = disk.parent / "robot.pcap"
+    conv = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30004))
+    conv.handshake()
+    conv.send("client", build("request_protocol_version", protocol_version=2))
+    conv.send("server", build("request_protocol_version_reply", accepted=True))
+    write(capture, [conv])
+    out = disk / "out"
+    assert run(capsys, "capture", str(capture), "-o", str(out), "--lenient")[0] == 0
+    before = state(out)
+    subprocess.run(["mount", "-o", "remount,ro", str(disk)], check=True)
+    code, err = run(capsys, "capture", str(capture), "-o", str(out), "--lenient")
+    assert code == 1, err
+    assert "read-only" in err and "robot" in err and "Errno" not in err and ".part" not in err, err
+    assert state(out) == before
 
 
 # 5. special files as inputs: said what they are

@@ -125,9 +125,14 @@ class Part:
             raise self.failed from exc
 
     def discard(self) -> None:
-        """Remove the temporary file; an existing target stays as it was."""
+        """Remove the temporary file; an existing target stays as it was. Called while an error
+        is on its way: a file system that refuses the removal too (read-only: the file was never
+        made) must not put its own error in place of the one that says what went wrong."""
         if not self.published:
-            self.temp.unlink(missing_ok=True)
+            try:
+                self.temp.unlink(missing_ok=True)
+            except OSError:
+                pass
 
     def _placed(self) -> None:
         if self.placed is not None:
