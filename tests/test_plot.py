@@ -76,3 +76,24 @@ def test_a_file_that_is_not_parquet_is_a_clear_error(tmp_path: Path) -> None:
     bad.write_bytes(b"PAR1 this is not a parquet file")
     result = cli("plot", str(bad), "actual_q", "-o", str(tmp_path / "q.png"))
     assert result.returncode == 1 and "bad.parquet" in result.stderr and "Traceback" not in result.stderr
+
+
+def test_cells_that_are_not_numbers_are_said_with_their_lines_and_exit_3(tmp_path: Path) -> None:
+    """A truncated CSV (its last row cut short) or a garbled cell was plotted as a gap with no
+    word, exit 0. The plot is still written; stderr names each line, the exit code is 3. A
+    column of text alone (a name, a mode word) is no fault."""
+    table = tmp_path / "run.csv"
+    rows = [f"{i / 500},{0.1 * i},{-0.1 * i},RUNNING" for i in range(20)]
+    rows[7] = "0.014,abc,-0.7,RUNNING"
+    table.write_text("timestamp,actual_q_0,actual_q_1,mode\n" + "\n".join(rows) + "\n0.04,2.0")
+    image = tmp_path / "q.png"
+    done = cli("plot", str(table), "actual_q", "-o", str(image))
+    assert done.returncode == 3, done.stderr
+    assert image.stat().st_size > 0
+    assert "problem: line 22: cut short (2 of 4 cells)" in done.stderr, done.stderr
+    assert "problem: column actual_q_0: 1 cell not numbers (line 9 'abc')" in done.stderr, done.stderr
+    assert "mode" not in done.stderr
+    whole = [r for i, r in enumerate(rows) if i != 7]
+    table.write_text("timestamp,actual_q_0,actual_q_1,mode\n" + "\n".join(whole))
+    done = cli("plot", str(table), "actual_q", "-o", str(image))
+    assert done.returncode == 0 and "problem" not in done.stderr, done.stderr

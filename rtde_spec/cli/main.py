@@ -7,7 +7,8 @@ Exit codes, the same for every subcommand:
   2    a usage error (bad option, missing file, unknown controller version)
   3    capture read every input to its end, but some was damaged or skipped, or
        nothing decoded (the summary on stderr says what and where, and the TCP ports
-       seen; --lenient makes it 0)
+       seen; --lenient makes it 0); plot wrote its image, but CSV cells that are not
+       numbers are gaps in it (stderr names their lines)
   130  interrupted (Ctrl-C, SIGTERM, SIGHUP); what was written so far is whole
 Errors print `error: WHAT: WHY; WHAT TO DO` on stderr; --debug shows the traceback.
 tests/test_cli_errors.py holds each error a user can cause, with its message and code.
@@ -81,7 +82,8 @@ def build_parser() -> argparse.ArgumentParser:
         description="Universal Robots RTDE and primary/secondary interfaces: spec, codec and tools.",
         epilog="Exit codes: 0 success; 1 error in the data or result; 2 usage error; 3 capture read "
         "every input but some was damaged or skipped, or nothing decoded (summary on stderr; --lenient "
-        "gives 0); 130 interrupted. Start with `rtde-spec examples DIR`: the files the README uses.",
+        "gives 0), or plot's table had cells that are not numbers; 130 interrupted. Start with "
+        "`rtde-spec examples DIR`: the files the README uses.",
     )
     parser.add_argument("--version", action="version", version=f"rtde-spec {__version__}")
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors (default: off)")

@@ -8,11 +8,16 @@ with --table), and a dataset of several robots is plotted per robot (or one, --r
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 from typing import Any
 
-from rtde_spec.cli.conventions import describe
+from rtde_spec.cli.conventions import describe, plural
 from rtde_spec.errors import DecodeError, UsageError
+from rtde_spec.printable import safe_text
+
+EXIT_DAMAGED = 3  # the plot was written, but some of the table could not be read (said on stderr)
+MAX_PROBLEMS = 20
 
 TIME_COLUMNS = ("timestamp", "capture_time")
 PARTITIONS = ("robot", "date")
@@ -97,8 +102,10 @@ def pick_table(folder: Path, fields: list[str], name: str | None) -> Path:
     )
 
 
-def load(path: Path) -> dict[str, list[Any]]:
-    """The table's columns as lists (pyarrow reads Parquet; JSON Lines and CSV are read here)."""
+def load(path: Path, problems: list[str] | None = None) -> dict[str, list[Any]]:
+    """The table's columns as lists (pyarrow reads Parquet; JSON Lines and CSV are read here).
+    CSV cells that are not numbers are gaps in the plot; where a column holds numbers, each
+    such cell, and each row cut short, is said in `problems` (a truncated file, a garbled cell)."""
     if path.is_dir() or path.suffix in (".parquet", ".pq"):
         from rtde_spec.output.hive import read_table
 
@@ -116,19 +123,42 @@ def load(path: Path) -> dict[str, list[Any]]:
                     except ValueError as exc:
                         raise DecodeError(f"line {number} is not JSON: {exc}", subject=f"{path}") from exc
         return {key: [row.get(key) for row in rows] for key in rows[0]} if rows else {}
+    return _load_csv(path, problems if problems is not None else [])
+
+
+def _load_csv(path: Path, problems: list[str]) -> dict[str, list[Any]]:
     import csv
 
+    nan = float("nan")
+    texts: dict[str, list[tuple[int, str]]] = {}  # column -> (line, cell) of cells not numbers
+    numbers: dict[str, int] = {}
     with open(path, newline="", encoding="utf-8", errors="replace") as f:
         reader = csv.DictReader(f)
         columns: dict[str, list[Any]] = {n: [] for n in reader.fieldnames or []}
+        numbers = dict.fromkeys(columns, 0)
         for row in reader:
+            line = reader.line_num
+            if None in row:  # more cells than the header names
+                problems.append(f"line {line}: {len(row[None])} cells more than the header's")  # type: ignore[index]
+            short = [key for key, value in row.items() if key is not None and value is None]
+            if short:
+                kept = len(columns) - len(short)
+                problems.append(f"line {line}: cut short ({kept} of {len(columns)} cells)")
             for key, value in row.items():
                 if key is None or key not in columns:
                     continue
                 try:
-                    columns[key].append(float(value))
+                    columns[key].append(float(value))  # type: ignore[arg-type]
+                    numbers[key] += 1
                 except (TypeError, ValueError):
-                    columns[key].append(float("nan"))
+                    columns[key].append(nan)
+                    if value is not None and value.strip():
+                        texts.setdefault(key, []).append((line, value))
+    for key, cells in texts.items():
+        if numbers[key]:  # a column of numbers with text in it; a column of text alone is no fault
+            shown = ", ".join(f"line {line} {cell[:20]!r}" for line, cell in cells[:3])
+            more = f" and {len(cells) - 3} more" if len(cells) > 3 else ""
+            problems.append(f"column {key}: {plural(len(cells), 'cell')} not numbers ({shown}{more})")
     return columns
 
 
@@ -192,7 +222,8 @@ def run(args: argparse.Namespace) -> int:
     _check_output(Path(args.output))
     if path.is_dir():
         path = pick_table(path, args.fields, args.table_name)
-    columns = load(path)
+    problems: list[str] = []
+    columns = load(path, problems)
     have = ", ".join(list(columns)[:12]) + (", ..." if len(columns) > 12 else "")
     time_column = args.time or next((c for c in TIME_COLUMNS if c in columns), None)
     if time_column is None or time_column not in columns:
@@ -213,4 +244,11 @@ def run(args: argparse.Namespace) -> int:
     }
     plot_columns(per_robot, args.fields, time_column, args.output, title=str(path))
     print(f"wrote {args.output}")
+    if problems:  # the plot holds what was read; what was not is said, and the exit code says so
+        print(safe_text(f"{path}: cells that are not numbers are gaps in the plot"), file=sys.stderr)
+        for problem in problems[:MAX_PROBLEMS]:
+            print(safe_text(f"  problem: {problem}"), file=sys.stderr)
+        if len(problems) > MAX_PROBLEMS:
+            print(f"  ... and {len(problems) - MAX_PROBLEMS} more", file=sys.stderr)
+        return EXIT_DAMAGED
     return 0
