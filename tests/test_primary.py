@@ -413,3 +413,26 @@ def test_describe_message_refuses_an_offset_message_pair() -> None:
     with pytest.raises(UsageError, match=r"StateChanges\.update takes one decoded message"):
         StateChanges().describe(pair)
     assert describe_message(pair[1]) is not None
+
+
+CB2 = {  # a 1.8 controller's Robot State sub-packages, in the layouts before 3.0
+    "masterboard_data": "00000043100000003e030001000101013ff80000000000003ff800000000000001013ff8"
+    "0000000000003ff80000000000003fc000003fc000003fc000003fc0000001",
+    "robot_mode_data": "00000034100000002f00000000000001e2400101010000010007003ff00000000000003fe0"
+    "0000000000003ff000000000000000",
+}
+
+
+@pytest.mark.parametrize("name", sorted(CB2))
+def test_a_message_decoded_with_an_older_layout_encodes_back_with_the_same_version(name: str) -> None:
+    """encode_message always wrote the newest layout: a CB2 masterboard decoded with 1.8 encoded
+    to bytes that read back as other values (safety mode 63), and a CB2 robot mode was refused.
+    With the version it was decoded with, it encodes to the bytes it came from."""
+    data = bytes.fromhex(CB2[name])
+    message = decode_message(data, version="1.8")
+    assert type(message.sub_packages[0]).NAME == name
+    assert encode_message(message, version="1.8") == data
+    assert encode_message(message, version=Version(1, 8, 0)) == data
+    decoder = PrimaryStreamDecoder(version="1.8")
+    ((_, streamed),) = decoder.feed(data)
+    assert encode_message(streamed, version=decoder.version) == data

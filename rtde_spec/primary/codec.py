@@ -78,6 +78,7 @@ class PrimaryCodec:
         self.size_bytes = prims[next(h.type for h in pf.header if h.name == "size")].size
         self.families: dict[int, _Family] = {}
         self.by_class: dict[type[PrimaryPart], tuple[_Family, Layout]] = {}
+        self.member_types: dict[type[PrimaryPart], int] = {}  # for the older layouts of a member
         # (member, field) -> first version per product line, for fields added after their member
         self.field_since: dict[tuple[str, str], dict[str, Version]] = {}
         for fam in pf.families:
@@ -88,6 +89,7 @@ class PrimaryCodec:
                 layout = Layout(member.fields, prims, self.values)
                 entry.members[member.type] = (cls, layout)
                 self.by_class[cls] = (entry, layout)
+                self.member_types[cls] = member.type
                 for fld in member.fields:
                     if fld.since:
                         since = {line: Version.parse(v) for line, v in fld.since.items()}
@@ -191,20 +193,26 @@ class PrimaryCodec:
 
     # --- encoding -----------------------------------------------------------
 
-    def encode_part_body(self, part: PrimaryPart) -> bytes:
+    def encode_part_body(self, part: PrimaryPart, version: Version | None = None) -> bytes:
+        """The part's body in the layout `version` uses (the newest without one), as decoding picks it."""
         fam, layout = self.by_class[type(part)]
+        if version is not None:
+            ranges = fam.older.get(self.member_types[type(part)], ())
+            layout = next((lay for before, lay in ranges if version < before), layout)
         dumped = part.model_dump()
         body = layout.encode(dumped)
         if fam.prefix is not None:
             body = fam.prefix.encode(dumped) + body
         return body + part.extra
 
-    def encode(self, message: PrimaryModel) -> bytes:
-        """A whole message from a model (a tagged member, Robot State, unknown or opaque)."""
+    def encode(self, message: PrimaryModel, version: Version | None = None) -> bytes:
+        """A whole message from a model (a tagged member, Robot State, unknown or opaque), in the
+        layouts of controller `version` (as `decode_message(version=...)` reads them; None: the
+        newest). A part decoded with an older layout is encoded back with the same version."""
         if isinstance(message, UnknownMessage):
             return message.raw
         if isinstance(message, RobotStateMessage):
-            body = b"".join(self._encode_sub(s) for s in message.sub_packages)
+            body = b"".join(self._encode_sub(s, version) for s in message.sub_packages)
             mtype = gen.FAMILY_TYPES["robot_state"]
         elif isinstance(message, OpaqueMessage):
             body, mtype = message.raw, message.type
@@ -215,13 +223,13 @@ class PrimaryCodec:
         elif isinstance(message, PrimaryPart) and type(message) in self.by_class:
             fam, _ = self.by_class[type(message)]
             if fam.spec.layout == "subpackages":
-                return self.encode(RobotStateMessage(sub_packages=[message]))
-            body, mtype = self.encode_part_body(message), fam.spec.type
+                return self.encode(RobotStateMessage(sub_packages=[message]), version)
+            body, mtype = self.encode_part_body(message, version), fam.spec.type
         else:
             raise EncodeError(f"not a primary-interface message: {type(message).__name__}")
         return self._frame(self.header, body, mtype, "message")
 
-    def _encode_sub(self, sub: Any) -> bytes:
+    def _encode_sub(self, sub: Any, version: Version | None = None) -> bytes:
         if isinstance(sub, UnknownSubPackage):
             return sub.raw
         if (
@@ -229,7 +237,7 @@ class PrimaryCodec:
             or self.by_class.get(type(sub), (None,))[0] is not self.families[gen.FAMILY_TYPES["robot_state"]]
         ):
             raise EncodeError(f"not a Robot State sub-package: {type(sub).__name__}", package="robot_state")
-        return self._frame(self.sub_header, self.encode_part_body(sub), sub.TYPE, sub.NAME)
+        return self._frame(self.sub_header, self.encode_part_body(sub, version), sub.TYPE, sub.NAME)
 
     def _frame(self, header: struct.Struct, body: bytes, mtype: int, name: str) -> bytes:
         size = header.size + len(body)
@@ -261,8 +269,11 @@ def decode_message(
     return default_codec().decode_message(data, strict=strict, version=known)
 
 
-def encode_message(message: PrimaryModel) -> bytes:
-    return default_codec().encode(message)
+def encode_message(message: PrimaryModel, *, version: Version | str | None = None) -> bytes:
+    """One whole message, in the layouts of controller `version` ("1.8", a Version; None: the
+    newest): a message decoded with `version` encodes back to its bytes with the same one."""
+    known = Version.parse(version) if version is not None else None
+    return default_codec().encode(message, known)
 
 
 def announced_version(message: PrimaryMessage) -> Version | None:
