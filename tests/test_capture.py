@@ -172,6 +172,30 @@ def test_primary_messages_become_one_table_per_sub_package(tmp_path: Path) -> No
     assert tables["primary_scripts"].column("script").to_pylist() == ["set_digital_out(1, True)\n"]
 
 
+
+def test_what_a_client_sends_in_one_burst_is_one_script_row_however_tcp_cut_it(tmp_path: Path) -> None:
+    """A script sent in two TCP segments was two rows, a character cut in two at their edge (its
+    bytes in script_raw). A row is a burst: a new def, or a pause after a whole line, starts one."""
+    conv = Conversation(("10.0.0.2", 52000), ("10.0.0.10", 30002))
+    conv.handshake()
+    program = 'def prog():\n  textmsg("héllo")\nend\n'.encode()
+    cut = program.index("é".encode()) + 1  # inside the character
+    conv.send("client", program[:cut], dt=0.0)
+    conv.send("client", program[cut:], dt=0.0002)
+    conv.send("client", b"def other():\n  sync()\nend\n", dt=0.001)  # a new program at once
+    conv.send("client", b"set_digital_out(1, True)\n", dt=1.0)  # a line after a pause
+    conv.send("client", b"set_digital_out(2, ", dt=1.0)  # a line cut by a pause is one row still
+    conv.send("client", b"True)\n", dt=1.0)
+    tables = capture_tables(write(tmp_path / "scripts.pcap", [conv]))
+    scripts = tables["primary_scripts"]
+    assert scripts.column("script").to_pylist() == [
+        program.decode(),
+        "def other():\n  sync()\nend\n",
+        "set_digital_out(1, True)\n",
+        "set_digital_out(2, True)\n",
+    ]
+    assert scripts.column("script_raw").to_pylist() == [""] * 4
+
 def test_cli_decodes_a_folder_in_parallel_into_a_hive_dataset(tmp_path: Path) -> None:
     folder = tmp_path / "captures"
     folder.mkdir()

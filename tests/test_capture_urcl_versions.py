@@ -323,4 +323,4 @@ def test_headless_mode_reads_the_program_sent_to_the_primary_port(tmp_path: Path
     assert trajectory_tables(tables) == {"urcl_trajectory_points_v1"}
     assert [p["duration"] for p in tables["urcl_trajectory_points_v1"]] == [0.5, 2.0]
     assert "trajectory layout point_type_21 (from the script on 30002)" in err
-    assert len(tables["primary_scripts"]) == 2  # the program's text is kept as before
+    assert [r["script"] for r in tables["primary_scripts"]] == [text.decode()]  # one row: one send

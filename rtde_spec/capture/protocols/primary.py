@@ -28,6 +28,8 @@ if TYPE_CHECKING:
     from rtde_spec.primary.robot_state import Reuse
 
 MAX_NOTES = 20  # distinct warnings kept per connection (each is said once, whatever the count)
+SCRIPT_PAUSE = 0.05  # s between a client's sends that ends a row of primary_scripts (one send: ~µs)
+MAX_SCRIPT_ROW = 4 << 20  # bytes of one row at most (URCL's program is 50 kB)
 NO_VERSION = (
     "no Version message before it in the capture (decoded with the newest layouts; "
     "capture --controller VERSION gives the robot's)"
@@ -55,12 +57,12 @@ class PrimaryConnection:
         self.version: Version | None = self.given
         self.reuse: Reuse = {}  # the last model of each Robot State sub-package (primary/robot_state.py)
         self.notes: list[str] = []  # why values may be wrong, once each: the summary shows them
+        self.script = bytearray()  # what the client sent since the last row of primary_scripts
+        self.script_time = self.script_last = 0.0  # when that began, and when its last segment came
 
     def feed(self, sender: str, chunk: Chunk) -> None:
-        base = {"connection": self.name, "capture_time": chunk.time}
-        day = day_of(chunk.time)
         if sender == "client":  # URScript (or anything else a client sends)
-            self.sink.row("primary_scripts", self.robot, day, {**base, **text_columns("script", chunk.data)})
+            self._script(chunk)
             self._program(chunk)
             return
         self.last_time = chunk.time
@@ -68,6 +70,32 @@ class PrimaryConnection:
 
     def framings(self) -> dict[str, Framing]:
         return {"controller": self.framing}
+
+    def _script(self, chunk: Chunk) -> None:
+        """What the client sends, a row per burst: the segments TCP cut one send into are one
+        row (a program in 14 segments was 14 rows, a character cut in two at their edges). A row
+        ends where a new `def`/`sec` begins, a gap lost bytes, or a whole line was followed by a
+        pause (`SCRIPT_PAUSE`); never inside a line, unless it grows past `MAX_SCRIPT_ROW`."""
+        data = chunk.data
+        held = self.script
+        if held and (
+            chunk.gap_before
+            or data.lstrip()[:4] in (b"def ", b"sec ")
+            or (held.endswith(b"\n") and chunk.time - self.script_last > SCRIPT_PAUSE)
+            or len(held) + len(data) > MAX_SCRIPT_ROW
+        ):
+            self._script_row()
+        if not self.script:
+            self.script_time = chunk.time
+        self.script += data
+        self.script_last = chunk.time
+
+    def _script_row(self) -> None:
+        if not self.script:
+            return
+        text, self.script = bytes(self.script), bytearray()
+        row = {"connection": self.name, "capture_time": self.script_time, **text_columns("script", text)}
+        self.sink.row("primary_scripts", self.robot, day_of(self.script_time), row)
 
     def _program(self, chunk: Chunk) -> None:
         """Keep the text a client sends as the robot's program (a new one at each `def`/`sec`)."""
@@ -80,6 +108,7 @@ class PrimaryConnection:
         self.program.reply += chunk.data[: max(0, room)]
 
     def finish(self) -> None:
+        self._script_row()
         self._messages(self.framing.finish(), self.framing.times, self.last_time)
 
     def _messages(self, raws: list[bytes], times: list[float] | None, now: float) -> None:
