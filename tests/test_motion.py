@@ -125,6 +125,40 @@ def test_movep_blends_through_its_waypoints() -> None:
     assert duration(0.02) < duration(0.0) - 0.1 * HZ
 
 
+
+@pytest.mark.parametrize(
+    "between",
+    [
+        "",
+        "  signal_async_progress(1)\n",  # ur_rtde's path: a function that sets a register
+        '  $ 5 "Waypoint_2"\n  n = n + 1\n',  # PolyScope's label, and an assignment
+    ],
+)
+def test_a_blended_move_blends_past_statements_that_do_not_wait(between: str) -> None:
+    """The controller runs statements that cannot wait while it looks ahead to the next motion:
+    a blend radius rounds the corner whatever stands between two moves. Only a move right
+    after another blended; with ur_rtde's signal_async_progress(i) before each waypoint the
+    arm stopped dead at every one (a square path 40 % slower)."""
+
+    def run_path(between: str) -> tuple[int, float]:
+        model = ControllerModel("5.15.0")
+        p = model.values["actual_TCP_pose"]
+        a = [p[0] + 0.1, p[1], p[2], *p[3:]]
+        b = [p[0] + 0.1, p[1] + 0.1, p[2], *p[3:]]
+        model.run_script(
+            "def path():\n  n = 0\n  def signal_async_progress(i):\n    write_output_integer_register(2, i)\n"
+            f"  end\n  movel(p{a}, a=1.2, v=0.25, r=0.03)\n{between}  movel(p{b}, a=1.2, v=0.25)\nend\n"
+        )
+        steps = until_stopped(model)
+        assert model.values["actual_TCP_pose"] == pytest.approx(b, abs=1e-6)
+        nearest = min(math.dist(s["actual_TCP_pose"][:3], a[:3]) for s in steps)
+        return len(steps), nearest
+
+    blended, corner = run_path(between)
+    stopped, _ = run_path(between.replace("", "") + "  sync()\n")  # a wait: no blend
+    assert corner > 0.02  # the corner was cut by about the radius
+    assert blended < stopped - 0.1 * HZ
+
 def test_power_brakes_and_protective_stop_gate_motion() -> None:
     model = ControllerModel("5.15.0")
     model.power_off()

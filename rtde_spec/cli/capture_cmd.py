@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import argparse
 import glob
-import os
 import re
 import sys
 from pathlib import Path
@@ -13,6 +12,7 @@ from typing import TYPE_CHECKING, Any
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.cli.arguments import primary_version
 from rtde_spec.cli.conventions import describe, plural
+from rtde_spec.cli.inputs import once_each
 from rtde_spec.cli.options import add_lenient
 from rtde_spec.errors import RtdeSpecError, UsageError
 from rtde_spec.printable import safe_text
@@ -188,23 +188,6 @@ def expand(patterns: list[str]) -> list[Path]:
             f"{', '.join(SUFFIXES)}, numbered or compressed; a glob matched nothing)"
         )
     return once_each(files)
-
-
-def once_each(files: list[Path]) -> list[Path]:
-    """Each file once, where first given: a file given twice (by a folder and a glob, or two
-    names of it) would decode into the same tables twice, its rows counted twice."""
-    seen: dict[str, Path] = {}
-    again: list[Path] = []
-    for path in files:
-        key = str(path) if str(path) == STDIN else os.path.realpath(path)
-        if key in seen:
-            again.append(path)
-        else:
-            seen[key] = path
-    if again:
-        names = ", ".join(safe_text(str(p)) for p in dict.fromkeys(again))
-        print(f"note: given more than once, decoded once: {names}", file=sys.stderr)
-    return list(seen.values())
 
 
 def captures_of(files: list[Path]) -> list[CapturePath]:

@@ -12,6 +12,7 @@ from pathlib import Path
 
 from rtde_spec.cli.arguments import existing_file
 from rtde_spec.errors import RtdeSpecError, UsageError
+from rtde_spec.printable import safe_text
 
 _HEX_RE = re.compile(r"^[0-9a-fA-F]*$")
 _CAPTURE_MAGIC = {
@@ -112,3 +113,20 @@ def from_hex_text(data: bytes) -> bytes:
     if stripped and _HEX_RE.match(stripped) and len(stripped) % 2 == 0:
         return bytes.fromhex(stripped)
     return data
+
+
+def once_each(files: list[Path]) -> list[Path]:
+    """Each file once, where first given: a file given twice (by a folder and a glob, or two
+    names of it) would decode into the same tables twice, its rows counted twice."""
+    seen: dict[str, Path] = {}
+    again: list[Path] = []
+    for path in files:
+        key = str(path) if str(path) == "/dev/stdin" else os.path.realpath(path)
+        if key in seen:
+            again.append(path)
+        else:
+            seen[key] = path
+    if again:
+        names = ", ".join(safe_text(str(p)) for p in dict.fromkeys(again))
+        print(f"note: given more than once, decoded once: {names}", file=sys.stderr)
+    return list(seen.values())

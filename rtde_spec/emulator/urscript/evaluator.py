@@ -19,6 +19,7 @@ from rtde_spec.emulator.urscript import builtins, matrices, rpc
 from rtde_spec.emulator.urscript import calls as script_calls
 from rtde_spec.emulator.urscript import values as urscript_ops
 from rtde_spec.emulator.urscript.interfaces import Robot
+from rtde_spec.emulator.urscript.lookahead import blends_into_move
 from rtde_spec.emulator.urscript.nodes import Branch, Expr, Function, Script, ScriptFault, Stmt
 
 if TYPE_CHECKING:
@@ -393,7 +394,3 @@ class Evaluator:
             return None
         builtins.call(self, stmt, values, kwargs)  # type: ignore[arg-type]
         return None
-
-
-def blends_into_move(stmt: Stmt | None) -> bool:
-    return stmt is not None and stmt.kind == "call" and stmt.name in script_calls.MOVES

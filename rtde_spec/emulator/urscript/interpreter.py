@@ -36,6 +36,7 @@ from rtde_spec.emulator.urscript.checker import check
 from rtde_spec.emulator.urscript.evaluator import Evaluator, Frame, Return, Steps, runtime_text
 from rtde_spec.emulator.urscript.events import ScriptEvent
 from rtde_spec.emulator.urscript.interfaces import Robot, Wait
+from rtde_spec.emulator.urscript.lookahead import next_waiting
 from rtde_spec.emulator.urscript.nodes import Script, ScriptFault, Stmt
 from rtde_spec.emulator.urscript.script_threads import Flow, Killed, LoopTurn, ScriptThread, close_thread
 from rtde_spec.emulator.urscript.watchdogs import check_watchdogs
@@ -262,7 +263,7 @@ class Program(Evaluator):
                 if stmt.kind == "call" and expr is not None and expr.kind == "call" and not expr.user:
                     self.call_now(stmt, frame)  # a call that cannot wait, at once
                     continue
-                signal = yield from self._statement(stmt, frame, body[i + 1] if i + 1 < len(body) else None)
+                signal = yield from self._statement(stmt, frame, next_waiting(body, i + 1))
             except (ScriptFault, Killed, GeneratorExit):
                 raise
             except MotionError as exc:
