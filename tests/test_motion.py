@@ -155,7 +155,7 @@ def test_a_blended_move_blends_past_statements_that_do_not_wait(between: str) ->
         return len(steps), nearest
 
     blended, corner = run_path(between)
-    stopped, _ = run_path(between.replace("", "") + "  sync()\n")  # a wait: no blend
+    stopped, _ = run_path(between + "  sync()\n")  # a wait: no blend
     assert corner > 0.02  # the corner was cut by about the radius
     assert blended < stopped - 0.1 * HZ
 
