@@ -64,3 +64,31 @@ def test_a_rerun_removes_the_files_an_earlier_version_wrote_under_the_old_name(t
     assert not (out / "rtde_outputs_1" / "robot=fd00__10").exists()
     rows = ds.dataset(out / "rtde_outputs_1", format="parquet", partitioning="hive").to_table()
     assert rows.num_rows == 20 and set(rows.column("robot").to_pylist()) == {ROBOT}
+
+
+def test_a_rerun_of_a_changed_capture_leaves_none_of_the_earlier_runs_tables_robots_or_days(
+    tmp_path: Path,
+) -> None:
+    """The same file, shorter or from another robot the second time: the tables, robots and days
+    its first run wrote and the second did not stayed beside the second's (15 primary tables of a
+    capture that no longer had the primary connection), read as rows of this capture."""
+    from rtde_spec import build
+
+    capture, out = tmp_path / "robot.pcapng", tmp_path / "out"
+    ipv6_capture(capture)
+    other = Conversation(("10.0.0.2", 51000), ("10.0.0.77", 30004))
+    other.handshake()
+    other.send("client", build("request_protocol_version", protocol_version=2))
+    write(tmp_path / "other.pcapng", [other], "pcapng")
+    decode_to_directory(tmp_path / "other.pcapng", out)  # another input's tables stay
+    first = decode_to_directory(capture, out)
+    assert {Path(p).parent.parent.name for p in first.paths} == {"robot=fd00%3A%3A10"}
+    shorter = Conversation(("10.0.0.2", 51000), ("10.0.0.11", 30004))  # now another robot, no data
+    shorter.handshake()
+    shorter.send("client", build("request_protocol_version", protocol_version=2))
+    write(capture, [shorter], "pcapng")
+    second = decode_to_directory(capture, out)
+    files = {str(p) for p in out.rglob("*.parquet") if p.name.startswith("robot-")}
+    assert files == set(second.paths), files
+    assert not (out / "rtde_outputs_1").exists()  # its only file was this capture's
+    assert any(p.name.startswith("other-") for p in out.rglob("*.parquet"))

@@ -120,13 +120,24 @@ class PreparedTables:
             raise OutputError(f"{failed.reason}: {kept}", errno=failed.errno, subject=failed.subject) from exc
 
     def _remove_stale_parts(self) -> None:
-        """Parts STEM_NNNN of an earlier run of this input that this run did not write (it was
-        shorter): left, they would read as rows of this capture."""
+        """Files of an earlier run of this input that this run did not write: parts STEM_NNNN
+        past this run's (it was shorter), and whole tables, robots or days it no longer holds
+        (the file changed: its primary tables stayed beside the new run's). Left, they would
+        read as rows of this capture."""
         written = {str(p) for p in self.paths}
+        stem = glob.escape(self.stem)
+        tables = [t for t in self.outdir.iterdir() if t.is_dir()] if self.outdir.is_dir() else []
+        for table in tables:
+            for pattern in (f"{stem}.{self.ext}", f"{stem}_[0-9][0-9][0-9][0-9].{self.ext}"):
+                for old in table.glob(f"*/*/{pattern}"):
+                    if str(old) not in written:
+                        _remove(old)
+                        for empty in (old.parent, old.parent.parent, table):  # date=, robot=, the table
+                            try:
+                                empty.rmdir()
+                            except OSError:
+                                break
         for folder in {p.parent for p in self.paths}:
-            for old in folder.glob(f"{glob.escape(self.stem)}_[0-9][0-9][0-9][0-9].{self.ext}"):
-                if str(old) not in written:
-                    _remove(old)
             self._remove_unescaped(folder)
 
     def _remove_unescaped(self, folder: Path) -> None:
