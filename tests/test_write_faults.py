@@ -189,7 +189,22 @@ def test_demo_whose_plot_does_not_fit_names_the_image(disk: Path, tmp_path: Path
     result = cli("demo", "-o", str(out), "--seconds", "1")
     assert result.returncode == 1, result.stderr
     said(result.stderr, out / "joints.png", "the disk is full")
-    assert not (out / "joints.png").exists()
+    assert not (out / "joints.png").exists() and not (out / "joints.csv").exists()  # the pair, or none
+    no_temp_files(disk)
+
+
+def test_demo_whose_plot_does_not_fit_keeps_the_earlier_pair(disk: Path) -> None:
+    """The new CSV went in place and the plot did not: a joints.csv of this run beside the
+    joints.png of the one before. Now both stay as they were."""
+    pytest.importorskip("matplotlib")
+    out = disk / "d"
+    assert cli("demo", "-o", str(out), "--seconds", "1").returncode == 0
+    before = state(out)
+    fill(disk, 45_000)
+    result = cli("demo", "-o", str(out), "--seconds", "1")
+    assert result.returncode == 1, result.stderr
+    said(result.stderr, out / "joints.png", "the disk is full")
+    assert state(out) == before
     no_temp_files(disk)
 
 

@@ -63,16 +63,25 @@ def run_online(args: argparse.Namespace) -> int:
             try:
                 timer.start()
                 result = record(client, DEMO_FIELDS, RATE, writer, duration=args.seconds)
+                writer.prepare()  # finished beside its name: in place with its plot, or not at all
+            except BaseException:
+                writer.abort()
+                raise
             finally:
                 timer.cancel()
                 timer.join()
-                writer.close()
+    finished = writer.part.temp if writer.part is not None else csv_path
+    rows = _read(finished)
+    try:
+        _summary(rows)
+        _plot(rows, png_path)  # a plot that fails (a full disk) leaves the earlier pair as it was
+    except BaseException:
+        writer.abort()
+        raise
+    writer.commit()
     interrupted = result.stopped_by == "interrupt"
     early = f"; stopped early by Ctrl-C after {result.seconds:.1f} s" if interrupted else ""
     print(f"\nWrote {plural(result.rows, 'row')} to {csv_path} (skipped {result.skipped}{early})")
-    rows = _read(csv_path)
-    _summary(rows)
-    _plot(rows, png_path)
     print("\nNext: rtde-spec serve (a controller for your own tests), rtde-spec record --host ROBOT ...,")
     print("      rtde-spec demo --offline (decoding without sockets), rtde-spec decode --help")
     return 0
