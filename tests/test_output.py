@@ -338,3 +338,27 @@ def test_a_capture_given_twice_is_decoded_once(tmp_path: Path) -> None:
         assert done.returncode == 0, done.stderr
         assert f"note: given more than once, decoded once: {folder / 'one.pcap'}" in done.stderr
         assert done.stdout.count("one.pcap: ") == 1, done.stdout
+
+
+def test_parquet_output_takes_a_file_name_that_is_not_utf8(tmp_path: Path) -> None:
+    """Linux names are bytes: a name that is not UTF-8 (Python keeps it as surrogates) failed
+    for Parquet alone, with "'utf-8' codec can't encode characters ... surrogates not allowed"."""
+    import os
+    import subprocess
+    import sys
+
+    import pyarrow as pa
+
+    from rtde_spec.recipes.codec import RecipeCodec
+
+    names = ["timestamp", "actual_q"]
+    codec = RecipeCodec.for_names(names, "output")
+    data = tmp_path / "data.bin"
+    packages = [codec.encode_package({"timestamp": i / 500, "actual_q": (0.0,) * 6}, 1) for i in range(7)]
+    data.write_bytes(b"".join(packages))
+    target = os.fsdecode(os.fsencode(str(tmp_path)) + b"/d\xff\xfe.parquet")
+    argv = [sys.executable, "-m", "rtde_spec", "decode", str(data), "--recipe", ",".join(names), "-o", target]
+    done = subprocess.run([os.fsencode(a) for a in argv], capture_output=True)
+    assert done.returncode == 0, done.stderr
+    table = pq.read_table(pa.BufferReader(Path(target).read_bytes()))
+    assert table.num_rows == 7 and table.column_names == ["timestamp", *(f"actual_q_{i}" for i in range(6))]

@@ -11,6 +11,7 @@ from rtde_spec.errors import OutputError, UsageError, require
 from rtde_spec.output.base import Writer, flat_columns, flatten
 from rtde_spec.output.partfile import Part, device_failed, is_special, write_failed
 from rtde_spec.output.tables import arrow_table, arrow_type, rows_table
+from rtde_spec.printable import safe_text
 
 _PARQUET_BATCH_ROWS = 16384
 CHUNK_METADATA_BYTES = 860  # what pyarrow holds per column chunk written, until the file closes
@@ -251,7 +252,7 @@ class LeanParquetWriter:
         from pyarrow import OSFile, _parquet
 
         self.schema = schema
-        self._file = OSFile(where, "wb") if isinstance(where, str) else None  # as pyarrow opens a path
+        self._file = _os_file(OSFile, where) if isinstance(where, str) else None  # as pyarrow opens a path
         try:
             self._writer = _parquet.ParquetWriter(
                 self._file if self._file is not None else where,
@@ -274,6 +275,26 @@ class LeanParquetWriter:
         finally:
             if self._file is not None:
                 self._file.close()
+
+
+def _os_file(os_file: Any, path: str) -> Any:
+    """pyarrow's own file at `path` (written without the GIL). A name that is not UTF-8 (bytes
+    Python keeps as surrogates: r\\xff.parquet) pyarrow cannot encode, and Parquet output of such
+    a name failed with a codec error: it is opened here and handed over by its descriptor."""
+    try:
+        path.encode("utf-8")
+    except UnicodeEncodeError:
+        fd = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o666)
+        try:
+            if os.path.isdir("/proc/self/fd"):
+                return os_file(f"/proc/self/fd/{fd}", "wb")
+        finally:
+            os.close(fd)
+        raise UsageError(
+            "pyarrow cannot open a file whose name is not UTF-8 on this system; give another name",
+            subject=f"file {safe_text(path)}",
+        ) from None
+    return os_file(path, "wb")
 
 
 def prepared_columns(columns: Mapping[str, Any]) -> Any:
