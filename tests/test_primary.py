@@ -436,3 +436,24 @@ def test_a_message_decoded_with_an_older_layout_encodes_back_with_the_same_versi
     decoder = PrimaryStreamDecoder(version="1.8")
     ((_, streamed),) = decoder.feed(data)
     assert encode_message(streamed, version=decoder.version) == data
+
+
+def test_a_message_of_the_costliest_values_stays_within_its_stated_multiple() -> None:
+    """Empty lists cost the most objects per wire byte (3 bytes, an object, its dict and a list
+    each): primary_values.py states ~150x, and counts that cannot fit are refused before that."""
+    import tracemalloc
+
+    head = bytes.fromhex("1900000000000007d0010000")  # global variables update from index 0
+    body = (b"\x11" + struct.pack(">H", 20_000) + b"\x11\x00\x00" * 20_000 + b"\n") * 3
+    data = struct.pack(">I", len(head) + len(body) + 4) + head + body
+    tracemalloc.start()
+    try:
+        message = decode_message(data)
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert [len(v.value) for v in message.variable_values] == [20_000] * 3
+    assert peak < 160 * len(data), peak / len(data)
+    bomb = struct.pack(">I", len(head) + 9 + 4) + head + b"\x11\xff\xff" + b"\x11\x00\x00" * 2
+    with pytest.raises(DecodeError, match="cannot fit in the bytes left"):
+        decode_message(bomb)

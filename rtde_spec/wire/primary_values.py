@@ -4,12 +4,16 @@ Each value is a type byte then its data; top-level values end with a separator
 byte. LIST and MATRIX nest (type, value) pairs without separators. The type
 table, its codes and layouts come from the spec.
 
-Hostile counts cannot make a decode allocate more than a small multiple of its
+Hostile counts cannot make a decode allocate more than a fixed multiple of its
 input: every LIST or MATRIX element takes at least one byte on the wire (its type
 byte), so a count whose elements cannot fit in the bytes left is refused before
 anything is built. A row of a 0-column matrix takes no bytes at all, so each such
 row is charged one byte of the message's value bytes: all the empty rows of one
-message together are at most as many as its value bytes.
+message together are at most as many as its value bytes. The multiple is that of
+Python objects, not small: a value that is not shared (NONE, booleans and empty
+strings are) is an object and its dict, ~300 bytes, for as few as 3 wire bytes (an
+empty LIST), so a message of those peaks at ~150x its bytes (tests/test_primary.py);
+a message is at most the codec's max size (1 MiB).
 """
 
 from __future__ import annotations
