@@ -92,14 +92,19 @@ class Direction:
                 out += self._drain()
             return out
         held = self.waiting.get(start)
+        while held is not None and len(held[1]) < len(payload):
+            # a longer retransmission: the held bytes keep their (earlier) time, the ones past
+            # them wait on their own, unless held there too (each byte has its first arrival's time)
+            self._compare(held[1], payload)
+            payload, start = payload[len(held[1]) :], start + len(held[1])
+            held = self.waiting.get(start)
         if held is not None:
             self._compare(held[1], payload)
-        if held is None or len(held[1]) < len(payload):  # a longer retransmission replaces a shorter
-            if held is None:
-                heapq.heappush(self._starts, start)
+        else:
+            heapq.heappush(self._starts, start)
             self.waiting[start] = (time, payload)
             self._arrivals.append((time, start))
-            self.waiting_bytes += len(payload) - (len(held[1]) if held else 0)
+            self.waiting_bytes += len(payload)
         while self.waiting and (self.waiting_bytes > MAX_WAITING or time - self._oldest() > HOLE_SECONDS):
             out += self.skip_gap()
         return out
