@@ -458,3 +458,19 @@ def test_a_primary_decode_that_stops_at_a_fault_keeps_the_file_there(
     assert code == 1 and state(tmp_path) == before, err
     assert "the 5 messages before it were not written" in err and "as it was" in err, err
     no_temp_files(tmp_path)
+
+
+def test_an_output_folder_that_is_a_link_to_nothing_is_said_so(tmp_path: Path) -> None:
+    """capture/examples/demo -o LINK, a symbolic link to a folder that does not exist, failed as
+    "writing failed: File exists" (making the folder met the link)."""
+    link = tmp_path / "link"
+    link.symlink_to(tmp_path / "nowhere")
+    capture = tmp_path / "c.pcap"
+    capture.write_bytes(b"")
+    said = f"is a symbolic link to {tmp_path / 'nowhere'}, which does not exist"
+    to = str(link)
+    commands = (["capture", str(capture), "-o", to], ["examples", to], ["demo", "-o", to])
+    for args in commands:
+        done = cli(*args)
+        assert done.returncode == 2 and said in done.stderr, done.stderr
+    assert not (tmp_path / "nowhere").exists()

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.cli.arguments import primary_version
-from rtde_spec.cli.conventions import describe, plural
+from rtde_spec.cli.conventions import dangling_link, describe, plural
 from rtde_spec.cli.inputs import once_each
 from rtde_spec.cli.options import add_lenient
 from rtde_spec.errors import RtdeSpecError, UsageError
@@ -149,6 +149,9 @@ def output_folder_arg(text: str) -> str:
             f"{text} is a file, but capture writes a folder (one table per kind); give a folder, e.g. "
             f"{path.stem or 'tables'}/"
         )
+    broken = dangling_link(path)
+    if broken is not None:
+        raise argparse.ArgumentTypeError(f"{text} {broken}")
     if not path.exists() and path.suffix.lower() in (".parquet", ".csv", ".jsonl", ".mcap"):
         raise argparse.ArgumentTypeError(
             f"{text} names a file, but capture writes a folder (one table per kind, --format "

@@ -10,6 +10,7 @@ checks each subcommand's parser against them.
 from __future__ import annotations
 
 import argparse
+import os
 from collections.abc import Callable
 from importlib.abc import Traversable
 from pathlib import Path
@@ -58,6 +59,18 @@ def plural(count: int, word: str, many: str | None = None) -> str:
     return f"{count} {word if count == 1 else many or word + 's'}"
 
 
+def dangling_link(path: Path) -> str | None:
+    """What is wrong with an output folder that is a symbolic link to nothing (making it failed
+    as "File exists"), or None."""
+    if not path.is_symlink() or path.exists():
+        return None
+    try:
+        target = os.readlink(path)
+    except OSError:
+        target = "?"
+    return f"is a symbolic link to {target}, which does not exist; make that folder, or give another"
+
+
 def output_folder(text: str, option: str = "-o") -> Path:
     """A folder output: refused when it names an existing file (a folder is made when missing) or
     is `-`, which means standard output everywhere else."""
@@ -72,6 +85,9 @@ def output_folder(text: str, option: str = "-o") -> Path:
             f"{path.stem or 'out'}/",
             subject=f"{option} {text}",
         )
+    broken = dangling_link(path)
+    if broken is not None:
+        raise UsageError(broken, subject=f"{option} {text}")
     return path
 
 

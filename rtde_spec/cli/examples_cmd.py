@@ -12,7 +12,7 @@ from importlib import resources
 from importlib.abc import Traversable
 from pathlib import Path
 
-from rtde_spec.cli.conventions import describe, place_copy
+from rtde_spec.cli.conventions import dangling_link, describe, place_copy
 from rtde_spec.errors import UsageError
 
 FILES = "files"
@@ -65,6 +65,9 @@ def run(args: argparse.Namespace) -> int:
     folder = Path(given)
     if folder.exists() and not folder.is_dir():
         raise UsageError("is a file, not a folder; give a folder to write the examples into", subject=given)
+    broken = dangling_link(folder)
+    if broken is not None:
+        raise UsageError(broken, subject=given)
     files = shipped()
     clashes = [name for name, _ in files if (folder / name).exists()]
     if clashes and not args.force:
