@@ -14,6 +14,7 @@ from __future__ import annotations
 import os
 import signal
 import sys
+import threading
 import time
 from collections.abc import Sequence
 from concurrent.futures import wait as wait_for
@@ -46,14 +47,18 @@ def decode_in_workers(
     Returns the summaries of the files finished and, after an interrupt, the stops of the
     files cut short (None when nothing was interrupted).
     """
+    import ctypes  # noqa: F401  # here: a worker short of descriptors could not import it (_end_with_parent)
     from concurrent.futures import ProcessPoolExecutor
 
     from rtde_spec.capture.decoder import decode_to_directory, place
 
     pool = ProcessPoolExecutor(max_workers=jobs, initializer=_start_worker)
-    futures = [pool.submit(_decode_one, f, target, kw) for f in files]
+    futures: list[Any] = []
     summaries: list[CaptureSummary] = []
     try:
+        # submitting starts the workers: out of descriptors, the second may fail after the first
+        # started, which must not be left waiting for work once this command has ended
+        futures += [pool.submit(_decode_one, f, target, kw) for f in files]
         for path, future in zip(files, futures, strict=True):
             got = future.result()
             if not isinstance(got, tuple):  # interrupted in the worker (a signal to it alone)
@@ -65,7 +70,14 @@ def decode_in_workers(
     except KeyboardInterrupt:
         return _stop(pool, futures, summaries)
     except BaseException:
-        pool.shutdown(wait=True, cancel_futures=True)
+        if len(futures) < len(files):  # the pool did not start: its workers are ended here
+            workers = list((getattr(pool, "_processes", None) or {}).values())
+            pool.shutdown(wait=False, cancel_futures=True)
+            for worker in workers:
+                worker.terminate()
+            _end(workers)
+        else:
+            pool.shutdown(wait=True, cancel_futures=True)
         _discard_unplaced(futures[len(summaries) :])
         raise
     pool.shutdown(wait=True)
@@ -169,10 +181,18 @@ def _end_with_parent() -> None:
         import ctypes
 
         ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGTERM))  # 1: PR_SET_PDEATHSIG
-    except (OSError, AttributeError):
+    except (OSError, AttributeError):  # no signal then: a thread looks for the parent instead
+        threading.Thread(target=_watch_parent, args=(parent,), name="rtde-spec-parent", daemon=True).start()
         return
     if os.getppid() != parent:  # it died before the request took effect
         os._exit(128 + int(signal.SIGTERM))
+
+
+def _watch_parent(parent: int) -> None:
+    """End this worker once its parent is gone (where the kernel will not signal it)."""
+    while os.getppid() == parent:
+        time.sleep(0.5)
+    _exit(128 + int(signal.SIGTERM))
 
 
 def _decode_one(path: CapturePath, target: tuple[Any, ...], kw: dict[str, Any]) -> Any:
