@@ -281,3 +281,28 @@ def test_a_stop_ends_workers_that_do_not_end_themselves(tmp_path: Path) -> None:
     done = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=60)
     assert done.stdout.split()[:1] == ["ended"], (done.returncode, done.stderr[-2000:])
     assert int(done.stdout.split()[1]) <= 5
+
+
+@pytest.mark.parametrize("error", [KeyboardInterrupt, RuntimeError])
+def test_a_stop_or_an_error_at_the_end_of_a_file_keeps_its_earlier_tables(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, error: type[BaseException]
+) -> None:
+    """A stop (in a --jobs worker) or an error that came where the decoder does not catch it, as
+    its connections finished, put the tables decoded so far in place of the earlier run's, and
+    dropped the ones not yet written (the URCL tables of a driver session): a file can be read
+    again, so now nothing of the cut run is placed."""
+    from rtde_spec.capture.decoder import decode_to_directory
+    from rtde_spec.capture.protocols.external import ExternalConnection
+
+    out = tmp_path / "out"
+    decode_to_directory(DRIVER, out)
+    before = digests(out)
+    assert any("urcl_script_commands" in name for name in before)
+
+    def cut_short(self: ExternalConnection) -> None:
+        raise error
+
+    monkeypatch.setattr(ExternalConnection, "finish", cut_short)
+    with pytest.raises(error):
+        decode_to_directory(DRIVER, out)
+    assert digests(out) == before

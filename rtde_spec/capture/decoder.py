@@ -221,7 +221,11 @@ def decode_prepared(
         sink.abort()
         raise dropped_tables(exc, path) from exc
     except BaseException:
-        try:  # what was decoded before the error is kept, where its names are still right
+        if not is_live(path):  # a file can be read again: its earlier tables stay, nothing half is
+            with signals_held(replay=False):  # put in place (a stop at its very end, in the workers of
+                sink.abort()  # --jobs, put the tables it had in place and dropped the others)
+            raise
+        try:  # a pipe cannot: what was decoded before the error is kept, where its names are still right
             place(_prepared(sink, path), path)
         except OutputError:
             pass
