@@ -51,7 +51,8 @@ def close_output(writer: Writer, failure: BaseException | None, unit: str) -> No
 
     if rows and isinstance(failure, RtdeSpecError):
         was = "; the file that was there is as it was" if part.replaces else ""
+        were = "was" if rows == 1 else "were"
         failure.extend(
-            f"the {plural(rows, unit)} before it were not written to {part.target} (no partial file{was}); "
+            f"the {plural(rows, unit)} before it {were} not written to {part.target} (no partial file{was}); "
             "--lenient skips what does not decode and writes the rest"
         )
