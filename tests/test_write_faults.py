@@ -474,3 +474,17 @@ def test_an_output_folder_that_is_a_link_to_nothing_is_said_so(tmp_path: Path) -
         done = cli(*args)
         assert done.returncode == 2 and said in done.stderr, done.stderr
     assert not (tmp_path / "nowhere").exists()
+
+
+def test_parquet_to_a_pipe_is_refused_before_it_is_opened(fifo: Path, tmp_path: Path) -> None:
+    """Parquet's writer seeks in its file: to a FIFO it failed with "lseek failed" once a reader
+    came, and waited for ever for one that never did. Now a usage error names the streaming formats."""
+    import sys
+
+    data = tmp_path / "data.bin"
+    data.write_bytes(bytes.fromhex("00045601"))
+    argv = [sys.executable, "-m", "rtde_spec", "decode", str(data), "-o", str(fifo), "--format", "parquet"]
+    done = subprocess.run(argv, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 2, done.stderr
+    assert "cannot be written to a pipe" in done.stderr, done.stderr
+    assert "--format csv or jsonl" in done.stderr, done.stderr

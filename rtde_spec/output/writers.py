@@ -10,6 +10,7 @@ from __future__ import annotations
 
 import io
 import json
+import stat
 import sys
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -216,6 +217,13 @@ def _writer_class(fmt: str) -> type[Writer]:
     return cls
 
 
+def is_fifo(target: Path) -> bool:
+    try:
+        return stat.S_ISFIFO(target.stat().st_mode)
+    except OSError:
+        return False
+
+
 def open_writer(
     fmt: str,
     path: str | Path | None = None,
@@ -257,6 +265,12 @@ def open_writer(
 
         return SplitWriter(one_part, Path(path), split)
     target = Path(path)
+    if cls.NEEDS_PATH and is_fifo(target):  # pyarrow seeks its file: "lseek failed"
+        raise UsageError(
+            f"{fmt} cannot be written to a pipe (the file is written by a writer that seeks in it); "
+            "give a file, or a format that streams: --format csv or jsonl",
+            subject=f"-o {target}",
+        )
     if cls.NEEDS_PATH and not (suspendable and not is_special(target)):
         writer = cls(str(target))  # type: ignore[arg-type]  # pyarrow's own file (written without the GIL) beside the target
         if writer.part is not None:
