@@ -488,3 +488,19 @@ def test_parquet_to_a_pipe_is_refused_before_it_is_opened(fifo: Path, tmp_path: 
     assert done.returncode == 2, done.stderr
     assert "cannot be written to a pipe" in done.stderr, done.stderr
     assert "--format csv or jsonl" in done.stderr, done.stderr
+
+
+def test_a_capture_whose_tables_cannot_be_named_leaves_no_empty_folders(tmp_path: Path) -> None:
+    """A 236-character capture name: its tables' names are too long, said clearly, but each
+    table's robot= and date= folders (52 of them) were left behind empty."""
+    from tests.capture_files import Conversation, write
+
+    conv = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30004))
+    conv.handshake()
+    conv.send("client", build("request_protocol_version", protocol_version=2))
+    conv.send("server", build("request_protocol_version_reply", accepted=True))
+    capture = write(tmp_path / ("r" * 236 + ".pcap"), [conv])
+    out = tmp_path / "out"
+    done = cli("capture", str(capture), "-o", str(out))
+    assert done.returncode == 1 and "too long" in done.stderr, done.stderr
+    assert [p for p in out.rglob("*")] == []

@@ -180,6 +180,7 @@ class DirectorySink(TableSink):
         self.outdir, self.fmt, self.stem = Path(outdir), fmt, stem
         self.writers: dict[tuple[str, str, str], Writer] = {}
         self.paths: list[Path] = []
+        self.folders: set[Path] = set()  # partition folders this run made or used: removed when left empty
         self.part_bytes = part_bytes
         self.parts: dict[tuple[str, str, str], int] = {}  # parts finished before the open one
         self.schemas: dict[tuple[str, str, str], Any] = {}  # a table's columns, for its next part
@@ -201,6 +202,7 @@ class DirectorySink(TableSink):
             part = self.parts.get(key, 0)
             path = folder / f"{self.stem}{f'_{part:04d}' if part else ''}.{EXTENSIONS[self.fmt]}"
             pinned = len(self._pinned_keys) < self._pinned
+            self.folders.add(folder)
             try:  # a folder or file that cannot be made (no inode left: a full disk) ends the run
                 folder.mkdir(parents=True, exist_ok=True)
                 writer = open_writer(self.fmt, path, suspendable=not pinned)
@@ -291,6 +293,12 @@ class DirectorySink(TableSink):
         self.finished.clear()
         if self.prepared is not None:
             self.prepared.discard()
+        for folder in self.folders:  # date=, robot= and table folders no file is left in
+            for empty in (folder, folder.parent, folder.parent.parent):
+                try:
+                    empty.rmdir()
+                except OSError:  # not empty (an earlier run's files), or gone
+                    break
 
     def close(self) -> None:
         """Every table finished first, then all put in place: a write error keeps none of them.
