@@ -99,3 +99,28 @@ def test_overlay_loads_with_extra_fields_and_has_an_ordinary_mode(tmp_path: Path
     assert listed.returncode == 0, listed.stderr
     names = {f["name"] for f in json.loads(listed.stdout)}
     assert "actual_tcp_jerk" in names
+
+
+def test_a_full_temporary_folder_is_said_in_a_line_and_the_spec_stays(tree: Path, tmp_path: Path) -> None:
+    """The checked copy goes to TMPDIR first; on a full one, shutil's error listed every file it
+    could not copy (2 kB of a list's repr). Now one line names the folder and why, exit 1."""
+    from tests.faults.tmpfs import fill, mounted_tmpfs
+
+    small = tmp_path / "tmp"
+    small.mkdir()
+    fields = tree / "rtde/fields.yaml"
+    before = fields.read_bytes()
+    doc = _doc(tmp_path, "| actual_tcp_jerk | VECTOR6D | Actual TCP jerk | 5.30.0 |\n")
+    with mounted_tmpfs(small, "size=256k"):
+        fill(small, 16_000)  # room for tempfile's own probe of the folder, not for the spec
+        argv = [sys.executable, "-m", "rtde_spec.cli", "spec", "import", str(doc), "--spec-dir", str(tree)]
+        result = subprocess.run(
+            [*argv, "--write"],
+            capture_output=True, text=True, cwd=ROOT, timeout=300, env={**os.environ, "TMPDIR": str(small)},
+        )  # fmt: skip
+    assert result.returncode == 1, result.stderr
+    error = [line for line in result.stderr.splitlines() if line.startswith("error:")]
+    assert len(error) == 1 and len(error[0]) < 400, result.stderr
+    assert "could not be copied there to be checked, so nothing was written" in error[0], error
+    assert "the disk is full" in error[0] and "temporary folder" in error[0], error
+    assert fields.read_bytes() == before

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from rtde_spec.errors import RtdeSpecError, UsageError
+from rtde_spec.errors import OutputError, RtdeSpecError, UsageError
 from rtde_spec.importers import availability as av
 from rtde_spec.importers.changes import Change
 from rtde_spec.importers.model import DocField, DocLayoutField, Document
@@ -73,8 +73,18 @@ def check_tree(spec_dir: Path, rel: str, text: str) -> None:
 
     with tempfile.TemporaryDirectory(prefix="rtde-spec-import-") as tmp:
         copy = Path(tmp) / "spec"
-        shutil.copytree(spec_dir, copy, ignore=shutil.ignore_patterns(".*"))
-        (copy / rel).write_text(text, encoding="utf-8")
+        try:
+            shutil.copytree(spec_dir, copy, ignore=shutil.ignore_patterns(".*"))
+            (copy / rel).write_text(text, encoding="utf-8")
+        except (OSError, shutil.Error) as exc:  # a full TMPDIR: shutil.Error holds a list per file
+            first = exc.args[0][0] if isinstance(exc, shutil.Error) and exc.args and exc.args[0] else None
+            text = str(first[2] if isinstance(first, tuple) and len(first) == 3 else exc)
+            why = "the disk is full" if "No space left" in text else text.split(":")[0]
+            raise OutputError(
+                f"{why}: the spec could not be copied there to be checked, so nothing was written "
+                "(TMPDIR picks another folder)",
+                subject=f"temporary folder {tmp}",
+            ) from None
         try:
             bundle = load_bundle(copy)
             try:
