@@ -504,3 +504,23 @@ def test_a_capture_whose_tables_cannot_be_named_leaves_no_empty_folders(tmp_path
     done = cli("capture", str(capture), "-o", str(out))
     assert done.returncode == 1 and "too long" in done.stderr, done.stderr
     assert [p for p in out.rglob("*")] == []
+
+
+@pytest.mark.skipif(not Path("/dev/full").exists(), reason="/dev/full is Linux's")
+def test_decode_to_a_full_standard_output_names_it(tmp_path: Path) -> None:
+    """`decode ... > /dev/full` said "[Errno 28] No space left on device", naming nothing."""
+    import sys
+
+    import yaml
+
+    from tests.helpers import DATA
+
+    golden = yaml.safe_load((DATA / "primary_golden.yaml").read_text())
+    primary = tmp_path / "primary.bin"
+    primary.write_bytes(b"".join(bytes.fromhex(c["hex"]) for c in golden[:5]))
+    for args in (["00045601", "--jsonl"], ["00045601"], ["--protocol", "primary", str(primary), "--jsonl"]):
+        with open("/dev/full", "wb") as full:
+            argv = [sys.executable, "-m", "rtde_spec", "decode", *args]
+            done = subprocess.run(argv, stdout=full, stderr=subprocess.PIPE, text=True)
+        assert done.returncode == 1, done.stderr
+        assert done.stderr == "error: standard output: writing failed: the disk is full\n", done.stderr

@@ -5,6 +5,8 @@ from __future__ import annotations
 import sys
 from typing import TYPE_CHECKING
 
+from rtde_spec.errors import RtdeSpecError
+
 if TYPE_CHECKING:
     from rtde_spec.errors import DecodeError
     from rtde_spec.output.base import Writer
@@ -41,13 +43,26 @@ def close_output(writer: Writer, failure: BaseException | None, unit: str) -> No
     or an interrupt it is dropped, a file that was there stays as it was, and the fault says
     so (a partial file in place of a good one would be data lost with no word)."""
     part = writer.part
-    if failure is None or part is None or part.failed is not None:
+    if part is None:  # standard output: a full disk under it is said as its own
+        full = _disk_full(failure)
+        try:
+            writer.close()
+        except OSError as exc:
+            if failure is not None or not _disk_full(exc):
+                raise
+            full = exc
+        if full is not None:
+            from rtde_spec.errors import OutputError
+
+            said = "writing failed: the disk is full"
+            raise OutputError(said, errno=full.errno, subject="standard output") from full
+        return
+    if failure is None or part.failed is not None:
         writer.close()  # a failed write (a full disk) raises here, saying what stays at the name
         return
     rows = writer.rows
     writer.abort()
     from rtde_spec.cli.conventions import plural
-    from rtde_spec.errors import RtdeSpecError
 
     if rows and isinstance(failure, RtdeSpecError):
         was = "; the file that was there is as it was" if part.replaces else ""
@@ -56,3 +71,13 @@ def close_output(writer: Writer, failure: BaseException | None, unit: str) -> No
             f"the {plural(rows, unit)} before it {were} not written to {part.target} (no partial file{was}); "
             "--lenient skips what does not decode and writes the rest"
         )
+
+
+def _disk_full(exc: BaseException | None) -> OSError | None:
+    """`exc` when it is a full disk no file of ours names (so standard output's: every file
+    output names itself), else None."""
+    import errno
+
+    if not isinstance(exc, OSError) or isinstance(exc, RtdeSpecError):
+        return None
+    return exc if exc.errno in (errno.ENOSPC, errno.EDQUOT) else None
