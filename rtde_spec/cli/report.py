@@ -47,10 +47,10 @@ def close_output(writer: Writer, failure: BaseException | None, unit: str) -> No
         full = _disk_full(failure)
         try:
             writer.close()
-        except OSError as exc:
-            if failure is not None or not _disk_full(exc):
+        except OSError as exc:  # the flush of what was held: the same full disk, or its first sign
+            if full is None and (failure is not None or not _disk_full(exc)):
                 raise
-            full = exc
+            full = full or exc
         if full is not None:
             from rtde_spec.errors import OutputError
 
