@@ -66,29 +66,41 @@ def test_a_rerun_removes_the_files_an_earlier_version_wrote_under_the_old_name(t
     assert rows.num_rows == 20 and set(rows.column("robot").to_pylist()) == {ROBOT}
 
 
-def test_a_rerun_of_a_changed_capture_leaves_none_of_the_earlier_runs_tables_robots_or_days(
-    tmp_path: Path,
-) -> None:
-    """The same file, shorter or from another robot the second time: the tables, robots and days
-    its first run wrote and the second did not stayed beside the second's (15 primary tables of a
-    capture that no longer had the primary connection), read as rows of this capture."""
+def test_a_rerun_of_a_changed_capture_leaves_none_of_the_earlier_runs_tables(tmp_path: Path) -> None:
+    """The same file, without its data the second time: the tables its first run wrote and the
+    second did not stayed beside the second's (15 primary tables of a capture that no longer
+    had the primary connection), read as rows of this capture. Another input's stay."""
+    import yaml
+
     from rtde_spec import build
+    from tests.helpers import DATA
 
     capture, out = tmp_path / "robot.pcapng", tmp_path / "out"
-    ipv6_capture(capture)
-    other = Conversation(("10.0.0.2", 51000), ("10.0.0.77", 30004))
-    other.handshake()
-    other.send("client", build("request_protocol_version", protocol_version=2))
+    cases = yaml.safe_load((DATA / "primary_golden.yaml").read_text())
+    golden = {c["message"]: bytes.fromhex(c["hex"]) for c in cases}
+    primary = Conversation(("fd00::2", 52000), (ROBOT, 30001))
+    primary.handshake()
+    primary.send("server", golden["robot_mode_data"])
+    data = Conversation(("fd00::2", 51000), (ROBOT, 30004))
+    rtde_setup(data)
+    for package in rtde_packages(20):
+        data.send("server", package)
+    write(capture, [data, primary], "pcapng")
+    other = Conversation(("fd00::3", 51000), (ROBOT, 30004))
+    rtde_setup(other)
+    for package in rtde_packages(3):
+        other.send("server", package)
     write(tmp_path / "other.pcapng", [other], "pcapng")
     decode_to_directory(tmp_path / "other.pcapng", out)  # another input's tables stay
     first = decode_to_directory(capture, out)
-    assert {Path(p).parent.parent.name for p in first.paths} == {"robot=fd00%3A%3A10"}
-    shorter = Conversation(("10.0.0.2", 51000), ("10.0.0.11", 30004))  # now another robot, no data
+    assert any("primary_robot_mode_data" in p for p in first.paths)
+    shorter = Conversation(("fd00::2", 51000), (ROBOT, 30004))  # the same robot, no data now
     shorter.handshake()
     shorter.send("client", build("request_protocol_version", protocol_version=2))
     write(capture, [shorter], "pcapng")
     second = decode_to_directory(capture, out)
     files = {str(p) for p in out.rglob("*.parquet") if p.name.startswith("robot-")}
     assert files == set(second.paths), files
-    assert not (out / "rtde_outputs_1").exists()  # its only file was this capture's
-    assert any(p.name.startswith("other-") for p in out.rglob("*.parquet"))
+    assert not any("rtde_outputs_1" in p or "primary_" in p for p in files)
+    assert not (out / "primary_robot_mode_data").exists()  # a table of this capture alone
+    assert [p.name.split("-")[0] for p in (out / "rtde_outputs_1").rglob("*.parquet")] == ["other"]

@@ -11,6 +11,7 @@ in place is always in a listing), then renames the files with signals held.
 from __future__ import annotations
 
 import glob
+import itertools
 import json
 from collections.abc import Sequence
 from dataclasses import dataclass, field
@@ -86,11 +87,7 @@ class PreparedTables:
             target = _renamed(part.target, self.outdir, moved)
             if target != part.target:
                 part.move_to(target)
-                for empty in (before, before.parent):  # robot=, date= folders it alone needed
-                    try:
-                        empty.rmdir()
-                    except OSError:
-                        break
+                prune(before, before.parent)  # robot=, date= folders it alone needed
         self.paths = [_renamed(path, self.outdir, moved) for path in self.paths]
         self.renamed.update(moved)
         self.recipes = dict(names)
@@ -120,23 +117,24 @@ class PreparedTables:
             raise OutputError(f"{failed.reason}: {kept}", errno=failed.errno, subject=failed.subject) from exc
 
     def _remove_stale_parts(self) -> None:
-        """Files of an earlier run of this input that this run did not write: parts STEM_NNNN
-        past this run's (it was shorter), and whole tables, robots or days it no longer holds
-        (the file changed: its primary tables stayed beside the new run's). Left, they would
-        read as rows of this capture."""
+        """Files of an earlier run of this input that this run did not write, in the robots and
+        days it writes: parts STEM_NNNN past this run's (it was shorter), and tables it no longer
+        holds (the file changed: its primary tables stayed beside the new run's). Left, they
+        would read as rows of this capture. Only this run's partitions are looked at, by name:
+        the cost is the capture's own, not the dataset's (a year of a fleet's days)."""
         written = {str(p) for p in self.paths}
-        stem = glob.escape(self.stem)
+        partitions = {p.relative_to(self.outdir).parts[1:-1] for p in self.paths}
         tables = [t for t in self.outdir.iterdir() if t.is_dir()] if self.outdir.is_dir() else []
         for table in tables:
-            for pattern in (f"{stem}.{self.ext}", f"{stem}_[0-9][0-9][0-9][0-9].{self.ext}"):
-                for old in table.glob(f"*/*/{pattern}"):
+            for partition in partitions:
+                folder = table.joinpath(*partition)
+                for n in itertools.count():
+                    old = folder / f"{self.stem}{f'_{n:04d}' if n else ''}.{self.ext}"
+                    if not old.is_file():
+                        break
                     if str(old) not in written:
                         _remove(old)
-                        for empty in (old.parent, old.parent.parent, table):  # date=, robot=, the table
-                            try:
-                                empty.rmdir()
-                            except OSError:
-                                break
+                prune(folder, folder.parent, table)
         for folder in {p.parent for p in self.paths}:
             self._remove_unescaped(folder)
 
@@ -152,11 +150,7 @@ class PreparedTables:
         for pattern in (f"{stem}.{self.ext}", f"{stem}_[0-9][0-9][0-9][0-9].{self.ext}"):
             for old in legacy.glob(pattern):
                 _remove(old)
-        for empty in (legacy, legacy.parent):
-            try:
-                empty.rmdir()
-            except OSError:
-                break
+        prune(legacy, legacy.parent)
 
     def _remove_dropped_tables(self, tables: set[str]) -> None:
         """This input's files in recipe tables an earlier run of it wrote and this one did not (the
@@ -173,6 +167,15 @@ def _renamed(path: Path, outdir: Path, moved: dict[str, str]) -> Path:
     """`path` (OUTDIR/TABLE/...) in the table `moved` gives its table, if it gives one."""
     table, *rest = path.relative_to(outdir).parts
     return outdir.joinpath(moved[table], *rest) if table in moved else path
+
+
+def prune(*folders: Path) -> None:
+    """Remove each of `folders` in turn while it is empty (date=, robot=, a table's own)."""
+    for empty in folders:
+        try:
+            empty.rmdir()
+        except OSError:  # not empty, or gone
+            break
 
 
 def _remove(path: Path) -> None:

@@ -21,7 +21,7 @@ from typing import Any
 from rtde_spec.capture.reading.compressed import SUFFIXES as COMPRESSED
 from rtde_spec.capture.tables.names import Recipe, Register
 from rtde_spec.capture.tables.ordered_writes import PREPARED, OrderedWrites
-from rtde_spec.capture.tables.placing import EXTENSIONS, NamesTaken, PreparedTables
+from rtde_spec.capture.tables.placing import EXTENSIONS, NamesTaken, PreparedTables, prune
 from rtde_spec.errors import OutputError, require
 from rtde_spec.output.base import Writer, flat_columns, flatten
 from rtde_spec.output.hive import partition_folder
@@ -294,11 +294,7 @@ class DirectorySink(TableSink):
         if self.prepared is not None:
             self.prepared.discard()
         for folder in self.folders:  # date=, robot= and table folders no file is left in
-            for empty in (folder, folder.parent, folder.parent.parent):
-                try:
-                    empty.rmdir()
-                except OSError:  # not empty (an earlier run's files), or gone
-                    break
+            prune(folder, folder.parent, folder.parent.parent)
 
     def close(self) -> None:
         """Every table finished first, then all put in place: a write error keeps none of them.
