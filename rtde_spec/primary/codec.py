@@ -22,7 +22,7 @@ from rtde_spec.primary.compiled import Decoder
 from rtde_spec.primary.compiled_tagged import family_decoder
 from rtde_spec.primary.families import FamilyView, PrimaryView, primary_view
 from rtde_spec.primary.fast_models import build, with_groups
-from rtde_spec.primary.robot_state import Reuse, RobotStateReader
+from rtde_spec.primary.robot_state import Reuse, RobotStateReader, layout_for
 from rtde_spec.primary.version_warnings import warnings_for
 from rtde_spec.wire.framing import PackageFramer, Skipped, check_header
 from rtde_spec.wire.layout import Layout
@@ -197,8 +197,7 @@ class PrimaryCodec:
         """The part's body in the layout `version` uses (the newest without one), as decoding picks it."""
         fam, layout = self.by_class[type(part)]
         if version is not None:
-            ranges = fam.older.get(self.member_types[type(part)], ())
-            layout = next((lay for before, lay in ranges if version < before), layout)
+            layout = layout_for(fam.older.get(self.member_types[type(part)], ()), version, layout)
         dumped = part.model_dump()
         body = layout.encode(dumped)
         if fam.prefix is not None:

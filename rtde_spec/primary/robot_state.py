@@ -17,7 +17,7 @@ shares one per shape, bounded like the shapes (one model and its bytes per slot)
 from __future__ import annotations
 
 import struct
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from typing import Any
 
 from rtde_spec.errors import DecodeError
@@ -35,6 +35,11 @@ Shape = tuple[tuple[int, int], ...]  # (size, type) of each sub-package, in orde
 Reuse = dict[CompiledShape, list[Any]]  # a caller's own caches of sub-package models, per shape
 _NONE: frozenset[int] = frozenset()
 _new = object.__new__
+
+
+def layout_for(older: Sequence[tuple[Version, Layout]], version: Version, newest: Layout) -> Layout:
+    """The layout `version` uses: the first older one it comes before (oldest first), else the newest."""
+    return next((layout for before, layout in older if version < before), newest)
 
 
 class RobotStateReader:
@@ -152,8 +157,8 @@ class RobotStateReader:
         if member is None:
             return build(UnknownSubPackage, {"type": sub_type, "size": stop - pos, "raw": buf[pos:stop]})
         cls, layout = member
-        if version is not None and sub_type in self.older:
-            layout = next((lay for before, lay in self.older[sub_type] if version < before), layout)
+        if version is not None:
+            layout = layout_for(self.older.get(sub_type, ()), version, layout)
         return self.walk(cls, layout, buf, pos + self.header.size, stop)
 
     def _bad_header(self, buf: bytes, pos: int, end: int) -> None:
