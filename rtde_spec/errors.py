@@ -9,6 +9,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+try:  # at import: out of descriptors, an import then would fail too
+    import resource
+except ImportError:  # not POSIX
+    resource = None  # type: ignore[assignment]
+
 
 class RtdeSpecError(Exception):
     """Root of every error this package raises on purpose."""
@@ -161,3 +166,16 @@ class SpecError(RtdeSpecError):
 
     def relocated(self, shift: int = 0, package: str | None = None) -> RtdeSpecError:
         return self  # spec problems are located by file and line, not byte offset
+
+
+def out_of_descriptors() -> str:
+    """What to say when the process is out of file descriptors (EMFILE): the limit and what to
+    do (the bare OSError names whatever file the process happened to open: a module, a socket)."""
+    try:
+        limit = str(resource.getrlimit(resource.RLIMIT_NOFILE)[0]) if resource else "?"
+    except (OSError, ValueError):
+        limit = "?"
+    return (
+        f"out of file descriptors (ulimit -n {limit}): raise the limit (e.g. ulimit -n 1024) "
+        "or run fewer --jobs"
+    )

@@ -29,10 +29,8 @@ from typing import NoReturn
 
 try:  # now: out of descriptors, an import then would fail too
     import fcntl
-    import resource
 except ImportError:  # not POSIX
     fcntl = None  # type: ignore[assignment]
-    resource = None  # type: ignore[assignment]
 
 # numpy's OpenBLAS starts a thread per core when it loads, and they spin ~0.1 s of CPU while a
 # command starts (40 % of a one-package capture's CPU). No command does linear algebra worth
@@ -57,7 +55,7 @@ from rtde_spec.cli import (
 from rtde_spec.cli.conventions import GLOBAL_AFTER, add_global_options, leaf_parsers
 from rtde_spec.cli.report import EXIT_ERROR, EXIT_USAGE
 from rtde_spec.cli.stop_signals import restore, stop_on_terminate
-from rtde_spec.errors import RtdeSpecError, UsageError
+from rtde_spec.errors import RtdeSpecError, UsageError, out_of_descriptors
 from rtde_spec.printable import safe_text
 
 COMMANDS = (
@@ -193,17 +191,9 @@ def _usable(fd: int) -> bool:
 
 
 def _worded(exc: BaseException) -> str:
-    """The error's text; out of file descriptors, what the limit is and what to do (the bare
-    OSError names whatever file the process happened to open: a module, a socket)."""
+    """The error's text; out of file descriptors, what the limit is and what to do."""
     if isinstance(exc, OSError) and exc.errno in (errno.EMFILE, errno.ENFILE):
-        try:
-            limit = str(resource.getrlimit(resource.RLIMIT_NOFILE)[0]) if resource else "?"
-        except (OSError, ValueError):
-            limit = "?"
-        return (
-            f"out of file descriptors (ulimit -n {limit}): raise the limit (e.g. ulimit -n 1024) "
-            "or run fewer --jobs"
-        )
+        return out_of_descriptors()
     return str(exc)
 
 

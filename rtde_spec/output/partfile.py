@@ -23,7 +23,7 @@ from collections.abc import Callable
 from pathlib import Path
 from typing import BinaryIO, cast
 
-from rtde_spec.errors import OutputError
+from rtde_spec.errors import OutputError, out_of_descriptors
 from rtde_spec.output.tempnames import temp_path
 
 SPILL = 8 << 20  # held bytes handed to the file before a flush, so memory stays bounded
@@ -301,20 +301,10 @@ def write_failed(exc: BaseException, target: Path) -> OutputError:
     if code in (errno.ENOSPC, errno.EDQUOT) or "No space left" in str(exc):
         code, why = code or errno.ENOSPC, "the disk is full"
     elif code in (errno.EMFILE, errno.ENFILE):  # as cli/main.py says it for any other open
-        limit = _descriptor_limit()
-        why = f"out of file descriptors (ulimit -n {limit}): raise the limit or run fewer --jobs"
+        why = out_of_descriptors()
     else:
         why = (_WHY.get(code) if code is not None else None) or getattr(exc, "strerror", None) or str(exc)
     return OutputError(f"writing failed: {why}", errno=code, subject=f"file {target}")
-
-
-def _descriptor_limit() -> str:
-    try:
-        import resource
-
-        return str(resource.getrlimit(resource.RLIMIT_NOFILE)[0])
-    except (ImportError, OSError, ValueError):
-        return "?"
 
 
 _WHY = {
