@@ -71,7 +71,7 @@ def decode_in_workers(
         return _stop(pool, futures, summaries)
     except BaseException:
         if len(futures) < len(files):  # the pool did not start: its workers are ended here
-            workers = list((getattr(pool, "_processes", None) or {}).values())
+            workers = _workers_of(pool)
             pool.shutdown(wait=False, cancel_futures=True)
             for worker in workers:
                 worker.terminate()
@@ -103,7 +103,7 @@ def _stop(
 
     for future in futures:
         future.cancel()  # not started: never started
-    workers = list((getattr(pool, "_processes", None) or {}).values())
+    workers = _workers_of(pool)
     for worker in workers:
         try:
             os.kill(worker.pid, signal.SIGINT)  # a signal sent to the parent alone reaches them too
@@ -125,6 +125,11 @@ def _stop(
                 prepared.discard()
             stops.append(CaptureInterrupted(summary, kept=False))
     return placed, stops
+
+
+def _workers_of(pool: Any) -> list[Any]:
+    """The pool's worker processes (its own record of them: the pool offers no other)."""
+    return list((getattr(pool, "_processes", None) or {}).values())
 
 
 def _end(workers: list[Any]) -> None:

@@ -40,6 +40,14 @@ def is_special(target: Path) -> bool:
     return not stat.S_ISREG(mode) and not stat.S_ISDIR(mode)
 
 
+def is_fifo(target: Path) -> bool:
+    """A named pipe: written in order only (a writer that seeks cannot use one)."""
+    try:
+        return stat.S_ISFIFO(target.stat().st_mode)
+    except OSError:
+        return False
+
+
 KINDS = {
     stat.S_IFIFO: "a FIFO (named pipe)",
     stat.S_IFCHR: "a character device",

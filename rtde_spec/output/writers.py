@@ -10,7 +10,6 @@ from __future__ import annotations
 
 import io
 import json
-import stat
 import sys
 from collections.abc import Callable, Mapping
 from pathlib import Path
@@ -20,7 +19,7 @@ from rtde_spec.errors import OutputError, UsageError
 from rtde_spec.output.background import BackgroundStream
 from rtde_spec.output.base import Writer, flat_columns, flatten, native_order, plain
 from rtde_spec.output.parquet import ParquetWriter
-from rtde_spec.output.partfile import DeviceStream, Part, PartStream, is_special
+from rtde_spec.output.partfile import DeviceStream, Part, PartStream, is_fifo, is_special
 from rtde_spec.output.tables import arrow_table
 from rtde_spec.output.text import safe_text, table
 
@@ -215,13 +214,6 @@ def _writer_class(fmt: str) -> type[Writer]:
 
         cls = _WRITERS[fmt] = importlib.import_module(cls).McapWriter
     return cls
-
-
-def is_fifo(target: Path) -> bool:
-    try:
-        return stat.S_ISFIFO(target.stat().st_mode)
-    except OSError:
-        return False
 
 
 def open_writer(
