@@ -18,7 +18,8 @@ def next_waiting(body: list[Stmt], start: int) -> Stmt | None:
     waits): the controller runs the ones before it while it looks ahead to the next motion, so a
     blended move blends into a move after them (ur_rtde's paths put `signal_async_progress(i)`
     between their waypoints, PolyScope a `$ N "Waypoint"` label; the arm stopped at each)."""
-    for stmt in body[start : start + LOOK_AHEAD]:
+    for k in range(start, min(len(body), start + LOOK_AHEAD)):  # no slice: this runs at every wait
+        stmt = body[k]
         expr = stmt.expr
         if stmt.kind == "label" or (stmt.kind in ("assign", "call") and expr is not None and not expr.user
                                     and expr.kind != "run"):  # fmt: skip
