@@ -137,6 +137,29 @@ def test_examples_on_a_full_disk_leave_no_temporary_files(
     no_temp_files(disk)
 
 
+def test_examples_that_do_not_fit_write_none_and_run_again_when_there_is_room(
+    disk: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    """Half the set and an error was a folder the next run refused as "already there"."""
+    (disk / "ex").mkdir()
+    (disk / "ex" / "mine.txt").write_text("the user's own file\n")
+    fill(disk, 100_000)  # the examples are about 380 kB
+    code, err = run(capsys, "examples", str(disk / "ex"))
+    assert code == 1 and "the disk is full" in err, err
+    assert sorted(p.name for p in (disk / "ex").rglob("*")) == ["mine.txt"]  # no example, no subfolder
+    (disk / "filler").unlink()
+    assert run(capsys, "examples", str(disk / "ex"))[0] == 0  # not "already there": nothing was
+    assert (disk / "ex" / "move.script").is_file() and (disk / "ex" / "mine.txt").is_file()
+
+
+def test_examples_into_a_new_folder_on_a_full_disk_leave_no_folder(
+    disk: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    fill(disk, 100_000)
+    assert run(capsys, "examples", str(disk / "new" / "ex"))[0] == 1
+    assert sorted(p.name for p in disk.iterdir()) == ["filler"]
+
+
 def test_examples_force_on_a_full_disk_keeps_the_files_there(
     disk: Path, capsys: pytest.CaptureFixture[str]
 ) -> None:

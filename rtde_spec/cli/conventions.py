@@ -10,8 +10,10 @@ checks each subcommand's parser against them.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
-from collections.abc import Callable
+import shutil
+from collections.abc import Callable, Sequence
 from importlib.abc import Traversable
 from pathlib import Path
 from typing import Any
@@ -127,16 +129,49 @@ def place_copy(source: Path | Traversable, target: Path, refuse: Callable[[str],
     renamed when whole, through a symlink; a failed write leaves no temporary file and the
     file that was there as it was). A full disk raises the write error, naming the file
     (exit 1); any other failure `refuse(why)`: the folder given is the problem (exit 2)."""
-    import shutil
+    place_copies([(source, target)], lambda why, _: refuse(why))
 
-    from rtde_spec.output.partfile import NO_ROOM, write_failed, write_with
 
+def place_copies(
+    copies: Sequence[tuple[Path | Traversable, Path]], refuse: Callable[[str, Path], UsageError]
+) -> None:
+    """Each `(source, target)` as `place_copy` writes it, the set in place together or not at
+    all: every file is written beside its name first, then each is renamed. (A set cut short
+    by a full disk was refused as "already there" when run again.) A failed write leaves the
+    files that were there as they were, and no file or folder this call made. A full disk
+    raises the write error naming the file; any other failure `refuse(why, target)`."""
+    from rtde_spec.output.partfile import NO_ROOM, Part, PartStream, write_failed
+
+    parts: list[Part] = []
+    made = _missing_folders([target.parent for _, target in copies])
+    target = copies[0][1] if copies else Path()
     try:
-        target.parent.mkdir(parents=True, exist_ok=True)
-        with source.open("rb") as src:
-            write_with(target, lambda out: shutil.copyfileobj(src, out))
-    except OSError as exc:
+        for source, target in copies:
+            target.parent.mkdir(parents=True, exist_ok=True)
+            parts.append(Part(target))
+            with source.open("rb") as src, PartStream(parts[-1], batched=False) as out:
+                shutil.copyfileobj(src, out)
+        for part, (_, target) in zip(parts, copies, strict=True):  # noqa: B007  # named if it fails
+            part.commit()  # a rename can fail too (a full directory): the files before it are in place
+    except BaseException as exc:
+        for part in parts:
+            part.discard()
+        for folder in made:  # the deepest first; one that holds a file now (a rename above) stays
+            with contextlib.suppress(OSError):
+                folder.rmdir()
+        if not isinstance(exc, OSError):
+            raise
         failed = write_failed(exc, target)
         if failed.errno in NO_ROOM:
             raise failed from None
-        raise refuse(failed.reason.removeprefix("writing failed: ")) from None
+        raise refuse(failed.reason.removeprefix("writing failed: "), target) from None
+
+
+def _missing_folders(folders: Sequence[Path]) -> list[Path]:
+    """The folders (and their parents) that do not exist yet, the deepest first."""
+    missing: set[Path] = set()
+    for folder in folders:
+        while not folder.exists() and not folder.is_symlink() and folder != folder.parent:
+            missing.add(folder)
+            folder = folder.parent
+    return sorted(missing, key=lambda f: len(f.parts), reverse=True)

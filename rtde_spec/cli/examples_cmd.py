@@ -12,7 +12,7 @@ from importlib import resources
 from importlib.abc import Traversable
 from pathlib import Path
 
-from rtde_spec.cli.conventions import dangling_link, describe, place_copy
+from rtde_spec.cli.conventions import dangling_link, describe, place_copies
 from rtde_spec.errors import UsageError
 
 FILES = "files"
@@ -77,15 +77,15 @@ def run(args: argparse.Namespace) -> int:
             "give --force to overwrite them, or another folder",
             subject=given,
         )
-    for name, resource in files:
 
-        def refuse(why: str, name: str = name) -> UsageError:  # the folder given is the problem
-            return UsageError(
-                f"cannot write the examples there ({name}: {why}); give a folder you can write to",
-                subject=given,
-            )
+    def refuse(why: str, target: Path) -> UsageError:  # the folder given is the problem
+        return UsageError(
+            f"cannot write the examples there ({target.relative_to(folder)}: {why}); "
+            "give a folder you can write to",
+            subject=given,
+        )
 
-        place_copy(resource, folder / name, refuse)
+    place_copies([(resource, folder / name) for name, resource in files], refuse)
     print(f"wrote {len(files)} example files to {folder}/: {', '.join(name for name, _ in files)}")
     print(f"run the README's commands from there: cd {folder}")
     return 0
