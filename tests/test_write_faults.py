@@ -530,6 +530,39 @@ def test_a_capture_whose_tables_cannot_be_named_leaves_no_empty_folders(tmp_path
 
 
 @pytest.mark.skipif(not Path("/dev/full").exists(), reason="/dev/full is Linux's")
+def test_every_command_that_prints_names_a_full_standard_output() -> None:
+    """`fields > /dev/full` said "[Errno 28] No space left on device", naming nothing, and
+    `--help > /dev/full` exited 0: the text was lost with no word."""
+    import sys
+
+    from rtde_spec.examples import __file__ as examples
+
+    recipe = str(Path(examples).parent / "files" / "rtde_config.xml")
+    for args in (["fields"], ["validate", recipe], ["--help"], ["decode", "--help"], ["--version"]):
+        with open("/dev/full", "wb") as full:
+            argv = [sys.executable, "-m", "rtde_spec", *args]
+            done = subprocess.run(argv, stdout=full, stderr=subprocess.PIPE, text=True)
+        assert done.returncode == 1, (args, done.stderr)
+        assert done.stderr == "error: standard output: writing failed: the disk is full\n", (
+            args,
+            done.stderr,
+        )
+
+
+def test_standard_output_to_a_pipe_closed_early_is_no_error() -> None:
+    """`rtde-spec fields | head -1`: the reader closing the pipe is not ours to report."""
+    import sys
+
+    reader = subprocess.Popen(
+        [sys.executable, "-m", "rtde_spec", "fields"], stdout=subprocess.PIPE, stderr=subprocess.PIPE
+    )
+    assert reader.stdout is not None and reader.stderr is not None
+    assert reader.stdout.readline().startswith(b"name")
+    reader.stdout.close()
+    assert reader.wait(timeout=60) == 0
+    assert reader.stderr.read() == b""
+
+
 def test_decode_to_a_full_standard_output_names_it(tmp_path: Path) -> None:
     """`decode ... > /dev/full` said "[Errno 28] No space left on device", naming nothing."""
     import sys

@@ -27,11 +27,6 @@ import threading
 from collections.abc import Callable
 from typing import NoReturn
 
-try:  # now: out of descriptors, an import then would fail too
-    import fcntl
-except ImportError:  # not POSIX
-    fcntl = None  # type: ignore[assignment]
-
 # numpy's OpenBLAS starts a thread per core when it loads, and they spin ~0.1 s of CPU while a
 # command starts (40 % of a one-package capture's CPU). No command does linear algebra worth
 # sharing (the emulator's 6x6 kinematics), so one thread; a user's own setting wins.
@@ -54,6 +49,7 @@ from rtde_spec.cli import (
 )
 from rtde_spec.cli.conventions import GLOBAL_AFTER, add_global_options, leaf_parsers
 from rtde_spec.cli.report import EXIT_ERROR, EXIT_USAGE
+from rtde_spec.cli.standard_streams import discard_held_output, set_up_streams
 from rtde_spec.cli.stop_signals import restore, stop_on_terminate
 from rtde_spec.errors import RtdeSpecError, UsageError, out_of_descriptors
 from rtde_spec.printable import safe_text
@@ -138,16 +134,17 @@ def entry() -> NoReturn:
     By then every output is closed and in place; stdout and stderr are flushed here. Only when
     nothing else runs: a thread still alive, or an exception (a usage error's SystemExit
     included), leaves the usual way. Code calling `main()` itself is not affected."""
-    _stand_in_for_closed_streams()
-    code = main()
+    set_up_streams()
+    try:
+        code = main()
+    except SystemExit:  # --help, --version, a usage error: argparse ends the command
+        if not _flushed():
+            sys.exit(EXIT_ERROR)
+        raise
+    if not _flushed(said=code != 0):
+        code = code or EXIT_ERROR
     if threading.active_count() > 1:  # not ours to cut short: Python joins them as usual
         sys.exit(code)
-    try:
-        sys.stdout.flush()
-    except BrokenPipeError:  # the reader closed the pipe (`| head`): not an error of ours
-        pass
-    except OSError:  # a full disk under a redirected stdout: said as Python would say it
-        sys.exit(code or EXIT_ERROR)
     try:
         sys.stderr.flush()
     except OSError:
@@ -156,38 +153,20 @@ def entry() -> NoReturn:
     os._exit(code)
 
 
-def _stand_in_for_closed_streams() -> None:
-    """Started with stdout or stderr closed (`>&-`), Python leaves `sys.stdout` None and every
-    print failed with a traceback (a capture that had written all its tables exited 1), and the
-    first file the command opened took descriptor 1 or 2, where a library's own messages would
-    land in it. The closed descriptors get /dev/null; summaries and messages go nowhere, as to a
-    closed terminal; data meant for standard output is refused by `output.writers.open_writer`
-    (`closed_stream`), as it would be lost."""
-    for fd, name in ((0, "stdin"), (1, "stdout"), (2, "stderr")):
-        if not _usable(fd):
-            null = os.open(os.devnull, os.O_RDWR)
-            if null != fd:
-                os.dup2(null, fd)
-                os.close(null)
-            if fd:  # the stream Python made of a file that took the descriptor: not ours to write
-                setattr(sys, name, None)
-        if getattr(sys, name) is None:
-            stand_in = open(fd, "r" if fd == 0 else "w", encoding="utf-8", closefd=False)
-            stand_in.closed_stream = True  # type: ignore[attr-defined]
-            setattr(sys, name, stand_in)
-
-
-def _usable(fd: int) -> bool:
-    """Open, and for output not read-only: a closed stderr's descriptor can be a file a
-    launcher opened (pyenv's shim script, read-only), and every message to it failed."""
+def _flushed(said: bool = False) -> bool:
+    """Standard output flushed; False when that failed (a full disk: said on stderr, unless the
+    command has `said` its error already). What it held is dropped either way, so Python's own
+    flush at the end does not fail again."""
     try:
-        if fcntl is None:  # no access mode to read: open is all that is known
-            os.fstat(fd)
-            return True
-        flags = fcntl.fcntl(fd, fcntl.F_GETFL)
-    except OSError:
+        sys.stdout.flush()
+    except BrokenPipeError:  # the reader closed the pipe (`| head`): not an error of ours
+        discard_held_output()
+    except OSError as exc:  # a full disk under a redirected stdout: "standard output: ..."
+        if not said:
+            print(f"error: {safe_text(_worded(exc))}", file=sys.stderr)
+        discard_held_output()
         return False
-    return fd == 0 or flags & os.O_ACCMODE != os.O_RDONLY
+    return True
 
 
 def _worded(exc: BaseException) -> str:
