@@ -18,7 +18,7 @@ ENTRY = """
 import atexit, sys, threading, time
 atexit.register(lambda: print("teardown", file=sys.stderr, flush=True))
 if sys.argv[1] == "thread":  # a thread of the caller's still running when main() returns
-    threading.Thread(target=time.sleep, args=(0.3,)).start()
+    threading.Thread(target=time.sleep, args=(3.0,)).start()  # alive when main() returns, even under load
 sys.argv = ["rtde-spec", *sys.argv[2:]]
 from rtde_spec.cli.main import entry
 entry()

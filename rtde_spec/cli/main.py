@@ -49,7 +49,7 @@ from rtde_spec.cli import (
 )
 from rtde_spec.cli.conventions import GLOBAL_AFTER, add_global_options, leaf_parsers
 from rtde_spec.cli.report import EXIT_ERROR, EXIT_USAGE
-from rtde_spec.cli.standard_streams import discard_held_output, set_up_streams
+from rtde_spec.cli.standard_streams import discard_held_output, output_failure, set_up_streams
 from rtde_spec.cli.stop_signals import restore, stop_on_terminate
 from rtde_spec.errors import RtdeSpecError, UsageError, out_of_descriptors
 from rtde_spec.printable import safe_text
@@ -159,6 +159,9 @@ def _flushed(said: bool = False) -> bool:
     flush at the end does not fail again."""
     try:
         sys.stdout.flush()
+        failed = output_failure()
+        if failed is not None:  # a write whose caller swallowed the error (argparse's help)
+            raise failed
     except BrokenPipeError:  # the reader closed the pipe (`| head`): not an error of ours
         discard_held_output()
     except OSError as exc:  # a full disk under a redirected stdout: "standard output: ..."

@@ -50,8 +50,16 @@ def discard_held_output() -> None:
     sys.stdout = open(os.devnull, "w", encoding="utf-8")  # for the rest of the process
 
 
+def output_failure() -> OSError | None:
+    """The error a write to standard output raised, even where its caller swallowed it (argparse
+    prints `--help` and ignores an OSError: unbuffered, the text was lost with exit 0)."""
+    return _StandardOutput.failed
+
+
 class _StandardOutput(io.RawIOBase):
     """Descriptor 1 as Python's standard output writes it, its full disk said as standard output's."""
+
+    failed: OSError | None = None  # the first error of a write: one standard output a process
 
     def writable(self) -> bool:
         return True
@@ -74,8 +82,10 @@ class _StandardOutput(io.RawIOBase):
         except OSError as exc:
             if exc.errno in NO_ROOM:
                 said = "writing failed: the disk is full"
-                raise OutputError(said, errno=exc.errno, subject="standard output") from exc
-            raise
+                exc = OutputError(said, errno=exc.errno, subject="standard output")
+            if _StandardOutput.failed is None and not isinstance(exc, BrokenPipeError):
+                _StandardOutput.failed = exc
+            raise exc from None
 
 
 def _stand_in_for_closed_streams() -> None:
