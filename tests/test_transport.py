@@ -32,7 +32,11 @@ SCENARIO = Scenario.model_validate(
 
 def emulator(scenario: Scenario = SCENARIO, **ports: int | None) -> EmulatorThread:
     config = EmulatorConfig(
-        rtde_port=0, primary_port=0, secondary_port=0, scenario=scenario, realtime_port=None,
+        rtde_port=0,
+        primary_port=0,
+        secondary_port=0,
+        scenario=scenario,
+        realtime_port=None,
         dashboard_port=None,
     )
     for name, port in ports.items():
@@ -516,6 +520,46 @@ def test_read_only_port_refuses_script_clearly() -> None:
     client = PrimaryClient("127.0.0.1", 30011)
     with pytest.raises(UsageError, match="read-only"):
         client.send_script("popup('hi')")
+
+
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [  # each said "outputs.actual_q.bool: Input should be a valid boolean" or named no file
+        (
+            "outputs:\n  actual_q: {sine: {amplitude: 1, period: 0}}\n",
+            "outputs.actual_q.sine.period: Input should be greater than 0",
+        ),
+        (
+            "outputs:\n  actual_q: {ramp: {rate: x}}\n",
+            "outputs.actual_q.ramp.rate: Input should be a valid number",
+        ),
+        ("outputs:\n  robot_mode: hello\n", "outputs.robot_mode: 'hello' is not a number, true or false"),
+        ("outputs:\n  actual_q: {sinus: 1}\n", "outputs.actual_q: {'sinus': 1} is not a number"),
+        (
+            "- controller\n- outputs\n",
+            "a scenario is a mapping (controller, outputs, faults, calibrated), not a list",
+        ),
+    ],
+)
+def test_a_scenario_error_names_the_key_the_file_got_wrong(tmp_path: Path, text: str, said: str) -> None:
+    from rtde_spec.emulator.controller.scenario import load_scenario
+
+    bad = tmp_path / "s.yaml"
+    bad.write_text(text)
+    with pytest.raises(UsageError) as raised:
+        load_scenario(bad)
+    assert str(raised.value).startswith(f"scenario file {bad}: {said}"), str(raised.value)
+
+
+def test_a_scenario_that_is_not_text_is_named(tmp_path: Path) -> None:
+    from rtde_spec.emulator.controller.scenario import load_scenario
+
+    bad = tmp_path / "s.yaml"
+    bad.write_bytes(b"outputs:\xa0\xff\n")
+    with pytest.raises(
+        UsageError, match=r"s\.yaml: cannot read scenario: not UTF-8 text: byte 0xa0 at offset 8"
+    ):
+        load_scenario(bad)
 
 
 def test_scenario_files_are_validated(tmp_path) -> None:  # type: ignore[no-untyped-def]

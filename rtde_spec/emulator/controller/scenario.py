@@ -132,11 +132,48 @@ def load_scenario(path: str | Path) -> Scenario:
     """A scenario from YAML; every problem is a UsageError naming the file and key."""
     try:
         data = safe_yaml.load(Path(path).read_text(encoding="utf-8")) or {}
+    except UnicodeDecodeError as exc:
+        said = f"not UTF-8 text: byte 0x{exc.object[exc.start]:02x} at offset {exc.start}"
+        raise UsageError(f"cannot read scenario: {said}", subject=f"file {path}") from None
     except (OSError, yaml.YAMLError) as exc:
         raise UsageError(f"cannot read scenario: {exc}", subject=f"file {path}") from None
+    if not isinstance(data, dict):
+        said = f"a scenario is a mapping ({', '.join(Scenario.model_fields)}), not {_kind(data)}"
+        raise UsageError(said, subject=f"scenario file {path}")
     try:
         return Scenario.model_validate(data)
     except ValidationError as exc:
-        first = exc.errors()[0]
-        where = ".".join(str(p) for p in first["loc"])
-        raise UsageError(f"{where}: {first['msg']}", subject=f"scenario file {path}") from None
+        raise UsageError(_explained(exc, data), subject=f"scenario file {path}") from None
+
+
+SHAPES = {"sine": "SineOf", "ramp": "RampOf"}  # an output's function, as the union names its member
+MEMBERS = {*SHAPES.values(), "bool", "int", "float", "list[float]"}  # tags, not keys of the file
+VALUES = "a number, true or false, a list of numbers, {sine: {...}} or {ramp: {...}}"
+
+
+def _explained(exc: ValidationError, data: dict[str, Any]) -> str:
+    """The error of the value's own shape: pydantic lists one per member of an output's union,
+    first "Input should be a valid boolean" for a sine whose period is 0."""
+    errors = exc.errors()
+    first = errors[0]
+    loc = first["loc"]
+    if len(loc) >= 3 and loc[0] == "outputs":
+        name = loc[1]
+        outputs = data.get("outputs")
+        value = outputs.get(name) if isinstance(outputs, dict) else None
+        shape = next((SHAPES[k] for k in SHAPES if isinstance(value, dict) and k in value), None)
+        if shape is None:
+            return f"outputs.{name}: {safe_repr(value)} is not {VALUES}"
+        first = next(e for e in errors if e["loc"][:3] == ("outputs", name, shape))
+        loc = first["loc"]
+    return f"{'.'.join(str(p) for p in loc if p not in MEMBERS)}: {first['msg']}"
+
+
+def _kind(data: object) -> str:
+    return "a list" if isinstance(data, list) else f"{safe_repr(data)}"
+
+
+def safe_repr(value: object) -> str:
+    """A value as the file gave it, cut short: a scenario may hold a long list by mistake."""
+    text = repr(value)
+    return text if len(text) <= 60 else text[:57] + "..."
