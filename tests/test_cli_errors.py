@@ -37,6 +37,9 @@ FILES: dict[str, str | bytes] = {
     "wrong.txt": "timestamp\nactual_q\n",
     "ok.csv": "timestamp,a\n0,1\n1,2\n",
     "extra.yaml": "outputs:\n  - name: x\n    type: NOPE\n",
+    "extra_map.yaml": "my_field:\n  type: DOUBLE\n",  # fields as a mapping, not under outputs:
+    "extra_list.yaml": "- my_field\n",
+    "extra_bin.yaml": b"\xf6\x00\x01binary",
     "guide.txt": "just some text\n",
     "script.urs": "popup('hi')\n",
     "afile": "not a folder\n",
@@ -129,6 +132,13 @@ CASES: list[Case] = [
       "shaped like spec/rtde/fields.yaml"),
     c(1, "--extra-fields", "extra.yaml", "fields", "--", "extra.yaml:3", "unknown type 'NOPE'",
       "known: BOOL"),
+    # a spec problem's list is printed as lines (it was one line, its newlines as \x0a)
+    c(1, "--extra-fields", "extra_map.yaml", "fields", "--",
+      "extra_map.yaml:", "my_field: unknown key 'my_field'", "holds `inputs:` and `outputs:`", lines=2),
+    c(1, "--extra-fields", "extra_list.yaml", "fields", "--",
+      "the file is a mapping (doc_ref, inputs, outputs), not a list", lines=2),
+    c(1, "--extra-fields", "extra_bin.yaml", "fields", "--",
+      "extra_bin.yaml: <root>: not UTF-8 text: byte 0xf6 at offset 0", lines=2),
     c(2, "fields", "--diff", "5.10", "4.0", "--", "argument --diff", "no known product line"),
     # serve
     c(2, "serve", "--rtde-port", "99999", "--", "argument --rtde-port", "give 0..65535"),

@@ -115,12 +115,12 @@ def main(argv: list[str] | None = None) -> int:
     except UsageError as exc:
         if args.debug:
             raise
-        print(f"error: {safe_text(str(exc))}", file=sys.stderr)
+        print(f"error: {_printable(str(exc))}", file=sys.stderr)
         return EXIT_USAGE
     except (RtdeSpecError, OSError, ValueError) as exc:
         if args.debug:
             raise
-        print(f"error: {safe_text(_worded(exc))}", file=sys.stderr)  # errors quote the wire: escaped
+        print(f"error: {_printable(_worded(exc))}", file=sys.stderr)  # errors quote the wire: escaped
         return EXIT_ERROR
     finally:
         restore(previous)
@@ -166,10 +166,16 @@ def _flushed(said: bool = False) -> bool:
         discard_held_output()
     except OSError as exc:  # a full disk under a redirected stdout: "standard output: ..."
         if not said:
-            print(f"error: {safe_text(_worded(exc))}", file=sys.stderr)
+            print(f"error: {_printable(_worded(exc))}", file=sys.stderr)
         discard_held_output()
         return False
     return True
+
+
+def _printable(text: str) -> str:
+    """An error's lines as lines (a spec's list of problems), control characters escaped in each:
+    its newlines were printed as `\\x0a`, the list on one line."""
+    return "\n".join(safe_text(line) for line in text.split("\n"))
 
 
 def _worded(exc: BaseException) -> str:

@@ -6,6 +6,7 @@ one), the line, and the reason. All problems are collected before raising.
 
 from __future__ import annotations
 
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, TypeVar
 
@@ -114,6 +115,12 @@ def _reason(err: Any) -> str:
 
 def _validate(source: _Source, model: type[BaseModel], issues: list[SpecIssue]) -> Any:
     data = source.data if source.data is not None else {}
+    if not isinstance(data, dict):  # else "Input should be a valid dictionary or instance of FieldsFile"
+        kind = "a list" if isinstance(data, list) else f"{type(data).__name__} {data!r:.40}"
+        issues.append(
+            source.issue((), f"the file is a mapping ({', '.join(model.model_fields)}), not {kind}")
+        )
+        return None
     try:
         return model.model_validate(data)
     except ValidationError as exc:
@@ -134,6 +141,12 @@ def _open(path: Path, label: str, issues: list[SpecIssue]) -> _Source | None:
         return _Source(path, label)
     except FileNotFoundError:
         issues.append(SpecIssue(label, "", "file not found"))
+    except UnicodeDecodeError as exc:  # a binary file given by mistake: said, not a codec's traceback
+        issues.append(
+            SpecIssue(label, "", f"not UTF-8 text: byte 0x{exc.object[exc.start]:02x} at offset {exc.start}")
+        )
+    except OSError as exc:  # a folder, no permission
+        issues.append(SpecIssue(label, "", f"cannot read it: {exc.strerror or exc}"))
     except yaml.YAMLError as exc:
         mark = getattr(exc, "problem_mark", None)
         line = mark.line + 1 if mark is not None else None
@@ -189,8 +202,20 @@ def load_fields_file(path: Path | str, spec: Spec, against: FieldsFile | None = 
         raise SpecError(issues)
     extra = _validate(source, FieldsFile, issues)
     if issues:
-        raise SpecError(issues)
+        raise SpecError([_shaped(issue) for issue in issues])
     found = [source.issue(loc, reason) for loc, reason in lint_fields_file(extra, spec, against)]
     if found:
         raise SpecError(found)
     return extra
+
+
+FIELDS_SHAPE = "an extra-fields file holds `inputs:` and `outputs:`, lists of fields as spec/rtde/fields.yaml"
+
+
+def _shaped(issue: SpecIssue) -> SpecIssue:
+    """A key at the top of an extra-fields file that is not one: what the file holds instead
+    (`my_field: {type: DOUBLE}` said only "unknown key 'my_field'")."""
+    top = issue.path and not any(mark in issue.path for mark in ".[")
+    if not (top and issue.reason.startswith("unknown key")) and "the file is a mapping" not in issue.reason:
+        return issue
+    return replace(issue, reason=f"{issue.reason}; {FIELDS_SHAPE}")
