@@ -116,6 +116,34 @@ def test_a_program_split_over_reads_runs_once_its_end_arrives() -> None:
         emu.stop()
 
 
+@pytest.mark.parametrize(
+    "block",
+    [
+        # a condition over three lines, as Robotiq's vacuum URCap preamble writes its waits
+        "  while (get_standard_digital_in(0) and\n         not get_standard_digital_in(1) and\n"
+        "         True):\n    sleep(0.01)\n  end\n",
+        '  if "#" == "#":\n    textmsg("a # in a string")\n  end\n',  # no comment starts in a string
+        "  if True: textmsg(1) end\n",  # a block on one line
+        "  t = struct(sec=1, end=2)\n  textmsg(t.sec + t.end)\n",  # time()'s fields: keywords after a dot
+    ],
+)
+def test_a_program_is_cut_at_its_own_end_whatever_its_blocks_look_like(block: str) -> None:
+    """The port runs the whole program, not its first lines up to an inner `end` (a syntax error
+    then, and the rest run as loose lines)."""
+    emu = emulator()
+    try:
+        sock = socket.create_connection(("127.0.0.1", emu.ports["primary"]))
+        sock.sendall(f"def p():\n{block}  set_standard_digital_out(3, True)\nend\n".encode())
+        deadline = time.monotonic() + 3
+        while emu.call(lambda: emu.model.values["actual_digital_output_bits"]) != 8:
+            assert time.monotonic() < deadline
+            time.sleep(0.05)
+        assert [text.count("\n") for _, text in emu.emulator.primary.scripts] == [block.count("\n") + 3]
+        sock.close()
+    finally:
+        emu.stop()
+
+
 def test_script_framer_cuts_lines_and_programs() -> None:
     framer = ScriptFramer()
     assert framer.feed(b"textmsg(1)\nset_standard_digital_out(1, Tr") == ["textmsg(1)\n"]

@@ -2,7 +2,10 @@
 
 A controller runs a line sent outside a program as soon as its newline arrives, and
 a `def` (or `sec`) program once its closing `end` has; a line without its newline is
-not run yet. Bytes that cannot be URScript text (invalid UTF-8, NUL and other control
+not run yet. Blocks are counted by their keywords outside strings and comments, wherever
+they stand: a condition may go on over lines (Robotiq's vacuum URCap writes
+`while (not a(s) and` / `b(s)):`), a string may hold `#`, and `if x: y() end` opens and
+closes on one line. Bytes that cannot be URScript text (invalid UTF-8, NUL and other control
 bytes) are refused, and what is held unfinished is counted so the server can bound it.
 """
 
@@ -14,9 +17,10 @@ from rtde_spec.emulator.ports.guard import GuardedConnection, Port
 from rtde_spec.errors import ProtocolError
 
 _NOT_TEXT = re.compile(rb"[\x00-\x08\x0b\x0e-\x1f\x7f]")
-_OPENS = re.compile(r"^(def|sec|thread|if|while)\b.*:$")
-_ENDS = re.compile(r"^end\b")
-_PROGRAM = re.compile(r"^(def|sec)\b")
+_STRINGS = re.compile(r"\"(?:[^\"\\\n]|\\.)*\"|'(?:[^'\\\n]|\\.)*'")
+# keywords open (and `end` closes) one block each; after a `.` they are a struct's field (time().sec)
+_OPENS = re.compile(r"(?<![.\w])(?:def|sec|thread|if|while)\b")
+_ENDS = re.compile(r"(?<![.\w])end\b")
 
 
 class ScriptFramer:
@@ -58,18 +62,17 @@ class ScriptFramer:
         out: list[str] = []
         loose: list[str] = []  # lines outside any program, run together
         for line in lines:
-            code = line.split("#", 1)[0].strip()
-            if self._depth == 0 and not (code and _OPENS.match(code)):
+            code = _STRINGS.sub('""', line).split("#", 1)[0].strip()
+            opens = len(_OPENS.findall(code))
+            net = opens - len(_ENDS.findall(code))
+            if self._depth == 0 and net <= 0:  # a line of its own, blocks and all
                 if code:
                     loose.append(line)
                 continue
             if self._depth == 0 and loose:
                 out.append("\n".join(loose) + "\n")
                 loose = []
-            if _OPENS.match(code):
-                self._depth += 1
-            elif _ENDS.match(code):
-                self._depth -= 1
+            self._depth = max(0, self._depth + net)
             self._program.append(line)
             self._program_bytes += len(line) + 1
             if self._depth == 0:
