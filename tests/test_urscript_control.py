@@ -285,6 +285,26 @@ end"""
     assert model.values["actual_q"][0] == pytest.approx(HOME_Q[0] + 0.1)
 
 
+def test_a_struct_field_can_be_assigned_and_only_a_field_the_struct_has() -> None:
+    """URCL's direct torque programs set `pd_controller_gains.kp = [...]` on a global struct."""
+    _, events = run(
+        """def prog():
+  global gains = struct(kp=[1, 2], kd=3, inner=struct(x=1))
+  kept = gains
+  def tune():
+    gains.kp = [4, 5]
+    gains.kp[1] = 7
+    gains.inner.x = 2
+  end
+  tune()
+  textmsg(gains.kp, gains.kd, gains.inner.x, kept.kp)
+  gains.ki = 1
+end"""
+    )
+    assert said(events) == ["[4, 7]32[1, 2]"]
+    assert faults(events) == [("Type error: struct has no field ki", 11, 3)]
+
+
 def test_operators_follow_python_precedence() -> None:
     lines = [
         "1 + 2 * 3 == 7 and not 1 > 2 or False",  # True

@@ -157,9 +157,13 @@ class Evaluator:
         if name not in where:
             raise ScriptFault(f"compile_error_name_not_found:{name}", stmt.line, stmt.column)
         positions = [
-            self.value(e, frame) if e.kind != "pair" else tuple(self.value(i, frame) for i in e.items)
+            urscript_ops.Member(e.value)
+            if e.kind == "member"
+            else self.value(e, frame)
+            if e.kind != "pair"
+            else tuple(self.value(i, frame) for i in e.items)
             for e in stmt.index
-        ]  # a matrix's row and column are one subscript, a tuple
+        ]  # a matrix's row and column are one subscript, a tuple; a struct's field a Member
         changed = urscript_ops.replaced(where[name], positions, value, stmt.line, stmt.column)
         if isinstance(value, list):  # `a[0] = a` must not nest a value deeper each turn
             check_shape(changed, stmt.line, stmt.column)

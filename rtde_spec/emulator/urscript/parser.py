@@ -135,10 +135,14 @@ class _Parser(ExpressionParser):
 
     def target(self, expr: Expr, start: Token) -> tuple[str, tuple[Expr, ...]]:
         """The variable and subscripts an assignment writes: `x`, `q[0]`, `m[1][2]`, `m[1, 2]`,
-        `p[0]`; a matrix's row and column are one subscript, a `pair`."""
+        `p[0]`, a struct's field `s.kp` (URCL's `pd_controller_gains.kp = [...]`); a matrix's row
+        and column are one subscript, a `pair`, a field one `member`."""
         index: list[Expr] = []
-        while expr.kind == "index":
-            index.insert(0, _subscript(expr.items[1:], expr))
+        while expr.kind in ("index", "field"):
+            if expr.kind == "field":
+                index.insert(0, Expr("member", expr.value, column=expr.column, line=expr.line))
+            else:
+                index.insert(0, _subscript(expr.items[1:], expr))
             expr = expr.items[0]
         if expr.kind == "pose" and expr.value == "p" and len(expr.items) in (1, 2):
             return "p", (_subscript(expr.items, expr), *index)

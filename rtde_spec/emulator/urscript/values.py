@@ -84,9 +84,15 @@ _PLAIN = (int, float)  # exact types (a bool is no number): element-wise at once
 
 
 def type_name(value: Any) -> str:
-    return {Pose: "pose", list: "array", bool: "bool", int: "int", float: "float", str: "string"}.get(
-        type(value), type(value).__name__
-    )
+    return {
+        Pose: "pose",
+        list: "array",
+        bool: "bool",
+        int: "int",
+        float: "float",
+        str: "string",
+        dict: "struct",
+    }.get(type(value), type(value).__name__)
 
 
 def _is_number(value: Any) -> bool:
@@ -132,10 +138,19 @@ def index(value: Any, position: Any, line: int, column: int) -> Any:
     return value[position]
 
 
+class Member(str):
+    """A struct's field an assignment writes (`s.kp = ...`), among its subscripts."""
+
+
 def replaced(value: Any, positions: list[Any], new: Any, line: int, column: int) -> Any:
     """A copy of `value` with the element at `positions` (one per subscript, a matrix's row and
-    column a tuple) set to `new`."""
+    column a tuple, a struct's field a Member) set to `new`; a struct keeps the fields it has."""
     here = positions[0]
+    if isinstance(here, Member):
+        if not isinstance(value, dict) or here not in value:
+            raise ScriptFault(f"Type error: {type_name(value)} has no field {here}", line, column)
+        rest = new if len(positions) == 1 else replaced(value[here], positions[1:], new, line, column)
+        return {**value, str(here): rest}
     if isinstance(here, tuple):  # m[i, j]: an entry, so the last subscript
         if len(positions) > 1:
             raise ScriptFault("Type error: a matrix entry cannot be indexed", line, column)
