@@ -219,6 +219,22 @@ def test_a_label_without_its_number_and_text_is_a_syntax_error(label: str) -> No
 # --- arguments by name, as URCap preambles call their functions -------------------------------------
 
 
+@pytest.mark.parametrize("version", ["3.15.8", "5.15.0"])
+def test_a_force_node_s_tool_feature_gives_force_mode_the_tool_s_pose(version: str) -> None:
+    """PolyScope writes `force_mode(tool_pose(), ...)` for a Force node on its Tool feature."""
+    model, events = start(
+        "def p():\n  set_tcp(p[0, 0, 0.1, 0, 0, 0])\n"
+        "  force_mode(tool_pose(), [0, 0, 1, 0, 0, 0], [0, 0, 5, 0, 0, 0], 2, [0.1, 0.1, 0.1, 0.3, 0.3, 0.3])"
+        "\n"
+        "  textmsg(pose_dist(tool_pose(), get_actual_tcp_pose()))\n"
+        "  textmsg(pose_dist(tool_pose(), get_actual_tool_flange_pose()))\n  end_force_mode()\nend\n",
+        version,
+    )
+    events += steps(model, 5)
+    assert not faults(events)
+    assert texts(events) == ["0", "0.1"]
+
+
 def test_user_functions_take_their_parameters_by_name() -> None:
     _, events = start(
         "def p():\n"

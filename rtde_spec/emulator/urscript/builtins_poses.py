@@ -41,6 +41,12 @@ def _three(stmt: Stmt, value: Any, name: str) -> list[float]:
     return [number(stmt, v, name) for v in value]
 
 
+@_builtin("tool_pose")
+def _tool_pose(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose:
+    """PolyScope's Force node's task frame for its Tool feature: where the TCP is."""
+    return Pose(runner.robot.arm.pose())
+
+
 @_builtin("pose_sub")
 def _pose_sub(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose:
     a, b = _pose(stmt, args[0]), _pose(stmt, args[1])
