@@ -358,6 +358,13 @@ prog()
             1,
         ),
         ("if True:\n  sync()\n", "missing end of if on line 1", 2, 1),
+        ('def prog():\n  textmsg("a")\n  else:\n  end\nend', "syntax_error_on_line:3:else:", 3, 3),
+        (
+            "def prog():\n  while True:\n    sync()\n  elif x:\n  end\nend",
+            "syntax_error_on_line:4:elif x:",
+            4,
+            3,
+        ),
         ('def prog():\n  textmsg("a")\n  break\nend', "syntax_error_on_line:3:break", 3, 3),
         ("return 1", "syntax_error_on_line:1:return 1", 1, 1),
         ("def prog():\n  while x < 1\n    sync()\n  end\nend", "syntax_error_on_line:2:", 2, 14),

@@ -177,7 +177,7 @@ class _Parser(ExpressionParser):
         self.depth -= 1
         self.in_def -= 1
         self.loops = loops
-        self.take("end")
+        self.close()
         function = Function(
             name.text,
             tuple(params),
@@ -216,13 +216,18 @@ class _Parser(ExpressionParser):
                 tok = self.next()
                 self.take(":")
                 branches.append(Branch(None, self.block(what), tok.line, tok.column))
-                if self.at("elif", "else"):
-                    raise self.fail_at(self.peek())
         self.depth -= 1
-        self.take("end")
+        self.close()
         return Stmt(
             word, head.line, self.source(head.line), word, column=head.column, branches=tuple(branches)
         )
+
+    def close(self) -> None:
+        """A block's `end`; an `elif` or `else` no `if` owns is the error, on its own line (not
+        an `end` missing from the line before)."""
+        if self.at("elif", "else"):
+            raise self.fail_at(self.peek())
+        self.take("end")
 
 
 def _subscript(indices: tuple[Expr, ...], where: Expr) -> Expr:
