@@ -189,6 +189,57 @@ def test_a_setting_outside_the_manuals_values_is_a_runtime_exception(line: str, 
     assert problem in text and at == 2
 
 
+def test_modbus_signals_a_program_sets_read_back_and_inputs_read_nothing() -> None:
+    """PolyScope's Set, Wait and If nodes on Modbus signals call these (UR's URScript_Examples
+    modbus/ programs too); no device answers, so an input reads False or 0."""
+    model, events = start(
+        "def p():\n"
+        '  modbus_add_signal("0.0.0.0", 255, 0, 0, "din", False)\n'
+        '  modbus_add_signal("0.0.0.0", 255, 1, 1, "dout", False)\n'
+        '  modbus_add_signal("0.0.0.0", 255, 2, 3, "reg", False)\n'
+        '  modbus_add_signal("0.0.0.0", 255, 9, 16, "regs", False, 3)\n'
+        '  modbus_add_signal("0.0.0.0", 255, 0, 0, "dins", True, 4)\n'
+        '  modbus_set_output_signal("dout", True, False)\n'
+        '  modbus_set_output_register("reg", 65535)\n'
+        '  modbus_set_output_register("regs", [7, 8])\n'
+        '  textmsg(modbus_get_signal_status("din", False), modbus_get_signal_status("dout"))\n'
+        '  textmsg(modbus_get_signal_status("reg", False), modbus_get_signal_status("regs"))\n'
+        '  textmsg(modbus_get_signal_status("dins")[3])\n'
+        '  modbus_send_custom_command("0.0.0.0", 255, 6, [17, 32, 2, 88])\n'
+        '  modbus_delete_signal("din")\n'
+        '  modbus_get_signal_status("din", False)\n'
+        "end\n"
+    )
+    events += steps(model, 3)
+    assert texts(events) == ["FalseTrue", "65535[7, 8, 0]", "False"]  # 4 inputs: a list
+    assert faults(events) == [
+        ("modbus_get_signal_status: no Modbus signal 'din' (modbus_add_signal adds it)", 15)
+    ]
+
+
+@pytest.mark.parametrize(
+    ("line", "problem"),
+    [
+        ('modbus_set_output_signal("din", True, False)', "'din' is no digital output"),
+        ('modbus_set_output_register("dout", 1, False)', "'dout' is no register output"),
+        ('modbus_set_output_signal("dout", 1, False)', "the value must be a bool, not 1"),
+        ('modbus_set_output_register("reg", 65536)', "the value must be an int of 0 to 65535, not 65536"),
+        ('modbus_set_output_register("regs", [1, 2, 3, 4])', "an int of 0 to 65535 (or a list of 1 to 3)"),
+        ('modbus_send_custom_command("0.0.0.0", 255, 6, [256])', "data a list of bytes"),
+    ],
+)
+def test_a_modbus_write_the_signal_cannot_take_is_a_runtime_exception(line: str, problem: str) -> None:
+    signals = (
+        '  modbus_add_signal("0.0.0.0", 255, 0, 0, "din", False)\n'
+        '  modbus_add_signal("0.0.0.0", 255, 1, 1, "dout", False)\n'
+        '  modbus_add_signal("0.0.0.0", 255, 2, 3, "reg", False)\n'
+        '  modbus_add_signal("0.0.0.0", 255, 9, 16, "regs", False, 3)\n'
+    )
+    _, events = start(f"def p():\n{signals}  {line}\nend\n")
+    ((text, at),) = faults(events)
+    assert problem in text and at == 6
+
+
 # --- program labels ------------------------------------------------------------------------------------
 
 

@@ -152,7 +152,8 @@ def _runstate_outputs(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) ->
     settings_of(runner)["_runstate_standard_digital_outputs"] = list(outputs)  # undocumented: recorded
 
 
-# --- Modbus signals: recorded, never polled (the emulator has no Modbus client) --------------------
+# --- Modbus signals: recorded, never polled (the emulator has no Modbus client); an output keeps
+#     what the program set, an input reads False or 0 --------------------------------------------
 
 
 def _signals(runner: Runner) -> dict[str, dict[str, Any]]:
@@ -194,10 +195,87 @@ def _modbus_setting(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> N
     else:
         key, allowed = "runstate_choice", range(6)
     value = _int(stmt, arg(stmt, args, kwargs, 1, key), key, allowed)
+    _signal(runner, stmt, name)[key] = value
+
+
+def _signal(runner: Runner, stmt: Stmt, name: str) -> dict[str, Any]:
     signal = _signals(runner).get(name)
     if signal is None:
         raise ScriptFault(f"{stmt.name}: no Modbus signal {name!r} (modbus_add_signal adds it)", stmt.line, 1)
-    signal[key] = value
+    return signal
+
+
+@_builtin("modbus_delete_signal")
+def _modbus_delete(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    name = _signal_name(stmt, arg(stmt, args, kwargs, 0, "signal_name"))
+    _signal(runner, stmt, name)
+    del _signals(runner)[name]
+
+
+_DIGITAL = (0, 1, 15)  # signal types: digital input, output, outputs (register_count coils)
+_MANY = (15, 16)  # outputs of several coils / registers
+
+
+def _many(signal: dict[str, Any]) -> bool:
+    """A signal of several coils or registers: its value is a list (UR's wago-750 example reads 24
+    digital inputs as one signal of register_count 24)."""
+    return signal["type"] in _MANY or signal["count"] > 1
+
+
+def _current(signal: dict[str, Any]) -> Any:
+    """What a signal holds: what the program set, else False or 0 (no device answers)."""
+    zero: Any = False if signal["type"] in _DIGITAL else 0
+    return signal.get("value", [zero] * signal["count"] if _many(signal) else zero)
+
+
+@_builtin("modbus_get_signal_status")
+def _modbus_get(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
+    """A digital signal's bool, a register's unsigned int, a list of them for a signal of several."""
+    signal = _signal(runner, stmt, _signal_name(stmt, arg(stmt, args, kwargs, 0, "signal_name")))
+    arg(stmt, args, kwargs, 1, "is_secondary_program", False)
+    value = _current(signal)
+    return list(value) if isinstance(value, list) else value
+
+
+@_builtin("modbus_set_output_signal", "modbus_set_output_register")
+def _modbus_set(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    """An output's value, or a list of values from its first (a shorter list keeps the rest)."""
+    name = _signal_name(stmt, arg(stmt, args, kwargs, 0, "signal_name"))
+    signal = _signal(runner, stmt, name)
+    digital = stmt.name == "modbus_set_output_signal"
+    value = arg(stmt, args, kwargs, 1, "digital_value" if digital else "register_value")
+    arg(stmt, args, kwargs, 2, "is_secondary_program", False)
+    kinds, what = ((1, 15), "digital output") if digital else ((3, 16), "register output")
+    if signal["type"] not in kinds:
+        raise ScriptFault(f"{stmt.name}: {name!r} is no {what}", stmt.line, 1)
+    many = _many(signal)
+    values = value if many and isinstance(value, list) else [value]
+    if not 0 < len(values) <= signal["count"] or not all(_fits(v, digital) for v in values):
+        shape = "a bool" if digital else "an int of 0 to 65535"
+        shape += f" (or a list of 1 to {signal['count']})" if many else ""
+        raise ScriptFault(f"{stmt.name}: the value must be {shape}, not {value!r}"[:200], stmt.line, 1)
+    signal["value"] = values + _current(signal)[len(values) :] if many else value
+
+
+def _fits(value: Any, digital: bool) -> bool:
+    return isinstance(value, bool) if digital else type(value) is int and 0 <= value <= 0xFFFF
+
+
+@_builtin("modbus_send_custom_command")
+def _modbus_custom(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    """Checked and dropped: no Modbus device is there to send it to."""
+    address = arg(stmt, args, kwargs, 0, "IP")
+    if not isinstance(address, str) or not address:
+        raise ScriptFault(f"{stmt.name}: IP must be a text that is not empty", stmt.line, 1)
+    _int(stmt, arg(stmt, args, kwargs, 1, "slave_number"), "slave_number", range(256))
+    function = arg(stmt, args, kwargs, 2, "function_code")
+    data = arg(stmt, args, kwargs, 3, "data")
+    if (
+        type(function) is not int
+        or not isinstance(data, list)
+        or not all(_fits(d, False) and d < 256 for d in data)
+    ):
+        raise ScriptFault(f"{stmt.name}: function_code must be an int and data a list of bytes", stmt.line, 1)
 
 
 # --- reading the I/O ----------------------------------------------------------------------------
