@@ -289,7 +289,7 @@ def test_rpy_conversions_give_the_manuals_examples_and_invert_each_other() -> No
     model, events = run(
         "a = rotvec2rpy([3.14, 1.57, 0])\nb = rpy2rotvec([3.14, 1.57, 0])\n"
         "c = rpy2rotvec([0.3, -0.7, 2.5])\nd = rotvec2rpy(c)\ne = rotvec2rpy([0, 0, 0])\n"
-        "f = size([[1, 2, 3], [4, 5, 6]])\ng = size([1, 2, 3, 4])\n"
+        'f = size([[1, 2, 3], [4, 5, 6]])\ng = size([1, 2, 3, 4])\ns = size("here I am")\n'
         "h = size([p[0, 0, 0, 0, 0, 0], p[1, 1, 1, 0, 0, 0]])\n"
         "done = True\nsleep(60)\n"
     )
@@ -300,7 +300,8 @@ def test_rpy_conversions_give_the_manuals_examples_and_invert_each_other() -> No
     assert matrix([0, 0, 0, *got["c"]])[:3, :3] == pytest.approx(rpy_matrix(0.3, -0.7, 2.5), abs=1e-12)
     assert got["d"] == pytest.approx([0.3, -0.7, 2.5], abs=1e-12)
     assert got["e"] == [0.0, 0.0, 0.0]
-    assert (got["f"], got["g"], got["h"]) == ([2, 3], [4], [2, 6])
+    assert (got["f"], got["g"], got["h"]) == ([2, 3], 4, [2, 6])  # a matrix's shape, an array's length
+    assert got["s"] == 9  # the Script Directory's size("here I am")
 
 
 def test_the_world_model_is_polyscope_xs_and_polyscope_x_keeps_the_e_series_functions() -> None:

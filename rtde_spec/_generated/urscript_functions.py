@@ -1251,9 +1251,10 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'returns': 'array',
                 'since': {'polyscope-x': '10.0.0'},
                 'checked': False,
-                'doc': "[rows, columns] of a matrix, [length] of an array (PolyScope X's Center to "
-                       'Object smart skill reads size(dir_list)[0]; no edition on hand documents '
-                       'it)'},
+                'doc': '[rows, columns] of a matrix, the length of an array or a text (the '
+                       "e-Series Script Directory's urmath size(v): size([1,2,3,4,5]) is 5; "
+                       "PolyScope X's Center to Object smart skill reads size(dir_list)[0]). The "
+                       'e-Series version that brought it is not on hand'},
                {'name': 'rotvec2rpy',
                 'section': 'maths',
                 'params': [{'name': 'rotation_vector'}],

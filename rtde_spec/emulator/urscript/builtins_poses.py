@@ -101,12 +101,15 @@ def _rpy2rotvec(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> list[
 
 
 @_builtin("size")
-def _size(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> list[int]:
-    """[rows, columns] of a matrix, [length] of an array: PolyScope X's smart skills read the
+def _size(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> list[int] | int:
+    """[rows, columns] of a matrix; the length of an array or a text, as the e-Series Script
+    Directory's size(v) gives it (size([1,2,3,4,5]) is 5). PolyScope X's smart skills read the
     rows of a list of directions as `size(dir_list)[0]`."""
     value = arg(stmt, args, kwargs, 0, "v")
     if matrices.is_matrix(value):
         return [len(value), len(value[0])]
-    if isinstance(value, list):
-        return [len(value)]
-    raise ScriptFault(f"{stmt.name}: needs an array or a matrix, not {type_name(value)}", stmt.line, 1)
+    if isinstance(value, (list, str)):
+        return len(value)
+    raise ScriptFault(
+        f"{stmt.name}: needs a matrix, an array or a text, not {type_name(value)}", stmt.line, 1
+    )
