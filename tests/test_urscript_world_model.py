@@ -304,6 +304,24 @@ def test_rpy_conversions_give_the_manuals_examples_and_invert_each_other() -> No
     assert got["s"] == 9  # the Script Directory's size("here I am")
 
 
+@pytest.mark.parametrize("version", ["3.15.8", "5.15.0", POLYSCOPE_X])
+def test_an_int_s_32_bits_go_to_a_list_of_bools_and_back(version: str) -> None:
+    """The Script Directory's urmath: index 0 the least significant bit, signed 32-bit ints (UR's
+    "Modbus server bit access" article reads a port register's bits so)."""
+    model, events = run(
+        "a = integer_to_binary_list(57)\nb = integer_to_binary_list(-57)\n"
+        "c = binary_list_to_integer([True, False, False, True])\nd = binary_list_to_integer(b)\n"
+        f"e = binary_list_to_integer([])\nf = binary_list_to_integer([{', '.join(['True'] * 32)}, False])\n"
+        "done = True\nsleep(60)\n",
+        ControllerModel(version),
+    )
+    assert faults(events) == []
+    got = results(model)
+    assert got["a"] == [True, False, False, True, True, True] + [False] * 26  # 57 = 0b111001
+    assert got["b"] == [True, True, True, False, False, False] + [True] * 26
+    assert (got["c"], got["d"], got["e"], got["f"]) == (9, -57, 0, -1)  # past 32 bools: the first 32
+
+
 def test_the_world_model_is_polyscope_xs_and_polyscope_x_keeps_the_e_series_functions() -> None:
     for version in ("5.22.0", "3.15.8"):
         _, events = run("reset_world_model()\n", ControllerModel(version))

@@ -1,5 +1,6 @@
 """The pose maths a program calls for a value: differences, distances and interpolation of poses,
-the rotation vector in roll-pitch-yaw and back, and `size` of an array or matrix. Poses compose
+the rotation vector in roll-pitch-yaw and back, `size` of an array or matrix, and an int's 32 bits
+as a list of bools and back. Poses compose
 as 4x4 matrices (kinematics' pose_to_matrix), as pose_trans and pose_inv do in calls.py, so every
 pose function agrees with the others to the last digit.
 
@@ -113,3 +114,23 @@ def _size(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> list[int] |
     raise ScriptFault(
         f"{stmt.name}: needs a matrix, an array or a text, not {type_name(value)}", stmt.line, 1
     )
+
+
+@_builtin("integer_to_binary_list")
+def _integer_to_binary_list(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> list[bool]:
+    """The 32 bits of a signed int, least significant first (the Script Directory's urmath)."""
+    x = arg(stmt, args, kwargs, 0, "x")
+    if type(x) is not int:
+        raise ScriptFault(f"{stmt.name}: x must be an int, not {type_name(x)}", stmt.line, 1)
+    return [bool(x >> bit & 1) for bit in range(32)]
+
+
+@_builtin("binary_list_to_integer")
+def _binary_list_to_integer(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> int:
+    """The signed int of a list of bools, index 0 least significant: 0 for an empty list, the
+    first 32 of a longer one (the Script Directory's urmath)."""
+    bits = arg(stmt, args, kwargs, 0, "l")
+    if not isinstance(bits, list) or not all(isinstance(b, bool) for b in bits):
+        raise ScriptFault(f"{stmt.name}: l must be a list of bools", stmt.line, 1)
+    value = sum(1 << i for i, b in enumerate(bits[:32]) if b)
+    return value - (1 << 32) if value >= 1 << 31 else value
