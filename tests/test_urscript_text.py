@@ -40,3 +40,17 @@ def test_a_pose_shows_as_p_and_its_six_numbers() -> None:
 def test_poses_the_arm_gives_show_as_poses() -> None:
     (line,) = said("def prog():\n  textmsg(get_actual_tcp_pose())\nend\n")
     assert line.startswith("p[") and line.count(",") == 5
+
+
+def test_a_float_shows_with_six_decimals_and_no_trailing_zeros() -> None:
+    """The Script Directory's to_str and str_cat: "formatted with 6 decimals, and trailing zeros
+    will be removed" (to_str(2.123456123456) is "2.123456"), not six significant digits: a client
+    reading joints a program sends with socket_send_string gets them to the micro-radian."""
+    lines = said(
+        "def prog():\n"
+        "  textmsg(to_str(2.123456123456))\n"
+        "  textmsg(str_cat(-1.5707963, 123.4567891))\n"
+        "  textmsg(p[1.0, 2.0, 3.0, 4.0, 5.0, 6.0], [0.0000004, -0.0000004, 1234567.25])\n"
+        "end\n"
+    )
+    assert lines == ["2.123456", "-1.570796123.456789", "p[1, 2, 3, 4, 5, 6][0, 0, 1234567.25]"]

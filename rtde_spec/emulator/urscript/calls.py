@@ -36,6 +36,7 @@ from rtde_spec.emulator.urscript.values import (  # noqa: F401 - the calls' valu
     Pose,
     _is_number,
     arithmetic,
+    float_text,
     make_pose,
     type_name,
 )
@@ -311,7 +312,7 @@ def _text_of(value: Any, parts: list[str], left: list[int], depth: int) -> None:
     if depth > 64:
         raise ValueError("to_str: a list nested more than 64 levels")
     if isinstance(value, Pose):  # before list: a pose is a list too, but shows as p[...]
-        parts.append("p[" + ", ".join(f"{v:.6g}" for v in value) + "]")
+        parts.append("p[" + ", ".join(float_text(float(v)) for v in value) + "]")
     elif isinstance(value, list):
         parts.append("[")
         for i, item in enumerate(value):
@@ -322,7 +323,7 @@ def _text_of(value: Any, parts: list[str], left: list[int], depth: int) -> None:
     elif isinstance(value, bool):
         parts.append("True" if value else "False")
     elif isinstance(value, float):
-        parts.append(f"{value:.6g}")
+        parts.append(float_text(value))
     else:
         parts.append(str(value))
     left[0] -= len(parts[-1]) + 2

@@ -9,6 +9,7 @@ another variable that holds the same list.
 
 from __future__ import annotations
 
+import math
 import operator
 from collections.abc import Callable
 from typing import Any
@@ -81,6 +82,15 @@ def _elementwise(op: str, left: Any, right: Any, line: int, column: int) -> list
 
 
 _PLAIN = (int, float)  # exact types (a bool is no number): element-wise at once
+
+
+def float_text(value: float) -> str:
+    """A float as to_str, str_cat and textmsg show it: "formatted with 6 decimals, and trailing
+    zeros will be removed" (the Script Directory: to_str(2.123456123456) is "2.123456")."""
+    if not math.isfinite(value):
+        return f"{value:g}"
+    text = f"{value:.6f}".rstrip("0").rstrip(".")
+    return "0" if text == "-0" else text
 
 
 def type_name(value: Any) -> str:
