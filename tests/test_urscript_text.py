@@ -4,6 +4,8 @@ list of poses shows each as a pose; a joint list stays a plain `[...]`."""
 
 from __future__ import annotations
 
+import pytest
+
 from .test_urscript_control import run
 
 
@@ -54,3 +56,33 @@ def test_a_float_shows_with_six_decimals_and_no_trailing_zeros() -> None:
         "end\n"
     )
     assert lines == ["2.123456", "-1.570796123.456789", "p[1, 2, 3, 4, 5, 6][0, 0, 1234567.25]"]
+
+
+def test_a_text_is_taken_apart_as_the_script_directory_s_examples_do() -> None:
+    lines = said(
+        "def prog():\n"
+        '  textmsg(str_at("Hello", 1), str_empty(""))\n'
+        '  textmsg(str_find("Hello World!", "o"), str_find("Hello World!", "o", 5))\n'
+        '  textmsg(str_find("abc", "z"), str_empty("Hello"))\n'
+        '  textmsg(str_sub("0123456789abcdefghij", 5, 3), str_sub("0123456789abcdefghij", 10))\n'
+        '  textmsg(str_sub("abcde", 2, 50), str_sub("abcde", 5))\n'
+        "end\n"
+    )
+    assert lines == ["eTrue", "47", "-1False", "567abcdefghij", "cde"]
+
+
+@pytest.mark.parametrize(
+    ("call", "problem"),
+    [
+        ('str_at("Hello", 10)', "index 10 is out of bounds (0 to 4)"),
+        ('str_at("", 0)', "the source string is empty"),
+        ('str_sub("abcde", -5, 50)', "index -5 is out of bounds"),
+        ("str_find(1, 2)", "src must be a string, not int"),
+    ],
+)
+def test_a_position_outside_the_text_is_a_runtime_exception(call: str, problem: str) -> None:
+    _, events = run(f"def prog():\n  x = {call}\nend\n", 5)
+    assert [(kind, line) for kind, _, line, _ in events if kind == "runtime_exception"] == [
+        ("runtime_exception", 2)
+    ]
+    assert problem in next(text for kind, text, _, _ in events if kind == "runtime_exception")

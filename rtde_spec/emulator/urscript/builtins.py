@@ -27,6 +27,7 @@ from rtde_spec.emulator.urscript.builtins_dynamics import DYNAMICS
 from rtde_spec.emulator.urscript.builtins_io import IO
 from rtde_spec.emulator.urscript.builtins_modes import MODES, settings_of
 from rtde_spec.emulator.urscript.builtins_poses import POSES
+from rtde_spec.emulator.urscript.builtins_text import TEXT
 from rtde_spec.emulator.urscript.calls import Pose, number, six, type_name
 from rtde_spec.emulator.urscript.interfaces import Runner
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
@@ -286,6 +287,7 @@ BUILTINS.update(MODES)
 BUILTINS.update(DYNAMICS)
 BUILTINS.update(IO)
 BUILTINS.update(POSES)
+BUILTINS.update(TEXT)
 BUILTINS.update(WORLD)
 BUILTINS["socket_close"] = sockets.socket_close
 BUILTINS["socket_set_var"] = sockets.socket_set_var
