@@ -88,6 +88,15 @@ def test_transpose_and_inv() -> None:
     assert "singular" in text and line == 3
 
 
+def test_transpose_makes_an_array_a_column_and_a_column_an_array() -> None:
+    """The Script Directory's examples: transpose([1,2,3]) is [[1],[2],[3]], transpose of that
+    is [1,2,3]; a row matrix still becomes a column matrix."""
+    _, events = run_script(
+        "textmsg(transpose([1, 2, 3]), transpose([[1], [2], [3]]))\ntextmsg(transpose([[1, 2]]))\n"
+    )
+    assert said(events) == ["[[1], [2], [3]][1, 2, 3]", "[[1], [2]]"] and not faults(events)
+
+
 def test_inv_of_a_pose_is_the_inverse_transformation() -> None:
     _, events = run_script(
         "x = inv(p[.2, .5, .1, 1.57, 0, 3.14])\ntextmsg([x[0], x[1], x[2], x[3], x[4], x[5]])\n"

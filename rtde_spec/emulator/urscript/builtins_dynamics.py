@@ -106,7 +106,7 @@ def _target_accelerations(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs
 
 
 @_builtin("transpose")
-def _transpose(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> list[list[Any]]:
+def _transpose(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> list[Any]:
     return matrices.transpose(arg(stmt, args, kwargs, 0, "m"), stmt.line, stmt.column or 1)
 
 

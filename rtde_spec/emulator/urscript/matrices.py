@@ -126,10 +126,17 @@ def _exact(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return np.asarray(high * (1 << 32) + middle * (1 << 16) + np.matmul(a_low, b_low).astype(object))
 
 
-def transpose(value: Any, line: int, where: int) -> list[list[Any]]:
-    """Rows as columns."""
+def transpose(value: Any, line: int, where: int) -> list[Any]:
+    """Rows as columns; an array is one column and a matrix of one column an array, as the Script
+    Directory's examples go (transpose([1,2,3]) is [[1],[2],[3]], and back)."""
+    if isinstance(value, list) and value and all(_number(v) for v in value):
+        return [[v] for v in value]
     if not is_matrix(value):
-        raise ScriptFault(f"Type error: transpose needs a matrix, not {describe(value)}", line, where)
+        raise ScriptFault(
+            f"Type error: transpose needs a matrix or an array, not {describe(value)}", line, where
+        )
+    if len(value[0]) == 1:
+        return [row[0] for row in value]
     return [list(column) for column in zip(*value, strict=True)]
 
 
