@@ -86,3 +86,19 @@ def test_a_position_outside_the_text_is_a_runtime_exception(call: str, problem: 
         ("runtime_exception", 2)
     ]
     assert problem in next(text for kind, text, _, _ in events if kind == "runtime_exception")
+
+
+def test_to_num_gives_an_int_without_a_decimal_point_hex_too() -> None:
+    """The Script Directory's to_num: an int or a float by the presence of '.', an optional sign,
+    "0x" hexadecimal; a number out of its type's range is a runtime exception."""
+    lines = said(
+        "def prog():\n"
+        '  l = [10, 20, 30]\n  textmsg(l[to_num("+1")], to_num("0x3A"))\n'
+        '  textmsg(to_num("3.14"), to_num(" -2"))\n'
+        "end\n"
+    )
+    assert lines == ["2058", "3.14-2"]
+    _, events = run('def prog():\n  x = to_num("99999999999")\nend\n', 5)
+    assert [(kind, line) for kind, _, line, _ in events if kind == "runtime_exception"] == [
+        ("runtime_exception", 2)
+    ]

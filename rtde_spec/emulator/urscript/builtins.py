@@ -365,10 +365,14 @@ def _str_len(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> int:
 @builtin("to_num")
 def _to_num(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
     text = str(args[0]).strip()
+    hexa = text.lstrip("+-")[:2].lower() == "0x"  # no '.': an int, "0x3A" too (the Script Directory)
     try:
-        return int(text) if text.lstrip("-").isdigit() and len(text) < 12 else float(text)
+        value = int(text, 16 if hexa else 10) if text.lstrip("+-").isdigit() or hexa else float(text)
+        if type(value) is int and not script_calls.INT_MIN <= value <= script_calls.INT_MAX:
+            raise ValueError
+        return value
     except ValueError:
-        raise ScriptFault(f"to_num: not a number: {text[:40]!r}", stmt.line, 1) from None
+        raise ScriptFault(f"to_num: not a number of its type: {text[:40]!r}", stmt.line, 1) from None
 
 
 @builtin("struct")
