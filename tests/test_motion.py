@@ -125,7 +125,6 @@ def test_movep_blends_through_its_waypoints() -> None:
     assert duration(0.02) < duration(0.0) - 0.1 * HZ
 
 
-
 @pytest.mark.parametrize(
     "between",
     [
@@ -159,6 +158,7 @@ def test_a_blended_move_blends_past_statements_that_do_not_wait(between: str) ->
     assert corner > 0.02  # the corner was cut by about the radius
     assert blended < stopped - 0.1 * HZ
 
+
 def test_power_brakes_and_protective_stop_gate_motion() -> None:
     model = ControllerModel("5.15.0")
     model.power_off()
@@ -190,10 +190,9 @@ def test_power_brakes_and_protective_stop_gate_motion() -> None:
 @pytest.mark.parametrize(
     ("script", "text", "line"),
     [
-        ("def prog():\n  textmsg(\"a\")\n  movej([0, 0, 0])\nend", "movej: q must be six numbers", 3),
+        ('def prog():\n  textmsg("a")\n  movej([0, 0, 0])\nend', "movej: q must be six numbers", 3),
         ("def prog():\n  x = 1\n  fly_to(x)\nend", "compile_error_name_not_found:fly_to", 3),
         ("def prog():\n  movej([0, -1.57, 1.57, -1.57, -1.57, 0], v=fast)\nend", "name_not_found:fast", 2),
-        ("movel(p[2, 2, 2, 0, 3.14, 0])", "out of reach of the UR5e", 1),
         ("movej([0, -1.57, 7.0, -1.57, -1.57, 0])", "outside the UR5e's range", 1),
         ("def prog():\n  x = 1\n  t = run mover()\nend", "compile_error_name_not_found:mover", 3),
         ("movej([0, 0, 0, 0, 0, 0]", "syntax_error_on_line:1:", 1),
@@ -209,6 +208,42 @@ def test_what_cannot_run_is_a_runtime_exception_with_its_line(script: str, text:
     assert model.program is None and model.values["runtime_state"] == ProgramState.STOPPED
 
 
+def test_a_movel_out_of_reach_goes_along_its_line_and_stops_where_the_line_leaves_reach() -> None:
+    """It was refused before moving; a controller starts it (PolyScope's Direction node moves
+    towards a point 1000 m away) and fails where the arm cannot follow the line."""
+    model = ControllerModel("5.15.0")
+    start = list(model.values["actual_TCP_pose"])
+    model.run_script(
+        f"movel(p[{start[0]}, {start[1]}, {start[2] + 5}, {start[3]}, {start[4]}, {start[5]}], v=0.5)"
+    )
+    run(model, 0.2)
+    assert model.program is not None  # moving, no error yet
+    assert model.values["actual_TCP_pose"][2] > start[2] + 0.01
+    until_stopped(model)
+    faults = [e for e in model.drain_events() if e.kind == "runtime_exception"]
+    assert len(faults) == 1 and "out of reach of the UR5e" in faults[0].text, faults
+    assert start[2] + 0.1 < model.values["actual_TCP_pose"][2] < start[2] + 1.5  # the edge of its reach
+
+
+def test_a_direction_node_moves_towards_a_far_point_until_its_thread_is_killed() -> None:
+    model = ControllerModel("5.15.0")
+    start = list(model.values["actual_TCP_pose"])
+    model.run_script(
+        "def prog():\n"
+        "  thread mover():\n"
+        "    movel(pose_add(get_target_tcp_pose(), p[0, 0, -1000.0, 0, 0, 0]), a=1.2, v=0.05)\n"
+        "  end\n"
+        "  h = run mover()\n"
+        "  sleep(0.4)\n"
+        "  kill h\n"
+        "  stopl(3.0)\n"
+        "end"
+    )
+    until_stopped(model)
+    assert not [e for e in model.drain_events() if e.kind == "runtime_exception"]
+    assert start[2] - 0.03 < model.values["actual_TCP_pose"][2] < start[2] - 0.005  # ~0.05 m/s for 0.4 s
+
+
 def test_io_payload_tcp_and_messages() -> None:
     model = ControllerModel("5.15.0")
     model.run_script(
@@ -218,8 +253,8 @@ def test_io_payload_tcp_and_messages() -> None:
         "  set_analog_out(0, 0.3)\n"
         "  set_payload(1.5, [0, 0, 0.05])\n"
         "  set_tcp(p[0, 0, 0.1, 0, 0, 0])\n"
-        "  textmsg(\"at \", 3)\n"
-        "  popup(\"check\", \"Title\", warning=True)\n"
+        '  textmsg("at ", 3)\n'
+        '  popup("check", "Title", warning=True)\n'
         "  sleep(0.1)\n"
         "end"
     )

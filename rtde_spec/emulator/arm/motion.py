@@ -166,11 +166,10 @@ class LinearMove(Motion):
         )
         length, angle = float(np.linalg.norm(self.dp)), float(np.linalg.norm(self.turn))
         self.length = length if length > 1e-6 else angle  # a pure turn runs at v in rad/s
+        # a target out of reach is not refused here: the arm goes along the line and stops where
+        # the line leaves its reach (`sample`). PolyScope's Direction node moves towards a point
+        # 1000 m away until a condition kills the move (`calculate_point_to_move_towards`).
         self.profile = profile(self.length, v, a, t)
-        try:
-            kin.nearest(arm, target, start.q, tcp)  # out of reach: refuse before moving
-        except UsageError as exc:
-            raise MotionError(str(exc.reason)) from exc
         self.q, self._t_prev = start.q.copy(), 0.0
 
     def pose_at(self, s: float) -> list[float]:
@@ -182,7 +181,7 @@ class LinearMove(Motion):
         s = self.profile.at(t)[0]
         try:
             q = np.array(kin.nearest(self.arm, self.pose_at(s), self.q, self.tcp, same_branch=True))
-        except UsageError as exc:  # a singular point on the way
+        except UsageError as exc:  # a singular point, or the edge of the arm's reach, on the way
             raise MotionError(f"inverse kinematics failed on the way: {exc.reason}") from exc
         previous = self.last
         dt = max(t - self._t_prev, 1e-9)
