@@ -196,3 +196,29 @@ def test_reading_before_connect_is_a_usage_error_at_once() -> None:
     with pytest.raises(UsageError, match="not connected"):
         asyncio.run(receive())
     assert time.monotonic() - start < 2.0
+
+
+def test_a_time_out_of_zero_does_not_wait_and_errors_name_the_time_out_given(emu: EmulatorThread) -> None:
+    """`receive(timeout=0)` waited the client's whole time-out (0 was read as "not given"), and a
+    time-out longer than a read slice was named less one slice ("within 4.9 s" for 5)."""
+    import asyncio
+
+    from rtde_spec.rtde.aio import AsyncRtdeClient
+
+    with RtdeClient("127.0.0.1", emu.ports["rtde"], timeout=5) as client:
+        client.setup_outputs(["timestamp"], 500)  # not started: nothing comes
+        for wait, named in ((0, "within 0 s"), (None, "within 5 s"), (0.5, "within 0.5 s")):
+            began = time.monotonic()
+            with pytest.raises(TimeoutError, match=named):
+                client.receive(timeout=wait) if wait is not None else client.receive()
+            assert time.monotonic() - began < (wait if wait is not None else 5) + 1
+
+    async def asynchronous() -> float:
+        async with AsyncRtdeClient("127.0.0.1", emu.ports["rtde"], timeout=5) as client:
+            await client.setup_outputs(["timestamp"], 500)
+            began = time.monotonic()
+            with pytest.raises(TimeoutError):
+                await client.receive(timeout=0)
+            return time.monotonic() - began
+
+    assert asyncio.run(asynchronous()) < 1

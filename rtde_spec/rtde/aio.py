@@ -85,7 +85,7 @@ class AsyncRtdeClient(ClientBase):
         if data:
             return data.popleft()
         loop = asyncio.get_running_loop()
-        wait = timeout or self.timeout
+        wait = self.timeout if timeout is None else timeout  # 0: only what is there, no wait
         deadline = loop.time() + wait
         while not data:
             if self._closed is not None:

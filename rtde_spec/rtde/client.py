@@ -142,7 +142,7 @@ class RtdeClient(ThreadReads):
                 return self._data.popleft()  # records waiting: no lock, no wait
             except IndexError:  # another caller took the last one
                 pass
-        wait = timeout or self.timeout
+        asked = wait = self.timeout if timeout is None else timeout  # 0: what is there, no wait
         path = self.core.records_path
         if path is not None and self._sliced and wait >= SLICE and self._closed is None:
             # one read here if the socket is free: a record when it is one package (as __iter__)
@@ -163,11 +163,12 @@ class RtdeClient(ThreadReads):
                     self._finish(self._ended(f"connection lost: {exc.strerror or exc}"))
                 finally:
                     self._reading.release()
-        return self._wait(wait)
+        return self._wait(wait, asked)
 
-    def _wait(self, wait: float) -> Any:
+    def _wait(self, wait: float, asked: float) -> Any:
         """The next record once it comes: read here when the socket is free, else wait for the
-        reader thread's read to end (it hands the records over with the lock, then steps aside)."""
+        reader thread's read to end (it hands the records over with the lock, then steps aside).
+        `asked`: the caller's whole time-out, which the error names (`wait` is what is left)."""
         data = self._data
         now = time.monotonic()
         deadline = now + wait
@@ -190,7 +191,7 @@ class RtdeClient(ThreadReads):
                     self._reading.release()
             now = time.monotonic()
             if not data and self._closed is None and now >= deadline:
-                raise TimeoutError(f"no data package from {self.where} within {wait} s")
+                raise TimeoutError(f"no data package from {self.where} within {asked} s")
 
     def _read_here(self, left: float) -> Any:
         """One read of the socket in the caller's thread (holding `_reading`), up to about `left` s:
