@@ -433,6 +433,47 @@ def test_closed_by_the_controller_is_an_error_naming_it() -> None:
     client.close()
 
 
+def _until_lost(client: RtdeClient | AsyncRtdeClient) -> None:
+    deadline = time.monotonic() + 5
+    while client.connection_lost is None and time.monotonic() < deadline:
+        time.sleep(0.01)
+
+
+def test_sending_on_an_ended_connection_is_an_error_naming_it() -> None:
+    """Inputs sent after the controller closed the connection went to a dead socket without a
+    word (blocking client) or raised a bare ConnectionResetError (asyncio); after close(), the
+    asyncio client's receive waited its whole time-out. Each now raises RtdeConnectionError."""
+    running = emulator()
+    client = RtdeClient("127.0.0.1", running.ports["rtde"], timeout=2).connect()
+    io = client.setup_inputs(["input_int_register_24"])
+    running.stop()
+    _until_lost(client)
+    with pytest.raises(RtdeConnectionError, match=r"127\.0\.0\.1:\d+: the controller closed"):
+        client.send(io, input_int_register_24=1)
+    client.close()
+
+    async def asynchronous(running: EmulatorThread) -> None:
+        closed = await AsyncRtdeClient("127.0.0.1", running.ports["rtde"], timeout=5).connect()
+        await closed.close()
+        began = time.monotonic()
+        with pytest.raises(RtdeConnectionError, match="closed by this client"):
+            await closed.receive()
+        assert time.monotonic() - began < 1
+        client = await AsyncRtdeClient("127.0.0.1", running.ports["rtde"], timeout=2).connect()
+        io = await client.setup_inputs(["input_int_register_24"])
+        running.stop()
+        for _ in range(500):  # the end comes to the reader task
+            if client.connection_lost is not None:
+                break
+            await asyncio.sleep(0.01)
+        for _ in range(3):
+            with pytest.raises(RtdeConnectionError, match=r"127\.0\.0\.1"):
+                await client.send(io, input_int_register_24=1)
+        await client.close()
+
+    asyncio.run(asynchronous(emulator()))
+
+
 def test_receive_times_out_then_hands_over_what_came_before_a_close() -> None:
     running = emulator()
     client = RtdeClient("127.0.0.1", running.ports["rtde"], timeout=5).connect()

@@ -111,6 +111,8 @@ class AsyncRtdeClient(ClientBase):
                 return
 
     async def close(self) -> None:
+        if self._closed is None and self._writer is not None:  # what a later call raises
+            self._closed = RtdeConnectionError("closed by this client", subject=self.where)
         if self._writer is not None:
             self._writer.close()
         if self._task is not None:
@@ -129,8 +131,13 @@ class AsyncRtdeClient(ClientBase):
     async def _write(self, data: bytes) -> None:
         if self._writer is None:
             raise RtdeConnectionError("not connected", subject=self.where)
-        self._writer.write(data)
-        await self._writer.drain()
+        if self._closed is not None:  # the transport would take the bytes of a closed connection
+            raise self._closed
+        try:
+            self._writer.write(data)
+            await self._writer.drain()
+        except OSError as exc:
+            raise RtdeConnectionError(f"connection lost while sending: {exc}", subject=self.where) from None
 
     async def _request(self, data: bytes) -> Reply:
         """Send a request (built by the core just before) and wait for the reply matched to it."""

@@ -263,6 +263,10 @@ class RtdeClient(ThreadReads):
     def _write(self, data: bytes) -> None:
         if self._sock is None:
             raise RtdeConnectionError("not connected", subject=self.where)
+        if self._closed is not None:  # the kernel would take the bytes of a closed connection
+            raise self._closed
+        if self._closing:
+            raise RtdeConnectionError("closed by this client", subject=self.where)
         try:
             with self._send_lock:
                 self._sock.sendall(data)
