@@ -474,6 +474,43 @@ def test_sending_on_an_ended_connection_is_an_error_naming_it() -> None:
     asyncio.run(asynchronous(emulator()))
 
 
+def test_a_failed_handshake_leaves_no_connection_open_and_a_client_connects_once() -> None:
+    """A connect() whose handshake failed (no reply, no protocol accepted, not RTDE) left the
+    socket open and its reader thread running: `with RtdeClient(...)` never reaches __exit__.
+    A closed client's connect() opened a second socket and raised "closed by this client"."""
+    with socket.create_server(("127.0.0.1", 0)) as server:  # accepts, never answers
+        server.settimeout(5)
+        port = server.getsockname()[1]
+        with pytest.raises(TimeoutError, match="no reply to request_protocol_version"):
+            with RtdeClient("127.0.0.1", port, timeout=0.3):
+                pass
+        peer, _ = server.accept()
+        with peer:
+            peer.settimeout(5)
+            while peer.recv(4096):  # the request; then the end, not a time-out
+                pass
+        assert not [t for t in threading.enumerate() if t.name.startswith(f"rtde-reader-127.0.0.1:{port}")]
+
+        async def asynchronous() -> None:
+            with pytest.raises(TimeoutError):
+                await AsyncRtdeClient("127.0.0.1", port, timeout=0.3).connect()
+            peer, _ = server.accept()
+            with peer:
+                peer.settimeout(5)
+                while peer.recv(4096):
+                    pass
+
+        asyncio.run(asynchronous())
+    running = emulator()
+    client = RtdeClient("127.0.0.1", running.ports["rtde"], timeout=2).connect()
+    with pytest.raises(UsageError, match="is connected; make a new RtdeClient"):
+        client.connect()
+    client.close()
+    with pytest.raises(UsageError, match="was closed; make a new RtdeClient"):
+        client.connect()
+    running.stop()
+
+
 def test_receive_times_out_then_hands_over_what_came_before_a_close() -> None:
     running = emulator()
     client = RtdeClient("127.0.0.1", running.ports["rtde"], timeout=5).connect()

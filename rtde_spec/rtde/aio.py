@@ -41,6 +41,11 @@ class AsyncRtdeClient(ClientBase):
         self._task: asyncio.Task[None] | None = None
 
     async def connect(self, protocol_version: int | None = None) -> AsyncRtdeClient:
+        if self._writer is not None:
+            state = "was closed" if self._closed is not None else "is connected"
+            raise UsageError(
+                f"this client {state}; make a new AsyncRtdeClient to connect again", subject=self.where
+            )
         try:
             reader, self._writer = await asyncio.wait_for(
                 asyncio.open_connection(self.host, self.port), self.timeout
@@ -48,12 +53,16 @@ class AsyncRtdeClient(ClientBase):
         except (OSError, asyncio.TimeoutError) as exc:
             raise RtdeConnectionError(f"cannot connect to the RTDE port: {exc}", subject=self.where) from None
         self._task = asyncio.get_running_loop().create_task(self._read_loop(reader))
-        for version in self._versions_to_try(protocol_version):
-            if (await self._request(self.core.request_protocol_version(version))).message.accepted:  # type: ignore[attr-defined]
-                break
-        else:
-            raise ProtocolError("the controller accepted no protocol version", subject=self.where)
-        await self._request(self.core.get_controller_version())
+        try:
+            for version in self._versions_to_try(protocol_version):
+                if (await self._request(self.core.request_protocol_version(version))).message.accepted:  # type: ignore[attr-defined]
+                    break
+            else:
+                raise ProtocolError("the controller accepted no protocol version", subject=self.where)
+            await self._request(self.core.get_controller_version())
+        except BaseException:  # no connection or reader task left behind
+            await self.close()
+            raise
         return self
 
     async def setup_outputs(self, names: Sequence[str] | str, frequency: float = 125.0) -> Any:
@@ -123,7 +132,7 @@ class AsyncRtdeClient(ClientBase):
                 pass
 
     async def __aenter__(self) -> AsyncRtdeClient:
-        return await self.connect()
+        return await self.connect() if self._writer is None else self
 
     async def __aexit__(self, *exc: object) -> None:
         await self.close()

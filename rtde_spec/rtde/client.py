@@ -62,7 +62,13 @@ class RtdeClient(ThreadReads):
     # --- connection ---------------------------------------------------------
 
     def connect(self, protocol_version: int | None = None) -> RtdeClient:
-        """Connect, negotiate the newest protocol (falling back), and read the controller version."""
+        """Connect, negotiate the newest protocol (falling back), and read the controller version.
+        A client connects once (its recipes and state are that connection's): a new one reconnects."""
+        if self._sock is not None:
+            state = "was closed" if self._closing or self._closed is not None else "is connected"
+            raise UsageError(
+                f"this client {state}; make a new RtdeClient to connect again", subject=self.where
+            )
         try:
             self._sock = socket.create_connection((self.host, self.port), timeout=self.timeout)
         except OSError as exc:
@@ -74,13 +80,17 @@ class RtdeClient(ThreadReads):
         self._sliced = _recv_timeout(self._sock, SLICE)
         self._reader = threading.Thread(target=self._read_loop, name=f"rtde-reader-{self.where}", daemon=True)
         self._reader.start()
-        for version in self._versions_to_try(protocol_version):
-            reply = self._request(self.core.request_protocol_version(version))
-            if reply.message.accepted:
-                break
-        else:
-            raise ProtocolError("the controller accepted no protocol version", subject=self.where)
-        self._request(self.core.get_controller_version())
+        try:
+            for version in self._versions_to_try(protocol_version):
+                reply = self._request(self.core.request_protocol_version(version))
+                if reply.message.accepted:
+                    break
+            else:
+                raise ProtocolError("the controller accepted no protocol version", subject=self.where)
+            self._request(self.core.get_controller_version())
+        except BaseException:  # no socket or reader thread left behind (`with` never reaches __exit__)
+            self.close()
+            raise
         return self
 
     def close(self) -> None:
