@@ -183,6 +183,28 @@ def test_bulk_decode_of_spaced_rows_as_a_capture_file_holds_them(gap: int) -> No
     assert len(codec.decode_many(np.zeros((0, size), np.uint8))) == 0
 
 
+@pytest.mark.parametrize("recipe_id", [300, -1, "1", 1.0])
+def test_a_recipe_id_no_package_carries_is_named_by_every_decoder(recipe_id: object) -> None:
+    """decode_many raised a bare struct.error for a recipe id outside 0..255 or no integer, and
+    decode_package said "of another recipe (expected 1, got 1)" for the text '1'."""
+    codec = RecipeCodec.for_names(["timestamp"], "output")
+    package = codec.encode_package({"timestamp": 2.0}, recipe_id=1)
+    for decoder in (codec.decode_many, codec.decode_records, codec.decode_package):
+        if decoder is not codec.decode_many and recipe_id == 1:
+            continue  # an integral float finds recipe 1, as 1 == 1.0
+        with pytest.raises(DecodeError, match="no data package carries this recipe id") as info:
+            decoder(package, recipe_id=recipe_id)
+        assert (info.value.field, info.value.actual) == ("recipe_id", repr(recipe_id))
+
+
+def test_rows_of_a_transposed_array_decode_as_the_rows_they_show() -> None:
+    """A 2-D array whose rows are not contiguous (a transpose) raised numpy's ValueError."""
+    codec = RecipeCodec.for_names(["timestamp"], "output")
+    packages = b"".join(codec.encode_package({"timestamp": float(i)}, 1) for i in range(3))
+    rows = np.asfortranarray(np.frombuffer(packages, np.uint8).reshape(3, -1))
+    assert codec.decode_many(rows, recipe_id=1)["timestamp"].tolist() == [0.0, 1.0, 2.0]
+
+
 def test_recipe_errors() -> None:
     with pytest.raises(RecipeError, match="unknown output field"):
         RecipeCodec.for_names(["nope"], "output")

@@ -23,7 +23,7 @@ from rtde_spec._generated.constants import (
 )
 from rtde_spec.errors import DecodeError, RecipeError, require
 from rtde_spec.metamodel.catalogue import Catalogue, Direction, FieldInfo, WireTypeInfo
-from rtde_spec.recipes.encoding import _FAST_ERRORS, PREFIX, Encoder, RecipeItem
+from rtde_spec.recipes.encoding import _FAST_ERRORS, PREFIX, Encoder, RecipeItem, expected_recipe_id
 from rtde_spec.recipes.record import record_class
 
 if TYPE_CHECKING:
@@ -206,6 +206,7 @@ class RecipeCodec:
                 actual=size,
             )
         if recipe_id is not None and rid != recipe_id:
+            expected_recipe_id(recipe_id)  # one no package carries is said as such
             raise DecodeError(
                 "data package of another recipe",
                 package="data_package",
@@ -330,6 +331,7 @@ class RecipeCodec:
         size, type and recipe id are checked in one pass, and the first bad one is named.
         """
         np = require("numpy", "numpy", "decode_many")
+        recipe_id = None if recipe_id is None else expected_recipe_id(recipe_id)
         size = self.package_size
         if isinstance(buffer, np.ndarray) and buffer.ndim == 2:
             if buffer.dtype != np.uint8 or buffer.shape[1] != size:
@@ -338,7 +340,8 @@ class RecipeCodec:
                     expected=f"uint8 rows of {size} bytes",
                     actual=f"{buffer.dtype} rows of {buffer.shape[1]}",
                 )
-            rows, stride = buffer, buffer.strides[0]
+            rows = buffer if buffer.strides[1] == 1 else np.ascontiguousarray(buffer)  # e.g. a transpose
+            stride = rows.strides[0]
         else:
             self._whole_packages(len(buffer))
             rows, stride = np.frombuffer(buffer, dtype=np.uint8).reshape(-1, size), size

@@ -26,7 +26,7 @@ from operator import itemgetter
 from typing import Any
 
 from rtde_spec._generated.constants import BYTE_ORDER, DATA_PACKAGE_PREFIX_FORMAT, DATA_PACKAGE_TYPE
-from rtde_spec.errors import EncodeError
+from rtde_spec.errors import DecodeError, EncodeError
 from rtde_spec.metamodel.catalogue import FieldInfo, WireTypeInfo
 
 PREFIX = struct.Struct(DATA_PACKAGE_PREFIX_FORMAT)
@@ -235,6 +235,22 @@ def as_mapping(values: Any) -> Mapping[str, Any]:
         f"values must be a dict, a record, a model or a dataclass, not {type(values).__name__}",
         package="data_package",
     )
+
+
+def expected_recipe_id(recipe_id: Any) -> int:
+    """The recipe id a decoder is told to look for, or DecodeError when no package can carry it
+    (a text, a float, one outside the prefix's integer): never a bare struct.error."""
+    low, high = _bounds(PREFIX.format[-1])
+    number = _index_or_none(recipe_id)
+    if number is None or not low <= number <= high:
+        raise DecodeError(
+            "no data package carries this recipe id",
+            package="data_package",
+            field="recipe_id",
+            expected=f"an integer {low}..{high}",
+            actual=repr(recipe_id),
+        )
+    return number
 
 
 def _bounds(code: str) -> tuple[int, int]:
