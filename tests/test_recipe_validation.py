@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import pytest
 
+from rtde_spec.errors import RecipeError, UsageError
 from rtde_spec.recipes.model import Recipe
 from rtde_spec.recipes.validation import (
     NOT_FOUND,
@@ -214,3 +215,24 @@ def test_recipes_without_a_version_among_others_are_flagged() -> None:
     unnamed = Recipe(("timestamp",), direction="output", key="b")
     report = validate_recipes([named, unnamed])
     assert "no-controller" in codes(report)
+
+
+def test_what_user_code_passes_instead_of_recipes_is_named() -> None:
+    """Names instead of recipes, a bad direction or version string raised AttributeError,
+    KeyError or a bare ValueError from inside; one string as a recipe's names was read a
+    character a name ("t: unknown field", "i: unknown field", ...)."""
+    for given in (["timestamp", "actual_q"], "timestamp", Recipe(("timestamp",))):
+        with pytest.raises(UsageError, match="takes a list of Recipe"):
+            validate_recipes(given)  # type: ignore[arg-type]
+    with pytest.raises(UsageError, match="direction must be input or output, not 'out'"):
+        validate_recipes([Recipe(("timestamp",))], direction="out")  # type: ignore[arg-type]
+    with pytest.raises(UsageError, match="not 'outputs'"):
+        validate_recipes([Recipe(("timestamp",), direction="outputs")])  # type: ignore[arg-type]
+    for version in ("bogus", "v5.4", 5):
+        with pytest.raises(RecipeError, match="bad version string") as info:
+            validate_recipes([Recipe(("timestamp",))], controller=version)  # type: ignore[arg-type]
+        assert info.value.subject == "controller version"
+    assert Recipe("timestamp,actual_q").names == ("timestamp", "actual_q")  # type: ignore[arg-type]
+    assert Recipe(["timestamp"]).names == ("timestamp",)  # type: ignore[arg-type]
+    with pytest.raises(UsageError, match="None is a NoneType"):
+        Recipe(("timestamp", None))  # type: ignore[arg-type]

@@ -31,6 +31,11 @@ class Recipe:
     declared_types: dict[str, str] = field(default_factory=dict)
     source: str | None = None
 
+    def __post_init__(self) -> None:
+        """Names as a tuple of text: a list is taken, one string is the comma list (it was read a
+        character a name), a name that is no text is a UsageError (not a TypeError from inside)."""
+        object.__setattr__(self, "names", recipe_names(self.names))
+
     @classmethod
     def parse(cls, text: str, direction: Direction | None = None) -> Recipe:
         """A comma list, as the setup package carries it ("timestamp,actual_q")."""

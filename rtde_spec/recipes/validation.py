@@ -17,6 +17,7 @@ from typing import Literal
 
 from rtde_spec._generated.constants import DATA_PACKAGE_PREFIX_FORMAT, RTDE_ANSWERS
 from rtde_spec._generated.constants import RTDE_LIMITS as LIMITS
+from rtde_spec.errors import UsageError
 from rtde_spec.metamodel.catalogue import Catalogue, FieldInfo
 from rtde_spec.metamodel.versions import Version
 from rtde_spec.recipes.files import infer_direction
@@ -99,8 +100,8 @@ class _Checker:
     def __init__(self, catalogue: Catalogue, controller: str | None) -> None:
         self.cat = catalogue
         self.controller = controller
+        self.line = catalogue.line_of(controller) if controller else None  # RecipeError if no version
         self.version = Version.parse(controller) if controller else None
-        self.line = catalogue.line_of(controller) if controller else None
         self.all_names = {d: set(catalogue.names(d)) for d in ("input", "output")}
         self.max_frequency = (
             self.line.rtde_max_frequency
@@ -235,6 +236,8 @@ def validate_recipe(
     cat = catalogue or Catalogue.default()
     checker = _checker or _Checker(cat, controller or recipe.controller)
     dirn = direction or infer_direction(recipe, checker.all_names["input"], checker.all_names["output"])
+    if dirn not in ("input", "output"):
+        raise UsageError(f"direction must be input or output, not {dirn!r}", subject=recipe.key)
     problems: list[Problem] = []
     rows = [_row(name, dirn, recipe, checker, problems) for name in recipe.names]
     seen: dict[str, int] = {}
@@ -297,6 +300,17 @@ def validate_recipes(
 ) -> ValidationReport:
     """Check the recipes of one client together (e.g. all recipes of an XML file)."""
     frequency = checked_frequency(frequency)
+    # names, one name or one Recipe: say so, not an AttributeError from inside
+    odd = (
+        recipes
+        if isinstance(recipes, (str, Recipe))
+        else next((r for r in recipes if not isinstance(r, Recipe)), None)
+    )
+    if odd is not None:
+        raise UsageError(
+            "validate_recipes takes a list of Recipe, e.g. [Recipe(('timestamp', 'actual_q'))], "
+            f"not {type(odd).__name__} {odd!r:.60}"
+        )
     cat = catalogue or Catalogue.default()
     # each recipe is checked against --controller, else the version its file names
     checkers: dict[str | None, _Checker] = {}
