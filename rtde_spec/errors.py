@@ -111,6 +111,10 @@ class UsageError(RtdeSpecError):
     """The command line or call asks for something unusable: a missing file, an unknown version."""
 
 
+class VersionStringError(UsageError, ValueError):
+    """A controller version that is no version ("bogus", "v5.4"): a ValueError, as int("x") is."""
+
+
 class MissingDependencyError(UsageError, ImportError):
     """An optional dependency is not installed; the message names the extra that brings it."""
 

@@ -14,7 +14,7 @@ from hypothesis import strategies as st
 
 from rtde_spec._generated import primary_models as gen
 from rtde_spec._generated import primary_structs
-from rtde_spec.errors import DecodeError, EncodeError
+from rtde_spec.errors import DecodeError, EncodeError, UsageError
 from rtde_spec.metamodel.schema import LayoutField
 from rtde_spec.metamodel.versions import Version
 from rtde_spec.primary.codec import (
@@ -59,6 +59,22 @@ def _part(message: Any) -> Any:
         (sub,) = message.sub_packages
         return sub
     return message
+
+
+@pytest.mark.parametrize("version", ["bogus", "v5.4", "5", 5])
+def test_a_controller_version_that_is_no_version_is_a_usage_error(version: object) -> None:
+    """decode_message, encode_message and the stream decoder raised a bare ValueError for a
+    version string that is no version; it is a UsageError now (and still a ValueError)."""
+    message = gen.TextMessage(timestamp=1, source=-2, text_message="hi")
+    calls = (
+        lambda: decode_message(encode_message(message), version=version),  # type: ignore[arg-type]
+        lambda: encode_message(message, version=version),  # type: ignore[arg-type]
+        lambda: PrimaryStreamDecoder(version=version),  # type: ignore[arg-type]
+    )
+    for call in calls:
+        with pytest.raises(UsageError, match=f"bad version string {version!r}") as info:
+            call()
+        assert isinstance(info.value, ValueError)
 
 
 @pytest.mark.parametrize("case", GOLDEN, ids=[c["message"] for c in GOLDEN])

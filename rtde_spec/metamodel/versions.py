@@ -5,6 +5,8 @@ from __future__ import annotations
 import re
 from functools import total_ordering
 
+from rtde_spec.errors import VersionStringError
+
 _VERSION_RE = re.compile(r"^(\d+)\.(\d+)(?:\.(\d+))?(?:\.(\d+))?$")
 
 
@@ -19,12 +21,12 @@ class Version:
 
     @classmethod
     def parse(cls, text: str | Version) -> Version:
-        """Parse "X.Y[.Z[.B]]"; raise ValueError naming the text otherwise."""
+        """Parse "X.Y[.Z[.B]]"; raise VersionStringError (a ValueError) naming the text otherwise."""
         if isinstance(text, Version):
             return text
         match = _VERSION_RE.match(str(text).strip())
         if not match:
-            raise ValueError(f"bad version string {text!r}: expected MAJOR.MINOR.BUGFIX")
+            raise VersionStringError(f"bad version string {text!r}: expected MAJOR.MINOR.BUGFIX")
         major, minor, bugfix, build = match.groups()
         return cls(int(major), int(minor), int(bugfix or 0), int(build) if build else None)
 
