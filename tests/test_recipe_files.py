@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -232,3 +233,21 @@ def test_a_controller_version_read_as_a_number_is_refused(tmp_path: Path, text: 
         load_recipes(path)
     path.write_text(text.replace("5.10", '"5.10"'))
     assert load_recipes(path)[0].controller == "5.10"
+
+
+@pytest.mark.parametrize(
+    ("text", "said"),
+    [
+        ("fields: [{timestamp: DOUBLE}, actual_q]\n", "recipe 1: {'timestamp': 'DOUBLE'} is no name"),
+        ("fields: [timestamp, null]\n", "recipe 1: None is no name"),
+        ("- [timestamp]\n- [timestamp, 5]\n", "recipe 2: 5 is no name"),
+        ("fields: [timestamp]\nfrequency: true\n", "recipe 1: frequency must be a number (got True)"),
+    ],
+)
+def test_an_entry_that_is_no_name_is_named_with_its_recipe(tmp_path: Path, text: str, said: str) -> None:
+    """A mapping without `name`, null and numbers became the names "None" and "5" (validated as
+    unknown fields, the cause unsaid); `frequency: true` was 1 Hz; recipes were counted from 0."""
+    path = tmp_path / "r.yaml"
+    path.write_text(text)
+    with pytest.raises(RecipeError, match=re.escape(said)):
+        load_recipes(path)

@@ -174,8 +174,8 @@ def _from_xml(text: str, where: str) -> list[Recipe]:
 
 
 def _recipe_from_mapping(item: Any, where: str, index: int) -> Recipe:
-    if isinstance(item, list):
-        return Recipe(tuple(str(n).strip() for n in item))
+    if isinstance(item, list):  # its names, read as those under `fields`
+        item = {"fields": item}
     if not isinstance(item, dict):
         raise RecipeError(f"recipe {index} must be a mapping or a list of names", subject=at(where))
     known = {"key", "direction", "frequency", "controller", "fields", "names"}
@@ -192,20 +192,20 @@ def _recipe_from_mapping(item: Any, where: str, index: int) -> Recipe:
     names: list[str] = []
     declared: dict[str, str] = {}
     for entry in raw:
-        if isinstance(entry, dict):
-            names.append(str(entry.get("name")).strip())
-            if entry.get("type"):
-                declared[names[-1]] = str(entry["type"])
-        else:
-            names.append(str(entry).strip())
+        name = entry.get("name") if isinstance(entry, dict) else entry
+        if not isinstance(name, str):  # null, 5, `{timestamp: DOUBLE}` were the names "None", "5"
+            raise RecipeError(f"recipe {index}: {entry!r:.40} is no name or {{name,type}}", subject=at(where))
+        names.append(name.strip())
+        if isinstance(entry, dict) and entry.get("type"):
+            declared[names[-1]] = str(entry["type"])
     direction = item.get("direction")
     if direction not in (None, "input", "output"):
         raise RecipeError(
             f"recipe {index}: direction must be input or output", subject=at(where), actual=direction
         )
     frequency = item.get("frequency")
-    try:
-        hz = float(frequency) if frequency is not None else None
+    try:  # a bool is no rate (`frequency: true` was 1 Hz)
+        hz = None if frequency is None else float(frequency if not isinstance(frequency, bool) else "-")
     except (TypeError, ValueError, OverflowError):
         raise RecipeError(
             f"recipe {index}: frequency must be a number", subject=at(where), actual=repr(frequency)[:80]
@@ -244,7 +244,7 @@ def _from_data(data: Any, where: str) -> list[Recipe]:
         items = data
     if not isinstance(items, list) or not items:
         raise RecipeError("no recipes found", subject=at(where))
-    return [_recipe_from_mapping(item, where, i) for i, item in enumerate(items)]
+    return [_recipe_from_mapping(item, where, i) for i, item in enumerate(items, 1)]  # as pick_recipe
 
 
 def _from_yaml(text: str, where: str) -> list[Recipe]:
