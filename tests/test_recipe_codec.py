@@ -142,6 +142,18 @@ def test_short_payload_names_the_field_it_cuts() -> None:
         codec.decode_record(payload + b"\0")
 
 
+@pytest.mark.parametrize(("cut", "offset"), [(-4, -4), (0, -61), (0, 62), (10, -10)])
+def test_an_offset_outside_the_bytes_is_named(cut: int, offset: int) -> None:
+    """A negative offset raised a bare struct.error, or an error about the payload's length at a
+    made-up place; past the end, "got -935 payload bytes"."""
+    codec = RecipeCodec.for_names(["timestamp", "actual_q", "robot_mode"], "output")
+    payload = bytes(codec.size + cut)
+    for decoder in (codec.decode, codec.decode_record, codec.decode_model):
+        with pytest.raises(DecodeError, match="offset outside the bytes given") as info:
+            decoder(payload, offset)
+        assert (info.value.expected, info.value.actual) == (f"0..{len(payload)}", offset)
+
+
 def test_package_checks() -> None:
     codec = RecipeCodec.for_names(["timestamp"], "output")
     package = codec.encode_package({"timestamp": 2.0}, recipe_id=1)

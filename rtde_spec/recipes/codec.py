@@ -144,6 +144,8 @@ class RecipeCodec:
 
     def _check(self, payload: bytes | bytearray | memoryview, offset: int) -> None:
         """Offsets count from the start of the bytes given: inside them or at their end."""
+        if not 0 <= offset <= len(payload):  # -4 read the last 4 bytes (struct counts from the end)
+            raise DecodeError("offset outside the bytes given", expected=f"0..{len(payload)}", actual=offset)
         got = len(payload) - offset
         if got == self.size:
             return
@@ -162,13 +164,13 @@ class RecipeCodec:
 
     def decode(self, payload: bytes | bytearray | memoryview, offset: int = 0) -> dict[str, Any]:
         """Values by name (vectors as tuples) from a payload starting at `offset`."""
-        if len(payload) - offset != self.size:
+        if len(payload) - offset != self.size or offset < 0:
             self._check(payload, offset)
         return self._to_dict(self.struct.unpack_from(payload, offset))  # type: ignore[no-any-return]
 
     def decode_record(self, payload: bytes | bytearray | memoryview, offset: int = 0) -> Any:
         """A record: every value decoded, attribute access by the spec's names; the cheapest form."""
-        if len(payload) - offset != self.size:
+        if len(payload) - offset != self.size or offset < 0:
             self._check(payload, offset)
         return _new_tuple(self.record_type, self.struct.unpack_from(payload, offset))
 
