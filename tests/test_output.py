@@ -193,6 +193,26 @@ def test_a_writer_replaces_an_existing_file_only_when_it_closes_with_rows(tmp_pa
     assert Path("/dev/null").is_char_device()
 
 
+@pytest.mark.parametrize("fmt", [*FILE_FORMATS, "mcap"])
+def test_a_closed_writer_refuses_rows_and_closes_again_quietly(tmp_path: Path, fmt: str) -> None:
+    """Rows written after close() were dropped without a word (Parquet left a temporary file
+    behind), and CSV's second close raised ValueError: underlying buffer has been detached."""
+    from rtde_spec import UsageError, open_writer
+
+    out = tmp_path / f"out.{fmt}"
+    writer = open_writer(fmt, out)
+    writer.write({"timestamp": 1.0, "robot_mode": 7})
+    writer.close()
+    kept = out.read_bytes()
+    writer.close()
+    with pytest.raises(UsageError, match="this writer is closed"):
+        writer.write({"timestamp": 2.0, "robot_mode": 7})
+    with pytest.raises(UsageError, match="this writer is closed"):
+        writer.write_columns({})
+    writer.abort()
+    assert out.read_bytes() == kept and leftover_temps(tmp_path) == []
+
+
 def test_a_failed_decode_leaves_an_existing_output_byte_identical(tmp_path: Path) -> None:
     garbage = tmp_path / "garbage.bin"
     garbage.write_bytes(b"\x00\x03\x55" * 100)  # a package of size 3 and an unknown type: no rows

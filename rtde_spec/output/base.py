@@ -7,7 +7,7 @@ import json
 from collections.abc import Mapping
 from typing import IO, Any
 
-from rtde_spec.errors import OutputError
+from rtde_spec.errors import OutputError, UsageError
 from rtde_spec.output.background import BackgroundStream
 from rtde_spec.output.partfile import Part
 
@@ -76,6 +76,7 @@ class Writer:
     """
 
     NEEDS_PATH = False  # True: given a file name, the writer opens the file itself (Parquet)
+    closed = False  # close() or abort() was called
 
     def __init__(self, stream: IO[bytes]) -> None:
         self.stream = stream
@@ -135,10 +136,23 @@ class Writer:
         """Finish the output; its file appears at its name if rows were written.
 
         After a failed write (a full disk) nothing of this run is committed: an existing
-        file stays as it was, and the error names the file and what was kept.
+        file stays as it was, and the error names the file and what was kept. A second close
+        does nothing.
         """
+        if self._shut():
+            return
         self.prepare()
         self.commit()
+
+    def _shut(self) -> bool:
+        """Whether it was closed before; from now on a write is a UsageError (rows written after
+        close were lost without a word, or CSV's raised ValueError: buffer detached)."""
+        was, self.closed = self.closed, True
+        self.write = self.write_columns = self._write_after_close  # type: ignore[method-assign]
+        return was
+
+    def _write_after_close(self, *_: Any) -> None:
+        raise UsageError("this writer is closed: what is written after close() would be lost")
 
     def prepare(self) -> None:
         """The first half of `close`: the file is finished beside its name, not yet in place.
@@ -180,6 +194,8 @@ class Writer:
 
     def abort(self) -> None:
         """Close without keeping anything not already in place (an existing file stays)."""
+        if self._shut():
+            return
         try:
             self._finish()
         except Exception:  # the output is dropped anyway
