@@ -142,6 +142,16 @@ def test_short_payload_names_the_field_it_cuts() -> None:
         codec.decode_record(payload + b"\0")
 
 
+@pytest.mark.parametrize("given", [[1, 2], {"timestamp": [1.0]}, None, np.zeros(3)])
+def test_tables_of_what_is_no_structured_array_are_a_usage_error(given: object) -> None:
+    """A list, dict or plain array raised AttributeError ('list' has no 'dtype') or TypeError."""
+    from rtde_spec.errors import UsageError
+
+    for convert in (to_pandas, to_arrow):
+        with pytest.raises(UsageError, match=r"take the structured array RecipeCodec\.decode_many returns"):
+            convert(given)
+
+
 @pytest.mark.parametrize(("cut", "offset"), [(-4, -4), (0, -61), (0, 62), (10, -10)])
 def test_an_offset_outside_the_bytes_is_named(cut: int, offset: int) -> None:
     """A negative offset raised a bare struct.error, or an error about the payload's length at a

@@ -9,14 +9,20 @@ from __future__ import annotations
 from collections.abc import Mapping, Sequence
 from typing import Any
 
-from rtde_spec.errors import require
+from rtde_spec.errors import UsageError, require
 
 HEADER_COLUMNS = ("size", "type")
 
 
 def _columns(arr: Any, keep_header: bool) -> dict[str, Any]:
+    names = getattr(getattr(arr, "dtype", None), "names", None)
+    if not names:  # a list, a dict, a plain array: an AttributeError or TypeError from inside
+        raise UsageError(
+            "to_pandas and to_arrow take the structured array RecipeCodec.decode_many returns, "
+            f"not {type(arr).__name__}" + (f" of {arr.dtype}" if hasattr(arr, "dtype") else "")
+        )
     out: dict[str, Any] = {}
-    for name in arr.dtype.names:
+    for name in names:
         if name in HEADER_COLUMNS and not keep_header:
             continue
         column = arr[name]
