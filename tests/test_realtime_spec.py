@@ -11,13 +11,14 @@ from __future__ import annotations
 
 import math
 import random
+import re
 import shutil
 import struct
 from pathlib import Path
 
 import pytest
 
-from rtde_spec.errors import DecodeError, SpecError
+from rtde_spec.errors import DecodeError, EncodeError, SpecError
 from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.metamodel.realtime import load_realtime
 from rtde_spec.metamodel.versions import Version
@@ -172,6 +173,28 @@ def test_values_survive_encode_and_decode() -> None:
 def spec_copy(tmp_path: Path) -> Path:
     shutil.copytree(ROOT / "spec", tmp_path / "spec")
     return tmp_path / "spec"
+
+
+@pytest.mark.parametrize(
+    ("values", "field", "reason"),
+    [
+        ({"q_actal": [0.1] * 6}, "q_actal", "not a field of any real-time layout: q_actal"),
+        ({"robot_mode": 1.5}, "robot_mode", "not a whole number"),
+        ({"safety_mode": math.nan}, "safety_mode", "not a whole number"),
+        ({"time": "1"}, "time", "not a number (text is no number)"),
+        ({"q_actual": [1, 2, 3, 4, 5, "6"]}, "q_actual", "not 6 numbers"),
+    ],
+)
+def test_what_a_message_cannot_carry_is_refused_naming_the_field(
+    values: dict, field: str, reason: str
+) -> None:
+    """A misspelt name was dropped (its field sent as zeros), text was taken as a number, and a
+    mode of 1.5 was encoded into a message the decoder then refused."""
+    with pytest.raises(EncodeError, match=re.escape(reason)) as info:
+        encode(values, "5.10.0")
+    assert info.value.field == field
+    message = encode({"robot_mode": 7}, "5.10.0")
+    assert encode(decode(message, "5.10.0"), "5.10.0") == message  # a decoded message encodes back
 
 
 def test_the_spec_refuses_fields_that_do_not_add_up_to_the_documented_size(tmp_path: Path) -> None:

@@ -64,28 +64,44 @@ class RealtimeLayout:
         return out
 
     def encode(self, values: Mapping[str, Any]) -> bytes:
-        """One message of this layout; a field not given is sent as zeros."""
+        """One message of this layout; a field not given, or only sent by other versions, is sent
+        as zeros. A name of no version, a value that is no number (or no whole number where the
+        field is a mode or bits) is an EncodeError naming the field: a misspelt name was dropped,
+        text was taken as a number, 1.5 made a message the decoder refuses."""
+        unknown = sorted(set(values) - _field_names())
+        if unknown:
+            raise EncodeError(
+                f"not a field of any real-time layout: {', '.join(unknown)}",
+                package=PACKAGE,
+                field=unknown[0],
+            )
         flat: list[float] = [float(self.size)]
-        try:
-            for name, count in zip(self.names, self.counts, strict=True):
-                value = values.get(name)
-                if value is None:
-                    flat.extend((0.0,) * count)
-                elif count == 1:
-                    flat.append(float(value))
-                else:
-                    items = [float(v) for v in value]
-                    if len(items) != count:
-                        raise EncodeError(
-                            "wrong number of values", package=PACKAGE, field=name, expected=count,
-                            actual=len(items),
-                        )  # fmt: skip
-                    flat.extend(items)
-            return self.plan.pack(int(flat[0]), *flat[1:])
-        except (TypeError, ValueError, struct.error) as exc:
-            if isinstance(exc, EncodeError):
-                raise
-            raise EncodeError(f"cannot encode: {exc}", package=PACKAGE) from None
+        for name, count in zip(self.names, self.counts, strict=True):
+            value = values.get(name)
+            if value is None:
+                flat.extend((0.0,) * count)
+                continue
+            try:
+                parts = [value] if count == 1 or isinstance(value, (str, bytes)) else list(value)
+                if any(isinstance(v, (str, bytes)) for v in parts):
+                    raise TypeError("text is no number")
+                items = [float(v) for v in parts]
+            except (TypeError, ValueError, OverflowError) as exc:
+                raise EncodeError(
+                    f"not {'a number' if count == 1 else f'{count} numbers'} ({exc})",
+                    package=PACKAGE, field=name, actual=repr(value)[:80],
+                ) from None  # fmt: skip
+            if len(items) != count:
+                raise EncodeError(
+                    "wrong number of values", package=PACKAGE, field=name, expected=count, actual=len(items)
+                )
+            if name in self.integers and not all(math.isfinite(v) and v == int(v) for v in items):
+                raise EncodeError(
+                    "not a whole number", package=PACKAGE, field=name, expected="a whole number",
+                    actual=repr(value)[:80],
+                )  # fmt: skip
+            flat.extend(items)
+        return self.plan.pack(int(flat[0]), *flat[1:])
 
 
 def _whole(value: float, name: str, layout: RealtimeLayout, at: int) -> int:
@@ -111,6 +127,11 @@ def _all() -> tuple[RealtimeLayout, ...]:
         RealtimeLayout(line, first, size, names, counts, frozenset(integers), struct.Struct(fmt))
         for line, first, size, fmt, names, counts, integers in LAYOUTS
     )
+
+
+@cache
+def _field_names() -> frozenset[str]:
+    return frozenset(name for plan in _all() for name in plan.names) | {"message_size"}
 
 
 @cache
