@@ -417,6 +417,41 @@ def test_primary_client_yields_messages_and_offsets_on_request() -> None:
         emu.stop()
 
 
+def test_a_primary_client_reconnects_from_a_clean_stream_and_names_a_lost_connection() -> None:
+    """Iterating again after close() reconnected, but framed the new stream after the bytes of a
+    message the old connection had half sent (a DecodeError of made-up size); send_script on a
+    closed connection raised a bare BrokenPipeError, and bytes an AttributeError."""
+    import socket
+    import threading
+
+    from rtde_spec import PrimaryClient, RtdeConnectionError
+
+    text = encode_message(gen.TextMessage(timestamp=1, source=-2, text_message="hello"))
+    with socket.create_server(("127.0.0.1", 0)) as server:
+
+        def serve() -> None:
+            for sent in (text + text[:7], text):  # the first connection ends inside a message
+                peer, _ = server.accept()
+                with peer:
+                    peer.sendall(sent)
+                    peer.recv(100)  # until the client closes or sends
+
+        thread = threading.Thread(target=serve, daemon=True)
+        thread.start()
+        client = PrimaryClient("127.0.0.1", server.getsockname()[1], timeout=5)
+        first = client.messages(with_offsets=True)
+        assert next(first)[1].text_message == "hello"
+        client.close()
+        offset, again = next(client.messages(with_offsets=True))
+        assert (offset, again.text_message) == (0, "hello")
+        client.send_script(b"textmsg(1)")  # the server's recv returns: it closes
+        thread.join(5)
+        with pytest.raises(RtdeConnectionError, match="connection lost while sending"):
+            for _ in range(50):  # the first send after the close may still be taken by the kernel
+                client.send_script("textmsg(1)")
+        client.close()
+
+
 def test_describe_message_refuses_an_offset_message_pair() -> None:
     from rtde_spec.errors import UsageError
     from rtde_spec.primary.events import StateChanges, describe_message

@@ -36,6 +36,10 @@ class PrimaryClient:
         return f"{self.host}:{self.port}"
 
     def connect(self) -> PrimaryClient:
+        """A new connection (an earlier one is closed): its stream is framed from its first byte,
+        not after what the last connection left half-read."""
+        self.close()
+        self.decoder, self.last_offset = PrimaryStreamDecoder(), None
         try:
             self._sock = socket.create_connection((self.host, self.port), timeout=self.timeout)
         except OSError as exc:
@@ -109,10 +113,17 @@ class PrimaryClient:
                 f"({PRIMARY_PORTS['primary']}, {PRIMARY_PORTS['secondary']})",
                 subject=self.where,
             )
+        if isinstance(script, str):
+            script = script.encode("utf-8")  # type: ignore[assignment]
+        if not isinstance(script, (bytes, bytearray)):
+            raise UsageError(f"URScript is text, not {type(script).__name__}", subject=self.where)
         if self._sock is None:
             self.connect()
         assert self._sock is not None
-        self._sock.sendall(script.encode("utf-8") + (b"" if script.endswith("\n") else b"\n"))
+        try:
+            self._sock.sendall(bytes(script) + (b"" if script.endswith(b"\n") else b"\n"))
+        except OSError as exc:  # the controller closed the connection, or it was lost
+            raise RtdeConnectionError(f"connection lost while sending: {exc}", subject=self.where) from None
 
     def close(self) -> None:
         if self._sock is not None:
