@@ -120,3 +120,30 @@ def test_package_over_the_size_field() -> None:
     with pytest.raises(EncodeError) as info:
         build("data_package", recipe_id=1, payload=b"\0" * 70000)
     assert info.value.field == "size" and "65535" in str(info.value.expected)
+
+
+@pytest.mark.parametrize("given", ["0005560002", 5, None])
+def test_what_is_no_bytes_is_named_by_every_decoder(given: object) -> None:
+    """Hex text raised TypeError "string argument without an encoding" (or "can't concat str to
+    bytearray" from a stream decoder, "message cut short" from the real-time one); a number was
+    decoded as that many zero bytes. Each is a UsageError saying what to pass."""
+    from rtde_spec import PrimaryStreamDecoder, SessionDecoder, StreamDecoder, UsageError, decode_message
+    from rtde_spec.realtime import RealtimeStream
+    from rtde_spec.realtime import decode as decode_realtime
+    from rtde_spec.rtde.codec import decode_stream
+
+    calls = [
+        lambda: decode(given, sender="client"),  # type: ignore[arg-type]
+        lambda: decode_message(given),  # type: ignore[arg-type]
+        lambda: list(decode_stream(given)),  # type: ignore[arg-type]
+        lambda: list(StreamDecoder().feed(given)),  # type: ignore[arg-type]
+        lambda: PrimaryStreamDecoder().feed(given),  # type: ignore[arg-type]
+        lambda: SessionDecoder().feed("client", given),  # type: ignore[arg-type]
+        lambda: RealtimeStream().feed(given),  # type: ignore[arg-type]
+    ]
+    if given is not None:
+        calls.append(lambda: decode_realtime(given))  # type: ignore[arg-type]
+    for call in calls:
+        with pytest.raises(UsageError, match=f"takes bytes .*not {type(given).__name__}"):
+            call()
+    assert decode(bytearray(h("0005 56 0002")), sender="client") == decode(h("0005 56 0002"), sender="client")

@@ -24,7 +24,7 @@ from rtde_spec.primary.families import FamilyView, PrimaryView, primary_view
 from rtde_spec.primary.fast_models import build, with_groups
 from rtde_spec.primary.robot_state import Reuse, RobotStateReader, layout_for
 from rtde_spec.primary.version_warnings import warnings_for
-from rtde_spec.wire.framing import PackageFramer, Skipped, check_header
+from rtde_spec.wire.framing import PackageFramer, Skipped, as_bytes, check_header
 from rtde_spec.wire.layout import Layout
 from rtde_spec.wire.primary_base import (
     OpaqueMessage,
@@ -125,7 +125,7 @@ class PrimaryCodec:
         sub-package has them. `reuse`: a caller's own cache of Robot State sub-package
         models (`{}` to start one; a stream decoder keeps one), else the codec's shared one.
         """
-        buf = data if type(data) is bytes else bytes(data)
+        buf = data if type(data) is bytes else as_bytes(data, "decode_message")
         hsize = self.header.size
         size, mtype = self.header.unpack_from(buf) if len(buf) >= hsize else (0, 0)
         if not (hsize <= size <= self.max_size and (size == len(buf) or (not strict and size < len(buf)))):

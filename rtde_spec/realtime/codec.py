@@ -23,6 +23,7 @@ from rtde_spec.realtime.layout import (
     layout_for,
     layout_for_size,
 )
+from rtde_spec.wire.framing import as_bytes
 
 
 def decode(
@@ -32,6 +33,8 @@ def decode(
 
     `version` picks the layout the controller sends; without it the message size does.
     """
+    if isinstance(data, (str, int)):  # "message cut short" for hex text; a TypeError after
+        as_bytes(data, "decode")
     if len(data) < HEADER.size:
         raise DecodeError(
             "message cut short", package=PACKAGE, offset=0, expected="4 bytes", actual=len(data)
@@ -98,7 +101,11 @@ class RealtimeStream:
         self.errors: list[RtdeSpecError] = []
 
     def feed(self, chunk: bytes | bytearray | memoryview) -> list[dict[str, Any]]:
-        self.buffer += chunk
+        try:
+            self.buffer += chunk
+        except TypeError:  # "can't concat str to bytearray"
+            as_bytes(chunk, "feed")
+            raise
         out: list[dict[str, Any]] = []
         buf, at = self.buffer, 0
         while len(buf) - at >= HEADER.size:

@@ -23,7 +23,7 @@ from rtde_spec._generated.constants import (
 )
 from rtde_spec.errors import DecodeError, EncodeError
 from rtde_spec.rtde.protocol_state import ProtocolState
-from rtde_spec.wire.framing import check_header
+from rtde_spec.wire.framing import as_bytes, check_header
 from rtde_spec.wire.rtde_layouts import layouts
 
 Sender = Literal["controller", "client"]
@@ -140,7 +140,7 @@ def decode_package(
     strict: bool = True,
 ) -> Package:
     """Decode exactly one package (header included) to its name and values."""
-    buf = bytes(data)
+    buf = as_bytes(data, "decode")
     size, ptype = check_header(
         buf, HEADER, what="package", strict=strict, hint="; use decode_stream for several"
     )

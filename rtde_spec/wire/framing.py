@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from rtde_spec._generated.constants import RTDE_HEADER_FORMAT as HEADER_FORMAT
-from rtde_spec.errors import DecodeError
+from rtde_spec.errors import DecodeError, UsageError
 
 _HEADER = struct.Struct(HEADER_FORMAT)
 _SIZE_BYTES = struct.calcsize(HEADER_FORMAT[:2])  # the size field leads the header
@@ -84,7 +84,11 @@ class PackageFramer:
         self.salvaged = out
         if run is not None and isinstance(data, bytes):
             data = self._run_in_place(data, run, out)
-        self._buf += data
+        try:
+            self._buf += data
+        except TypeError:  # "can't concat str to bytearray"
+            as_bytes(data, "feed")
+            raise
         self._drain(run, out)
         return out
 
@@ -183,6 +187,21 @@ class PackageFramer:
                 expected=f"{need} bytes" if need is not None else f">= {self._header_size} bytes",
                 actual=f"{self.pending} bytes",
             )
+
+
+def as_bytes(data: Any, what: str) -> bytes:
+    """`data` as bytes: bytes, bytearray, memoryview or another buffer (a numpy array). Text or a
+    number is a UsageError saying what to pass: bytes(text) raised "string argument without an
+    encoding", and bytes(5) made five zero bytes to decode."""
+    if isinstance(data, bytes):
+        return data
+    if not isinstance(data, (str, int)):
+        try:
+            return bytes(data)
+        except (TypeError, ValueError):
+            pass
+    hint = "; hex text: bytes.fromhex(text)" if isinstance(data, str) else ""
+    raise UsageError(f"{what} takes bytes (bytes, bytearray, memoryview), not {type(data).__name__}{hint}")
 
 
 def check_header(
