@@ -655,3 +655,16 @@ def test_scenario_files_are_validated(tmp_path) -> None:  # type: ignore[no-unty
     unknown = Scenario.model_validate({"outputs": {"actual_qq": 1}})
     with pytest.raises(UsageError, match="unknown output 'actual_qq'"):
         unknown.functions(Catalogue.builtin())
+
+
+@pytest.mark.parametrize("port", [70000, -1, "30004", 1.5])
+def test_a_port_that_is_no_tcp_port_is_refused_before_anything_listens(port: object) -> None:
+    """rtde_port=70000 was served on 4464 (70000 - 65536) without a word; "30004" and -1 raised
+    socket.gaierror from inside asyncio."""
+    config = EmulatorConfig(
+        host="127.0.0.26", rtde_port=port, primary_port=None, secondary_port=None,  # type: ignore[arg-type]
+        realtime_port=None, dashboard_port=None,
+    )  # fmt: skip
+    with pytest.raises(UsageError, match=r"rtde_port must be a TCP port 0\.\.65535"):
+        with EmulatorThread(config):
+            pass

@@ -42,6 +42,7 @@ from rtde_spec.emulator.ports.primary_server import PrimaryConnection, PrimaryHu
 from rtde_spec.emulator.ports.realtime_server import RealtimeConnection, RealtimeHub
 from rtde_spec.emulator.ports.rtde_server import RtdeConnection, RtdeHub
 from rtde_spec.emulator.urscript.budgets import step_deadline
+from rtde_spec.errors import UsageError
 from rtde_spec.metamodel.catalogue import Catalogue
 
 log = logging.getLogger("rtde_spec.emulator")
@@ -106,6 +107,9 @@ class EmulatorConfig:
 class Emulator:
     def __init__(self, config: EmulatorConfig | None = None, catalogue: Catalogue | None = None) -> None:
         self.config = config or EmulatorConfig()
+        for name, port in vars(self.config).items():  # 70000 was served on 4464, "x" a gaierror
+            if name.endswith("_port") and port is not None and not (type(port) is int and 0 <= port <= 65535):
+                raise UsageError(f"{name} must be a TCP port 0..65535 (0: a free one) or None, not {port!r}")
         cat = catalogue or Catalogue.default()
         version = self.config.controller or self.config.scenario.controller
         arm = self.config.arm or ("UR5" if cat.line_of(version).id == "cb3" else "UR5e")
