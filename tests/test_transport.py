@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import asyncio
 import itertools
+import re
 import socket
 import struct
 import threading
@@ -668,3 +669,26 @@ def test_a_port_that_is_no_tcp_port_is_refused_before_anything_listens(port: obj
     with pytest.raises(UsageError, match=r"rtde_port must be a TCP port 0\.\.65535"):
         with EmulatorThread(config):
             pass
+
+
+@pytest.mark.parametrize(
+    ("options", "said"),
+    [
+        ({"port": 70000}, "port must be 1..65535, not 70000"),
+        ({"port": 0}, "port must be 1..65535, not 0"),
+        ({"timeout": None}, "timeout must be a number of seconds above 0, not None"),
+        ({"timeout": -1}, "timeout must be a number of seconds above 0, not -1"),
+        ({"timeout": "5"}, "timeout must be a number of seconds above 0, not '5'"),
+    ],
+)
+def test_client_options_that_cannot_work_are_named_before_connecting(options: dict, said: str) -> None:
+    """Port 70000 connected to port 4464 (70000 - 65536); a timeout of None, -1 or "5" raised
+    TypeError or ValueError from inside the socket module, at connect or at the first request."""
+    given = {"port": 1, "timeout": 1.0, **options}
+    for make in (
+        lambda: RtdeClient("127.0.0.1", given["port"], timeout=given["timeout"]).connect(),
+        lambda: AsyncRtdeClient("127.0.0.1", given["port"], timeout=given["timeout"]),
+        lambda: PrimaryClient("127.0.0.1", given["port"], timeout=given["timeout"]).connect(),
+    ):
+        with pytest.raises(UsageError, match=re.escape(said)):
+            make()
