@@ -15,6 +15,10 @@ except ImportError:  # not POSIX
     resource = None  # type: ignore[assignment]
 
 
+MAX_SHOWN = 500
+"""Characters of a value an error message shows (the whole value stays in `actual`)."""
+
+
 class RtdeSpecError(Exception):
     """Root of every error this package raises on purpose."""
 
@@ -70,12 +74,15 @@ class RtdeSpecError(Exception):
         if self.offset is not None:
             where.append(f"byte offset {self.offset}")
         text = f"{', '.join(where)}: {self.reason}" if where else self.reason
-        if self.expected is not None and self.actual is not None:
-            text += f" (expected {self.expected}, got {self.actual})"
+        got = None if self.actual is None else str(self.actual)
+        if got is not None and len(got) > MAX_SHOWN:  # a 70,000-character text was the message
+            got = f"{got[: MAX_SHOWN - 40]}... ({len(got)} characters)"
+        if self.expected is not None and got is not None:
+            text += f" (expected {self.expected}, got {got})"
         elif self.expected is not None:  # nothing to show as got: "got None" would mislead
             text += f" (expected {self.expected})"
-        elif self.actual is not None:
-            text += f" (got {self.actual})"
+        elif got is not None:
+            text += f" (got {got})"
         return text
 
 

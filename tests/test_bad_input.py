@@ -147,3 +147,17 @@ def test_what_is_no_bytes_is_named_by_every_decoder(given: object) -> None:
         with pytest.raises(UsageError, match=f"takes bytes .*not {type(given).__name__}"):
             call()
     assert decode(bytearray(h("0005 56 0002")), sender="client") == decode(h("0005 56 0002"), sender="client")
+
+
+def test_an_error_about_a_huge_value_shows_its_start_and_size() -> None:
+    """A 70,000-character text message, or 100,000 values for a vector, were the whole error
+    message; the message shows 500 characters of the value, `actual` keeps all of it."""
+    from rtde_spec import RecipeCodec
+
+    with pytest.raises(EncodeError) as info:
+        build("text_message", message="x" * 70000, source="me", warning_level=1)
+    assert len(str(info.value)) < 800 and "... (70002 characters)" in str(info.value)
+    assert info.value.actual == repr("x" * 70000)
+    with pytest.raises(EncodeError) as info:
+        RecipeCodec.for_names(["actual_q"], "output").encode({"actual_q": [0.0] * 100_000})
+    assert len(str(info.value)) < 900 and "100000 given" in str(info.value)
