@@ -359,6 +359,17 @@ def test_in_use_between_two_clients_through_the_client(emu: EmulatorThread) -> N
         one.setup_inputs(["speed_slider_fraction"])  # the same client may use it again
 
 
+def test_inputs_sent_with_another_clients_recipe_are_refused(emu: EmulatorThread) -> None:
+    """client.send(recipe of another client) went out; the controller wrote nothing and said
+    "data package of unknown input recipe 1" in a text message the caller never saw."""
+    port = emu.ports["rtde"]
+    with RtdeClient("127.0.0.1", port, timeout=2) as mine, RtdeClient("127.0.0.1", port, timeout=2) as other:
+        theirs = other.setup_inputs(["input_int_register_30"])
+        with pytest.raises(UsageError, match="input recipe 1 was set up by another client"):
+            mine.send(theirs, input_int_register_30=7)
+        other.send(theirs, input_int_register_30=7)
+
+
 def test_names_over_the_setup_limit_get_a_text_message() -> None:
     """CB3 holds a setup to the CB3 guide's 2048 bytes of names; e-Series takes the 9,173 bytes
     UR's C++ client library sends to current simulators (no limit is documented for it)."""

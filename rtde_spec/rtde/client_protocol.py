@@ -195,6 +195,8 @@ class ClientProtocol:
             raise UsageError(
                 f"send takes the InputRecipe that setup_inputs returned, not a {type(recipe).__name__}"
             )
+        if self.inputs.get(recipe.recipe_id) is not recipe:  # the controller logs it, writes nothing
+            raise UsageError(f"input recipe {recipe.recipe_id} was set up by another client, not this one")
         if values is None:
             values = named
         elif named:
