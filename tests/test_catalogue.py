@@ -104,3 +104,21 @@ def test_unknown_controller_line_is_a_clear_error() -> None:
         CAT.line_of("4.1.0")
     with pytest.raises(RecipeError, match="bad version string"):
         CAT.line_of("five")
+
+
+def test_a_direction_that_is_none_is_a_usage_error() -> None:
+    """Catalogue.get/fields/names and RecipeCodec.for_names with "outputs" raised KeyError."""
+    from rtde_spec import RecipeCodec
+    from rtde_spec.errors import UsageError
+
+    cat = Catalogue.default()
+    calls = (
+        lambda: cat.get("timestamp", "outputs"),  # type: ignore[arg-type]
+        lambda: cat.fields("outputs"),  # type: ignore[arg-type]
+        lambda: cat.names("outputs"),  # type: ignore[arg-type]
+        lambda: RecipeCodec.for_names(["timestamp"], "outputs"),  # type: ignore[arg-type]
+    )
+    for call in calls:
+        with pytest.raises(UsageError, match="direction must be input or output, not 'outputs'"):
+            call()
+    assert cat.get("timestamp", "output") is not None and cat.get("nope", "input") is None

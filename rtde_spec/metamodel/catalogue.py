@@ -14,7 +14,7 @@ from functools import cache
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Literal
 
-from rtde_spec.errors import RecipeError
+from rtde_spec.errors import RecipeError, UsageError
 from rtde_spec.metamodel.versions import Version
 
 if TYPE_CHECKING:
@@ -255,16 +255,25 @@ class Catalogue:
     ) -> list[FieldInfo]:
         """Fields in spec order, optionally of one direction and available on a controller."""
         directions = DIRECTIONS if direction is None else (direction,)
-        out = [info for d in directions for info in self._fields[d].values()]
+        out = [info for d in directions for info in self._of(d).values()]
         if controller is not None:
             out = [info for info in out if self.available(info, controller)]
         return out
 
     def get(self, name: str, direction: Direction) -> FieldInfo | None:
-        return self._fields[direction].get(name)
+        try:
+            return self._fields[direction].get(name)
+        except KeyError:
+            return self._of(direction).get(name)
 
     def names(self, direction: Direction) -> list[str]:
-        return list(self._fields[direction])
+        return list(self._of(direction))
+
+    def _of(self, direction: Direction) -> dict[str, FieldInfo]:
+        """The fields of a direction; UsageError for one that is none ("outputs" was a KeyError)."""
+        if direction not in self._fields:
+            raise UsageError(f"direction must be {' or '.join(self._fields)}, not {direction!r}")
+        return self._fields[direction]
 
     def available(self, info: FieldInfo, controller: str | Version) -> bool:
         """Whether a controller of this version knows the field."""
