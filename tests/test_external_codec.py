@@ -136,3 +136,10 @@ def test_the_spec_refuses_scale_on_text_and_unknown_types(tmp_path: Path) -> Non
     )
     with pytest.raises(SpecError, match="scale is for numbers"):
         load_external(root)
+
+
+def test_an_unknown_protocol_is_a_key_error_naming_the_known_ones() -> None:
+    """record_codec("nope", ...) raised a bare StopIteration (which a generator turns into
+    RuntimeError); like an unknown message or layout, it is a KeyError that lists the names."""
+    with pytest.raises(KeyError, match=r"no external-control protocol nope \(known: reverse, "):
+        record_codec("nope", "reverse_command")

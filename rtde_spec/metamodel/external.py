@@ -133,7 +133,13 @@ class ExternalControlFile(StrictModel):
     protocols: list[ExternalProtocol]
 
     def protocol(self, name: str) -> ExternalProtocol:
-        return next(p for p in self.protocols if p.name == name)
+        """The protocol of that name; KeyError naming the known ones (a bare StopIteration was raised)."""
+        found = next((p for p in self.protocols if p.name == name), None)
+        if found is None:
+            raise KeyError(
+                f"no external-control protocol {name} (known: {', '.join(p.name for p in self.protocols)})"
+            )
+        return found
 
 
 def check(spec: ExternalControlFile, prims: dict[str, tuple[int, str]]) -> list[tuple[str, str]]:
