@@ -148,7 +148,7 @@ class Writer:
         """Whether it was closed before; from now on a write is a UsageError (rows written after
         close were lost without a word, or CSV's raised ValueError: buffer detached)."""
         was, self.closed = self.closed, True
-        self.write = self.write_columns = self._write_after_close  # type: ignore[method-assign]
+        self.write = self.write_columns = self._write_after_close  # type: ignore[method-assign,assignment]
         return was
 
     def _write_after_close(self, *_: Any) -> None:
