@@ -4,6 +4,7 @@ errors that name the field, size checks, bulk decode and tables."""
 from __future__ import annotations
 
 import math
+from fractions import Fraction
 
 import numpy as np
 import pytest
@@ -339,6 +340,35 @@ def test_strict_refusals_name_field_limit_and_value(
 def test_strict_vector_refusals(field: str, value: object, bad_field: str, reason: str) -> None:
     err = _strict_error(OUT, {**GOOD_OUT, field: value})
     assert err.field == bad_field and reason in str(err)
+
+
+@pytest.mark.parametrize(
+    ("field", "value", "plain", "said"),
+    [
+        ("input_int_register_24", np.int32(7), 7, "a Python int for INT32, not numpy.int32"),
+        ("standard_digital_output_mask", np.uint8(3), 3, "a Python int for UINT8, not numpy.uint8"),
+        (
+            "input_double_register_24",
+            np.float32(0.5),
+            0.5,
+            "a Python int or float for DOUBLE, not numpy.float32",
+        ),
+        (
+            "input_double_register_24",
+            Fraction(1, 2),
+            0.5,
+            "a Python int or float for DOUBLE, not fractions.Fraction",
+        ),
+    ],
+)
+def test_strict_says_it_refuses_the_type_of_a_number(
+    field: str, value: object, plain: object, said: str
+) -> None:
+    """Strict mode refused np.int32(7) as "not an integer for INT32" and np.float32 as "not a
+    number": both are; what strict refuses is their type."""
+    err = _strict_error(STRICT, {**GOOD, field: value})
+    assert f"strict mode takes {said}" in str(err) and err.field == field
+    assert STRICT.encode({**GOOD, field: value}) == STRICT.encode({**GOOD, field: plain})
 
 
 def test_strict_negative_uint32_names_its_limits() -> None:

@@ -321,6 +321,17 @@ def _checked(item: RecipeItem, value: Any, strict: bool, at: int | None) -> Any:
     if strict:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
             what = "an integer" if wire.kind == "int" else "a number"
+            if (
+                not isinstance(value, bool)
+                and not text
+                and hasattr(kind, "__index__" if wire.kind == "int" else "__float__")
+            ):
+                # a numpy int32 *is* an integer: say what strict mode refuses in it, its type
+                py = "int" if wire.kind == "int" else "int or float"
+                raise fail(
+                    f"strict mode takes a Python {py} for {wire.name}, not {kind.__module__}.{kind.__name__}",
+                    wire.name,
+                )
             raise fail(f"not {what} for {wire.name}", wire.name)
     elif text or not (hasattr(kind, "__index__") or hasattr(kind, "__float__")):
         what = "an integer" if wire.kind == "int" else "a number"
