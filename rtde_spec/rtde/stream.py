@@ -21,6 +21,7 @@ from typing import Any
 from rtde_spec._generated import rtde_models as gen
 from rtde_spec.errors import DecodeError
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
+from rtde_spec.recipes.encoding import PREFIX, expected_recipe_id
 from rtde_spec.rtde.codec import Sender, decode, observe, starting_version
 from rtde_spec.rtde.data_forms import implied_recipe_id, lacks_recipe_id, with_recipe_id
 from rtde_spec.rtde.protocol_state import ProtocolState
@@ -28,6 +29,7 @@ from rtde_spec.wire.framing import PackageFramer, Skipped
 from rtde_spec.wire.rtde_messages import RtdeMessage
 
 DATA = gen.DataPackage.PACKAGE_TYPE
+ID_AT = PREFIX.size - struct.calcsize(PREFIX.format[0] + PREFIX.format[-1])  # the recipe id in a package
 _HEADER = struct.Struct(gen.HEADER_FORMAT)
 
 
@@ -61,9 +63,16 @@ class StreamDecoder:
         strict: bool = True,
         batch: bool = True,
         skip_errors: bool = False,
+        recipe_id: int | None = None,
     ) -> None:
+        """`codec` decodes the data packages of one recipe: those of `recipe_id`, the others pass
+        undecoded (`values` None). Without `recipe_id`, the recipe of the first data package; a
+        data package of another recipe is then a DecodeError (or skipped with `skip_errors`):
+        decoded with the codec of another recipe of the same size, it gave wrong numbers."""
         self.sender = sender
         self.codec = codec
+        self.chosen = recipe_id is not None  # by the caller: other recipes pass undecoded
+        self.recipe_id = None if recipe_id is None else expected_recipe_id(recipe_id)
         self.strict = strict
         self.skip_errors = skip_errors
         self.skipped = Skipped()
@@ -74,6 +83,8 @@ class StreamDecoder:
         self._run: tuple[int, bytes] | None = None  # (package size, header bytes) of batched packages
         if batch and codec is not None and _has_numpy():
             self._run = (codec.package_size, _HEADER.pack(codec.package_size, DATA))
+            if self.recipe_id is not None:
+                self._pin(self.recipe_id)
         self.packages = 0
 
     def feed(self, data: bytes | bytearray | memoryview) -> Iterator[Package | Batch]:
@@ -109,14 +120,20 @@ class StreamDecoder:
         """DecodeError if the stream ended inside a package (or could not be framed)."""
         self._framer.close()
 
+    def _pin(self, recipe_id: int) -> None:
+        """Data packages of `recipe_id` are the codec's: runs of them are batched, no other."""
+        self.recipe_id = recipe_id
+        if self._run is not None:
+            self._run = (self._run[0], PREFIX.pack(self._run[0], DATA, recipe_id))
+
     def _batch_of(self, offset: int, run: bytes | memoryview) -> Iterator[Batch | Package]:
         assert self.codec is not None
+        if self.recipe_id is None:
+            self._pin(PREFIX.unpack_from(run)[2])  # the first data package's recipe
         try:
-            array = self.codec.decode_many(run)
-        except DecodeError as exc:
-            if not self.skip_errors:
-                raise exc.in_stream(offset, self.packages + 1) from None
-            size = self.codec.package_size  # one at a time: the good ones kept, the bad skipped
+            array = self.codec.decode_many(run, self.recipe_id)
+        except DecodeError:  # one at a time: those before the bad one kept, it said (or skipped)
+            size = self.codec.package_size
             for at in range(0, len(run), size):
                 item = self._one(offset + at, bytes(run[at : at + size]))
                 if item is not None:
@@ -136,7 +153,7 @@ class StreamDecoder:
                 package, protocol_version=self.state.version, sender=self.sender, strict=self.strict
             )
             values = None
-            if self.codec is not None and isinstance(message, gen.DataPackage):
+            if self.codec is not None and isinstance(message, gen.DataPackage) and self._ours(message):
                 payload = message.payload
                 if not self.strict and len(payload) > self.codec.size:  # newer firmware appended fields
                     payload = payload[: self.codec.size]
@@ -151,6 +168,27 @@ class StreamDecoder:
             return None
         observe(self.state, message)
         return Package(offset, message, values, whole is not None)
+
+    def _ours(self, message: gen.DataPackage) -> bool:
+        """Whether the codec decodes this data package: one of its recipe (the first one's, unless
+        the caller chose). Another recipe's is passed undecoded if the caller chose, else refused."""
+        rid = message.recipe_id
+        if self.recipe_id is None:
+            self._pin(rid)
+        if rid == self.recipe_id:
+            return True
+        if self.chosen:
+            return False
+        raise DecodeError(
+            f"a data package of recipe {rid} after those of recipe {self.recipe_id}: the recipe given "
+            "decodes one recipe's packages (StreamDecoder(recipe_id=...) says which; --lenient skips the "
+            "rest)",
+            package="data_package",
+            field="recipe_id",
+            offset=ID_AT,
+            expected=self.recipe_id,
+            actual=rid,
+        )
 
     def _with_recipe_id(self, package: bytes | memoryview) -> bytes | None:
         """The guides' form of a data package of the recipe sent without its id byte (where the
