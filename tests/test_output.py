@@ -213,6 +213,22 @@ def test_a_closed_writer_refuses_rows_and_closes_again_quietly(tmp_path: Path, f
     assert out.read_bytes() == kept and leftover_temps(tmp_path) == []
 
 
+@pytest.mark.parametrize("fmt", [*FILE_FORMATS, "mcap"])
+def test_a_writer_in_a_with_block_is_closed_or_aborted_on_an_error(tmp_path: Path, fmt: str) -> None:
+    """A writer neither closed nor aborted (an error between its rows) left `.NAME.part-PID`."""
+    from rtde_spec import open_writer
+
+    out = tmp_path / f"out.{fmt}"
+    with open_writer(fmt, out) as writer:
+        writer.write({"timestamp": 1.0, "robot_mode": 7})
+    kept = out.read_bytes()
+    assert kept and leftover_temps(tmp_path) == []
+    with pytest.raises(RuntimeError, match="the caller's own"), open_writer(fmt, out) as writer:
+        writer.write({"timestamp": 2.0, "robot_mode": 7})
+        raise RuntimeError("the caller's own error")
+    assert out.read_bytes() == kept and leftover_temps(tmp_path) == []
+
+
 def test_a_failed_decode_leaves_an_existing_output_byte_identical(tmp_path: Path) -> None:
     garbage = tmp_path / "garbage.bin"
     garbage.write_bytes(b"\x00\x03\x55" * 100)  # a package of size 3 and an unknown type: no rows

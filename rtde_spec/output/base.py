@@ -72,7 +72,8 @@ class Writer:
 
     A writer of a file (`open_writer` with a path) writes it beside its name and
     renames it into place at `close` if rows were written (see `partfile`): a run
-    that fails before its first row leaves an existing file as it was.
+    that fails before its first row leaves an existing file as it was. As a context
+    manager it is closed at the end of the block, or aborted if the block raised.
     """
 
     NEEDS_PATH = False  # True: given a file name, the writer opens the file itself (Parquet)
@@ -191,6 +192,17 @@ class Writer:
             kept = "none of its rows were kept"
         failed = part.failed
         return OutputError(f"{failed.reason}; {kept}", errno=failed.errno, subject=failed.subject)
+
+    def __enter__(self) -> Writer:
+        return self
+
+    def __exit__(self, kind: type[BaseException] | None, *_: object) -> None:
+        """`with open_writer(...) as w:` closes it, or aborts it on an error: a writer neither
+        closed nor aborted left its temporary `.NAME.part-PID` file beside the name."""
+        if kind is None:
+            self.close()
+        else:
+            self.abort()
 
     def abort(self) -> None:
         """Close without keeping anything not already in place (an existing file stays)."""
