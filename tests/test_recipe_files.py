@@ -251,3 +251,18 @@ def test_an_entry_that_is_no_name_is_named_with_its_recipe(tmp_path: Path, text:
     path.write_text(text)
     with pytest.raises(RecipeError, match=re.escape(said)):
         load_recipes(path)
+
+
+@pytest.mark.parametrize("fmt", ["yaml", "json", "xml"])
+def test_what_a_recipe_file_cannot_read_back_is_not_written(tmp_path: Path, fmt: str) -> None:
+    """No recipe wrote a file load_recipes refuses; a NaN rate wrote JSON's NaN."""
+    from rtde_spec.errors import RecipeError
+    from rtde_spec.recipes.files import save_recipes
+    from rtde_spec.recipes.model import Recipe
+
+    out = tmp_path / f"r.{fmt}"
+    with pytest.raises(RecipeError, match="no recipes to write"):
+        save_recipes([], out)
+    with pytest.raises(RecipeError, match="frequency must be a finite number"):
+        save_recipes([Recipe(("timestamp",), frequency=float("nan"))], out)
+    assert not out.exists()

@@ -21,7 +21,7 @@ from defusedxml import DefusedXmlException
 
 from rtde_spec.errors import RecipeError, UsageError
 from rtde_spec.metamodel import safe_yaml
-from rtde_spec.recipes.model import FILE_FORMATS, Direction, Recipe
+from rtde_spec.recipes.model import FILE_FORMATS, Direction, Recipe, check_savable
 
 MAX_FILE_BYTES = 1 << 20  # 1 MiB: recipes are names; anything larger is not a recipe
 FORMATS = FILE_FORMATS
@@ -285,6 +285,7 @@ def _as_mapping(recipe: Recipe) -> dict[str, Any]:
 
 def dumps_recipes(recipes: list[Recipe], fmt: str, types: dict[str, str] | None = None) -> str:
     """Recipes as text of a format; `types` fills XML type attributes (name -> type)."""
+    check_savable(recipes)
     if fmt == "csv":
         _single(recipes, fmt)
         return recipes[0].wire_text + "\n"

@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import math
 import numbers
 from collections.abc import Iterable
 from dataclasses import dataclass, field, replace
 from typing import Any, Literal
 
-from rtde_spec.errors import UsageError
+from rtde_spec.errors import RecipeError, UsageError
 
 Direction = Literal["input", "output"]
 FILE_FORMATS = ("xml", "lines", "csv", "yaml", "json")
@@ -78,3 +79,15 @@ def checked_frequency(frequency: Any, *, required: bool = False) -> float | None
             f"frequency must be a number of Hz, not {type(frequency).__name__} {frequency!r:.80}"
         )
     return float(frequency)
+
+
+def check_savable(recipes: list[Recipe]) -> None:
+    """RecipeError for what a recipe file cannot hold and read back: no recipe at all (a file
+    load_recipes refuses), a rate that is no finite number (JSON's NaN, YAML's .inf)."""
+    if not recipes:
+        raise RecipeError("no recipes to write: a recipe file holds at least one")
+    for recipe in recipes:
+        if recipe.frequency is not None and not math.isfinite(recipe.frequency):
+            raise RecipeError(
+                "frequency must be a finite number of Hz", subject=recipe.key, actual=recipe.frequency
+            )
