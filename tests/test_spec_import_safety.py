@@ -124,3 +124,20 @@ def test_a_full_temporary_folder_is_said_in_a_line_and_the_spec_stays(tree: Path
     assert "could not be copied there to be checked, so nothing was written" in error[0], error
     assert "the disk is full" in error[0] and "temporary folder" in error[0], error
     assert fields.read_bytes() == before
+
+
+def test_an_overlay_never_replaces_a_spec_file_or_the_document(tree: Path, tmp_path: Path) -> None:
+    """-o spec/rtde/fields.yaml replaced the spec's 900-line field list with the 7-line overlay."""
+    fields = tree / "rtde/fields.yaml"
+    before = fields.read_bytes()
+    doc = _doc(tmp_path, "| actual_tcp_jerk | VECTOR6D | Actual TCP jerk | 5.30.0 |\n")
+    result = _cli("spec", "import", str(doc), "--spec-dir", str(tree), "-o", str(fields))
+    assert result.returncode == 2 and "is a file of the spec" in result.stderr, result.stderr
+    assert fields.read_bytes() == before
+    text = doc.read_bytes()
+    result = _cli("spec", "import", str(doc), "--spec-dir", str(tree), "-o", str(doc))
+    assert result.returncode == 2 and "is the document being imported" in result.stderr, result.stderr
+    assert doc.read_bytes() == text
+    new = tree / "rtde/new_fields.yaml"  # a new file beside the spec's own ones is no harm: written
+    result = _cli("spec", "import", str(doc), "--spec-dir", str(tree), "-o", str(new))
+    assert result.returncode == 0 and "actual_tcp_jerk" in new.read_text(), result.stderr

@@ -230,8 +230,25 @@ def _spec_to_compare(args: argparse.Namespace) -> Any:
         )
     else:
         spec = load_spec(args.spec_dir)
+    _refuse_overlay_over_inputs(args)
     args.loaded_spec = spec
     return spec
+
+
+def _refuse_overlay_over_inputs(args: argparse.Namespace) -> None:
+    """-o never replaces a file the import reads: one of the spec's own files (`-o
+    spec/rtde/fields.yaml` left the spec a 7-line overlay) or the document itself."""
+    if args.overlay is None:
+        return
+    target = args.overlay.resolve()
+    if target == args.document.resolve():
+        raise UsageError("is the document being imported; give a new file name", subject=f"-o {args.overlay}")
+    if args.spec_dir is not None and target.is_file() and target.is_relative_to(args.spec_dir.resolve()):
+        raise UsageError(
+            f"is a file of the spec {args.spec_dir}; the overlay is a file of its own (e.g. "
+            "new_fields.yaml), and --write edits the spec",
+            subject=f"-o {args.overlay}",
+        )
 
 
 def _check_overlay_path(overlay: Path | None) -> None:
