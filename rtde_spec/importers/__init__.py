@@ -15,6 +15,7 @@ from rtde_spec.importers.cells import Lines, visible
 from rtde_spec.importers.edition import newest, versions_named
 from rtde_spec.importers.model import Document
 from rtde_spec.importers.rows import field_rows, main_line
+from rtde_spec.importers.sniff import ZIP, refuse_binary, utf16_without_bom
 from rtde_spec.importers.tables import MAX_BYTES
 from rtde_spec.metamodel.document_forms import FORMATS
 from rtde_spec.metamodel.schema import Spec
@@ -122,14 +123,22 @@ def _text(path: Path) -> str:
         size = path.stat().st_size
         if size > MAX_BYTES:
             raise UsageError(f"{path}: {size} bytes; UR's documents are under {MAX_BYTES} bytes")
-        return visible(decode(path.read_bytes(), path))
+        data = path.read_bytes()
+        refuse_binary(data, path)
+        return visible(decode(data, path))
     except FileNotFoundError:
         raise UsageError(f"no such document: {path}") from None
     except IsADirectoryError:
         raise UsageError(f"{path} is a directory, not a document") from None
 
 
-_BOMS = ((codecs.BOM_UTF8, "utf-8-sig"), (codecs.BOM_UTF16_LE, "utf-16"), (codecs.BOM_UTF16_BE, "utf-16"))
+_BOMS = (
+    (codecs.BOM_UTF8, "utf-8-sig"),
+    (codecs.BOM_UTF32_LE, "utf-32"),  # before UTF-16's: FF FE 00 00 starts with UTF-16 LE's FF FE
+    (codecs.BOM_UTF32_BE, "utf-32"),
+    (codecs.BOM_UTF16_LE, "utf-16"),
+    (codecs.BOM_UTF16_BE, "utf-16"),
+)
 #: `<meta charset="windows-1252">` or `<meta http-equiv="Content-Type" content="text/html; charset=...">`
 _CHARSET = re.compile(rb"<meta\b[^>]*?charset\s*=\s*[\"']?\s*([A-Za-z0-9_.:-]+)", re.I)
 
@@ -152,6 +161,11 @@ def decode(data: bytes, path: Path | str = "") -> str:
             # browsers read a page declared latin-1/ascii as windows-1252 (the WHATWG rule)
             codec = "cp1252" if codec in ("latin-1", "iso8859-1", "ascii") else codec
             return _decode_as(data, codec, path, f"its <meta> charset {name!r}")
+    bare = utf16_without_bom(data)
+    if bare is not None:
+        return _decode_as(data, bare, path, "its NUL bytes (UTF-16 without a byte-order mark)")
+    if b"\0" in data:
+        raise UsageError(f"{path}: binary data (a NUL byte at offset {data.index(0)}), not a text document")
     try:
         return data.decode("utf-8")
     except UnicodeDecodeError:
@@ -168,6 +182,15 @@ def _decode_as(data: bytes, codec: str, path: Path | str, why: str) -> str:
         ) from None
 
 
+def _starts(path: Path, magic: bytes) -> bool:
+    """Whether the file begins with `magic` (a workbook saved as Client_Interface.xls is a ZIP)."""
+    try:
+        with path.open("rb") as f:
+            return f.read(len(magic)) == magic
+    except OSError:
+        return False  # said by the reader that opens it next
+
+
 def read_document(
     path: Path | str,
     spec: Spec,
@@ -180,7 +203,7 @@ def read_document(
     path = Path(path)
     if fmt not in (None, *FORMATS):
         raise UsageError(f"unknown form {fmt!r}; one of {', '.join(FORMATS)}")
-    if fmt == "xlsx" or (fmt is None and path.suffix.lower() in (".xlsx", ".xlsm")):
+    if fmt == "xlsx" or (fmt is None and (path.suffix.lower() in (".xlsx", ".xlsm") or _starts(path, ZIP))):
         from rtde_spec.importers.workbook import read_workbook
 
         return read_workbook(path, spec, source, line, edition)

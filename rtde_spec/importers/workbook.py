@@ -12,6 +12,7 @@ read-only (rows streamed), so a large file costs no more memory than its rows.
 
 from __future__ import annotations
 
+import io
 import zipfile
 from pathlib import Path
 from typing import Any
@@ -22,6 +23,7 @@ from rtde_spec.importers.model import DocMember, Document
 from rtde_spec.importers.primary_listing import SIGN, read_listing
 from rtde_spec.importers.realtime_tables import edition_of_title, tables_in
 from rtde_spec.importers.rows import is_placeholder
+from rtde_spec.importers.sniff import ZIP, refuse_binary
 from rtde_spec.importers.tables import MAX_BYTES, Table, check_rows
 from rtde_spec.metamodel.schema import Spec
 from rtde_spec.metamodel.versions import Version
@@ -78,8 +80,12 @@ def read_workbook(
         raise UsageError(f"no such document: {path}")
     if path.stat().st_size > MAX_BYTES:
         raise UsageError(f"{path}: larger than {MAX_BYTES} bytes; not one of UR's workbooks")
+    data = path.read_bytes()
+    if not data.startswith(ZIP):
+        refuse_binary(data, path)  # a PDF or an Excel 97-2003 .xls: said what to do
     try:
-        book = openpyxl.load_workbook(path, read_only=True, data_only=True)
+        # from its bytes: openpyxl refuses a workbook by its name (.xls, .xlsx.download) otherwise
+        book = openpyxl.load_workbook(io.BytesIO(data), read_only=True, data_only=True)
     except (zipfile.BadZipFile, KeyError, ValueError, OSError) as exc:
         raise UsageError(f"{path}: not a readable .xlsx workbook ({type(exc).__name__}: {exc})") from None
     tables: list[Table] = []

@@ -1,0 +1,96 @@
+"""spec import on the files people have besides text: UR's PDFs as downloaded, an Excel 97-2003
+copy, a workbook saved under another name, text in UTF-16 without a byte-order mark or in UTF-32.
+Each is read or named with what to do, never "cannot tell the document's form" or a traceback."""
+
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+SPEC = str(ROOT / "spec")
+PDF = b"%PDF-1.7\n%\xe2\xe3\xcf\xd3\n1 0 obj\n<< /Type /Catalog >>\nendobj\n"
+GUIDE = """# RTDE guide (a copy)
+
+## Robot Controller Outputs
+
+| Name | Type | Comment | Introduced in version |
+|---|---|---|---|
+| timestamp | DOUBLE | Time elapsed since the controller was started [s] | |
+| actual_q | VECTOR6D | Actual joint positions | |
+| … and more fields … | | | |
+"""
+
+
+def _cli(path: Path, *args: str) -> subprocess.CompletedProcess[str]:
+    return subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "rtde_spec.cli",
+            "spec",
+            "import",
+            str(path),
+            "--spec-dir",
+            str(ROOT / "spec"),
+            *args,
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        timeout=300,
+    )
+
+
+@pytest.mark.parametrize("codec", ["utf-16-le", "utf-16-be", "utf-32"])
+def test_utf16_without_a_bom_and_utf32_are_read(tmp_path: Path, codec: str) -> None:
+    """UTF-32's BOM (FF FE 00 00) begins with UTF-16 LE's; UTF-16 without one read as UTF-8 is NUL-spaced."""
+    path = tmp_path / "guide.md"
+    path.write_bytes(GUIDE.replace("\n", "\r\n").encode(codec))
+    result = _cli(path)
+    assert result.returncode == 0, result.stderr
+    assert "0 added, 0 removed, 0 changed" in result.stdout
+
+
+BINARY = {
+    "pdf": (PDF, "a PDF; import its text: `pdftotext"),
+    "xls": (bytes.fromhex("D0CF11E0A1B11AE1") + bytes(600), "an Excel 97-2003 (.xls)"),
+    "binary": (b"Name\x00\x01\x02\x00\xff\x00\x00\x00\x10binary", "binary data (a NUL byte at offset 4)"),
+}
+
+
+@pytest.mark.parametrize("kind", list(BINARY))
+@pytest.mark.parametrize(
+    "form", [[], ["--form", "xlsx"], ["--form", "markdown"]], ids=["detected", "xlsx", "md"]
+)
+def test_a_pdf_or_an_old_xls_is_named(tmp_path: Path, kind: str, form: list) -> None:
+    head, said = BINARY[kind]
+    path = tmp_path / "Client_Interface.xls"
+    path.write_bytes(head)
+    result = _cli(path, *form)
+    assert result.returncode == 2 and "Traceback" not in result.stderr, result.stderr
+    if "NUL" in said and form == ["--form", "xlsx"]:  # read as a workbook: no ZIP
+        assert "not a readable .xlsx workbook" in result.stderr
+    else:
+        assert said in result.stderr and str(path) in result.stderr, result.stderr
+
+
+def test_a_workbook_under_another_name_is_read_as_one(tmp_path: Path) -> None:
+    """A browser saves Client_Interface.xlsx as Client_Interface.xls or .xlsx.download; openpyxl refused
+    those names (InvalidFileException, a traceback with --form xlsx)."""
+    openpyxl = pytest.importorskip("openpyxl")
+    book = openpyxl.Workbook()
+    sheet = book.active
+    sheet.append(["Robot Controller Outputs"])
+    sheet.append(["Name", "Type", "Comment", "Introduced in version"])
+    sheet.append(["actual_q", "VECTOR6D", "Actual joint positions", None])
+    sheet.append(["actual_tcp_jerk", "VECTOR6D", "Actual TCP jerk", "5.30.0"])
+    sheet.append(["… and more", None, None, None])
+    for name, form in (("Client_Interface.xls", []), ("Client_Interface.xlsx.download", ["--form", "xlsx"])):
+        path = tmp_path / name
+        book.save(path)
+        result = _cli(path, "--json", *form)
+        assert result.returncode == 0 and '"actual_tcp_jerk"' in result.stdout, result.stderr
