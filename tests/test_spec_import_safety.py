@@ -141,3 +141,31 @@ def test_an_overlay_never_replaces_a_spec_file_or_the_document(tree: Path, tmp_p
     new = tree / "rtde/new_fields.yaml"  # a new file beside the spec's own ones is no harm: written
     result = _cli("spec", "import", str(doc), "--spec-dir", str(tree), "-o", str(new))
     assert result.returncode == 0 and "actual_tcp_jerk" in new.read_text(), result.stderr
+
+
+def test_a_value_the_spec_decided_against_is_never_written_under_another_id(
+    tree: Path, tmp_path: Path
+) -> None:
+    """A recorded conflict matches only its own document's id, and a copy's id comes from its file name:
+    the crate README saved as README.md wrote back 14 values the spec had decided against."""
+    from rtde_spec.metamodel.loader import load_spec
+
+    spec = load_spec(ROOT / "spec")
+    entry, conflict = next(
+        (e, c)
+        for e in spec.fields.outputs
+        for c in e.conflicts
+        if c.what == "description" and c.document and e.index is None
+    )
+    fields = tree / "rtde/fields.yaml"
+    before = fields.read_bytes()
+    doc = _doc(tmp_path, f"| {entry.name} | {entry.type} | {conflict.document} | |\n")
+    result = _cli("spec", "import", str(doc), "--spec-dir", str(tree), "--write")
+    assert result.returncode == 0, result.stderr
+    assert f"not written: {entry.name} (output) description" in result.stderr, result.stderr
+    assert "wrote 0 of 1 changes" in result.stderr and "--source names the document" in result.stdout
+    assert fields.read_bytes() == before
+    result = _cli(
+        "spec", "import", str(doc), "--spec-dir", str(tree), "--source", conflict.sources[0], "--check"
+    )
+    assert result.returncode == 0 and "0 changed; 1 known conflicts" in result.stdout, result.stdout

@@ -357,6 +357,12 @@ def _print_report(
         f"\n{counts['added']} added, {counts['removed']} removed, {counts['changed']} changed; "
         f"{len(known)} known conflicts{hint}"
     )
+    decided = sorted({s for c in new if "decided" in c.extra for s in c.extra["decided"].sources})
+    if decided:
+        print(
+            f"{sum('decided' in c.extra for c in new)} of them are conflicts the spec records for "
+            f"{', '.join(decided)} (--write holds them): --source names the document if it is that one"
+        )
 
 
 def _write(
@@ -383,7 +389,7 @@ def _write(
     new = [c for c in changes if c.known is None]
     result = write_changes(changes, doc, spec, args.spec_dir, allow_removals=args.allow_removals)
     for change, why in result.held:
-        print(f"not written: {change.field} ({change.where}) removed: {why}", file=sys.stderr)
+        print(f"not written: {change.field} ({change.where}) {change.what}: {why}", file=sys.stderr)
     print(
         f"wrote {len(result.written)} of {len(new)} changes to {args.spec_dir}; run `python -m codegen`",
         file=sys.stderr,

@@ -40,6 +40,9 @@ class Change:
         out["line"] = self.line
         if self.known is not None:
             out["known"] = {"decision": self.known.decision, "sources": list(self.known.sources)}
+        decided = self.extra.get("decided")
+        if self.known is None and decided is not None:
+            out["decided_for"] = list(decided.sources)  # the value a conflict of that document records
         return out
 
 
@@ -72,12 +75,18 @@ def same_family(a: str, b: str) -> bool:
 
 def mark_known(change: Change, conflicts: list[Conflict], source: str | None = None) -> Change:
     """Mark the change known when a conflict recorded for this document (family) covers it exactly:
-    a conflict recorded because one document stops early never hides another's real change."""
+    a conflict recorded because one document stops early never hides another's real change.
+
+    A conflict of another document recording this very value is kept in `extra["decided"]`: still
+    reported, never written (the same copy under another file name gets another source id)."""
     for conflict in conflicts:
         if source is not None and not any(same_family(s, source) for s in conflict.sources):
+            if conflict.document is not None and matches(conflict, change):
+                change.extra.setdefault("decided", conflict)
             continue
         if matches(conflict, change):
             change.known = conflict
+            change.extra.pop("decided", None)
             break
     return change
 

@@ -333,6 +333,11 @@ def write_changes(
     for change in changes:
         if change.known is not None or (change.kind == "removed" and not allow_removals):
             continue
+        decided = change.extra.get("decided")
+        if decided is not None:  # a value the spec decided against, for a document of another id
+            why = f"the spec records this value as a conflict of {', '.join(decided.sources)}"
+            result.held.append((change, f"{why}; --source names the document if it is that one"))
+            continue
         if doc.interface == "primary":
             if _apply_primary(change, data, doc, spec):
                 result.written.append(change)
