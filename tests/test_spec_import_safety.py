@@ -169,3 +169,22 @@ def test_a_value_the_spec_decided_against_is_never_written_under_another_id(
         "spec", "import", str(doc), "--spec-dir", str(tree), "--source", conflict.sources[0], "--check"
     )
     assert result.returncode == 0 and "0 changed; 1 known conflicts" in result.stdout, result.stdout
+
+
+@pytest.mark.parametrize("form", ["crlf", "bom"])
+def test_a_windows_checkouts_spec_file_keeps_its_line_ends(tree: Path, tmp_path: Path, form: str) -> None:
+    """git's core.autocrlf gives fields.yaml CRLF line ends: --write rewrote every line to LF."""
+    fields = tree / "rtde/fields.yaml"
+    text = fields.read_bytes()
+    before = text.replace(b"\n", b"\r\n") if form == "crlf" else b"\xef\xbb\xbf" + text
+    fields.write_bytes(before)
+    doc = _doc(tmp_path, "| actual_tcp_jerk | VECTOR6D | Actual TCP jerk | 5.30.0 |\n")
+    result = _cli("spec", "import", str(doc), "--spec-dir", str(tree), "--write")
+    assert result.returncode == 0 and "wrote 1 of 1 changes" in result.stderr, result.stderr
+    after = fields.read_bytes()
+    assert after.startswith(before[:3])
+    end = b"\r\n" if form == "crlf" else b"\n"
+    old, new = before.split(end), after.split(end)
+    diff = [d for d in difflib.ndiff(old, new) if d[:1] in "+-"]
+    assert diff and all(d.startswith("+ ") for d in diff), diff[:5]  # only the new entry's lines
+    assert (b"\r" in after) == (form == "crlf") and b"\r\r" not in after

@@ -9,6 +9,7 @@ its mode kept. Removals are applied only when asked for.
 
 from __future__ import annotations
 
+import codecs
 import io
 import os
 import re
@@ -75,7 +76,7 @@ def check_tree(spec_dir: Path, rel: str, text: str) -> None:
         copy = Path(tmp) / "spec"
         try:
             shutil.copytree(spec_dir, copy, ignore=shutil.ignore_patterns(".*"))
-            (copy / rel).write_text(text, encoding="utf-8")
+            (copy / rel).write_bytes(text.encode("utf-8"))  # as replace_text writes it (no CRLF added)
         except (OSError, shutil.Error) as exc:  # a full TMPDIR: shutil.Error holds a list per file
             first = exc.args[0][0] if isinstance(exc, shutil.Error) and exc.args and exc.args[0] else None
             text = str(first[2] if isinstance(first, tuple) and len(first) == 3 else exc)
@@ -329,7 +330,8 @@ def write_changes(
             )
         result.held += [(c, "a removal: pass --allow-removals to apply it") for c in removals]
     yaml = _yaml()
-    data = yaml.load(path.read_text(encoding="utf-8"))
+    raw = path.read_bytes()
+    data = yaml.load(raw.decode("utf-8-sig").replace("\r\n", "\n"))
     for change in changes:
         if change.known is not None or (change.kind == "removed" and not allow_removals):
             continue
@@ -346,6 +348,10 @@ def write_changes(
             result.written.append(change)
     if result.written:
         text = _dump(yaml, data)
+        if b"\r\n" in raw:  # a Windows checkout's file: every line kept as it was, not rewritten to LF
+            text = text.replace("\n", "\r\n")
+        if raw.startswith(codecs.BOM_UTF8):
+            text = "\ufeff" + text
         check_tree(spec_dir, rel, text)
         replace_text(path, text)
     return result
