@@ -188,3 +188,20 @@ def test_a_windows_checkouts_spec_file_keeps_its_line_ends(tree: Path, tmp_path:
     diff = [d for d in difflib.ndiff(old, new) if d[:1] in "+-"]
     assert diff and all(d.startswith("+ ") for d in diff), diff[:5]  # only the new entry's lines
     assert (b"\r" in after) == (form == "crlf") and b"\r\r" not in after
+
+
+def test_a_primary_change_write_cannot_make_is_said_with_why(tree: Path, tmp_path: Path) -> None:
+    """'wrote 0 of 1 changes' alone: a joint's type changed inside its repeat is a layout decision."""
+    interface = tree / "primary/interface.yaml"
+    before = interface.read_bytes()
+    joint = ["double q_actual", "double q_target", "double qd_actual", "float I_actual", "double V_actual"]
+    joint += ["float T_motor", "float T_micro", "uint8_t jointMode"]
+    head = ["Robot Software 5.9", "Joint Data (Sub Package of Robot State Message)", "Field", "Description"]
+    rows = ["uint32_t packageSize", "uint8_t packageType", "ROBOT_STATE_PACKAGE_TYPE_JOINT_DATA = 1"]
+    rows += ["Following 8 fields are repeated for each joint (6 times)", *(f"\u2192 {r}" for r in joint)]
+    doc = tmp_path / "primary.txt"
+    doc.write_text("\n\n".join(head + rows) + "\n")
+    result = _cli("spec", "import", str(doc), "--spec-dir", str(tree), "--write")
+    assert result.returncode == 0, result.stderr
+    assert "not written: joints.v_actual (robot_state/joint_data) type: a layout decision" in result.stderr
+    assert interface.read_bytes() == before

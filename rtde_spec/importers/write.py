@@ -340,12 +340,12 @@ def write_changes(
             why = f"the spec records this value as a conflict of {', '.join(decided.sources)}"
             result.held.append((change, f"{why}; --source names the document if it is that one"))
             continue
-        if doc.interface == "primary":
-            if _apply_primary(change, data, doc, spec):
-                result.written.append(change)
-        else:
+        if doc.interface == "primary" and not _apply_primary(change, data, doc, spec):
+            result.held.append((change, "a layout decision (a group, array, string): edit spec/primary"))
+            continue
+        if doc.interface != "primary":
             _apply_rtde(change, data, doc, spec)
-            result.written.append(change)
+        result.written.append(change)
     if result.written:
         text = _dump(yaml, data)
         if b"\r\n" in raw:  # a Windows checkout's file: every line kept as it was, not rewritten to LF
