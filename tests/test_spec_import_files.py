@@ -94,3 +94,23 @@ def test_a_workbook_under_another_name_is_read_as_one(tmp_path: Path) -> None:
         book.save(path)
         result = _cli(path, "--json", *form)
         assert result.returncode == 0 and '"actual_tcp_jerk"' in result.stdout, result.stderr
+
+
+def test_a_form_feed_page_break_in_a_tab_copy_goes_on_with_the_table(tmp_path: Path) -> None:
+    """pdftotext ends a page with a form feed: the tab reader's splitlines() took it for a blank line,
+    so the rows after the page's running title became a table of no direction, not read."""
+    from rtde_spec.importers import read_document
+    from rtde_spec.metamodel.loader import load_spec
+
+    head = "Name\tType\tComment\tIntroduced in version"
+    names = ["timestamp", "target_q", "target_qd", "actual_q", "actual_qd"]
+    types = ["DOUBLE", "VECTOR6D", "VECTOR6D", "VECTOR6D", "VECTOR6D"]
+    rows = [f"{n}\t{t}\tsome words\t" for n, t in zip(names, types, strict=True)]
+    title = "Real-Time Data Exchange (RTDE) Guide"
+    lines = [title, "Robot Controller Outputs", head, *rows[:3], "\f" + title, head, *rows[3:]]
+    lines.append("… and more")
+    path = tmp_path / "copied.txt"
+    path.write_text("\n".join(lines) + "\n")
+    doc = read_document(path, load_spec(ROOT / "spec"))
+    assert [(f.name, f.direction) for f in doc.fields] == [(n, "output") for n in names]
+    assert not doc.problems

@@ -3,7 +3,15 @@
 from __future__ import annotations
 
 from rtde_spec.importers.eseries_text import stops_in
-from rtde_spec.importers.tables import PAGE_MARK, Table, check_rows, continues, is_heading
+from rtde_spec.importers.tables import (
+    FORM_FEED,
+    PAGE_MARK,
+    Table,
+    check_rows,
+    continues,
+    is_heading,
+    split_form_feeds,
+)
 
 
 def read_tables(text: str, notes: list[str] | None = None) -> list[Table]:
@@ -16,9 +24,9 @@ def read_tables(text: str, notes: list[str] | None = None) -> list[Table]:
     gap: list[str] = []
     gap_at = 0  # the line the gap starts at
     count = 0
-    for number, raw in enumerate(text.splitlines(), start=1):
+    for number, raw in split_form_feeds(text):  # splitlines() dropped a page's form feed as a blank line
         line = raw.rstrip("\r\n")
-        if not line.strip():
+        if not line.strip() and FORM_FEED not in line:
             continue
         if "\t" not in line:
             if current is not None:
