@@ -114,3 +114,11 @@ def test_a_form_feed_page_break_in_a_tab_copy_goes_on_with_the_table(tmp_path: P
     doc = read_document(path, load_spec(ROOT / "spec"))
     assert [(f.name, f.direction) for f in doc.fields] == [(n, "output") for n in names]
     assert not doc.problems
+
+
+def test_lone_cr_line_ends_are_line_ends(tmp_path: Path) -> None:
+    """Excel for Mac's tab-delimited text ends lines with CR alone: one long line, no form found."""
+    path = tmp_path / "guide.md"
+    path.write_bytes(GUIDE.replace("\n", "\r").encode())
+    result = _cli(path)
+    assert result.returncode == 0 and "0 added, 0 removed, 0 changed" in result.stdout, result.stderr

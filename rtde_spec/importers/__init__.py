@@ -125,7 +125,8 @@ def _text(path: Path) -> str:
             raise UsageError(f"{path}: {size} bytes; UR's documents are under {MAX_BYTES} bytes")
         data = path.read_bytes()
         refuse_binary(data, path)
-        return visible(decode(data, path))
+        # lone CRs end lines too: Excel for Mac's "tab-delimited text" writes them
+        return visible(decode(data, path)).replace("\r\n", "\n").replace("\r", "\n")
     except FileNotFoundError:
         raise UsageError(f"no such document: {path}") from None
     except IsADirectoryError:
