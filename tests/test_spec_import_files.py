@@ -122,3 +122,16 @@ def test_lone_cr_line_ends_are_line_ends(tmp_path: Path) -> None:
     path.write_bytes(GUIDE.replace("\n", "\r").encode())
     result = _cli(path)
     assert result.returncode == 0 and "0 added, 0 removed, 0 changed" in result.stdout, result.stderr
+
+
+def test_markdown_rows_without_the_outer_pipes(tmp_path: Path) -> None:
+    """GFM tables may leave out the leading and trailing pipes (`Name | Type | Comment`)."""
+    bare = "\n".join(
+        line.strip().strip("|").strip() if line.startswith("|") else line for line in GUIDE.splitlines()
+    )
+    assert "\n| " not in bare
+    path = tmp_path / "guide.md"
+    path.write_text(bare + "\n")
+    result = _cli(path, "--json")
+    assert result.returncode == 0, result.stderr
+    assert '"fields": 2' in result.stdout and '"removed": []' in result.stdout, result.stdout

@@ -40,12 +40,16 @@ _REALTIME_HEAD = re.compile(
 )
 
 
+#: a Markdown table without its outer pipes: `Name | Type | ...` over a `---|---` ruler
+_BARE_MD = re.compile(r"^[ \t]*(?:Name|Meaning|Field)[ \t]*\|[^\n]*\n[ \t]*\|?[ \t]*:?-{3,}", re.M)
+
+
 def detect_format(text: str) -> str:
     """Which of UR's document forms this is, from its content alone."""
     head = text[:4096].lower()
     if "<table" in text.lower() or head.lstrip().startswith(("<!doctype html", "<html")):
         return "html"
-    if re.search(r"^\s*\|\s*(Name|Meaning|Field)\s*\|", text, re.MULTILINE):
+    if re.search(r"^\s*\|\s*(Name|Meaning|Field)\s*\|", text, re.M) or _BARE_MD.search(text):
         return "markdown"
     if "ROBOT_STATE_PACKAGE_TYPE" in text or "Sub Package of Robot State" in text:
         return "primary-text"

@@ -39,14 +39,16 @@ def read_tables(text: str) -> list[Table]:
             heading = title = stripped.lstrip("#").strip()
             current = None
             continue
-        if not stripped.startswith("|"):
+        nxt = lines[number] if number < len(lines) else ""
+        # GFM rows may lack the outer pipes (`Name | Type`): a row in a table, or a header over a ruler
+        bare = "|" in stripped and (current is not None or bool(_RULER.match(nxt.strip())))
+        if not stripped.startswith("|") and not bare:
             current = None
             if 0 < len(stripped) <= 60 and not stripped.endswith(".") and not stripped.startswith("("):
                 title = stripped  # a title line of a page converted without # headings
             continue
         if _RULER.match(stripped):
             continue
-        nxt = lines[number] if number < len(lines) else ""
         cells = _split(stripped)
         known = tuple(c.lower().rstrip(".") for c in cells[:3]) in _KNOWN_HEADS
         if known and current is not None and not current.rows:
