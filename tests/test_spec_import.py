@@ -176,7 +176,9 @@ def test_a_document_of_no_known_form_is_a_usage_error(
     path = tmp_path / "notes.txt"
     path.write_text("just some text\n")
     assert main(["spec", "import", str(path), "--spec-dir", str(ROOT / "spec")]) == 2
-    assert "cannot tell the document's form" in capsys.readouterr().err
+    err = capsys.readouterr().err
+    assert "cannot tell the document's form" in err
+    assert str(path) in err  # which file: the error named none
 
 
 def test_help_does_not_import_the_importer_or_ruamel() -> None:

@@ -213,7 +213,10 @@ def read_document(
 
         return read_workbook(path, spec, source, line, edition)
     text = _text(path)
-    kind = fmt or detect_format(text)
+    try:
+        kind = fmt or detect_format(text)
+    except UsageError as exc:  # which file could not be told, as every other read error says
+        raise UsageError(str(exc), subject=f"file {path}") from None
     lines = Lines.of(spec)
     doc = Document(str(path), kind, source or _DEFAULT_SOURCE.get(kind) or _slug(path))
     if kind == "primary-text":
