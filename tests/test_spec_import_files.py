@@ -135,3 +135,32 @@ def test_markdown_rows_without_the_outer_pipes(tmp_path: Path) -> None:
     result = _cli(path, "--json")
     assert result.returncode == 0, result.stderr
     assert '"fields": 2' in result.stdout and '"removed": []' in result.stdout, result.stdout
+
+
+def test_html_whose_section_titles_are_paragraphs(tmp_path: Path) -> None:
+    """A page from a CMS or a word processor titles its tables with <p><strong>, not <h3>: both
+    tables were 'of no direction' and the import ended in 'no field read'."""
+    head = "<tr><th>Name</th><th>Type</th><th>Comment</th><th>Introduced in version</th></tr>"
+    page = (
+        "<html><body><h2>Field names and associated types</h2>"
+        "<p><strong>Robot Controller Inputs</strong></p><table>" + head + "<tr><td>speed_slider_fraction</td>"
+        "<td>DOUBLE</td><td>New speed slider value</td><td></td></tr><tr><td>… and more</td></tr></table>"
+        "<p><strong>Robot Controller Outputs</strong></p><p>The client should subscribe to one output.</p>"
+        "<table>"
+        + head
+        + "<tr><td>actual_q</td><td>VECTOR6D</td><td>Actual joint positions</td><td></td></tr>"
+        "<tr><td>… and more</td></tr></table><table>" + head + "<tr><td>actual_qd</td><td>VECTOR6D</td>"
+        "<td>Actual joint velocities</td><td></td></tr></table></body></html>"
+    )
+    path = tmp_path / "guide.html"
+    path.write_text(page)
+    from rtde_spec.importers import read_document
+    from rtde_spec.metamodel.loader import load_spec
+
+    doc = read_document(path, load_spec(ROOT / "spec"))
+    assert [(f.name, f.direction) for f in doc.fields] == [
+        ("speed_slider_fraction", "input"),
+        ("actual_q", "output"),
+    ]
+    # the third table has no title of its own: never the one the second table used
+    assert len(doc.problems) == 1 and "names no direction" in doc.problems[0], doc.problems

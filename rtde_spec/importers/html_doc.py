@@ -35,14 +35,19 @@ class _Reader(HTMLParser):
         self._depth = 0  # nested tables are read as text of their cell
         self._count = 0
         self._sup = 0  # inside <sup>: a footnote marker when in a name cell (actual_q<sup>1</sup>)
+        self._para: list[str] | None = None  # a <p> outside tables: a title where a page has no <h3>
+        self.title = ""  # the last short <p> after the last heading, before a table
 
     def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
         if tag in _HEADINGS:
             self._heading_text = []
+        elif tag == "p" and self._depth == 0:
+            self._para = []
         elif tag == "table":
             self._depth += 1
+            self._para = None  # a <p> left open ends at the table, as a browser ends it
             if self._depth == 1:
-                self._table = Table(self.heading, [], self.getpos()[0])
+                self._table = Table(self._table_heading(), [], self.getpos()[0])
         elif self._depth == 1 and tag == "tr":
             self._close_row()  # </tr> and </td> may be left out in HTML
             self._row, self._row_line = [], self.getpos()[0]
@@ -57,7 +62,13 @@ class _Reader(HTMLParser):
     def handle_endtag(self, tag: str) -> None:
         if tag in _HEADINGS and self._heading_text is not None:
             self.heading = " ".join("".join(self._heading_text).split())
-            self._heading_text = None
+            self._heading_text = self._para = None
+            self.title = ""
+        elif tag == "p" and self._para is not None:
+            text = " ".join("".join(self._para).split())
+            if 0 < len(text) <= 60 and not text.endswith("."):
+                self.title = text
+            self._para = None
         elif tag == "table":
             if self._depth == 1:
                 self._close_row()
@@ -88,7 +99,16 @@ class _Reader(HTMLParser):
                 check_rows(self._count, self._row_line)
         self._row = None
 
+    def _table_heading(self) -> str:
+        """The heading above a table; a short <p> title after it when only that names the direction
+        (a CMS or word-processor page: <p><strong>Robot Controller Outputs</strong></p>)."""
+        title, self.title = self.title, ""  # used once: a second table needs its own
+        said = Table(title, [], 0).direction
+        return title if said and Table(self.heading, [], 0).direction is None else self.heading
+
     def handle_data(self, data: str) -> None:
+        if self._para is not None:
+            self._para.append(data)
         if self._heading_text is not None:
             self._heading_text.append(data)
         if self._cell is not None and not (
