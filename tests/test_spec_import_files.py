@@ -164,3 +164,16 @@ def test_html_whose_section_titles_are_paragraphs(tmp_path: Path) -> None:
     ]
     # the third table has no title of its own: never the one the second table used
     assert len(doc.problems) == 1 and "names no direction" in doc.problems[0], doc.problems
+
+
+def test_no_field_read_says_which_table_had_no_direction(tmp_path: Path) -> None:
+    """'no field read (1 other tables seen)' named neither the table nor why it was not read."""
+    path = tmp_path / "fields.md"
+    path.write_text(
+        "# Fields\n\n| Name | Type | Comment |\n|---|---|---|\n| actual_q | VECTOR6D | Actual joint q |\n"
+    )
+    result = _cli(path)
+    assert result.returncode == 2 and "no field read" in result.stderr
+    assert "the field table at line 3 (1 rows, heading 'Fields') names no direction" in result.stderr, (
+        result.stderr
+    )

@@ -373,7 +373,8 @@ def finish(
             )
     if not doc.fields and not doc.realtime and not doc.members:
         seen = f" ({len(tables)} other tables seen)" if tables else ""
-        raise UsageError(f"{doc.path} ({doc.format}): no field read{seen}; looked for {LOOKED_FOR}")
+        why = "".join(f"; {problem}" for problem in doc.problems)  # a field table of no direction: where
+        raise UsageError(f"{doc.path} ({doc.format}): no field read{seen}; looked for {LOOKED_FOR}{why}")
     named = versions_named(text, lines)
     if doc.fields:
         doc.line = line or main_line(doc.fields, _text_line(named) or default)
