@@ -205,3 +205,26 @@ def test_a_primary_change_write_cannot_make_is_said_with_why(tree: Path, tmp_pat
     assert result.returncode == 0, result.stderr
     assert "not written: joints.v_actual (robot_state/joint_data) type: a layout decision" in result.stderr
     assert interface.read_bytes() == before
+
+
+def test_rows_run_together_by_expanded_tabs_are_never_written(tree: Path, tmp_path: Path) -> None:
+    """A tab copy whose tabs an editor expanded to spaces reads as columns that are not there: a row
+    runs into the one above (actual_q gets its version and words) and nothing said so; --write was
+    refused only when the lost rows made more than five removals."""
+    rows = [
+        ("timestamp", "DOUBLE", "Time elapsed since the controller was started [s]", ""),
+        ("target_q", "VECTOR6D", "Target joint positions", ""),
+        ("actual_q", "VECTOR6D", "Actual joint positions", ""),
+        ("actual_TCP_acceleration", "VECTOR3D", "Actual TCP acceleration", "5.23.0 / 10.11.0"),
+        ("actual_qd", "VECTOR6D", "Actual joint velocities", ""),
+    ]
+    lines = ["Robot Controller Outputs", "Name\tType\tComment\tIntroduced in version"]
+    lines += ["\t".join(r) for r in rows] + ["… and more"]
+    doc = tmp_path / "expanded.txt"
+    doc.write_text("\n".join(line.expandtabs(4) for line in lines) + "\n")
+    fields = tree / "rtde/fields.yaml"
+    before = fields.read_bytes()
+    result = _cli("spec", "import", str(doc), "--spec-dir", str(tree), "--write")
+    assert result.returncode == 2, result.stderr
+    assert "the comment of actual_q holds another row ('actual_TCP_acceleration VECTOR3D')" in result.stderr
+    assert fields.read_bytes() == before

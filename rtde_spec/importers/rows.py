@@ -106,3 +106,19 @@ def main_line(fields: list[DocField], default: str) -> str:
             if note.versions:
                 counts[next(iter(note.versions))] += 1
     return counts.most_common(1)[0][0] if counts else default
+
+
+def merged_rows(fields: list[DocField], lines: Lines) -> list[str]:
+    """Comment cells holding a further row (`… target_current VECTOR6D Target joint currents`): a
+    copy that lost its columns (tabs expanded to spaces) ran rows together, and the versions read
+    are another row's; said as a problem, so --write refuses the copy."""
+    types = "|".join(
+        sorted({re.escape(t) for t in lines.types.values() if t.isupper()}, key=len, reverse=True)
+    )
+    row = re.compile(rf"\b[A-Za-z]\w*_\w+\s+(?:{types})\b")
+    return [
+        f"line {f.line}: the comment of {f.name} holds another row ({m.group(0)!r}): rows run together, "
+        "not one of the document's rows"
+        for f in fields
+        if (m := row.search(f.doc))
+    ]
