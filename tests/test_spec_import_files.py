@@ -177,3 +177,27 @@ def test_no_field_read_says_which_table_had_no_direction(tmp_path: Path) -> None
     assert "the field table at line 3 (1 rows, heading 'Fields') names no direction" in result.stderr, (
         result.stderr
     )
+
+
+def test_a_browser_print_footer_on_one_line_is_no_part_of_a_row(tmp_path: Path) -> None:
+    """A page printed from a browser has its address and "1/2" in one footer line; pdftotext -layout
+    keeps them on one line, which went into the comment of the page's last row (and --write would
+    put the address into the spec's doc)."""
+    from rtde_spec.importers import read_document
+    from rtde_spec.metamodel.loader import load_spec
+
+    cols = "{:<26}{:<10}{:<44}{}"
+    rows = [
+        ("timestamp", "DOUBLE", "Time elapsed since the controller was started", ""),
+        ("target_q", "VECTOR6D", "Target joint positions", ""),
+    ]
+    head = cols.format("Name", "Type", "Comment", "Introduced in version")
+    title = "Real-Time Data Exchange (RTDE) Guide"
+    footer = "https://docs.example.invalid/rtde-guide.html" + " " * 30 + "1/2"
+    lines = [title, "", "Robot Controller Outputs", "", head, "", cols.format(*rows[0]), footer]
+    lines += ["\f" + title, "", head, "", cols.format(*rows[1]), "", "… and more"]
+    path = tmp_path / "printed.txt"
+    path.write_text("\n".join(lines) + "\n")
+    doc = read_document(path, load_spec(ROOT / "spec"))
+    assert doc.format == "columns-text"
+    assert [(f.name, f.doc) for f in doc.fields] == [(n, c) for n, _, c, _ in rows]

@@ -60,8 +60,12 @@ FORM_FEED = "\f"  # pdftotext ends every page with one
 
 
 def is_page_mark(text: str) -> bool:
-    """A page number, a page's address or date line, or a form feed: never a cell."""
-    return FORM_FEED in text or bool(PAGE_MARK.match(text))
+    """A page number, a page's address or date line, or a form feed: never a cell. A browser's
+    printed footer puts two on one line (`https://…/rtde-guide.html      1/9` in -layout)."""
+    if FORM_FEED in text or PAGE_MARK.match(text):
+        return True
+    parts = re.split(r"\s{2,}", text.strip())
+    return len(parts) > 1 and all(PAGE_MARK.match(part) for part in parts)
 
 
 def split_form_feeds(text: str) -> list[tuple[int, str]]:
