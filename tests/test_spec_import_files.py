@@ -201,3 +201,16 @@ def test_a_browser_print_footer_on_one_line_is_no_part_of_a_row(tmp_path: Path) 
     doc = read_document(path, load_spec(ROOT / "spec"))
     assert doc.format == "columns-text"
     assert [(f.name, f.doc) for f in doc.fields] == [(n, c) for n, _, c, _ in rows]
+
+
+def test_a_paragraph_title_never_renames_a_primary_table() -> None:
+    """A primary message table is named by its heading (the member's title); a short <p> between
+    them that names a direction ("Tool outputs") stays text."""
+    from rtde_spec.importers.html_doc import read_tables
+
+    page = (
+        "<h3>Tool Data (Sub Package of Robot State Message)</h3><p>Tool outputs</p>"
+        "<table><tr><th>Field</th><th>Description</th></tr>"
+        "<tr><td>double analogInput0</td><td></td></tr></table>"
+    )
+    assert [t.heading for t in read_tables(page)] == ["Tool Data (Sub Package of Robot State Message)"]

@@ -37,6 +37,7 @@ class _Reader(HTMLParser):
         self._sup = 0  # inside <sup>: a footnote marker when in a name cell (actual_q<sup>1</sup>)
         self._para: list[str] | None = None  # a <p> outside tables: a title where a page has no <h3>
         self.title = ""  # the last short <p> after the last heading, before a table
+        self._title = ""  # the one before the table being read
 
     def handle_starttag(self, tag: str, attrs: list[tuple[str, str | None]]) -> None:
         if tag in _HEADINGS:
@@ -47,7 +48,8 @@ class _Reader(HTMLParser):
             self._depth += 1
             self._para = None  # a <p> left open ends at the table, as a browser ends it
             if self._depth == 1:
-                self._table = Table(self._table_heading(), [], self.getpos()[0])
+                self._table = Table(self.heading, [], self.getpos()[0])
+                self._title, self.title = self.title, ""  # used once: a second table needs its own
         elif self._depth == 1 and tag == "tr":
             self._close_row()  # </tr> and </td> may be left out in HTML
             self._row, self._row_line = [], self.getpos()[0]
@@ -93,18 +95,21 @@ class _Reader(HTMLParser):
         if self._row is not None and self._table is not None:
             if not self._table.header:
                 self._table.header = self._row
+                self._table.heading = self._table_heading(self._table)
             elif any(self._row):
                 self._table.rows.append((self._row_line, self._row))
                 self._count += 1
                 check_rows(self._count, self._row_line)
         self._row = None
 
-    def _table_heading(self) -> str:
-        """The heading above a table; a short <p> title after it when only that names the direction
-        (a CMS or word-processor page: <p><strong>Robot Controller Outputs</strong></p>)."""
-        title, self.title = self.title, ""  # used once: a second table needs its own
-        said = Table(title, [], 0).direction
-        return title if said and Table(self.heading, [], 0).direction is None else self.heading
+    def _table_heading(self, table: Table) -> str:
+        """The heading above a field table; a short <p> title after it when only that names the
+        direction (a CMS or word-processor page: <p><strong>Robot Controller Outputs</strong></p>).
+        Other tables (the primary interface's, titled by their heading) keep the heading."""
+        said = Table(self._title, [], 0).direction
+        if table.is_field_table and said and table.direction is None:
+            return self._title
+        return table.heading
 
     def handle_data(self, data: str) -> None:
         if self._para is not None:
