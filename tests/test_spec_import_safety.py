@@ -228,3 +228,18 @@ def test_rows_run_together_by_expanded_tabs_are_never_written(tree: Path, tmp_pa
     assert result.returncode == 2, result.stderr
     assert "the comment of actual_q holds another row ('actual_TCP_acceleration VECTOR3D')" in result.stderr
     assert fields.read_bytes() == before
+
+
+@pytest.mark.parametrize("comment", ["yes", "No", "on", "NULL"])
+def test_a_comment_that_yaml_1_1_reads_as_a_bool_is_written_as_text(
+    tree: Path, tmp_path: Path, comment: str
+) -> None:
+    """ruamel (YAML 1.2) wrote `doc: yes` unquoted; the spec's loader (YAML 1.1) read True and
+    `--write` refused the import."""
+    import yaml
+
+    doc = _doc(tmp_path, f"| actual_tcp_jerk | VECTOR6D | {comment} | 5.30.0 |\n")
+    result = _cli("spec", "import", str(doc), "--spec-dir", str(tree), "--write")
+    assert result.returncode == 0, result.stderr
+    fields = yaml.safe_load((tree / "rtde/fields.yaml").read_text())["outputs"]
+    assert [f["doc"] for f in fields if f["name"] == "actual_tcp_jerk"] == [comment]

@@ -10,7 +10,6 @@ its mode kept. Removals are applied only when asked for.
 from __future__ import annotations
 
 import codecs
-import io
 import os
 import re
 import shutil
@@ -24,35 +23,11 @@ from rtde_spec.errors import OutputError, RtdeSpecError, UsageError
 from rtde_spec.importers import availability as av
 from rtde_spec.importers.changes import Change
 from rtde_spec.importers.model import DocField, DocLayoutField, Document
+from rtde_spec.importers.yaml_text import dump, flow, round_trip
 from rtde_spec.metamodel.schema import Spec
-
-
-def _yaml() -> Any:
-    from ruamel.yaml import YAML
-
-    yaml = YAML(typ="rt")
-    yaml.preserve_quotes = True
-    yaml.width = 4096
-    yaml.indent(mapping=2, sequence=4, offset=2)
-    return yaml
-
-
-def _flow(data: dict[str, Any] | list[Any]) -> Any:
-    from ruamel.yaml.comments import CommentedMap, CommentedSeq
-
-    node: Any = CommentedMap(data) if isinstance(data, dict) else CommentedSeq(data)
-    node.fa.set_flow_style()
-    return node
-
 
 #: more removals than this from one document is a document that does not cover the spec
 HANDFUL = 5
-
-
-def _dump(yaml: Any, data: Any) -> str:
-    buf = io.StringIO()
-    yaml.dump(data, buf)
-    return buf.getvalue()
 
 
 def replace_text(path: Path, text: str) -> None:
@@ -131,7 +106,7 @@ def refuse_unreadable(changes: list[Change], doc: Document) -> None:
 def _add_source(entry: Any, source: str) -> None:
     sources = entry.get("sources")
     if sources is None:
-        entry["sources"] = _flow([source])
+        entry["sources"] = flow([source])
     elif source not in sources:
         sources.append(source)
 
@@ -145,7 +120,7 @@ def new_entry(row: DocField, doc: Document, spec: Spec) -> dict[str, Any]:
         entry["doc"] = row.doc
     lines = spec.product_lines.product_lines
     if row.index is not None:
-        entry["index"] = _flow(list(row.index))
+        entry["index"] = flow(list(row.index))
         per = {
             i: (av.apply({}, doc_availability(row, i, doc.line, spec), lines), None)
             for i in range(row.index[0], row.index[1] + 1)
@@ -153,16 +128,16 @@ def new_entry(row: DocField, doc: Document, spec: Spec) -> dict[str, Any]:
         parts = av.runs(per)
         if len(parts) == 1:
             if parts[0][2] is not None:
-                entry["since"] = _flow(dict(parts[0][2]))
+                entry["since"] = flow(dict(parts[0][2]))
         else:
             entry["ranges"] = [
-                _flow({"index": _flow([a, b]), "since": _flow(dict(s or {}))}) for a, b, s, _ in parts
+                flow({"index": flow([a, b]), "since": flow(dict(s or {}))}) for a, b, s, _ in parts
             ]
     else:
         since = av.apply({}, doc_availability(row, None, doc.line, spec), lines)
         if since is not None:
-            entry["since"] = _flow(dict(since))
-    entry["sources"] = _flow([doc.source])
+            entry["since"] = flow(dict(since))
+    entry["sources"] = flow([doc.source])
     return entry
 
 
@@ -177,23 +152,23 @@ def _insert(entry: Any, key: str, value: Any) -> None:
 
 def _set_family(entry: Any, per: dict[int, tuple[av.Since, str | None]]) -> None:
     parts = av.runs(per)
-    entry["index"] = _flow([parts[0][0], parts[-1][1]])
+    entry["index"] = flow([parts[0][0], parts[-1][1]])
     if len(parts) == 1:
         entry.pop("ranges", None)
         if parts[0][2] is None:
             entry.pop("since", None)
         else:
-            _insert(entry, "since", _flow(dict(parts[0][2])))
+            _insert(entry, "since", flow(dict(parts[0][2])))
         return
     entry.pop("since", None)
     ranges = []
     for low, high, since, reserved in parts:
-        rng: dict[str, Any] = {"index": _flow([low, high])}
+        rng: dict[str, Any] = {"index": flow([low, high])}
         if since is not None:
-            rng["since"] = _flow(dict(since))
+            rng["since"] = flow(dict(since))
         if reserved is not None and reserved != entry.get("reserved"):
             rng["reserved"] = reserved
-        ranges.append(_flow(rng))
+        ranges.append(flow(rng))
     _insert(entry, "ranges", ranges)
 
 
@@ -225,7 +200,7 @@ def _apply_rtde(change: Change, data: Any, doc: Document, spec: Spec) -> None:
         if since == {}:
             data[key].remove(entry)
         else:
-            entry["since"] = _flow(dict(since or {}))
+            entry["since"] = flow(dict(since or {}))
         return
     if change.what == "type":
         entry["type"] = change.new
@@ -255,7 +230,7 @@ def _apply_rtde(change: Change, data: Any, doc: Document, spec: Spec) -> None:
             if since is None:
                 entry.pop("since", None)
             else:
-                _insert(entry, "since", _flow(dict(since)))
+                _insert(entry, "since", flow(dict(since)))
     _add_source(entry, doc.source)
 
 
@@ -275,7 +250,7 @@ def _apply_primary(change: Change, data: Any, doc: Document, spec: Spec) -> bool
     lines = spec.product_lines.product_lines
     if change.what == "availability" and change.field == member_name:
         since = av.apply(member.get("since"), change.new, lines)
-        member["since"] = _flow(dict(since or {}))
+        member["since"] = flow(dict(since or {}))
         return True
     if change.what == "added":
         row: DocLayoutField = change.extra["row"]
@@ -290,8 +265,8 @@ def _apply_primary(change: Change, data: Any, doc: Document, spec: Spec) -> bool
             av.apply({}, dict(change.extra.get("since", {})) or row.versions, lines) if row.versions else None
         )
         if since:
-            new["since"] = _flow(dict(since))
-        member["fields"].append(_flow(new))
+            new["since"] = flow(dict(since))
+        member["fields"].append(flow(new))
         return True
     node: Any = {"fields": member["fields"]}
     for part in change.field.split("."):
@@ -299,7 +274,7 @@ def _apply_primary(change: Change, data: Any, doc: Document, spec: Spec) -> bool
     if change.what == "availability":
         since = av.apply(node.get("since") or member.get("since"), change.new, lines)
         if since is not None:
-            node["since"] = _flow(dict(since))
+            node["since"] = flow(dict(since))
     elif change.what == "description":
         node["doc"] = change.new
     elif change.what == "type" and " in " not in str(change.new) and "[" not in str(change.new):
@@ -329,7 +304,7 @@ def write_changes(
                 "written. Pass --allow-removals if it really drops them"
             )
         result.held += [(c, "a removal: pass --allow-removals to apply it") for c in removals]
-    yaml = _yaml()
+    yaml = round_trip()
     raw = path.read_bytes()
     data = yaml.load(raw.decode("utf-8-sig").replace("\r\n", "\n"))
     for change in changes:
@@ -347,7 +322,7 @@ def write_changes(
             _apply_rtde(change, data, doc, spec)
         result.written.append(change)
     if result.written:
-        text = _dump(yaml, data)
+        text = dump(yaml, data)
         if b"\r\n" in raw:  # a Windows checkout's file: every line kept as it was, not rewritten to LF
             text = text.replace("\n", "\r\n")
         if raw.startswith(codecs.BOM_UTF8):
@@ -360,7 +335,7 @@ def write_changes(
 def write_overlay(changes: list[Change], doc: Document, spec: Spec, path: Path) -> int:
     """The fields the document adds, as a file for --extra-fields / RTDE_SPEC_EXTRA_FIELDS."""
     refuse_unreadable(changes, doc)
-    yaml = _yaml()
+    yaml = round_trip()
     data: dict[str, Any] = {}
     count = 0
     for change in changes:
@@ -372,7 +347,7 @@ def write_overlay(changes: list[Change], doc: Document, spec: Spec, path: Path) 
 
     out = CommentedMap(data)
     out.yaml_set_start_comment(f"Fields {doc.path} adds to the built-in spec (rtde-spec spec import -o)")
-    text = _dump(yaml, out)
+    text = dump(yaml, out)
     _check_overlay(text, spec)
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
