@@ -230,7 +230,7 @@ def test_rows_run_together_by_expanded_tabs_are_never_written(tree: Path, tmp_pa
     assert fields.read_bytes() == before
 
 
-@pytest.mark.parametrize("comment", ["yes", "No", "on", "NULL"])
+@pytest.mark.parametrize("comment", ["yes", "Off"])
 def test_a_comment_that_yaml_1_1_reads_as_a_bool_is_written_as_text(
     tree: Path, tmp_path: Path, comment: str
 ) -> None:
