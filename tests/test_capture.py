@@ -172,7 +172,6 @@ def test_primary_messages_become_one_table_per_sub_package(tmp_path: Path) -> No
     assert tables["primary_scripts"].column("script").to_pylist() == ["set_digital_out(1, True)\n"]
 
 
-
 def test_what_a_client_sends_in_one_burst_is_one_script_row_however_tcp_cut_it(tmp_path: Path) -> None:
     """A script sent in two TCP segments was two rows, a character cut in two at their edge (its
     bytes in script_raw). A row is a burst: a new def, or a pause after a whole line, starts one."""
@@ -195,6 +194,7 @@ def test_what_a_client_sends_in_one_burst_is_one_script_row_however_tcp_cut_it(t
         "set_digital_out(2, True)\n",
     ]
     assert scripts.column("script_raw").to_pylist() == [""] * 4
+
 
 def test_cli_decodes_a_folder_in_parallel_into_a_hive_dataset(tmp_path: Path) -> None:
     folder = tmp_path / "captures"
@@ -349,7 +349,10 @@ def test_an_interrupted_live_capture_keeps_what_was_decoded(tmp_path: Path) -> N
 
 
 @pytest.mark.skipif(sys.platform != "linux", reason="reads how much a pipe holds (Linux FIONREAD)")
-def test_ctrl_c_on_a_piped_capture_reports_what_was_kept(tmp_path: Path) -> None:
+@pytest.mark.parametrize("ignored", [False, True], ids=["ctrl-c", "kill-int-of-a-background-job"])
+def test_ctrl_c_on_a_piped_capture_reports_what_was_kept(tmp_path: Path, ignored: bool) -> None:
+    """`ignored`: started as a script's background job (`rtde-spec capture - ... &`), which the
+    shell has ignore SIGINT: `kill -INT` was ignored and the capture read on to the input's end."""
     import fcntl
     import signal
     import struct
@@ -363,7 +366,10 @@ def test_ctrl_c_on_a_piped_capture_reports_what_was_kept(tmp_path: Path) -> None
         conv.send("server", data(i))
     capture = write(tmp_path / "all.pcap", [conv]).read_bytes()
     cmd = [sys.executable, "-m", "rtde_spec", "capture", "-", "-o", str(tmp_path / "out")]
-    proc = subprocess.Popen(cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE)
+    started = (lambda: signal.signal(signal.SIGINT, signal.SIG_IGN)) if ignored else None
+    proc = subprocess.Popen(
+        cmd, stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE, preexec_fn=started
+    )
     assert proc.stdin is not None
     proc.stdin.write(capture[: len(capture) // 2])
     proc.stdin.flush()

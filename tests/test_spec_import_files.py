@@ -5,10 +5,11 @@ Each is read or named with what to do, never "cannot tell the document's form" o
 from __future__ import annotations
 
 import subprocess
-import sys
 from pathlib import Path
 
 import pytest
+
+from tests.test_spec_import_safety import _cli as run_cli
 
 ROOT = Path(__file__).resolve().parent.parent
 SPEC = str(ROOT / "spec")
@@ -26,23 +27,7 @@ GUIDE = """# RTDE guide (a copy)
 
 
 def _cli(path: Path, *args: str) -> subprocess.CompletedProcess[str]:
-    return subprocess.run(
-        [
-            sys.executable,
-            "-m",
-            "rtde_spec.cli",
-            "spec",
-            "import",
-            str(path),
-            "--spec-dir",
-            str(ROOT / "spec"),
-            *args,
-        ],
-        capture_output=True,
-        text=True,
-        cwd=ROOT,
-        timeout=300,
-    )
+    return run_cli("spec", "import", str(path), "--spec-dir", SPEC, *args)
 
 
 @pytest.mark.parametrize("codec", ["utf-16-le", "utf-16-be", "utf-32"])

@@ -1,4 +1,5 @@
-"""SIGTERM and SIGHUP stop a command as Ctrl-C does, once.
+"""SIGTERM and SIGHUP stop a command as Ctrl-C does, once; SIGINT stops it even where the
+shell started it ignoring Ctrl-C (a script's background job).
 
 A service manager, `docker stop` or a closed terminal sends them; scripts and supervisors
 often send them twice (to the process and to its group). The first one stops the command,
@@ -30,8 +31,9 @@ def stopping() -> None:
 
 
 def stop_on_terminate() -> dict[int, Any]:
-    """`interrupt` for SIGTERM and SIGHUP where they have their default action; returns the
-    handlers replaced, for `restore`. Left as they are when not called from the main thread
+    """`interrupt` for SIGTERM and SIGHUP where they have their default action (nohup's ignored
+    SIGHUP stays ignored), Python's Ctrl-C for a SIGINT the shell ignored; returns the handlers
+    replaced, for `restore`. Left as they are when not called from the main thread
     (`main()` run in a thread of a program) or where the system has no such signal."""
     _STATE["stopping"] = False
     previous: dict[int, Any] = {}
@@ -43,7 +45,13 @@ def stop_on_terminate() -> dict[int, Any]:
             if signal.getsignal(signum) is signal.SIG_DFL:
                 previous[signum] = signal.signal(signum, interrupt)
         except ValueError:  # not the main thread
-            break
+            return previous
+    interrupt_ignored = getattr(signal, "SIGINT", None)
+    if interrupt_ignored is not None and signal.getsignal(interrupt_ignored) is signal.SIG_IGN:
+        # a script's background job (`rtde-spec record ... &`: the shell has it ignore Ctrl-C):
+        # `kill -INT` stops it as Ctrl-C does, as it stops tcpdump (it was ignored: the script
+        # waited for ever)
+        previous[interrupt_ignored] = signal.signal(interrupt_ignored, signal.default_int_handler)
     return previous
 
 
