@@ -243,3 +243,25 @@ def test_a_comment_that_yaml_1_1_reads_as_a_bool_is_written_as_text(
     assert result.returncode == 0, result.stderr
     fields = yaml.safe_load((tree / "rtde/fields.yaml").read_text())["outputs"]
     assert [f["doc"] for f in fields if f["name"] == "actual_tcp_jerk"] == [comment]
+
+
+def test_a_spec_file_is_on_disk_before_it_replaces_the_old_one(
+    tree: Path, tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The write was renamed into place unsynced: a power loss right after could leave the spec
+    file empty. The file and its folder are now synced (the real fsync, counted)."""
+    from rtde_spec.importers import write
+
+    synced: list[str] = []
+    real = os.fsync
+
+    def fsync(fd: int) -> None:
+        synced.append(os.readlink(f"/proc/self/fd/{fd}"))
+        real(fd)
+
+    monkeypatch.setattr(os, "fsync", fsync)
+    target = tree / "rtde" / "fields.yaml"
+    write.replace_text(target, target.read_text() + "# one more line\n")
+    assert target.read_text().endswith("# one more line\n")
+    assert any(".fields.yaml" in s for s in synced), synced  # the temporary file, before the rename
+    assert str(target.parent) in synced, synced  # the folder, after it

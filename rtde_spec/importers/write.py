@@ -34,13 +34,15 @@ def replace_text(path: Path, text: str) -> None:
     """Write beside `path` and rename into place, keeping its mode; a read-only file is refused.
 
     The project's one way of writing a file (`partfile`): a failure leaves the old file as it was
-    and no temporary file, names `path`, and a symlink is written through."""
+    and no temporary file, names `path`, and a symlink is written through. Synced before the
+    rename and the folder after: a power loss then leaves the old spec file or the new one, never
+    an empty one."""
     from rtde_spec.output.partfile import write_with
 
     if path.exists() and (not os.access(path, os.W_OK) or not path.stat().st_mode & stat.S_IWUSR):
         raise UsageError(f"{path} is read-only; nothing written")
     data = text.encode("utf-8")
-    write_with(path, lambda out: out.write(data), keep_mode=True)
+    write_with(path, lambda out: out.write(data), keep_mode=True, durable=True)
 
 
 def check_tree(spec_dir: Path, rel: str, text: str) -> None:
