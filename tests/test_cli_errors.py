@@ -166,6 +166,10 @@ CASES: list[Case] = [
     c(2, "plot", "ok.csv", "nope", "-o", "x.png", "--", "file ok.csv", "no column 'nope'",
       "the table has: timestamp, a"),
     c(2, "plot", "ok.csv", "a", "-o", "x.txt", "--", "-o x.txt", "end it in .png, .svg or .pdf"),
+    # an output under a file: "the folder afile does not exist" (it does), or a listing "Not a directory"
+    c(2, "plot", "ok.csv", "a", "-o", "afile/x.png", "--", "-o afile/x.png", "afile is a file, not a folder"),
+    c(2, "capture", "late.pcap", "-o", "afile/out", "--", "afile/out: afile is a file, not a folder"),
+    c(2, "demo", "-o", "afile/d", "--", "-o afile/d: afile is a file, not a folder"),
     c(2, "plot", "ok.csv", "a", "-o", "nowhere/x.png", "--", "the folder nowhere does not exist"),
     c(2, "plot", "ok.csv", "a", "--time", "zz", "-o", "x.png", "--", "no column 'zz'",
       "name the time column with --time COLUMN"),

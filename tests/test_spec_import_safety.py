@@ -265,3 +265,14 @@ def test_a_spec_file_is_on_disk_before_it_replaces_the_old_one(
     assert target.read_text().endswith("# one more line\n")
     assert any(".fields.yaml" in s for s in synced), synced  # the temporary file, before the rename
     assert str(target.parent) in synced, synced  # the folder, after it
+
+
+def test_an_overlay_under_a_file_says_so(tree: Path, tmp_path: Path) -> None:
+    """`-o afile/x.yaml` said "writing failed: File exists" (the folder made where a file is)."""
+    (tmp_path / "afile").write_text("a file\n")
+    doc = _doc(tmp_path, "| actual_tcp_jerk | VECTOR6D | Actual TCP jerk | 5.30.0 |\n")
+    overlay = str(tmp_path / "afile" / "x.yaml")
+    result = _cli("spec", "import", str(doc), "--spec-dir", str(tree), "-o", overlay)
+    assert result.returncode == 1, result.stderr
+    assert "a part of the path is a file, not a folder" in result.stderr, result.stderr
+    assert "File exists" not in result.stderr

@@ -11,7 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.cli.arguments import primary_version
-from rtde_spec.cli.conventions import dangling_link, describe, plural
+from rtde_spec.cli.conventions import dangling_link, describe, file_in_the_way, plural
 from rtde_spec.cli.inputs import once_each
 from rtde_spec.cli.options import add_lenient
 from rtde_spec.errors import RtdeSpecError, UsageError
@@ -152,6 +152,9 @@ def output_folder_arg(text: str) -> str:
     broken = dangling_link(path)
     if broken is not None:
         raise argparse.ArgumentTypeError(f"{text} {broken}")
+    in_the_way = file_in_the_way(path)
+    if in_the_way is not None:
+        raise argparse.ArgumentTypeError(f"{text}: {in_the_way}")
     if not path.exists() and path.suffix.lower() in (".parquet", ".csv", ".jsonl", ".mcap"):
         raise argparse.ArgumentTypeError(
             f"{text} names a file, but capture writes a folder (one table per kind, --format "

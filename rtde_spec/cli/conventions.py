@@ -90,7 +90,19 @@ def output_folder(text: str, option: str = "-o") -> Path:
     broken = dangling_link(path)
     if broken is not None:
         raise UsageError(broken, subject=f"{option} {text}")
+    in_the_way = file_in_the_way(path)
+    if in_the_way is not None:
+        raise UsageError(in_the_way, subject=f"{option} {text}")
     return path
+
+
+def file_in_the_way(path: Path) -> str | None:
+    """Why a folder cannot be made at `path`: the nearest part of it that exists is a file (it was
+    found only when a file under it was written: "Not a directory", "File exists"); else None."""
+    above = next((p for p in path.parents if p.exists() or p.is_symlink()), None)
+    if above is None or above.is_dir():
+        return None
+    return f"{above} is a file, not a folder; give a path in a folder"
 
 
 def output_file(text: str, option: str = "-o") -> Path:

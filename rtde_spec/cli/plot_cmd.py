@@ -198,6 +198,9 @@ def _check_output(output: Path) -> None:
             f"(or any of {', '.join(sorted(kinds))})",
             subject=f"-o {output}",
         )
+    if output.parent.exists() and not output.parent.is_dir():
+        said = f"{output.parent} is a file, not a folder; give a path in a folder"
+        raise UsageError(said, subject=f"-o {output}")
     if not output.parent.is_dir():
         raise UsageError(
             f"the folder {output.parent} does not exist; create it or write the image elsewhere",

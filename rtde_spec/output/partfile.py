@@ -320,6 +320,7 @@ _WHY = {
     errno.EROFS: "the file system is read-only",
     errno.EISDIR: "a directory has that name; give a file name",
     errno.ENOTDIR: "a part of the path is a file, not a folder",
+    errno.EEXIST: "a part of the path is a file, not a folder",  # its folder made where a file is
     errno.ENOENT: "its folder does not exist",
     errno.EACCES: "permission denied (the folder or file is not writable)",
     errno.EPERM: "the operation is not permitted there",
