@@ -703,3 +703,19 @@ def test_client_options_that_cannot_work_are_named_before_connecting(options: di
     ):
         with pytest.raises(UsageError, match=re.escape(said)):
             make()
+
+
+def test_an_emulator_thread_started_twice_serves_once_and_a_stopped_one_says_to_make_a_new_one() -> None:
+    """`with emu` after `emu.start()` raised RuntimeError: threads can only be started once; so did
+    a start after stop(), naming nothing of ours."""
+    config = EmulatorConfig(
+        host="127.0.0.28", rtde_port=0, primary_port=0, secondary_port=None, realtime_port=None,
+        dashboard_port=None,
+    )  # fmt: skip
+    emu = EmulatorThread(config).start()
+    with emu as same:  # already serving: the same emulator, not a second start
+        assert same is emu
+        with RtdeClient("127.0.0.28", emu.ports["rtde"]) as client:
+            assert client.controller_version
+    with pytest.raises(UsageError, match="has stopped; make a new EmulatorThread"):
+        emu.start()

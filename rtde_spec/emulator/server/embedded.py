@@ -29,6 +29,7 @@ from pathlib import Path
 
 from rtde_spec.emulator.controller.model import ControllerModel
 from rtde_spec.emulator.server.loop import Emulator, EmulatorConfig
+from rtde_spec.errors import UsageError
 from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.printable import SafeFormatter
 
@@ -77,6 +78,12 @@ class EmulatorThread:
             _close_loop(self._loop)
 
     def start(self) -> EmulatorThread:
+        """Serve (a running one is returned as it is: `with emu` after `emu.start()`). One that
+        stopped does not start again ("threads can only be started once"): make a new one."""
+        if self._thread.is_alive():
+            return self
+        if self._thread.ident is not None:
+            raise UsageError("this EmulatorThread has stopped; make a new EmulatorThread(config) to serve")
         self._thread.start()
         self._ready.wait(10)
         if self._error is not None:
