@@ -15,6 +15,7 @@ from collections.abc import Iterator
 from typing import Literal, overload
 
 from rtde_spec._generated.constants import PRIMARY_PORTS
+from rtde_spec.endpoints import check_endpoint
 from rtde_spec.errors import DecodeError, RtdeConnectionError, UsageError
 from rtde_spec.primary.codec import PrimaryMessage, PrimaryStreamDecoder
 
@@ -26,16 +27,7 @@ class PrimaryClient:
 
     def __init__(self, host: str, port: int = PRIMARY_PORTS["secondary"], *, timeout: float = 5.0) -> None:
         self.host, self.port, self.timeout = host, port, timeout
-        if isinstance(port, int) and not 0 < port <= 65535:  # 70000 reached port 4464
-            raise UsageError(f"port must be 1..65535, not {port}", subject=self.where)
-        if (
-            isinstance(timeout, bool)
-            or not isinstance(timeout, (int, float))
-            or not 0 < timeout < float("inf")
-        ):
-            raise UsageError(
-                f"timeout must be a number of seconds above 0, not {timeout!r}", subject=self.where
-            )
+        check_endpoint(host, port, timeout)
         self.decoder = PrimaryStreamDecoder()
         self._sock: socket.socket | None = None
         self.read_only = port in READ_ONLY_PORTS

@@ -8,6 +8,7 @@ import socket
 from typing import Any
 
 from rtde_spec._generated.constants import RTDE_PORT, RTDE_PROTOCOLS
+from rtde_spec.endpoints import check_endpoint
 from rtde_spec.errors import UsageError
 from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.metamodel.versions import Version
@@ -34,14 +35,7 @@ class ClientBase:
         """`batch` > 1: the reader wakes once per that many data packages (less CPU per package,
         batch / frequency more latency): for recording and logging, not for control loops."""
         where = f"{host}:{port}"
-        if isinstance(port, int) and not 0 < port <= 65535:  # 70000 reached port 4464
-            raise UsageError(f"port must be 1..65535, not {port}", subject=where)
-        if (
-            isinstance(timeout, bool)
-            or not isinstance(timeout, (int, float))
-            or not 0 < timeout < float("inf")
-        ):
-            raise UsageError(f"timeout must be a number of seconds above 0, not {timeout!r}", subject=where)
+        check_endpoint(host, port, timeout)
         if isinstance(batch, bool) or not isinstance(batch, int) or batch < 1:
             raise UsageError(f"batch must be an integer of at least 1, not {batch!r}", subject=where)
         self.host, self.port, self.timeout, self.batch = host, port, timeout, batch
