@@ -6,7 +6,9 @@ must not outlive the command. So the parent forwards Ctrl-C and SIGTERM to its w
 as the one-process path does (the file's tables dropped, its earlier ones kept) and returns
 what it has, an idle one exits; pending files are cancelled, not started; and a worker
 whose parent died (SIGKILL) gets SIGTERM from the kernel (Linux) instead of waiting on a
-queue forever.
+queue forever. That signal is one of its own, not SIGTERM: the kernel sends it when the
+thread that started the worker ends, and a killed command's main thread may end before its
+other threads, so the worker's parent still looks alive (`getppid` names the same process).
 """
 
 from __future__ import annotations
@@ -31,6 +33,7 @@ _busy = False  # a worker is decoding a file: a signal stops the file, else it e
 _stopping = False  # that file is being stopped: later signals change nothing
 _halted = False  # the command is stopping: a file handed to this worker after that is not started
 _parent = 0  # the pid of the command that started this worker
+_orphaned = False  # the command is gone (or going): nobody will place what this worker prepared
 _unplaced: list[Path] = []  # temp files of tables this worker prepared, for its parent to place
 _STOPS = ("SIGINT", "SIGTERM", "SIGHUP")
 STOP_GRACE = 20.0  # s a stopped worker has to drop its file and end before it is ended
@@ -160,6 +163,14 @@ def _start_worker() -> None:
     _end_with_parent()
 
 
+def _on_parent_death(signum: int, frame: FrameType | None) -> None:
+    """The kernel's word that the command is dying: stop as for SIGTERM, and remove what it
+    would have placed."""
+    global _orphaned
+    _orphaned = True
+    _on_signal(int(signal.SIGTERM), frame)
+
+
 def _on_signal(signum: int, frame: FrameType | None) -> None:
     global _stopping, _halted
     _halted = True
@@ -168,7 +179,7 @@ def _on_signal(signum: int, frame: FrameType | None) -> None:
             return
         _stopping = True
         raise KeyboardInterrupt  # decode_prepared drops the file's tables, keeps the old ones
-    if signum == signal.SIGINT and os.getppid() == _parent:
+    if signum == signal.SIGINT and not _gone():
         # idle, or sending a finished file's result to the parent: ending here could cut that
         # message short, and the pool's reader would wait for its rest for ever (a command that
         # never ends). The parent stops the pool, which ends an idle worker cleanly.
@@ -177,7 +188,7 @@ def _on_signal(signum: int, frame: FrameType | None) -> None:
 
 
 def _end_with_parent() -> None:
-    """SIGTERM from the kernel when the parent process dies (Linux's PR_SET_PDEATHSIG)."""
+    """A signal from the kernel when the parent process dies (Linux's PR_SET_PDEATHSIG)."""
     global _parent
     parent = _parent = os.getppid()
     if not sys.platform.startswith("linux"):
@@ -185,7 +196,9 @@ def _end_with_parent() -> None:
     try:
         import ctypes
 
-        ctypes.CDLL(None, use_errno=True).prctl(1, int(signal.SIGTERM))  # 1: PR_SET_PDEATHSIG
+        death = signal.SIGRTMIN + 2  # SIGRTMIN itself may be taken by the C library's threads
+        signal.signal(death, _on_parent_death)
+        ctypes.CDLL(None, use_errno=True).prctl(1, int(death))  # 1: PR_SET_PDEATHSIG
     except (OSError, AttributeError):  # no signal then: a thread looks for the parent instead
         threading.Thread(target=_watch_parent, args=(parent,), name="rtde-spec-parent", daemon=True).start()
         return
@@ -225,14 +238,19 @@ def _decode_one(path: CapturePath, target: tuple[Any, ...], kw: dict[str, Any]) 
         return CaptureInterrupted(CaptureSummary(str(path)), kept=False)
     finally:
         _busy = False
-        if os.getppid() != _parent:  # the parent died (its SIGTERM stopped this file): no one
-            _exit(128 + int(signal.SIGTERM))  # takes the result or sends more work
+        if _gone():  # the parent died (its signal stopped this file): no one takes the
+            _exit(128 + int(signal.SIGTERM))  # result or sends more work
+
+
+def _gone() -> bool:
+    """The command that started this worker is dead or dying."""
+    return _orphaned or os.getppid() != _parent
 
 
 def _exit(code: int) -> None:
     """End the worker; the temp files of tables it prepared that the parent did not place go
     first (the parent died: nobody will place or drop them)."""
-    if os.getppid() != _parent:
+    if _gone():
         for temp in _unplaced:
             try:
                 temp.unlink()
