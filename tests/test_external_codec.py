@@ -143,3 +143,15 @@ def test_an_unknown_protocol_is_a_key_error_naming_the_known_ones() -> None:
     RuntimeError); like an unknown message or layout, it is a KeyError that lists the names."""
     with pytest.raises(KeyError, match=r"no external-control protocol nope \(known: reverse, "):
         record_codec("nope", "reverse_command")
+
+
+def test_a_record_s_codec_names_a_bad_offset_and_the_missing_fields() -> None:
+    """A negative offset raised a bare struct.error; a record with values missing was refused
+    without naming which."""
+    codec = record_codec("reverse", "reverse_command")
+    for at in (-4, codec.size + 1):
+        with pytest.raises(DecodeError, match="offset outside the buffer") as info:
+            codec.decode(bytes(codec.size), at)
+        assert info.value.offset == at
+    with pytest.raises(EncodeError, match="missing: target, control_mode"):
+        codec.encode("motion_target", {"read_timeout": 1.0})

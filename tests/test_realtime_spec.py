@@ -218,3 +218,14 @@ def test_the_spec_refuses_an_unknown_rtde_name_and_a_group(tmp_path: Path) -> No
     )
     with pytest.raises(SpecError, match="only double, int32, uint64 values"):
         load_realtime(root)
+
+
+def test_bytes_after_one_message_are_refused_not_dropped() -> None:
+    """`decode` of one message ignored what followed it: a recv() chunk holding a message and a
+    half lost the half unsaid. It now says how many bytes follow, and where."""
+    size = layout_for("5.9").size
+    one = struct.pack(">I", size) + bytes(size - 4)
+    assert decode(one)["message_size"] == len(one)
+    with pytest.raises(DecodeError, match="10 bytes after the message") as info:
+        decode(one + one[:10])
+    assert info.value.offset == len(one)

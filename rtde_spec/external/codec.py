@@ -103,6 +103,10 @@ class RecordCodec:
 
     def decode(self, buf: bytes | bytearray | memoryview, at: int = 0) -> tuple[VariantPlan, dict[str, Any]]:
         """(variant, values in SI units) of the record at `at`; DecodeError when cut or of no variant."""
+        if at < 0 or at > len(buf):
+            raise DecodeError(
+                "offset outside the buffer", field=self.message, offset=at, expected=f"0 to {len(buf)}"
+            )
         if len(buf) - at < self.size:
             raise DecodeError(
                 f"{self.message} is cut off",
@@ -138,7 +142,10 @@ class RecordCodec:
             raise EncodeError(f"no variant {variant!r}", field=self.message)
         body = plan.layout.encode(values, f"{self.message}.")
         if len(body) != plan.layout.fixed_size:
-            raise EncodeError("every field needs a value", field=f"{self.message}.{variant}")
+            missing = [f.name for f in plan.layout.fields if f.name not in values]
+            raise EncodeError(
+                f"every field needs a value; missing: {', '.join(missing)}", field=f"{self.message}.{variant}"
+            )
         return body + bytes(self.size - len(body))
 
 

@@ -41,6 +41,11 @@ def decode(
         )
     (size,) = HEADER.unpack_from(data, 0)
     check_size(size, len(data))
+    if len(data) > size:  # a second message, or part of one: not to be dropped unsaid
+        raise DecodeError(
+            f"{len(data) - size} bytes after the message (RealtimeStream decodes a stream of them)",
+            package=PACKAGE, offset=size, expected=f"{size} bytes", actual=f"{len(data)} bytes",
+        )  # fmt: skip
     layout = _layout(size, version, strict)
     out = layout.decode(data)
     if size > layout.size:
