@@ -127,3 +127,29 @@ def test_pydantic_serializes_decoded_messages_in_a_fresh_process(data: bytes) ->
         [sys.executable, "-c", FRESH, data.hex()], capture_output=True, text=True, timeout=60
     )
     assert done.returncode == 0 and done.stdout.strip() == "ok", done.stderr[-2000:]
+
+
+def test_nan_and_infinities_dump_to_json_and_read_back() -> None:
+    """pydantic writes NaN and infinities as `null` by default: a decoded model holding one (an
+    unset value, a controller's NaN) dumped to JSON that its own class refused to read back. They
+    are now the strings "NaN", "Infinity", "-Infinity": valid JSON that validates back."""
+    import math
+
+    from rtde_spec import RecipeCodec
+    from rtde_spec._generated import primary_models as pm
+    from rtde_spec._generated import rtde_models as rm
+    from rtde_spec.primary.codec import encode_message
+    from rtde_spec.wire.primary_base import RobotStateMessage
+
+    names = [n for n in pm.CartesianInfo.model_fields if n not in ("extra", "missing")]
+    values = {**dict.fromkeys(names, 0.5), "x": math.nan, "rz": -math.inf}
+    message = decode_message(encode_message(RobotStateMessage(sub_packages=[pm.CartesianInfo(**values)])))
+    codec = RecipeCodec.for_names(["timestamp", "actual_q"], "output")
+    record = codec.decode_model(codec.encode({"timestamp": math.nan, "actual_q": (math.inf,) * 6}))
+    setup = rm.SetupOutputsV2(output_frequency=math.nan, variable_names=["timestamp"])
+    for model in (message.sub_packages[0], record, setup):
+        dumped = model.model_dump_json()
+        assert "null" not in dumped and '"NaN"' in dumped
+        again = type(model).model_validate_json(dumped)
+        assert json.loads(again.model_dump_json()) == json.loads(dumped)  # (NaN != NaN: as JSON)
+    assert math.isinf(type(record).model_validate_json(record.model_dump_json()).actual_q[0])

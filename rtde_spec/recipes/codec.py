@@ -29,8 +29,7 @@ from rtde_spec.recipes.record import record_class
 if TYPE_CHECKING:
     from pydantic import BaseModel
 
-_PREFIX = PREFIX  # header + recipe id
-_PREFIX_FIELDS = DATA_PACKAGE_PREFIX_FIELDS
+_PREFIX, _PREFIX_FIELDS = PREFIX, DATA_PACKAGE_PREFIX_FIELDS  # header + recipe id; their names
 _SIZE_AT, _TYPE_AT, _RECIPE_ID_AT = DATA_PACKAGE_PREFIX_OFFSETS
 PAYLOAD_OFFSET = _PREFIX.size
 _new_tuple = tuple.__new__
@@ -287,12 +286,13 @@ class RecipeCodec:
     def model_type(self) -> type[BaseModel]:
         """A pydantic model with one bounded field per variable (built on first use)."""
         if self._model_type is None:
-            from pydantic import create_model
+            from pydantic import ConfigDict, create_model
 
             from rtde_spec._generated.rtde_types import WIRE_TYPES
 
             fields: dict[str, Any] = {i.name: (WIRE_TYPES[i.wire.name], ...) for i in self.items}
-            self._model_type = create_model("RecipeRecord", **fields)
+            nan = ConfigDict(ser_json_inf_nan="strings")  # NaN as "NaN": JSON that reads back
+            self._model_type = create_model("RecipeRecord", __config__=nan, **fields)
         return self._model_type
 
     @property

@@ -42,7 +42,7 @@ class VariableValue(BaseModel):
     LIST: list of VariableValue; MATRIX: list of rows, each a list of VariableValue.
     """
 
-    model_config = ConfigDict(frozen=True)
+    model_config = ConfigDict(frozen=True, ser_json_inf_nan="strings")  # as PrimaryModel's
     type: str
     value: (
         bool

@@ -27,7 +27,12 @@ class RtdeMessage(BaseModel):
     # schemas are built on first use: a capture or decode imports ~100 classes and uses a few;
     # bytes are hex in JSON: protocol bytes (extra, raw, data) are rarely UTF-8
     model_config = ConfigDict(
-        extra="forbid", frozen=True, defer_build=True, ser_json_bytes="hex", val_json_bytes="hex"
+        extra="forbid",
+        frozen=True,
+        defer_build=True,
+        ser_json_bytes="hex",
+        val_json_bytes="hex",
+        ser_json_inf_nan="strings",  # NaN and infinities as "NaN", "Infinity": valid JSON that reads back
     )
 
     NAME: ClassVar[str]
