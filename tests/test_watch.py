@@ -104,6 +104,27 @@ def test_a_script_is_watched_to_the_programs_end(
     assert "PROGRAM_XXX_STOPPED" in lines[-1]
 
 
+def test_by_default_the_primary_port_shows_a_script_s_texts_and_the_secondary_says_why_not(
+    capsys: pytest.CaptureFixture[str], tmp_path: Path
+) -> None:
+    """watch's default port was the secondary 30002, which sends only Robot State and Version (the
+    primary/secondary document): a script's texts, its runtime exceptions and its start and stop
+    never showed, and a program too short to be seen running kept watch waiting for its end."""
+    host = "127.0.0.44"  # the controller's own port numbers, on an address of this test's
+    config = EmulatorConfig(host=host, rtde_port=None, realtime_port=None, dashboard_port=None)
+    script = tmp_path / "quick.script"
+    script.write_text('def quick():\n  textmsg("quick")\nend\n')
+    with EmulatorThread(config):
+        code = main(["watch", "--host", host, "--script", str(script)])
+        out, err = capsys.readouterr()
+        assert code == 0 and f"watching {host}:30001" in err and "the program ended" in err
+        assert any(line.endswith("[ROBOTINTERFACE] quick") for line in out.splitlines())
+        code = main(["watch", "--host", host, "--port", "30002", "--count", "1"])
+        out, err = capsys.readouterr()
+        assert code == 0 and "note: port 30002 sends only Robot State and the Version message" in err
+        assert "come on 30001" in err
+
+
 def test_json_lines_and_a_script_sent_first(
     emu: EmulatorThread, capsys: pytest.CaptureFixture[str], tmp_path: Path
 ) -> None:

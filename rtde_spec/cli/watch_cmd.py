@@ -38,7 +38,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
             "it, or --count LINES, --duration SECONDS; with --script, the program's end does. --foxglove "
             "serves the same to the Foxglove app.",
             "rtde-spec watch --host 127.0.0.1 --count 3",
-            "rtde-spec watch --host 127.0.0.1 --port 30001 --script move.script",
+            "rtde-spec watch --host 127.0.0.1 --script move.script",
             "rtde-spec watch --host 127.0.0.1 --jsonl --duration 10 > messages.jsonl",
             "rtde-spec watch --host 127.0.0.1 --foxglove 8765",
         ),
@@ -46,7 +46,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
     ports = ", ".join(map(str, PRIMARY_PORTS.values()))
     add_connection(
         p,
-        PRIMARY_PORTS["secondary"],
+        PRIMARY_PORTS["primary"],  # the messages come only there; 30002 sends Robot State and Version
         f"primary/secondary port: {ports}",
         "seconds without a message that are an error",
     )
@@ -97,6 +97,12 @@ def run(args: argparse.Namespace) -> int:
     try:
         with client:
             print(f"watching {client.where}", file=sys.stderr)
+            if args.port in _STATE_ONLY:
+                print(
+                    f"note: port {args.port} sends only Robot State and the Version message: errors, "
+                    f"texts and runtime exceptions come on {_MESSAGES[args.port]}",
+                    file=sys.stderr,
+                )
             if live is not None:
                 rtde = subscribe_rtde(args, live)
             if script is not None:
@@ -128,6 +134,11 @@ def run(args: argparse.Namespace) -> int:
         if live is not None:
             live.close()
     raise RtdeConnectionError("the controller closed the connection", subject=client.where)
+
+
+_MESSAGES = {PRIMARY_PORTS["secondary"]: PRIMARY_PORTS["primary"]}
+_MESSAGES[PRIMARY_PORTS["secondary_read_only"]] = PRIMARY_PORTS["primary_read_only"]
+_STATE_ONLY = frozenset(_MESSAGES)  # the secondary ports (the primary/secondary document)
 
 
 class ProgramEnd:

@@ -23,9 +23,13 @@ READ_ONLY_PORTS = {port for name, port in PRIMARY_PORTS.items() if name.endswith
 
 
 class PrimaryClient:
-    """`with PrimaryClient(host, 30002) as c: for message in c: ...` (decoded messages)."""
+    """`with PrimaryClient(host) as c: for message in c: ...` (decoded messages).
 
-    def __init__(self, host: str, port: int = PRIMARY_PORTS["secondary"], *, timeout: float = 5.0) -> None:
+    Port 30001 by default: the primary port sends the robot's messages (errors, texts,
+    runtime exceptions) beside Robot State; the secondary 30002 sends only Robot State and
+    the Version message."""
+
+    def __init__(self, host: str, port: int = PRIMARY_PORTS["primary"], *, timeout: float = 5.0) -> None:
         self.host, self.port, self.timeout = host, port, timeout
         check_endpoint(host, port, timeout)
         self.decoder = PrimaryStreamDecoder()
