@@ -97,3 +97,60 @@ def test_cells_that_are_not_numbers_are_said_with_their_lines_and_exit_3(tmp_pat
     table.write_text("timestamp,actual_q_0,actual_q_1,mode\n" + "\n".join(whole))
     done = cli("plot", str(table), "actual_q", "-o", str(image))
     assert done.returncode == 0 and "problem" not in done.stderr, done.stderr
+
+
+RECORDED = ["timestamp", "actual_q", "robot_mode", "actual_digital_input_bits"]
+
+
+def _ur_record_files(tmp_path: Path, rows: int) -> tuple[Path, Path, list[dict[str, object]]]:
+    """What UR's examples/record.py writes for RECORDED: its CSV (cells separated by spaces) and its
+    --binary form (names, types with a vector's type once per component, then each package's field
+    bytes as sent, without header and recipe id)."""
+    from rtde_spec import RecipeCodec
+    from rtde_spec.recipes.codec import PAYLOAD_OFFSET
+
+    codec = RecipeCodec.for_names(RECORDED, "output")
+    values = [
+        {"timestamp": 1.5 + i * 0.008, "actual_q": tuple(0.1 * i + j for j in range(6)), "robot_mode": 7,
+         "actual_digital_input_bits": 2**40 + i}
+        for i in range(rows)
+    ]  # fmt: skip
+    names = ["timestamp", *(f"actual_q_{j}" for j in range(6)), "robot_mode", "actual_digital_input_bits"]
+    types = ["DOUBLE"] * 7 + ["INT32", "UINT64"]
+    text = tmp_path / "robot_data.csv"
+    lines = [" ".join(names)]
+    lines += [
+        " ".join(map(str, [v["timestamp"], *v["actual_q"], 7, v["actual_digital_input_bits"]]))
+        for v in values
+    ]
+    text.write_text("\r\n".join(lines) + "\r\n")  # csv.writer ends rows with CRLF
+    binary = tmp_path / "robot_data.bin"
+    body = b"".join(codec.encode_package(v, recipe_id=1)[PAYLOAD_OFFSET:] for v in values)
+    binary.write_bytes(f"{' '.join(names)}\n{' '.join(types)}\n".encode() + body)
+    return text, binary, values
+
+
+def test_ur_record_py_recordings_plot_in_both_its_forms(tmp_path: Path) -> None:
+    """UR's own client records with record.py, whose CSV separates cells by spaces and whose binary
+    form is its own: plot read the CSV's header as one column ("no time column") and the binary
+    file as text. Both now give the recorded values; a binary row cut short is said, exit 3."""
+    from rtde_spec.cli.plot_cmd import load
+
+    text, binary, values = _ur_record_files(tmp_path, 25)
+    for path in (text, binary):
+        columns = load(path)
+        assert columns["timestamp"] == [v["timestamp"] for v in values]
+        assert columns["actual_q_5"] == [v["actual_q"][5] for v in values]  # type: ignore[index]
+        assert columns["actual_digital_input_bits"] == [v["actual_digital_input_bits"] for v in values]
+        assert columns["robot_mode"] == [7] * 25
+        image = tmp_path / f"{path.suffix[1:]}.png"
+        done = cli("plot", str(path), "actual_q", "robot_mode", "-o", str(image))
+        assert done.returncode == 0 and image.read_bytes().startswith(PNG), done.stderr
+    binary.write_bytes(binary.read_bytes()[:-10])
+    problems: list[str] = []
+    assert len(load(binary, problems)["timestamp"]) == 24
+    assert problems == [
+        f"byte {binary.stat().st_size - 58}: the last row is cut short (58 of 68 bytes): dropped"
+    ]
+    done = cli("plot", str(binary), "actual_q", "-o", str(tmp_path / "cut.png"))
+    assert done.returncode == 3 and "the last row is cut short" in done.stderr, done.stderr

@@ -31,8 +31,10 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
             "Plots fields of a table against time, one line per vector component, units from the spec. "
             "TABLE: a .csv, .parquet or .jsonl file, a table folder of `capture -o OUT` "
             "(OUT/rtde_outputs_1), or OUT itself (the table with the fields is found); several robots "
-            "are plotted one line each. Needs matplotlib (the plot extra).",
+            "are plotted one line each. UR's record.py recordings too (its CSV separated by spaces, "
+            "its --binary form). Needs matplotlib (the plot extra).",
             "rtde-spec plot run.parquet actual_q -o run.png",
+            "rtde-spec plot robot_data.csv actual_q -o q.png    # UR's record.py",
             "rtde-spec plot tables/ actual_q robot_mode -o q.png",
             "rtde-spec plot tables/rtde_outputs_1 actual_q --robot 10.0.0.10 -o q.png",
         ),
@@ -123,17 +125,25 @@ def load(path: Path, problems: list[str] | None = None) -> dict[str, list[Any]]:
                     except ValueError as exc:
                         raise DecodeError(f"line {number} is not JSON: {exc}", subject=f"{path}") from exc
         return {key: [row.get(key) for row in rows] for key in rows[0]} if rows else {}
+    from rtde_spec.output.ur_recordings import binary_layout, read_binary
+
+    if binary_layout(path) is not None:  # UR's record.py --binary
+        return read_binary(path, problems if problems is not None else [])
     return _load_csv(path, problems if problems is not None else [])
 
 
 def _load_csv(path: Path, problems: list[str]) -> dict[str, list[Any]]:
     import csv
 
+    from rtde_spec.output.ur_recordings import separator
+
     nan = float("nan")
     texts: dict[str, list[tuple[int, str]]] = {}  # column -> (line, cell) of cells not numbers
     numbers: dict[str, int] = {}
     with open(path, newline="", encoding="utf-8", errors="replace") as f:
-        reader = csv.DictReader(f)
+        cells = separator(f.readline())  # UR's record.py separates by spaces
+        f.seek(0)
+        reader = csv.DictReader(f, delimiter=cells)
         columns: dict[str, list[Any]] = {n: [] for n in reader.fieldnames or []}
         numbers = dict.fromkeys(columns, 0)
         for row in reader:
