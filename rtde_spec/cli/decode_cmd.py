@@ -24,6 +24,7 @@ from rtde_spec._generated.constants import (
 )
 from rtde_spec.cli.arguments import RECIPE_FILE_HELP, existing_file, primary_version, recipe_file
 from rtde_spec.cli.conventions import describe, output_file
+from rtde_spec.cli.hex_dumps import looks_like_hex_forms
 from rtde_spec.cli.inputs import from_hex_text, read_input, refuse_special, reject_capture
 from rtde_spec.cli.options import add_lenient
 from rtde_spec.cli.report import close_output, report_skipped
@@ -46,12 +47,14 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
         help="decode RTDE or primary/secondary messages from hex or a file",
         **describe(
             "Decodes RTDE or primary/secondary packages from hex, a file of bytes (or hex text) or standard "
-            "input, into a table, JSON (--json: one array), JSON Lines (--jsonl), CSV, Parquet or MCAP "
+            "input (hex as copied: plain, a dump with offsets as Wireshark, tshark -x, xxd or hexdump -C "
+            "print it, a C array 0x00,0x05, or \\x00\\x05), into a table, JSON (--json: one array), JSON Lines (--jsonl), CSV, Parquet or MCAP "
             "(-o FILE, the format from its suffix). The output streams, so files of any size decode in "
             "constant memory; a fault stops with its byte offset, on standard output after every package "
             "before it; -o FILE is put in place only whole (a file there stays as it was).",
             "rtde-spec decode 00045601 --from controller",
             "rtde-spec decode session.bin --from client --jsonl",
+            "rtde-spec decode copied-from-wireshark.txt --from client",
             "rtde-spec decode data.bin --recipe outputs.txt -o data.parquet",
             "rtde-spec decode --protocol primary capture_30001.bin --json",
         ),
@@ -209,7 +212,8 @@ def input_left(args: argparse.Namespace, offset: int | None) -> str:
 
 
 def _is_hex_text(head: bytes) -> bool:
-    return bool(head) and all(c in b"0123456789abcdefABCDEF \t\r\n:x" for c in head[:4096])
+    plain = all(c in b"0123456789abcdefABCDEF \t\r\n:x" for c in head[:4096])
+    return bool(head) and (plain or looks_like_hex_forms(head))
 
 
 def _progress(total: int, args: argparse.Namespace) -> Any:

@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 from rtde_spec.cli.arguments import existing_file
+from rtde_spec.cli.hex_dumps import from_hex_forms
 from rtde_spec.errors import RtdeSpecError, UsageError
 from rtde_spec.printable import safe_text
 
@@ -87,6 +88,9 @@ def read_input(arg: str) -> bytes:
     elif path is not None:
         data = path.read_bytes()
     else:
+        forms = from_hex_forms(arg)  # a dump line, 0x00,0x05 or \x00\x05
+        if forms is not None:
+            return forms
         try:
             return parse_hex(arg)
         except RtdeSpecError as exc:
@@ -104,11 +108,15 @@ def read_input(arg: str) -> bytes:
 
 
 def from_hex_text(data: bytes) -> bytes:
-    """The bytes that hex text stands for; `data` itself when it is not hex text."""
+    """The bytes that hex text stands for (plain hex, a dump with offsets, a C array, escaped);
+    `data` itself when it is not hex text."""
     try:
         text = data.decode("ascii")
     except UnicodeDecodeError:
         return data
+    forms = from_hex_forms(text)  # first: a dump's offsets are hex digits too
+    if forms is not None:
+        return forms
     stripped = re.sub(r"[\s:]", "", text)
     if stripped and _HEX_RE.match(stripped) and len(stripped) % 2 == 0:
         return bytes.fromhex(stripped)
