@@ -53,8 +53,7 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
             "constant memory; a fault stops with its byte offset, on standard output after every package "
             "before it; -o FILE is put in place only whole (a file there stays as it was).",
             "rtde-spec decode 00045601 --from controller",
-            "rtde-spec decode session.bin --from client --jsonl",
-            "rtde-spec decode copied-from-wireshark.txt --from client",
+            "rtde-spec decode copied-from-wireshark.txt --from client --jsonl",
             "rtde-spec decode data.bin --recipe outputs.txt -o data.parquet",
             "rtde-spec decode --protocol primary capture_30001.bin --json",
         ),
