@@ -1395,6 +1395,27 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'checked': False,
                 'doc': 'The signed int of a list of bools, index 0 the least significant: 0 for an '
                        'empty list, the first 32 of a longer one'},
+               {'name': 'random',
+                'section': 'maths',
+                'returns': 'float',
+                'since': {'cb3': '3.0.0', 'e-series': '5.0.0'},
+                'checked': False,
+                'doc': 'A pseudo-random float from 0 to 1',
+                'emulation': "Python's Mersenne Twister, seeded at the emulator's start"},
+               {'name': 'make_list',
+                'section': 'maths',
+                'params': [{'name': 'length'},
+                           {'name': 'initial_value'},
+                           {'name': 'capacity', 'default': 'length'}],
+                'returns': 'array',
+                'since': {'e-series': '5.11.0'},
+                'checked': False,
+                'doc': 'A list of `length` copies of initial_value (any value but a list: a list '
+                       'of lists is a matrix) that can grow and shrink from 0 to capacity (not '
+                       "less than length); `since` taken as struct's, the type its doc names for "
+                       'initial_value',
+                'emulation': 'capacity is checked, not kept: the emulator has no method that grows '
+                             'or shrinks a list'},
                {'name': 'get_list_length',
                 'section': 'maths',
                 'params': [{'name': 'v'}],

@@ -28,6 +28,7 @@ from rtde_spec.emulator.urscript.builtins_io import IO
 from rtde_spec.emulator.urscript.builtins_modes import MODES, settings_of
 from rtde_spec.emulator.urscript.builtins_poses import POSES
 from rtde_spec.emulator.urscript.builtins_text import TEXT
+from rtde_spec.emulator.urscript.builtins_values import VALUES
 from rtde_spec.emulator.urscript.calls import Pose, number, six, type_name
 from rtde_spec.emulator.urscript.interfaces import Runner
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
@@ -282,13 +283,8 @@ def _waypoint(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose:
     return Pose(arm.pose())
 
 
-BUILTINS.update(sockets.SENDERS)
-BUILTINS.update(MODES)
-BUILTINS.update(DYNAMICS)
-BUILTINS.update(IO)
-BUILTINS.update(POSES)
-BUILTINS.update(TEXT)
-BUILTINS.update(WORLD)
+for _table in (sockets.SENDERS, MODES, DYNAMICS, IO, POSES, TEXT, VALUES, WORLD):
+    BUILTINS.update(_table)
 BUILTINS["socket_close"] = sockets.socket_close
 BUILTINS["socket_set_var"] = sockets.socket_set_var
 BUILTINS["rpc_factory"] = rpc.rpc_factory
