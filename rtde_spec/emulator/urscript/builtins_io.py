@@ -187,6 +187,51 @@ def _modbus_add(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
     }  # fmt: skip
 
 
+@_builtin("modbus_add_rw_signal")
+def _modbus_add_rw(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    """A signal of registers read from one address and written to another with function code 23
+    (read_register_count and write_register_count 1 to 123)."""
+    address = arg(stmt, args, kwargs, 0, "IP")
+    if not isinstance(address, str) or not address:
+        raise ScriptFault(f"{stmt.name}: IP must be a text that is not empty", stmt.line, 1)
+    slave = _int(stmt, arg(stmt, args, kwargs, 1, "slave_number"), "slave_number", range(256))
+    fields = ("read_address", "read_register_count", "write_address", "write_register_count")
+    read_at, reads, write_at, writes = (arg(stmt, args, kwargs, 2 + i, f) for i, f in enumerate(fields))
+    for field, value in zip(fields, (read_at, reads, write_at, writes), strict=True):
+        low, top = (1, 123) if field.endswith("count") else (0, 0xFFFF)
+        if type(value) is not int or not low <= value <= top:
+            raise ScriptFault(
+                f"{stmt.name}: {field} must be an int of {low} to {top}, not {value!r}", stmt.line, 1
+            )
+    name = _signal_name(stmt, arg(stmt, args, kwargs, 6, "signal_name"))
+    sequential = bool(arg(stmt, args, kwargs, 7, "sequential_mode", False))
+    _signals(runner)[name] = {
+        "ip": address, "slave": slave, "address": write_at, "read_address": read_at, "type": _RW,
+        "sequential": sequential, "count": writes, "read_count": reads, "update_frequency": 10,
+        "runstate_choice": 0,
+    }  # fmt: skip
+
+
+@_builtin("modbus_set_signal_watchdog")
+def _modbus_watchdog(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    """How long (0 to 300 s; 2 s by default) errors are tolerated before the program stops."""
+    signal = _signal(runner, stmt, _signal_name(stmt, arg(stmt, args, kwargs, 0, "signal_name")))
+    timeout = number(stmt, arg(stmt, args, kwargs, 1, "new_timeout_in_sec"), "new_timeout_in_sec")
+    if not 0 <= timeout <= 300:
+        raise ScriptFault(f"{stmt.name}: new_timeout_in_sec must be 0 to 300, not {timeout:g}", stmt.line, 1)
+    signal["watchdog"] = timeout
+
+
+@_builtin("modbus_get_error", "modbus_get_time_since_signal_invalid")
+def _modbus_error(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> int | float:
+    """No device is polled, so none fails: no error (0) and no time in error (0.0)."""
+    _signal(runner, stmt, _signal_name(stmt, arg(stmt, args, kwargs, 0, "signal_name")))
+    if stmt.name == "modbus_get_time_since_signal_invalid":
+        return 0.0
+    _int(stmt, arg(stmt, args, kwargs, 1, "error_source", 0), "error_source", (0, 1, 2))
+    return 0
+
+
 @_builtin("modbus_set_signal_update_frequency", "modbus_set_runstate_dependent_choice")
 def _modbus_setting(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
     name = _signal_name(stmt, arg(stmt, args, kwargs, 0, "signal_name"))
@@ -213,7 +258,8 @@ def _modbus_delete(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> No
 
 
 _DIGITAL = (0, 1, 15)  # signal types: digital input, output, outputs (register_count coils)
-_MANY = (15, 16)  # outputs of several coils / registers
+_RW = 23  # modbus_add_rw_signal's: registers read from one address and written to another
+_MANY = (15, 16, _RW)  # outputs of several coils / registers
 
 
 def _many(signal: dict[str, Any]) -> bool:
@@ -233,6 +279,8 @@ def _modbus_get(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
     """A digital signal's bool, a register's unsigned int, a list of them for a signal of several."""
     signal = _signal(runner, stmt, _signal_name(stmt, arg(stmt, args, kwargs, 0, "signal_name")))
     arg(stmt, args, kwargs, 1, "is_secondary_program", False)
+    if signal["type"] == _RW:  # what the device's read registers hold: none answers
+        return [0] * signal["read_count"] if signal["read_count"] > 1 else 0
     value = _current(signal)
     return list(value) if isinstance(value, list) else value
 
@@ -245,7 +293,7 @@ def _modbus_set(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
     digital = stmt.name == "modbus_set_output_signal"
     value = arg(stmt, args, kwargs, 1, "digital_value" if digital else "register_value")
     arg(stmt, args, kwargs, 2, "is_secondary_program", False)
-    kinds, what = ((1, 15), "digital output") if digital else ((3, 16), "register output")
+    kinds, what = ((1, 15), "digital output") if digital else ((3, 16, _RW), "register output")
     if signal["type"] not in kinds:
         raise ScriptFault(f"{stmt.name}: {name!r} is no {what}", stmt.line, 1)
     many = _many(signal)
