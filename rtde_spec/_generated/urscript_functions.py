@@ -1301,6 +1301,18 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                        "e-Series Script Directory's urmath size(v): size([1,2,3,4,5]) is 5; "
                        "PolyScope X's Center to Object smart skill reads size(dir_list)[0]). The "
                        'e-Series version that brought it is not on hand'},
+               {'name': 'wrench_trans',
+                'section': 'maths',
+                'params': [{'name': 'T_from_to'}, {'name': 'w_from'}],
+                'returns': 'array',
+                'since': {'cb3': '3.0.0', 'e-series': '5.0.0'},
+                'checked': False,
+                'doc': 'A wrench [F_x, F_y, F_z, M_x, M_y, M_z] moved to another point of view '
+                       '("w_to = T_from->to * w_from"): for T_from_to = (R, p), F\' = R F and M\' '
+                       "= R M + p x F', the wrench at the frame the pose places, seen from the "
+                       "frame it is given in. The manual's text does not fix the direction (its "
+                       "get_tcp_force example reads it the other way); UR's impedance and "
+                       "admittance examples and o2ac's programs, run on arms, read it so"},
                {'name': 'rotvec2rpy',
                 'section': 'maths',
                 'params': [{'name': 'rotation_vector'}],

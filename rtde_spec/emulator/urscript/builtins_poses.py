@@ -134,3 +134,19 @@ def _binary_list_to_integer(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwar
         raise ScriptFault(f"{stmt.name}: l must be a list of bools", stmt.line, 1)
     value = sum(1 << i for i, b in enumerate(bits[:32]) if b)
     return value - (1 << 32) if value >= 1 << 31 else value
+
+
+@_builtin("wrench_trans")
+def _wrench_trans(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> list[float]:
+    """A wrench [F, M] given at the frame `T_from_to` places (in its coordinates), seen from the
+    frame the pose is given in: F' = R F, M' = R M + p x F' for T = (R, p), the pose_trans way of
+    reading a pose. UR's programs that ran on arms fix this way round: the impedance example maps
+    a velocity "from offset t to base frame" with wrench_trans(offset_pos, .) (angular and linear
+    swapped), its admittance example a flange velocity to the TCP with pose_inv(T_cc_to_tcp), and
+    o2ac's inverts the TCP's rotation to get a base force in TCP coordinates."""
+    frame = _pose(stmt, arg(stmt, args, kwargs, 0, "T_from_to"))
+    wrench = np.array(six(stmt, arg(stmt, args, kwargs, 1, "w_from"), "w_from"))
+    rotation, position = frame[:3, :3], frame[:3, 3]
+    force = rotation @ wrench[:3]
+    moment = rotation @ wrench[3:] + np.cross(position, force)
+    return [float(v) for v in (*force, *moment)]
