@@ -666,6 +666,19 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                        '(0-10 V)',
                 'emulation': "sets the input's bit of tool_analog_input_types (and the Tool Data's "
                              'input range)'},
+               {'name': 'set_analog_inputrange',
+                'section': 'interfaces',
+                'params': [{'name': 'port'}, {'name': 'range'}],
+                'returns': 'none',
+                'since': {'cb3': '3.0.0', 'e-series': '5.0.0'},
+                'checked': False,
+                'doc': 'Deprecated (the e-Series Script Directory) range of analog input port 0-3: '
+                       "0-1 the controller's, range 0 (0-5 V, taken as 2) or 2 (0-10 V), its "
+                       "ranges 1 and 3 (-5-5 V, -10-10 V) no longer supported; 2-3 the tool's, "
+                       "range 0 (0-5 V, taken as 1) or 1 (0-10 V), 2 4-20 mA. python-urx's Robotiq "
+                       'program calls it; Robotiq ran that on a CB3 (python-urx PR #26, 2017)',
+                'emulation': 'as set_standard_analog_input_domain / set_tool_analog_input_domain: '
+                             "a voltage range sets the input's bit, 4-20 mA clears it"},
                {'name': 'set_input_actions_to_default',
                 'section': 'interfaces',
                 'returns': 'none',
@@ -707,6 +720,17 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'doc': 'As set_runstate_standard_digital_output_to_value, for tool digital output '
                        'outputId (0 or 1; states 0 to 5)',
                 'emulation': 'as set_runstate_standard_digital_output_to_value'},
+               {'name': 'set_runstate_outputs',
+                'section': 'interfaces',
+                'params': [{'name': 'outputs', 'default': []}],
+                'returns': 'none',
+                'since': {'cb3': '3.0.0'},
+                'checked': False,
+                'doc': "CB2-era name: the outputs that follow the program's run state; "
+                       "python-urx's Robotiq program (run on a CB3 by Robotiq, python-urx PR #26, "
+                       '2017) and generated CB-era preambles call set_runstate_outputs([]). No '
+                       'edition on hand documents it; no e-Series program on hand calls it',
+                'emulation': 'recorded only, as set_runstate_standard_digital_outputs'},
                {'name': 'set_runstate_standard_digital_outputs',
                 'section': 'interfaces',
                 'params': [{'name': 'outputs'}],

@@ -67,13 +67,29 @@ def _input_domain(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Non
     """Domain 1 (voltage) sets the input's bit, 0 (current) clears it, as RTDE encodes it."""
     port = _int(stmt, arg(stmt, args, kwargs, 0, "port"), "port", (0, 1))
     domain = _int(stmt, arg(stmt, args, kwargs, 1, "domain"), "domain", DOMAINS)
-    if stmt.name == "set_standard_analog_input_domain":
+    _domain(runner, stmt, stmt.name == "set_standard_analog_input_domain", port, domain == 1)
+
+
+def _domain(runner: Runner, stmt: Stmt, standard: bool, port: int, voltage: bool) -> None:
+    if standard:
         bits = (AnalogIoTypes.ANALOG_INPUT_0_VOLTAGE, AnalogIoTypes.ANALOG_INPUT_1_VOLTAGE)
-        _bit(runner.robot.values, "analog_io_types", int(bits[port]), domain == 1)
+        _bit(runner.robot.values, "analog_io_types", int(bits[port]), voltage)
     else:
         tool = tuple(ToolAnalogInputTypes)  # input 0's bit, input 1's
-        _bit(runner.robot.values, "tool_analog_input_types", int(tool[port]), domain == 1)
+        _bit(runner.robot.values, "tool_analog_input_types", int(tool[port]), voltage)
     runner.applied.append(stmt.text)
+
+
+@_builtin("set_analog_inputrange")
+def _input_range(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    """The deprecated form (CB2/CB3 preambles, python-urx's Robotiq program): ports 0-1 the
+    controller's, range 0 (0-5 V, taken as 2) or 2 (0-10 V); 2-3 the tool's, range 0 (0-5 V,
+    taken as 1) or 1 (0-10 V) voltage, 2 current (4-20 mA). The controller's ranges 1 and 3 (-5-5 V,
+    -10-10 V) are "no longer supported" (the Script Directory), so refused."""
+    port = _int(stmt, arg(stmt, args, kwargs, 0, "port"), "port", range(4))
+    allowed = (0, 2) if port < 2 else (0, 1, 2)
+    chosen = _int(stmt, arg(stmt, args, kwargs, 1, "range"), "range", allowed)
+    _domain(runner, stmt, port < 2, port % 2, port < 2 or chosen != 2)
 
 
 @_builtin("set_input_actions_to_default")
@@ -144,9 +160,12 @@ def _runstate(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
     runner.applied.append(stmt.text)
 
 
-@_builtin("set_runstate_standard_digital_outputs")
+@_builtin("set_runstate_standard_digital_outputs", "set_runstate_outputs")
 def _runstate_outputs(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
-    outputs = arg(stmt, args, kwargs, 0, "outputs")
+    """Which outputs follow the program's run state; set_runstate_outputs is the CB2-era name
+    (CB3 preambles and python-urx's Robotiq program call it with [] for none)."""
+    default = [] if stmt.name == "set_runstate_outputs" else ...
+    outputs = arg(stmt, args, kwargs, 0, "outputs", default)
     if not isinstance(outputs, list) or not all(type(o) is int for o in outputs):
         raise ScriptFault(f"{stmt.name}: outputs must be a list of output numbers", stmt.line, 1)
     settings_of(runner)["_runstate_standard_digital_outputs"] = list(outputs)  # undocumented: recorded
