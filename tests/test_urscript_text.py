@@ -102,3 +102,15 @@ def test_to_num_gives_an_int_without_a_decimal_point_hex_too() -> None:
     assert [(kind, line) for kind, _, line, _ in events if kind == "runtime_exception"] == [
         ("runtime_exception", 2)
     ]
+
+
+def test_a_struct_has_no_text_so_to_str_str_cat_and_textmsg_refuse_it() -> None:
+    """The Script Directory's str_cat: operands "can be one of the following types: String, Boolean,
+    Integer, Float, Pose, List of Boolean / Integer / Float / Pose. Any other type will raise an
+    exception" (to_str lists the same); textmsg sends s1 and s2 "concatenated", as str_cat joins."""
+    for call in ("to_str(s)", 'str_cat("s=", s)', 'textmsg("s=", s)', "textmsg(s)"):
+        _, events = run(f"def prog():\n  s = struct(a=1)\n  x = 1\n  {call}\nend\n", 10)
+        texts = [text for kind, text, _, _ in events if kind == "text"]
+        (fault,) = [(text, line) for kind, text, line, _ in events if kind == "runtime_exception"]
+        assert texts == [] and "a struct has no text" in fault[0] and fault[1] == 4, (call, fault)
+    assert said('def prog():\n  textmsg(True, [False, 1, "a", 2.5])\nend\n') == ["True[False, 1, a, 2.5]"]

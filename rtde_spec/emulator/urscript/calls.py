@@ -320,12 +320,12 @@ def _text_of(value: Any, parts: list[str], left: list[int], depth: int) -> None:
                 parts.append(", ")
             _text_of(item, parts, left, depth + 1)
         parts.append("]")
-    elif isinstance(value, bool):
-        parts.append("True" if value else "False")
     elif isinstance(value, float):
         parts.append(float_text(value))
-    else:
+    elif isinstance(value, (int, str)):  # a bool too: True, False
         parts.append(str(value))
+    else:  # "Any other type will raise an exception" (the Script Directory's str_cat, to_str)
+        raise ValueError(f"a {type_name(value)} has no text (only bools, numbers, texts, poses and lists)")
     left[0] -= len(parts[-1]) + 2
     if left[0] < 0:
         raise ValueError(f"to_str: text over {MAX_TEXT} characters")
