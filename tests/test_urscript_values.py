@@ -3,6 +3,8 @@ call them (UR's examples seed lists with make_list), so a controller that lacks 
 
 from __future__ import annotations
 
+from rtde_spec.emulator.controller.model import ControllerModel
+
 from .test_urscript_control import faults, run, said
 
 
@@ -56,3 +58,34 @@ def test_make_list_refuses_what_the_manual_rules_out() -> None:
         _, events = run(f"def prog():\n  x = 1\n  l = {call}\nend\n")
         ((text, line, _),) = faults(events)
         assert text.startswith("make_list: ") and message in text and line == 3, (call, text)
+
+
+def run_on(version: str, script: str, steps: int = 20) -> list[tuple[str, str, int]]:
+    model = ControllerModel(version)
+    model.run_script(script)
+    for _ in range(steps):
+        if model.program is None:
+            break
+        model.tick(model.step + 1)
+    return [(e.kind, e.text, e.line) for e in model.drain_events()]
+
+
+def test_get_rtde_value_reads_an_rtde_output_as_clients_receive_it() -> None:
+    """UR's impedance-control example (for 5.23) times itself with get_rtde_value."""
+    events = run_on(
+        "5.23.0",
+        "def prog():\n"
+        '  textmsg(get_rtde_value("actual_execution_time"))\n'
+        '  textmsg(get_rtde_value("actual_q")[1])\n'
+        '  textmsg(get_rtde_value("robot_mode"))\n'
+        '  x = get_rtde_value("no_such_output")\n'
+        "end\n",
+    )
+    assert [text for kind, text, _ in events if kind == "text"] == ["0", "-1.5708", "7"]  # the home pose
+    faults = [(text, line) for kind, text, line in events if kind == "runtime_exception"]
+    assert faults == [("get_rtde_value: no RTDE output 'no_such_output' on this controller", 5)]
+
+
+def test_get_rtde_value_is_refused_before_5_23() -> None:
+    events = run_on("5.22.0", 'def prog():\n  x = get_rtde_value("actual_q")\nend\n')
+    assert ("runtime_exception", "compile_error_name_not_found:get_rtde_value", 2) in events

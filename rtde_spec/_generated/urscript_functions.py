@@ -487,6 +487,17 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'doc': 'Disable the tool wrench limitation tool_wrench_limit_set gave (5.22 '
                        'programs call it in their preamble)',
                 'emulation': 'recorded only: the emulator models no wrench limit'},
+               {'name': 'get_rtde_value',
+                'section': 'internals',
+                'params': [{'name': 'name'}],
+                'returns': 'number',
+                'since': {'e-series': '5.23.0'},
+                'checked': False,
+                'doc': 'An RTDE output by its name (spec/rtde), as RTDE clients receive it; an '
+                       'unknown name is a runtime exception. Undocumented in the editions on hand: '
+                       "UR's impedance-control example (2025, written for 5.23's direct_torque) "
+                       'reads get_rtde_value("actual_execution_time"); `since` taken as that '
+                       "example's version"},
                {'name': 'get_target_payload',
                 'section': 'internals',
                 'returns': 'float',

@@ -1,5 +1,6 @@
 """The Script Directory's urmath functions that make a value rather than compute one from a pose:
-random() and make_list(length, initial_value, capacity).
+random() and make_list(length, initial_value, capacity); and get_rtde_value(name), an RTDE
+output's value as the RTDE server sends it.
 
 make_list's elements are copies of initial_value (URScript's values are values: changing one
 element of a list of structs changes no other). The emulator has no list methods that grow or
@@ -60,3 +61,16 @@ def _make_list(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> list[A
     if isinstance(initial, (dict, Pose)):  # a struct or pose: each element its own
         return [copy.deepcopy(initial) for _ in range(length)]
     return [initial] * length
+
+
+@_builtin("get_rtde_value")
+def _rtde_value(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
+    """An RTDE output of this controller by its name, as RTDE clients receive it (a vector as a
+    list). Undocumented in the editions on hand: UR's impedance-control example reads its own
+    timing with get_rtde_value("actual_execution_time")."""
+    name = arg(stmt, args, kwargs, 0, "name")
+    outputs = getattr(runner.robot, "outputs", runner.robot.values)
+    if not isinstance(name, str) or name not in outputs or name not in runner.robot.values:
+        raise ScriptFault(f"{stmt.name}: no RTDE output {str(name)[:60]!r} on this controller", stmt.line, 1)
+    value = runner.robot.values[name]
+    return list(value) if isinstance(value, (tuple, list)) else value
