@@ -1185,6 +1185,34 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                        'x, y, z, rx, ry, rz',
                 'emulation': 'calls are real XML-RPC over HTTP, made off the control loop (the '
                              'thread waits, 30 s at most); pstream URLs are refused when called'},
+               {'name': 'eip_reader_factory',
+                'section': 'interfaces',
+                'params': [{'name': 'instance_name'}, {'name': 'data_size'}],
+                'returns': 'handle',
+                'since': {'e-series': '5.16.0'},
+                'doc': 'A read-only handle on a PLC->Robot assembly instance (its id as a text, '
+                       'its size in bytes). Methods: '
+                       'define_uint8/uint16/int16/int32/float32(offset, data_name) and their '
+                       '_array(offset, length, data_name) forms, define_bit(offset, bit_number, '
+                       'data_name, bitfield_width=1), define_string(offset, length, data_name) lay '
+                       'out labels (no overlaps but bits over numbers; within the size); '
+                       'read(label) gives a value, read([labels]) a struct; set_watchdog(frequency '
+                       '0-10 Hz, action 0 ignore/1 pause/2 stop), start_watchdog(), '
+                       'stop_watchdog(); close()',
+                'emulation': 'no Ethernet/IP adapter and no PLC: reads give zeros, False and ""; a '
+                             'watchdog is recorded and never trips'},
+               {'name': 'eip_writer_factory',
+                'section': 'interfaces',
+                'params': [{'name': 'instance_name'}, {'name': 'data_size'}],
+                'returns': 'handle',
+                'since': {'e-series': '5.16.0'},
+                'doc': "A write-only handle on a Robot->PLC assembly instance: the reader's "
+                       'define_ methods, write(struct of labels and values) (all at once; a value '
+                       "out of its label's type range is a runtime exception; an array takes a "
+                       'list of at most its length, a string at most length - 1 characters), '
+                       'clear() (all to zero), close()',
+                'emulation': 'what the program writes is checked and kept on the handle; no PLC '
+                             'receives it'},
                {'name': 'add_frame',
                 'section': 'worldmodel',
                 'params': [{'name': 'name'},

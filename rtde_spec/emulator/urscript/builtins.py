@@ -19,6 +19,7 @@ from rtde_spec.emulator.arm import kinematics as kin
 from rtde_spec.emulator.arm.motion import JointMove, LinearMove
 from rtde_spec.emulator.urscript import calls as script_calls
 from rtde_spec.emulator.urscript import (
+    eip,
     optimove,  # noqa: F401 - registers optimovej/optimovel
     rpc,
     sockets,
@@ -283,7 +284,7 @@ def _waypoint(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose:
     return Pose(arm.pose())
 
 
-for _table in (sockets.SENDERS, MODES, DYNAMICS, IO, POSES, TEXT, VALUES, WORLD):
+for _table in (sockets.SENDERS, MODES, DYNAMICS, IO, POSES, TEXT, VALUES, WORLD, eip.FACTORIES):
     BUILTINS.update(_table)
 BUILTINS["socket_close"] = sockets.socket_close
 BUILTINS["socket_set_var"] = sockets.socket_set_var

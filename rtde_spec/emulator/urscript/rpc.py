@@ -21,6 +21,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any
 from urllib.parse import urlsplit
 
+from rtde_spec.emulator.urscript import eip
 from rtde_spec.emulator.urscript.calls import Pose, arg, type_name
 from rtde_spec.emulator.urscript.interfaces import Runner
 from rtde_spec.emulator.urscript.nodes import Expr, ScriptFault, Stmt
@@ -70,6 +71,8 @@ def rpc_factory(runner: Runner, stmt: Stmt, args: list[Any], kwargs: dict[str, A
 def call(expr: Expr, handle: Any, args: list[Any], kwargs: dict[str, Any]) -> Waiting:
     """`handle.name(args)`: the server's answer, once it comes (the thread waits meanwhile)."""
     name, line, column = str(expr.value), expr.line, expr.column
+    if isinstance(handle, eip.EipHandle):  # an Ethernet/IP handle's method: answered at once
+        return eip.call(handle, name, args, kwargs, line, column)
     if not isinstance(handle, RpcHandle):
         raise ScriptFault(f"Type error: {type_name(handle)} has no method {name}", line, column)
     if name == "closeXMLRPCClientConnection":
