@@ -370,7 +370,7 @@ def test_the_io_reads_give_what_the_outputs_and_inputs_show() -> None:
         "  textmsg(str_cat(read_output_integer_register(24), read_output_float_register(25)))\n"
         "  textmsg(read_output_boolean_register(10))\n"
         '  textmsg(str_cat(length([1, 2, 3]), length("abcd")))\n'
-        "  t = time(1)\n  textmsg(t.sec >= 0 and t.nanosec < 1000000000)\nend\n"
+        "  t = time(2)\n  textmsg(t.sec >= 0 and t.nanosec < 1000000000)\nend\n"
     )
     # on a loaded machine the step's time slice may end before the script does: it goes on in the
     # next steps (once failed in a README run beside another suite, the last textmsg missing)

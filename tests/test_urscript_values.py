@@ -89,3 +89,23 @@ def test_get_rtde_value_reads_an_rtde_output_as_clients_receive_it() -> None:
 def test_get_rtde_value_is_refused_before_5_23() -> None:
     events = run_on("5.22.0", 'def prog():\n  x = get_rtde_value("actual_q")\nend\n')
     assert ("runtime_exception", "compile_error_name_not_found:get_rtde_value", 2) in events
+
+
+def test_time_reads_the_controller_s_clock_by_default_and_the_system_time_with_mode_2() -> None:
+    """The e-Series Script Directory's time(mode=0): 0 the controller's execution time since it
+    started (its example: current_time_s = time().sec), 2 the system time in GMT, 1 reserved."""
+    events = run_on(
+        "5.22.0",
+        "def prog():\n"
+        "  sleep(0.5)\n"
+        "  t = time()\n"
+        "  textmsg(t.sec + t.nanosec / 1000000000)\n"
+        "  textmsg(time(2).sec > 1700000000, time(0).sec < 10)\n"
+        "  x = time(1)\n"
+        "end\n",
+        steps=400,
+    )
+    texts = [text for kind, text, _ in events if kind == "text"]
+    assert 0.49 < float(texts[0]) < 0.6 and texts[1] == "TrueTrue"
+    faults = [(text, line) for kind, text, line in events if kind == "runtime_exception"]
+    assert faults == [("time: mode must be 0 (controller) or 2 (system time), not 1", 6)]

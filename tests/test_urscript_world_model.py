@@ -327,7 +327,7 @@ def test_the_world_model_is_polyscope_xs_and_polyscope_x_keeps_the_e_series_func
         _, events = run("reset_world_model()\n", ControllerModel(version))
         assert faults(events) == [("compile_error_name_not_found:reset_world_model", 1)]
     _, events = run(
-        "m = get_target_payload()\nx = time(1)\nq = rpy2rotvec([0, 0, 1])\n", ControllerModel("10.0.0")
+        "m = get_target_payload()\nx = time()\nq = rpy2rotvec([0, 0, 1])\n", ControllerModel("10.0.0")
     )
     assert faults(events) == []  # e-Series functions (5.10, 5.22) are PolyScope X's from 10.0
 

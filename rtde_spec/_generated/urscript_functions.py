@@ -460,16 +460,17 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                              'running is dropped'},
                {'name': 'time',
                 'section': 'internals',
-                'params': [{'name': 'clock'}],
+                'params': [{'name': 'mode', 'default': 0}],
                 'returns': 'struct',
                 'since': {'e-series': '5.22.0'},
                 'checked': False,
-                'doc': "A clock's reading as a struct of sec and nanosec (UR's execution-time "
-                       'example times code with time(2) on PolyScope 5.22, the earliest version '
-                       'known to have it; the editions on hand do not document it)',
-                'emulation': 'clock is read as a POSIX clock id (0 real time, 1 monotonic, 2 the '
-                             "process's CPU time, 3 the thread's): the emulator's own clock of "
-                             "that id, not the controller's"},
+                'doc': "struct(sec, nanosec) of a clock (the e-Series Script Directory's "
+                       "time(mode=0)): mode 0 the controller's execution time since it started "
+                       '(monotonic), 2 the system time in GMT (seconds since 1970, may jump), 1 '
+                       "reserved. UR's execution-time example times code with time(2) on PolyScope "
+                       '5.22, the earliest version known to have it',
+                'emulation': "mode 0 is the emulator's time since it started (RTDE's timestamp); 1 "
+                             'and other modes are a runtime exception'},
                {'name': 'motion_version_set',
                 'section': 'internals',
                 'params': [{'name': 'version'}],

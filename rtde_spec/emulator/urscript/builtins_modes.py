@@ -76,7 +76,7 @@ for _name in (
     "tool_wrench_limit_disable",
 ):  # fmt: skip
     MODES[_name] = _mode(f"_{_name}", 1)
-CLOCKS = range(4)  # time(clock): POSIX clock ids (real time, monotonic, process and thread CPU time)
+CLOCKS = (0, 2)  # time(mode): the controller's time since it started, the system time (1 is reserved)
 
 
 @_builtin("motion_version_set")
@@ -100,10 +100,18 @@ def _set_pos(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
 
 @_builtin("time")
 def _time(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> dict[str, int]:
-    clock = arg(stmt, args, kwargs, 0, "clock")
-    if not isinstance(clock, int) or isinstance(clock, bool) or clock not in CLOCKS:
-        raise ScriptFault(f"{stmt.name}: clock must be 0 to {len(CLOCKS) - 1}, not {clock!r}", stmt.line, 1)
-    nanoseconds = time.clock_gettime_ns(clock)
+    """struct(sec, nanosec) of time(mode=0) (the e-Series Script Directory): mode 0 the time since
+    the controller started (monotonic; the emulator's, as RTDE's timestamp), 2 the system time
+    (GMT, seconds since 1970), 1 reserved."""
+    mode = arg(stmt, args, kwargs, 0, "mode", 0)
+    if type(mode) is not int or mode not in CLOCKS:
+        raise ScriptFault(
+            f"{stmt.name}: mode must be 0 (controller) or 2 (system time), not {mode!r}", stmt.line, 1
+        )
+    if mode == 0:
+        nanoseconds = round(float(getattr(runner.robot, "time", 0.0)) * 1e9)
+    else:
+        nanoseconds = time.time_ns()
     return {"sec": nanoseconds // 1_000_000_000, "nanosec": nanoseconds % 1_000_000_000}
 
 
