@@ -109,3 +109,19 @@ def test_time_reads_the_controller_s_clock_by_default_and_the_system_time_with_m
     assert 0.49 < float(texts[0]) < 0.6 and texts[1] == "TrueTrue"
     faults = [(text, line) for kind, text, line in events if kind == "runtime_exception"]
     assert faults == [("time: mode must be 0 (controller) or 2 (system time), not 1", 6)]
+
+
+def test_reachability_takes_the_manuals_parameters_and_the_tcp_it_is_given() -> None:
+    """get_inverse_kin_has_solution(pose, qnear, maxPositionError, maxOrientationError, tcp) and
+    is_within_safety_limits(position, qNear): the same pose with a TCP 5 m long is out of reach."""
+    events = run_on(
+        "5.15.0",
+        "def prog():\n"
+        "  x = get_actual_tcp_pose()\n"
+        "  long = p[0, 0, 5, 0, 0, 0]\n"
+        "  textmsg(get_inverse_kin_has_solution(x), get_inverse_kin_has_solution(x, tcp=long))\n"
+        "  q = get_actual_joint_positions()\n"
+        "  textmsg(is_within_safety_limits(position=x), is_within_safety_limits(x, q))\n"
+        "end\n",
+    )
+    assert [text for kind, text, _ in events if kind == "text"] == ["TrueFalse", "TrueTrue"]

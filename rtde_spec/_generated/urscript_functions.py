@@ -386,10 +386,11 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'doc': 'Whether the arm stands still'},
                {'name': 'is_within_safety_limits',
                 'section': 'internals',
-                'params': [{'name': 'pose'}],
+                'params': [{'name': 'position'}, {'name': 'qNear', 'default': 'current'}],
                 'returns': 'bool',
                 'since': {'cb3': '3.0.0', 'e-series': '5.0.0'},
-                'doc': 'Whether a pose or joint position is within the limits',
+                'doc': 'Whether a pose or joint position is within the limits (qNear: the joints '
+                       "the pose's inverse kinematics starts near)",
                 'emulation': 'joint limits and reachability; safety planes are not modelled'},
                {'name': 'get_speed_slider_fraction',
                 'section': 'internals',

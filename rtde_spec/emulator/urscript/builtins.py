@@ -302,13 +302,15 @@ def _steady(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> bool:
 
 @builtin("get_inverse_kin_has_solution", "is_within_safety_limits")
 def _reachable(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> bool:
-    arm = runner.robot.arm
-    target = _arg(stmt, args, kwargs, 0, "pose")
-    if stmt.name == "is_within_safety_limits" and not isinstance(target, Pose):
+    arm, limits = runner.robot.arm, stmt.name == "is_within_safety_limits"
+    target = _arg(stmt, args, kwargs, 0, "position" if limits else "pose")  # the manual's names
+    if limits and not isinstance(target, Pose):
         q = six(stmt, target, "q")
         return all(low <= v <= high for v, (low, high) in zip(q, arm.model.joint_limits, strict=True))
+    tcp = None if limits else _arg(stmt, args, kwargs, 4, "tcp", None)
+    tcp = arm.tcp if tcp is None else six(stmt, tcp, "tcp")
     try:
-        kin.nearest(arm.model, six(stmt, target, "pose"), arm.state.q, arm.tcp)
+        kin.nearest(arm.model, six(stmt, target, "pose"), arm.state.q, tcp)
     except (ArithmeticError, ValueError, RtdeSpecError):  # no solution is the answer
         return False
     return True
