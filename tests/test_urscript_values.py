@@ -17,9 +17,24 @@ def test_random_gives_floats_from_0_to_1_that_differ() -> None:
     assert len(set(values)) > 1
 
 
-def test_random_with_an_argument_is_a_runtime_exception_at_its_line() -> None:
-    _, events = run("def prog():\n  x = 1\n  y = random(3)\nend\n")
-    assert faults(events) == [("random: takes no arguments, got 1", 3, 1)]
+def test_a_built_in_given_more_arguments_than_it_has_is_a_compile_error_at_the_call() -> None:
+    """Arguments past a built-in's parameters were dropped unseen (norm(1, 2) was 1)."""
+    for call, message in (
+        ("random(3)", "random takes at most 0 arguments, got 1"),
+        ("make_list(1, 0, 1, 1)", "make_list takes at most 3 arguments, got 4"),
+        ("norm(1, 2)", "norm takes at most 1 arguments, got 2"),
+        (
+            "wrench_trans(p[0, 0, 0, 0, 0, 0], [1, 2, 3, 4, 5, 6], 1)",
+            "wrench_trans takes at most 2 arguments",
+        ),
+        (
+            "pose_dist(p[0, 0, 0, 0, 0, 0], p[0, 0, 0, 0, 0, 0], p_from=p[0, 0, 0, 0, 0, 0])",
+            "pose_dist p_from given twice",
+        ),
+    ):
+        _, events = run(f"def prog():\n  x = 1\n  y = {call}\nend\n")
+        ((text, line, column),) = faults(events)
+        assert text.startswith(f"compile_error: {message}") and (line, column) == (3, 7), (call, text)
 
 
 def test_make_list_gives_the_manuals_lists() -> None:

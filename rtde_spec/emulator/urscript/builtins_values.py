@@ -30,8 +30,6 @@ _RANDOM = _random.Random()  # the emulator's own generator: a program's draws le
 @_builtin("random")
 def _draw(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> float:
     """A pseudo-random float from 0 to 1 (the Script Directory's urmath random())."""
-    if args or kwargs:
-        raise ScriptFault(f"{stmt.name}: takes no arguments, got {len(args) + len(kwargs)}", stmt.line, 1)
     return _RANDOM.random()
 
 
@@ -48,8 +46,6 @@ def _make_list(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> list[A
     """`length` copies of `initial_value`: make_list(5, "a") is ["a", "a", "a", "a", "a"]. A list
     (not a pose) as the initial value is refused: "Creation list of list with this function is not supported
     (they are matrices in URScript)" (the Script Directory)."""
-    if len(args) > 3:
-        raise ScriptFault(f"{stmt.name}: takes at most 3 arguments, got {len(args)}", stmt.line, 1)
     length = _count(stmt, arg(stmt, args, kwargs, 0, "length"), "length")
     initial = arg(stmt, args, kwargs, 1, "initial_value")
     capacity = _count(stmt, arg(stmt, args, kwargs, 2, "capacity", length), "capacity")

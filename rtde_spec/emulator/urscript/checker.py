@@ -2,7 +2,8 @@
 
 Every called name must be a function or thread of the program or a built-in the emulator
 implements (`compile_error_name_not_found:NAME` otherwise), `run` must name a thread, and a
-user function's arguments must fit its parameters (by position, then by name). A method call
+user function's arguments must fit its parameters (by position, then by name), a built-in's the
+parameters spec/urscript lists (no more of them, none twice). A method call
 (`proxy.getTarget()`) is a remote procedure call: its name is the server's to know. It also
 marks each expression that may call a user function (`Expr.user`): those the interpreter
 evaluates step by step, since the function may wait (ur_rtde's `keep_running = process_cmd(cmd)`
@@ -12,6 +13,7 @@ runs a movej inside an expression).
 from __future__ import annotations
 
 from collections.abc import Collection
+from functools import cache
 
 from rtde_spec.emulator.urscript.nodes import Expr, Function, Script, ScriptFault, Stmt
 
@@ -99,6 +101,7 @@ class _Checker:
             elif expr.value not in self.builtins:
                 raise ScriptFault(f"compile_error_name_not_found:{expr.value}", where, expr.column)
             else:
+                _builtin_arguments_fit(expr, where)
                 user = user or expr.value in self.waits
         elif expr.kind == "method":  # proxy.name(...): a remote procedure call, answered by its server
             user = True
@@ -108,6 +111,34 @@ class _Checker:
                 raise ScriptFault(f"compile_error_name_not_found:{expr.value}", where, expr.column)
         expr.user = user
         return user
+
+
+@cache
+def _signatures() -> dict[str, list[str]]:
+    """The built-ins' parameter names, in order (spec/urscript)."""
+    from rtde_spec.metamodel.urscript import urscript_functions
+
+    free = ("struct", "textmsg")  # struct's fields have any names; the emulator's textmsg joins any number
+    return {f.name: [p.name for p in f.params] for f in urscript_functions().functions if f.name not in free}
+
+
+def _builtin_arguments_fit(expr: Expr, line: int) -> None:
+    """A built-in's call: no more arguments in order than it has parameters, none given twice (one
+    it needs and is not given is the call's runtime exception). A name it does not have is let be:
+    UR's own client library calls get_mass_matrix(include_rotor_inertia=...), the editions on hand
+    name it include_rotors_inertia, and whether a controller refuses either is not known."""
+    params = _signatures().get(str(expr.value))
+    if params is None:
+        return
+    given, named = len(expr.items), [name for name, _ in expr.kwargs]
+    twice = [n for i, n in enumerate(named) if n in params[:given] or n in named[:i]]
+    what = (
+        f"{twice[0]} given twice" if twice
+        else f"takes at most {len(params)} arguments, got {given}" if given > len(params)
+        else ""
+    )  # fmt: skip
+    if what:
+        raise ScriptFault(f"compile_error: {expr.value} {what}", line, expr.column)
 
 
 def _arguments_fit(function: Function, expr: Expr, line: int) -> None:
