@@ -1161,6 +1161,16 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'since': {'cb3': '3.0.0', 'e-series': '5.0.0'},
                 'doc': 'Read number bytes (1 to 30): [count, bytes...]; [0, -1, ...] on a '
                        'time-out; a timeout of 0 or less waits for ever'},
+               {'name': 'socket_read_line',
+                'section': 'interfaces',
+                'params': [{'name': 'socket_name', 'default': 'socket_0'},
+                           {'name': 'timeout', 'default': 2}],
+                'returns': 'string',
+                'since': {'cb3': '3.0.0', 'e-series': '5.0.0'},
+                'checked': False,
+                'doc': 'Deprecated (socket_read_string replaces it): the text up to the first '
+                       '"\\r\\n" or "\\n", which is not returned; "" on a time-out; a timeout of 0 '
+                       'or less waits for ever'},
                {'name': 'socket_read_string',
                 'section': 'interfaces',
                 'params': [{'name': 'socket_name', 'default': 'socket_0'},

@@ -339,3 +339,26 @@ def socket_read_string(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -
 
     got = yield from _reading(runner, sock, take, 1, timeout)
     return got[1] if got[0] else ""
+
+
+def socket_read_line(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Waiting:
+    """Deprecated (socket_read_string replaces it): the text up to the first "\\n" or "\\r\\n",
+    which is dropped and not returned; "" on a time-out (a timeout of 0 or less waits for ever)."""
+    sock = sockets_of(runner).get(_name(stmt, args, kwargs, 0))
+    timeout = number(stmt, arg(stmt, args, kwargs, 1, "timeout", 2.0), "timeout")
+
+    def take(sock: ProgramSocket, count: int) -> list[Any] | None:
+        stop = sock.buffer.find(b"\n", 0, MAX_STRING)
+        if stop < 0:
+            if len(sock.buffer) < MAX_STRING:
+                return None
+            stop = MAX_STRING - 1  # a line longer than a string holds: its first part
+        text = bytes(sock.buffer[:stop]).removesuffix(b"\r")
+        del sock.buffer[: stop + 1]
+        return [1, text.decode("latin-1")]
+
+    got = yield from _reading(runner, sock, take, 1, timeout)
+    return got[1] if got[0] else ""
+
+
+READERS["socket_read_line"] = socket_read_line
