@@ -28,6 +28,7 @@ from rtde_spec.emulator.urscript.builtins_dynamics import DYNAMICS
 from rtde_spec.emulator.urscript.builtins_io import IO
 from rtde_spec.emulator.urscript.builtins_modes import MODES, settings_of
 from rtde_spec.emulator.urscript.builtins_poses import POSES
+from rtde_spec.emulator.urscript.builtins_readings import READINGS
 from rtde_spec.emulator.urscript.builtins_text import TEXT
 from rtde_spec.emulator.urscript.builtins_values import VALUES
 from rtde_spec.emulator.urscript.calls import Pose, number, six, type_name
@@ -284,7 +285,7 @@ def _waypoint(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose:
     return Pose(arm.pose())
 
 
-for _table in (sockets.SENDERS, MODES, DYNAMICS, IO, POSES, TEXT, VALUES, WORLD, eip.FACTORIES):
+for _table in (sockets.SENDERS, MODES, DYNAMICS, IO, POSES, TEXT, VALUES, WORLD, READINGS, eip.FACTORIES):
     BUILTINS.update(_table)
 BUILTINS["socket_close"] = sockets.socket_close
 BUILTINS["socket_set_var"] = sockets.socket_set_var
