@@ -38,3 +38,40 @@ def test_flags_are_kept_between_program_runs() -> None:
     events += model.drain_events() + steps(model, 5)
     assert texts(events) == ["False", "TrueTrueFalse"]
     assert faults(events) == [("set_flag: n must be an int of 0 to 31, not 32", 3)]
+
+
+def test_gravity_and_base_acceleration_read_back_what_the_program_set() -> None:
+    model, events = start(
+        "def p():\n"
+        "  textmsg(get_gravity(), get_base_acceleration())\n"
+        "  set_gravity([0, 9.82, 0])\n"
+        "  set_base_acceleration([0.1, 0, 0])\n"
+        "  high_holding_torque_disable()\n"
+        "  textmsg(get_gravity(), get_base_acceleration())\n"
+        "  set_gravity([0, 9.82])\n"
+        "end\n"
+    )
+    events += steps(model, 5)
+    assert texts(events) == ["[0, 0, 9.82][0, 0, 0]", "[0, 9.82, 0][0.1, 0, 0]"]
+    assert faults(events) == [("set_gravity: d must be three numbers", 7)]
+
+
+def test_the_modbus_calls_that_steer_polling_check_their_signal() -> None:
+    model, events = start(
+        "def p():\n"
+        '  modbus_add_signal("0.0.0.0", 255, 0, 0, "din")\n'
+        '  modbus_set_digital_input_action("din", "freedrive")\n'
+        '  modbus_request_update_signal_value("din")\n'
+        '  modbus_reset_connection("0.0.0.0")\n'
+        '  modbus_reset_connection("0.0.0.0", False)\n'
+        '  textmsg("ok")\n'
+        '  modbus_set_digital_input_action("din", "pause")\n'
+        "end\n"
+    )
+    events += steps(model, 5)
+    assert texts(events) == ["ok"]
+    assert faults(events) == [
+        ("modbus_set_digital_input_action: 'din' must be a digital input and action \"default\" or "
+         "\"freedrive\", not 'pause'", 8)
+    ]  # fmt: skip
+    assert model.program is None

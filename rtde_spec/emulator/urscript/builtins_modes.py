@@ -72,7 +72,7 @@ MODES["end_teach_mode"] = _mode("_freedrive", 0)
 MODES["end_freedrive_mode"] = _mode("_freedrive", 0)
 for _name in (
     "force_mode_set_damping", "force_mode_set_gain_scaling", "zero_ftsensor", "ft_rtde_input_enable",
-    "enable_external_ft_sensor", "set_gravity", "set_safety_mode_transition_hardness",
+    "enable_external_ft_sensor", "set_safety_mode_transition_hardness",
     "tool_wrench_limit_disable",
 ):  # fmt: skip
     MODES[_name] = _mode(f"_{_name}", 1)
