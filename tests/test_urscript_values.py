@@ -140,3 +140,19 @@ def test_reachability_takes_the_manuals_parameters_and_the_tcp_it_is_given() -> 
         "end\n",
     )
     assert [text for kind, text, _ in events if kind == "text"] == ["TrueFalse", "TrueTrue"]
+
+
+def test_make_list_copies_stay_within_what_a_value_may_hold() -> None:
+    """Copies of a struct holding a list multiply its elements: 1,000 copies of 2,000 would be two
+    million, past the 65,536 a value holds (a bigger make_list would take the emulator's memory)."""
+    _, events = run(
+        "def prog():\n"
+        "  s = struct(a = make_list(2000, 0))\n"
+        "  l = make_list(1000, s)\n"
+        "  m = make_list(30, s)\n"
+        "  textmsg(length(m))\n"
+        "end\n"
+    )
+    assert faults(events) == [
+        ("make_list: 1000 of this initial value hold over 65536 elements (a value holds at most that)", 3, 1)
+    ]

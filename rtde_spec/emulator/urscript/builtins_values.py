@@ -54,6 +54,9 @@ def _make_list(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> list[A
         raise ScriptFault(f"{stmt.name}: initial_value cannot be an array ({what})", stmt.line, 1)
     if capacity < length:
         raise ScriptFault(f"{stmt.name}: capacity {capacity} is less than length {length}", stmt.line, 1)
+    if length and _elements(initial, MAX_ELEMENTS // length) * length > MAX_ELEMENTS:
+        what = f"{length} of this initial value hold over {MAX_ELEMENTS} elements"
+        raise ScriptFault(f"{stmt.name}: {what} (a value holds at most that)", stmt.line, 1)
     if isinstance(initial, (dict, Pose)):  # a struct or pose: each element its own
         return [copy.deepcopy(initial) for _ in range(length)]
     return [initial] * length
@@ -70,3 +73,18 @@ def _rtde_value(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Any:
         raise ScriptFault(f"{stmt.name}: no RTDE output {str(name)[:60]!r} on this controller", stmt.line, 1)
     value = runner.robot.values[name]
     return list(value) if isinstance(value, (tuple, list)) else value
+
+
+def _elements(value: Any, budget: int) -> int:
+    """The elements `value` holds through its lists and struct fields (1 for a number or a text),
+    counted no further than past `budget`: make_list's copies stay within what a value may hold."""
+    count, stack = 0, [value]
+    while stack and count <= budget:
+        item = stack.pop()
+        if isinstance(item, list):
+            stack.extend(item)
+        elif isinstance(item, dict):
+            stack.extend(item.values())
+        else:
+            count += 1
+    return count
