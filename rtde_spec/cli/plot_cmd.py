@@ -141,9 +141,9 @@ def _load_csv(path: Path, problems: list[str]) -> dict[str, list[Any]]:
     texts: dict[str, list[tuple[int, str]]] = {}  # column -> (line, cell) of cells not numbers
     numbers: dict[str, int] = {}
     with open(path, newline="", encoding="utf-8", errors="replace") as f:
-        cells = separator(f.readline())  # UR's record.py separates by spaces
+        between = separator(f.readline())  # UR's record.py separates by spaces
         f.seek(0)
-        reader = csv.DictReader(f, delimiter=cells)
+        reader = csv.DictReader(f, delimiter=between)
         columns: dict[str, list[Any]] = {n: [] for n in reader.fieldnames or []}
         numbers = dict.fromkeys(columns, 0)
         for row in reader:

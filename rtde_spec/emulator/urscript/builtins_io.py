@@ -164,7 +164,7 @@ def _runstate(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
 def _runstate_outputs(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
     """Which outputs follow the program's run state; set_runstate_outputs is the CB2-era name
     (CB3 preambles and python-urx's Robotiq program call it with [] for none)."""
-    default = [] if stmt.name == "set_runstate_outputs" else ...
+    default: Any = [] if stmt.name == "set_runstate_outputs" else ...
     outputs = arg(stmt, args, kwargs, 0, "outputs", default)
     if not isinstance(outputs, list) or not all(type(o) is int for o in outputs):
         raise ScriptFault(f"{stmt.name}: outputs must be a list of output numbers", stmt.line, 1)
