@@ -49,8 +49,8 @@ def add_parser(sub: argparse._SubParsersAction) -> None:
             "Decodes RTDE or primary/secondary packages from hex (plain, a dump of Wireshark, tshark -x, "
             "xxd, hexdump -C, 0x00,0x05, \\x00\\x05), a file of bytes or hex, or standard input, into a "
             "table, JSON (--json: one array), JSON Lines (--jsonl), CSV, Parquet or MCAP (-o FILE, the "
-            "format from its suffix). Streamed: any size in constant memory; a fault stops at its byte offset, "
-            "after every package before it; -o FILE is put in place only whole (a file there stays as it was).",
+            "format from its suffix). Streamed: any size in constant memory; a fault stops at its offset, "
+            "after every package before it; -o FILE is put in place only whole (one there stays as it was).",
             "rtde-spec decode 00045601 --from controller",
             "rtde-spec decode copied-from-wireshark.txt --from client --jsonl",
             "rtde-spec decode data.bin --recipe outputs.txt -o data.parquet",
