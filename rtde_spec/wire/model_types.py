@@ -1,10 +1,23 @@
-"""Annotated types shared by generated pydantic models: the wire's string rules."""
+"""What generated pydantic models share: the wire's string rules, and the models' config."""
 
 from __future__ import annotations
 
 from typing import Annotated
 
-from pydantic import AfterValidator, Field, PlainSerializer
+from pydantic import AfterValidator, ConfigDict, Field, PlainSerializer
+
+# Every protocol message model's config. Frozen, no unknown keys. Schemas are built on first
+# use: a capture or decode imports ~100 classes and uses a few. Bytes are hex in JSON: protocol
+# bytes (extra, raw, data) are rarely UTF-8. NaN and infinities are "NaN", "Infinity": valid
+# JSON that reads back (pydantic's null did not).
+WIRE_MODEL_CONFIG = ConfigDict(
+    extra="forbid",
+    frozen=True,
+    defer_build=True,
+    ser_json_bytes="hex",
+    val_json_bytes="hex",
+    ser_json_inf_nan="strings",
+)
 
 
 def _ascii(value: str) -> str:

@@ -7,6 +7,7 @@ from typing import Any, ClassVar
 
 from pydantic import BaseModel, ConfigDict, ValidationError
 
+from rtde_spec.wire.model_types import WIRE_MODEL_CONFIG
 from rtde_spec.wire.pydantic_errors import encode_error
 
 # slots a frozen model without extra keys or private attributes always holds None in
@@ -16,16 +17,7 @@ _UNSET_SLOTS = frozenset({"__pydantic_extra__", "__pydantic_private__"})
 class PrimaryModel(BaseModel):
     """Frozen, no unknown keys; user construction fails with EncodeError."""
 
-    # schemas are built on first use: a capture or decode imports ~100 classes and uses a few;
-    # bytes are hex in JSON: protocol bytes (extra, raw, data) are rarely UTF-8
-    model_config = ConfigDict(
-        extra="forbid",
-        frozen=True,
-        defer_build=True,
-        ser_json_bytes="hex",
-        val_json_bytes="hex",
-        ser_json_inf_nan="strings",  # NaN and infinities as "NaN", "Infinity": valid JSON that reads back
-    )
+    model_config = ConfigDict(**WIRE_MODEL_CONFIG)  # (wire/model_types.py says why each key)
     NAME: ClassVar[str] = "primary"
 
     def __init__(self, **data: Any) -> None:

@@ -14,6 +14,7 @@ from typing import TYPE_CHECKING, Any, ClassVar
 from pydantic import BaseModel, ConfigDict, ValidationError
 
 from rtde_spec.errors import EncodeError
+from rtde_spec.wire.model_types import WIRE_MODEL_CONFIG
 from rtde_spec.wire.pydantic_errors import encode_error
 from rtde_spec.wire.rtde_layouts import layouts
 
@@ -24,16 +25,7 @@ if TYPE_CHECKING:
 class RtdeMessage(BaseModel):
     """One RTDE package: fields as the spec names them, plus class-level wire metadata."""
 
-    # schemas are built on first use: a capture or decode imports ~100 classes and uses a few;
-    # bytes are hex in JSON: protocol bytes (extra, raw, data) are rarely UTF-8
-    model_config = ConfigDict(
-        extra="forbid",
-        frozen=True,
-        defer_build=True,
-        ser_json_bytes="hex",
-        val_json_bytes="hex",
-        ser_json_inf_nan="strings",  # NaN and infinities as "NaN", "Infinity": valid JSON that reads back
-    )
+    model_config = ConfigDict(**WIRE_MODEL_CONFIG)  # (wire/model_types.py says why each key)
 
     NAME: ClassVar[str]
     PACKAGE_TYPE: ClassVar[int]
