@@ -34,9 +34,10 @@ Nothing lost:
   -o is written beside its name (.NAME.part-PID) and replaces an existing file only
   once rows arrive: a run that fails first (a refused recipe or --frequency, no
   connection) leaves it byte-identical and no temporary file behind.
-  CSV and JSON Lines are in place from the first batch on and handed to the
+  CSV, JSON Lines and MCAP are in place from the first batch on and handed to the
   operating system every batch (0.2 s): a killed recorder (SIGKILL) loses at most
-  the last batch, every line complete. (The trade-off: a reader may see the file
+  the last batch, every line (MCAP: every chunk) complete; MCAP readers read such a
+  file in order without its summary (`mcap recover` adds it). (The trade-off: a reader may see the file
   grow, batch by batch, as with any log; all of it is always whole lines.)
   Parquet needs its footer, written at close: until then the file is the hidden
   .NAME.part-PID, which a kill leaves unreadable. Use --split to close parts as you

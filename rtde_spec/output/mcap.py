@@ -5,7 +5,10 @@ primary/secondary message and Robot State sub-package: see `topics`), JSON
 messages with a JSON Schema generated from the spec, log times from the capture
 time or the controller's timestamp. Written in zstd (else lz4, else plain) chunks
 of about 1 MB, so memory stays bounded; the file appears at its name when closed
-(see `Writer`), as MCAP's summary is written last.
+(see `Writer`), as MCAP's summary is written last. A recording's file (`live`) is in
+place from its first batch on, each batch closing a chunk: a killed recorder leaves
+every batch but the last in whole chunks, which MCAP readers read in order without
+the summary (`mcap recover` writes the summary back).
 """
 
 from __future__ import annotations
@@ -122,6 +125,14 @@ class McapWriter(Writer):
             for data, log_time in zip(lines, times.tolist(), strict=True):
                 self._add(channel, data, log_time)
             self.rows += len(lines)
+
+    def flush(self) -> None:
+        """A live file's batch in a whole chunk on disk (a capture's tables keep ~1 MB chunks)."""
+        if self.live and self.rows:
+            finish_chunk = getattr(self._mcap, "flush", None)  # mcap 1.2 on
+            if finish_chunk is not None:
+                finish_chunk()
+        super().flush()
 
     def size(self) -> int:
         """Bytes written so far; a chunk being filled (up to ~1 MB) is counted when written."""

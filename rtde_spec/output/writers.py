@@ -189,9 +189,10 @@ _WRITERS: dict[str, type[Writer] | str] = {  # a module's name: imported when th
     "parquet": ParquetWriter,
     "mcap": "rtde_spec.output.mcap",
 }
-# Formats a reader reads while they grow (one complete line per row): a recording's file can be
-# in place from its first batch on. A format with a header or footer to finish waits for close.
-GROWING = {"jsonl", "csv"}
+# Formats a reader reads while they grow (one complete line per row; MCAP's chunks, each batch
+# closing one, read in order without the summary): a recording's file can be in place from its
+# first batch on. A format with a footer it cannot be read without (Parquet) waits for close.
+GROWING = {"jsonl", "csv", "mcap"}
 
 
 def format_for(path: str | None, fmt: str | None) -> str:
