@@ -224,9 +224,10 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 from rtde_spec.cli import capture_jobs as jobs
 
-workers = []
+workers, pools = [], []
 def command():  # the thread that starts the worker ends; the process goes on
     pool = ProcessPoolExecutor(1, initializer=jobs._start_worker)
+    pools.append(pool)  # not collected with this thread: that would stop its worker as a shutdown
     got = pool.submit(jobs._decode_one, Path(sys.argv[1]), (sys.argv[2], "parquet", None), {}).result()
     workers.extend(pool._processes)
     print("prepared", len(got[1].parts), flush=True)
