@@ -10,8 +10,25 @@ from rtde_spec.importers.tables import (
     check_rows,
     continues,
     is_heading,
+    is_page_line,
     split_form_feeds,
 )
+
+
+def _is_furniture(cells: list[str]) -> bool:
+    """A page's footer or header that came with a tab between its parts ("Copyright © … A/S.<TAB>Page
+    1 of 9", "5/14/24, 10:15 AM<TAB>Real-Time Data Exchange (RTDE) Guide"): one or two cells, one a
+    page mark. A field row has a name, a type and a comment, none of them a page mark."""
+    parts = [c for c in cells if c]
+    return 0 < len(parts) <= 2 and any(is_page_line(c) for c in parts)
+
+
+def _repeats_header(last: Table, cells: list[str], gap: list[str]) -> bool:
+    """Whether `cells` are `last`'s header again with no heading of a direction between: a page broke
+    the table (its footer, the page number, the running title), whatever the footer's form."""
+    if [c.lower() for c in cells] != [h.lower() for h in last.header]:
+        return False
+    return not any(is_heading(g) and Table(g.strip(), [], 0).direction for g in gap)
 
 
 def read_tables(text: str, notes: list[str] | None = None) -> list[Table]:
@@ -28,6 +45,9 @@ def read_tables(text: str, notes: list[str] | None = None) -> list[Table]:
         line = raw.rstrip("\r\n")
         if not line.strip() and FORM_FEED not in line:
             continue
+        cells = [c.strip() for c in line.split("\t")]
+        if "\t" in line and _is_furniture(cells):
+            line = "   ".join(c for c in cells if c)  # read as the footer line it is
         if "\t" not in line:
             if current is not None:
                 last, gap, gap_at = current, [], number
@@ -36,11 +56,14 @@ def read_tables(text: str, notes: list[str] | None = None) -> list[Table]:
             if is_heading(line) and not PAGE_MARK.match(line):
                 heading = line.strip()
             continue
-        cells = [c.strip() for c in line.split("\t")]
         if all(set(c) <= {"-"} for c in cells):  # the ruler that ends a table
             current = last = None
             continue
-        if current is None and last is not None and continues(last, gap):
+        if (
+            current is None
+            and last is not None
+            and (continues(last, gap) or _repeats_header(last, cells, gap))
+        ):
             current = last
             heading = last.heading
             if notes is not None:
@@ -51,6 +74,8 @@ def read_tables(text: str, notes: list[str] | None = None) -> list[Table]:
         if current is None:
             current = Table(heading, cells, number)
             tables.append(current)
+        elif [c.lower() for c in cells] == [h.lower() for h in current.header]:
+            continue  # the header again inside the table (a page's top): never a field named "Name"
         else:
             current.rows.append((number, cells))
             count += 1

@@ -22,7 +22,7 @@ from rtde_spec.importers.tables import (
     Table,
     check_rows,
     is_heading,
-    is_page_mark,
+    is_page_line,
     running_lines,
     split_form_feeds,
 )
@@ -121,8 +121,8 @@ def _tables(
                 current.rows.pop()
             current = None
         number, para = paras[i]
-        if is_page_mark(para) or (current is not None and para in running):
-            if current is not None and is_page_mark(para):
+        if is_page_line(para) or (current is not None and para in running):
+            if current is not None and is_page_line(para):
                 after = skip_page_break(paras, i, current, running, starts, problems, notes)
                 if after is None:
                     current = None  # the next section starts on the next page

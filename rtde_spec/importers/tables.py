@@ -68,6 +68,21 @@ def is_page_mark(text: str) -> bool:
     return len(parts) > 1 and all(PAGE_MARK.match(part) for part in parts)
 
 
+#: a page's footer or header holding a page mark beside its text: "Copyright © … A/S. Page 1 of 9",
+#: "https://…/rtde-guide/ 1/9" (a browser's print), "5/14/24, 10:15 AM Real-Time Data Exchange …"
+_MARK_AT_EDGE = re.compile(
+    r"(?:^|\s)page\s+\d+(?:\s*(?:of|/)\s*\d+)?\s*$|(?:\s{2,}|://\S+\s+)\d+\s*/\s*\d+\s*$"
+    r"|^\s*(?:page\s+\d+\s*(?:of|/)\s*\d+|https?://\S+|\d{1,2}/\d{1,2}/\d{2,4},?\s+\d{1,2}:\d{2}(?:\s*[AP]M)?)\s",
+    re.I,
+)
+
+
+def is_page_line(text: str) -> bool:
+    """A page mark, alone or at either end of a footer's or header's text: between tables (never a
+    cell) it says a page broke there."""
+    return is_page_mark(text) or bool(_MARK_AT_EDGE.search(text))
+
+
 def split_form_feeds(text: str) -> list[tuple[int, str]]:
     """(line number, line) of a text, a form feed on a line of its own (pdftotext starts the next
     page's first line with it: "\fReal-Time Data Exchange (RTDE) Guide"). Lines are counted as an
@@ -99,11 +114,11 @@ def running_lines(lines: list[str]) -> frozenset[str]:
     breaks = 0
     k = 0
     while k < len(at):
-        if not is_page_mark(lines[at[k]]):
+        if not is_page_line(lines[at[k]]):
             k += 1
             continue
         end = k
-        while end + 1 < len(at) and is_page_mark(lines[at[end + 1]]):
+        while end + 1 < len(at) and is_page_line(lines[at[end + 1]]):
             end += 1
         breaks += 1
         for text in {texts[j] for j in at[max(0, k - 2) : k] + at[end + 1 : end + 3]}:
@@ -120,6 +135,8 @@ def running_lines(lines: list[str]) -> frozenset[str]:
 
 
 _DIRECTION_WORD = re.compile(r"\b(?:in|out)puts?\b", re.I)
+#: a page number alone: between the rows of a text form (not a cell there) it is a page's footer
+_PAGE_NUMBER = re.compile(r"\d{1,3}")
 
 
 def continues(previous: Table, gap: list[str]) -> bool:
@@ -130,7 +147,7 @@ def continues(previous: Table, gap: list[str]) -> bool:
     texts = [g.strip() for g in gap if g.strip()]
     if any("continued" in t.lower() and _same_kind(previous.heading, t) for t in texts):
         return True
-    if not any(PAGE_MARK.match(g) for g in gap):
+    if not any(is_page_line(g) or _PAGE_NUMBER.fullmatch(g.strip()) for g in gap):
         return False
     return not any(is_heading(t) and _same_kind(previous.heading, t) and t != previous.heading for t in texts)
 
