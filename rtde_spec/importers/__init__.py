@@ -220,9 +220,14 @@ def read_document(
     lines = Lines.of(spec)
     doc = Document(str(path), kind, source or _DEFAULT_SOURCE.get(kind) or _slug(path))
     if kind == "primary-text":
-        from rtde_spec.importers.primary_text import read_members
+        from rtde_spec.importers.primary_text import lost_arrows, read_members
 
         doc.members = read_members(text, lines)
+        if lost := lost_arrows(text):
+            doc.remarks.append(
+                f"lines {', '.join(map(str, lost[:5]))}{'…' if len(lost) > 5 else ''}: "
+                "a group's row starts with '?' or the like, read as its '→' (an 8-bit save)"
+            )
         if not doc.members:  # the docs site's C-like listing ("for each joint: ... end")
             from rtde_spec.importers.primary_listing import read_listing
 

@@ -15,7 +15,20 @@ from rtde_spec.importers.cells import Lines, parse_versions
 from rtde_spec.importers.model import DocLayoutField, DocMember
 
 _TYPES = r"unsigned char|uint\d+_t|int\d+_t|double|float|bool|char|type32"
-_ROW = re.compile(rf"^(→\s*)?(?:({_TYPES})\s+)?([A-Za-z_][A-Za-z0-9_]*)(?:\[(\d*)\])?$")
+#: the arrow that marks a group's rows, and what it becomes in a copy saved in an 8-bit code page
+#: (Windows-1252, Latin-1: "?"), read back in the wrong one ("â†’"), or typed ("->")
+ARROWS = r"→|\?|â†’|â\x86\x92|->"
+_ROW = re.compile(rf"^((?:{ARROWS})\s*)?(?:({_TYPES})\s+)?([A-Za-z_][A-Za-z0-9_]*)(?:\[(\d*)\])?$")
+_LOST_ARROW = re.compile(
+    rf"^[ \t]*(?!→)(?:{ARROWS})[ \t]*(?:{_TYPES})[ \t]+[A-Za-z_]\w*(?:\[\d*\])?[ \t]*$", re.M
+)
+
+
+def lost_arrows(text: str) -> list[int]:
+    """Lines whose group arrow is not "→" (a "?" where an 8-bit save had no arrow): read as the arrow."""
+    return [text.count("\n", 0, m.start()) + 1 for m in _LOST_ARROW.finditer(text)]
+
+
 _VERSION_LINE = re.compile(r"^\d+\.\d+\.\d+(\s*/\s*\d+\.\d+\.\d+)*(\s.*)?$")
 _NUMBER = re.compile(r"^[A-Z][A-Z0-9_]* = (\d+)$")
 _REPEAT = re.compile(r"^Following \d+ fields are repeated .*\((\d+) times\)", re.IGNORECASE)
