@@ -12,6 +12,7 @@ from rtde_spec.importers import cb3_text, columns_text, eseries_text, rendered_t
 from rtde_spec.importers.cells import Lines, parse_name
 from rtde_spec.importers.cut import mark_cut
 from rtde_spec.importers.model import Document
+from rtde_spec.importers.spaced_tabs import refuse_expanded_tabs
 from rtde_spec.importers.tables import Table
 from rtde_spec.importers.wrapped import known_names
 from rtde_spec.metamodel.schema import Spec
@@ -31,6 +32,7 @@ def read_text_tables(kind: str, text: str, doc: Document, lines: Lines, spec: Sp
     if kind in ("cb3-text", "tab-text"):
         tables = cb3_text.read_tables(text, notes=doc.remarks)
     elif kind == "columns-text":
+        refuse_expanded_tabs(text, is_type, doc.path)
         tables = columns_text.read_tables(text, is_type, known, doc.problems)
     else:
         read = (
