@@ -104,6 +104,8 @@ class DocRealtimeTable:
     rows: list[DocRealtimeRow] = field(default_factory=list)
     total: tuple[int, int] | None = None  # (values, bytes) of its TOTAL row
     skipped: list[tuple[int, str]] = field(default_factory=list)  # rows that are no field
+    #: rows (the TOTAL's too) whose numbers are not there: a workbook's formulas saved without values
+    unread: list[tuple[int, str]] = field(default_factory=list)
 
 
 @dataclass

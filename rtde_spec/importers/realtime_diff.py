@@ -104,6 +104,18 @@ def diff_table(t: DocRealtimeTable, doc: Document, spec: RealtimeFile, catalogue
     where = f"realtime {t.edition}"
     expected = plan_for(spec, catalogue, t.product_line, t.edition)
     _check_sizes(t, doc)
+    if t.unread:
+        doc.remarks.append(
+            f"table {t.title!r}: "
+            + ", ".join(f"line {n} ({what!r})" for n, what in t.unread[:5])
+            + ": a row without its numbers (a workbook's formulas saved without their values: open "
+            "and save it in Excel or LibreOffice); not read, so "
+            + (
+                "the message's length is not compared"
+                if t.total is None
+                else "fields it lacks are not reported"
+            )
+        )
     out: list[Change] = []
     for row in t.header:
         if TYPES.get(row.type, row.type) != spec.header[0].type:
@@ -148,7 +160,11 @@ def diff_table(t: DocRealtimeTable, doc: Document, spec: RealtimeFile, catalogue
             out.append(mark_known(change, before.conflicts, doc.source) if before and not row.key else change)
         tail = op == "insert" or (op == "replace" and not rows)  # spec fields past the rows
         for fld in fields:
-            if t.skipped or (tail and b1 == len(expected) and t.total is None):
+            if (
+                t.skipped
+                or [u for u in t.unread if u[1].upper() != "TOTAL"]
+                or (tail and b1 == len(expected) and t.total is None)
+            ):
                 # a placeholder row, or rows end before the message does and no TOTAL row follows:
                 # the table stops early (a copy cut short), which says nothing of these fields
                 doc.unlisted.setdefault(where, []).append(fld.name)

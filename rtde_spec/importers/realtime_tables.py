@@ -113,6 +113,12 @@ def table_of(table: Table, lines: Lines, title: str | None = None) -> DocRealtim
             first = next(c for c in cells if c.strip()).strip()
             if is_placeholder(first):
                 out.skipped.append((number, first[:60]))
+            elif _clean(cells[0]).upper() == "TOTAL" or any(
+                is_type(c) for c in [_clean(c) for c in cells if c.strip()][:2]
+            ):
+                out.unread.append((number, _clean(cells[0]) or first[:60]))  # its numbers are empty
+                if _clean(cells[0]).upper() == "TOTAL":
+                    break
             continue
         if got.key == "message_size" and not out.rows:
             out.header.append(got)
