@@ -14,7 +14,7 @@ from rtde_spec.importers import columns_text, html_doc, markdown, realtime_table
 from rtde_spec.importers.cells import Lines, visible
 from rtde_spec.importers.edition import newest, versions_named
 from rtde_spec.importers.model import Document
-from rtde_spec.importers.rows import field_rows, main_line, merged_rows
+from rtde_spec.importers.rows import field_rows, main_line, merged_rows, odd_names
 from rtde_spec.importers.sniff import ZIP, refuse_binary, utf16_without_bom
 from rtde_spec.importers.tables import MAX_BYTES
 from rtde_spec.metamodel.document_forms import FORMATS
@@ -368,7 +368,7 @@ def finish(
     """Fields of the tables into `doc`, its line and edition; exit 2 when no table of any
     interface (RTDE fields, real-time rows, primary sub-packages) is read."""
     doc.fields = field_rows(tables, lines, doc.tables)
-    doc.problems += merged_rows(doc.fields, lines)
+    doc.problems += merged_rows(doc.fields, lines) + odd_names(tables)
     for table in tables:
         if table.is_field_table and table.direction is None and table.rows:
             # never dropped silently: a table the copy does not say the direction of (a heading

@@ -5,7 +5,15 @@ from __future__ import annotations
 import re
 from collections import Counter
 
-from rtde_spec.importers.cells import DASHES, Lines, parse_name, parse_versions, spans_in, versions_in_text
+from rtde_spec.importers.cells import (
+    DASHES,
+    Lines,
+    parse_name,
+    parse_versions,
+    spans_in,
+    versions_in_text,
+    visible,
+)
 from rtde_spec.importers.model import DocField, TableReport
 from rtde_spec.importers.tables import Table
 
@@ -36,6 +44,8 @@ def field_rows(tables: list[Table], lines: Lines, reports: list[TableReport] | N
             if is_placeholder(cells[0]):
                 report.skipped.append((line, cells[0].strip()[:60]))
                 continue
+            if _odd_tail(cells[0]) is not None:
+                continue  # said by odd_names
             out.append(_field(cells, direction, line, lines))
             report.fields += 1
             report.names.append(out[-1].name)
@@ -96,6 +106,36 @@ def _field(cells: list[str], direction: str, line: int, lines: Lines) -> DocFiel
         notes=notes,
         version_text=version,
     )
+
+
+#: what may follow a name in its cell and is no part of it: a footnote mark (`[^1]`, `¹`, `*`, `†`)
+_NAME_TAIL = re.compile(
+    r"[\s*`]*(?:\[\^?[\w-]+\]|[\u00b9\u00b2\u00b3\u2070-\u2079]+|[*\u2020\u2021]+)?[\s*`]*"
+)
+
+
+def _odd_tail(cell: str) -> str | None:
+    """What follows the name in a name cell when it is more than a footnote mark, else None."""
+    text = visible(cell).strip().strip("`*").strip()
+    name, _, family = parse_name(cell)
+    tail = "" if family else text[len(name) :] if text.startswith(name) else text
+    return None if _NAME_TAIL.fullmatch(tail) else tail.strip()
+
+
+def odd_names(tables: list[Table]) -> list[str]:
+    """Name cells holding more than a name and a footnote mark (`name#hash`, `weird name: here`):
+    their first word may not be the field's name; said with cell and line, the row not read."""
+    return [
+        f"line {line}: the name cell {cells[0].strip()[:60]!r} holds more than a name "
+        f"({tail[:30]!r} after {parse_name(cells[0])[0]!r}): not read"
+        for table in tables
+        if table.is_field_table and table.direction is not None
+        for line, cells in table.rows
+        if len(cells) >= 2
+        and cells[0].strip()
+        and not is_placeholder(cells[0])
+        and (tail := _odd_tail(cells[0])) is not None
+    ]
 
 
 def main_line(fields: list[DocField], default: str) -> str:
