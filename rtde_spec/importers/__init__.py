@@ -13,7 +13,7 @@ from rtde_spec.errors import UsageError
 from rtde_spec.importers import columns_text, html_doc, markdown, realtime_tables, rendered_text
 from rtde_spec.importers.cells import Lines, visible
 from rtde_spec.importers.edition import newest, versions_named
-from rtde_spec.importers.model import Document
+from rtde_spec.importers.model import Document, check_source
 from rtde_spec.importers.rows import field_rows, main_line, merged_rows, odd_names
 from rtde_spec.importers.sniff import ZIP, refuse_binary, utf16_without_bom
 from rtde_spec.importers.tables import MAX_BYTES
@@ -206,6 +206,8 @@ def read_document(
 ) -> Document:
     """Read a document in any supported form into the common model."""
     path = Path(path)
+    if source is not None:
+        check_source(source)
     if fmt not in (None, *FORMATS):
         raise UsageError(f"unknown form {fmt!r}; one of {', '.join(FORMATS)}")
     if fmt == "xlsx" or (fmt is None and (path.suffix.lower() in (".xlsx", ".xlsm") or _starts(path, ZIP))):

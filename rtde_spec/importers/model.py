@@ -139,3 +139,22 @@ class Document:
         """The one interface of the document (the first read when it holds several)."""
         found = self.interfaces
         return found[0] if found else ("primary" if self.format == "primary-text" else "rtde")
+
+
+def check_source(source: str) -> None:
+    """Refuse a --source the spec cannot record (the schema's `Source` pattern), before any reading:
+    it was accepted until --write's checked copy of the spec failed, and recorded conflicts never
+    matched it meanwhile."""
+    from pydantic import TypeAdapter, ValidationError
+
+    from rtde_spec.errors import UsageError
+    from rtde_spec.metamodel.schema import Source
+
+    try:
+        TypeAdapter(Source).validate_python(source)
+    except ValidationError as exc:
+        pattern = exc.errors()[0].get("ctx", {}).get("pattern", "")
+        raise UsageError(
+            f"--source {source!r}: a source id is lower-case letters, digits, '.' and '-', starting "
+            f"with a letter or digit (the pattern {pattern}), as the spec records it"
+        ) from None
