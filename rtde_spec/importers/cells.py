@@ -25,9 +25,25 @@ _IN_TEXT = re.compile(rf"(?:{_SPAN}\s*)?\d+\.\d+\.\d+(?:\s*[/{DASHES}]\s*\d+\.\d
 INVISIBLE = re.compile("[\u00ad\u200b\u200c\u200d\u2060\ufeff]")
 
 
+#: the ligatures a PDF's text layer gives for "fi", "fl", "ff" (a copy from a PDF viewer, pdftotext):
+#: `conﬁgurable_digital_output` would be read as `con` and a field removed
+_LIGATURES = str.maketrans(
+    {
+        "\ufb00": "ff",
+        "\ufb01": "fi",
+        "\ufb02": "fl",
+        "\ufb03": "ffi",
+        "\ufb04": "ffl",
+        "\ufb05": "st",
+        "\ufb06": "st",
+    }
+)
+
+
 def visible(text: str) -> str:
-    """The text without the invisible characters that would cut a name in two."""
-    return INVISIBLE.sub("", text)
+    """The text without the invisible characters that would cut a name in two, its ligatures as
+    the letters they stand for."""
+    return INVISIBLE.sub("", text).translate(_LIGATURES)
 
 
 _FAMILY = re.compile(r"^([A-Za-z0-9_]+?)_[Xx]\b\s*(?:\(\s*(?:X\s*=\s*)?" + _SPAN + r"\s*\))?")
