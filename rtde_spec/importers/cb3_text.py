@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from rtde_spec.importers.eseries_text import stops_in
+from rtde_spec.importers.side_by_side import unfold
 from rtde_spec.importers.tables import (
     FORM_FEED,
     PAGE_MARK,
@@ -41,7 +42,8 @@ def read_tables(text: str, notes: list[str] | None = None) -> list[Table]:
     gap: list[str] = []
     gap_at = 0  # the line the gap starts at
     count = 0
-    for number, raw in split_form_feeds(text):  # splitlines() dropped a page's form feed as a blank line
+    # splitlines() dropped a page's form feed as a blank line; tables side by side go one after the other
+    for number, raw in unfold(split_form_feeds(text)):
         line = raw.rstrip("\r\n")
         if not line.strip() and FORM_FEED not in line:
             continue
