@@ -7,6 +7,7 @@ A PDF's text layer gives "ﬁ", "ﬂ", "ﬀ" as one character each; copied (or r
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -34,3 +35,33 @@ def test_ligatures_read_as_their_letters(tmp_path: Path, seed: str, spec: Spec) 
     plain = _read(tmp_path, "plain.txt", seed, spec)
     doc = _read(tmp_path, "copied.txt", copy, spec)
     assert _fields(doc) == _fields(plain) and doc.problems == []
+
+
+def _name_cells(seed: str, mark: object) -> str:
+    """The seed with every name cell (the line before a type cell) changed by `mark`."""
+    lines = seed.split("\n")
+    types = {"UINT32 |", "UINT8 |", "DOUBLE |", "VECTOR6D |", "INT32 |", "BOOL |", "UINT64 |", "VECTOR3D |"}
+    for k in range(len(lines) - 1):
+        if lines[k + 1] in types and re.fullmatch(r"[a-z]\w* \|", lines[k]):
+            lines[k] = mark(lines[k])  # type: ignore[operator]
+    return "\n".join(lines)
+
+
+@pytest.mark.parametrize("quotes", ["‘’", "“”", "''"])
+def test_quoted_name_cells_read_as_the_names(tmp_path: Path, seed: str, spec: Spec, quotes: str) -> None:
+    """A copy that quotes the names (smart quotes from a word processor): the rows were not found."""
+    copy = _name_cells(seed, lambda line: f"{quotes[0]}{line[:-2]}{quotes[1]} |")
+    plain = _read(tmp_path, "plain.txt", seed, spec)
+    doc = _read(tmp_path, "quoted.txt", copy, spec)
+    assert [f.name for f in doc.fields] == [f.name for f in plain.fields] and doc.problems == []
+
+
+def test_pipe_cells_that_start_no_row_are_said(tmp_path: Path, seed: str, spec: Spec) -> None:
+    """`• speed_slider_mask |` (a bullet before each name): no row starts, and every field of the
+    table was "removed" with nothing said."""
+    copy = _name_cells(seed, lambda line: f"• {line}")
+    doc = _read(tmp_path, "bullets.txt", copy, spec)
+    at = copy.split("\n").index("• speed_slider_mask |") + 1
+    assert any(
+        p.startswith(f"line {at}: '• speed_slider_mask' and ") and "start no row" in p for p in doc.problems
+    )

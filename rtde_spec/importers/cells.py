@@ -143,9 +143,18 @@ def versions_in_text(text: str, lines: Lines) -> tuple[list[VersionNote], str]:
     return notes, " ".join(stripped.split()).strip(" -;,")
 
 
+#: what a copy puts around a name: Markdown's `code` and **bold**, quotes (straight or typographic)
+NAME_MARKS = "`*'\"\u2018\u2019\u201c\u201d"
+
+
+def name_text(cell: str) -> str:
+    """A name cell's text without the marks around the name."""
+    return visible(cell).strip().strip(NAME_MARKS).strip()
+
+
 def parse_name(cell: str) -> tuple[str, tuple[int, int] | None, bool]:
     """(name with {X}, index range written in the name, is it a family) of a name cell."""
-    text = visible(cell).strip().strip("`*").strip()
+    text = name_text(cell)
     match = _FAMILY.match(text)
     if match and (match.end() == len(text) or text[match.end() :].strip() == ""):
         base, low, high = match.group(1), match.group(2), match.group(3)

@@ -125,5 +125,6 @@ def split_rows(table: Table, starts_row: object) -> Table:
                 i += 1
             out.rows.append((line, cells))
         else:
+            out.stray.append(flat[i])
             i += 1
     return out

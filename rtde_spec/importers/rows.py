@@ -8,11 +8,11 @@ from collections import Counter
 from rtde_spec.importers.cells import (
     DASHES,
     Lines,
+    name_text,
     parse_name,
     parse_versions,
     spans_in,
     versions_in_text,
-    visible,
 )
 from rtde_spec.importers.model import DocField, TableReport
 from rtde_spec.importers.tables import Table
@@ -23,7 +23,7 @@ _PLACEHOLDER = re.compile(r"…|\.\.\.|\band more\b|\betc\.?$|^\W*$", re.I)
 
 def is_placeholder(name_cell: str) -> bool:
     """Whether a name cell holds no field name but a note that rows were left out."""
-    word = name_cell.strip().strip("`*").strip()  # Markdown copies put names in `code` or **bold**
+    word = name_text(name_cell)  # Markdown copies put names in `code` or **bold**, others in quotes
     return bool(_PLACEHOLDER.search(word)) or not re.match(r"[A-Za-z_]", word)
 
 
@@ -116,7 +116,7 @@ _NAME_TAIL = re.compile(
 
 def _odd_tail(cell: str) -> str | None:
     """What follows the name in a name cell when it is more than a footnote mark, else None."""
-    text = visible(cell).strip().strip("`*").strip()
+    text = name_text(cell)
     name, _, family = parse_name(cell)
     tail = "" if family else text[len(name) :] if text.startswith(name) else text
     return None if _NAME_TAIL.fullmatch(tail) else tail.strip()

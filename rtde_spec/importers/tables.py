@@ -32,6 +32,7 @@ class Table:
     cut: bool = False  # the copy ends inside it: rows after the last one read are missing
     open_end: bool = False  # the text ends in it (nothing after its last row): cut unless that row is whole
     stub: tuple[int, str] | None = None  # (line, text) of a row the text stops in, too short to read
+    stray: list[tuple[int, str]] = field(default_factory=list)  # (line, text) of cells no row starts
 
     @property
     def is_field_table(self) -> bool:

@@ -41,6 +41,18 @@ def read_text_tables(kind: str, text: str, doc: Document, lines: Lines, spec: Sp
             else eseries_text.read_tables(text, notes=doc.remarks)
         )
         tables = [eseries_text.split_rows(t, starts_row) for t in read]
+        if kind == "e-series-text":  # every cell ends in `|`: one that starts no row is a row lost
+            doc.problems += [
+                _stray(t) for t in tables if t.is_field_table and any(c.strip() for _, c in t.stray)
+            ]
     mark_cut(tables, doc.problems)
     # a header with no row under it and the text going on (repeated above a page's last lines)
     return [t for t in tables if t.rows or t.cut or not t.is_field_table]
+
+
+def _stray(table: Table) -> str:
+    cells = [(n, c) for n, c in table.stray if c.strip()]
+    return (
+        f"line {cells[0][0]}: {cells[0][1][:60]!r} and {len(cells) - 1} more cells of the table "
+        f"{table.heading!r} start no row (no name cell followed by a type cell): not read"
+    )
