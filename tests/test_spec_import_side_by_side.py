@@ -61,3 +61,22 @@ def test_one_table_in_two_columns(tmp_path: Path, rows: dict, spec: Spec) -> Non
     plain = _read(tmp_path, "plain.txt", tabbed(rows), spec)
     doc = _read(tmp_path, "columns.txt", text + "\n", spec)
     assert _fields(doc) == _fields(plain) and doc.problems == []
+
+
+def test_html_tables_side_by_side_are_said_and_not_written(tmp_path: Path, rows: dict, spec: Spec) -> None:
+    """An HTML page with the two tables as one (header cells repeated): the right half's cells were
+    the left rows' comments (83 fields removed, nothing said). Now both halves' rows are read and
+    the guess of the left half's direction is a problem, so --write holds."""
+    head = "".join(f"<th>{h}</th>" for h in TAB_HEADER.split("\t") * 2)
+    body = "".join(
+        "<tr>" + "".join(f"<td>{c}</td>" for c in line.split("\t")) + "</tr>"
+        for line in _side(rows["input"], rows["output"])
+    )
+    page = (
+        f"<html><body><h1>{TITLE}</h1><h2>Robot Controller Inputs</h2><h2>Robot Controller Outputs</h2>"
+        f"<table><tr>{head}</tr>{body}</table></body></html>"
+    )
+    doc = _read(tmp_path, "side.html", page, spec)
+    names = [r[0] for r in rows["input"] + rows["output"]]
+    assert sorted(f.name.replace("{X}", "X") for f in doc.fields) == sorted(names)
+    assert any("holds two tables side by side" in p for p in doc.problems)

@@ -15,6 +15,7 @@ from rtde_spec.importers.cells import Lines, visible
 from rtde_spec.importers.edition import newest, versions_named
 from rtde_spec.importers.model import Document, check_source
 from rtde_spec.importers.rows import field_rows, main_line, merged_rows, odd_names
+from rtde_spec.importers.side_by_side import unfold_tables
 from rtde_spec.importers.sniff import ZIP, refuse_binary, utf16_without_bom
 from rtde_spec.importers.tables import MAX_BYTES
 from rtde_spec.metamodel.document_forms import FORMATS
@@ -369,6 +370,7 @@ def finish(
 ) -> Document:
     """Fields of the tables into `doc`, its line and edition; exit 2 when no table of any
     interface (RTDE fields, real-time rows, primary sub-packages) is read."""
+    tables = unfold_tables(tables, doc.problems)
     doc.fields = field_rows(tables, lines, doc.tables)
     doc.problems += merged_rows(doc.fields, lines) + odd_names(tables)
     for table in tables:

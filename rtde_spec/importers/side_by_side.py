@@ -78,3 +78,27 @@ def _right_heading(out: list[tuple[int, str]]) -> tuple[int, str] | None:
 
 def _direction(heading: str) -> str | None:
     return Table(heading.strip(), [], 0).direction
+
+
+def unfold_tables(tables: list[Table], problems: list[str]) -> list[Table]:
+    """Each table whose header cells repeat (HTML, Markdown: two tables laid side by side) as one
+    table in two columns: the right half's rows after the left's, under the one heading the copy
+    gives them. Said in `problems` (so --write holds): the halves may be inputs and outputs under
+    a heading each, which the copy does not tell apart, and the left half's direction is a guess."""
+    out: list[Table] = []
+    for table in tables:
+        split = _halves(table.header)
+        if split is None or not table.is_field_table:
+            out.append(table)
+            continue
+        whole = Table(table.heading, table.header[:split], table.line, cut=table.cut, open_end=table.open_end)
+        whole.rows = [(n, cells[:split]) for n, cells in table.rows]
+        whole.rows += [(n, cells[split:]) for n, cells in table.rows if any(c.strip() for c in cells[split:])]
+        problems.append(
+            f"the table at line {table.line} holds two tables side by side (its header cells repeat): "
+            "read as "
+            f"one table in two columns under {table.heading!r}; if its halves are inputs and outputs, "
+            "copy each on its own"
+        )
+        out.append(whole)
+    return out
