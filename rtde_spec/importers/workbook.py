@@ -13,6 +13,7 @@ read-only (rows streamed), so a large file costs no more memory than its rows.
 from __future__ import annotations
 
 import io
+import re
 import zipfile
 from pathlib import Path
 from typing import Any
@@ -29,6 +30,8 @@ from rtde_spec.metamodel.schema import Spec
 from rtde_spec.metamodel.versions import Version
 
 _HEADERS = (("name", "type", "comment"), ("meaning", "type", "number of values"))
+#: a field row's name cell: what may go on a table after blank rows
+_ROW = re.compile(r"[A-Za-z_][A-Za-z0-9_]*(?:\s*\(.*\))?$")
 
 
 def _text(value: Any) -> str:
@@ -40,12 +43,22 @@ def sheet_tables(title: str, rows: list[list[str]], count: int = 0) -> tuple[lis
     tables: list[Table] = []
     heading = title
     current: Table | None = None
+    gap = False  # blank rows since the table's last row
     for number, cells in enumerate(rows, start=1):
         while cells and not cells[-1]:
             cells = cells[:-1]
         if not cells:
-            current = None
+            gap = current is not None
             continue
+        if all(set(c) <= set("-") for c in cells):  # the ruler the CB3 guide ends a table with
+            current, gap = None, False
+            continue
+        named = _ROW.match(cells[0]) or (current is not None and not current.is_field_table)
+        if gap and not (named and len([c for c in cells if c]) >= 2):
+            # text pasted from the CB3 guide has a blank row between some rows: a field's row after
+            # them goes on the table; anything else ends it
+            current = None
+        gap = False
         head = tuple(c.lower() for c in cells if c)[:3]  # merged header cells read as empty ones
         if head in _HEADERS:
             current = Table(heading, cells, number)
