@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from rtde_spec.metamodel.schema import Spec
-from tests.test_spec_import_cut_pages import _fields
+from tests.test_spec_import_cut_pages import _fields, rendered
 from tests.test_spec_import_realworld import ESERIES, _read, rows, seed, spec
 
 __all__ = ["rows", "seed", "spec"]  # the module fixtures, shared
@@ -65,3 +65,19 @@ def test_pipe_cells_that_start_no_row_are_said(tmp_path: Path, seed: str, spec: 
     assert any(
         p.startswith(f"line {at}: '• speed_slider_mask' and ") and "start no row" in p for p in doc.problems
     )
+
+
+@pytest.mark.parametrize(
+    ("name", "broken"),
+    [("actual_joint_voltage", "actual_joint_volt-\nage"), ("speed_slider_mask", "speed_slid-\ner_mask")],
+)
+def test_a_name_hyphenated_at_a_line_end_is_one_name(
+    tmp_path: Path, rows: dict, spec: Spec, name: str, broken: str
+) -> None:
+    """A PDF viewer's copy breaks a long name in a narrow column with a hyphen: the part after the
+    break was read as the name ('age') and the part before as the row above's comment."""
+    text = rendered(rows)
+    assert f"\n{name}\n" in text
+    plain = _read(tmp_path, "plain.txt", text, spec)
+    doc = _read(tmp_path, "copied.txt", text.replace(f"\n{name}\n", f"\n{broken}\n", 1), spec)
+    assert _fields(doc) == _fields(plain) and doc.problems == []

@@ -26,7 +26,7 @@ from rtde_spec.importers.tables import (
     running_lines,
     split_form_feeds,
 )
-from rtde_spec.importers.wrapped import FRAGMENT, joins
+from rtde_spec.importers.wrapped import FRAGMENT, HYPHENATED, joins
 
 _HEAD = ("name", "type", "comment")
 _VERSION_HEAD = re.compile(r"(introduced in )?version|since", re.I)
@@ -72,7 +72,7 @@ def _lines(
     for i, (number, para) in enumerate(paras):
         if out and i + 1 < len(paras) and is_type(paras[i + 1][1]) and FRAGMENT.fullmatch(para):
             first = len(out)
-            while first > 0 and FRAGMENT.fullmatch(out[first - 1][1]) and not is_type(out[first - 1][1]):
+            while first > 0 and HYPHENATED.fullmatch(out[first - 1][1]) and not is_type(out[first - 1][1]):
                 (at, before), after = out[first - 1], (out[first][1] if first < len(out) else para)
                 verdict = joins(before, after, known, inside_word=False)
                 if verdict is None and problems is not None:
@@ -84,7 +84,7 @@ def _lines(
                     break
                 first -= 1
             if first < len(out):
-                para = "".join([*(c for _, c in out[first:]), para])
+                para = "".join([*(c.removesuffix("-") for _, c in out[first:]), para])
                 number = out[first][0]
                 del out[first:]
         out.append((number, para))

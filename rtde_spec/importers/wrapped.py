@@ -9,6 +9,8 @@ A PDF's name column is narrow, so long names break where a line may break: after
 - a break inside a word leaves no mark: the parts are rejoined only when the whole is a name
   the spec knows and the first part alone is not (a new field wrapped there cannot be told
   from two cells, and is reported with its line, never guessed);
+- a part ending in a line-break hyphen (`actual_joint_volt-` / `age`, a PDF viewer's copy) goes
+  on without it, where the name has a `_` before the break or the whole is a known name;
 - a part with spaces ("(X=[0..48])", a family's note) goes on the name with a space.
 """
 
@@ -21,6 +23,8 @@ from rtde_spec.metamodel.schema import Spec
 
 #: a piece of a name: identifier characters only (`{X}` kept for families)
 FRAGMENT = re.compile(r"[A-Za-z0-9_{}]+")
+#: the same, maybe ended by a line-break hyphen
+HYPHENATED = re.compile(r"[A-Za-z0-9_{}]+-?")
 
 
 def known_names(spec: Spec) -> frozenset[str]:
@@ -34,6 +38,11 @@ def joins(first: str, second: str, known: Collection[str], inside_word: bool = T
     only a break inside a word could make them one and the spec does not know the whole.
     `inside_word=False` (cells one per line, where a short comment may precede a name) refuses a
     break inside a word unless a part holds a `_`, as every field name but a few short ones does."""
+    if first.endswith("-") and FRAGMENT.fullmatch(first[:-1]) and FRAGMENT.fullmatch(second):
+        # a line-break hyphen ("actual_joint_volt-" / "age" in a PDF viewer's copy): no field name
+        # holds a "-"; taken where the name has a `_`, or the whole is a name the spec knows
+        whole = first[:-1] + second
+        return "_" in whole and ("_" in first or whole in known)
     if not (FRAGMENT.fullmatch(first) and FRAGMENT.fullmatch(second)):
         return False
     if first.endswith("_") or second.startswith("_"):
@@ -59,7 +68,7 @@ def join_parts(parts: list[str], known: Collection[str]) -> tuple[list[str], lis
         last = cells[-1].rsplit(" ", 1)[-1]
         verdict = joins(last, part, known) if last == cells[-1] else False
         if verdict:
-            cells[-1] += part
+            cells[-1] = cells[-1].removesuffix("-") + part
         else:
             if verdict is None:
                 unsure.append(k)
