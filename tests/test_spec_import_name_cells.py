@@ -56,3 +56,21 @@ def test_a_name_cell_with_more_than_a_name_is_said(
 def test_a_footnote_mark_after_a_name_is_no_part_of_it(tmp_path: Path, spec: Spec, cell: str) -> None:
     doc = read_document(_doc(tmp_path, cell), spec)
     assert doc.problems == [] and [f.name for f in doc.fields] == ["timestamp", "actual_q"]
+
+
+@pytest.mark.parametrize(
+    "cell", ["actual_<br>joint_voltage", "actual_joint<br/>_voltage", "actual_<br>\njoint_voltage"]
+)
+def test_a_name_broken_by_a_line_break_beside_an_underscore(tmp_path: Path, spec: Spec, cell: str) -> None:
+    """A saved page's narrow column with `<br>` in a name: read as 'actual_ joint_voltage', which
+    was cut to 'actual_' (or, once said, not read)."""
+    page = (
+        "<html><body><h2>Robot Controller Outputs</h2><table><tr><th>Name</th><th>Type</th><th>Comment</th>"
+        "<th>Introduced in version</th></tr>"
+        f"<tr><td>{cell}</td><td>VECTOR6D</td><td>Actual joint voltages</td><td></td></tr>"
+        "</table></body></html>"
+    )
+    path = tmp_path / "guide.html"
+    path.write_text(page, encoding="utf-8")
+    doc = read_document(path, spec)
+    assert [f.name for f in doc.fields] == ["actual_joint_voltage"] and doc.problems == []

@@ -147,9 +147,14 @@ def versions_in_text(text: str, lines: Lines) -> tuple[list[VersionNote], str]:
 NAME_MARKS = "`*'\"\u2018\u2019\u201c\u201d"
 
 
+#: a line break beside a `_` inside a name cell (`speed_<br>slider_mask` in a saved page's narrow
+#: column): no name ends or starts with `_`, so the parts are one name (see `wrapped`)
+_BROKEN_AT_UNDERSCORE = re.compile(r"(?<=\w_)\s+(?=\w)|(?<=\w)\s+(?=_\w)")
+
+
 def name_text(cell: str) -> str:
-    """A name cell's text without the marks around the name."""
-    return visible(cell).strip().strip(NAME_MARKS).strip()
+    """A name cell's text without the marks around the name, a name broken beside a `_` rejoined."""
+    return _BROKEN_AT_UNDERSCORE.sub("", visible(cell).strip().strip(NAME_MARKS).strip())
 
 
 def parse_name(cell: str) -> tuple[str, tuple[int, int] | None, bool]:
