@@ -13,6 +13,7 @@ import re
 
 from rtde_spec.importers.cells import Lines, parse_versions
 from rtde_spec.importers.model import DocLayoutField, DocMember
+from rtde_spec.importers.tables import is_page_line, running_lines
 
 _TYPES = r"unsigned char|uint\d+_t|int\d+_t|double|float|bool|char|type32"
 #: the arrow that marks a group's rows, and what it becomes in a copy saved in an 8-bit code page
@@ -165,6 +166,10 @@ class _Builder:
 def read_members(text: str, lines: Lines) -> list[DocMember]:
     """Every message and sub-package table of the document, with its rows."""
     numbered = [(n, raw.strip()) for n, raw in enumerate(text.splitlines(), start=1) if raw.strip()]
+    # a printed page's furniture (its footer with the page number, the running title) is no row's
+    # description: "Copyright © … Page 3 of 40" was read as requestedType's
+    running = running_lines([t for _, t in numbered])
+    numbered = [(n, t) for n, t in numbered if not is_page_line(t) and t not in running]
     members: list[DocMember] = []
     builder: _Builder | None = None
     heads = {i: _head_size(numbered, i) for i in range(len(numbered))}
