@@ -8,6 +8,7 @@ never as a table of no direction (every field after the break "removed").
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import pytest
@@ -104,3 +105,14 @@ def test_pipe_copy_with_a_bare_page_number(tmp_path: Path, seed: str, spec: Spec
     plain = _read(tmp_path, "plain.txt", seed, spec)
     doc = _read(tmp_path, "paged.txt", paged, spec)
     assert _fields(doc) == _fields(plain) and doc.problems == []
+
+
+def test_another_tables_header_after_a_page_break_starts_that_table(tmp_path: Path, spec: Spec) -> None:
+    """The CB3 guide copied without its `----` rulers, a page's number before "Data types": the
+    outputs table went on over the break, and "Name Type Size in bits", "BOOL …" became fields."""
+    text = (ESERIES.parent / "rtde-guide-cb3-era.txt").read_text(encoding="utf-8")
+    plain = _read(tmp_path, "plain.txt", text, spec)
+    at = text.index("\nData types\n")
+    paged = re.sub(r"(?m)^-+\t-+\t-+\t-+\n", "", text[:at] + "\nPage 5 of 9\n" + text[at:])
+    doc = _read(tmp_path, "paged.txt", paged, spec)
+    assert _fields(doc) == _fields(plain)

@@ -32,6 +32,13 @@ def _repeats_header(last: Table, cells: list[str], gap: list[str]) -> bool:
     return not any(is_heading(g) and Table(g.strip(), [], 0).direction for g in gap)
 
 
+def _other_header(last: Table, cells: list[str]) -> bool:
+    """Whether `cells` are another table's header (Data types: Name, Type, Size in bits): it starts
+    that table whatever the page break before it, never rows "Name", "BOOL" of the field table."""
+    low = [c.lower() for c in cells]
+    return low[:1] == ["name"] and low != [h.lower() for h in last.header]
+
+
 def read_tables(text: str, notes: list[str] | None = None) -> list[Table]:
     """The tables; one broken by a page ("Page 7 of 9", a running header, the header repeated)
     goes on as the same table (said in `notes`), its direction the heading's above its start."""
@@ -65,6 +72,7 @@ def read_tables(text: str, notes: list[str] | None = None) -> list[Table]:
             current is None
             and last is not None
             and (continues(last, gap) or _repeats_header(last, cells, gap))
+            and not _other_header(last, cells)
         ):
             current = last
             heading = last.heading
