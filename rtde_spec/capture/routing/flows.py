@@ -22,7 +22,7 @@ from rtde_spec.capture.reading.packets import FIN, RST, SYN, Segment
 from rtde_spec.capture.routing.classify import ROBOT_CLIENT_KINDS, connection_for
 from rtde_spec.capture.tables.sink import TableSink
 from rtde_spec.capture.tables.summary import ConnectionSummary
-from rtde_spec.capture.tcp import Direction
+from rtde_spec.capture.tcp import MOD, Direction
 from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.recipes.codec import RecipeCodec
 from rtde_spec.rtde.packages import encode_package
@@ -68,11 +68,15 @@ class FlowTable:
         self.finished: list[ConnectionSummary] = []
         self.folded: dict[str, ConnectionSummary] = {}  # past MAX_LISTED: one line per kind
         self.script_first: list[Flow] = []
+        self.reopened: list[Flow] = []  # closed connections whose 4-tuple a new SYN took: finished first
         self._swept = float("-inf")
 
     def route_of(self, seg: Segment) -> Route | None:
         """The segment's route, or None: not a connection we decode (or a SYN still undecided)."""
         route = self.routes.get((seg.src, seg.sport, seg.dst, seg.dport))
+        if route is not None and seg.flags & SYN and _new_connection(route, seg):
+            self._retire(route[0])
+            route = None
         if route is None:
             route = self._new_route(seg)
             if route is None:
@@ -111,13 +115,26 @@ class FlowTable:
         self.routes[(seg.src, seg.sport, seg.dst, seg.dport)] = route
         return route
 
+    def _retire(self, flow: Flow) -> None:
+        """A closed connection whose addresses and ports a new one reuses: no segment reaches it
+        any more; it is finished at the next sweep (`due` says so at once)."""
+        self.flows.pop(frozenset({flow.client, flow.server}), None)
+        (a, b) = (flow.client, flow.server)
+        self.routes.pop((a[0], a[1], b[0], b[1]), None)
+        self.routes.pop((b[0], b[1], a[0], a[1]), None)
+        self.reopened.append(flow)
+
     def due(self, now: float) -> bool:
         """Whether it is time to look for connections to finish (cheap: one comparison)."""
-        return now - self._swept >= SWEEP_SECONDS
+        return bool(self.reopened) or now - self._swept >= SWEEP_SECONDS
 
     def sweep(self, now: float, finish: Callable[[Flow], None]) -> None:
         """Finish the connections closed LINGER_SECONDS ago or idle IDLE_SECONDS; drop their state."""
         self._swept = now
+        while self.reopened:
+            flow = self.reopened.pop(0)
+            finish(flow)
+            self._keep(connection_summary(flow))
         done = [
             (key, flow)
             for key, flow in self.flows.items()
@@ -146,8 +163,9 @@ class FlowTable:
 
     def summaries(self) -> list[ConnectionSummary]:
         """Every connection's summary: finished ones, folded ones, then those still open."""
-        for flow in self.flows.values():  # at the end: those still open count like the finished
+        for flow in self.live():  # at the end: those still open count like the finished
             self._keep(connection_summary(flow))
+        self.reopened.clear()
         self.flows.clear()
         self.routes.clear()
         for kind, folded in self.folded.items():
@@ -155,7 +173,14 @@ class FlowTable:
         return [*self.finished, *self.folded.values()]
 
     def live(self) -> list[Flow]:
-        return list(self.flows.values())
+        return [*self.reopened, *self.flows.values()]
+
+
+def _new_connection(route: Route, seg: Segment) -> bool:
+    """Whether a SYN starts a new connection on the 4-tuple of a closed one (a client that binds
+    its port, or reconnects after a reset): not the SYN of this one seen again."""
+    flow, _, direction = route
+    return flow.closed_at is not None and direction.base not in (None, (seg.seq + 1) % MOD)
 
 
 def fold(into: ConnectionSummary, one: ConnectionSummary) -> None:

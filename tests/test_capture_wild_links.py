@@ -1,0 +1,46 @@
+"""Captures as real setups write them: a 4-tuple reused by a new connection, FCS flags in a
+pcap header, older QinQ tags, keep-alive probes. Each decodes to the rows that were sent."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import dpkt
+
+from rtde_spec.capture.decoder import decode_capture
+from rtde_spec.capture.tables.sink import ArrowSink
+from tests.capture_files import ACK, Conversation, rtde_packages, rtde_setup, write
+
+CLIENT, SERVER = ("10.0.0.2", 51000), ("10.0.0.10", 30004)
+BIG = ("timestamp", "actual_q", "robot_mode", "actual_TCP_pose")
+
+
+def _close(conv: Conversation) -> None:
+    conv.time += 0.01
+    for side in ("client", "server"):
+        conv.frames.append((conv.time, conv._frame(side, conv.seq[side], b"", dpkt.tcp.TH_FIN | ACK)))
+
+
+def test_a_new_connection_on_the_4_tuple_of_a_closed_one_is_decoded_as_its_own(tmp_path: Path) -> None:
+    """A client that binds its port reconnects 1 s after closing: the new SYN went to the old
+    connection (still lingering 5 s for retransmissions), which was then finished 5 s after the
+    old FIN in the middle of the new one; the rest came as a stream without its setup: 1,006 of
+    3,000 packages dropped as 'without a recipe' (exit 3)."""
+    first = Conversation(CLIENT, SERVER)
+    rtde_setup(first)
+    for package in rtde_packages(50):
+        first.send("server", package)
+    _close(first)
+    second = Conversation(CLIENT, SERVER, time=first.time + 1.0, seq={"client": 900_000, "server": 700_000})
+    rtde_setup(second, BIG)
+    for package in rtde_packages(3000, BIG):
+        second.send("server", package)
+        second.frames.append((second.time, second._frame("client", second.seq["client"], b"", ACK)))
+    sink = ArrowSink()
+    summary = decode_capture(write(tmp_path / "reuse.pcap", [first, second]), sink)
+    tables = sink.tables()
+    assert summary.problems() == []
+    assert [c.packages for c in summary.connections] == [56, 3006]
+    assert tables["rtde_outputs_1"].num_rows == 50
+    assert tables["rtde_outputs_2"].num_rows == 3000
+    assert tables["rtde_outputs_2"].column("timestamp").to_pylist()[-1] == 2999 * 0.002
