@@ -3,11 +3,12 @@ pcap header, older QinQ tags, keep-alive probes. Each decodes to the rows that w
 
 from __future__ import annotations
 
+import struct
 from pathlib import Path
 
 import dpkt
 
-from rtde_spec.capture.decoder import decode_capture
+from rtde_spec.capture.decoder import capture_tables, decode_capture
 from rtde_spec.capture.tables.sink import ArrowSink
 from tests.capture_files import ACK, Conversation, rtde_packages, rtde_setup, write
 
@@ -44,3 +45,31 @@ def test_a_new_connection_on_the_4_tuple_of_a_closed_one_is_decoded_as_its_own(t
     assert tables["rtde_outputs_1"].num_rows == 50
     assert tables["rtde_outputs_2"].num_rows == 3000
     assert tables["rtde_outputs_2"].column("timestamp").to_pylist()[-1] == 2999 * 0.002
+
+
+def _rtde(tmp_path: Path, count: int = 100) -> tuple[Conversation, Path]:
+    conv = Conversation(CLIENT, SERVER)
+    rtde_setup(conv)
+    for package in rtde_packages(count):
+        conv.send("server", package)
+    return conv, write(tmp_path / "plain.pcap", [conv])
+
+
+def _pcap(path: Path, frames: list[tuple[float, bytes]], linktype: int) -> Path:
+    with open(path, "wb") as out:
+        out.write(struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, linktype))
+        for ts, frame in frames:
+            out.write(struct.pack("<IIII", int(ts), round(ts % 1 * 1e6), len(frame), len(frame)) + frame)
+    return path
+
+
+def test_a_pcap_header_that_says_its_frames_end_in_an_fcs_is_read_as_its_link_type(tmp_path: Path) -> None:
+    """libpcap's and Wireshark's LT_LINKTYPE is the low 16 bits; the top bits say an FCS of so many
+    16-bit words ends each frame (0x24000001: Ethernet with 4 bytes). Only the top 4 bits were
+    masked: every frame was 'link type 67108865, which this reader does not decode', no rows."""
+    conv, plain = _rtde(tmp_path)
+    with_fcs = [(ts, frame + b"\xde\xad\xbe\xef") for ts, frame in sorted(conv.frames, key=lambda f: f[0])]
+    path = _pcap(tmp_path / "fcs.pcap", with_fcs, 0x24000001)
+    expected = capture_tables(plain)
+    assert expected["rtde_outputs_1"].num_rows == 100
+    assert capture_tables(path) == expected

@@ -275,7 +275,7 @@ def _pcap(
     rest = f.read(20)
     if len(rest) < 20:
         raise UsageError("not a pcap file (its header is cut off)", subject=f"file {name}")
-    linktype = struct.unpack(order + "I", rest[16:20])[0] & 0x0FFFFFFF  # upper bits: FCS flags
+    linktype = struct.unpack(order + "I", rest[16:20])[0] & 0xFFFF  # upper 16 bits: FCS length, flags
     size_at = struct.Struct(order + "I").unpack_from  # a record header's captured length, at +8
     u32 = np.dtype(order + "u4")
     snaplen = struct.unpack(order + "I", rest[12:16])[0]
