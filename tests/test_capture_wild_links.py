@@ -73,3 +73,20 @@ def test_a_pcap_header_that_says_its_frames_end_in_an_fcs_is_read_as_its_link_ty
     expected = capture_tables(plain)
     assert expected["rtde_outputs_1"].num_rows == 100
     assert capture_tables(path) == expected
+
+
+def test_keep_alive_probes_of_an_idle_client_are_no_damage(tmp_path: Path) -> None:
+    """A Windows or BSD client idle while the controller streams probes with one byte (a zero) at
+    the sequence number before its next one; Wireshark calls that "TCP Keep-Alive". It was
+    compared with the client's last byte sent and counted as a retransmission with other
+    bytes: the capture was 'damaged', exit 3."""
+    conv = Conversation(CLIENT, SERVER)
+    rtde_setup(conv)
+    for i, package in enumerate(rtde_packages(100)):
+        conv.send("server", package)
+        if i % 25 == 0:
+            conv.frames.append((conv.time, conv._frame("client", conv.seq["client"] - 1, b"\0", ACK)))
+    sink = ArrowSink()
+    summary = decode_capture(write(tmp_path / "keepalive.pcap", [conv]), sink)
+    assert summary.problems() == []
+    assert sink.tables()["rtde_outputs_1"].num_rows == 100

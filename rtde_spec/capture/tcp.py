@@ -3,7 +3,9 @@
 In order: data is delivered at once. Retransmitted and overlapping segments deliver
 only the bytes not seen yet; where they overlap bytes seen recently (the last
 `RECENT` delivered, or a segment waiting at the same place) with other bytes, the
-difference is counted as a conflict (the first copy is kept). Out-of-order segments
+difference is counted as a conflict (the first copy is kept); a keep-alive probe (one byte
+before the next expected, its content any byte: Windows and BSD send a zero) is not
+compared, as Wireshark calls it "TCP Keep-Alive". Out-of-order segments
 wait behind the hole before them for its retransmission, which a sender makes within
 its retransmission time-out (200 ms and up). When the hole has waited HOLE_SECONDS of
 capture time, or more than MAX_WAITING bytes wait, it is declared lost: it is counted
@@ -77,6 +79,8 @@ class Direction:
             self.midstream = True
         start = self._at(seq)
         end = start + len(payload)
+        if end == self.pos and len(payload) == 1:  # a keep-alive probe: one byte (garbage) at pos - 1
+            return []
         if start < self.pos:  # a retransmission, maybe overlapping new bytes
             self._compare_recent(start, payload)
             if end <= self.pos:
