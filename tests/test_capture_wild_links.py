@@ -90,3 +90,16 @@ def test_keep_alive_probes_of_an_idle_client_are_no_damage(tmp_path: Path) -> No
     summary = decode_capture(write(tmp_path / "keepalive.pcap", [conv]), sink)
     assert summary.problems() == []
     assert sink.tables()["rtde_outputs_1"].num_rows == 100
+
+
+def test_frames_with_the_older_qinq_tag_0x9100_are_read(tmp_path: Path) -> None:
+    """Switches from before 802.1ad tag the outer VLAN 0x9100 (Wireshark's default QinQ type):
+    every such frame was 'not TCP': no rows, and the run said the capture held no TCP segments."""
+    conv, plain = _rtde(tmp_path)
+    tagged = [
+        (ts, frame[:12] + b"\x91\x00\x00\x05\x81\x00\x00\x07" + frame[12:])
+        for ts, frame in sorted(conv.frames, key=lambda f: f[0])
+    ]
+    expected = capture_tables(plain)
+    assert expected["rtde_outputs_1"].num_rows == 100
+    assert capture_tables(_pcap(tmp_path / "qinq.pcap", tagged, 1)) == expected

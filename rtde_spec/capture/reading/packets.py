@@ -22,7 +22,8 @@ from rtde_spec.capture.reading.pcapfile import blocks
 
 FIN, SYN, RST = 0x01, 0x02, 0x04
 ACK_PSH = 0x18  # the flags a run's segments stand for (a run has no FIN, SYN or RST)
-IPV4, IPV6, VLAN = 0x0800, 0x86DD, (0x8100, 0x88A8)
+IPV4, IPV6 = 0x0800, 0x86DD
+VLAN = (0x8100, 0x88A8, 0x9100)  # 802.1Q, 802.1ad, and the QinQ tag before 802.1ad (Wireshark reads it)
 TCP = 6
 IPV6_OPTION_HEADERS = {0, 43, 60}  # hop-by-hop, routing, destination options: skipped over
 IPV6_FRAGMENT = 44
