@@ -7,6 +7,7 @@ import struct
 from pathlib import Path
 
 import dpkt
+import pytest
 
 from rtde_spec.capture.decoder import capture_tables, decode_capture
 from rtde_spec.capture.tables.sink import ArrowSink
@@ -103,3 +104,20 @@ def test_frames_with_the_older_qinq_tag_0x9100_are_read(tmp_path: Path) -> None:
     expected = capture_tables(plain)
     assert expected["rtde_outputs_1"].num_rows == 100
     assert capture_tables(_pcap(tmp_path / "qinq.pcap", tagged, 1)) == expected
+
+
+@pytest.mark.parametrize("kind", ["realtime", "urcl_reverse"])
+def test_records_of_a_stream_captured_from_its_middle_keep_their_own_capture_times(
+    tmp_path: Path, kind: str
+) -> None:
+    """A capture started after the connect (no SYN): fixed-size records are held until three in a
+    row confirm the offset, and were then all given the time of the segment that confirmed it,
+    so the first two real-time messages (or reverse records) were 16 and 8 ms late."""
+    from tests.test_capture_driver import realtime_conversation, reverse_conversation
+
+    conv = realtime_conversation() if kind == "realtime" else reverse_conversation()
+    data = sorted(conv.frames, key=lambda f: f[0])[2:]  # the handshake not captured
+    expected = [ts for ts, _ in data][: 10 if kind == "realtime" else 40]
+    conv.frames = data
+    rows = capture_tables(write(tmp_path / "mid.pcap", [conv]))[kind]
+    assert rows.column("capture_time").to_pylist() == pytest.approx(expected, abs=1e-6)  # pcap: microseconds

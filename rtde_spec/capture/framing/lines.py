@@ -31,9 +31,11 @@ class FixedFraming:
         self.skipped = self.cut = self.lead_in = 0
         self.unaligned = False  # no offset ever looked right: decoded from where the stream began
         self.phase = 0  # unsynced: the first offset not yet refused
-        self.times: list[float] | None = None  # records are given the time of the chunk completing them
+        self.times: list[float] | None = None  # of the records the last call gave, when not all its chunk's
+        self.marks: list[tuple[int, float]] = []  # unsynced: (end in buf, time) of each chunk held
 
     def feed(self, chunk: Chunk) -> list[bytes]:
+        self.times = None
         if chunk.midstream:
             self.synced = False
         if chunk.gap_before:
@@ -52,22 +54,35 @@ class FixedFraming:
             self.skipped += n
             data = data[n:]
         self.buf += data
-        if not self.synced and not self._align(final=False):
-            return []
+        if not self.synced:
+            self.marks.append((len(self.buf), chunk.time))
+            if not self._align(final=False):
+                return []
         return self._records()
 
     def finish(self) -> list[bytes]:
         """The end of the stream: a mid-stream capture too short to confirm is aligned as it can be."""
+        self.times = None
         if self.synced or not self.buf:
             return []
         self._align(final=True)
         return self._records()
 
     def _records(self) -> list[bytes]:
+        """The whole records held; those held while the offset was searched keep the time of the
+        chunk that completed each (`times`), not the time of the one that confirmed the offset."""
         size, buf = self.size, self.buf
         whole = len(buf) - len(buf) % size
         out = [bytes(buf[i : i + size]) for i in range(0, whole, size)]
         del buf[:whole]
+        marks, self.marks = self.marks, []
+        if marks and len({t for _, t in marks}) > 1:
+            times, mark = [], 0
+            for end in range(size, whole + 1, size):
+                while marks[mark][0] < end:
+                    mark += 1
+                times.append(marks[mark][1])
+            self.times = times
         return out
 
     def _align(self, final: bool) -> bool:
@@ -88,6 +103,7 @@ class FixedFraming:
             if all(self.plausible(data, k * size) for k in range(need)):
                 self.lead_in += phase
                 del buf[:phase]
+                self.marks = [(end - phase, t) for end, t in self.marks if end > phase]
                 self.synced = True
                 self.phase = 0
                 return True

@@ -107,7 +107,7 @@ class ExternalConnection:
             if len(held) == 1 or self.held_bytes > MAX_HELD:  # the program sent before, else the end decides
                 self._choose(sender, final=self.held_bytes > MAX_HELD)
             return
-        self._records(SIDE[sender], framing.feed(chunk), chunk.time)
+        self._records(SIDE[sender], framing.feed(chunk), chunk.time, framing.times)
 
     def _choose(self, sender: str, final: bool) -> None:
         """Choose the layout of what `sender` sends if its program (or, when `final`, anything) says;
@@ -126,12 +126,14 @@ class ExternalConnection:
         framing = self.framing[sender] = FixedFraming(codec.size, codec.plausible)
         self.notes.append(f"{self.protocol.name} layout {choice.name} ({choice.why})")
         for chunk in self.held.pop(sender):
-            self._records(side, framing.feed(chunk), chunk.time)
+            self._records(side, framing.feed(chunk), chunk.time, framing.times)
 
-    def _records(self, side: str, records: list[bytes], time: float) -> None:
+    def _records(self, side: str, records: list[bytes], now: float, times: list[float] | None = None) -> None:
+        """`times`: each record's, when not all `now` (the framing held some while it searched)."""
         codec, shared = self.codecs[side], self.shared[side]
-        day = day_of(time)
-        for record in records:
+        today = day_of(now)
+        for record, time in zip(records, times or [now] * len(records), strict=True):
+            day = today if time == now else day_of(time)
             self.counts.packages += 1
             plan = codec.variant_of(record)
             if (
@@ -183,7 +185,7 @@ class ExternalConnection:
         for sender in list(self.choosers):
             self._choose(sender, final=True)
         for sender, framing in self.framing.items():
-            self._records(SIDE[sender], framing.finish(), self.last_time)
+            self._records(SIDE[sender], framing.finish(), self.last_time, framing.times)
             if framing.unaligned:
                 self.counts.errors.append(
                     f"{SIDE[sender]}: no record boundary found; decoded from the first byte"

@@ -64,7 +64,8 @@ class RealtimeConnection:
                 return
             self._start(size)
             return
-        self._messages(self.framing["controller"].feed(chunk), chunk.time)
+        framing = self.framing["controller"]
+        self._messages(framing.feed(chunk), chunk.time, framing.times)
 
     def _size(self, final: bool) -> int | None:
         """The connection's message size: a known size whose field repeats one message later.
@@ -114,12 +115,13 @@ class RealtimeConnection:
         held, self.held = self.held, []
         self.search = bytearray()
         for chunk in held:
-            self._messages(framing.feed(chunk), chunk.time)
+            self._messages(framing.feed(chunk), chunk.time, framing.times)
 
-    def _messages(self, messages: list[bytes], time: float) -> None:
+    def _messages(self, messages: list[bytes], time: float, times: list[float] | None = None) -> None:
+        """`times`: each message's, when not all `time` (the framing held some while it searched)."""
         self.counts.packages += len(messages)
         self.held_messages += messages
-        self.held_times += [time] * len(messages)
+        self.held_times += times or [time] * len(messages)
         if len(self.held_messages) >= BATCH:
             self._flush()
 
@@ -163,7 +165,7 @@ class RealtimeConnection:
             self._start(size)
         framing = self.framing.get("controller")
         if framing is not None:
-            self._messages(framing.finish(), self.last_time)
+            self._messages(framing.finish(), self.last_time, framing.times)
         self._flush()
 
     def close(self) -> None:
