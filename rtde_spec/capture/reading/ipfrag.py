@@ -3,6 +3,7 @@ or by a big send on a small MTU is decoded whole, not counted as bytes never cap
 
 from __future__ import annotations
 
+from bisect import bisect_left
 from collections import OrderedDict
 
 MAX_DATAGRAMS = 1024  # datagrams waiting for their other fragments; the oldest is dropped past this
@@ -17,6 +18,9 @@ class Fragments:
         self.pending: OrderedDict[bytes, dict[int, bytes]] = OrderedDict()
         self.heads: dict[bytes, bytes] = {}  # the first fragment's IP header
         self.ends: dict[bytes, int] = {}  # the datagram's payload size, from its last fragment
+        self.reach: dict[bytes, tuple[int, int, list[int]]] = {}  # (bytes whole from 0, offsets
+        # taken into that, every offset sorted): the fragments are looked at once each, not all
+        # again per fragment (8,000 fragments of one datagram took 9.5 s)
 
     def add(self, frame: bytes, at: int) -> bytes | None:
         """One fragment of the IPv4 datagram at `frame[at:]`; an Ethernet frame of it when complete."""
@@ -34,9 +38,12 @@ class Fragments:
                 old, lost = self.pending.popitem(last=False)
                 self.heads.pop(old, None)
                 self.ends.pop(old, None)
+                self.reach.pop(old, None)
                 counts["ip_fragments_dropped"] = counts.get("ip_fragments_dropped", 0) + 1
                 counts["ip_fragments_lost"] = counts.get("ip_fragments_lost", 0) + len(lost)
-        pieces[offset] = frame[at + header : at + total]
+        before = pieces.get(offset)
+        pieces[offset] = frame[at + header : at + total]  # a copy of one held replaces it
+        self._place(key, offset, len(pieces[offset]), before)
         if offset == 0:
             self.heads[key] = frame[at : at + header]
         if not more:
@@ -46,7 +53,7 @@ class Fragments:
             return None
         counts["ip_reassembled"] = counts.get("ip_reassembled", 0) + 1
         head = bytearray(self.heads.pop(key))
-        del self.pending[key], self.ends[key]
+        del self.pending[key], self.ends[key], self.reach[key]
         head[2:4] = (len(head) + len(whole)).to_bytes(2, "big")
         head[6:8] = b"\0\0"
         return ETHERNET_IPV4 + bytes(head) + whole
@@ -59,10 +66,36 @@ class Fragments:
         self.pending.clear()
         self.heads.clear()
         self.ends.clear()
+        self.reach.clear()
+
+    def _place(self, key: bytes, offset: int, length: int, before: bytes | None) -> None:
+        """A fragment's offset among the datagram's, sorted; one before the offsets taken already
+        starts within the bytes reached, and is taken at once. A shorter copy of one taken makes
+        the bytes reached counted again."""
+        reach, taken, offsets = self.reach.get(key, (0, 0, []))
+        at = bisect_left(offsets, offset)
+        if before is None:
+            offsets.insert(at, offset)
+            taken += at < taken
+        elif at < taken and length < len(before):
+            reach = taken = 0
+        if at < taken:
+            reach = max(reach, offset + length)
+        self.reach[key] = (reach, taken, offsets)
+
+    def _reached(self, key: bytes) -> int:
+        """How many bytes from 0 the fragments held cover without a hole (each offset taken once)."""
+        reach, taken, offsets = self.reach[key]
+        pieces = self.pending[key]
+        while taken < len(offsets) and offsets[taken] <= reach:
+            reach = max(reach, offsets[taken] + len(pieces[offsets[taken]]))
+            taken += 1
+        self.reach[key] = (reach, taken, offsets)
+        return reach
 
     def _whole(self, key: bytes) -> bytes | None:
         end = self.ends.get(key)
-        if end is None or key not in self.heads:
+        if end is None or key not in self.heads or self._reached(key) < end:
             return None
         pieces, parts, at = self.pending[key], [], 0
         for offset in sorted(pieces):
