@@ -121,3 +121,25 @@ def test_records_of_a_stream_captured_from_its_middle_keep_their_own_capture_tim
     conv.frames = data
     rows = capture_tables(write(tmp_path / "mid.pcap", [conv]))[kind]
     assert rows.column("capture_time").to_pylist() == pytest.approx(expected, abs=1e-6)  # pcap: microseconds
+
+
+def test_ipv6_atomic_fragments_are_read_as_the_whole_packets_they_are(tmp_path: Path) -> None:
+    """A host told of a path MTU under 1,280 bytes sends every packet with a fragment header of
+    offset 0 and no more fragments (RFC 6946's atomic fragment): the whole packet. Every such
+    frame was 'a fragment of an IPv6 TCP segment', counted as undecodable: no rows, exit 3."""
+    conv = Conversation(("fd00::2", 51000), ("fd00::10", 30004))
+    rtde_setup(conv)
+    for package in rtde_packages(100):
+        conv.send("server", package)
+    plain = write(tmp_path / "plain.pcap", [conv])
+
+    def atomic(frame: bytes) -> bytes:
+        ip = bytearray(frame[14:54])
+        ip[4:6] = (int.from_bytes(ip[4:6], "big") + 8).to_bytes(2, "big")
+        ip[6] = 44  # next header: a fragment header, then TCP
+        return frame[:14] + bytes(ip) + bytes([6, 0, 0, 0, 0, 0, 0x12, 0x34]) + frame[54:]
+
+    frames = [(ts, atomic(frame)) for ts, frame in sorted(conv.frames, key=lambda f: f[0])]
+    expected = capture_tables(plain)
+    assert expected["rtde_outputs_1"].num_rows == 100
+    assert capture_tables(_pcap(tmp_path / "atomic.pcap", frames, 1)) == expected

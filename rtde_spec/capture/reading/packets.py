@@ -110,10 +110,11 @@ def _tcp_of(linktype: int, frame: bytes, book: Addresses) -> tuple[str, str, int
             end = min(len(frame), at + 40 + payload)
         src, dst, family = frame[at + 8 : at + 24], frame[at + 24 : at + 40], socket.AF_INET6
         nxt, tcp = frame[at + 6], at + 40
-        while nxt in IPV6_OPTION_HEADERS:
+        while nxt in IPV6_OPTION_HEADERS or (nxt == IPV6_FRAGMENT and _atomic(frame, tcp, end)):
             if tcp + 2 > end:
                 raise ValueError("IPv6 extension headers beyond the packet")
-            nxt, tcp = frame[tcp], tcp + (frame[tcp + 1] + 1) * 8
+            size = 8 if nxt == IPV6_FRAGMENT else (frame[tcp + 1] + 1) * 8
+            nxt, tcp = frame[tcp], tcp + size
         if nxt == IPV6_FRAGMENT and tcp < end and frame[tcp] == TCP:
             raise ValueError("a fragment of an IPv6 TCP segment (not put back together)")
         if nxt != TCP:
@@ -129,6 +130,12 @@ def _tcp_of(linktype: int, frame: bytes, book: Addresses) -> tuple[str, str, int
                 names.clear()
             names[raw] = socket.inet_ntop(family, raw)
     return names[src], names[dst], tcp, end, frame
+
+
+def _atomic(frame: bytes, at: int, end: int) -> bool:
+    """Whether the IPv6 fragment header at `at` is an atomic fragment (RFC 6946: offset 0, no more
+    fragments): the whole packet, its fragment header to be skipped like an option header."""
+    return at + 8 <= end and not int.from_bytes(frame[at + 2 : at + 4], "big") & 0xFFF9
 
 
 def _segment(
