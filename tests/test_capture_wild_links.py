@@ -143,3 +143,27 @@ def test_ipv6_atomic_fragments_are_read_as_the_whole_packets_they_are(tmp_path: 
     expected = capture_tables(plain)
     assert expected["rtde_outputs_1"].num_rows == 100
     assert capture_tables(_pcap(tmp_path / "atomic.pcap", frames, 1)) == expected
+
+
+def test_data_in_a_syn_is_the_first_of_its_stream(tmp_path: Path) -> None:
+    """A client with TCP Fast Open (RFC 7413) sends its first request in the SYN. Those bytes were
+    dropped: the protocol version request lost, the setup decoded as protocol 1 (garbled names)
+    and every data package 'without a recipe', exit 3."""
+    from rtde_spec import build
+
+    plain = Conversation(CLIENT, SERVER)
+    rtde_setup(plain)
+    request = build("request_protocol_version", protocol_version=2)
+    for package in rtde_packages(50):
+        plain.send("server", package)
+    (syn_time, _), *rest = sorted(plain.frames, key=lambda f: f[0])
+    assert rest[1][1].endswith(request)  # the request, sent after the handshake
+    fast = Conversation(CLIENT, SERVER)
+    fast.frames = [(syn_time, fast._frame("client", 1000, request, dpkt.tcp.TH_SYN)), rest[0], *rest[2:]]
+    sink = ArrowSink()
+    summary = decode_capture(write(tmp_path / "fast_open.pcap", [fast]), sink)
+    assert summary.problems() == []
+    got, expected = sink.tables(), capture_tables(write(tmp_path / "plain.pcap", [plain]))
+    assert got["rtde_outputs_1"] == expected["rtde_outputs_1"]
+    setup = [t["rtde_setup"].drop_columns("capture_time") for t in (got, expected)]
+    assert setup[0] == setup[1]  # the request's time is the SYN's

@@ -71,7 +71,7 @@ class Direction:
             # capture point), is no new start: restarting would decode what followed it twice
             if self.base != (seq + 1) % MOD:
                 self.base, self.pos = (seq + 1) % MOD, 0
-            return []
+            seq = (seq + 1) % MOD  # data in a SYN (TCP Fast Open, RFC 7413) is the stream's first
         if not payload:
             return []
         if self.base is None:  # a capture that starts mid-stream
