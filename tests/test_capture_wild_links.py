@@ -56,11 +56,12 @@ def _rtde(tmp_path: Path, count: int = 100) -> tuple[Conversation, Path]:
     return conv, write(tmp_path / "plain.pcap", [conv])
 
 
-def _pcap(path: Path, frames: list[tuple[float, bytes]], linktype: int) -> Path:
+def _pcap(path: Path, frames: list[tuple[float, bytes]], linktype: int, snap: int = 65535) -> Path:
     with open(path, "wb") as out:
-        out.write(struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, 65535, linktype))
+        out.write(struct.pack("<IHHiIII", 0xA1B2C3D4, 2, 4, 0, 0, snap, linktype))
         for ts, frame in frames:
-            out.write(struct.pack("<IIII", int(ts), round(ts % 1 * 1e6), len(frame), len(frame)) + frame)
+            kept = frame[:snap]
+            out.write(struct.pack("<IIII", int(ts), round(ts % 1 * 1e6), len(kept), len(frame)) + kept)
     return path
 
 
@@ -167,3 +168,19 @@ def test_data_in_a_syn_is_the_first_of_its_stream(tmp_path: Path) -> None:
     assert got["rtde_outputs_1"] == expected["rtde_outputs_1"]
     setup = [t["rtde_setup"].drop_columns("capture_time") for t in (got, expected)]
     assert setup[0] == setup[1]  # the request's time is the SYN's
+
+
+def test_dashboard_rows_after_a_greeting_cut_by_the_snap_length_pair_each_request_with_its_reply(
+    tmp_path: Path,
+) -> None:
+    """tcpdump -s 96 (an old default) keeps 42 bytes of payload here: the greeting (45) is cut,
+    the replies are whole. The line after the gap was passed over as the tail of the cut one:
+    'power on' got the reply to the next request, and so on to the last (latencies of 0.1 s)."""
+    from tests.test_capture_driver import dashboard_conversation
+
+    conv = dashboard_conversation()
+    frames = sorted(conv.frames, key=lambda f: f[0])
+    whole = capture_tables(_pcap(tmp_path / "whole.pcap", frames, 1))["dashboard"].to_pylist()
+    cut = capture_tables(_pcap(tmp_path / "cut.pcap", frames, 1, snap=96))["dashboard"].to_pylist()
+    assert whole[0]["outcome"] == "greeting" and len(whole) == 7
+    assert str(cut) == str(whole[1:])  # the greeting's row is lost with its end; the rest as sent (nan too)

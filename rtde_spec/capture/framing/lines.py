@@ -117,10 +117,16 @@ class FixedFraming:
 
 
 class LineFraming:
-    """Cut one direction's bytes into lines (without their newline); `limit` bounds a line."""
+    """Cut one direction's bytes into lines (without their newline); `limit` bounds a line.
 
-    def __init__(self, limit: int) -> None:
+    After a gap the bytes up to the next newline are the tail of a line whose start was lost,
+    and are passed over, unless `whole` says they read as a line of their own: a sender that
+    writes each line in one send starts a segment with a line, so the bytes lost were the rest
+    of the line cut (a snap length) or whole lines (a dropped segment)."""
+
+    def __init__(self, limit: int, whole: Callable[[bytes], bool] | None = None) -> None:
         self.limit = limit
+        self.whole = whole
         self.buf = bytearray()
         self.resync = False  # after a gap (or an over-long line): drop bytes up to the next newline
         self.skipped = self.cut = self.lead_in = 0
@@ -136,9 +142,17 @@ class LineFraming:
         data = chunk.data
         if self.resync:
             at = data.find(b"\n")
-            self.skipped += len(data) if at < 0 else at + 1
-            if at < 0:
+            if (
+                at >= 0
+                and chunk.gap_before
+                and self.whole is not None
+                and self.whole(data[:at].rstrip(b"\r"))
+            ):
+                at = -1  # the chunk after the gap starts with a whole line: nothing to pass over
+            elif at < 0:
+                self.skipped += len(data)
                 return []
+            self.skipped += at + 1
             data = data[at + 1 :]
             self.resync = False
         self.buf += data

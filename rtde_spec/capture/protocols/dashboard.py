@@ -27,7 +27,10 @@ class DashboardConnection:
         self.name, self.robot, self.sink = name, robot, sink
         self.spec = dashboard_spec()
         limit = self.spec.max_line_bytes
-        self.framing = {"client": LineFraming(limit), "controller": LineFraming(limit)}
+        self.framing = {
+            "client": LineFraming(limit, self._whole_request),
+            "controller": LineFraming(limit, self._whole_reply),
+        }
         self.open: deque[tuple[float, str]] = deque()
         self.greeted = False
         self.counts = Counts()
@@ -37,6 +40,21 @@ class DashboardConnection:
         self.last_time = chunk.time
         for line in self.framing[sender].feed(chunk):
             self._line(sender, line, chunk.time)
+
+    def _whole_request(self, raw: bytes) -> bool:
+        """Whether a line after a gap in the client's bytes is a whole request (a command's)."""
+        return self.spec.find(raw.decode("utf-8", "replace")) is not None
+
+    def _whole_reply(self, raw: bytes) -> bool:
+        """Whether a line after a gap in the server's bytes is a whole line: the greeting, or a
+        reply of the oldest open request's command. Passed over, its request would take the
+        next one's reply, and every request after it too (a snap length of 96 bytes cut every
+        session's greeting: each row had the reply to the request after it)."""
+        text = raw.decode("utf-8", "replace")
+        if not self.open:
+            return text == self.spec.greeting
+        found = self.spec.find(self.open[0][1])
+        return self.spec.outcome(found[0] if found is not None else None, text) is not None
 
     def _line(self, sender: str, raw: bytes, time: float) -> None:
         text = raw.decode("utf-8", "replace")
