@@ -184,3 +184,21 @@ def test_dashboard_rows_after_a_greeting_cut_by_the_snap_length_pair_each_reques
     cut = capture_tables(_pcap(tmp_path / "cut.pcap", frames, 1, snap=96))["dashboard"].to_pylist()
     assert whole[0]["outcome"] == "greeting" and len(whole) == 7
     assert str(cut) == str(whole[1:])  # the greeting's row is lost with its end; the rest as sent (nan too)
+
+
+def test_dashboard_requests_whose_replies_a_gap_lost_have_no_reply_and_the_rest_keep_theirs(
+    tmp_path: Path,
+) -> None:
+    """The segment of the reply to 'load' is not in the capture: 'load' took the reply to 'play',
+    'play' the one to 'robotmode', and so on, each with the next one's latency."""
+    from tests.test_capture_driver import dashboard_conversation
+
+    conv = dashboard_conversation()
+    frames = sorted(conv.frames, key=lambda f: f[0])
+    whole = capture_tables(_pcap(tmp_path / "whole.pcap", frames, 1))["dashboard"].to_pylist()
+    lost = [f for f in frames if b"File not found" not in f[1]]
+    assert len(lost) == len(frames) - 1
+    rows = capture_tables(_pcap(tmp_path / "lost.pcap", lost, 1))["dashboard"].to_pylist()
+    assert [r["request"] for r in rows] == [r["request"] for r in whole]
+    assert rows[2]["outcome"] == "no_reply" and whole[2]["reply"].startswith("File not found")
+    assert str(rows[:2] + rows[3:]) == str(whole[:2] + whole[3:])

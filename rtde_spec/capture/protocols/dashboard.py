@@ -33,11 +33,14 @@ class DashboardConnection:
         }
         self.open: deque[tuple[float, str]] = deque()
         self.greeted = False
+        self.after_gap = False  # bytes of the server were lost since its replies last matched
         self.counts = Counts()
         self.last_time = 0.0
 
     def feed(self, sender: str, chunk: Chunk) -> None:
         self.last_time = chunk.time
+        if sender == "controller" and chunk.gap_before:
+            self.after_gap = True
         for line in self.framing[sender].feed(chunk):
             self._line(sender, line, chunk.time)
 
@@ -47,14 +50,17 @@ class DashboardConnection:
 
     def _whole_reply(self, raw: bytes) -> bool:
         """Whether a line after a gap in the server's bytes is a whole line: the greeting, or a
-        reply of the oldest open request's command. Passed over, its request would take the
-        next one's reply, and every request after it too (a snap length of 96 bytes cut every
-        session's greeting: each row had the reply to the request after it)."""
+        reply of an open request's command. Passed over, its request would take the next one's
+        reply, and every request after it too (a snap length of 96 bytes cut every session's
+        greeting: each row had the reply to the request after it)."""
         text = raw.decode("utf-8", "replace")
         if not self.open:
             return text == self.spec.greeting
-        found = self.spec.find(self.open[0][1])
-        return self.spec.outcome(found[0] if found is not None else None, text) is not None
+        return any(self._answers(request, text) for _, request in self.open)
+
+    def _answers(self, request: str, reply: str) -> bool:
+        found = self.spec.find(request)
+        return self.spec.outcome(found[0] if found is not None else None, reply) is not None
 
     def _line(self, sender: str, raw: bytes, time: float) -> None:
         text = raw.decode("utf-8", "replace")
@@ -62,12 +68,26 @@ class DashboardConnection:
         if sender == "client":
             self.open.append((time, text))
             return
+        if self.open and self.after_gap:
+            self._realign(text)
         if self.open:
             request_time, request = self.open.popleft()
             self._row(request_time, request, text, time)
         else:  # the greeting, or a line no request asked for
             self._row(time, "", text, time, "greeting" if not self.greeted else "unrequested")
         self.greeted = True
+
+    def _realign(self, reply: str) -> None:
+        """After a gap in the server's bytes, the first reply that answers an open request's command
+        tells whose it is: the requests before that one had their replies in the gap (rows with
+        no reply), rather than each taking the reply to the one after it."""
+        answered = next((k for k, (_, r) in enumerate(self.open) if self._answers(r, reply)), None)
+        if answered is None:
+            return
+        for _ in range(answered):
+            time, request = self.open.popleft()
+            self._row(time, request, "", float("nan"), "no_reply")
+        self.after_gap = False
 
     def _row(
         self, time: float, request: str, reply: str, reply_time: float, outcome: str | None = None
