@@ -202,3 +202,31 @@ def test_dashboard_requests_whose_replies_a_gap_lost_have_no_reply_and_the_rest_
     assert [r["request"] for r in rows] == [r["request"] for r in whole]
     assert rows[2]["outcome"] == "no_reply" and whole[2]["reply"].startswith("File not found")
     assert str(rows[:2] + rows[3:]) == str(whole[:2] + whole[3:])
+
+
+def test_an_interface_time_offset_is_added_to_its_timestamps(tmp_path: Path) -> None:
+    """pcapng's if_tsoffset is "an offset (in seconds) that must be added to the timestamp of each
+    packet to obtain the absolute timestamp"; it was ignored: every capture time an hour early."""
+    conv, plain = _rtde(tmp_path)
+
+    def block(kind: int, body: bytes) -> bytes:
+        body += b"\0" * (-len(body) % 4)
+        return struct.pack("<II", kind, len(body) + 12) + body + struct.pack("<I", len(body) + 12)
+
+    offset = struct.pack("<HHq", 14, 8, 3600) + struct.pack("<HH", 0, 0)
+    data = block(0x0A0D0D0A, struct.pack("<IHHq", 0x1A2B3C4D, 1, 0, -1))
+    data += block(1, struct.pack("<HHI", 1, 0, 0) + offset)
+    for ts, frame in sorted(conv.frames, key=lambda f: f[0]):
+        stamp = round(ts * 1e6) - 3600 * 10**6
+        head = struct.pack("<IIIII", 0, stamp >> 32, stamp & 0xFFFFFFFF, len(frame), len(frame))
+        data += block(6, head + frame)
+    shifted = tmp_path / "offset.pcapng"
+    shifted.write_bytes(data)
+    expected = capture_tables(plain)
+    assert expected["rtde_outputs_1"].num_rows == 100
+    got = capture_tables(shifted)
+    times = [t["rtde_outputs_1"].column("capture_time").to_pylist() for t in (got, expected)]
+    assert times[0] == pytest.approx(times[1], abs=5e-6)  # microseconds rounded, not cut as dpkt does
+    assert got["rtde_outputs_1"].drop_columns("capture_time") == expected["rtde_outputs_1"].drop_columns(
+        "capture_time"
+    )

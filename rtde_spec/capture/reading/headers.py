@@ -10,6 +10,7 @@ the summary say what happened and how to capture instead (`-s 0`).
 from __future__ import annotations
 
 import struct
+from collections.abc import Iterator
 from typing import Any
 
 
@@ -41,23 +42,39 @@ def count_cut(stats: dict[str, int], lengths: Any, origs: Any, times: Any = None
             pass
 
 
-def interface(buf: Any, pos: int, length: int, order: str, stats: dict[str, int]) -> tuple[int, float]:
-    """(link type, seconds per timestamp unit) of an interface block; its snap length to `stats`."""
+def interface(buf: Any, pos: int, length: int, order: str, stats: dict[str, int]) -> tuple[int, float, int]:
+    """(link type, seconds per timestamp unit, seconds to add) of an interface block; its snap
+    length to `stats`."""
     if length >= 20:  # a whole interface block: its snap length at +12
         snap_length(stats, struct.unpack_from(order + "I", buf, pos + 12)[0])
     linktype = struct.unpack_from(order + "H", buf, pos + 8)[0]
-    return linktype, resolution(buf[pos + 16 : pos + length - 4], order)
+    options = buf[pos + 16 : pos + length - 4]
+    return linktype, resolution(options, order), time_offset(options, order)
 
 
-def resolution(options: bytes, order: str) -> float:
-    """Seconds per timestamp unit from an interface's if_tsresol option (default microseconds)."""
+def _options(options: bytes, order: str) -> Iterator[tuple[int, bytes]]:
+    """(code, value) of each option up to opt_endofopt; a value cut short by the block is as held."""
     pos = 0
     while pos + 4 <= len(options):
         code, size = struct.unpack(order + "HH", options[pos : pos + 4])
         if code == 0:
-            break
-        if code == 9 and size >= 1 and pos + 4 < len(options):  # its value byte, if the block holds it
-            value = options[pos + 4]
-            return 2.0 ** -(value & 0x7F) if value & 0x80 else 10.0**-value
+            return
+        yield code, options[pos + 4 : pos + 4 + size]
         pos += 4 + size + (-size % 4)
+
+
+def resolution(options: bytes, order: str) -> float:
+    """Seconds per timestamp unit from an interface's if_tsresol option (default microseconds)."""
+    for code, value in _options(options, order):
+        if code == 9 and value:  # its value byte, if the block holds it
+            return 2.0 ** -(value[0] & 0x7F) if value[0] & 0x80 else 10.0 ** -value[0]
     return 1e-6
+
+
+def time_offset(options: bytes, order: str) -> int:
+    """Seconds to add to an interface's timestamps, from its if_tsoffset option (pcapng: "an offset
+    (in seconds) that must be added to the timestamp of each packet"; default 0)."""
+    for code, value in _options(options, order):
+        if code == 14 and len(value) >= 8:
+            return int(struct.unpack(order + "q", value[:8])[0])
+    return 0

@@ -10,7 +10,7 @@ done are handed back, so memory stays flat); a pipe is read. A steady stream
 without a Python step per record.
 
 Classic pcap in either byte order with micro- or nanosecond stamps; pcapng sections
-(either byte order), interfaces (link type, `if_tsresol`), enhanced and simple packet
+(either byte order), interfaces (link type, `if_tsresol`, `if_tsoffset`), enhanced and simple packet
 blocks; other blocks are skipped. A cut-off last record is counted in
 `stats['truncated']`; frames a snap length cut in `stats['cut_frames']` (`headers.py`).
 """
@@ -322,7 +322,7 @@ def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int], lag: i
     import numpy as np
 
     order = "<"
-    interfaces: list[tuple[int, float]] = []  # (link type, seconds per timestamp unit)
+    interfaces: list[tuple[int, float, int]] = []  # (link type, seconds per timestamp unit, offset)
 
     def parse(buf: Any, pos: int, end: int, found: _Columns) -> int:
         nonlocal order, interfaces
@@ -355,11 +355,11 @@ def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int], lag: i
                 same = min(same, same_run(buf, pos, length, same, length - 4, length, u32))  # its end
                 same = min(same, same_run(buf, pos, length, same, 0, EPB, u32))
                 same = min(same, same_run(buf, pos, length, same, 8, iface, u32))
-                linktype, unit = interfaces[iface] if iface < len(interfaces) else (-1, 1e-6)
+                linktype, unit, shift = interfaces[iface] if iface < len(interfaces) else (-1, 1e-6, 0)
                 high, low, caplen = (strided(buf, pos + at, length, same, u32) for at in (12, 16, 20))
                 starts = pos + 28 + np.arange(same, dtype=np.int64) * length
                 lengths = np.minimum(caplen, length - 32)
-                times = ((high << 32) | low) * unit
+                times = ((high << 32) | low) * unit + shift
                 found.add(starts, lengths, times, linktype)
                 count_cut_run(stats, buf, pos + 24, length, same, lengths, u32, times)
                 pos += same * length
