@@ -230,3 +230,21 @@ def test_an_interface_time_offset_is_added_to_its_timestamps(tmp_path: Path) -> 
     assert got["rtde_outputs_1"].drop_columns("capture_time") == expected["rtde_outputs_1"].drop_columns(
         "capture_time"
     )
+
+
+def test_apple_pktap_frames_are_read_through_their_header(tmp_path: Path) -> None:
+    """Link type 258, Apple's PKTAP (a capture through macOS's pktap interface that keeps its
+    headers; tcpdump and Wireshark read it): a header (its length, 1 for 'a packet follows', the
+    packet's link type, the interface and process) before each frame. Every frame was of 'link
+    type 258, which this reader does not decode'."""
+    conv, plain = _rtde(tmp_path)
+
+    def pktap(frame: bytes) -> bytes:
+        header = struct.pack("<III24s", 108, 1, 1, b"en0").ljust(108, b"\0")
+        return header + frame
+
+    frames = [(ts, pktap(frame)) for ts, frame in sorted(conv.frames, key=lambda f: f[0])]
+    frames.insert(3, (frames[3][0], struct.pack("<III", 108, 2, 1).ljust(108, b"\0")))  # no packet after it
+    expected = capture_tables(plain)
+    assert expected["rtde_outputs_1"].num_rows == 100
+    assert capture_tables(_pcap(tmp_path / "pktap.pcap", frames, 258)) == expected

@@ -1,10 +1,11 @@
 """TCP segments out of pcap and pcapng files, headers read with `struct`.
 
 Link types: Ethernet (with 802.1Q/802.1ad tags), Linux cooked (SLL and SLL2), BSD
-loopback/null and raw IP; IPv4 (fragments put back together) and IPv6 (hop-by-hop, routing and
-destination options skipped). Anything else is counted, not decoded: other protocols as
-`not_tcp`; frames that claim IP but whose headers cannot be read as `undecodable`, and link
-types not read here as `unknown_link` (both reported as damage by the summary).
+loopback/null, raw IP, and Apple's PKTAP around any of them; IPv4 (fragments put back
+together) and IPv6 (hop-by-hop, routing and destination options skipped). Anything else is
+counted, not decoded: other protocols as `not_tcp`; frames that claim IP but whose headers
+cannot be read as `undecodable`, and link types not read here as `unknown_link` (both
+reported as damage by the summary).
 """
 
 from __future__ import annotations
@@ -46,6 +47,7 @@ class UnknownLink(Exception):
 
 
 LINK_HEADERS = {1: 14, 113: 16, 276: 20, 0: 4, 108: 4}  # bytes before the IP header (Ethernet: untagged)
+PKTAP = 258  # Apple's per-packet metadata, then the frame of the link type it names
 
 
 def _ip_start(linktype: int, frame: bytes) -> tuple[int, int]:
@@ -71,7 +73,24 @@ def _ip_start(linktype: int, frame: bytes) -> tuple[int, int]:
         return (IPV4 if len(frame) > 4 and frame[4] >> 4 == 4 else IPV6), 4
     if linktype in (101, 12, 14, 228, 229):  # raw IP
         return (IPV4 if frame and frame[0] >> 4 == 4 else IPV6), 0
+    if linktype == PKTAP:
+        return _pktap(frame)
     raise UnknownLink(linktype)
+
+
+def _pktap(frame: bytes) -> tuple[int, int]:
+    """Apple's PKTAP (a capture through macOS's pktap interface that keeps its headers): a header
+    in the host's (little-endian) order naming its own length, whether a packet follows (1) and
+    that packet's link type."""
+    if len(frame) < 12:
+        raise ValueError("shorter than its PKTAP header")
+    length, follows, inner = struct.unpack_from("<III", frame)
+    if follows != 1:  # no packet after the header (a drop report): nothing of TCP
+        return 0, 0
+    if not 12 <= length <= len(frame) or inner == PKTAP:
+        raise ValueError("a PKTAP header that cannot be one")
+    kind, at = _ip_start(inner, frame[length:])
+    return kind, length + at
 
 
 def _tcp_of(linktype: int, frame: bytes, book: Addresses) -> tuple[str, str, int, int, bytes] | None:
