@@ -270,3 +270,60 @@ def test_fragments_seen_on_two_interfaces_are_copies_not_lost_fragments(tmp_path
     assert summary.problems() == []
     assert summary.reading["ip_reassembled"] == 102  # 100 data packages, 2 setup packages over 40 bytes
     assert sink.tables() == capture_tables(plain)
+
+
+class Acked(Conversation):
+    """A conversation whose segments acknowledge what the other side sent, as real ones do."""
+
+    def _frame(self, side: str, seq: int, payload: bytes, flags: int) -> bytes:
+        frame = bytearray(super()._frame(side, seq, payload, flags))
+        other = self.seq["server" if side == "client" else "client"]
+        frame[14 + 20 + 8 : 14 + 20 + 12] = (other % (1 << 32)).to_bytes(4, "big")
+        return bytes(frame)  # the TCP checksum is not checked by the reader
+
+
+def test_a_request_the_capture_missed_but_the_server_acknowledged_costs_only_its_own_row(
+    tmp_path: Path,
+) -> None:
+    """dumpcap dropped the segment of 'load' (the server got it: its reply acknowledges it). The
+    requests after it waited behind the hole for its retransmission, which never comes, until the
+    end of the capture: every reply after it was 'unrequested' and every request 'no_reply'."""
+    from tests.test_capture_driver import PC, ROBOT
+
+    conv = Acked((PC, 41999), (ROBOT, 29999))
+    conv.handshake()
+    conv.send("server", b"Connected: Universal Robots Dashboard Server\n")
+    pairs = [(b"power on\n", b"Powering on\n"), (b"load x.urp\n", b"File not found: x.urp\n"),
+             (b"play\n", b"Failed to execute: play\n"), (b"robotmode\n", b"Robotmode: IDLE\n")]  # fmt: skip
+    for request, reply in pairs:
+        conv.send("client", request, dt=0.1, keep=request != b"load x.urp\n")
+        conv.send("server", reply, dt=0.004)
+    rows = capture_tables(write(tmp_path / "dropped.pcap", [conv]))["dashboard"].to_pylist()
+    assert [(r["request"], r["reply"], r["outcome"]) for r in rows] == [
+        ("", "Connected: Universal Robots Dashboard Server", "greeting"),
+        ("power on", "Powering on", "ok"),
+        ("", "File not found: x.urp", "unrequested"),
+        ("play", "Failed to execute: play", "failed"),
+        ("robotmode", "Robotmode: IDLE", "ok"),
+    ]
+
+
+def test_a_segment_only_the_second_capture_point_holds_fills_its_hole_after_the_acknowledgment(
+    tmp_path: Path,
+) -> None:
+    """Two capture points merged (every frame twice, the second 5 ms later), the first missing three
+    data segments: the acknowledgment (from the first) comes before the second point's copy, which
+    must still fill the hole. A connection that shows copies does not take holes for lost on an ACK."""
+    conv = Acked(CLIENT, SERVER)
+    rtde_setup(conv)
+    for package in rtde_packages(200):
+        conv.send("server", package)
+        conv.send("client", b"", dt=0.0005)  # the client's ACK of it
+    first = sorted(conv.frames, key=lambda f: f[0])
+    missing = {first[k][1] for k in (40, 100, 160)}
+    assert all(len(frame) > 100 for frame in missing)  # data segments, not ACKs
+    merged = [f for f in first if f[1] not in missing] + [(ts + 0.005, frame) for ts, frame in first]
+    sink = ArrowSink()
+    summary = decode_capture(_pcap(tmp_path / "merged.pcap", sorted(merged, key=lambda f: f[0]), 1), sink)
+    assert summary.problems() == []
+    assert sink.tables()["rtde_outputs_1"].num_rows == 200

@@ -50,6 +50,7 @@ class Direction:
     lost_bytes: int = 0
     conflicts: int = 0  # retransmissions whose bytes differ from the copy kept
     conflict_bytes: int = 0
+    copies: int = 0  # segments (a SYN too) wholly seen before: retransmissions, or a second capture point
     midstream: bool = False  # no SYN seen: the next chunk delivered is the first, from mid-stream
     _starts: list[int] = field(default_factory=list)  # heap of waiting positions
     _arrivals: deque[tuple[float, int]] = field(default_factory=deque)  # (time, position), oldest first
@@ -71,6 +72,8 @@ class Direction:
             # capture point), is no new start: restarting would decode what followed it twice
             if self.base != (seq + 1) % MOD:
                 self.base, self.pos = (seq + 1) % MOD, 0
+            else:
+                self.copies += 1
             seq = (seq + 1) % MOD  # data in a SYN (TCP Fast Open, RFC 7413) is the stream's first
         if not payload:
             return []
@@ -84,6 +87,7 @@ class Direction:
         if start < self.pos:  # a retransmission, maybe overlapping new bytes
             self._compare_recent(start, payload)
             if end <= self.pos:
+                self.copies += 1
                 return []
             payload = payload[self.pos - start :]
             start = self.pos
@@ -195,6 +199,24 @@ class Direction:
         if chunks:
             chunks[0].gap_before = lost
         return chunks
+
+    def acked(self, ack: int) -> list[Chunk]:
+        """The peer's acknowledgment number: the bytes before it reached the peer, so a hole before
+        it is not in the capture and never will be (Wireshark: "ACKed segment that wasn't
+        captured"). Such holes are declared lost now, not after HOLE_SECONDS of this direction's
+        own segments: what waits behind them is decoded in its place among the other direction's."""
+        out: list[Chunk] = []
+        if self.base is None or not self.waiting:
+            return out
+        upto = self._at(ack)
+        starts, waiting = self._starts, self.waiting
+        while waiting:
+            while starts[0] not in waiting:
+                heapq.heappop(starts)
+            if starts[0] > upto:
+                break
+            out += self.skip_gap()
+        return out
 
     def drain(self) -> list[Chunk]:
         """At the end of the capture: every hole still open is lost; deliver everything after them."""

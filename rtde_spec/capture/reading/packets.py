@@ -28,7 +28,8 @@ VLAN = (0x8100, 0x88A8, 0x9100)  # 802.1Q, 802.1ad, and the QinQ tag before 802.
 TCP = 6
 IPV6_OPTION_HEADERS = {0, 43, 60}  # hop-by-hop, routing, destination options: skipped over
 IPV6_FRAGMENT = 44
-_TCP = struct.Struct(">HHI4xBB")  # ports, seq, (ack), data offset byte, flags
+_TCP = struct.Struct(">HHIIBB")  # ports, seq, ack, data offset byte, flags
+ACK = 0x10
 
 
 class Segment(NamedTuple):
@@ -40,6 +41,7 @@ class Segment(NamedTuple):
     seq: int
     flags: int
     payload: bytes
+    ack: int = -1  # the acknowledgment number, when the ACK flag is set (-1: none, or not read)
 
 
 class UnknownLink(Exception):
@@ -176,12 +178,12 @@ def _segment(
             counts["not_tcp"] = counts.get("not_tcp", 0) + 1
         return None
     src, dst, at, end, frame = found
-    sport, dport, seq, offset, flags = _TCP.unpack_from(frame, at)
+    sport, dport, seq, ack, offset, flags = _TCP.unpack_from(frame, at)
     data = at + (offset >> 4) * 4
     if data > end:
         counts["undecodable"] = counts.get("undecodable", 0) + 1
         return None
-    return Segment(ts, src, sport, dst, dport, seq, flags, frame[data:end])
+    return Segment(ts, src, sport, dst, dport, seq, flags, frame[data:end], ack if flags & ACK else -1)
 
 
 def items(

@@ -85,6 +85,8 @@ class FlowTable:
         flow.last = seg.time
         if seg.flags & (FIN | RST) and flow.closed_at is None:
             flow.closed_at = seg.time
+        if seg.ack >= 0:
+            _acked(flow, "client" if route[1] == "controller" else "controller", seg.ack)
         return route
 
     def _new_route(self, seg: Segment) -> Route | None:
@@ -174,6 +176,17 @@ class FlowTable:
 
     def live(self) -> list[Flow]:
         return [*self.reopened, *self.flows.values()]
+
+
+def _acked(flow: Flow, other: str, ack: int) -> None:
+    """What the other direction's holes before `ack` held was never captured: what waits behind
+    them goes to the decoder now, before this segment, as it was sent. Not in a connection that
+    shows copies of its segments: from a second capture point (mergecap) a segment the first
+    one missed comes a few ms after the acknowledgment, and fills the hole as it is."""
+    direction = flow.directions[other]
+    if direction.waiting and not any(d.copies for d in flow.directions.values()):
+        for chunk in direction.acked(ack):
+            flow.decoder.feed(other, chunk)
 
 
 def _new_connection(route: Route, seg: Segment) -> bool:
