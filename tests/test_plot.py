@@ -154,3 +154,28 @@ def test_ur_record_py_recordings_plot_in_both_its_forms(tmp_path: Path) -> None:
     ]
     done = cli("plot", str(binary), "actual_q", "-o", str(tmp_path / "cut.png"))
     assert done.returncode == 3 and "the last row is cut short" in done.stderr, done.stderr
+
+
+def test_a_table_given_to_decode_or_capture_is_named_with_the_command_that_reads_it(tmp_path: Path) -> None:
+    """A recording (UR's record.py CSV or binary, our own Parquet) given to `decode` was decoded
+    as packages ("unknown package type 109 ('m')") and to `capture` was "not a pcap (magic
+    74696d65)". Each now says what the file is and that `plot` draws it; a client's session whose
+    setup names four fields between binary bytes is still packages."""
+    from rtde_spec import build
+    from rtde_spec.output.ur_recordings import recording_kind
+
+    text, binary, _ = _ur_record_files(tmp_path, 5)
+    parquet = tmp_path / "run.parquet"
+    import pyarrow.csv as pacsv
+    import pyarrow.parquet as pq
+
+    pq.write_table(pacsv.read_csv(text, parse_options=pacsv.ParseOptions(delimiter=" ")), parquet)
+    for path, kind in ((text, "a recorded table (CSV)"), (binary, "a binary recording of UR's record.py"),
+                       (parquet, "a Parquet table")):  # fmt: skip
+        for command in ("decode", "capture"):
+            done = cli(command, str(path), *(["-o", str(tmp_path / "out")] if command == "capture" else []))
+            assert done.returncode == 2, done.stderr
+            assert f"this is {kind}, a table already: `rtde-spec plot {path} FIELD" in done.stderr
+    names = ["timestamp", "actual_q", "robot_mode", "safety_mode"]
+    session = build("setup_outputs_v2", output_frequency=125.0, variable_names=names) + build("start")
+    assert recording_kind(session) is None

@@ -25,7 +25,7 @@ from rtde_spec._generated.constants import (
 from rtde_spec.cli.arguments import RECIPE_FILE_HELP, existing_file, primary_version, recipe_file
 from rtde_spec.cli.conventions import describe, output_file
 from rtde_spec.cli.hex_dumps import looks_like_hex_forms
-from rtde_spec.cli.inputs import from_hex_text, read_input, refuse_special, reject_capture
+from rtde_spec.cli.inputs import from_hex_text, read_input, refuse_special, reject_capture, reject_recording
 from rtde_spec.cli.options import add_lenient
 from rtde_spec.cli.report import close_output, report_skipped
 from rtde_spec.errors import DecodeError, RtdeSpecError, UsageError
@@ -168,6 +168,7 @@ def chunks(args: argparse.Namespace) -> Iterator[bytes]:
     with open(path, "rb") as f:
         head = f.read(CHUNK)
         reject_capture(head, args.data)
+        reject_recording(head, args.data)
         if _is_hex_text(head):
             yield read_input(args.data)
             return

@@ -52,6 +52,15 @@ def reject_capture(head: bytes, source: str) -> None:
         )
 
 
+def reject_recording(head: bytes, source: str) -> None:
+    """A table file (a recording, `capture`'s output, UR's record.py file) given as packages."""
+    from rtde_spec.output.ur_recordings import table_hint
+
+    hint = table_hint(head, source)
+    if hint is not None:
+        raise UsageError(f"not RTDE or primary bytes: {hint}", subject=f"file {source}")
+
+
 def not_a_file(arg: str | Path) -> str | None:
     """What `arg` is when it names something that exists but is not a regular file ("a FIFO (named
     pipe)", "a character device", "a directory"); None when it is a file or nothing is there."""
@@ -104,6 +113,8 @@ def read_input(arg: str) -> bytes:
                 "a file, or - for standard input"
             ) from None
     reject_capture(data, arg)
+    if path is not None:
+        reject_recording(data[:65536], arg)
     return from_hex_text(data)
 
 

@@ -9,6 +9,7 @@ id). `plot` reads both; the CSV's separator is found from its header line.
 
 from __future__ import annotations
 
+import re
 from pathlib import Path
 from typing import Any
 
@@ -26,10 +27,51 @@ def separator(header: str) -> str:
 def binary_layout(path: Path) -> tuple[list[str], list[str], int] | None:
     """(names, types, offset of the first row) when `path` is record.py's binary form, else None:
     its second line names only RTDE types, one per column."""
+    with open(path, "rb") as f:
+        return _binary_head(f.read(_HEAD_LIMIT))
+
+
+def table_hint(head: bytes, source: str) -> str | None:
+    """What a table file is, from its first bytes, and what reads it, when one is given where
+    packages or a capture are expected (`decode`, `capture`)."""
+    if head.startswith(b"\x89MCAP"):
+        return "this is an MCAP file: open it in Foxglove or with the mcap tools"
+    kind = recording_kind(head)
+    if kind is None:
+        return None
+    return f"this is {kind}, a table already: `rtde-spec plot {source} FIELD -o plot.png` draws it"
+
+
+def recording_kind(head: bytes) -> str | None:
+    """What table `head` starts, of those `plot` reads; None when it is none of them."""
+    if head.startswith(b"PAR1"):
+        return "a Parquet table"
+    if _binary_head(head) is not None:
+        return "a binary recording of UR's record.py"
+    try:
+        first = head.split(b"\n", 1)[0].decode("ascii").strip()
+    except UnicodeDecodeError:
+        return None
+    if not first.isprintable():  # packages' bytes (a setup names fields too, between binary)
+        return None
+    if first.startswith("{") and '"timestamp"' in first:
+        return "a JSON Lines table"
+    names = [re.sub(r"_\d+$", "", n) for n in first.split(separator(first)) if n]
+    known = _field_names()
+    if len(names) >= 2 and sum(n in known for n in names) * 2 >= len(names):
+        return "a recorded table (CSV)"
+    return None
+
+
+def _field_names() -> set[str]:
     from rtde_spec.metamodel.catalogue import Catalogue
 
-    with open(path, "rb") as f:
-        head = f.read(_HEAD_LIMIT)
+    return {*Catalogue.builtin().names("output"), *Catalogue.builtin().names("input"), "capture_time"}
+
+
+def _binary_head(head: bytes) -> tuple[list[str], list[str], int] | None:
+    from rtde_spec.metamodel.catalogue import Catalogue
+
     first = head.find(b"\n")
     second = head.find(b"\n", first + 1) if first >= 0 else -1
     if second < 0:

@@ -105,6 +105,11 @@ def blocks(f: IO[bytes], name: str, stats: dict[str, int], lag: int = 0) -> Iter
     elif magic in PCAP_MAGIC:
         yield from _pcap(f, *PCAP_MAGIC[magic], name, stats, lag)
     else:
+        from rtde_spec.output.ur_recordings import table_hint
+
+        hint = table_hint(head + f.read(65536), name)
+        if hint is not None:  # a table given for a capture: the command that reads it
+            raise UsageError(f"not a capture: {hint}", subject=f"file {name}")
         other = OTHER_FORMATS.get(magic, "")
         raise UsageError(
             f"not a pcap or pcapng file (magic {head.hex()}{other}); a capture Wireshark opens converts "
