@@ -47,6 +47,16 @@ def test_a_new_connection_on_the_4_tuple_of_a_closed_one_is_decoded_as_its_own(t
     assert tables["rtde_outputs_1"].num_rows == 50
     assert tables["rtde_outputs_2"].num_rows == 3000
     assert tables["rtde_outputs_2"].column("timestamp").to_pylist()[-1] == 2999 * 0.002
+    # each connection's rows and summary line under a name of its own: they shared one
+    name = "10.0.0.2:51000-10.0.0.10:30004"
+    assert [c.name for c in summary.connections] == [name, f"{name} #2"]
+    assert set(tables["rtde_outputs_1"].column("connection").to_pylist()) == {name}
+    assert set(tables["rtde_outputs_2"].column("connection").to_pylist()) == {f"{name} #2"}
+    setup = tables["rtde_setup"].column("connection").to_pylist()
+    assert setup.count(name) > 0 and setup.count(f"{name} #2") > 0
+    from rtde_spec.capture.protocols.base import server_port  # what the decoders read the port from
+
+    assert server_port(f"{name} #2") == server_port(name) == "30004"
 
 
 def _rtde(tmp_path: Path, count: int = 100) -> tuple[Conversation, Path]:

@@ -77,3 +77,8 @@ class ConnectionDecoder(Protocol):
 
     def close(self) -> None:
         """Flush what is batched to the sink."""
+
+
+def server_port(name: str) -> str:
+    """The server's port of a connection's name ("A:p-B:q", "A:p-B:q #2" on a reused 4-tuple)."""
+    return name.split(" ", 1)[0].rpartition(":")[2]

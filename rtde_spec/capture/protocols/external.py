@@ -21,7 +21,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 from rtde_spec.capture.framing.lines import FixedFraming
-from rtde_spec.capture.protocols.base import Counts
+from rtde_spec.capture.protocols.base import Counts, server_port
 from rtde_spec.capture.tables.rows import text_columns
 from rtde_spec.capture.tables.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
@@ -232,7 +232,7 @@ class ScriptSenderConnection:
         self.requests: list[_Request] = []
         self.counts = Counts()
         self.programs = programs_of(session)
-        self.port = name.rpartition(":")[2]  # the server's (driver's) port: the name ends with it
+        self.port = server_port(name)  # the server's (driver's) port
         self.extra_requests = 0  # requests past MAX_REQUESTS: counted, not kept
         self.over = 0  # bytes of replies to those
         self.cut_bytes = 0  # bytes of robot lines past MAX_LINE

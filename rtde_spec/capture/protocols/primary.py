@@ -15,7 +15,7 @@ import json
 from typing import TYPE_CHECKING, Any
 
 from rtde_spec.capture.framing.sized import STRONG, WEAK, Check, Framing
-from rtde_spec.capture.protocols.base import Counts
+from rtde_spec.capture.protocols.base import Counts, server_port
 from rtde_spec.capture.tables.rows import column_types, flatten_part, text_columns
 from rtde_spec.capture.tables.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
@@ -103,7 +103,7 @@ class PrimaryConnection:
             return
         if self.program is None or chunk.data.lstrip()[:4] in (b"def ", b"sec "):
             self.program = ProgramSent(chunk.time, bytearray())
-            self.programs.add(self.robot, self.name.rpartition(":")[2], self.program)
+            self.programs.add(self.robot, server_port(self.name), self.program)
         room = MAX_PROGRAM_BYTES - len(self.program.reply)
         self.program.reply += chunk.data[: max(0, room)]
 

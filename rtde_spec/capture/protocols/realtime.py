@@ -15,7 +15,7 @@ import re
 from typing import Any
 
 from rtde_spec.capture.framing.lines import FixedFraming
-from rtde_spec.capture.protocols.base import Counts
+from rtde_spec.capture.protocols.base import Counts, server_port
 from rtde_spec.capture.tables.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
 from rtde_spec.errors import RtdeSpecError
@@ -178,7 +178,7 @@ class RealtimeConnection:
         kind = content_kind(self.opening)
         if kind is None or kind == "realtime":
             return ""
-        port = self.name.rsplit(":", 1)[-1]
+        port = server_port(self.name)
         return f"; they look like the {kind} interface: --port-map {port}={kind} decodes them as that"
 
 

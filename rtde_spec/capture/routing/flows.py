@@ -37,6 +37,7 @@ MAX_FOREIGN = 1 << 16  # connections remembered as not ours
 MAX_LISTED = 1000  # finished connections listed one by one in the summary; the rest are folded
 MAX_FOLDED_LINES = 1000  # problems and notes kept word for word on a folded line
 MAX_PENDING_SYNS = 1 << 14  # SYNs of connections on unknown ports, waiting for their first data
+REUSE_MARK = "#"  # `connection` of the 2nd, 3rd... connection on one 4-tuple: "A:p-B:q #2"
 
 
 @dataclass
@@ -69,6 +70,7 @@ class FlowTable:
         self.folded: dict[str, ConnectionSummary] = {}  # past MAX_LISTED: one line per kind
         self.script_first: list[Flow] = []
         self.reopened: list[Flow] = []  # closed connections whose 4-tuple a new SYN took: finished first
+        self.uses: dict[Key, int] = {}  # how many connections a reused 4-tuple has carried
         self._swept = float("-inf")
 
     def route_of(self, seg: Segment) -> Route | None:
@@ -109,6 +111,9 @@ class FlowTable:
                     self.foreign.popitem(last=False)
                 return None
             self.flows[key] = flow
+            uses = self.uses.get(key)
+            if uses is not None:  # its rows apart from the earlier connection's on these ports
+                flow.decoder.name = f"{flow.decoder.name} {REUSE_MARK}{uses}"
             for syn in self.pending.pop(key, []):
                 side = "client" if (syn.src, syn.sport) == flow.client else "controller"
                 flow.directions[side].feed(syn.time, syn.seq, b"", syn=True)
@@ -120,7 +125,9 @@ class FlowTable:
     def _retire(self, flow: Flow) -> None:
         """A closed connection whose addresses and ports a new one reuses: no segment reaches it
         any more; it is finished at the next sweep (`due` says so at once)."""
-        self.flows.pop(frozenset({flow.client, flow.server}), None)
+        key: Key = frozenset({flow.client, flow.server})
+        self.flows.pop(key, None)
+        self.uses[key] = self.uses.get(key, 1) + 1
         (a, b) = (flow.client, flow.server)
         self.routes.pop((a[0], a[1], b[0], b[1]), None)
         self.routes.pop((b[0], b[1], a[0], a[1]), None)
