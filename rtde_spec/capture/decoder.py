@@ -82,7 +82,7 @@ def decode_capture(
     session: dict[str, Any] = {}  # what this file's connections share (URCL programs: protocols/external.py)
     if controller is not None:
         session["controller"] = Version.parse(controller)
-    table = FlowTable(lambda seg: classify(seg, sink, recipe, ports, cat, session))
+    table = FlowTable(lambda seg, mark: classify(seg, sink, recipe, ports, cat, session, mark))
     batcher = Batcher(table, _finish)
     try:
         for item in items(path, stats, progress, sink.lag):

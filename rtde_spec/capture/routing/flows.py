@@ -60,7 +60,7 @@ Key = frozenset[tuple[str, int]]
 class FlowTable:
     """The connections of one capture: routes segments, finishes connections that are done."""
 
-    def __init__(self, classify: Callable[[Segment], Flow | None]) -> None:
+    def __init__(self, classify: Callable[[Segment, str], Flow | None]) -> None:
         self._classify = classify
         self.flows: dict[Key, Flow] = {}
         self.routes: dict[tuple[str, int, str, int], Route] = {}
@@ -97,7 +97,8 @@ class FlowTable:
         if flow is None:
             if key in self.foreign:
                 return None
-            flow = self._classify(seg)
+            uses = self.uses.get(key)  # a reused 4-tuple's later connections: named apart
+            flow = self._classify(seg, f" {REUSE_MARK}{uses}" if uses is not None else "")
             if flow is None:
                 if not seg.payload:
                     if seg.flags & SYN:  # kept: the stream starts here if its first data says what it is
@@ -111,9 +112,6 @@ class FlowTable:
                     self.foreign.popitem(last=False)
                 return None
             self.flows[key] = flow
-            uses = self.uses.get(key)
-            if uses is not None:  # its rows apart from the earlier connection's on these ports
-                flow.decoder.name = f"{flow.decoder.name} {REUSE_MARK}{uses}"
             for syn in self.pending.pop(key, []):
                 side = "client" if (syn.src, syn.sport) == flow.client else "controller"
                 flow.directions[side].feed(syn.time, syn.seq, b"", syn=True)
@@ -230,8 +228,10 @@ def classify(
     ports: Mapping[int, str],
     cat: Catalogue,
     session: dict[str, Any],
+    mark: str = "",
 ) -> Flow | None:
-    """A new connection's protocol, by port or by its first data; None when it is none of ours."""
+    """A new connection's protocol, by port or by its first data; None when it is none of ours.
+    `mark` follows its name where its 4-tuple carried a connection before (" #2")."""
     src, dst = (seg.src, seg.sport), (seg.dst, seg.dport)
     if seg.dport in ports:
         client, server, kind = src, dst, ports[seg.dport]
@@ -243,7 +243,7 @@ def classify(
         client, server, kind = dst, src, found  # the controller speaks first: its first message
     else:
         return None
-    name = f"{client[0]}:{client[1]}-{server[0]}:{server[1]}"
+    name = f"{client[0]}:{client[1]}-{server[0]}:{server[1]}{mark}"
     decoder = connection_for(
         kind, name, client[0], server[0], sink, recipe=recipe, catalogue=cat, session=session
     )
