@@ -55,8 +55,15 @@ def _tool_temp(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> float:
 
 @_builtin("get_tool_current")
 def _tool_current(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> float:
-    """In A (RTDE's tool_output_current is in mA)."""
-    return float(runner.robot.values.get("tool_output_current", 0.0)) / 1000.0
+    """In A, from RTDE's tool_output_current in the unit the spec gives it (mA)."""
+    return float(runner.robot.values.get("tool_output_current", 0.0)) * _amperes_per_unit()
+
+
+def _amperes_per_unit() -> float:
+    from rtde_spec.metamodel.catalogue import Catalogue
+
+    info = Catalogue.builtin().get("tool_output_current", "output")
+    return {"mA": 1e-3, "A": 1.0}[(info.unit if info is not None else None) or "A"]
 
 
 @_builtin("get_tool_accelerometer_reading")
