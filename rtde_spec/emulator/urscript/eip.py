@@ -19,13 +19,14 @@ from rtde_spec.emulator.urscript.calls import arg, type_name
 from rtde_spec.emulator.urscript.interfaces import Runner
 from rtde_spec.emulator.urscript.matrices import MAX_ELEMENTS
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
+from rtde_spec.emulator.urscript.values import INT_MAX, INT_MIN
 
 # a numeric field's bytes and its values (None: any float a float32 holds)
 NUMERIC: dict[str, tuple[int, tuple[int, int] | None]] = {
     "uint8": (1, (0, 0xFF)),
     "uint16": (2, (0, 0xFFFF)),
     "int16": (2, (-0x8000, 0x7FFF)),
-    "int32": (4, (-0x8000_0000, 0x7FFF_FFFF)),
+    "int32": (4, (INT_MIN, INT_MAX)),  # URScript's own int
     "float32": (4, None),
 }
 FLOAT32_MAX = 3.4028234663852886e38
