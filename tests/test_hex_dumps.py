@@ -91,3 +91,22 @@ def test_decode_reads_a_dump_file_a_dump_on_the_command_line_and_a_c_array(tmp_p
     for arg in ("0000   00 05 56 00 02   ..V..", "0x00,0x05,0x56,0x00,0x02"):
         done = cli("decode", arg, "--from", "client", "--jsonl")
         assert done.returncode == 0 and '"protocol_version":2' in done.stdout, done.stderr
+
+
+def test_a_long_dump_reads_in_time_linear_in_its_length() -> None:
+    """Each line looked for its successor in a copy of every line after it: a 2 MB hexdump took
+    minutes. Eight times the dump now takes about eight times as long (quadratic was 64)."""
+    import time
+
+    def dump(data: bytes) -> str:
+        rows = [data[i : i + 16] for i in range(0, len(data), 16)]
+        return "".join(f"{16 * n:08x}  {row.hex(' ')}\n" for n, row in enumerate(rows)) + f"{len(data):08x}\n"
+
+    small, large = bytes(range(256)) * 160, bytes(range(256)) * 1280  # 40 kB, 320 kB
+    times = []
+    for data in (small, large):
+        text = dump(data)
+        start = time.perf_counter()
+        assert from_hex_forms(text) == data
+        times.append(time.perf_counter() - start)
+    assert times[1] < 24 * times[0] + 0.05, times

@@ -74,9 +74,10 @@ def _dump(lines: list[tuple[int, str]]) -> bytes:
                 f"hex dump line {number}: offset {offset:#x} where {at:#x} was due "
                 "(a line missing or given twice?)"
             )
-        ahead = next((_OFFSET.match(later) for _, later in lines[i + 1 :] if later.strip() != "*"), None)
+        following = lines[i + 1][1] if i + 1 < len(lines) else "*"  # its offset bounds this line
+        ahead = _OFFSET.match(following) if following.strip() != "*" else None
         step = int(ahead.group(1), 16) - offset if ahead is not None else 0
-        wanted = step if step > 0 and lines[i + 1][1].strip() != "*" else None  # (not back: said next)
+        wanted = step if step > 0 else None  # (an offset going back is said at its own line)
         last = _line_bytes(line[found.end() :], wanted, number)
         out += last
     return bytes(out)
