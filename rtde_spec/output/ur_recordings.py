@@ -66,7 +66,8 @@ def recording_kind(head: bytes) -> str | None:
 def _field_names() -> set[str]:
     from rtde_spec.metamodel.catalogue import Catalogue
 
-    return {*Catalogue.builtin().names("output"), *Catalogue.builtin().names("input"), "capture_time"}
+    catalogue = Catalogue.builtin()
+    return {*catalogue.names("output"), *catalogue.names("input"), "capture_time"}
 
 
 def _binary_head(head: bytes) -> tuple[list[str], list[str], int] | None:
