@@ -8,6 +8,7 @@ is wrong: the two codecs below differ only in that one has no generated decoders
 
 from __future__ import annotations
 
+import json
 from typing import Any
 
 import pytest
@@ -41,12 +42,18 @@ def _family(name: str) -> Any:
 
 
 def _outcome(codec: PrimaryCodec, data: bytes, strict: bool = True) -> Any:
-    """The model and its dict's key order, or the error's text."""
+    """The model and its dict's key order, or the error's text. As reprs: a damaged byte can make
+    a NaN, which equals nothing, not even the same NaN the other decoder gives (seen once)."""
     try:
         message = codec.decode_message(data, strict=strict)
     except DecodeError as exc:
         return ("error", str(exc))
-    return message, list(message.__dict__), message.model_dump()
+    return repr(message), list(message.__dict__), repr(message.model_dump())
+
+
+def _json(model: Any) -> Any:
+    """A model's values as its JSON gives them: NaN as "NaN", which equals itself."""
+    return json.loads(model.model_dump_json())
 
 
 def test_every_tagged_member_has_a_generated_decoder() -> None:
@@ -69,7 +76,7 @@ def test_generated_tagged_decoder_equals_the_layout_walk(key: tuple[str, int]) -
     def check(part: PrimaryPart, tail: bytes, cut: int, data: st.DataObject) -> None:
         whole = encode_message(part)
         made = fast(whole, 5, len(whole))  # the generated decoder itself, not the walk
-        assert made == part and made is not None
+        assert made is not None and (made == part or _json(made) == _json(part))  # (NaN equals nothing)
         assert _outcome(codec, whole) == _outcome(GENERAL, whole)
         grown = (len(whole) + len(tail)).to_bytes(4, "big") + whole[4:] + tail  # tail inside the message
         assert _outcome(codec, grown) == _outcome(GENERAL, grown)
