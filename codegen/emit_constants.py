@@ -60,6 +60,17 @@ def emit_constants(spec: Spec) -> str:
         "packages.yaml data_recipe_id). Pairs not listed always carry the id. A decoder tells\n"
         "the forms apart by the package size: the recipe's payload plus the prefix, with or\n"
         'without the id."""\n',
+        "DATA_SENT_WITHOUT_RECIPE_ID: frozenset[tuple[str, int]] = frozenset({\n",
+        *(
+            f"    ({sender!r}, {proto}),\n"
+            for rule in pk.data_recipe_id
+            if rule.sent == "without"
+            for sender in rule.senders
+            for proto in rule.protocols
+        ),
+        "})\n",
+        '"""(sender, protocol) pairs whose data packages a real sender sends without the id byte\n'
+        '(spec: packages.yaml data_recipe_id `sent`): the form the emulator writes for them."""\n',
         "RTDE_PACKAGE_TYPES: dict[int, str] = {\n",
         *(f"    {ord(p.code)}: {p.name!r},  # {p.code!r}\n" for p in pk.package_types),
         "}\n",

@@ -155,7 +155,8 @@ def _recipe_id_section(spec: Spec) -> str:
         "\n## The recipe id in data packages\n\n"
         "Where it is optional, a decoder tells the two forms apart by the package's size against "
         "its recipe's (they differ by the one byte); a package without the id belongs to the "
-        "implied recipe. Encoders always write the id.\n\n"
+        "implied recipe. Encoders write the id; the emulator sends each form as a real sender "
+        "does (Sent).\n\n"
     )
     rows = [
         [
@@ -163,11 +164,12 @@ def _recipe_id_section(spec: Spec) -> str:
             " and ".join(r.senders),
             r.recipe_id,
             "—" if r.implied is None else r.implied,
+            r.sent or "with",
             " ".join((r.doc or "").split()),
         ]
         for r in rules
     ]
-    out += md_table(["Protocol", "From", "Recipe id", "Implied id", "Why"], rows)
+    out += md_table(["Protocol", "From", "Recipe id", "Implied id", "Sent", "Why"], rows)
     for r in rules:
         out += f"\nSources (protocol {', '.join(map(str, r.protocols))}, {' and '.join(r.senders)}):\n\n"
         out += "".join(f"- {source}\n" for source in r.sources)

@@ -16,13 +16,13 @@ from pathlib import Path
 
 import pytest
 
-from rtde_spec import RecipeCodec, build
+from rtde_spec import EmulatorConfig, EmulatorThread, RecipeCodec, build
 from rtde_spec._generated.constants import DATA_WITHOUT_RECIPE_ID
 from rtde_spec.capture.decoder import capture_tables
 from rtde_spec.errors import DecodeError
 from rtde_spec.metamodel.loader import load_spec
 from rtde_spec.rtde.client import RtdeClient
-from rtde_spec.rtde.data_forms import lacks_recipe_id, with_recipe_id
+from rtde_spec.rtde.data_forms import lacks_recipe_id, sent_without_recipe_id, with_recipe_id
 from rtde_spec.rtde.session import SessionDecoder
 from rtde_spec.rtde.stream import Package, StreamDecoder
 
@@ -259,6 +259,7 @@ def test_capture_decoder_reads_both_forms_in_protocol_1(tmp_path: Path) -> None:
         ("  - protocols: [2]\n    senders: [controller]", "  - protocols: [1]\n    senders: [controller]",
          "already has rule"),
         ("    recipe_id: optional\n    implied: 1", "    recipe_id: optional", "implied"),
+        ("    sent: without  ", "    ", "sent"),
         ("  - protocols: [2]\n    senders: [controller]", "  - protocols: [3]\n    senders: [controller]",
          "no message is of protocol 3"),
     ],
@@ -276,3 +277,71 @@ def test_a_broken_recipe_id_rule_is_a_spec_error(tmp_path: Path, old: str, new: 
     with pytest.raises(SpecError, match=reason) as info:
         load_spec(tmp_path / "spec")
     assert "packages.yaml" in str(info.value)
+
+
+# --- the emulator sends what a controller sends -----------------------------------
+
+
+def _emulator() -> EmulatorThread:
+    config = EmulatorConfig(
+        host="127.0.0.1", rtde_port=0, primary_port=None, secondary_port=None,
+        realtime_port=None, dashboard_port=None,
+    )  # fmt: skip
+    return EmulatorThread(config)
+
+
+def _read_package(sock: socket.socket) -> bytes:
+    buf = b""
+    while len(buf) < 3 or len(buf) < struct.unpack_from(">H", buf)[0]:
+        chunk = sock.recv(1)
+        assert chunk, "the emulator closed the connection"
+        buf += chunk
+    return buf
+
+
+def test_emulator_sends_protocol_1_outputs_without_the_id_as_urbasic_reads_them() -> None:
+    """URBasic's session, byte for byte (its RTDE.run: version, protocol 1, names only, start),
+    and its reading: the setup reply is the types alone, a data package is the header and the
+    variables (RTDE_IO_Config.unpack_recipe, format '>' + the types). With the guides' id byte
+    it read every value one byte off: joint positions of 4e+226."""
+    names = ["timestamp", "actual_q", "robot_mode"]
+    with _emulator() as emu, socket.create_connection(("127.0.0.1", emu.ports["rtde"]), 5) as sock:
+        sock.sendall(struct.pack(">HB", 3, ord("v")))
+        assert _read_package(sock)[2] == ord("v")
+        sock.sendall(struct.pack(">HBH", 5, ord("V"), 1))
+        assert _read_package(sock) == struct.pack(">HBB", 4, ord("V"), 1)
+        payload = ",".join(names).encode()
+        sock.sendall(struct.pack(">HB", 3 + len(payload), ord("O")) + payload)
+        reply = _read_package(sock)
+        assert reply[3:] == b"DOUBLE,VECTOR6D,INT32"  # no id before the types
+        sock.sendall(struct.pack(">HB", 3, ord("S")))
+        assert _read_package(sock) == struct.pack(">HBB", 4, ord("S"), 1)
+        package = _read_package(sock)
+        while package[2] != ord("U"):
+            package = _read_package(sock)
+    layout = struct.Struct(">d6di")
+    assert len(package) == 3 + layout.size  # the header and the variables: no id byte
+    timestamp, *q, mode = layout.unpack_from(package, 3)
+    assert 0.0 <= timestamp < 60.0
+    assert all(-7.0 < v < 7.0 for v in q) and q[1] == pytest.approx(-1.5708, abs=1e-3)
+    assert -1 <= mode <= 8
+
+
+def test_our_clients_read_the_emulator_in_both_protocols() -> None:
+    with _emulator() as emu:
+        for version in (1, 2):
+            client = RtdeClient("127.0.0.1", emu.ports["rtde"], timeout=5.0).connect(protocol_version=version)
+            with client:
+                assert client.protocol_version == version
+                client.setup_outputs(["timestamp", "actual_q"], 125)
+                client.start()
+                records = [client.receive() for _ in range(3)]
+            assert records[2].timestamp > records[0].timestamp
+            assert records[2].actual_q[1] == pytest.approx(-1.5708, abs=1e-3)
+
+
+def test_the_spec_says_a_controller_sends_protocol_1_outputs_without_the_id() -> None:
+    assert sent_without_recipe_id("controller", 1)
+    assert not sent_without_recipe_id("controller", 2) and not sent_without_recipe_id("client", 1)
+    rule = next(r for r in load_spec(ROOT / "spec").packages.data_recipe_id if r.recipe_id == "optional")
+    assert rule.sent == "without" and any("URBasic" in s for s in rule.sources)

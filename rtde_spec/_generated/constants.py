@@ -29,6 +29,11 @@ DATA_WITHOUT_RECIPE_ID: dict[tuple[str, int], int] = {
 packages.yaml data_recipe_id). Pairs not listed always carry the id. A decoder tells
 the forms apart by the package size: the recipe's payload plus the prefix, with or
 without the id."""
+DATA_SENT_WITHOUT_RECIPE_ID: frozenset[tuple[str, int]] = frozenset({
+    ('controller', 1),
+})
+"""(sender, protocol) pairs whose data packages a real sender sends without the id byte
+(spec: packages.yaml data_recipe_id `sent`): the form the emulator writes for them."""
 RTDE_PACKAGE_TYPES: dict[int, str] = {
     86: 'RTDE_REQUEST_PROTOCOL_VERSION',  # 'V'
     118: 'RTDE_GET_URCONTROL_VERSION',  # 'v'

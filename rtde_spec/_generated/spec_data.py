@@ -1297,13 +1297,16 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                   'senders': ['controller'],
                                   'recipe_id': 'optional',
                                   'implied': 1,
+                                  'sent': 'without',
                                   'doc': 'Protocol 1 output data packages come with or without the '
                                          "recipe id byte. UR's guides show the id in every data "
-                                         "package; UR's C++ client library reads protocol-1 data "
-                                         "packages without it, since UR's own fix for protocol 1 "
-                                         '(the setup reply without its id, and the data packages '
-                                         'after it). The other public clients never read protocol '
-                                         '1.',
+                                         'package; a controller sends them without it. The two '
+                                         'public clients that read protocol 1 read them without '
+                                         "it: UR's C++ client library, since UR's own fix for "
+                                         'protocol 1 (the setup reply without its id, and the data '
+                                         'packages after it), and URBasic, which speaks only '
+                                         "protocol 1 and was used on real arms. UR's Python client "
+                                         'and ur_rtde never read protocol 1.',
                                   'sources': ["UR's RTDE guide, CB3 and e-Series eras "
                                               '(shared/seeds rtde-guide-*.txt), RTDE_DATA_PACKAGE: '
                                               'header, recipe id uint8, then the variables; no '
@@ -1323,8 +1326,15 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                               'and reads a protocol-1 setup reply as if it had an '
                                               'id, so it never decodes protocol 1',
                                               'ur_rtde (src/rtde.cpp RTDE::receiveData): always '
-                                              'reads the id byte; it always negotiates protocol '
-                                              '2']},
+                                              'reads the id byte; it always negotiates protocol 2',
+                                              'URBasic (Rope Robotics, 2017; copied into robot '
+                                              'projects, e.g. jayLEE0301/vq_bet_official '
+                                              'envs/ur3/.../URBasic/rtde.py, and the PyPI package '
+                                              'iflow-mcp-nonead-nonead-universal-robots-mcp '
+                                              '0.1.4): RTDE.run negotiates protocol 1 only; '
+                                              'RTDE_IO_Config.unpack_recipe reads the output setup '
+                                              'reply without an id and unpacks data packages with '
+                                              'no id byte before the variables']},
                                  {'protocols': [1, 2],
                                   'senders': ['client'],
                                   'recipe_id': 'always',

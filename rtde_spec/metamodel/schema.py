@@ -294,13 +294,15 @@ class RecipeIdRule(StrictModel):
     senders: Annotated[list[str], Field(min_length=1)]
     recipe_id: Literal["always", "optional"]
     implied: Annotated[int, Field(ge=0, le=255)] | None = None  # the recipe of a package without the byte
+    sent: Literal["with", "without"] | None = None  # the form the sender sends (the emulator writes it)
     doc: str | None = None
     sources: Annotated[list[str], Field(min_length=1)]
 
     @model_validator(mode="after")
     def _implied_when_optional(self) -> RecipeIdRule:
-        if (self.recipe_id == "optional") != (self.implied is not None):
-            raise ValueError("`implied` is given exactly when recipe_id is optional")
+        optional = self.recipe_id == "optional"
+        if optional != (self.implied is not None) or optional != (self.sent is not None):
+            raise ValueError("`implied` and `sent` are given exactly when recipe_id is optional")
         return self
 
 

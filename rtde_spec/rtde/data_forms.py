@@ -15,6 +15,7 @@ import struct
 
 from rtde_spec._generated.constants import (
     DATA_PACKAGE_TYPE,
+    DATA_SENT_WITHOUT_RECIPE_ID,
     DATA_WITHOUT_RECIPE_ID,
     RTDE_HEADER_FORMAT,
 )
@@ -45,3 +46,14 @@ def with_recipe_id(package: bytes | bytearray | memoryview, recipe_id: int) -> b
     """The guides' form of a data package sent without its id: the id after the header, size + 1."""
     head = _HEADER.pack(len(package) + 1, DATA_PACKAGE_TYPE)
     return head + bytes((recipe_id,)) + bytes(package[HEADER_SIZE:])
+
+
+def sent_without_recipe_id(sender: str, protocol_version: int) -> bool:
+    """Whether a real `sender` sends its data packages without the id byte in this protocol
+    (a controller in protocol 1): the form an emulator of that sender writes."""
+    return (sender, protocol_version) in DATA_SENT_WITHOUT_RECIPE_ID
+
+
+def without_recipe_id(package: bytes) -> bytes:
+    """A data package in the guides' form with its id byte taken out: size - 1, then the payload."""
+    return _HEADER.pack(len(package) - 1, DATA_PACKAGE_TYPE) + package[HEADER_SIZE + 1 :]

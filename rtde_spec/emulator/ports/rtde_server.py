@@ -1,6 +1,7 @@
 """The emulator's RTDE port: one connection per client, each with its own recipes.
 
-Follows the guides: protocol 1 until a version request is accepted; NOT_FOUND and
+Follows the guides: protocol 1 until a version request is accepted (its output data
+packages without the recipe id byte, as a controller sends them); NOT_FOUND and
 IN_USE in setup replies; input recipe ids from 1 (0 refuses a recipe); one output
 recipe per client; start refused without an output recipe; pause always accepted;
 outputs every floor(base / frequency) control steps; names limited to the spec's
@@ -24,6 +25,7 @@ from rtde_spec.errors import DecodeError, RtdeSpecError
 from rtde_spec.printable import safe_text
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
 from rtde_spec.rtde.codec import decode, observe, setup_names
+from rtde_spec.rtde.data_forms import sent_without_recipe_id, without_recipe_id
 from rtde_spec.rtde.protocol_state import ProtocolState
 from rtde_spec.wire.framing import PackageFramer
 from rtde_spec.wire.rtde_messages import RtdeMessage
@@ -222,6 +224,8 @@ class RtdeConnection(GuardedConnection):
         assert self.output is not None
         values = self.hub.model.values
         data = self.output.encode_package({n: values[n] for n in self.output_names}, recipe_id=1)
+        if sent_without_recipe_id("controller", self.state.version):
+            data = without_recipe_id(data)  # protocol 1: as a controller sends it (spec: data_recipe_id)
         if self.write(data):
             self.sent += 1
         else:
