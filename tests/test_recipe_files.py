@@ -128,6 +128,59 @@ def test_wrong_root_and_missing_name(tmp_path: Path) -> None:
         load_recipes(path)
 
 
+# URBasic's rtdeConfigurationDefault.xml as it ships (Rope Robotics' URBasic/rtde.py reads it:
+# <receive> holds what it asks the controller for, <send> what it writes, each field with an
+# initValue it sends first); a commented-out line and a stray "-->" left in the text as it has them
+URBASIC_XML = """<?xml version="1.0"?>
+<!-- Universal Robots do not support more than 96 values in recieve or send config at one time  -->
+<rtde_config>
+    <receive key="out">
+        <!--<field name="target_q" type="VECTOR6D"/>-->
+        <field name="actual_q" type="VECTOR6D"/>
+        <field name="speed_scaling" type="DOUBLE"/>-->
+        <field name="output_int_register_0" type="INT32"/>
+    </receive>
+    <send key="in">
+        <field name="input_int_register_0" type="INT32" initValue="0"/>
+        <field name="standard_digital_output_mask" type="UINT8" initValue="0"/>
+    </send>
+</rtde_config>
+"""
+
+
+def test_urbasic_receive_and_send_elements_are_its_output_and_input_recipes(tmp_path: Path) -> None:
+    path = tmp_path / "rtdeConfigurationDefault.xml"
+    path.write_text(URBASIC_XML)
+    out, into = load_recipes(path)
+    assert (out.key, out.direction, out.names) == (
+        "out", "output", ("actual_q", "speed_scaling", "output_int_register_0"),
+    )  # fmt: skip
+    assert out.declared_types["actual_q"] == "VECTOR6D"
+    assert (into.key, into.direction, into.names) == (
+        "in", "input", ("input_int_register_0", "standard_digital_output_mask"),
+    )  # fmt: skip
+
+
+def test_validate_reads_urbasic_s_file_with_each_direction(
+    tmp_path: Path, capsys: pytest.CaptureFixture[str]
+) -> None:
+    from rtde_spec.cli.main import main
+
+    path = tmp_path / "rtdeConfigurationDefault.xml"
+    path.write_text(URBASIC_XML.replace('"input_int_register_0"', '"actual_q"'))  # an output under <send>
+    assert main(["validate", str(path), "--controller", "5.15.0"]) == 1
+    report = capsys.readouterr().out
+    assert "out (output, 3 fields" in report and "in (input, 2 fields" in report
+    assert "actual_q" in report.split("in (input")[1]  # the output named under <send> is the fault
+
+
+def test_an_rtde_config_without_recipes_names_what_it_holds(tmp_path: Path) -> None:
+    path = tmp_path / "r.xml"
+    path.write_text('<rtde_config><recipes><field name="actual_q"/></recipes></rtde_config>')
+    with pytest.raises(RecipeError, match=r"no <recipe> elements.*<recipes>"):
+        load_recipes(path)
+
+
 def test_formats_are_all_covered() -> None:
     assert set(FORMATS) == {"xml", "lines", "csv", "yaml", "json"}
 

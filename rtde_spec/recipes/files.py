@@ -15,13 +15,12 @@ from pathlib import Path
 from typing import Any
 from xml.etree.ElementTree import Element, SubElement, tostring
 
-import defusedxml.ElementTree as SafeET
 import yaml
-from defusedxml import DefusedXmlException
 
 from rtde_spec.errors import RecipeError, UsageError
 from rtde_spec.metamodel import safe_yaml
 from rtde_spec.recipes.model import FILE_FORMATS, Direction, Recipe, check_savable
+from rtde_spec.recipes.xml_recipes import from_xml
 
 MAX_FILE_BYTES = 1 << 20  # 1 MiB: recipes are names; anything larger is not a recipe
 FORMATS = FILE_FORMATS
@@ -119,7 +118,7 @@ def load_recipes(path: str | Path, fmt: str | None = None) -> list[Recipe]:
     text = read_text_bounded(p)
     kind = fmt or detect_format(p, text)
     loaders = {
-        "xml": _from_xml,
+        "xml": from_xml,
         "yaml": _from_yaml,
         "json": _from_json,
         "csv": _from_csv,
@@ -140,37 +139,6 @@ def _from_csv(text: str, where: str) -> list[Recipe]:
 
 def _from_lines(text: str, where: str) -> list[Recipe]:
     return [Recipe(tuple(n for n in _uncommented(text) if n))]
-
-
-_XML_DECLARATION = re.compile(r"^\s*<\?xml[^>]*\?>")
-
-
-def _from_xml(text: str, where: str) -> list[Recipe]:
-    try:  # the text is decoded already: a declaration naming its encoding would be refused
-        root = SafeET.fromstring(_XML_DECLARATION.sub("", text, count=1), forbid_dtd=True)
-    except DefusedXmlException as exc:
-        raise RecipeError(f"unsafe XML refused: {exc}", subject=at(where)) from None
-    except SafeET.ParseError as exc:
-        line, col = exc.position
-        raise RecipeError(f"not well-formed XML at line {line}, column {col}", subject=at(where)) from None
-    if root.tag != "rtde_config":
-        raise RecipeError("XML root must be <rtde_config>", subject=at(where), actual=f"<{root.tag}>")
-    recipes = []
-    for number, element in enumerate(root.findall("recipe"), 1):
-        key = element.get("key")
-        names: list[str] = []
-        declared: dict[str, str] = {}
-        for fld in element.findall("field"):
-            name = (fld.get("name") or "").strip()  # XML turns a line break in a value into a space
-            if not name:
-                raise RecipeError(f"<field> without a name in recipe {key or number}", subject=at(where))
-            names.append(name)
-            if fld.get("type"):
-                declared[name] = fld.get("type", "")
-        recipes.append(Recipe(tuple(names), key=key, declared_types=declared))
-    if not recipes:
-        raise RecipeError("no <recipe> elements", subject=at(where))
-    return recipes
 
 
 def _recipe_from_mapping(item: Any, where: str, index: int) -> Recipe:
