@@ -38,6 +38,7 @@ from rtde_spec.emulator.controller.modes import RobotModes
 from rtde_spec.emulator.controller.program import PROGRAM_ERRORS, Program, runtime_text
 from rtde_spec.emulator.urscript import ScriptFault, parse
 from rtde_spec.emulator.urscript.events import ScriptEvent
+from rtde_spec.emulator.urscript.program_globals import global_names
 from rtde_spec.metamodel.arms import arm_model
 from rtde_spec.metamodel.catalogue import Catalogue, FieldInfo
 from rtde_spec.metamodel.versions import Version
@@ -305,7 +306,9 @@ class ControllerModel(RobotModes):
         self.program, self.paused = program, False
         self._program_bits()
         self._runstate("start")
-        self.emit(ScriptEvent("program_started", program.name, program=program.name))
+        self.emit(
+            ScriptEvent("program_started", program.name, program=program.name, names=global_names(script))
+        )
         program.advance(0.0)  # runs at once up to its first wait, as the controller does
         if program.finished:
             self._end_program()

@@ -22,6 +22,7 @@ from rtde_spec.emulator.ports.guard import Port
 from rtde_spec.emulator.ports.primary_commands import take_commands
 from rtde_spec.emulator.ports.robot_messages import (
     event_messages,
+    global_variables_update,
     prepare,
     program_threads_message,
     safety_mode_message,
@@ -30,6 +31,7 @@ from rtde_spec.emulator.ports.robot_messages import (
 from rtde_spec.emulator.ports.script import run_script
 from rtde_spec.emulator.ports.script_framer import ScriptPort
 from rtde_spec.emulator.ports.state_message import RobotStateBuilder
+from rtde_spec.emulator.urscript.program_globals import global_names
 from rtde_spec.printable import safe_text
 
 if TYPE_CHECKING:
@@ -50,6 +52,8 @@ class PrimaryHub:
         self.states = 0
         self._safety_mode = self._robot_mode = -1
         self._labels: list[tuple[str, int, str]] = []  # the threads' labels last sent (Program Threads)
+        self._globals_of: object = None  # the program whose global variable names these are
+        self._global_names: tuple[str, ...] = ()
         prepare()  # the messages' codec now, not in the control step of a program's start
 
     def run(self, port: int, text: str) -> None:
@@ -98,6 +102,9 @@ class PrimaryHub:
             messages = [m for event in events for m in event_messages(event, micros)]
             if safety_changed:
                 messages.append(safety_mode_message(safety, micros))
+            update = self._global_variables(micros)
+            if update:
+                messages.append(update)
             labels = self._program_labels()
             if labels and labels != self._labels:
                 messages.append(program_threads_message(labels, micros))
@@ -115,6 +122,20 @@ class PrimaryHub:
                 )
                 data = periodic
             conn.send(burst + data if conn.messages else data)
+
+    def _global_variables(self, micros: int) -> bytes:
+        """The running program's Global Variables Update ("sent every 100ms" after the setup message
+        its start sent, UR's primary interface document): its globals' values, in the setup's order."""
+        program = getattr(self.model, "program", None)
+        script = getattr(program, "script", None)
+        if script is None:
+            return b""
+        if program is not self._globals_of:
+            self._globals_of, self._global_names = program, global_names(script)
+        if not self._global_names:
+            return b""
+        values = program.globals  # type: ignore[union-attr]
+        return global_variables_update([values.get(name) for name in self._global_names], micros)
 
     def _program_labels(self) -> list[tuple[str, int, str]]:
         """(thread, label number, label text) of the running program's threads that passed a label

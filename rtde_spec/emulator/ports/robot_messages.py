@@ -6,8 +6,9 @@ for `textmsg` (and popups, which the spec has no message for), a runtime excepti
 with the script line and column, a key message when a program starts or stops
 (PROGRAM_XXX_STARTED / PROGRAM_XXX_STOPPED with the program's name, as controllers
 announce it: the name runs to the end of the message, see key_message) followed on
-start by the global variables setup message, and a safety mode message whenever the
-safety mode changes.
+start by the global variables setup message (the program's global variable names), the
+global variables update (their values) every 100 ms while it runs, and a safety mode
+message whenever the safety mode changes.
 """
 
 from __future__ import annotations
@@ -21,6 +22,8 @@ from rtde_spec._generated.enums import (
     ReportDataType,
     RobotMessageType,
 )
+from rtde_spec.emulator.urscript.matrices import is_matrix
+from rtde_spec.emulator.urscript.values import INT_MAX, INT_MIN, Pose
 from rtde_spec.metamodel.versions import Version
 from rtde_spec.primary import models as pm
 from rtde_spec.primary.codec import default_codec, encode_message
@@ -142,6 +145,38 @@ def global_variables_setup(names: list[str], micros: int) -> bytes:
     )
 
 
+def global_variables_update(values: list[Any], micros: int) -> bytes:
+    """Global Variables Update: the values in the order of the setup message's names (a name the
+    program has not written yet, or a value of no listed type, is NONE)."""
+    return encode_message(
+        pm.GlobalVariablesUpdateMessage(
+            timestamp=micros,
+            robot_message_type=int(ProgramStateMessageType.GLOBAL_VARIABLES_UPDATE),
+            start_index=0,
+            variable_values=[typed(value) for value in values],
+        )
+    )
+
+
+def typed(value: Any) -> dict[str, Any]:
+    """A URScript value as the update message types it (spec/primary/enums.yaml GlobalVariableType)."""
+    if isinstance(value, bool):
+        return {"type": "BOOL", "value": value}
+    if isinstance(value, int) and INT_MIN <= value <= INT_MAX:
+        return {"type": "INT", "value": value}
+    if isinstance(value, (int, float)):
+        return {"type": "FLOAT", "value": float(value)}
+    if isinstance(value, str):
+        return {"type": "VAR_STRING", "value": value[:65535]}
+    if isinstance(value, Pose):
+        return {"type": "POSE", "value": tuple(float(v) for v in value)}
+    if is_matrix(value):
+        return {"type": "MATRIX", "value": [[typed(v) for v in row] for row in value]}
+    if isinstance(value, list) and len(value) <= 65535:
+        return {"type": "LIST", "value": [typed(v) for v in value]}
+    return {"type": "NONE", "value": None}
+
+
 def event_messages(event: Any, micros: int) -> list[bytes]:
     """The messages for one model event (emulator/urscript/events.py's ScriptEvent)."""
     kind = getattr(event, "kind", "")
@@ -156,7 +191,7 @@ def event_messages(event: Any, micros: int) -> list[bytes]:
     if kind == "program_started":
         return [
             key_message(PROGRAM_STARTED, event.program or text, micros),
-            global_variables_setup([], micros),
+            global_variables_setup(list(getattr(event, "names", ())), micros),
         ]
     if kind == "program_stopped":
         return [key_message(PROGRAM_STOPPED, event.program or text, micros)]

@@ -24,3 +24,4 @@ class ScriptEvent:
     warning: bool = False
     error: bool = False
     program: str = ""  # the program's name (its def), for program state messages
+    names: tuple[str, ...] = ()  # program_started: its global variables (program_globals.py)
