@@ -143,3 +143,29 @@ def test_commands_beside_urscript_lines_run_and_the_urscript_still_runs() -> Non
     finally:
         client.close()
         emu.stop()
+
+
+def test_pause_program_and_resume_program_on_the_primary_port() -> None:
+    """UnderAutomation's Universal Robots SDK (PyPI underautomation_universalrobots 9.4.0.1,
+    primary_interface.commands.pause_program / resume_program) sends `pause program` and
+    `resume program`, one line each, on port 30001, as the older ROS driver does
+    (ros-industrial/universal_robot ur_driver/src/ur_driver/driver.py, RobotCommands); the
+    emulator ran them as URScript and answered a syntax error, the program going on."""
+    emu = serve()
+    client = Primary(emu.ports["primary"])
+    try:
+        client.send("def spin():\n  while True:\n    sleep(0.1)\n  end\nend")
+        client.wait_state(lambda s: s["robot_mode_data"].is_program_running)
+        client.send("resume program")  # nothing paused: no effect
+        client.send("pause program")
+        state = client.wait_state(lambda s: s["robot_mode_data"].is_program_paused)
+        assert not state["robot_mode_data"].is_program_running
+        client.send("resume program")
+        state = client.wait_state(lambda s: s["robot_mode_data"].is_program_running)
+        assert not state["robot_mode_data"].is_program_paused
+        client.send("stop program")
+        client.wait_state(lambda s: not s["robot_mode_data"].is_program_running)
+        assert client.errors() == []
+    finally:
+        client.close()
+        emu.stop()

@@ -3,7 +3,11 @@
 Drivers send these as lines of their own, outside any program: UR's C++ client library
 (URCL, src/primary/primary_client.cpp) sends `power on`, `power off`, `set robotmode run`
 (brake release, powering the arm first if need be), `set unlock protective stop` and
-`stop program`; its driver starts with `stop program`. The controller acts on them at
+`stop program`; its driver starts with `stop program`. The older ROS driver
+(ros-industrial/universal_robot, ur_driver/src/ur_driver/driver.py, RobotCommands) also sends
+`pause program` and `resume program` (the latter after the arm is back in run mode), and so
+does UnderAutomation's Universal Robots SDK 9.4 (primary_interface.commands.pause_program and
+resume_program, one line each on port 30001). The controller acts on them at
 once and does not parse them as URScript, so they are taken out of what a client sends
 before the interpreter sees it. They act on the same model as the dashboard's commands
 (modes.py); they have no reply, a client watches the Robot State (robot mode, protective
@@ -34,6 +38,11 @@ def _run(model: ControllerModel) -> bool:
     return model.power_on() and model.release_brakes()
 
 
+def _resume(model: ControllerModel) -> bool:
+    """`resume program`: a paused program goes on, as the dashboard's play resumes it; nothing starts."""
+    return model.program is not None and model.paused and model.play()
+
+
 def _noop(model: ControllerModel) -> bool:
     return True  # popups are not shown by the emulator: there is nothing to close
 
@@ -45,6 +54,8 @@ COMMANDS: dict[str, Callable[[ControllerModel], bool]] = {
     "brake release": _brake_release,
     "set robotmode run": _run,
     "stop program": lambda m: m.stop_program(),
+    "pause program": lambda m: m.pause_program(),
+    "resume program": _resume,
     "unlock protective stop": lambda m: m.unlock_protective_stop(),
     "set unlock protective stop": lambda m: m.unlock_protective_stop(),
     "close popup": _noop,
