@@ -27,6 +27,7 @@ from rtde_spec.emulator.urscript.values import INT_MAX, INT_MIN, Pose
 from rtde_spec.metamodel.versions import Version
 from rtde_spec.primary import models as pm
 from rtde_spec.primary.codec import default_codec, encode_message
+from rtde_spec.wire.primary_values import VariableValue
 
 PROJECT = "URControl"
 BUILD_DATE = "emulated by rtde_spec"
@@ -158,23 +159,23 @@ def global_variables_update(values: list[Any], micros: int) -> bytes:
     )
 
 
-def typed(value: Any) -> dict[str, Any]:
+def typed(value: Any) -> VariableValue:
     """A URScript value as the update message types it (spec/primary/enums.yaml GlobalVariableType)."""
     if isinstance(value, bool):
-        return {"type": "BOOL", "value": value}
+        return VariableValue(type="BOOL", value=value)
     if isinstance(value, int) and INT_MIN <= value <= INT_MAX:
-        return {"type": "INT", "value": value}
+        return VariableValue(type="INT", value=value)
     if isinstance(value, (int, float)):
-        return {"type": "FLOAT", "value": float(value)}
+        return VariableValue(type="FLOAT", value=float(value))
     if isinstance(value, str):
-        return {"type": "VAR_STRING", "value": value[:65535]}
+        return VariableValue(type="VAR_STRING", value=value[:65535])
     if isinstance(value, Pose):
-        return {"type": "POSE", "value": tuple(float(v) for v in value)}
+        return VariableValue(type="POSE", value=tuple(float(v) for v in value))
     if is_matrix(value):
-        return {"type": "MATRIX", "value": [[typed(v) for v in row] for row in value]}
+        return VariableValue(type="MATRIX", value=[[typed(v) for v in row] for row in value])
     if isinstance(value, list) and len(value) <= 65535:
-        return {"type": "LIST", "value": [typed(v) for v in value]}
-    return {"type": "NONE", "value": None}
+        return VariableValue(type="LIST", value=[typed(v) for v in value])
+    return VariableValue(type="NONE", value=None)
 
 
 def event_messages(event: Any, micros: int) -> list[bytes]:
