@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import http.client
 import xmlrpc.client
-from collections.abc import Generator
+from collections.abc import Callable, Generator
 from concurrent.futures import Future, ThreadPoolExecutor
 from typing import Any
 from urllib.parse import urlsplit
@@ -103,10 +103,34 @@ def call(expr: Expr, handle: Any, args: list[Any], kwargs: dict[str, Any]) -> Wa
     return _from_wire(answer, 0, name, line, column)
 
 
+def _dump_i4(marshaller: xmlrpc.client.Marshaller, value: Any, write: Callable[[str], object]) -> None:
+    if not xmlrpc.client.MININT <= value <= xmlrpc.client.MAXINT:
+        raise OverflowError("int exceeds XML-RPC limits")
+    write(f"<value><i4>{int(value)}</i4></value>\n")
+
+
+class _Marshaller(xmlrpc.client.Marshaller):
+    """Python's, but an int goes as <i4>, XML-RPC's original element, not <int>: what the
+    xmlrpc-c library writes (the library UR's RPC manual page names), and the only one
+    UnderAutomation's Universal Robots SDK 9.4 reads (it refuses <int> as unsupported)."""
+
+    dispatch = dict(xmlrpc.client.Marshaller.dispatch)  # noqa: RUF012 - the base class has it so
+    dispatch[int] = _dump_i4
+
+
 def _call(url: str, name: str, args: list[Any]) -> Any:
-    proxy = xmlrpc.client.ServerProxy(url, transport=_Transport(), allow_none=False)
-    with proxy:
-        return getattr(proxy, name)(*args)
+    parts = urlsplit(url)
+    handler = (parts.path + (f"?{parts.query}" if parts.query else "")) or "/RPC2"
+    body = (
+        "<?xml version='1.0'?>\n<methodCall>\n<methodName>"
+        f"{name}</methodName>\n{_Marshaller(None, False).dumps(tuple(args))}</methodCall>\n"
+    )
+    transport = _Transport()
+    try:
+        response = transport.request(parts.netloc, handler, body.encode("utf-8", "xmlcharrefreplace"))
+    finally:
+        transport.close()
+    return response[0] if len(response) == 1 else response
 
 
 def _to_wire(value: Any, depth: int, line: int, column: int) -> Any:
