@@ -6,7 +6,9 @@ values in the setup's order (a type byte, the data, a new line after each). Unde
 Universal Robots SDK (PyPI underautomation_universalrobots 9.4.0.1) builds
 `primary_interface.global_variables.get_all()` from them (its example
 examples/primary_interface/primary_interface_global_variables.py lists names, values and
-types); the emulator sent an empty setup and no updates, so the SDK found no variables.
+types); the emulator sent an empty setup and no updates, so the SDK found no variables. The SDK
+also says values are decoded another way from 3.2 to 5.8, a way no public document gives: those
+versions get the names and no values.
 The bytes are read here by hand, as that client reads them, over real sockets on loopback.
 """
 
@@ -58,9 +60,10 @@ def _value(data: bytes, pos: int) -> tuple[object, int]:
     raise AssertionError(f"type byte {code} at {pos - 1}")
 
 
-def _program_state_messages(seconds: float) -> list[bytes]:
+def _program_state_messages(seconds: float, controller: str = "5.15.0") -> list[bytes]:
     """The Program State messages (type 25) a primary client gets while PROGRAM runs."""
     config = EmulatorConfig(
+        controller=controller,
         rtde_port=None,
         primary_port=0,
         secondary_port=None,
@@ -105,3 +108,9 @@ def test_setup_names_the_program_globals_and_updates_bring_their_values_every_10
         assert values[1:] == ["abc", (0.1, 0.2, 0.3, 0.0, 0.0, 0.0), True, [1, 2, 3]]
         counters.append(values[0])
     assert counters == sorted(counters) and counters[-1] > counters[0]
+
+
+def test_before_5_9_the_setup_names_the_globals_and_no_values_are_sent() -> None:
+    messages = _program_state_messages(1.0, controller="3.15.8")
+    assert [m[16:] for m in messages if m[13] == 0] == [b"counter\nname\npos\nflag\nq\n"]
+    assert [m for m in messages if m[13] == 1] == []

@@ -30,7 +30,7 @@ from rtde_spec.emulator.ports.robot_messages import (
 )
 from rtde_spec.emulator.ports.script import run_script
 from rtde_spec.emulator.ports.script_framer import ScriptPort
-from rtde_spec.emulator.ports.state_message import RobotStateBuilder
+from rtde_spec.emulator.ports.state_message import RobotStateBuilder, available
 from rtde_spec.emulator.urscript.program_globals import global_names
 from rtde_spec.printable import safe_text
 
@@ -38,6 +38,12 @@ if TYPE_CHECKING:
     from rtde_spec.emulator.controller.model import ControllerModel
 
 log = logging.getLogger("rtde_spec.emulator")
+
+# The Global Variables Update's values are typed as the 5.9/5.10 and the current primary documents
+# give them (the spec's value_types); UnderAutomation's Universal Robots SDK documents another way
+# to decode them from 3.2 to 5.8, which no public document gives: those versions get the setup
+# message's names and no values rather than values typed as they are not.
+VALUES_SINCE = {"e-series": "5.9.0"}
 KEEP_SCRIPTS = 64  # the last scripts received, for tests and `watch` to look at
 
 
@@ -52,6 +58,7 @@ class PrimaryHub:
         self.states = 0
         self._safety_mode = self._robot_mode = -1
         self._labels: list[tuple[str, int, str]] = []  # the threads' labels last sent (Program Threads)
+        self._values = available(VALUES_SINCE, model.version, model.catalogue)
         self._globals_of: object = None  # the program whose global variable names these are
         self._global_names: tuple[str, ...] = ()
         prepare()  # the messages' codec now, not in the control step of a program's start
@@ -128,7 +135,7 @@ class PrimaryHub:
         its start sent, UR's primary interface document): its globals' values, in the setup's order."""
         program = getattr(self.model, "program", None)
         script = getattr(program, "script", None)
-        if script is None:
+        if script is None or not self._values:
             return b""
         if program is not self._globals_of:
             self._globals_of, self._global_names = program, global_names(script)
