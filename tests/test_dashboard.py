@@ -217,3 +217,21 @@ def test_the_dashboard_table_refuses_aliases_and_undeclared_values(tmp_path: Pat
     with pytest.raises(SpecError, match="robot_moode"):
         load_dashboard(tmp_path)
     assert load_dashboard(good.parent.parent).port == 29999
+
+
+def test_load_takes_the_program_name_in_double_quotes(emu: EmulatorThread, tmp_path: Path) -> None:
+    """UnderAutomation's Universal Robots SDK (PyPI underautomation_universalrobots 9.4.0.1,
+    robot.dashboard.load_program, its example examples/dashboard/dashboard_load_play_program.py)
+    always sends `load "NAME.urp"` and takes `Loading program` for success; the emulator looked
+    for a file named with the quotes and answered File not found."""
+    (tmp_path / "programs" / "my prog.script").write_text(PROGRAM)
+    dash = Dashboard(emu.ports["dashboard"])
+    try:
+        assert dash.ask('load "prog.urp"') == "Loading program: prog.urp"
+        assert dash.ask("get loaded program") == "Loaded program: prog.urp"
+        assert dash.ask('load "my prog.urp"') == "Loading program: my prog.urp"
+        assert dash.ask("programState") == "STOPPED my prog.urp"
+        assert dash.ask('load "missing.urp"') == "File not found: missing.urp"
+        assert dash.ask('load "prog.urp') == 'File not found: "prog.urp'  # one quote: part of the name
+    finally:
+        dash.close()

@@ -35,6 +35,7 @@ class ValueDoc(StrictModel):
 class DashboardCommand(StrictModel):
     command: Annotated[str, Field(pattern=r"^[A-Za-z][A-Za-z ]*[A-Za-z]$")]
     argument: Annotated[str, Field(pattern=r"^[a-z_]+$")] | None = None
+    quoted: bool = False  # the argument may come in double quotes, which are not part of it
     action: Action
     since: Since
     doc: str | None = None

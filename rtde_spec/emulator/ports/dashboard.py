@@ -82,6 +82,8 @@ class DashboardHub:
         if found is None or not available(found[0].since, self.model.version, self.model.catalogue):
             return self.table.unknown.format(line=line), False
         command, argument = found
+        if command.quoted and len(argument) >= 2 and argument[0] == argument[-1] == '"':
+            argument = argument[1:-1]
         try:
             outcome = self._act(command, argument)
         except Exception as exc:  # whatever a command meets is its failure reply, never a closed socket
