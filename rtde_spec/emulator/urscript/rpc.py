@@ -123,7 +123,8 @@ def _call(url: str, name: str, args: list[Any]) -> Any:
     handler = (parts.path + (f"?{parts.query}" if parts.query else "")) or "/RPC2"
     body = (
         "<?xml version='1.0'?>\n<methodCall>\n<methodName>"
-        f"{name}</methodName>\n{_Marshaller(None, False).dumps(tuple(args))}</methodCall>\n"
+        f"{xmlrpc.client.escape(name)}</methodName>\n{_Marshaller(None, False).dumps(tuple(args))}"
+        "</methodCall>\n"
     )
     transport = _Transport()
     try:
