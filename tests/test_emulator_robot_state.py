@@ -240,11 +240,19 @@ def test_textmsg_and_a_script_that_cannot_run_become_robot_messages_on_the_prima
 
 
 @pytest.mark.parametrize(
-    ("version", "arm", "expected", "kind"), [("5.15.0", "UR10e", "UR10e", 2), ("3.15.8", None, "UR5", 1)]
+    ("version", "arm", "expected", "kind", "box", "series"),
+    [
+        ("5.15.0", "UR10e", "UR10e", 2, 5, 3),
+        ("3.15.8", None, "UR5", 1, 4, 2),
+        ("5.15.0", "UR3e", "UR3e", 3, 6, 3),
+    ],
 )
 def test_the_kinematics_sub_package_carries_the_chosen_arm(
-    version: str, arm: str | None, expected: str, kind: int
+    version: str, arm: str | None, expected: str, kind: int, box: int, series: int
 ) -> None:
+    """Configuration Data also names the arm's controller box type and series as UnderAutomation's
+    Universal Robots SDK 9.4 reads them (its ControllerBoxTypes and RobotSubTypes, which have no 0:
+    with the 0s the emulator sent, its configuration_data raised '0 is not a valid ...')."""
     config = EmulatorConfig(
         rtde_port=None, primary_port=None, secondary_port=0, controller=version, arm=arm, realtime_port=None,
         dashboard_port=None,
@@ -253,7 +261,8 @@ def test_the_kinematics_sub_package_carries_the_chosen_arm(
         got = list(messages(emu.ports["secondary"], 2))
     state = PrimaryStreamDecoder().feed(b"".join(got))[1][1]
     assert tuple(state["kinematics_info"].dh_a) == arm_model(expected).dh.a
-    assert state["configuration_data"].robot_type == kind
+    conf = state["configuration_data"]
+    assert (conf.robot_type, conf.reserved, conf.robot_sub_type) == (kind, box, series)
 
 
 # in a fresh interpreter, as `rtde-spec serve` starts: once the emulator is made, the robot messages of

@@ -41,6 +41,8 @@ class ArmModel(StrictModel):
     joint_speed_deg_s: Six | None = None
     payload_kg: Annotated[float, Field(gt=0)]
     reach_m: Annotated[float, Field(gt=0)]
+    controller_box_type: Annotated[int, Field(ge=0, le=2**31 - 1)] | None = None  # Configuration Data
+    robot_sub_type: Annotated[int, Field(ge=0, le=2**31 - 1)] = 0  # Configuration Data: the series
 
     @property
     def joint_limits(self) -> tuple[tuple[float, float], ...]:

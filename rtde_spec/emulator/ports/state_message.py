@@ -84,9 +84,11 @@ def arm_parameters(model: ControllerModel) -> ArmModel:
 
 
 def robot_type(arm: ArmModel) -> tuple[int, int]:
-    """(robotType, robotSubType): the arm's family by name (UR7e is a UR5e, UR12e a UR10e)."""
+    """(robotType, robotSubType): the arm's family by name (UR7e is a UR5e, UR12e a UR10e), and
+    its series (spec/arms/models.yaml)."""
     family = {"UR7E": "UR5", "UR12E": "UR10"}.get(arm.name.upper(), arm.name.upper().removesuffix("E"))
-    return (int(RobotType[family]) if family in RobotType.__members__ else int(RobotType.UNDEFINED)), 0
+    kind = int(RobotType[family]) if family in RobotType.__members__ else int(RobotType.UNDEFINED)
+    return kind, arm.robot_sub_type
 
 
 @cache
@@ -273,7 +275,7 @@ class RobotStateBuilder:
             "dh_alpha": tuple(arm.dh.alpha),
             "dh_theta": (0.0,) * 6,
             "masterboard_version": 3,
-            "reserved": 0,
+            "reserved": arm.controller_box_type or 0,  # the controller box type (spec/arms/models.yaml)
             "robot_type": kind,
             "robot_sub_type": sub,
         }
