@@ -169,3 +169,28 @@ def test_pause_program_and_resume_program_on_the_primary_port() -> None:
     finally:
         client.close()
         emu.stop()
+
+
+def test_set_sim_and_set_real_switch_the_real_arm_off_and_on() -> None:
+    """python-urx (urx/urrobot.py URRobot.set_simulation) sends `set sim` / `set real` as a program
+    on the secondary port, and UnderAutomation's SDK 9.4 (commands.set_simulated / set_real) on
+    30001; the emulator ran them as URScript and answered a syntax error. Robot Mode Data's
+    isRealRobotEnabled is false while simulating; the program still runs."""
+    emu = serve()
+    client = Primary(emu.ports["primary"])
+    try:
+        assert client.wait_state(lambda s: True)["robot_mode_data"].is_real_robot_enabled
+        with socket.create_connection(("127.0.0.1", emu.ports["secondary"]), timeout=5) as sock:
+            sock.sendall(b"set sim\n")
+            client.wait_state(lambda s: not s["robot_mode_data"].is_real_robot_enabled)
+            sock.sendall(b'textmsg("simulated")\n')
+            client.wait_state(
+                lambda s: any(getattr(m, "text_message", "") == "simulated" for m in client.seen)
+            )
+        client.send("set real")
+        state = client.wait_state(lambda s: s["robot_mode_data"].is_real_robot_enabled)
+        assert state["robot_mode_data"].is_real_robot_connected
+        assert client.errors() == []
+    finally:
+        client.close()
+        emu.stop()

@@ -35,6 +35,7 @@ class RobotModes:
     program: Program | None
     paused: bool
     loaded: str | None
+    simulated = False  # `set sim` on a script port: the real arm is not enabled (Robot Mode Data says so)
 
     def run_script(self, text: str) -> Program | None:
         raise NotImplementedError
@@ -123,6 +124,12 @@ class RobotModes:
         return True
 
     # --- the program --------------------------------------------------------------
+
+    def simulate(self, on: bool) -> bool:
+        """`set sim` / `set real`: the program runs on the simulated arm or the real one; the Robot
+        Mode Data's isRealRobotEnabled says which (the emulator's arm moves the same either way)."""
+        self.simulated = on
+        return True
 
     def load_program(self, text: str) -> None:
         """Keep a program (URScript text) for play()."""

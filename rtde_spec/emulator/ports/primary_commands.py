@@ -7,7 +7,10 @@ Drivers send these as lines of their own, outside any program: UR's C++ client l
 (ros-industrial/universal_robot, ur_driver/src/ur_driver/driver.py, RobotCommands) also sends
 `pause program` and `resume program` (the latter after the arm is back in run mode), and so
 does UnderAutomation's Universal Robots SDK 9.4 (primary_interface.commands.pause_program and
-resume_program, one line each on port 30001). The controller acts on them at
+resume_program, one line each on port 30001). `set sim` and `set real` switch between the
+simulated arm and the real one (python-urx, urx/urrobot.py URRobot.set_simulation, sends them as
+a program on the secondary port; UnderAutomation's SDK: commands.set_simulated and set_real);
+Robot Mode Data's isRealRobotEnabled is false while simulating. The controller acts on them at
 once and does not parse them as URScript, so they are taken out of what a client sends
 before the interpreter sees it. They act on the same model as the dashboard's commands
 (modes.py); they have no reply, a client watches the Robot State (robot mode, protective
@@ -58,6 +61,8 @@ COMMANDS: dict[str, Callable[[ControllerModel], bool]] = {
     "resume program": _resume,
     "unlock protective stop": lambda m: m.unlock_protective_stop(),
     "set unlock protective stop": lambda m: m.unlock_protective_stop(),
+    "set sim": lambda m: m.simulate(True),
+    "set real": lambda m: m.simulate(False),
     "close popup": _noop,
     "close safety popup": _noop,
 }

@@ -196,7 +196,7 @@ class RobotStateBuilder:
         return {
             "timestamp": self.micros(),
             "is_real_robot_connected": True,
-            "is_real_robot_enabled": True,
+            "is_real_robot_enabled": not self.model.simulated,
             "is_robot_power_on": mode >= RobotMode.POWER_ON,
             "is_emergency_stopped": safety in EMERGENCY,
             "is_protective_stopped": safety == SafetyMode.PROTECTIVE_STOP,
