@@ -50,6 +50,7 @@ class UnknownLink(Exception):
 
 LINK_HEADERS = {1: 14, 113: 16, 276: 20, 0: 4, 108: 4}  # bytes before the IP header (Ethernet: untagged)
 PKTAP = 258  # Apple's per-packet metadata, then the frame of the link type it names
+WHY, FIRST, MAX_REASONS = "why:", "first:", 16  # unreadable frames per reason (`_unreadable`)
 
 
 def _ip_start(linktype: int, frame: bytes) -> tuple[int, int]:
@@ -160,9 +161,10 @@ def _atomic(frame: bytes, at: int, end: int) -> bool:
 
 
 def _segment(
-    ts: float, linktype: int, frame: bytes, book: Addresses, counts: dict[str, int]
+    ts: float, linktype: int, frame: bytes, book: Addresses, counts: dict[str, int], number: int = 0
 ) -> Segment | None:
-    """The TCP segment in one frame; None (counted) when it is not one, or cannot be read."""
+    """The TCP segment in one frame (`number`: its number in the file, from 1); None (counted) when
+    it is not one, or cannot be read."""
     fragments = counts.get("ip_fragments", 0)
     try:
         found = _tcp_of(linktype, frame, book)
@@ -170,8 +172,8 @@ def _segment(
         counts["unknown_link"] = counts.get("unknown_link", 0) + 1
         counts["unknown_link_type"] = linktype
         return None
-    except (IndexError, ValueError, OSError):
-        counts["undecodable"] = counts.get("undecodable", 0) + 1
+    except (IndexError, ValueError, OSError) as e:
+        _unreadable(counts, str(e) if isinstance(e, ValueError) else "a header cut short", number)
         return None
     if found is None:
         if counts.get("ip_fragments", 0) == fragments:  # a fragment waiting for the rest is not "not TCP"
@@ -181,9 +183,22 @@ def _segment(
     sport, dport, seq, ack, offset, flags = _TCP.unpack_from(frame, at)
     data = at + (offset >> 4) * 4
     if data > end:
-        counts["undecodable"] = counts.get("undecodable", 0) + 1
+        _unreadable(counts, "a TCP header longer than its segment", number)
         return None
     return Segment(ts, src, sport, dst, dport, seq, flags, frame[data:end], ack if flags & ACK else -1)
+
+
+def _unreadable(counts: dict[str, int], why: str, number: int) -> None:
+    """A frame whose headers cannot be read: counted, and per reason how many and the number of
+    the first (`why:REASON`, `first:REASON`), so the summary says what and where (Wireshark's
+    frame numbers). At most MAX_REASONS reasons are kept apart; the rest count in the total."""
+    counts["undecodable"] = counts.get("undecodable", 0) + 1
+    key = WHY + why
+    if key not in counts and sum(k.startswith(WHY) for k in counts) >= MAX_REASONS:
+        return
+    counts[key] = counts.get(key, 0) + 1
+    if number:
+        counts.setdefault(FIRST + why, number)
 
 
 def items(
@@ -211,12 +226,13 @@ def items(
                 buf = records.buf
                 offsets, lengths = records.offsets.tolist(), records.lengths.tolist()
                 times, links = records.times.tolist(), records.links.tolist()
+                number = counts["frames"] + 1  # of the block's first frame
                 counts["frames"] += len(offsets)
                 done = 0
                 for first, end in [*runs(records), (len(offsets), len(offsets))]:
                     for k in range(done, first):
                         frame = buf[offsets[k] : offsets[k] + lengths[k]]
-                        seg = _segment(times[k], links[k], frame, book, counts)
+                        seg = _segment(times[k], links[k], frame, book, counts, number + k)
                         if seg is not None:
                             yield seg
                     if first < end:

@@ -96,7 +96,7 @@ class CaptureSummary:
         if r.get("bad_times"):
             out.append(f"{r['bad_times']} frames with an impossible capture time (kept; date=unknown)")
         if r.get("undecodable"):
-            out.append(f"{r['undecodable']} frames whose IP/TCP headers do not decode (skipped)")
+            out.append(f"{r['undecodable']} frames whose IP/TCP headers do not decode (skipped){self._why()}")
         if r.get("unknown_link"):
             link = r.get("unknown_link_type", -1)
             kind = "of an interface the file never describes" if link < 0 else f"of link type {link}"
@@ -129,6 +129,19 @@ class CaptureSummary:
                 "give the recipe with --recipe FILE"
             )
         return out
+
+    def _why(self) -> str:
+        """What was wrong with the unreadable frames, per reason: how many, and the first's number."""
+        r = self.reading
+        reasons = [key[4:] for key in r if key.startswith("why:")]
+        if not reasons:
+            return ""
+        parts = []
+        for why in reasons:
+            first = r.get("first:" + why)
+            where = f"frame {first}" if r["why:" + why] == 1 else f"the first is frame {first}"
+            parts.append(f"{r['why:' + why]}: {why}" + (f" ({where})" if first else ""))
+        return ": " + "; ".join(parts)
 
     def _ends(self) -> list[str]:
         """Where reading the file ended before its end: a record cut off, a file that grew while it
