@@ -1,11 +1,12 @@
 """TCP segments out of pcap and pcapng files, headers read with `struct`.
 
 Link types: Ethernet (with 802.1Q/802.1ad tags), Linux cooked (SLL and SLL2), BSD
-loopback/null, raw IP, and Apple's PKTAP around any of them; IPv4 (fragments put back
-together) and IPv6 (hop-by-hop, routing and destination options skipped). Anything else is
+loopback/null, raw IP, Linux NFLOG, and Apple's PKTAP around any of them; IPv4 (fragments put
+back together) and IPv6 (hop-by-hop, routing and destination options skipped); tunnels
+unwrapped (GRE, ERSPAN, VXLAN, Geneve, IP in IP, MPLS: `tunnels.py`). Anything else is
 counted, not decoded: other protocols as `not_tcp`; frames that claim IP but whose headers
-cannot be read as `undecodable`, and link types not read here as `unknown_link` (both
-reported as damage by the summary).
+cannot be read as `undecodable` (per reason, with the first frame's number), and link types
+not read here as `unknown_link` (both reported as damage by the summary).
 """
 
 from __future__ import annotations
@@ -16,6 +17,7 @@ from collections.abc import Callable, Iterator, Sequence
 from pathlib import Path
 from typing import NamedTuple
 
+from rtde_spec.capture.reading import tunnels
 from rtde_spec.capture.reading.bulk import DataRun, run_of, runs
 from rtde_spec.capture.reading.compressed import open_capture
 from rtde_spec.capture.reading.ipfrag import Addresses
@@ -24,7 +26,6 @@ from rtde_spec.capture.reading.pcapfile import blocks
 FIN, SYN, RST = 0x01, 0x02, 0x04
 ACK_PSH = 0x18  # the flags a run's segments stand for (a run has no FIN, SYN or RST)
 IPV4, IPV6 = 0x0800, 0x86DD
-VLAN = (0x8100, 0x88A8, 0x9100)  # 802.1Q, 802.1ad, and the QinQ tag before 802.1ad (Wireshark reads it)
 TCP = 6
 IPV6_OPTION_HEADERS = {0, 43, 60}  # hop-by-hop, routing, destination options: skipped over
 IPV6_FRAGMENT = 44
@@ -44,12 +45,22 @@ class Segment(NamedTuple):
     ack: int = -1  # the acknowledgment number, when the ACK flag is set (-1: none, or not read)
 
 
+class Inner(NamedTuple):
+    """Where to read on: a tunnel's packet inside a frame, or a datagram put back together."""
+
+    frame: bytes
+    kind: int  # ethertype-like: IPv4, IPv6, MPLS
+    at: int
+
+
 class UnknownLink(Exception):
     """A frame of a link type this reader does not decode (or of an interface the file never described)."""
 
 
 LINK_HEADERS = {1: 14, 113: 16, 276: 20, 0: 4, 108: 4}  # bytes before the IP header (Ethernet: untagged)
 PKTAP = 258  # Apple's per-packet metadata, then the frame of the link type it names
+NFLOG = 239  # Linux netfilter's log (`tcpdump -i nflog:N`)
+MAX_DEPTH = 8  # IP headers read in one frame: tunnels in tunnels, fragments put back together
 WHY, FIRST, MAX_REASONS = "why:", "first:", 16  # unreadable frames per reason (`_unreadable`)
 
 
@@ -61,13 +72,7 @@ def _ip_start(linktype: int, frame: bytes) -> tuple[int, int]:
     if len(frame) < LINK_HEADERS.get(linktype, 0):
         raise ValueError("shorter than its link header")
     if linktype == 1:  # Ethernet
-        at, ethertype = 12, int.from_bytes(frame[12:14], "big")
-        while ethertype in VLAN:
-            at += 4
-            if len(frame) < at + 2:
-                raise ValueError("shorter than its VLAN tags")
-            ethertype = int.from_bytes(frame[at : at + 2], "big")
-        return ethertype, at + 2
+        return tunnels.ethernet(frame, 0)
     if linktype == 113:  # Linux cooked v1: protocol at 14, IP at 16
         return int.from_bytes(frame[14:16], "big"), 16
     if linktype == 276:  # Linux cooked v2: protocol at 0, IP at 20
@@ -78,6 +83,8 @@ def _ip_start(linktype: int, frame: bytes) -> tuple[int, int]:
         return (IPV4 if frame and frame[0] >> 4 == 4 else IPV6), 0
     if linktype == PKTAP:
         return _pktap(frame)
+    if linktype == NFLOG:
+        return tunnels.nflog(frame)
     raise UnknownLink(linktype)
 
 
@@ -103,16 +110,35 @@ def _tcp_of(linktype: int, frame: bytes, book: Addresses) -> tuple[str, str, int
     A frame that claims IP (by its link header) but whose IP or TCP header cannot be one raises
     ValueError: it is counted as unreadable, never passed over as "not TCP". An IPv4 total length
     of 0 (or an IPv6 payload length of 0) is a segment that TCP segmentation offload had not cut
-    yet when the sending host captured it: its length is the frame's, as Wireshark takes it."""
+    yet when the sending host captured it: its length is the frame's, as Wireshark takes it.
+    A tunnel's packet (`tunnels.py`) is read on inside the same frame, at most MAX_DEPTH deep."""
     kind, at = _ip_start(linktype, frame)
+    for _ in range(MAX_DEPTH):
+        if kind in tunnels.MPLS:
+            start = tunnels.mpls(frame, at, len(frame))
+            if start is None:
+                return None
+            kind, at = start
+            continue
+        found = _ip(kind, frame, at, book)
+        if not isinstance(found, Inner):
+            return found
+        frame, kind, at = found
+    raise ValueError(f"tunnels nested more than {MAX_DEPTH} deep")
+
+
+def _ip(kind: int, frame: bytes, at: int, book: Addresses) -> tuple[str, str, int, int, bytes] | Inner | None:
+    """The TCP segment of the IP packet at frame[at:]; or, for a tunnel or a datagram just put back
+    together, the frame and where in it to read on."""
     if kind == IPV4:
         if len(frame) < at + 20 or frame[at] >> 4 != 4 or frame[at] & 0x0F < 5:
             raise ValueError("no IPv4 header")
-        if frame[at + 9] != TCP:
+        protocol = frame[at + 9]
+        if protocol != TCP and protocol not in tunnels.CARRIERS:
             return None
         if int.from_bytes(frame[at + 6 : at + 8], "big") & 0x3FFF:  # more fragments, or an offset
             whole = book.fragments.add(frame, at)
-            return None if whole is None else _tcp_of(1, whole, book)
+            return None if whole is None else Inner(whole, IPV4, 14)
         total = int.from_bytes(frame[at + 2 : at + 4], "big")
         tcp = at + (frame[at] & 0x0F) * 4
         if total == 0:  # segmentation offload: the frame's length
@@ -131,18 +157,21 @@ def _tcp_of(linktype: int, frame: bytes, book: Addresses) -> tuple[str, str, int
         else:
             end = min(len(frame), at + 40 + payload)
         src, dst, family = frame[at + 8 : at + 24], frame[at + 24 : at + 40], socket.AF_INET6
-        nxt, tcp = frame[at + 6], at + 40
-        while nxt in IPV6_OPTION_HEADERS or (nxt == IPV6_FRAGMENT and _atomic(frame, tcp, end)):
+        protocol, tcp = frame[at + 6], at + 40
+        while protocol in IPV6_OPTION_HEADERS or (protocol == IPV6_FRAGMENT and _atomic(frame, tcp, end)):
             if tcp + 2 > end:
                 raise ValueError("IPv6 extension headers beyond the packet")
-            size = 8 if nxt == IPV6_FRAGMENT else (frame[tcp + 1] + 1) * 8
-            nxt, tcp = frame[tcp], tcp + size
-        if nxt == IPV6_FRAGMENT and tcp < end and frame[tcp] == TCP:
+            size = 8 if protocol == IPV6_FRAGMENT else (frame[tcp + 1] + 1) * 8
+            protocol, tcp = frame[tcp], tcp + size
+        if protocol == IPV6_FRAGMENT and tcp < end and frame[tcp] == TCP:
             raise ValueError("a fragment of an IPv6 TCP segment (not put back together)")
-        if nxt != TCP:
+        if protocol != TCP and protocol not in tunnels.CARRIERS:
             return None
     else:
         return None
+    if protocol != TCP:
+        start = tunnels.inner(protocol, frame, tcp, end)
+        return None if start is None else Inner(frame[:end], *start)
     if tcp + 20 > end or frame[tcp + 12] >> 4 < 5:
         raise ValueError("no whole TCP header")
     names = book.names

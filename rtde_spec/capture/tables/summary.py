@@ -102,7 +102,7 @@ class CaptureSummary:
             kind = "of an interface the file never describes" if link < 0 else f"of link type {link}"
             out.append(
                 f"{r['unknown_link']} frames {kind}, which this reader does not decode (skipped; it reads "
-                "Ethernet, Linux cooked SLL/SLL2, BSD loopback, raw IP and Apple's PKTAP)"
+                "Ethernet, Linux cooked SLL/SLL2, BSD loopback, raw IP, Linux NFLOG and Apple's PKTAP)"
             )
         if r.get("ip_fragments_lost"):
             out.append(
