@@ -1,5 +1,5 @@
 """Robot traffic as a collector captures it: a switch port mirrored over ERSPAN, an overlay
-network (VXLAN, Geneve), GRE and IP-in-IP tunnels, MPLS, Linux's NFLOG. Each
+network (VXLAN, Geneve), GRE and IP-in-IP tunnels, MPLS, Linux's NFLOG, IPv6 fragments. Each
 decodes to the rows of the same frames captured directly; a damaged tunnel header costs its own
 frame, reported with its number. The headers are built here with struct, each laid out as the
 specification cited beside it says (dpkt, the tests' writer, has no ERSPAN, VXLAN or Geneve)."""
@@ -7,6 +7,8 @@ specification cited beside it says (dpkt, the tests' writer, has no ERSPAN, VXLA
 from __future__ import annotations
 
 import functools
+import itertools
+import random
 import struct
 from collections.abc import Callable
 from pathlib import Path
@@ -114,6 +116,19 @@ def fragments4(packet: bytes, size: int, ident: int) -> list[bytes]:
     return out
 
 
+def fragments6(packet: bytes, size: int, ident: int) -> list[bytes]:
+    """The IPv6 packet's payload in `size`-byte fragments, each after the packet's header and a
+    fragment header (RFC 8200 section 4.5: next header, reserved, offset (13 bits, 8-byte units),
+    2 reserved bits, M; identification)."""
+    body, out = packet[40:], []
+    for at in range(0, len(body), size):
+        piece = struct.pack(">BBHI", packet[6], 0, at | (at + size < len(body)), ident) + body[at : at + size]
+        head = bytearray(packet[:40])
+        head[4:6], head[6] = len(piece).to_bytes(2, "big"), 44
+        out.append(bytes(head) + piece)
+    return out
+
+
 Wrap = Callable[[int, bytes], list[bytes]]  # (frame number, the Ethernet frame) -> the frames carrying it
 WRAPS: dict[str, tuple[int, Wrap]] = {  # name -> (link type, wrap)
     "gre": (1, lambda n, f: [ethernet(0x0800, ipv4(47, gre(0x6558, f)))]),
@@ -197,6 +212,54 @@ def test_traffic_carried_in_a_tunnel_decodes_to_the_rows_of_the_frames_captured_
     assert summary.problems() == []
     assert sink.tables() == expected
     assert [c.name for c in summary.connections] == ["10.0.0.2:51000-10.0.0.10:30004"]
+
+
+def test_tcp_segments_in_ipv6_fragments_are_put_back_together(tmp_path: Path) -> None:
+    """A host sends a segment larger than the path MTU in IPv6 fragments (RFC 8200 section 4.5).
+    Every fragment was counted as 'a fragment of an IPv6 TCP segment (not put back together)': no
+    rows, exit 3. Here the fragments of two datagrams come interleaved, some in reverse order,
+    some twice (a second capture point)."""
+    conv = Conversation(("fd00::2", 51000), ("fd00::10", 30004))
+    rtde_setup(conv, BIG)
+    for package in rtde_packages(200, BIG):
+        conv.send("server", package)
+    expected = capture_tables(write(tmp_path / "plain.pcap", [conv]))
+    frames = sorted(conv.frames, key=lambda f: f[0])
+    out: list[tuple[float, bytes]] = []
+    rng = random.Random(8)
+    for n in range(0, len(frames), 2):
+        both = [
+            [(ts, f[:14] + p) for p in fragments6(f[14:], 24, n + k)]
+            for k, (ts, f) in enumerate(frames[n : n + 2])
+        ]
+        for pieces in both:
+            if rng.random() < 0.3:
+                pieces.reverse()
+            if rng.random() < 0.2:
+                pieces.append(pieces[0])
+        out += [p for pair in itertools.zip_longest(*both) for p in pair if p is not None]
+    sink = ArrowSink()
+    summary = decode_capture(pcap(tmp_path / "fragments.pcap", out, 1), sink)
+    assert summary.problems() == []
+    assert sink.tables() == expected
+    fragmented = [f for _, f in frames if len(f) - 14 - 40 > 24]  # the rest: one atomic fragment each
+    assert summary.reading["ip_reassembled"] == len(fragmented) > 200
+
+
+def test_an_ipv6_datagram_whose_fragment_never_came_costs_its_own_bytes(tmp_path: Path) -> None:
+    conv = Conversation(("fd00::2", 51000), ("fd00::10", 30004))
+    rtde_setup(conv, BIG)
+    for package in rtde_packages(50, BIG):
+        conv.send("server", package)
+    frames = sorted(conv.frames, key=lambda f: f[0])
+    out = [(ts, f[:14] + p) for n, (ts, f) in enumerate(frames) for p in fragments6(f[14:], 32, n)]
+    lost = len(out) - 3 * 5 - 2  # the second fragment of the fifth package from the end
+    summary = decode_capture(pcap(tmp_path / "lost.pcap", out[:lost] + out[lost + 1 :], 1), ArrowSink())
+    assert summary.packages == 6 + 49  # the setup exchange, and every package but the one cut
+    assert summary.damage() == [
+        "4 IP fragments of datagrams whose other fragments never came (skipped)",  # of the 5 it was cut into
+        "fd00::2:51000-fd00::10:30004: 1 TCP gaps, 112 bytes never captured",
+    ]
 
 
 DAMAGED: dict[str, tuple[bytes, str]] = {  # a frame, and what the summary says of it

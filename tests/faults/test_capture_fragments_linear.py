@@ -47,3 +47,32 @@ def test_a_copy_of_a_fragment_replaces_it_and_a_shorter_copy_is_counted_again() 
     assert fragments.add(fragment(9, 16, False, b"c" * 8), 14) is None
     whole = fragments.add(fragment(9, 8, True, b"d" * 8), 14)
     assert whole is not None and whole[34:] == b"b" * 8 + b"d" * 8 + b"c" * 8
+
+
+def fragment6(ident: int, offset: int, more: bool, payload: bytes) -> bytes:
+    """An IPv6 header (RFC 8200 section 3) and a fragment header (section 4.5: next header TCP,
+    offset in 8-byte units with M in its lowest bit, identification)."""
+    source, destination = b"\xfd" + b"\0" * 14 + b"\1", b"\xfd" + b"\0" * 14 + b"\2"
+    header = struct.pack(">IHBB16s16s", 6 << 28, 8 + len(payload), 44, 64, source, destination)
+    return ETHERNET[:12] + b"\x86\xdd" + header + struct.pack(">BBHI", 6, 0, offset | more, ident) + payload
+
+
+def test_ipv6_fragments_share_the_ipv4_bounds_each_looked_at_once() -> None:
+    """IPv6 fragments (put back together as IPv4's are) cost their number too, with the same rules:
+    a copy of a fragment of a packet just put back together is counted as a copy."""
+    count = 8000
+    order = [0, count - 1, *range(1, count - 2)]
+    frames = [fragment6(7, k * 8, k != count - 1, bytes([k % 251]) * 8) for k in order]
+    counts: dict[str, int] = {}
+    fragments = Fragments(counts)
+    started = time.process_time()
+    assert all(fragments.add_v6(frame, 14, 54) is None for frame in frames)
+    elapsed = time.process_time() - started
+    last = fragment6(7, (count - 2) * 8, True, bytes([(count - 2) % 251]) * 8)
+    whole = fragments.add_v6(last, 14, 54)
+    assert whole is not None and whole[12:14] == b"\x86\xdd" and whole[20] == 6  # next header: TCP
+    assert whole[54:] == b"".join(bytes([k % 251]) * 8 for k in range(count))
+    assert int.from_bytes(whole[18:20], "big") == count * 8  # its payload length
+    assert fragments.add_v6(last, 14, 54) is None  # the same frame again: a copy
+    assert counts == {"ip_fragments": count + 1, "ip_reassembled": 1, "ip_fragment_copies": 1}
+    assert elapsed < 1.0, f"{elapsed:.2f} s for {count} fragments"

@@ -1,5 +1,7 @@
-"""IPv4 fragments put back together (RFC 791), in bounded memory: a segment split by a router
-or by a big send on a small MTU is decoded whole, not counted as bytes never captured."""
+"""IP fragments put back together (IPv4: RFC 791; IPv6: RFC 8200 section 4.5), in bounded memory:
+a segment split by a router or by a big send on a small MTU, or a tunnel's packet grown past the
+MTU by its outer headers (ERSPAN of full-size frames), is decoded whole, not counted as bytes
+never captured. Both versions share one table, its limits and its rules for copies and overlaps."""
 
 from __future__ import annotations
 
@@ -9,6 +11,7 @@ from collections import OrderedDict
 MAX_DATAGRAMS = 1024  # datagrams waiting for their other fragments; the oldest is dropped past this
 MAX_DONE_BYTES = 1 << 22  # payloads of datagrams just put together, kept to know copies of their fragments
 ETHERNET_IPV4 = b"\0" * 12 + b"\x08\x00"  # the link header a reassembled datagram is given
+ETHERNET_IPV6 = b"\0" * 12 + b"\x86\xdd"
 
 
 class Fragments:
@@ -34,11 +37,31 @@ class Fragments:
         flags = int.from_bytes(frame[at + 6 : at + 8], "big")
         offset, more = (flags & 0x1FFF) * 8, bool(flags & 0x2000)
         key = frame[at + 12 : at + 20] + frame[at + 9 : at + 10] + frame[at + 4 : at + 6]
-        if (
-            key in self.done
-            and key not in self.pending
-            and self._copy(key, offset, frame[at + header : at + total])
-        ):
+        piece = frame[at + header : at + total]
+        return self._add(key, offset, more, piece, frame[at : at + header], total - header)
+
+    def add_v6(self, frame: bytes, at: int, fragment: int) -> bytes | None:
+        """One fragment of the IPv6 packet at `frame[at:]` whose fragment header is at `fragment`;
+        an Ethernet frame of it when complete. RFC 8200 section 4.5: fragments are of one packet by
+        source, destination and identification; the offset (13 bits) counts 8-byte units and the M
+        flag says more follow. The packet put back together is its IPv6 header with the fragment
+        header's Next Header, then the fragmentable part (headers before the fragment header, of
+        no use to find TCP, are left out)."""
+        self.counts["ip_fragments"] = self.counts.get("ip_fragments", 0) + 1
+        word = int.from_bytes(frame[fragment + 2 : fragment + 4], "big")
+        key = frame[at + 8 : at + 40] + frame[fragment + 4 : fragment + 8]
+        head = bytearray(frame[at : at + 40])
+        head[6] = frame[fragment]
+        end = at + 40 + int.from_bytes(frame[at + 4 : at + 6], "big")  # as the header says
+        piece = frame[fragment + 8 : end]
+        return self._add(key, word & 0xFFF8, bool(word & 1), piece, bytes(head), end - fragment - 8)
+
+    def _add(self, key: bytes, offset: int, more: bool, piece: bytes, head: bytes, size: int) -> bytes | None:
+        """One fragment (`piece` at `offset` of its datagram, `size` bytes as its header says: a
+        snap length may have cut the piece shorter); `head`: the IP header its datagram is given
+        when whole (the first fragment's)."""
+        counts = self.counts
+        if key in self.done and key not in self.pending and self._copy(key, offset, piece):
             return None
         pieces = self.pending.get(key)
         if pieces is None:
@@ -51,22 +74,27 @@ class Fragments:
                 counts["ip_fragments_dropped"] = counts.get("ip_fragments_dropped", 0) + 1
                 counts["ip_fragments_lost"] = counts.get("ip_fragments_lost", 0) + len(lost)
         before = pieces.get(offset)
-        pieces[offset] = frame[at + header : at + total]  # a copy of one held replaces it
-        self._place(key, offset, len(pieces[offset]), before)
+        pieces[offset] = piece  # a copy of one held replaces it
+        self._place(key, offset, len(piece), before)
         if offset == 0:
-            self.heads[key] = frame[at : at + header]
+            self.heads[key] = head
         if not more:
-            self.ends[key] = offset + total - header
+            self.ends[key] = offset + size
         whole = self._whole(key)
         if whole is None:
             return None
         counts["ip_reassembled"] = counts.get("ip_reassembled", 0) + 1
-        head = bytearray(self.heads.pop(key))
+        made = bytearray(self.heads.pop(key))
         del self.pending[key], self.ends[key], self.reach[key]
-        head[2:4] = (len(head) + len(whole)).to_bytes(2, "big")
-        head[6:8] = b"\0\0"
         self._keep_done(key, whole)
-        return ETHERNET_IPV4 + bytes(head) + whole
+        v6 = made[0] >> 4 == 6
+        size = len(whole) + (0 if v6 else len(made))
+        at = 4 if v6 else 2  # a length past 16 bits is written 0: the frame's length, as for offload
+        made[at : at + 2] = (size if size <= 0xFFFF else 0).to_bytes(2, "big")
+        if v6:
+            return ETHERNET_IPV6 + bytes(made) + whole
+        made[6:8] = b"\0\0"
+        return ETHERNET_IPV4 + bytes(made) + whole
 
     def _copy(self, key: bytes, offset: int, piece: bytes) -> bool:
         """Whether a fragment is a copy of one of a datagram just put together (the same frame from a

@@ -1,12 +1,12 @@
 """TCP segments out of pcap and pcapng files, headers read with `struct`.
 
 Link types: Ethernet (with 802.1Q/802.1ad tags), Linux cooked (SLL and SLL2), BSD
-loopback/null, raw IP, Linux NFLOG, and Apple's PKTAP around any of them; IPv4 (fragments put
-back together) and IPv6 (hop-by-hop, routing and destination options skipped); tunnels
-unwrapped (GRE, ERSPAN, VXLAN, Geneve, IP in IP, MPLS: `tunnels.py`). Anything else is
-counted, not decoded: other protocols as `not_tcp`; frames that claim IP but whose headers
-cannot be read as `undecodable` (per reason, with the first frame's number), and link types
-not read here as `unknown_link` (both reported as damage by the summary).
+loopback/null, raw IP, Linux NFLOG, and Apple's PKTAP around any of them; IPv4 and IPv6
+(hop-by-hop, routing and destination options skipped), fragments of either put back together
+(`ipfrag.py`); tunnels unwrapped (GRE, ERSPAN, VXLAN, Geneve, IP in IP, MPLS: `tunnels.py`).
+Anything else is counted, not decoded: other protocols as `not_tcp`; frames that claim IP but
+whose headers cannot be read as `undecodable` (per reason, with the first frame's number), and
+link types not read here as `unknown_link` (both reported as damage by the summary).
 """
 
 from __future__ import annotations
@@ -163,8 +163,11 @@ def _ip(kind: int, frame: bytes, at: int, book: Addresses) -> tuple[str, str, in
                 raise ValueError("IPv6 extension headers beyond the packet")
             size = 8 if protocol == IPV6_FRAGMENT else (frame[tcp + 1] + 1) * 8
             protocol, tcp = frame[tcp], tcp + size
-        if protocol == IPV6_FRAGMENT and tcp < end and frame[tcp] == TCP:
-            raise ValueError("a fragment of an IPv6 TCP segment (not put back together)")
+        if protocol == IPV6_FRAGMENT:
+            if tcp + 8 > end or payload == 0:
+                raise ValueError("an IPv6 fragment header beyond the packet")
+            whole = book.fragments.add_v6(frame, at, tcp)
+            return None if whole is None else Inner(whole, IPV6, 14)
         if protocol != TCP and protocol not in tunnels.CARRIERS:
             return None
     else:

@@ -106,7 +106,7 @@ class CaptureSummary:
             )
         if r.get("ip_fragments_lost"):
             out.append(
-                f"{r['ip_fragments_lost']} IPv4 fragments of datagrams whose other fragments never came "
+                f"{r['ip_fragments_lost']} IP fragments of datagrams whose other fragments never came "
                 "(skipped)"
             )
         for c in self.connections:
