@@ -259,3 +259,28 @@ def test_a_file_cut_shorter_while_it_is_read_is_an_error_not_a_fault(
                 with open(path, "r+b") as f:
                     f.truncate(1000)  # another program cuts the capture
     assert seen >= 3
+
+
+def test_nanosecond_times_are_the_nearest_float_in_pcapng_as_in_pcap(tmp_path: Path) -> None:
+    """dumpcap writes pcapng with if_tsresol 9. Its 64-bit count of nanoseconds was scaled as a
+    float (past 2**53, rounded before scaling): half the capture times came out one float step
+    (238 ns at today's epoch) off the nearest, and off the same frames in a nanosecond pcap."""
+    import random
+    from fractions import Fraction
+
+    rng = random.Random(3)
+    stamps = sorted(1_795_765_736_000_000_000 + rng.randrange(10**12) for _ in range(200))
+    frame = ethernet(ip_tcp())
+    order = "<"
+    shb = block(0x0A0D0D0A, struct.pack(order + "IHHq", 0x1A2B3C4D, 1, 0, -1))
+    tsresol = struct.pack(order + "HH", 9, 1) + b"\x09" + b"\x00" * 3 + struct.pack(order + "HH", 0, 0)
+    idb = block(1, struct.pack(order + "HHI", 1, 0, 65535) + tsresol)
+    epbs = b"".join(
+        block(6, struct.pack(order + "IIIII", 0, ns >> 32, ns & 0xFFFFFFFF, len(frame), len(frame)) + frame)
+        for ns in stamps
+    )
+    nearest = [float(Fraction(ns, 10**9)) for ns in stamps]
+    from_pcapng, _ = read(tmp_path, shb + idb + epbs)
+    assert [s.time for s in from_pcapng] == nearest
+    from_pcap, _ = read(tmp_path, pcap([(ns // 10**9, ns % 10**9, frame) for ns in stamps], nano=True))
+    assert [s.time for s in from_pcap] == nearest

@@ -26,7 +26,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
-from rtde_spec.capture.reading.headers import count_cut, interface, snap_length
+from rtde_spec.capture.reading.headers import count_cut, interface, seconds, snap_length
 from rtde_spec.capture.reading.recordsync import MAX_BLOCK, next_pcap_record, next_pcapng_block, pcap_limit
 from rtde_spec.capture.reading.strides import count_cut_run, same_run, strided
 from rtde_spec.errors import UsageError
@@ -310,7 +310,7 @@ def _pcap(
             secs, fracs = (strided(buf, pos + at, stride, same, u32) for at in (0, 4))
             starts = pos + 16 + np.arange(same, dtype=np.int64) * stride
             lengths = np.full(same, caplen, dtype=np.int64)
-            times = secs + fracs * unit
+            times = secs + fracs / fractions  # the fraction's nearest float, then the sum's
             found.add(starts, lengths, times, linktype)
             count_cut_run(stats, buf, pos + 12, stride, same, lengths, u32, times)
             last_secs[:] = [int(secs[-1])]
@@ -364,7 +364,7 @@ def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int], lag: i
                 high, low, caplen = (strided(buf, pos + at, length, same, u32) for at in (12, 16, 20))
                 starts = pos + 28 + np.arange(same, dtype=np.int64) * length
                 lengths = np.minimum(caplen, length - 32)
-                times = ((high << 32) | low) * unit + shift
+                times = seconds((high << 32) | low, unit, shift)
                 found.add(starts, lengths, times, linktype)
                 count_cut_run(stats, buf, pos + 24, length, same, lengths, u32, times)
                 pos += same * length
