@@ -76,3 +76,27 @@ def test_ipv6_fragments_share_the_ipv4_bounds_each_looked_at_once() -> None:
     assert fragments.add_v6(last, 14, 54) is None  # the same frame again: a copy
     assert counts == {"ip_fragments": count + 1, "ip_reassembled": 1, "ip_fragment_copies": 1}
     assert elapsed < 1.0, f"{elapsed:.2f} s for {count} fragments"
+
+
+def test_fragments_of_a_datagram_never_completed_expire_before_its_id_comes_again() -> None:
+    """A datagram whose last fragment was lost waited for ever (only 1,024 others pushed it out):
+    when its id came again (the 16-bit id wraps after 65,536 datagrams of a host), the new
+    datagram was put together with the stale fragment's bytes, and came out longer than it was.
+    A receiver drops fragments it held past its reassembly time-out (Linux's ipfrag_time: 30 s;
+    RFC 8200 section 4.5 for IPv6: 60 s); so does the reader, counting them as lost."""
+    counts: dict[str, int] = {}
+    fragments = Fragments(counts)
+    fragments.now = 1000.0
+    assert fragments.add(fragment(7, 8, True, b"s" * 24), 14) is None  # its other fragments never come
+    fragments.now = 1100.0  # the id again, 100 s later
+    assert fragments.add(fragment(7, 0, True, b"n" * 16), 14) is None
+    whole = fragments.add(fragment(7, 16, False, b"m" * 8), 14)
+    assert whole is not None and whole[34:] == b"n" * 16 + b"m" * 8
+    assert counts["ip_fragments_lost"] == 1 and counts["ip_fragments_expired"] == 1
+    from rtde_spec.capture.tables.summary import CaptureSummary
+
+    assert CaptureSummary("x.pcap", 3, reading=counts).damage() == [
+        "1 IP fragments of datagrams whose other fragments never came (skipped); 1 of those datagrams "
+        "waited past the reassembly time-out (30 s for IPv4, 60 s for IPv6, as Linux holds them): a "
+        "later datagram of the same id is not mixed with them"
+    ]

@@ -12,6 +12,8 @@ MAX_DATAGRAMS = 1024  # datagrams waiting for their other fragments; the oldest 
 MAX_DONE_BYTES = 1 << 22  # payloads of datagrams just put together, kept to know copies of their fragments
 ETHERNET_IPV4 = b"\0" * 12 + b"\x08\x00"  # the link header a reassembled datagram is given
 ETHERNET_IPV6 = b"\0" * 12 + b"\x86\xdd"
+TIMEOUT_V4, TIMEOUT_V6 = 30.0, 60.0  # seconds a datagram's fragments are held: Linux's ipfrag_time and
+# ip6frag_time, RFC 8200 section 4.5's 60 s; a datagram past them is dropped as the receiver drops it
 
 
 class Fragments:
@@ -27,6 +29,8 @@ class Fragments:
         # again per fragment (8,000 fragments of one datagram took 9.5 s)
         self.done: OrderedDict[bytes, bytes] = OrderedDict()  # key -> payload, the newest last
         self.done_bytes = 0
+        self.now = 0.0  # the capture time of the fragment being added (set by the reader)
+        self.started: dict[bytes, float] = {}  # when each pending datagram's first fragment came
 
     def add(self, frame: bytes, at: int) -> bytes | None:
         """One fragment of the IPv4 datagram at `frame[at:]`; an Ethernet frame of it when complete."""
@@ -63,16 +67,13 @@ class Fragments:
         counts = self.counts
         if key in self.done and key not in self.pending and self._copy(key, offset, piece):
             return None
+        self._expire()
         pieces = self.pending.get(key)
         if pieces is None:
             pieces = self.pending[key] = {}
+            self.started[key] = self.now
             if len(self.pending) > MAX_DATAGRAMS:
-                old, lost = self.pending.popitem(last=False)
-                self.heads.pop(old, None)
-                self.ends.pop(old, None)
-                self.reach.pop(old, None)
-                counts["ip_fragments_dropped"] = counts.get("ip_fragments_dropped", 0) + 1
-                counts["ip_fragments_lost"] = counts.get("ip_fragments_lost", 0) + len(lost)
+                self._drop("ip_fragments_dropped")
         before = pieces.get(offset)
         pieces[offset] = piece  # a copy of one held replaces it
         self._place(key, offset, len(piece), before)
@@ -85,7 +86,7 @@ class Fragments:
             return None
         counts["ip_reassembled"] = counts.get("ip_reassembled", 0) + 1
         made = bytearray(self.heads.pop(key))
-        del self.pending[key], self.ends[key], self.reach[key]
+        del self.pending[key], self.ends[key], self.reach[key], self.started[key]
         self._keep_done(key, whole)
         v6 = made[0] >> 4 == 6
         size = len(whole) + (0 if v6 else len(made))
@@ -95,6 +96,23 @@ class Fragments:
             return ETHERNET_IPV6 + bytes(made) + whole
         made[6:8] = b"\0\0"
         return ETHERNET_IPV4 + bytes(made) + whole
+
+    def _expire(self) -> None:
+        """Datagrams held past their time-out, oldest first (the table is in the order they began;
+        a capture clock stepped back expires nothing until it passes them again)."""
+        while self.pending:
+            key = next(iter(self.pending))
+            if self.now - self.started[key] <= (TIMEOUT_V4 if len(key) == 11 else TIMEOUT_V6):
+                return
+            self._drop("ip_fragments_expired")
+
+    def _drop(self, why: str) -> None:
+        """The oldest datagram waiting, its fragments counted as lost and under `why`."""
+        old, lost = self.pending.popitem(last=False)
+        for held in (self.heads, self.ends, self.reach, self.started):
+            held.pop(old, None)
+        self.counts[why] = self.counts.get(why, 0) + 1
+        self.counts["ip_fragments_lost"] = self.counts.get("ip_fragments_lost", 0) + len(lost)
 
     def _copy(self, key: bytes, offset: int, piece: bytes) -> bool:
         """Whether a fragment is a copy of one of a datagram just put together (the same frame from a
@@ -123,6 +141,7 @@ class Fragments:
         self.heads.clear()
         self.ends.clear()
         self.reach.clear()
+        self.started.clear()
         self.done.clear()
         self.done_bytes = 0
 

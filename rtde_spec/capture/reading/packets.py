@@ -198,6 +198,7 @@ def _segment(
     """The TCP segment in one frame (`number`: its number in the file, from 1); None (counted) when
     it is not one, or cannot be read."""
     fragments = counts.get("ip_fragments", 0)
+    book.fragments.now = ts  # fragments held past their time-out expire by capture time
     try:
         found = _tcp_of(linktype, frame, book)
     except UnknownLink:

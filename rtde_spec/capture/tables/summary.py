@@ -107,7 +107,7 @@ class CaptureSummary:
         if r.get("ip_fragments_lost"):
             out.append(
                 f"{r['ip_fragments_lost']} IP fragments of datagrams whose other fragments never came "
-                "(skipped)"
+                "(skipped)" + _expired(r.get("ip_fragments_expired", 0))
             )
         for c in self.connections:
             if c.gaps:
@@ -234,6 +234,15 @@ class CaptureSummary:
             f"{self.file}: {verdict}: {self.frames} frames, {self.packages} packages, {gaps} gaps "
             f"({lost} bytes lost), {skipped} bytes skipped, {truncated} truncated records{notes}"
         )
+
+
+def _expired(datagrams: int) -> str:
+    if not datagrams:
+        return ""
+    return (
+        f"; {datagrams} of those datagrams waited past the reassembly time-out (30 s for IPv4, 60 s "
+        "for IPv6, as Linux holds them): a later datagram of the same id is not mixed with them"
+    )
 
 
 def _utc(seconds: float) -> str:
