@@ -315,3 +315,20 @@ def test_damaged_tunnel_headers_cost_their_own_frames_each_reported_with_its_num
     assert sink.tables() == expected
     why = "; ".join(f"1: {why} (frame {11 + 20 * k})" for k, (_, why) in enumerate(DAMAGED.values()))
     assert summary.damage() == [f"{len(DAMAGED)} frames whose IP/TCP headers do not decode (skipped): {why}"]
+
+
+def test_fragments_lost_of_udp_are_no_damage_unless_a_tunnel_loses_the_bytes(tmp_path: Path) -> None:
+    """Fragments of UDP are put back together for the tunnels UDP carries (VXLAN, Geneve). A lost
+    fragment of other UDP (a big syslog or DNS datagram in the same capture) is nothing the tables
+    lose: it made the capture 'damaged', exit 3. A VXLAN packet's lost fragment still shows as the
+    gap it leaves in the inner connection."""
+    conv = session()
+    frames = sorted(conv.frames, key=lambda f: f[0])
+    syslog = fragments4(ipv4(17, udp(514, b"<13>robot cell " * 40)), 200, 4242)
+    lost_tunnel = fragments4(ipv4(17, udp(4789, vxlan(frames[20][1]))), 64, 4243)
+    out = [(ts, ethernet(0x0800, ipv4(17, udp(4789, vxlan(f))))) for ts, f in frames]
+    out[10:10] = [(out[10][0], ethernet(0x0800, p)) for p in syslog[:1] + syslog[2:]]
+    out[20 + len(syslog) - 1] = (out[20][0], ethernet(0x0800, lost_tunnel[0]))  # its other fragments lost
+    summary = decode_capture(pcap(tmp_path / "udp.pcap", out, 1), ArrowSink())
+    assert summary.reading["ip_fragments_lost_udp"] == len(syslog) - 1 + 1
+    assert summary.damage() == ["10.0.0.2:51000-10.0.0.10:30004: 1 TCP gaps, 112 bytes never captured"]

@@ -12,6 +12,7 @@ MAX_DATAGRAMS = 1024  # datagrams waiting for their other fragments; the oldest 
 MAX_DONE_BYTES = 1 << 22  # payloads of datagrams just put together, kept to know copies of their fragments
 ETHERNET_IPV4 = b"\0" * 12 + b"\x08\x00"  # the link header a reassembled datagram is given
 ETHERNET_IPV6 = b"\0" * 12 + b"\x86\xdd"
+UDP = 17
 TIMEOUT_V4, TIMEOUT_V6 = 30.0, 60.0  # seconds a datagram's fragments are held: Linux's ipfrag_time and
 # ip6frag_time, RFC 8200 section 4.5's 60 s; a datagram past them is dropped as the receiver drops it
 
@@ -109,10 +110,19 @@ class Fragments:
     def _drop(self, why: str) -> None:
         """The oldest datagram waiting, its fragments counted as lost and under `why`."""
         old, lost = self.pending.popitem(last=False)
+        self._lost(old, len(lost))
         for held in (self.heads, self.ends, self.reach, self.started):
             held.pop(old, None)
         self.counts[why] = self.counts.get(why, 0) + 1
-        self.counts["ip_fragments_lost"] = self.counts.get("ip_fragments_lost", 0) + len(lost)
+
+    def _lost(self, key: bytes, fragments: int) -> None:
+        """Fragments of a datagram never completed: lost (damage), or, for UDP, `_udp` (no damage
+        of their own: UDP carries TCP only in a tunnel, whose inner connection reports its gap;
+        other UDP, fragmented and lost, is nothing the tables lose)."""
+        head = self.heads.get(key)
+        udp = key[8] == UDP if len(key) == 11 else head is not None and head[6] == UDP
+        name = "ip_fragments_lost_udp" if udp else "ip_fragments_lost"
+        self.counts[name] = self.counts.get(name, 0) + fragments
 
     def _copy(self, key: bytes, offset: int, piece: bytes) -> bool:
         """Whether a fragment is a copy of one of a datagram just put together (the same frame from a
@@ -134,9 +144,8 @@ class Fragments:
 
     def finish(self) -> None:
         """The end of the capture: fragments of datagrams never completed are counted as lost."""
-        waiting = sum(len(pieces) for pieces in self.pending.values())
-        if waiting:
-            self.counts["ip_fragments_lost"] = self.counts.get("ip_fragments_lost", 0) + waiting
+        for key, pieces in self.pending.items():
+            self._lost(key, len(pieces))
         self.pending.clear()
         self.heads.clear()
         self.ends.clear()
