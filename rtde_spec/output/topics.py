@@ -32,6 +32,7 @@ from rtde_spec.output import json_schemas as js
 from rtde_spec.output.base import plain
 
 CAPTURE_TIME = "capture_time"
+LAST_NS_SECOND = 9.2e9  # seconds past which nanoseconds leave int64 (the year 2261): no log time
 TIMESTAMP = "timestamp"
 _SCALE = {"s": 1.0, "ms": 1e-3, "µs": 1e-6, "us": 1e-6, "ns": 1e-9}
 _DATA_PACKAGE = next(m["name"] for m in SPEC["packages"]["messages"] if m["type"] == chr(DATA_PACKAGE_TYPE))
@@ -59,7 +60,8 @@ class Clock:
         return self.last
 
     def capture(self, seconds: float) -> int:
-        return self._keep(round(seconds * 1e9)) if _finite(seconds) else self.unknown()
+        ok = _finite(seconds) and abs(seconds) < LAST_NS_SECOND
+        return self._keep(nanoseconds(seconds)) if ok else self.unknown()
 
     def controller(self, seconds: float) -> int:
         if not _finite(seconds):
@@ -86,10 +88,14 @@ class Clock:
             base = self.epoch_ns or 0
         else:
             return np.full(rows, self.unknown(), dtype=np.int64)
-        ok = np.isfinite(seconds)
-        # whole nanoseconds first, then the offset in integers: a float holds only ~0.25 µs at 1e18
-        out = (np.where(ok, seconds, 0) * 1e9).round().astype(np.int64) + np.int64(base)
-        out = out.clip(0)
+        ok = np.isfinite(seconds) & (np.abs(seconds) < LAST_NS_SECOND)
+        # whole nanoseconds first, then the offset in integers: a float holds only ~0.25 µs at 1e18;
+        # whole seconds and the fraction apart, so a log time is the time the float holds to the
+        # nanosecond (seconds * 1e9 rounded to 256 ns at today's epoch: up to 128 ns more error)
+        kept = np.where(ok, seconds, 0)
+        whole = np.floor(kept)
+        out = whole.astype(np.int64) * np.int64(10**9) + ((kept - whole) * 1e9).round().astype(np.int64)
+        out = (out + np.int64(base)).clip(0)
         if not ok.all():  # a row without a time takes the one before it
             last = self.unknown() if self.last is None else self.last
             for i in np.flatnonzero(~ok):
@@ -97,6 +103,14 @@ class Clock:
         if rows:
             self.last = int(out[-1])
         return out
+
+
+def nanoseconds(seconds: float) -> int:
+    """The nanosecond nearest the time a float of seconds holds: whole seconds and the fraction
+    apart (the fraction is exact), since `seconds * 1e9` is rounded to a multiple of 256 ns past
+    2**60 ns (a capture time since 1970)."""
+    whole = math.floor(seconds)
+    return whole * 10**9 + round((seconds - whole) * 1e9)
 
 
 def topic_for_table(table: str) -> str:
