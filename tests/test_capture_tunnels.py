@@ -332,3 +332,17 @@ def test_fragments_lost_of_udp_are_no_damage_unless_a_tunnel_loses_the_bytes(tmp
     summary = decode_capture(pcap(tmp_path / "udp.pcap", out, 1), ArrowSink())
     assert summary.reading["ip_fragments_lost_udp"] == len(syslog) - 1 + 1
     assert summary.damage() == ["10.0.0.2:51000-10.0.0.10:30004: 1 TCP gaps, 112 bytes never captured"]
+
+
+def test_ipv6_fragments_of_what_cannot_hold_tcp_are_not_tcp(tmp_path: Path) -> None:
+    """A big ICMPv6 echo (`ping -s 3000`) in fragments, one lost: only what may hold TCP (TCP, option
+    headers, tunnels) is put back together, as for IPv4; its lost fragments made the capture
+    'damaged', exit 3, though the tables lose nothing."""
+    conv = session()
+    frames = sorted(conv.frames, key=lambda f: f[0])
+    echo = fragments6(ipv6(58, struct.pack(">BBHHH", 128, 0, 0, 1, 1) + b"x" * 3000), 1232, 99)
+    out = list(frames)
+    out[12:12] = [(out[12][0], ethernet(0x86DD, p)) for p in echo[:-1]]  # its last fragment lost
+    summary = decode_capture(pcap(tmp_path / "ping.pcap", out, 1), ArrowSink())
+    assert summary.problems() == [] and summary.packages == 206
+    assert summary.reading["not_tcp"] == len(echo) - 1

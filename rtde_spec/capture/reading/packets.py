@@ -29,6 +29,7 @@ IPV4, IPV6 = 0x0800, 0x86DD
 TCP = 6
 IPV6_OPTION_HEADERS = {0, 43, 60}  # hop-by-hop, routing, destination options: skipped over
 IPV6_FRAGMENT = 44
+MAY_HOLD_TCP = frozenset({TCP, *IPV6_OPTION_HEADERS, *tunnels.CARRIERS})  # what fragments are put together
 _TCP = struct.Struct(">HHIIBB")  # ports, seq, ack, data offset byte, flags
 ACK = 0x10
 
@@ -166,6 +167,8 @@ def _ip(kind: int, frame: bytes, at: int, book: Addresses) -> tuple[str, str, in
         if protocol == IPV6_FRAGMENT:
             if tcp + 8 > end or payload == 0:
                 raise ValueError("an IPv6 fragment header beyond the packet")
+            if frame[tcp] not in MAY_HOLD_TCP:  # ICMPv6 and the like: not TCP, as IPv4's are not
+                return None
             whole = book.fragments.add_v6(frame, at, tcp)
             return None if whole is None else Inner(whole, IPV6, 14)
         if protocol != TCP and protocol not in tunnels.CARRIERS:
