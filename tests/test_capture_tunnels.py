@@ -1,8 +1,9 @@
 """Robot traffic as a collector captures it: a switch port mirrored over ERSPAN, an overlay
-network (VXLAN, Geneve), GRE and IP-in-IP tunnels, MPLS, Linux's NFLOG, IPv6 fragments. Each
-decodes to the rows of the same frames captured directly; a damaged tunnel header costs its own
-frame, reported with its number. The headers are built here with struct, each laid out as the
-specification cited beside it says (dpkt, the tests' writer, has no ERSPAN, VXLAN or Geneve)."""
+network (VXLAN, Geneve), GRE and IP-in-IP tunnels, MPLS, a MikroTik's sniffer stream (TZSP),
+Linux's NFLOG, IPv6 fragments. Each decodes to the rows of the same frames captured directly; a
+damaged tunnel header costs its own frame, reported with its number. The headers are built here
+with struct, each laid out as the specification cited beside it says (dpkt, the tests' writer,
+has no ERSPAN, VXLAN or Geneve)."""
 
 from __future__ import annotations
 
@@ -103,6 +104,13 @@ def nflog(packet: bytes) -> bytes:
     return bytes([2, 0, 0, 1]) + tlv(10, b"rtde\0") + tlv(9, packet)
 
 
+def tzsp(frame: bytes) -> bytes:
+    """TZSP as a MikroTik streams its sniffer (Wireshark's packet-tzsp.c): version 1, type 0
+    (received), encapsulation 1 (Ethernet); tags: PADDING (0), the sensor's MAC (60, length 6),
+    END (1); then the frame."""
+    return bytes([1, 0, 0, 1, 0, 60, 6]) + b"\x4c\x5e\x0c\x00\x00\x01" + bytes([1]) + frame
+
+
 def fragments4(packet: bytes, size: int, ident: int) -> list[bytes]:
     """The IPv4 packet's payload in `size`-byte fragments, each with the packet's header (RFC 791
     section 3.1: total length, identification, MF 0x2000, offset in 8-byte units)."""
@@ -162,6 +170,7 @@ WRAPS: dict[str, tuple[int, Wrap]] = {  # name -> (link type, wrap)
     "mpls": (1, lambda n, f: [ethernet(0x8847, mpls(f[14:]))]),
     "mpls_ethernet_pseudowire": (1, lambda n, f: [ethernet(0x8847, mpls(b"\0" * 4 + f, (300,)))]),  # RFC 4448
     "ipip": (1, lambda n, f: [ethernet(0x0800, ipv4(4, f[14:]))]),
+    "tzsp": (1, lambda n, f: [ethernet(0x0800, ipv4(17, udp(37008, tzsp(f))))]),
     "nflog": (239, lambda n, f: [nflog(f[14:])]),
     # ingress and egress of the robot's port mirrored as two ERSPAN sessions: one connection
     "erspan2_session_per_direction": (
@@ -288,6 +297,14 @@ DAMAGED: dict[str, tuple[bytes, str]] = {  # a frame, and what the summary says 
         ethernet(0x0800, ipv4(17, udp(6081, b"\x3f" + geneve(b"")[1:]))),
         "Geneve options past the end of the packet",
     ),
+    "TZSP of version 2": (
+        ethernet(0x0800, ipv4(17, udp(37008, b"\x02" + tzsp(b"\0" * 60)[1:]))),
+        "a TZSP header of version 2 (1 is read)",
+    ),
+    "TZSP tags without their end": (
+        ethernet(0x0800, ipv4(17, udp(37008, bytes([1, 0, 0, 1, 0, 0, 60, 6, 1, 2])))),
+        "TZSP tags without their end",
+    ),
     "MPLS stack with no bottom": (
         ethernet(0x8847, b"\x00\x01\x00\x40" * 20),
         "an MPLS label stack of more than 16 entries",
@@ -309,11 +326,11 @@ def test_damaged_tunnel_headers_cost_their_own_frames_each_reported_with_its_num
     frames = sorted(conv.frames, key=lambda f: f[0])
     out = [(ts, wrap(n, frame)[0]) for n, (ts, frame) in enumerate(frames, 1)]
     for k, (frame, _) in enumerate(DAMAGED.values()):
-        out.insert(10 + 20 * k, (out[10 + 20 * k][0], frame))  # frame number 11 + 20 k
+        out.insert(10 + 15 * k, (out[10 + 15 * k][0], frame))  # frame number 11 + 15 k
     sink = ArrowSink()
     summary = decode_capture(pcap(tmp_path / "damaged.pcap", out, 1), sink)
     assert sink.tables() == expected
-    why = "; ".join(f"1: {why} (frame {11 + 20 * k})" for k, (_, why) in enumerate(DAMAGED.values()))
+    why = "; ".join(f"1: {why} (frame {11 + 15 * k})" for k, (_, why) in enumerate(DAMAGED.values()))
     assert summary.damage() == [f"{len(DAMAGED)} frames whose IP/TCP headers do not decode (skipped): {why}"]
 
 

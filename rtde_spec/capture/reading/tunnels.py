@@ -1,6 +1,7 @@
 """Traffic inside tunnels, unwrapped to the frame or packet it carries, then read as if captured
 directly: a robot cell's switch port mirrored to a collector (ERSPAN over GRE), an overlay
-network (VXLAN, Geneve), a GRE or IP-in-IP tunnel, an MPLS label stack, and Linux's NFLOG.
+network (VXLAN, Geneve), a GRE or IP-in-IP tunnel, an MPLS label stack, a MikroTik's sniffer
+stream (TZSP), and Linux's NFLOG.
 
 Each header is read as its specification lays it out (cited where it is read); a header cut
 short, of another version or with a length past its packet raises ValueError naming it: the
@@ -19,6 +20,7 @@ ERSPAN_2, ERSPAN_3 = 0x88BE, 0x22EB  # GRE protocol types of ERSPAN type I/II an
 GRE, UDP, IPIP, IPV6_IN_IP = 47, 17, 4, 41  # IP protocol numbers of what may carry TCP inside
 CARRIERS = frozenset((GRE, UDP, IPIP, IPV6_IN_IP))
 VXLAN_PORT, GENEVE_PORT = 4789, 6081  # IANA's UDP ports (RFC 7348 section 5; RFC 8926 section 3.3)
+TZSP_PORT = 37008  # MikroTik's "packet sniffer" streaming (TaZmen Sniffer Protocol; Wireshark's port)
 MAX_LABELS = 16  # MPLS label stack entries read before the stack is taken as damage
 Start = tuple[int, int]  # (ethertype of what starts there, its offset in the frame)
 
@@ -52,6 +54,8 @@ def inner(protocol: int, frame: bytes, at: int, end: int) -> Start | None:
         return _vxlan(frame, at + 8, end)
     if port == GENEVE_PORT:
         return _geneve(frame, at + 8, end)
+    if port == TZSP_PORT:
+        return _tzsp(frame, at + 8, end)
     return None
 
 
@@ -121,6 +125,25 @@ def _geneve(frame: bytes, at: int, end: int) -> Start | None:
     if end < start:
         raise ValueError("Geneve options past the end of the packet")
     return _carried(int.from_bytes(frame[at + 2 : at + 4], "big"), frame, start)
+
+
+def _tzsp(frame: bytes, at: int, end: int) -> Start | None:
+    """TZSP, as a MikroTik switch or router streams what its packet sniffer sees (Wireshark's
+    packet-tzsp.c, after Network Chemistry's note AN001): version 1, type (0: received, 1: for
+    transmit), encapsulation (1: Ethernet); then tags up to END (1): PADDING (0) alone, any other
+    with a length byte; then the frame."""
+    if end < at + 4:
+        raise ValueError("shorter than its TZSP header")
+    if frame[at] != 1:
+        raise ValueError(f"a TZSP header of version {frame[at]} (1 is read)")
+    if frame[at + 1] > 1 or int.from_bytes(frame[at + 2 : at + 4], "big") != 1:
+        return None  # a keepalive or configuration, or a frame not Ethernet (802.11)
+    at += 4
+    while at < end and frame[at] != 1:
+        at += 1 if frame[at] == 0 else 2 + (frame[at + 1] if at + 1 < end else 0)
+    if at >= end:
+        raise ValueError("TZSP tags without their end")
+    return ethernet(frame, at + 1)
 
 
 def _carried(protocol: int, frame: bytes, at: int) -> Start | None:
