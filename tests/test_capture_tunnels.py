@@ -391,3 +391,27 @@ def test_wireshark_reads_the_tunnels_built_here_to_the_same_tcp_segments(tmp_pat
         if name not in ("mpls_ethernet_pseudowire", "erspan3_ip"):
             wrapped = [(ts, carrier) for n, (ts, frame) in enumerate(frames, 1) for carrier in wrap(n, frame)]
             assert segments(pcap(tmp_path / f"{name}.pcap", wrapped, linktype)) == plain, name
+
+
+def test_frames_a_mirror_session_cut_are_named_as_the_cause_of_their_gaps(tmp_path: Path) -> None:
+    """A switch's ERSPAN session truncates mirrored frames past its MTU (the ERSPAN header's T bit,
+    draft section 4.1). The inner packet is shorter than its IP length, and no capture record says
+    so: the summary showed only TCP gaps, with no cause; it now names the mirror, as it names a
+    snap length."""
+    conv = session()
+    frames = sorted(conv.frames, key=lambda f: f[0])
+    cut = [len(f) > 120 for _, f in frames]
+
+    def mirrored(n: int, frame: bytes) -> bytes:
+        header = bytearray(erspan2(b""))
+        header[2] |= 0x04 * (len(frame) > 120)  # T: the frame was truncated
+        return ethernet(0x0800, ipv4(47, gre(0x88BE, bytes(header) + frame[:120], seq=n)))
+
+    out = [(ts, mirrored(n, f)) for n, (ts, f) in enumerate(frames, 1)]
+    summary = decode_capture(pcap(tmp_path / "truncated.pcap", out, 1), ArrowSink())
+    assert summary.damage()[0] == (
+        f"{sum(cut)} packets carried in tunnels hold less than their IP length says (the mirror cut them: "
+        "an ERSPAN session's MTU or truncation): the rest of their TCP payload is not in the file (the "
+        "gaps below); mirror whole frames to keep it"
+    )
+    assert "TCP gaps" in summary.damage()[1]

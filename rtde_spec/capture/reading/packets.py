@@ -114,23 +114,26 @@ def _tcp_of(linktype: int, frame: bytes, book: Addresses) -> tuple[str, str, int
     yet when the sending host captured it: its length is the frame's, as Wireshark takes it.
     A tunnel's packet (`tunnels.py`) is read on inside the same frame, at most MAX_DEPTH deep."""
     kind, at = _ip_start(linktype, frame)
-    for _ in range(MAX_DEPTH):
+    for depth in range(MAX_DEPTH):
         if kind in tunnels.MPLS:
             start = tunnels.mpls(frame, at, len(frame))
             if start is None:
                 return None
             kind, at = start
             continue
-        found = _ip(kind, frame, at, book)
+        found = _ip(kind, frame, at, book, depth > 0)
         if not isinstance(found, Inner):
             return found
         frame, kind, at = found
     raise ValueError(f"tunnels nested more than {MAX_DEPTH} deep")
 
 
-def _ip(kind: int, frame: bytes, at: int, book: Addresses) -> tuple[str, str, int, int, bytes] | Inner | None:
+def _ip(
+    kind: int, frame: bytes, at: int, book: Addresses, inner: bool = False
+) -> tuple[str, str, int, int, bytes] | Inner | None:
     """The TCP segment of the IP packet at frame[at:]; or, for a tunnel or a datagram just put back
-    together, the frame and where in it to read on."""
+    together, the frame and where in it to read on. `inner`: a packet a tunnel carried, which may
+    have been cut (a mirror session's MTU, ERSPAN's T bit) where no capture record says so."""
     if kind == IPV4:
         if len(frame) < at + 20 or frame[at] >> 4 != 4 or frame[at] & 0x0F < 5:
             raise ValueError("no IPv4 header")
@@ -148,6 +151,8 @@ def _ip(kind: int, frame: bytes, at: int, book: Addresses) -> tuple[str, str, in
             raise ValueError("IPv4 total length shorter than its header")
         else:
             end = min(len(frame), at + total)  # not the padding
+            if inner and end < at + total:
+                _cut_in_tunnel(book)
         src, dst, family = frame[at + 12 : at + 16], frame[at + 16 : at + 20], socket.AF_INET
     elif kind == IPV6:
         if len(frame) < at + 40 or frame[at] >> 4 != 6:
@@ -157,6 +162,8 @@ def _ip(kind: int, frame: bytes, at: int, book: Addresses) -> tuple[str, str, in
             end = len(frame)
         else:
             end = min(len(frame), at + 40 + payload)
+            if inner and end < at + 40 + payload:
+                _cut_in_tunnel(book)
         src, dst, family = frame[at + 8 : at + 24], frame[at + 24 : at + 40], socket.AF_INET6
         protocol, tcp = frame[at + 6], at + 40
         while protocol in IPV6_OPTION_HEADERS or (protocol == IPV6_FRAGMENT and _atomic(frame, tcp, end)):
@@ -187,6 +194,13 @@ def _ip(kind: int, frame: bytes, at: int, book: Addresses) -> tuple[str, str, in
                 names.clear()
             names[raw] = socket.inet_ntop(family, raw)
     return names[src], names[dst], tcp, end, frame
+
+
+def _cut_in_tunnel(book: Addresses) -> None:
+    """A packet in a tunnel shorter than its IP length: counted, so the summary names the cause of
+    the gaps it leaves, as it names a snap length."""
+    counts = book.fragments.counts
+    counts["tunnel_cut"] = counts.get("tunnel_cut", 0) + 1
 
 
 def _atomic(frame: bytes, at: int, end: int) -> bool:

@@ -104,6 +104,12 @@ class CaptureSummary:
                 f"{r['unknown_link']} frames {kind}, which this reader does not decode (skipped; it reads "
                 "Ethernet, Linux cooked SLL/SLL2, BSD loopback, raw IP, Linux NFLOG and Apple's PKTAP)"
             )
+        if r.get("tunnel_cut"):
+            out.append(
+                f"{r['tunnel_cut']} packets carried in tunnels hold less than their IP length says (the "
+                "mirror cut them: an ERSPAN session's MTU or truncation): the rest of their TCP payload is "
+                "not in the file (the gaps below); mirror whole frames to keep it"
+            )
         if r.get("ip_fragments_lost"):
             out.append(
                 f"{r['ip_fragments_lost']} IP fragments of datagrams whose other fragments never came "
