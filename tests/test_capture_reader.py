@@ -284,3 +284,21 @@ def test_nanosecond_times_are_the_nearest_float_in_pcapng_as_in_pcap(tmp_path: P
     assert [s.time for s in from_pcapng] == nearest
     from_pcap, _ = read(tmp_path, pcap([(ns // 10**9, ns % 10**9, frame) for ns in stamps], nano=True))
     assert [s.time for s in from_pcap] == nearest
+
+
+def test_a_capture_of_more_addresses_than_the_cache_holds_is_read(tmp_path: Path) -> None:
+    """Addresses are kept as text in a cache of 65,536 that is cleared when full. When a segment's
+    source filled it and its destination then cleared it, the source's text was gone: a KeyError
+    traceback ended the run (a scan, or a busy collector's capture: 40,000 segments between random
+    addresses)."""
+    import random
+
+    rng = random.Random(1)
+    records = [pcap([])]  # the file header, then a record per segment
+    for i in range(40_000):
+        ip = dpkt.ip.IP(src=rng.randbytes(4), dst=rng.randbytes(4), p=6)
+        ip.data = dpkt.tcp.TCP(sport=40000, dport=30004, seq=i, flags=dpkt.tcp.TH_SYN)
+        frame = ethernet(bytes(ip))
+        records.append(struct.pack("<IIII", 1_700_000_000, i, len(frame), len(frame)) + frame)
+    segs, _ = read(tmp_path, b"".join(records))
+    assert len(segs) == 40_000 and len({s.src for s in segs} | {s.dst for s in segs}) > 65_536

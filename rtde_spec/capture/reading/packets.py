@@ -187,13 +187,17 @@ def _ip(
         return None if start is None else Inner(frame[:end], *start)
     if tcp + 20 > end or frame[tcp + 12] >> 4 < 5:
         raise ValueError("no whole TCP header")
+    return _name(book, src, family), _name(book, dst, family), tcp, end, frame
+
+
+def _name(book: Addresses, raw: bytes, family: int) -> str:
+    """An address as text, converted once (a bounded cache: a scan's million sources reuse none)."""
     names = book.names
-    for raw in (src, dst):
-        if raw not in names:
-            if len(names) >= book.MAX:
-                names.clear()
-            names[raw] = socket.inet_ntop(family, raw)
-    return names[src], names[dst], tcp, end, frame
+    if raw not in names:
+        if len(names) >= book.MAX:
+            names.clear()
+        names[raw] = socket.inet_ntop(family, raw)
+    return names[raw]
 
 
 def _cut_in_tunnel(book: Addresses) -> None:
