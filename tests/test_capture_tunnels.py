@@ -415,3 +415,19 @@ def test_frames_a_mirror_session_cut_are_named_as_the_cause_of_their_gaps(tmp_pa
         "gaps below); mirror whole frames to keep it"
     )
     assert "TCP gaps" in summary.damage()[1]
+
+
+def test_unreadable_frames_past_the_reasons_kept_apart_are_still_told() -> None:
+    """16 reasons are kept apart (each with its first frame); the rest were left out of the line,
+    whose parts then did not add up to its count."""
+    from rtde_spec.capture.reading.packets import _unreadable
+    from rtde_spec.capture.tables.summary import CaptureSummary
+
+    counts: dict[str, int] = {}
+    for k in range(20):
+        _unreadable(counts, f"a GRE header of version {k}", 100 + k)
+    line = CaptureSummary("x.pcap", 200, reading=counts).damage()[0]
+    assert line.startswith(
+        "20 frames whose IP/TCP headers do not decode (skipped): 1: a GRE header of version 0"
+    )
+    assert line.endswith("1: a GRE header of version 15 (frame 115); 4: other reasons")

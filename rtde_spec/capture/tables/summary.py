@@ -147,6 +147,9 @@ class CaptureSummary:
             first = r.get("first:" + why)
             where = f"frame {first}" if r["why:" + why] == 1 else f"the first is frame {first}"
             parts.append(f"{r['why:' + why]}: {why}" + (f" ({where})" if first else ""))
+        others = r.get("undecodable", 0) - sum(r["why:" + why] for why in reasons)
+        if others > 0:  # past the reasons kept apart
+            parts.append(f"{others}: other reasons")
         return ": " + "; ".join(parts)
 
     def _ends(self) -> list[str]:
