@@ -16,9 +16,10 @@ from __future__ import annotations
 
 import socket
 import struct
-import time
 
 from rtde_spec.emulator.server import EmulatorConfig, EmulatorThread
+
+from .test_emulator_fidelity import raw_messages
 
 PROGRAM = b"""def globals_demo():
   counter = 0
@@ -70,22 +71,10 @@ def _program_state_messages(seconds: float, controller: str = "5.15.0") -> list[
         realtime_port=None,
         dashboard_port=None,
     )
-    got: list[bytes] = []
     with EmulatorThread(config) as emu:
         with socket.create_connection(("127.0.0.1", emu.ports["primary"]), timeout=5) as sock:
             sock.sendall(PROGRAM)
-            buf = bytearray()
-            deadline = time.monotonic() + seconds
-            while time.monotonic() < deadline:
-                chunk = sock.recv(65536)
-                assert chunk, "closed early"
-                buf += chunk
-                while len(buf) >= 5 and len(buf) >= struct.unpack_from(">I", buf)[0]:
-                    size = struct.unpack_from(">I", buf)[0]
-                    if buf[4] == 25:
-                        got.append(bytes(buf[:size]))
-                    del buf[:size]
-    return got
+            return [message for message in raw_messages(sock, seconds) if message[4] == 25]
 
 
 def test_setup_names_the_program_globals_and_updates_bring_their_values_every_100_ms() -> None:
