@@ -1301,6 +1301,26 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
                 'doc': 'What has come as text (at most 1,024 characters); with prefix and suffix '
                        'the text between them (what comes before the prefix is dropped, what '
                        'follows the suffix kept); "" on a time-out'},
+               {'name': 'interpreter_mode',
+                'section': 'internals',
+                'params': [{'name': 'clearQueueOnEnter', 'default': True},
+                           {'name': 'clearOnEnd', 'default': True}],
+                'returns': 'none',
+                'since': {'e-series': '5.10.0'},
+                'doc': 'Blocks the main thread and runs the statements the interpreter socket '
+                       '(30020) receives, until end_interpreter()'},
+               {'name': 'end_interpreter',
+                'section': 'internals',
+                'returns': 'none',
+                'since': {'e-series': '5.10.0'},
+                'doc': 'Ends interpreter mode: interpreter_mode() returns (sent to the interpreter '
+                       'socket, or from any thread)'},
+               {'name': 'clear_interpreter',
+                'section': 'internals',
+                'returns': 'none',
+                'since': {'e-series': '5.10.0'},
+                'doc': 'Clears what the current interpreter mode interpreted (its functions); '
+                       'statements sent after it wait until it ran'},
                {'name': 'rpc_factory',
                 'section': 'interfaces',
                 'params': [{'name': 'type'}, {'name': 'url'}],

@@ -1,5 +1,5 @@
 """Run the emulated controller: the RTDE port, the primary/secondary ports, the real-time
-ports, the dashboard server and the control loop.
+ports, the dashboard server, the interpreter socket and the control loop.
 
 The control loop keeps real time: each step is due at start + step / base rate
 (125 Hz for CB3 versions, 500 Hz for newer). As a controller reads its inputs at the start of a
@@ -37,6 +37,12 @@ from rtde_spec.emulator.controller.model import ControllerModel
 from rtde_spec.emulator.controller.scenario import Scenario
 from rtde_spec.emulator.ports.dashboard import DashboardConnection, DashboardHub
 from rtde_spec.emulator.ports.guard import ClientLimits, Port
+from rtde_spec.emulator.ports.interpreter_server import (
+    INTERPRETER_PORT,
+    InterpreterConnection,
+    InterpreterHub,
+    has_interpreter_mode,
+)
 from rtde_spec.emulator.ports.listener import Descriptors, Listener
 from rtde_spec.emulator.ports.primary_server import PrimaryConnection, PrimaryHub
 from rtde_spec.emulator.ports.realtime_server import RealtimeConnection, RealtimeHub
@@ -55,8 +61,9 @@ NEED_DECAY = 0.98  # per step: how fast a costly step's weight on the lead wears
 @dataclass
 class EmulatorConfig:
     """The ports `rtde-spec serve` serves, on the controller's numbers: RTDE 30004, primary 30001,
-    secondary 30002, real-time 30003, dashboard 29999 (the read-only ones off). Each moves to a
-    free port with 0 (`emu.ports` names them) or is left out with None; `free_ports()` moves all."""
+    secondary 30002, real-time 30003, dashboard 29999, interpreter 30020 (the read-only ones off). Each
+    moves to a free port with 0 (`emu.ports` names them) or is left out with None; `free_ports()` moves
+    all."""
 
     host: str = "127.0.0.1"
     rtde_port: int | None = RTDE_PORT
@@ -72,6 +79,8 @@ class EmulatorConfig:
     realtime_port: int | None = REALTIME_PORTS["realtime"]
     realtime_read_only_port: int | None = None
     realtime_optional: bool = False  # a real-time port in use is logged and skipped, not an error
+    # the interpreter socket (30020): served only by versions with interpreter mode (e-Series 5.10 on)
+    interpreter_port: int | None = INTERPRETER_PORT
     programs: Path | None = None  # where the dashboard's `load` finds programs (none: "File not found")
     # HOST[:PORT] of the driver an External Control node asks for its program (the ROS driver's
     # URCap mode); None: the dashboard client that plays it, on port 50002
@@ -100,6 +109,7 @@ class EmulatorConfig:
         """
         ports: dict[str, object] = {
             "rtde_port": 0, "primary_port": 0, "secondary_port": 0, "realtime_port": 0, "dashboard_port": 0,
+            "interpreter_port": 0,
         }  # fmt: skip
         return cls(**{**ports, **kw})  # type: ignore[arg-type]
 
@@ -121,6 +131,7 @@ class Emulator:
             self.model, self.config.programs, external_control=self.config.external_control
         )
         self.realtime = RealtimeHub(self.model, self.primary)
+        self.interpreter = InterpreterHub(self.model)
         self.faults = FaultSchedule(self.config.scenario.faults, self.model)
         self._silenced = False
         self.servers: list[Listener] = []
@@ -172,6 +183,11 @@ class Emulator:
                     log.warning("no dashboard server: port %d: %s", c.dashboard_port, exc.strerror)
             else:
                 log.info("no dashboard server: controller %s has none", self.model.version)
+        if c.interpreter_port is not None and has_interpreter_mode(self.model):
+            clients = self._port("interpreter")
+            await self._listen(
+                "interpreter", c.interpreter_port, lambda: InterpreterConnection(self.interpreter, clients)
+            )
         if c.realtime_priority is not None:
             _real_time(c.realtime_priority)
         _serving(+1, c)

@@ -33,6 +33,7 @@ from rtde_spec.emulator.urscript.builtins_text import TEXT
 from rtde_spec.emulator.urscript.builtins_values import VALUES
 from rtde_spec.emulator.urscript.calls import Pose, number, six, type_name
 from rtde_spec.emulator.urscript.interfaces import Runner
+from rtde_spec.emulator.urscript.interpreter_mode import IMODE, waiting
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
 from rtde_spec.emulator.urscript.registry import registrar
 from rtde_spec.emulator.urscript.world_model import WORLD
@@ -43,10 +44,8 @@ Kwargs = dict[str, Any]
 Builtin = Callable[[Runner, Stmt, Args, Kwargs], Any]
 BUILTINS: dict[str, Builtin] = {}
 WAITING: dict[str, Callable[[Runner, Stmt, Args, Kwargs], sockets.Waiting]] = dict(sockets.READERS)
-WAITING["socket_open"] = sockets.socket_open
-WAITING["socket_get_var"] = sockets.socket_get_var
-WAITING["socket_read_string"] = sockets.socket_read_string
-
+WAITING.update(socket_open=sockets.socket_open, socket_get_var=sockets.socket_get_var)
+WAITING.update(socket_read_string=sockets.socket_read_string, interpreter_mode=waiting)
 
 builtin = registrar(BUILTINS)
 
@@ -285,7 +284,8 @@ def _waypoint(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Pose:
     return Pose(arm.pose())
 
 
-for _table in (sockets.SENDERS, MODES, DYNAMICS, IO, POSES, TEXT, VALUES, WORLD, READINGS, eip.FACTORIES):
+_TABLES = (sockets.SENDERS, MODES, DYNAMICS, IO, POSES, TEXT, VALUES, WORLD, READINGS, eip.FACTORIES, IMODE)
+for _table in _TABLES:
     BUILTINS.update(_table)
 BUILTINS["socket_close"] = sockets.socket_close
 BUILTINS["socket_set_var"] = sockets.socket_set_var

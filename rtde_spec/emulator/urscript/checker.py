@@ -27,6 +27,18 @@ def check(script: Script, builtins: Collection[str], waits: Collection[str] = ()
         checker.body(body)
 
 
+def check_added(
+    functions: dict[str, Function], added: Script, builtins: Collection[str], waits: Collection[str]
+) -> None:
+    """Raise the first compile error of statements and functions `added` to a running program whose
+    functions are `functions` (interpreter mode links them in): checked as one program would be."""
+    merged = Script({**functions, **added.functions}, added.main)
+    checker = _Checker(merged, builtins, waits)
+    checker.waiting = _waiting_functions(merged, waits)
+    for body in [added.main, *(f.body for f in added.functions.values())]:
+        checker.body(body)
+
+
 def _waiting_functions(script: Script, waits: Collection[str]) -> set[str]:
     """The user functions that may wait: calling a waiting built-in, join, halt, or one of these."""
     calls: dict[str, set[str]] = {}

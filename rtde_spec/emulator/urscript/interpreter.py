@@ -28,7 +28,7 @@ from contextlib import contextmanager
 from typing import Any
 
 from rtde_spec.emulator.arm.motion import MotionError
-from rtde_spec.emulator.urscript import builtins, sockets
+from rtde_spec.emulator.urscript import builtins, interpreter_mode, sockets
 from rtde_spec.emulator.urscript import calls as script_calls
 from rtde_spec.emulator.urscript import values as urscript_ops
 from rtde_spec.emulator.urscript.budgets import SLICE, Budget, resident_bytes
@@ -211,6 +211,7 @@ class Program(Evaluator):
 
     def _end_threads(self) -> None:
         sockets.close_all(self)
+        interpreter_mode.close(self)
         for thread in list(self.threads.values()):
             if thread is not self.current:
                 close_thread(thread)
@@ -352,6 +353,13 @@ class Program(Evaluator):
         if kind in ("enter_critical", "exit_critical"):
             return None  # threads only switch where they wait, so a critical section holds already
         assert stmt.expr is not None
+        if (
+            stmt.name == "interpreter_mode"
+            and stmt.expr.kind == "call"
+            and stmt.name not in self.script.functions
+        ):
+            yield from interpreter_mode.session(self, stmt, frame)  # statements run in this scope
+            return None
         yield from self.call_statement(stmt, frame, following)
         return None
 

@@ -1,0 +1,74 @@
+"""The interpreter socket (port 30020, e-Series 5.10 on): URScript statements, one line each, for a
+program sitting in `interpreter_mode()` (urscript/interpreter_mode.py runs them).
+
+UR's article "Interpreter mode" (SW 5.10 and above, e-Series only): "the controller opens an
+interpreter socket (30020) where it accepts complete valid URScript statements". A client sends a
+line ending in "\\n" and reads one reply line ending in "\\n" (UR's InterpreterHelper example reads
+up to the newline and matches `(\\w+):\\W+(\\d+)?`): `ack: <id>: <statement>`, `discard: <reason>:
+<statement>` or `state: <value>: <command>`. A controller whose version has no interpreter mode
+has no such port (emulator/server/loop.py serves it only where the spec lists interpreter_mode()).
+Each client is held to the port's limits (guard.py).
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import TYPE_CHECKING
+
+from rtde_spec.emulator.ports.guard import GuardedConnection, Port
+from rtde_spec.emulator.urscript import builtins
+from rtde_spec.emulator.urscript.interpreter_mode import InterpreterState, receive
+
+if TYPE_CHECKING:
+    from rtde_spec.emulator.controller.model import ControllerModel
+
+log = logging.getLogger("rtde_spec.emulator")
+INTERPRETER_PORT = 30020  # UR's article "Interpreter mode"; the Script Directory's chapter 13
+
+
+def has_interpreter_mode(model: ControllerModel) -> bool:
+    """Whether the model's controller version has interpreter mode (spec/urscript: e-Series 5.10 on)."""
+    line = model.line
+    return "interpreter_mode" in builtins.names_for(line.id, str(model.version), line.inherits)
+
+
+class InterpreterHub:
+    """What the interpreter connections share: the model, and the interpreter of the program
+    that ran last (its ids answer the state commands while no program runs)."""
+
+    def __init__(self, model: ControllerModel) -> None:
+        self.model = model
+        self.last: InterpreterState | None = None
+
+    def answer(self, line: str, reply: object) -> None:
+        program = self.model.program
+        receive(program, line, reply, self.last)  # type: ignore[arg-type]
+        if program is not None:
+            self.last = getattr(program, "interpreter", None) or self.last
+
+
+class InterpreterConnection(GuardedConnection):
+    """One interpreter-socket client: a reply line per line it sends (some when interpreted)."""
+
+    def __init__(self, hub: InterpreterHub, port: Port) -> None:
+        super().__init__(port)
+        self.hub = hub
+        self.buffer = bytearray()
+
+    def data_received(self, data: bytes) -> None:
+        if self.dropped:
+            return
+        self.buffer += data
+        lines = self.buffer.split(b"\n")
+        self.buffer = bytearray(lines.pop())
+        if not self.received(len(self.buffer), len(lines)):
+            return
+        for raw in lines:
+            line = raw.decode("utf-8", "replace").strip()
+            if not line:
+                continue
+            log.debug("interpreter %s: %r", self.peer, line[:80])
+            self.hub.answer(line, self.reply)
+
+    def reply(self, text: str) -> None:
+        self.write(text.encode("utf-8", "replace") + b"\n")
