@@ -13,6 +13,7 @@ from rtde_spec.cli.arguments import port_number, port_or_off
 from rtde_spec.cli.conventions import describe
 from rtde_spec.cli.live_view import add_live_arguments
 from rtde_spec.cli.options import add_controller
+from rtde_spec.emulator.ports import INTERPRETER_PORT
 from rtde_spec.errors import UsageError
 from rtde_spec.realtime import REALTIME_PORTS
 
@@ -131,6 +132,14 @@ def _add_ports(p: argparse.ArgumentParser) -> None:
         metavar="PORT",
         help="dashboard server port (default: the controller's, 29999, when free; -1: not served). "
         "PolyScope X versions have no dashboard server",
+    )
+    p.add_argument(
+        "--interpreter-port",
+        type=port_or_off,
+        default=None,
+        metavar="PORT",
+        help=f"interpreter socket: URScript statements for a program in interpreter_mode() (default: "
+        f"{INTERPRETER_PORT} when free, on e-Series 5.10 and later; none before; -1: not served)",
     )
 
 
@@ -264,6 +273,8 @@ def _config(args: argparse.Namespace) -> EmulatorConfig:
         realtime_port=_dashboard_port(args.realtime_port, REALTIME_PORTS["realtime"]),
         realtime_read_only_port=args.realtime_read_only_port,
         realtime_optional=args.realtime_port is None,  # the default port may be taken: then none
+        interpreter_port=_dashboard_port(args.interpreter_port, INTERPRETER_PORT),
+        interpreter_optional=args.interpreter_port is None,  # the default port may be taken: then none
     )
     if args.external_control:
         from rtde_spec.emulator.controller.external_program import address

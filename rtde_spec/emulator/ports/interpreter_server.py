@@ -13,21 +13,24 @@ Each client is held to the port's limits (guard.py).
 from __future__ import annotations
 
 import logging
+from collections.abc import Callable
 from typing import TYPE_CHECKING
 
+from rtde_spec.emulator.ports import INTERPRETER_PORT
 from rtde_spec.emulator.ports.guard import GuardedConnection, Port
-from rtde_spec.emulator.urscript import builtins
-from rtde_spec.emulator.urscript.interpreter_mode import InterpreterState, receive
 
 if TYPE_CHECKING:
     from rtde_spec.emulator.controller.model import ControllerModel
+    from rtde_spec.emulator.urscript.interpreter_mode import InterpreterState
 
+__all__ = ["INTERPRETER_PORT", "InterpreterConnection", "InterpreterHub", "has_interpreter_mode"]
 log = logging.getLogger("rtde_spec.emulator")
-INTERPRETER_PORT = 30020  # UR's article "Interpreter mode"; the Script Directory's chapter 13
 
 
 def has_interpreter_mode(model: ControllerModel) -> bool:
     """Whether the model's controller version has interpreter mode (spec/urscript: e-Series 5.10 on)."""
+    from rtde_spec.emulator.urscript import builtins
+
     line = model.line
     return "interpreter_mode" in builtins.names_for(line.id, str(model.version), line.inherits)
 
@@ -40,9 +43,11 @@ class InterpreterHub:
         self.model = model
         self.last: InterpreterState | None = None
 
-    def answer(self, line: str, reply: object) -> None:
+    def answer(self, line: str, reply: Callable[[str], None]) -> None:
+        from rtde_spec.emulator.urscript.interpreter_mode import receive
+
         program = self.model.program
-        receive(program, line, reply, self.last)  # type: ignore[arg-type]
+        receive(program, line, reply, self.last)
         if program is not None:
             self.last = getattr(program, "interpreter", None) or self.last
 

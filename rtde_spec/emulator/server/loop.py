@@ -81,6 +81,7 @@ class EmulatorConfig:
     realtime_optional: bool = False  # a real-time port in use is logged and skipped, not an error
     # the interpreter socket (30020): served only by versions with interpreter mode (e-Series 5.10 on)
     interpreter_port: int | None = INTERPRETER_PORT
+    interpreter_optional: bool = False  # an interpreter port in use is logged and skipped, not an error
     programs: Path | None = None  # where the dashboard's `load` finds programs (none: "File not found")
     # HOST[:PORT] of the driver an External Control node asks for its program (the ROS driver's
     # URCap mode); None: the dashboard client that plays it, on port 50002
@@ -185,9 +186,10 @@ class Emulator:
                 log.info("no dashboard server: controller %s has none", self.model.version)
         if c.interpreter_port is not None and has_interpreter_mode(self.model):
             clients = self._port("interpreter")
-            await self._listen(
-                "interpreter", c.interpreter_port, lambda: InterpreterConnection(self.interpreter, clients)
-            )
+            factory = lambda: InterpreterConnection(self.interpreter, clients)  # noqa: E731
+            await self._optional("interpreter", c.interpreter_port, factory, c.interpreter_optional)
+        elif c.interpreter_port is not None:
+            log.info("no interpreter socket: controller %s has no interpreter mode", self.model.version)
         if c.realtime_priority is not None:
             _real_time(c.realtime_priority)
         _serving(+1, c)
