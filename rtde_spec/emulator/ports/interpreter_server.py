@@ -43,13 +43,16 @@ class InterpreterHub:
         self.model = model
         self.last: InterpreterState | None = None
 
-    def answer(self, line: str, reply: Callable[[str], None]) -> None:
-        from rtde_spec.emulator.urscript.interpreter_mode import receive
+    def answer(self, lines: list[str], reply: Callable[[str], None]) -> None:
+        """Lines one read brought: each received, then what time allows interpreted at once."""
+        from rtde_spec.emulator.urscript.interpreter_mode import interpret, receive, state_of
 
         program = self.model.program
-        receive(program, line, reply, self.last)
-        if program is not None:
-            self.last = getattr(program, "interpreter", None) or self.last
+        for line in lines:
+            receive(program, line, reply, self.last)
+        if program is not None and not program.finished:
+            self.last = state_of(program)
+            interpret(program, self.last)
 
 
 class InterpreterConnection(GuardedConnection):
@@ -68,12 +71,10 @@ class InterpreterConnection(GuardedConnection):
         self.buffer = bytearray(lines.pop())
         if not self.received(len(self.buffer), len(lines)):
             return
-        for raw in lines:
-            line = raw.decode("utf-8", "replace").strip()
-            if not line:
-                continue
-            log.debug("interpreter %s: %r", self.peer, line[:80])
-            self.hub.answer(line, self.reply)
+        texts = [text for text in (raw.decode("utf-8", "replace").strip() for raw in lines) if text]
+        if texts:
+            log.debug("interpreter %s: %d lines, the first %r", self.peer, len(texts), texts[0][:80])
+            self.hub.answer(texts, self.reply)
 
     def reply(self, text: str) -> None:
         self.write(text.encode("utf-8", "replace") + b"\n")

@@ -24,6 +24,7 @@ wait run at most MAX_PER_STEP a control step.
 
 from __future__ import annotations
 
+import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -55,6 +56,10 @@ INVALID_STATE = "Program is in an invalid state"  # no program runs (the reason 
 TOO_MANY = "Too many interpreted messages"
 MAX_INTERPRETED = 5000  # statements one interpreter mode holds before clear_interpreter() (the emulator's)
 MAX_PER_STEP = 100  # statements that never wait, run in one control step
+MAX_QUEUED = 1000  # lines received and not yet interpreted (more are discarded)
+MAX_LINE = 16 << 10  # characters of one line (compiling a longer one would hold up the control loop)
+INTERPRET_SECONDS = 0.0005  # CPU a control step (or a batch of lines received) spends interpreting
+TOO_LONG = "Statement too long"  # the emulator's own reason
 IMODE: dict[str, Any] = {}  # the built-ins this module runs (builtins.py merges them)
 _enter = registrar(IMODE)
 
@@ -102,9 +107,9 @@ def state_of(program: Any) -> InterpreterState:
 
 
 def receive(program: Program | None, line: str, reply: Reply, last: InterpreterState | None = None) -> None:
-    """One line from the interpreter socket; `reply` is called with each answer line (at once, or
-    when the line is interpreted). `last`: the interpreter of the program that ran last, for the
-    state commands when none runs."""
+    """One line from the interpreter socket; `reply` is called with its answer: at once, or when
+    the line is interpreted (`interpret`). `last`: the interpreter of the program that ran last,
+    for the state commands when none runs."""
     text = line.strip()
     running = program is not None and not program.finished
     if text in CONTROL:
@@ -114,10 +119,13 @@ def receive(program: Program | None, line: str, reply: Reply, last: InterpreterS
     if not running:
         reply(f"discard: {INVALID_STATE}: {text}")
         return
-    assert program is not None
     state = state_of(program)
-    state.received.append(Received(text, reply))
-    interpret(program, state)
+    if len(text) > MAX_LINE:
+        reply(f"discard: {TOO_LONG}: {text[:80]}...")
+    elif len(state.received) >= MAX_QUEUED:
+        reply(f"discard: {TOO_MANY}: {text}")
+    else:
+        state.received.append(Received(text, reply))
 
 
 def control(program: Program | None, state: InterpreterState, command: str) -> str:
@@ -135,8 +143,6 @@ def control(program: Program | None, state: InterpreterState, command: str) -> s
         state.last_cleared = max(state.last_cleared, *(item.id for item in state.ready), 0)
         state.ready.clear()
         state.clearing = False
-        if program is not None:
-            interpret(program, state)
     else:  # abort: a movej or movel under way stops (the manual: only those), whoever commanded it
         arm = program.robot.arm if program is not None else None
         motion = arm.motion if arm is not None else None
@@ -146,10 +152,14 @@ def control(program: Program | None, state: InterpreterState, command: str) -> s
     return f"state: {value}: {command}"
 
 
-def interpret(program: Program, state: InterpreterState) -> None:
+def interpret(program: Program, state: InterpreterState, seconds: float = INTERPRET_SECONDS) -> None:
     """Compile the lines received into the program while it is in interpreter mode (and no
-    clear_interpreter() is pending), answering each."""
+    clear_interpreter() is pending), answering each, for about `seconds` of CPU: a flood of lines
+    is interpreted over the control steps, which keep their time."""
+    until = time.thread_time() + seconds
     while state.active and not state.clearing and state.received and not program.finished:
+        if time.thread_time() > until:
+            return
         got = state.received.popleft()
         if state.size >= MAX_INTERPRETED:
             got.reply(f"discard: {TOO_MANY}: {got.text}")
@@ -272,7 +282,7 @@ def session(program: Program, stmt: Stmt, frame: dict[str, Any]) -> Any:
             item = state.ready.popleft()
             state.last_executed = item.id
             started = program.clock
-            yield from program.block(item.script.main, frame)
+            yield from _alongside(program.block(item.script.main, frame), program, state)
             run = run + 1 if program.clock == started else 0
     finally:
         state.active = False
@@ -280,6 +290,23 @@ def session(program: Program, stmt: Stmt, frame: dict[str, Any]) -> Any:
             _clear(program, state)
         else:
             state.ready.clear()
+
+
+def _alongside(steps: Any, program: Program, state: InterpreterState) -> Any:
+    """Run a statement's steps; at each of its waits (a move's control steps) what the socket
+    brought meanwhile is interpreted and answered, as the controller acknowledges lines while it
+    runs the earlier ones."""
+    while True:
+        try:
+            next(steps)
+        except StopIteration:
+            return
+        try:
+            yield
+        except GeneratorExit:
+            steps.close()
+            raise
+        interpret(program, state)
 
 
 def _clear(program: Program, state: InterpreterState) -> None:
