@@ -23,6 +23,9 @@ from .fixed_ports import fixed_ports, is_free, lock_path
 HOST = "127.0.0.94"  # an address no other module serves on
 ROOT = Path(__file__).resolve().parents[1]
 SERVE_PORTS = {"rtde": 30004, "primary": 30001, "secondary": 30002, "realtime": 30003, "dashboard": 29999}
+# serve's interpreter socket (e-Series 5.10 on); the library's plain config leaves it off, as the
+# configurations written before it name each port they serve (they would all take 127.0.0.1:30020)
+SERVE_ONLY = {"interpreter": 30020}
 
 
 def serve_defaults() -> dict[str, int]:
@@ -34,7 +37,7 @@ def serve_defaults() -> dict[str, int]:
 
 
 def test_emulator_config_defaults_are_the_ports_serve_serves() -> None:
-    assert serve_defaults() == SERVE_PORTS  # what serve's help says ...
+    assert serve_defaults() == {**SERVE_PORTS, **SERVE_ONLY}  # what serve's help says ...
     config = EmulatorConfig()
     served = {f.name.removesuffix("_port"): getattr(config, f.name) for f in dataclasses.fields(config)
               if f.name.endswith("_port") and getattr(config, f.name) is not None}  # fmt: skip
@@ -45,7 +48,7 @@ def test_emulator_config_defaults_are_the_ports_serve_serves() -> None:
 
 
 def test_every_port_serve_serves_moves_to_a_free_one_in_an_emulator_thread_too() -> None:
-    every = [arg for name in SERVE_PORTS for arg in (f"--{name}-port", "0")]
+    every = [arg for name in {**SERVE_PORTS, **SERVE_ONLY} for arg in (f"--{name}-port", "0")]
     proc = subprocess.Popen([sys.executable, "-m", "rtde_spec", "serve", "--host", HOST, *every],
                             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)  # fmt: skip
     try:
@@ -55,10 +58,10 @@ def test_every_port_serve_serves_moves_to_a_free_one_in_an_emulator_thread_too()
         proc.terminate()
         proc.wait(20)
     by_serve = dict(re.findall(r"(\w+) (\d+)", line.split(": ", 1)[1]))
-    config = EmulatorConfig(host=HOST, **{f"{name}_port": 0 for name in SERVE_PORTS})  # type: ignore[arg-type]
-    with EmulatorThread(config) as emu:
-        assert set(emu.ports) == set(by_serve) == set(SERVE_PORTS)
-        assert not set(emu.ports.values()) & set(SERVE_PORTS.values())  # each on a free port
+    ports = {f"{name}_port": 0 for name in {**SERVE_PORTS, **SERVE_ONLY}}
+    with EmulatorThread(EmulatorConfig(host=HOST, **ports)) as emu:  # type: ignore[arg-type]
+        assert set(emu.ports) == set(by_serve) == {*SERVE_PORTS, *SERVE_ONLY}
+        assert not set(emu.ports.values()) & {*SERVE_PORTS.values(), *SERVE_ONLY.values()}  # free ports
         with socket.create_connection((HOST, emu.ports["dashboard"]), timeout=5) as dashboard:
             assert dashboard.makefile("r").readline().startswith("Connected: Universal Robots Dashboard")
 

@@ -138,7 +138,7 @@ def _add_ports(p: argparse.ArgumentParser) -> None:
         type=port_or_off,
         default=None,
         metavar="PORT",
-        help=f"interpreter socket: URScript statements for a program in interpreter_mode() (default: "
+        help=f"interpreter socket: URScript statements for a program in interpreter mode (default: "
         f"{INTERPRETER_PORT} when free, on e-Series 5.10 and later; none before; -1: not served)",
     )
 

@@ -38,7 +38,6 @@ from rtde_spec.emulator.controller.scenario import Scenario
 from rtde_spec.emulator.ports.dashboard import DashboardConnection, DashboardHub
 from rtde_spec.emulator.ports.guard import ClientLimits, Port
 from rtde_spec.emulator.ports.interpreter_server import (
-    INTERPRETER_PORT,
     InterpreterConnection,
     InterpreterHub,
     has_interpreter_mode,
@@ -61,9 +60,9 @@ NEED_DECAY = 0.98  # per step: how fast a costly step's weight on the lead wears
 @dataclass
 class EmulatorConfig:
     """The ports `rtde-spec serve` serves, on the controller's numbers: RTDE 30004, primary 30001,
-    secondary 30002, real-time 30003, dashboard 29999, interpreter 30020 (the read-only ones off). Each
-    moves to a free port with 0 (`emu.ports` names them) or is left out with None; `free_ports()` moves
-    all."""
+    secondary 30002, real-time 30003, dashboard 29999 (the read-only ones and the interpreter socket
+    off). Each moves to a free port with 0 (`emu.ports` names them) or is left out with None;
+    `free_ports()` moves all."""
 
     host: str = "127.0.0.1"
     rtde_port: int | None = RTDE_PORT
@@ -79,8 +78,10 @@ class EmulatorConfig:
     realtime_port: int | None = REALTIME_PORTS["realtime"]
     realtime_read_only_port: int | None = None
     realtime_optional: bool = False  # a real-time port in use is logged and skipped, not an error
-    # the interpreter socket (30020): served only by versions with interpreter mode (e-Series 5.10 on)
-    interpreter_port: int | None = INTERPRETER_PORT
+    # the interpreter socket (INTERPRETER_PORT, 30020, what `serve` serves): only versions with interpreter
+    # mode (e-Series 5.10 on) have it. Off unless asked for: the configurations written before it
+    # name each port they serve, and would all take 127.0.0.1:30020
+    interpreter_port: int | None = None
     interpreter_optional: bool = False  # an interpreter port in use is logged and skipped, not an error
     programs: Path | None = None  # where the dashboard's `load` finds programs (none: "File not found")
     # HOST[:PORT] of the driver an External Control node asks for its program (the ROS driver's
@@ -104,7 +105,7 @@ class EmulatorConfig:
 
     @classmethod
     def free_ports(cls, **kw: object) -> EmulatorConfig:
-        """Every port `rtde-spec serve` serves (RTDE, primary, secondary, real-time, dashboard),
+        """Every port `rtde-spec serve` serves (RTDE, primary, secondary, real-time, dashboard, interpreter),
         each on a free port (`emu.ports` names them); a keyword moves or drops one (None).
         Tests running side by side use this: the plain defaults are the controller's fixed ports.
         """

@@ -74,7 +74,8 @@ class Program(Evaluator):
         self._memory_start = resident_bytes()
         line, version = getattr(robot, "line", None), getattr(robot, "version", None)
         known = builtins.names_for(line.id, str(version), line.inherits) if line else builtins.names()
-        check(script, known, script_calls.WAITS | set(builtins.WAITING))  # as this version compiles
+        self.names = (known, frozenset(script_calls.WAITS | set(builtins.WAITING)))  # interpreter mode's too
+        check(script, *self.names)  # as this version compiles
         main = ScriptThread(0, self.name, self._main())
         self.threads: dict[int, ScriptThread] = {0: main}
         self.current = main

@@ -28,7 +28,6 @@ import time
 from collections import deque
 from collections.abc import Callable
 from dataclasses import dataclass, field
-from functools import cache
 from typing import TYPE_CHECKING, Any
 
 from rtde_spec.emulator.arm.motion import JointMove, LinearMove
@@ -41,7 +40,8 @@ from rtde_spec.emulator.urscript.values import truth
 
 if TYPE_CHECKING:
     from rtde_spec.emulator.urscript.interfaces import Runner
-    from rtde_spec.emulator.urscript.interpreter import Program
+
+Program = Any  # interpreter.Program (which imports this module): its script, names, block, arguments
 
 Reply = Callable[[str], None]
 CONTROL = (
@@ -209,26 +209,11 @@ def _compile(program: Program, text: str) -> Script | str:
     bodies = [script.main, *(f.body for f in script.functions.values())]
     if any("interpreter_mode" in _called(body) for body in bodies):  # no nested interpreter modes
         return "Compile error"
-    known, waits = _known(program)
     try:
-        check_added(program.script.functions, script, known, waits)
+        check_added(program.script.functions, script, *program.names)  # as the program was checked
     except ScriptFault:
         return "Compile error"
     return script
-
-
-def _known(program: Program) -> tuple[frozenset[str], frozenset[str]]:
-    robot = program.robot
-    line, version = getattr(robot, "line", None), getattr(robot, "version", None)
-    return _names(line.id if line else "", str(version), line.inherits if line else None)
-
-
-@cache
-def _names(line: str, version: str, inherits: str | None) -> tuple[frozenset[str], frozenset[str]]:
-    from rtde_spec.emulator.urscript import builtins
-
-    known = builtins.names_for(line, version, inherits) if line else frozenset(builtins.names())
-    return known, frozenset(script_calls.WAITS | set(builtins.WAITING))
 
 
 def _called(body: list[Stmt]) -> set[str]:
