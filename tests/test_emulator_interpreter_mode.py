@@ -204,14 +204,19 @@ def test_skipbuffer_skips_what_has_not_run_and_abort_stops_the_move(emu: Emulato
 
 
 def test_clear_interpreter_clears_what_was_interpreted(emu: EmulatorThread) -> None:
+    """The manual: "Clears all interpreted statements, objects, functions, threads, etc."."""
     client = start(emu)
     try:
         assert client.id_of('def f(): textmsg("f") end') == 1
         assert client.id_of("f()") == 2
-        assert client.id_of("clear_interpreter()") == 3
-        assert client.id_of("x = 7") == 4  # answered once the clear ran
-        assert client.id_of("statelastcleared") == 3
+        assert client.id_of("thread ticker(): while True: sync() end end") == 3
+        assert client.id_of("handle = run ticker()") == 4
+        wait_until(lambda: len(emu.model.program.threads) == 2)  # type: ignore[union-attr]
+        assert client.id_of("clear_interpreter()") == 5
+        assert client.id_of("x = 7") == 6  # answered once the clear ran
+        assert client.id_of("statelastcleared") == 5
         assert client.send("f()") == "discard: Compile error: f()"  # f went with the clear
+        assert [t.name for t in emu.model.program.threads.values()] == ["prog"]  # type: ignore[union-attr]
     finally:
         client.close()
 

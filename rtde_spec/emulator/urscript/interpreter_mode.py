@@ -36,6 +36,7 @@ from rtde_spec.emulator.urscript.checker import check_added
 from rtde_spec.emulator.urscript.nodes import Expr, Script, ScriptFault, Stmt
 from rtde_spec.emulator.urscript.parser import parse
 from rtde_spec.emulator.urscript.registry import registrar
+from rtde_spec.emulator.urscript.script_threads import close_thread
 from rtde_spec.emulator.urscript.values import truth
 
 if TYPE_CHECKING:
@@ -295,7 +296,11 @@ def _alongside(steps: Any, program: Program, state: InterpreterState) -> Any:
 
 
 def _clear(program: Program, state: InterpreterState) -> None:
-    """Everything the interpreter mode interpreted leaves the program (its functions)."""
+    """Everything the interpreter mode interpreted leaves the program: its functions, and the
+    threads they run ("Threads started in current interpreter session will be stopped")."""
+    for thread in list(program.threads.values()):
+        if thread.id and thread.name in state.functions and thread is not program.current:
+            close_thread(thread)
     for name in state.functions:
         program.script.functions.pop(name, None)
     state.functions.clear()
