@@ -250,3 +250,25 @@ def test_before_5_10_and_on_cb3_there_is_no_interpreter_mode(version: str) -> No
         assert "interpreter" in emu.ports
     finally:
         emu.stop()
+
+
+def test_bad_input_gets_its_reply_and_a_runtime_error_faults_the_program_not_the_port(
+    emu: EmulatorThread,
+) -> None:
+    """Whatever a client sends, the port answers and keeps serving: bytes that are no UTF-8, a line
+    too long to compile on the control loop, a statement that fails when it runs (the program's
+    runtime exception, as any of its statements' would be)."""
+    client = start(emu)
+    try:
+        client.sock.sendall(b"\xff\xfe\n")
+        assert client.reply() == "discard: Syntax error: \ufffd\ufffd"
+        huge = "x = [" + ",".join(["1.0"] * 5000) + "]"
+        assert client.send(huge).startswith("discard: Statement too long: x = [1.0,")
+        assert client.send("end") == "discard: Syntax error: end"
+        assert client.send("z = 1 / 0") == "ack: 1: z = 1 / 0"
+        wait_until(lambda: emu.model.program is None)
+        assert client.send("statelastexecuted") == "state: 1: statelastexecuted"  # the last program's
+        assert client.send("textmsg(1)") == "discard: Program is in an invalid state: textmsg(1)"
+    finally:
+        client.close()
+    assert emu.emulator.late_steps == 0
