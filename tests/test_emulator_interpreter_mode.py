@@ -178,6 +178,8 @@ def test_lines_sent_before_interpreter_mode_wait_or_are_cleaned_up_on_entering(e
             else:
                 assert reply == "discard: Cleaned up before interpretation: set_standard_digital_out(4, True)"
             assert in_interpreter_mode(emu)
+            assert client.id_of("end_interpreter()") == 1 + keep
+            wait_until(lambda: emu.model.program is None)
         finally:
             client.close()
 

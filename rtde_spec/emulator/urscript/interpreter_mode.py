@@ -251,11 +251,11 @@ def session(program: Program, stmt: Stmt, frame: dict[str, Any]) -> Any:
     state = state_of(program)
     if state.active:
         raise ScriptFault("interpreter_mode(): nested interpreter modes are not supported", stmt.line, 1)
+    state.active, state.ending = True, False
     if flags[0]:
         while state.received:
             got = state.received.popleft()
             got.reply(f"discard: Cleaned up before interpretation: {got.text}")
-    state.active, state.ending = True, False
     try:
         interpret(program, state)
         run = 0
