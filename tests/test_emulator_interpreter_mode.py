@@ -15,6 +15,7 @@ import re
 import socket
 import time
 from collections.abc import Callable, Iterator
+from pathlib import Path
 
 import pytest
 
@@ -274,3 +275,31 @@ def test_bad_input_gets_its_reply_and_a_runtime_error_faults_the_program_not_the
     finally:
         client.close()
     assert emu.emulator.late_steps == 0
+
+
+def test_a_program_the_dashboard_plays_takes_statements_until_end_interpreter(tmp_path: Path) -> None:
+    """The way the article's examples begin: a program that enters interpreter mode is loaded and
+    played (here from the dashboard), a client sends statements, `end_interpreter()` ends it."""
+    (tmp_path / "interpreter.script").write_text("def interpreter():\n  interpreter_mode()\nend\n")
+    config = EmulatorConfig.free_ports(controller="5.15.0", realtime_port=None, programs=tmp_path)
+    emu = EmulatorThread(config).start()
+    try:
+        with socket.create_connection(("127.0.0.1", emu.ports["dashboard"]), timeout=5) as dashboard:
+            replies = dashboard.makefile("rb")
+            replies.readline()
+            for command in ("load interpreter.script", "play"):
+                dashboard.sendall(command.encode() + b"\n")
+                replies.readline()
+            wait_until(lambda: in_interpreter_mode(emu))
+            client = Interpreter(emu.ports["interpreter"])
+            try:
+                assert client.id_of(f"movej({TARGET}, a=3, v=3)") == 1
+                assert client.id_of("end_interpreter()") == 2
+                wait_until(lambda: emu.model.program is None)
+            finally:
+                client.close()
+            dashboard.sendall(b"programState\n")
+            assert replies.readline().decode().startswith("STOPPED")
+        assert actual_q(emu) == pytest.approx(TARGET, abs=1e-3)  # the move ran to its end first
+    finally:
+        emu.stop()
