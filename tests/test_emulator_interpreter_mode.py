@@ -303,3 +303,28 @@ def test_a_program_the_dashboard_plays_takes_statements_until_end_interpreter(tm
         assert actual_q(emu) == pytest.approx(TARGET, abs=1e-3)  # the move ran to its end first
     finally:
         emu.stop()
+
+
+def test_with_clear_on_end_false_what_was_interpreted_stays_for_the_next_interpreter_mode(
+    emu: EmulatorThread,
+) -> None:
+    """clearOnEnd=False: "The interpreted statements will in that case be a part of the program until
+    the end of program execution, thus they can be called/accessed in subsequent calls to
+    interpreter_mode()". Ids go on from one interpreter mode to the next of the same program."""
+    program = "def prog():\n  def helper():\n    textmsg(1)\n  end\n  interpreter_mode(clearOnEnd=False)\n"
+    client = start(emu, program + "  interpreter_mode()\nend\n")
+    try:
+        assert client.id_of("def blink(): set_standard_digital_out(3, True) end") == 1
+        # the program's own functions are not redefined (the emulator's choice: UR says nothing)
+        assert (
+            client.send("def helper(): textmsg(2) end")
+            == "discard: Compile error: def helper(): textmsg(2) end"
+        )
+        assert client.id_of("end_interpreter()") == 2
+        wait_until(lambda: client.id_of("statelastexecuted") == 2)
+        wait_until(lambda: in_interpreter_mode(emu))  # the second one
+        assert client.send("statelastcleared") == "state: 0: statelastcleared"  # nothing was cleared
+        assert client.id_of("blink()") == 3
+        wait_until(lambda: bool(emu.model.values["actual_digital_output_bits"] & 0b1000))
+    finally:
+        client.close()

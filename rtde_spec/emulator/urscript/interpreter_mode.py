@@ -155,10 +155,10 @@ def control(program: Program | None, state: InterpreterState, command: str) -> s
 
 def interpret(program: Program, state: InterpreterState, seconds: float = INTERPRET_SECONDS) -> None:
     """Compile the lines received into the program while it is in interpreter mode (and no
-    clear_interpreter() is pending), answering each, for about `seconds` of CPU: a flood of lines
+    clear_interpreter() is pending, nor its end), answering each, for about `seconds` of CPU: a flood of lines
     is interpreted over the control steps, which keep their time."""
     until = time.thread_time() + seconds
-    while state.active and not state.clearing and state.received and not program.finished:
+    while state.active and not (state.clearing or state.ending) and state.received and not program.finished:
         if time.thread_time() > until:
             return
         got = state.received.popleft()
@@ -210,6 +210,9 @@ def _compile(program: Program, text: str) -> Script | str:
     bodies = [script.main, *(f.body for f in script.functions.values())]
     if any("interpreter_mode" in _called(body) for body in bodies):  # no nested interpreter modes
         return "Compile error"
+    ours = state_of(program).functions
+    if any(name in program.script.functions and name not in ours for name in script.functions):
+        return "Compile error"  # the program's own functions stay as they are (the emulator's choice)
     try:
         check_added(program.script.functions, script, *program.names)  # as the program was checked
     except ScriptFault:
