@@ -14,7 +14,7 @@ default). A `clear_interpreter()` interpreted holds the lines after it unanswere
 answered at once, `state: <id>: <command>`. `end_interpreter()` makes `interpreter_mode()` return;
 with `clearOnEnd` (the default) what it interpreted is cleared.
 
-Where the documents say nothing the emulator decides (docs/emulator, and the reason texts here):
+Where the documents say nothing the emulator decides (docs/decisions.md, and the reason texts here):
 `skipbuffer` and `abort`, whose "return value should be ignored", answer in the state form with
 the statements skipped and whether a move was aborted; a line that does not parse is a "Syntax
 error", one the compiler refuses a "Compile error" (the reasons UR-facing clients match); a
