@@ -195,13 +195,20 @@ def test_skipbuffer_skips_what_has_not_run_and_abort_stops_the_move(emu: Emulato
         wait_until(lambda: client.id_of("statelastexecuted") == 1)
         assert client.send("skipbuffer") == "state: 2: skipbuffer"  # two statements skipped
         assert client.send("stateunexecuted") == "state: 0: stateunexecuted"
+        time.sleep(1.0)  # up to speed: 0.5 rad/s, a second's stop at 0.5 rad/s²
         assert client.send("abort") == "state: 1: abort"  # the movej under way stops
-        wait_until(lambda: emu.model.arm.motion is None)
+        assert client.id_of("set_standard_digital_out(7, True)") == 4
+        braked = 0
+        while emu.model.arm.motion is not None:  # a controlled stop: the next statement waits for it
+            executed = client.id_of("statelastexecuted")
+            assert executed == 1 or emu.model.arm.motion is None
+            braked += 1
+            time.sleep(0.05)
+        assert braked > 2
         assert actual_q(emu)[0] < 1.0  # it stopped well short of the target
         assert emu.model.values["actual_digital_output_bits"] & 0b1100000 == 0
-        assert client.send("abort") == "state: 0: abort"  # nothing to abort
-        assert client.id_of("set_standard_digital_out(7, True)") == 4  # ids go on
         wait_until(lambda: bool(emu.model.values["actual_digital_output_bits"] & 0b10000000))
+        assert client.send("abort") == "state: 0: abort"  # nothing to abort
     finally:
         client.close()
 

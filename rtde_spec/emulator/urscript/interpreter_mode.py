@@ -94,6 +94,7 @@ class InterpreterState:
     clearing: bool = False  # a clear_interpreter() was interpreted and has not run yet
     size: int = 0  # statements interpreted since the last clear
     functions: set[str] = field(default_factory=set)  # defined by interpreted statements
+    stopping: Any = None  # the controlled stop `abort` began: the next statement waits for its end
 
 
 def state_of(program: Any) -> InterpreterState:
@@ -150,6 +151,7 @@ def control(program: Program | None, state: InterpreterState, command: str) -> s
         value = int(isinstance(motion, JointMove | LinearMove))
         if arm is not None and value:
             arm.stop(float(getattr(motion, "a", 1.4)), linear=isinstance(motion, LinearMove))
+            state.stopping = arm.motion
     return f"state: {value}: {command}"
 
 
@@ -263,9 +265,10 @@ def session(program: Program, stmt: Stmt, frame: dict[str, Any]) -> Any:
         interpret(program, state)
         run = 0
         while not state.ending:
-            if not state.ready or run >= MAX_PER_STEP:
+            braking = state.stopping is not None and program.robot.arm.motion is state.stopping
+            if braking or not state.ready or run >= MAX_PER_STEP:
                 run = 0
-                yield  # idle (or enough for one step) until the next control step
+                yield  # idle (or enough for one step, or an aborted move stopping) until the next step
                 interpret(program, state)
                 continue
             item = state.ready.popleft()
