@@ -10,12 +10,27 @@ import json
 
 from rtde_spec.metamodel.urscript import ScriptFunctions
 
-from .render import GEN, MD_HEADER, literal_module, md_table
+from .render import GEN, MD_HEADER, PY_HEADER, literal_module, md_table
 
 
 def emit_urscript(table: ScriptFunctions) -> dict[str, str]:
     """Relative output path -> text, for the URScript built-ins of the loaded spec bundle."""
-    return {f"{GEN}/urscript_functions.py": _python(table), "docs/reference/urscript.md": _markdown(table)}
+    return {
+        f"{GEN}/urscript_functions.py": _python(table),
+        f"{GEN}/urscript_ports.py": _ports(table),
+        "docs/reference/urscript.md": _markdown(table),
+    }
+
+
+def _ports(table: ScriptFunctions) -> str:
+    """The interpreter socket's port on its own: the CLI names it without loading the table."""
+    kind = "int" if table.interpreter_port else "int | None"
+    return (
+        PY_HEADER
+        + '"""The port URScript itself serves (spec/urscript/functions.yaml)."""\n\n'
+        + f"INTERPRETER_PORT: {kind} = {table.interpreter_port!r}\n"
+        + '"""The interpreter socket of a program in interpreter_mode() (None: the spec names none)."""\n'
+    )
 
 
 def _python(table: ScriptFunctions) -> str:

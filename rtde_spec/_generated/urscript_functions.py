@@ -8,6 +8,7 @@ URSCRIPT_FUNCTIONS: dict[str, Any] = {'doc_ref': 'The URScript Programming Langu
             "rpy2rotvec and rotvec2rpy; UR's World Model API (MotionPlus documentation) for the "
             'world model',
  'product_lines': ['cb3', 'e-series', 'polyscope-x'],
+ 'interpreter_port': 30020,
  'functions': [{'name': 'movej',
                 'section': 'motion',
                 'params': [{'name': 'q'},

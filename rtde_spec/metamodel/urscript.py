@@ -60,6 +60,7 @@ class ScriptFunction(StrictModel):
 class ScriptFunctions(StrictModel):
     doc_ref: str
     product_lines: list[Literal["cb3", "e-series", "polyscope-x"]]
+    interpreter_port: Annotated[int, Field(ge=1, le=65535)] | None = None  # interpreter mode's socket
     functions: list[ScriptFunction]
 
     @model_validator(mode="after")
