@@ -150,6 +150,34 @@ def test_a_protective_stop_shows_everywhere_and_unlocks_after_five_seconds(emu: 
         dash.close()
 
 
+@pytest.mark.slow  # the 5 s rule in real time: CI runs it
+def test_urcls_protective_stop_unlocks_five_seconds_after_it_is_seen(emu: EmulatorThread) -> None:
+    """URCL's sequence against URSim (tests/test_dashboard_client_g5.cpp:427-459, clear_protective_stop):
+    `protective_stop()` on the primary port, safetymode polled until PROTECTIVE_STOP, sleep(5), then
+    `unlock protective stop` must succeed. The stop counts from when it happened, not from when the
+    server's 10 Hz bookkeeping noticed it (up to 100 ms later: refused at 5.0 s). The primary port's
+    `set unlock protective stop` keeps the same 5 s (tests/test_primary_client.cpp:201-213: 'not
+    allowed to unlock the protective stop immediately'; example_robot_wrapper.cpp retries after 5 s);
+    it unlocked at once."""
+    dash = Dashboard(emu.ports["dashboard"])
+    primary = socket.create_connection(("127.0.0.1", emu.ports["primary"]), timeout=5)
+    try:
+        primary.sendall(b"protective_stop()\n")
+        deadline = time.monotonic() + 2.0
+        while dash.ask("safetymode") != "Safetymode: PROTECTIVE_STOP":
+            assert time.monotonic() < deadline, "the protective stop never showed"
+        seen = time.monotonic()
+        primary.sendall(b"set unlock protective stop\n")
+        time.sleep(0.5)
+        assert dash.ask("safetymode") == "Safetymode: PROTECTIVE_STOP"  # refused within 5 s
+        time.sleep(max(0.0, seen + 5.0 - time.monotonic()))
+        assert dash.ask("unlock protective stop") == "Protective stop releasing"
+        assert dash.ask("safetymode") == "Safetymode: NORMAL"
+    finally:
+        primary.close()
+        dash.close()
+
+
 def test_commands_follow_the_controller_version_and_polyscope_x_has_no_dashboard() -> None:
     config = EmulatorConfig(
         rtde_port=None, primary_port=None, secondary_port=None, dashboard_port=0, realtime_port=None

@@ -21,6 +21,11 @@ from rtde_spec._generated.enums import (
 )
 from rtde_spec.emulator.arm.motion import MOVEJ_A
 
+# s a protective stop lasts before it may be unlocked, on every port: the dashboard's refusal says
+# so ("Cannot unlock protective stop until 5s after occurrence"), and URCL's primary client waits 5 s
+# before its `set unlock protective stop` (tests/test_primary_client.cpp, example_robot_wrapper.cpp)
+UNLOCK_AFTER = 5.0
+
 if TYPE_CHECKING:
     from rtde_spec.emulator.arm.state import Arm
     from rtde_spec.emulator.controller.program import Program
@@ -31,6 +36,9 @@ class RobotModes:
     """Mixed into ControllerModel: the state machine of power, brakes, safety and the program."""
 
     values: dict[str, Any]
+    time: float
+    base_hz: float
+    protective_stop_at: float | None = None  # model time of the current protective stop
     arm: Arm
     program: Program | None
     paused: bool
@@ -106,7 +114,12 @@ class RobotModes:
     # --- safety -----------------------------------------------------------------
 
     def protective_stop(self) -> bool:
-        """Halt at once and pause the program until unlocked and played again."""
+        """Halt at once and pause the program until unlocked and played again.
+
+        The stop counts from the step before this one: a client sees the step's state as soon as it
+        is computed (the dashboard reads it), up to a step before the step's time."""
+        if self.safety_mode != SafetyMode.PROTECTIVE_STOP:
+            self.protective_stop_at = self.time - 1.0 / self.base_hz
         if self.program is None:
             self.arm.halt()
         else:  # the motion is kept, frozen, and goes on when the program is played again
@@ -117,8 +130,15 @@ class RobotModes:
         )
         return True
 
+    def unlock_wait(self) -> float:
+        """Seconds before the current protective stop may be unlocked (0: now, or no stop)."""
+        if self.safety_mode != SafetyMode.PROTECTIVE_STOP or self.protective_stop_at is None:
+            return 0.0
+        return max(0.0, self.protective_stop_at + UNLOCK_AFTER - self.time)
+
     def unlock_protective_stop(self) -> bool:
-        if self.safety_mode != SafetyMode.PROTECTIVE_STOP:
+        """PROTECTIVE_STOP -> NORMAL, refused within UNLOCK_AFTER of the stop (from any port)."""
+        if self.safety_mode != SafetyMode.PROTECTIVE_STOP or self.unlock_wait() > 0:
             return False
         self._safety(SafetyMode.NORMAL, SafetyStatus.NORMAL, SafetyStatusBits.NORMAL_MODE)
         return True

@@ -18,7 +18,6 @@ from __future__ import annotations
 
 import logging
 import os
-import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -33,7 +32,6 @@ if TYPE_CHECKING:
 
 log = logging.getLogger("rtde_spec.emulator")
 SERIAL_NUMBER = "20245500001"  # UR serial numbers start with the year of make
-UNLOCK_AFTER = 5.0  # s a protective stop must last before it may be unlocked
 MAX_PROGRAM_BYTES = 1 << 20
 NO_PROGRAM = "<unnamed>"
 USER_ROLES = ("PROGRAMMER", "OPERATOR", "NONE", "LOCKED", "RESTRICTED")
@@ -56,7 +54,6 @@ class DashboardHub:
         self.programs = programs
         self.serial_number = serial_number
         self.program: str | None = None  # file name of the loaded program
-        self.protective_since: float | None = None
         self.installation = "default.installation"
         self.user_role = "PROGRAMMER"  # CB3's setUserRole
         self.operational_mode = "NONE"  # e-Series: no client controls it until `set operational mode`
@@ -65,14 +62,6 @@ class DashboardHub:
         self.external_control = external_control  # HOST[:PORT] of the driver (None: the one who plays)
         self.waiting_for_driver: str | None = None  # a loaded .urp whose External Control node needs it
         self.peer = "127.0.0.1"  # the client of the command being answered
-
-    def observe(self, now: float) -> None:
-        """Called a few times a second: when the current protective stop began."""
-        stopped = int(self.model.values.get("safety_mode", SafetyMode.NORMAL)) == SafetyMode.PROTECTIVE_STOP
-        if not stopped:
-            self.protective_since = None
-        elif self.protective_since is None:
-            self.protective_since = now
 
     def answer(self, line: str, peer: str = "127.0.0.1") -> tuple[str, bool]:
         """The reply to one command line (from the client at `peer`), and whether the connection
@@ -138,9 +127,7 @@ class DashboardHub:
         elif action == "stop":
             model.stop_program()
         elif action == "unlock_protective_stop":
-            self.observe(time.monotonic())  # a stop since the last look counts from now, not as unseen
-            since = self.protective_since
-            if since is not None and time.monotonic() - since < UNLOCK_AFTER:
+            if model.unlock_wait() > 0:  # the model's clock: from the stop itself (modes.UNLOCK_AFTER)
                 return "failed"
             model.unlock_protective_stop()
         elif action == "restart_safety":

@@ -283,7 +283,6 @@ class Emulator:
                 if step % state_every == 0:
                     self.primary.broadcast_state()
                     now = time.monotonic()
-                    self.dashboard.observe(now)
                     for port in self.clients.values():
                         port.check(now)
             if timing:
