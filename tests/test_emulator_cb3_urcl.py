@@ -70,4 +70,4 @@ def test_urcl_s_program_calls_compile_on_the_versions_it_sends_them_to(
     model.run_script(f"def prog():\n  {statement}\nend")
     name = call.split("(")[0]
     events = [(e.kind, e.text) for e in model.drain_events()]
-    assert (("runtime_exception", f"compile_error_name_not_found:{name}") in events) is refused
+    assert (("runtime_exception", f"compile_error_name_not_found:{name}:") in events) is refused

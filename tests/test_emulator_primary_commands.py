@@ -23,7 +23,11 @@ from rtde_spec.wire.primary_base import RobotStateMessage
 def serve() -> EmulatorThread:
     return EmulatorThread(
         EmulatorConfig(
-            rtde_port=None, primary_port=0, secondary_port=0, realtime_port=0, controller="5.15.0",
+            rtde_port=None,
+            primary_port=0,
+            secondary_port=0,
+            realtime_port=0,
+            controller="5.15.0",
             dashboard_port=None,
         )
     ).start()
@@ -193,6 +197,29 @@ def test_set_sim_and_set_real_switch_the_real_arm_off_and_on() -> None:
         state = client.wait_state(lambda s: s["robot_mode_data"].is_real_robot_enabled)
         assert state["robot_mode_data"].is_real_robot_connected
         assert client.errors() == []
+    finally:
+        client.close()
+        emu.stop()
+
+
+def test_an_unknown_name_is_reported_as_urcls_tests_expect_of_ursim() -> None:
+    """URCL's test_program_execution_reports_exception (tests/test_primary_client.cpp:428-456) sends
+    `calldoesntexist()` in a def on the primary port and expects the Runtime Exception message at
+    line 2, column 3 with the text "compile_error_name_not_found:calldoesntexist:", the closing colon
+    included, as robots send it too ("compile_error_name_not_found:get_tcp_pose:"). It lacked the colon."""
+    emu = serve()
+    client = Primary(emu.ports["primary"])
+    try:
+        client.wait_state(lambda s: mode(s) == RobotMode.RUNNING)
+        client.send("def illegal_fun():\n  calldoesntexist()\nend")
+        deadline = time.monotonic() + 3.0
+        while not client.errors() and time.monotonic() < deadline:
+            client.wait_state(lambda s: True)
+        seen = [m for m in client.seen if getattr(m, "NAME", "") == "runtime_exception_message"]
+        where = [
+            (e.script_line_number, e.script_column_number, e.runtime_exception_text_message) for e in seen
+        ]
+        assert where == [(2, 3, "compile_error_name_not_found:calldoesntexist:")]
     finally:
         client.close()
         emu.stop()

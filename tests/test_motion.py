@@ -193,10 +193,10 @@ def test_power_brakes_and_protective_stop_gate_motion() -> None:
     ("script", "text", "line"),
     [
         ('def prog():\n  textmsg("a")\n  movej([0, 0, 0])\nend', "movej: q must be six numbers", 3),
-        ("def prog():\n  x = 1\n  fly_to(x)\nend", "compile_error_name_not_found:fly_to", 3),
+        ("def prog():\n  x = 1\n  fly_to(x)\nend", "compile_error_name_not_found:fly_to:", 3),
         ("def prog():\n  movej([0, -1.57, 1.57, -1.57, -1.57, 0], v=fast)\nend", "name_not_found:fast", 2),
         ("movej([0, -1.57, 7.0, -1.57, -1.57, 0])", "outside the UR5e's range", 1),
-        ("def prog():\n  x = 1\n  t = run mover()\nend", "compile_error_name_not_found:mover", 3),
+        ("def prog():\n  x = 1\n  t = run mover()\nend", "compile_error_name_not_found:mover:", 3),
         ("movej([0, 0, 0, 0, 0, 0]", "syntax_error_on_line:1:", 1),
         ("set_standard_digital_out(9, True)", "no output 9", 1),
     ],

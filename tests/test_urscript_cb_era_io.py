@@ -40,7 +40,7 @@ def test_set_analog_inputrange_is_the_e_series_deprecated_call_too() -> None:
 
 def test_set_runstate_outputs_is_cb_era_only() -> None:
     _, events = start("def p():\n  set_runstate_outputs([])\nend\n", "5.15.0")
-    assert faults(events) == [("compile_error_name_not_found:set_runstate_outputs", 2)]
+    assert faults(events) == [("compile_error_name_not_found:set_runstate_outputs:", 2)]
 
 
 @pytest.mark.parametrize(

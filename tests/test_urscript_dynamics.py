@@ -79,7 +79,7 @@ def test_target_accelerations_are_the_motions_and_zero_when_still() -> None:
 )  # fmt: skip
 def test_5_23_has_them_and_a_controller_before_it_lacks_them(call: str) -> None:
     name = call.split("(")[0]
-    refused = ("runtime_exception", f"compile_error_name_not_found:{name}")
+    refused = ("runtime_exception", f"compile_error_name_not_found:{name}:")
     assert refused in run(f"x = 1\n{call}\n", version="5.22.0")[1]
     _, events = run(f"x = 1\n{call}\n", version="5.23.0")
     assert not [e for e in events if e[0] == "runtime_exception"], events

@@ -84,4 +84,4 @@ def test_what_the_manual_rules_out_is_a_runtime_exception_at_its_line(line: str,
 
 def test_the_factories_come_with_5_16() -> None:
     _, faults = outcome("", "5.15.0")
-    assert faults == [("compile_error_name_not_found:eip_writer_factory", 2)]
+    assert faults == [("compile_error_name_not_found:eip_writer_factory:", 2)]

@@ -167,7 +167,7 @@ def test_a_cb3_preamble_runs_on_a_cb3_controller() -> None:
 
 def test_tool_modes_and_the_serial_interface_are_e_series_only() -> None:
     _, events = start("def p():\n  set_tool_output_mode(0)\nend\n", "3.15.8")
-    assert faults(events) == [("compile_error_name_not_found:set_tool_output_mode", 2)]
+    assert faults(events) == [("compile_error_name_not_found:set_tool_output_mode:", 2)]
 
 
 @pytest.mark.parametrize(

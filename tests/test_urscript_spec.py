@@ -83,4 +83,4 @@ def test_a_function_the_controller_version_lacks_is_a_compile_error(version: str
     model = ControllerModel(version)
     model.run_script("m = get_target_payload()")
     events = [(e.kind, e.text) for e in model.drain_events()]
-    assert (("runtime_exception", "compile_error_name_not_found:get_target_payload") in events) is refused
+    assert (("runtime_exception", "compile_error_name_not_found:get_target_payload:") in events) is refused

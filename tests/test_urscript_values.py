@@ -103,7 +103,7 @@ def test_get_rtde_value_reads_an_rtde_output_as_clients_receive_it() -> None:
 
 def test_get_rtde_value_is_refused_before_5_23() -> None:
     events = run_on("5.22.0", 'def prog():\n  x = get_rtde_value("actual_q")\nend\n')
-    assert ("runtime_exception", "compile_error_name_not_found:get_rtde_value", 2) in events
+    assert ("runtime_exception", "compile_error_name_not_found:get_rtde_value:", 2) in events
 
 
 def test_time_reads_the_controller_s_clock_by_default_and_the_system_time_with_mode_2() -> None:

@@ -325,7 +325,7 @@ def test_an_int_s_32_bits_go_to_a_list_of_bools_and_back(version: str) -> None:
 def test_the_world_model_is_polyscope_xs_and_polyscope_x_keeps_the_e_series_functions() -> None:
     for version in ("5.22.0", "3.15.8"):
         _, events = run("reset_world_model()\n", ControllerModel(version))
-        assert faults(events) == [("compile_error_name_not_found:reset_world_model", 1)]
+        assert faults(events) == [("compile_error_name_not_found:reset_world_model:", 1)]
     _, events = run(
         "m = get_target_payload()\nx = time()\nq = rpy2rotvec([0, 0, 1])\n", ControllerModel("10.0.0")
     )

@@ -379,7 +379,7 @@ def call_function(program: Runner, stmt: Stmt, name: str, args: Args, kwargs: Kw
     }
     fn = table.get(name)
     if fn is None:
-        raise ScriptFault(f"compile_error_name_not_found:{name}", stmt.line, 1)
+        raise ScriptFault.name_not_found(name, stmt.line, 1)
     try:
         return fn()
     except (IndexError, TypeError, ValueError, ArithmeticError) as exc:

@@ -1,7 +1,7 @@
 """URScript's checker: what the controller's compiler refuses before a program runs.
 
 Every called name must be a function or thread of the program or a built-in the emulator
-implements (`compile_error_name_not_found:NAME` otherwise), `run` must name a thread, and a
+implements (`compile_error_name_not_found:NAME:` otherwise), `run` must name a thread, and a
 user function's arguments must fit its parameters (by position, then by name), a built-in's the
 parameters spec/urscript lists (no more of them, none twice). A method call
 (`proxy.getTarget()`) is a remote procedure call: its name is the server's to know. It also
@@ -111,7 +111,7 @@ class _Checker:
                 _arguments_fit(function, expr, where)
                 user = user or expr.value in self.waiting
             elif expr.value not in self.builtins:
-                raise ScriptFault(f"compile_error_name_not_found:{expr.value}", where, expr.column)
+                raise ScriptFault.name_not_found(expr.value, where, expr.column)
             else:
                 _builtin_arguments_fit(expr, where)
                 user = user or expr.value in self.waits
@@ -120,7 +120,7 @@ class _Checker:
         elif expr.kind == "run":
             function = self.functions.get(expr.value)
             if function is None or not function.thread:
-                raise ScriptFault(f"compile_error_name_not_found:{expr.value}", where, expr.column)
+                raise ScriptFault.name_not_found(expr.value, where, expr.column)
         expr.user = user
         return user
 

@@ -141,7 +141,7 @@ class Evaluator:
             return self.globals[name]
         if name in script_calls.CONSTANTS:
             return script_calls.CONSTANTS[name]
-        raise ScriptFault(f"compile_error_name_not_found:{name}", expr.line, expr.column)
+        raise ScriptFault.name_not_found(name, expr.line, expr.column)
 
     def assign(self, stmt: Stmt, frame: Frame, value: Any) -> None:
         name = stmt.name
@@ -155,7 +155,7 @@ class Evaluator:
             where[name] = value
             return
         if name not in where:
-            raise ScriptFault(f"compile_error_name_not_found:{name}", stmt.line, stmt.column)
+            raise ScriptFault.name_not_found(name, stmt.line, stmt.column)
         positions = [
             urscript_ops.Member(e.value)
             if e.kind == "member"

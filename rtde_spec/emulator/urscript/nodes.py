@@ -14,6 +14,13 @@ class ScriptFault(Exception):
         super().__init__(f"line {line}: {text}")
         self.text, self.line, self.column = text, line, column
 
+    @classmethod
+    def name_not_found(cls, name: str, line: int, column: int) -> ScriptFault:
+        """An unknown name as a controller reports it, closing colon included: URSim answers
+        `calldoesntexist()` with "compile_error_name_not_found:calldoesntexist:" (URCL's
+        tests/test_primary_client.cpp:455), robots with "compile_error_name_not_found:get_tcp_pose:"."""
+        return cls(f"compile_error_name_not_found:{name}:", line, column)
+
 
 @dataclass(eq=False)
 class Expr:
