@@ -14,7 +14,7 @@ from collections.abc import Callable
 
 import pytest
 
-from rtde_spec._generated.enums import RobotMode, SafetyMode
+from rtde_spec._generated.enums import ReportLevel, RobotMode, SafetyMode
 from rtde_spec.emulator.server import EmulatorConfig, EmulatorThread
 from rtde_spec.primary.codec import PrimaryStreamDecoder
 from rtde_spec.wire.primary_base import RobotStateMessage
@@ -220,6 +220,28 @@ def test_an_unknown_name_is_reported_as_urcls_tests_expect_of_ursim() -> None:
             (e.script_line_number, e.script_column_number, e.runtime_exception_text_message) for e in seen
         ]
         assert where == [(2, 3, "compile_error_name_not_found:calldoesntexist:")]
+    finally:
+        client.close()
+        emu.stop()
+
+
+def test_a_scripts_protective_stop_reports_error_code_c209a0_as_a_warning() -> None:
+    """URCL's read_error_code (tests/test_ur_driver.cpp:306-324) sends `sec setup(): protective_stop()`
+    and waits, in a loop with no time-out, for exactly one Error Code message: code 209, argument 0
+    ('A protective stop was triggered', UR's error code C209); its sendScriptBlocking tests call
+    that a 'warning level error code' (tests/test_primary_client.cpp:584). None was sent: URCL's
+    driver test hung there and sendScriptBlocking reported success for protective_stop()."""
+    emu = serve()
+    client = Primary(emu.ports["primary"])
+    try:
+        client.wait_state(lambda s: mode(s) == RobotMode.RUNNING)
+        client.send("sec setup():\n protective_stop()\nend")
+        client.wait_state(lambda s: s["robot_mode_data"].is_protective_stopped)
+        for _ in range(3):  # the messages of the stop come with the next Robot States
+            client.wait_state(lambda s: True)
+        codes = [m for m in client.seen if getattr(m, "NAME", "") == "robot_comm_message"]
+        got = [(m.robot_message_code, m.robot_message_argument, m.robot_message_report_level) for m in codes]
+        assert got == [(209, 0, ReportLevel.WARNING)]
     finally:
         client.close()
         emu.stop()

@@ -20,6 +20,7 @@ from rtde_spec._generated.enums import (
     MessageSource,
     ProgramStateMessageType,
     ReportDataType,
+    ReportLevel,
     RobotMessageType,
 )
 from rtde_spec.emulator.urscript.matrices import is_matrix
@@ -82,6 +83,23 @@ def runtime_exception(text: str, line: int, column: int, micros: int) -> bytes:
             script_line_number=max(0, line),
             script_column_number=max(0, column),
             runtime_exception_text_message=text,
+        )
+    )
+
+
+def error_code_message(code: int, argument: int, level: int, micros: int) -> bytes:
+    """An Error Code (Robot Comm) message: code and argument as URCL reads them (C209A0)."""
+    return encode_message(
+        pm.RobotCommMessage(
+            timestamp=micros,
+            source=_CONTROLLER,
+            robot_message_type=int(RobotMessageType.ERROR_CODE),
+            robot_message_code=code,
+            robot_message_argument=argument,
+            robot_message_report_level=level,
+            data_type=int(ReportDataType.UINT32),
+            report_data=0,
+            report_text="",
         )
     )
 
@@ -196,4 +214,7 @@ def event_messages(event: Any, micros: int) -> list[bytes]:
         ]
     if kind == "program_stopped":
         return [key_message(PROGRAM_STOPPED, event.program or text, micros)]
+    if kind == "error_code":
+        level = ReportLevel.WARNING if event.warning else ReportLevel.VIOLATION
+        return [error_code_message(int(event.code), int(event.argument), int(level), micros)]
     return []

@@ -12,8 +12,9 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from rtde_spec._generated.enums import ControlMode
+from rtde_spec._generated.enums import ControlMode, SafetyMode
 from rtde_spec.emulator.urscript.calls import arg, number, six
+from rtde_spec.emulator.urscript.events import ScriptEvent
 from rtde_spec.emulator.urscript.interfaces import Runner
 from rtde_spec.emulator.urscript.nodes import ScriptFault, Stmt
 from rtde_spec.emulator.urscript.registry import registrar
@@ -156,6 +157,12 @@ def _target_payload(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> N
 
 @_builtin("protective_stop")
 def _protective_stop(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> None:
+    """The stop, and the error code a controller reports for it: C209A0 ('A protective stop was
+    triggered'), a warning (URCL's tests against URSim: test_ur_driver.cpp read_error_code,
+    test_primary_client.cpp 'warning level error code')."""
     stop = getattr(runner.robot, "protective_stop", None)
     if stop is not None:
+        new = int(runner.robot.values.get("safety_mode", 0)) != SafetyMode.PROTECTIVE_STOP
         stop()
+        if new:
+            runner.robot.emit(ScriptEvent("error_code", "", code=209, argument=0, warning=True))
