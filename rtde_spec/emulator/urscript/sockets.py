@@ -90,10 +90,25 @@ def sockets_of(runner: Runner) -> dict[str, ProgramSocket]:
     return table
 
 
+def opening_of(runner: Runner) -> set[socket.socket]:
+    """The sockets whose socket_open is still waiting for the connection."""
+    pending = getattr(runner, "opening", None)
+    if pending is None:
+        pending = set()
+        runner.opening = pending  # type: ignore[attr-defined]
+    return pending
+
+
 def close_all(runner: Runner) -> None:
+    """The program's sockets, and those it is still opening: a connection the client already
+    accepted must close with the program, or the client never learns the program ended (URCL's
+    reverse interface stayed connected after `stop program` came during its socket_open)."""
     for sock in sockets_of(runner).values():
         sock.close()
     sockets_of(runner).clear()
+    for pending in opening_of(runner):
+        pending.close()
+    opening_of(runner).clear()
 
 
 def _name(stmt: Stmt, args: Args, kwargs: Kwargs, index: int) -> str:
@@ -122,20 +137,25 @@ def socket_open(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> Waiti
     sock.setblocking(False)
     sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
     code = sock.connect_ex((address, port))
+    opening_of(runner).add(sock)
     return _connecting(runner, name, sock, code, runner.clock + OPEN_TIMEOUT)
 
 
 def _connecting(runner: Runner, name: str, sock: socket.socket, code: int, until: float) -> Waiting:
     while code != 0:
         if code not in (errno.EINPROGRESS, errno.EALREADY, errno.EWOULDBLOCK) or runner.clock >= until:
+            opening_of(runner).discard(sock)
             sock.close()
             return False
         yield  # the connection comes while the control steps go on
+        if sock.fileno() < 0:
+            return False  # the program ended meanwhile: close_all closed it
         _, writable, _ = select.select([], [sock], [], 0)
         if writable:
             code = sock.getsockopt(socket.SOL_SOCKET, socket.SO_ERROR) or 0
             if code in (errno.EINPROGRESS, errno.EALREADY):
                 code = errno.ECONNREFUSED
+    opening_of(runner).discard(sock)
     sockets_of(runner)[name] = ProgramSocket(sock, name)
     return True
 
