@@ -106,8 +106,6 @@ def test_unlock_protective_stop_and_stop_program_on_the_primary_port() -> None:
         client.wait_state(lambda s: not s["robot_mode_data"].is_program_running)
         emu.call(emu.model.protective_stop)
         client.wait_state(lambda s: s["robot_mode_data"].is_protective_stopped)
-        # a stop 5 s old: one may be unlocked only then (test_dashboard.py has the real-time 5 s)
-        emu.call(lambda: setattr(emu.model, "protective_stop_at", emu.model.time - 5.0))
         client.send("set unlock protective stop")
         state = client.wait_state(lambda s: not s["robot_mode_data"].is_protective_stopped)
         assert state["masterboard_data"].safety_mode == SafetyMode.NORMAL

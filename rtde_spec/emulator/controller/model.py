@@ -147,7 +147,6 @@ class ControllerModel(RobotModes):
         if self._parsing:
             self._start_parsed()
         self.time = step / self.base_hz
-        self.unlock_when_due()
         values = self.values
         # After a stall (the server skipped steps, 100 ms late) the arm and its program take one
         # control step and stand still for the rest, as the steps a real controller never skips: a

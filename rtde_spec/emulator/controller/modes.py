@@ -21,11 +21,10 @@ from rtde_spec._generated.enums import (
 )
 from rtde_spec.emulator.arm.motion import MOVEJ_A
 
-# s a protective stop lasts before it may be unlocked: the dashboard refuses before ("Cannot unlock
-# protective stop until 5s after occurrence"); the primary port's `set unlock protective stop` is
-# not honoured at once either, but when the 5 s are up (URCL's tests against URSim: 'not allowed to
-# unlock the protective stop immediately', yet an unlock sent right after a stop is done within its
-# 5 s wait: tests/test_primary_client.cpp 201-213 and 511-521)
+# s a protective stop lasts before the dashboard unlocks it ("Cannot unlock protective stop until 5s
+# after occurrence"). The primary port's `set unlock protective stop` is done at once: URCL's tests
+# against URSim send it right after a stop and expect the stop gone within their 5 s wait
+# (tests/test_primary_client.cpp 511-521, 552-562, 579-588), a deferred unlock missed that.
 UNLOCK_AFTER = 5.0
 
 if TYPE_CHECKING:
@@ -41,7 +40,6 @@ class RobotModes:
     time: float
     base_hz: float
     protective_stop_at: float | None = None  # model time of the current protective stop
-    unlock_asked = False  # a primary port's unlock came early: done when UNLOCK_AFTER is up
     arm: Arm
     program: Program | None
     paused: bool
@@ -123,7 +121,6 @@ class RobotModes:
         is computed (the dashboard reads it), up to a step before the step's time."""
         if self.safety_mode != SafetyMode.PROTECTIVE_STOP:
             self.protective_stop_at = self.time - 1.0 / self.base_hz
-            self.unlock_asked = False
         if self.program is None:
             self.arm.halt()
         else:  # the motion is kept, frozen, and goes on when the program is played again
@@ -140,23 +137,10 @@ class RobotModes:
             return 0.0
         return max(0.0, self.protective_stop_at + UNLOCK_AFTER - self.time)
 
-    def ask_unlock(self) -> bool:
-        """The primary port's unlock: now, or once UNLOCK_AFTER is up (`unlock_when_due`)."""
+    def unlock_protective_stop(self) -> bool:
+        """PROTECTIVE_STOP -> NORMAL (the dashboard asks unlock_wait() first)."""
         if self.safety_mode != SafetyMode.PROTECTIVE_STOP:
             return False
-        self.unlock_asked = True
-        self.unlock_when_due()
-        return True
-
-    def unlock_when_due(self) -> bool:
-        """Each step: an unlock asked early is done when its time comes."""
-        return self.unlock_asked and self.unlock_wait() == 0 and self.unlock_protective_stop()
-
-    def unlock_protective_stop(self) -> bool:
-        """PROTECTIVE_STOP -> NORMAL, refused within UNLOCK_AFTER of the stop."""
-        if self.safety_mode != SafetyMode.PROTECTIVE_STOP or self.unlock_wait() > 0:
-            return False
-        self.unlock_asked = False
         self._safety(SafetyMode.NORMAL, SafetyStatus.NORMAL, SafetyStatusBits.NORMAL_MODE)
         return True
 
