@@ -243,3 +243,22 @@ def test_a_scripts_protective_stop_reports_error_code_c209a0_as_a_warning() -> N
     finally:
         client.close()
         emu.stop()
+
+
+def test_a_move_out_of_reach_is_a_protective_stop_not_a_runtime_exception() -> None:
+    """URCL's tests against URSim: an impossible movel 'will trigger a warning and protective stop'
+    (tests/test_primary_client.cpp:557-560, then unlocks it), and its instruction executor waits for
+    isRobotProtectiveStopped after a movel to an unreachable pose (tests/test_instruction_executor.cpp
+    317-335, looping until it comes). The emulator ended the program with a runtime exception
+    ('inverse kinematics failed on the way') and never stopped: URCL's test looped for ever."""
+    emu = serve()
+    client = Primary(emu.ports["primary"])
+    try:
+        client.wait_state(lambda s: mode(s) == RobotMode.RUNNING)
+        client.send("def reach():\n  movel(p[10,0,0,0,0,0])\nend")
+        state = client.wait_state(lambda s: s["robot_mode_data"].is_protective_stopped, seconds=12.0)
+        assert state["robot_mode_data"].is_program_paused  # paused, as by any protective stop
+        assert client.errors() == []
+    finally:
+        client.close()
+        emu.stop()

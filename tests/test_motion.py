@@ -210,7 +210,8 @@ def test_what_cannot_run_is_a_runtime_exception_with_its_line(script: str, text:
 
 def test_a_movel_out_of_reach_goes_along_its_line_and_stops_where_the_line_leaves_reach() -> None:
     """It was refused before moving; a controller starts it (PolyScope's Direction node moves
-    towards a point 1000 m away) and fails where the arm cannot follow the line."""
+    towards a point 1000 m away) and stops where the arm cannot follow the line: a protective stop,
+    the program paused (URCL's tests against URSim wait for one: test_instruction_executor.cpp:317)."""
     model = ControllerModel("5.15.0")
     start = list(model.values["actual_TCP_pose"])
     model.run_script(
@@ -219,9 +220,13 @@ def test_a_movel_out_of_reach_goes_along_its_line_and_stops_where_the_line_leave
     run(model, 0.2)
     assert model.program is not None  # moving, no error yet
     assert model.values["actual_TCP_pose"][2] > start[2] + 0.01
-    until_stopped(model)
-    faults = [e for e in model.drain_events() if e.kind == "runtime_exception"]
-    assert len(faults) == 1 and "out of reach of the UR5e" in faults[0].text, faults
+    for _ in range(30 * HZ):
+        if model.values["safety_mode"] == SafetyMode.PROTECTIVE_STOP:
+            break
+        model.tick(model.step + 1)
+    assert model.values["safety_mode"] == SafetyMode.PROTECTIVE_STOP
+    assert model.program is not None and model.values["runtime_state"] == ProgramState.PAUSED
+    assert not [e for e in model.drain_events() if e.kind == "runtime_exception"]
     assert start[2] + 0.1 < model.values["actual_TCP_pose"][2] < start[2] + 1.5  # the edge of its reach
 
 

@@ -177,7 +177,11 @@ class ControllerModel(RobotModes):
             self.arm.halt()
             if not all(math.isfinite(float(v)) for v in self.arm.state.q):
                 self.arm.place(before)  # the arm stays where it was: never NaN for good
-            if self.program is not None:
+            if isinstance(exc, MotionError) and self.program is not None:  # out of reach on the way
+                log.warning("program %s: %s: protective stop", self.program.name, safe_text(str(exc)[:200]))
+                self.protective_stop()  # as URSim: URCL's tests wait for one (test_instruction_executor.cpp)
+                return  # the program stays paused at its move
+            elif self.program is not None:
                 self.program.fail(ScriptFault(str(exc), line, 1))
         if self.arm.motion is not None or self.arm.revision != self._limits_checked:
             self._limits_checked = self.arm.revision
