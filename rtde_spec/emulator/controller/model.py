@@ -178,10 +178,8 @@ class ControllerModel(RobotModes):
             if not all(math.isfinite(float(v)) for v in self.arm.state.q):
                 self.arm.place(before)  # the arm stays where it was: never NaN for good
             if isinstance(exc, MotionError) and self.program is not None:  # out of reach on the way
-                log.warning("program %s: %s: protective stop", self.program.name, safe_text(str(exc)[:200]))
-                self.protective_stop()  # as URSim: URCL's tests wait for one (test_instruction_executor.cpp)
-                return  # the program stays paused at its move
-            elif self.program is not None:
+                return self.stopped_on_the_way(str(exc))  # the program stays paused at its move
+            if self.program is not None:
                 self.program.fail(ScriptFault(str(exc), line, 1))
         if self.arm.motion is not None or self.arm.revision != self._limits_checked:
             self._limits_checked = self.arm.revision
@@ -310,9 +308,8 @@ class ControllerModel(RobotModes):
         self.program, self.paused = program, False
         self._program_bits()
         self._runstate("start")
-        self.emit(
-            ScriptEvent("program_started", program.name, program=program.name, names=global_names(script))
-        )
+        names = global_names(script)  # the Global Variables Setup message lists them
+        self.emit(ScriptEvent("program_started", program.name, program=program.name, names=names))
         program.advance(0.0)  # runs at once up to its first wait, as the controller does
         if program.finished:
             self._end_program()

@@ -8,6 +8,7 @@ powered off, braked or safety-stopped does not move and runs no program.
 
 from __future__ import annotations
 
+import logging
 from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.enums import (
@@ -20,6 +21,7 @@ from rtde_spec._generated.enums import (
     SafetyStatusBits,
 )
 from rtde_spec.emulator.arm.motion import MOVEJ_A
+from rtde_spec.printable import safe_text
 
 # s a protective stop lasts before the dashboard unlocks it ("Cannot unlock protective stop until 5s
 # after occurrence"). The primary port's `set unlock protective stop` is done at once: URCL's tests
@@ -31,6 +33,8 @@ if TYPE_CHECKING:
     from rtde_spec.emulator.arm.state import Arm
     from rtde_spec.emulator.controller.program import Program
     from rtde_spec.emulator.urscript.events import ScriptEvent
+
+log = logging.getLogger("rtde_spec.emulator")
 
 
 class RobotModes:
@@ -113,6 +117,13 @@ class RobotModes:
         return True
 
     # --- safety -----------------------------------------------------------------
+
+    def stopped_on_the_way(self, why: str) -> None:
+        """A move that leaves the arm's reach on the way: a protective stop, the program paused at
+        its move, as URSim does (URCL's tests wait for one: test_instruction_executor.cpp)."""
+        name = self.program.name if self.program is not None else ""
+        log.warning("program %s: %s: protective stop", safe_text(name), safe_text(why[:200]))
+        self.protective_stop()
 
     def protective_stop(self) -> bool:
         """Halt at once and pause the program until unlocked and played again.
