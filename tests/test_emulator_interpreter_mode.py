@@ -247,7 +247,7 @@ def test_before_5_10_and_on_cb3_there_is_no_interpreter_mode(version: str) -> No
     model = ControllerModel(version)
     model.run_script(PROGRAM)
     events = [(e.kind, e.text) for e in model.drain_events()]
-    assert ("runtime_exception", "compile_error_name_not_found:interpreter_mode") in events
+    assert ("runtime_exception", "compile_error_name_not_found:interpreter_mode:") in events
     config = EmulatorConfig.free_ports(controller=version, realtime_port=None, dashboard_port=None)
     emu = EmulatorThread(config).start()
     try:
