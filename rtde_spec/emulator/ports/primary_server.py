@@ -61,6 +61,7 @@ class PrimaryHub:
         self._values = available(VALUES_SINCE, model.version, model.catalogue)
         self._globals_of: object = None  # the program whose global variable names these are
         self._global_names: tuple[str, ...] = ()
+        self._global_next = 0  # where the next update starts (a program's values take several when big)
         prepare()  # the messages' codec now, not in the control step of a program's start
 
     def run(self, port: int, text: str) -> None:
@@ -138,11 +139,14 @@ class PrimaryHub:
         if script is None or not self._values:
             return b""
         if program is not self._globals_of:
-            self._globals_of, self._global_names = program, global_names(script)
+            self._globals_of, self._global_names, self._global_next = program, global_names(script), 0
         if not self._global_names:
             return b""
         values = program.globals  # type: ignore[union-attr]
-        return global_variables_update([values.get(name) for name in self._global_names], micros)
+        update, self._global_next = global_variables_update(
+            [values.get(name) for name in self._global_names], micros, self._global_next
+        )
+        return update
 
     def _program_labels(self) -> list[tuple[str, int, str]]:
         """(thread, label number, label text) of the running program's threads that passed a label

@@ -14,6 +14,7 @@ message whenever the safety mode changes.
 from __future__ import annotations
 
 import struct
+from collections.abc import Sequence
 from typing import Any
 
 from rtde_spec._generated.enums import (
@@ -164,17 +165,48 @@ def global_variables_setup(names: list[str], micros: int) -> bytes:
     )
 
 
-def global_variables_update(values: list[Any], micros: int) -> bytes:
-    """Global Variables Update: the values in the order of the setup message's names (a name the
-    program has not written yet, or a value of no listed type, is NONE)."""
-    return encode_message(
+# bytes of values one Global Variables Update carries at most (the emulator's bound: no document gives
+# one; a string's most, 64 kB, fits): a program holding megabytes in its globals costs the control
+# step no more than this a tick
+UPDATE_BYTES = 128 << 10
+
+
+def global_variables_update(values: Sequence[Any], micros: int, start: int = 0) -> tuple[bytes, int]:
+    """Global Variables Update: the values from `start` on, in the order of the setup message's names,
+    as many as fit UPDATE_BYTES (its start index says where they begin; the next update goes on from
+    there). A name the program has not written yet, a value of no listed type, or one too big for an
+    update alone is NONE. Returns the message and the index the next update starts at."""
+    picked: list[Any] = []
+    used, at = 0, start
+    while at < len(values):
+        size = value_size(values[at], UPDATE_BYTES - used)
+        if picked and used + size > UPDATE_BYTES:
+            break
+        picked.append(values[at] if size <= UPDATE_BYTES else None)
+        used, at = used + min(size, UPDATE_BYTES), at + 1
+    message = encode_message(
         pm.GlobalVariablesUpdateMessage(
             timestamp=micros,
             robot_message_type=int(ProgramStateMessageType.GLOBAL_VARIABLES_UPDATE),
-            start_index=0,
-            variable_values=[typed(value) for value in values],
+            start_index=start,
+            variable_values=[typed(value) for value in picked],
         )
     )
+    return message, (at if at < len(values) else 0)
+
+
+def value_size(value: Any, limit: int) -> int:
+    """About the bytes `value` takes in an update, counted no further than just past `limit`."""
+    if isinstance(value, str):
+        return 3 + min(len(value), 65535)
+    if isinstance(value, list):
+        total = 3
+        for item in value:
+            total += value_size(item, limit - total)
+            if total > limit:
+                break
+        return total
+    return 25  # a number, a bool or a pose (six floats) and its type byte
 
 
 def typed(value: Any) -> VariableValue:
