@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
 from rtde_spec._generated.enums import ProgramState, RobotMode, SafetyMode, SafetyStatus, SafetyStatusBits
-from rtde_spec.emulator.ports.guard import GuardedConnection, Port
+from rtde_spec.emulator.ports.guard import GuardedConnection, Port, split_lines
 from rtde_spec.emulator.ports.robot_messages import BUILD_DATE
 from rtde_spec.emulator.ports.state_message import arm_parameters, available, robot_type
 from rtde_spec.metamodel.dashboard import DashboardCommand, dashboard_spec
@@ -304,9 +304,7 @@ class DashboardConnection(GuardedConnection):
     def data_received(self, data: bytes) -> None:
         if self.dropped:
             return
-        self.buffer += data
-        lines = self.buffer.split(b"\n")
-        self.buffer = bytearray(lines.pop())
+        self.buffer, lines = split_lines(self.buffer, data)
         if len(self.buffer) > self.hub.table.max_line_bytes:
             self.drop(f"a line of over {self.hub.table.max_line_bytes} bytes is no dashboard command")
             return

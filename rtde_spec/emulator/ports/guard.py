@@ -207,3 +207,11 @@ class GuardedConnection(asyncio.Protocol):
                 backlog,
                 self.limits.max_send_backlog,
             )
+
+
+def split_lines(buffer: bytearray, data: bytes) -> tuple[bytearray, list[bytearray]]:
+    """`buffer` and `data` cut at each newline: what follows the last one (kept for the next read),
+    and the whole lines before it (the line ports: dashboard, interpreter socket)."""
+    buffer += data
+    lines = buffer.split(b"\n")
+    return bytearray(lines.pop()), lines

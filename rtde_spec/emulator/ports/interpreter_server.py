@@ -17,7 +17,7 @@ from collections.abc import Callable
 from typing import TYPE_CHECKING
 
 from rtde_spec.emulator.ports import INTERPRETER_PORT
-from rtde_spec.emulator.ports.guard import GuardedConnection, Port
+from rtde_spec.emulator.ports.guard import GuardedConnection, Port, split_lines
 
 if TYPE_CHECKING:
     from rtde_spec.emulator.controller.model import ControllerModel
@@ -66,9 +66,7 @@ class InterpreterConnection(GuardedConnection):
     def data_received(self, data: bytes) -> None:
         if self.dropped:
             return
-        self.buffer += data
-        lines = self.buffer.split(b"\n")
-        self.buffer = bytearray(lines.pop())
+        self.buffer, lines = split_lines(self.buffer, data)
         if not self.received(len(self.buffer), len(lines)):
             return
         texts = [text for text in (raw.decode("utf-8", "replace").strip() for raw in lines) if text]
