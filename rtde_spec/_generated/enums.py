@@ -338,6 +338,16 @@ class ReportLevel(IntEnum):
     DEVL_CRITICAL_FAULT = 133
 
 
+class RobotErrorCode(IntEnum):
+    """Code of an Error Code (Robot Comm) message, shown as C<code>A<argument>; the codes the emulator sends.
+
+    Source: URCL tests/test_ur_driver.cpp read_error_code and tests/test_primary_client.cpp (against URSim): a script's protective_stop() reports C209A0 at warning level
+    """
+
+    PROTECTIVE_STOP_TRIGGERED = 209
+    """C209: a protective stop was triggered (argument 0: by a script's protective_stop())"""
+
+
 class ReportDataType(IntEnum):
     """Type of the report data of Safety Mode and Robot Comm messages."""
 
@@ -568,6 +578,7 @@ ENUMS: dict[str, type[IntEnum]] = {
     'ControlMode': ControlMode,
     'MessageSource': MessageSource,
     'ReportLevel': ReportLevel,
+    'RobotErrorCode': RobotErrorCode,
     'ReportDataType': ReportDataType,
     'RequestedType': RequestedType,
     'RobotType': RobotType,
@@ -633,6 +644,9 @@ VALUE_DOCS: dict[str, dict[int, str]] = {
         71: 'ExtenderNear_MCU',
         72: 'ExtenderFar_FPGA',
         73: 'ExtenderFar_MCU',
+    },
+    'RobotErrorCode': {
+        209: "C209: a protective stop was triggered (argument 0: by a script's protective_stop())",
     },
     'ReportDataType': {
         0: 'uint32_t',

@@ -1704,6 +1704,17 @@ SPEC: dict[str, Any] = {'primitives': {'primitives': [{'name': 'bool',
                                          {'name': 'DEVL_VIOLATION', 'value': 131},
                                          {'name': 'DEVL_FAULT', 'value': 132},
                                          {'name': 'DEVL_CRITICAL_FAULT', 'value': 133}]},
+                             {'name': 'RobotErrorCode',
+                              'doc': 'Code of an Error Code (Robot Comm) message, shown as '
+                                     'C<code>A<argument>; the codes the emulator sends.',
+                              'doc_ref': 'URCL tests/test_ur_driver.cpp read_error_code and '
+                                         'tests/test_primary_client.cpp (against URSim): a '
+                                         "script's protective_stop() reports C209A0 at warning "
+                                         'level',
+                              'values': [{'name': 'PROTECTIVE_STOP_TRIGGERED',
+                                          'value': 209,
+                                          'doc': 'C209: a protective stop was triggered (argument '
+                                                 "0: by a script's protective_stop())"}]},
                              {'name': 'ReportDataType',
                               'doc': 'Type of the report data of Safety Mode and Robot Comm '
                                      'messages.',

@@ -12,7 +12,7 @@ import time
 from collections.abc import Callable
 from typing import Any
 
-from rtde_spec._generated.enums import ControlMode, SafetyMode
+from rtde_spec._generated.enums import ControlMode, RobotErrorCode, SafetyMode
 from rtde_spec.emulator.urscript.calls import arg, number, six
 from rtde_spec.emulator.urscript.events import ScriptEvent
 from rtde_spec.emulator.urscript.interfaces import Runner
@@ -165,4 +165,5 @@ def _protective_stop(runner: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> 
         new = int(runner.robot.values.get("safety_mode", 0)) != SafetyMode.PROTECTIVE_STOP
         stop()
         if new:
-            runner.robot.emit(ScriptEvent("error_code", "", code=209, argument=0, warning=True))
+            code = int(RobotErrorCode.PROTECTIVE_STOP_TRIGGERED)
+            runner.robot.emit(ScriptEvent("error_code", "", code=code, argument=0, warning=True))
