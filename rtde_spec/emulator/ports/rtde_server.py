@@ -69,6 +69,7 @@ class RtdeConnection(GuardedConnection):
         self.framer = PackageFramer()
         self.output: RecipeCodec | None = None
         self.output_names: tuple[str, ...] = ()
+        self.bare = False  # the output's packages go without the recipe id (protocol 1 at its setup)
         self.divisor = 1
         self.inputs: dict[int, RecipeCodec] = {}
         self.started = False
@@ -175,6 +176,7 @@ class RtdeConnection(GuardedConnection):
         if ok:
             self.output = RecipeCodec.for_names(names, "output", model.catalogue)
             self.output_names = tuple(names)
+            self.bare = sent_without_recipe_id("controller", self.state.version)  # once, not per package
             self.divisor = max(1, math.floor(model.base_hz / frequency))
         if self.state.version == 1:
             self._send(gen.SetupOutputsV1Reply(variable_types=types))
@@ -224,7 +226,7 @@ class RtdeConnection(GuardedConnection):
         assert self.output is not None
         values = self.hub.model.values
         data = self.output.encode_package({n: values[n] for n in self.output_names}, recipe_id=1)
-        if sent_without_recipe_id("controller", self.state.version):
+        if self.bare:
             data = without_recipe_id(data)  # protocol 1: as a controller sends it (spec: data_recipe_id)
         if self.write(data):
             self.sent += 1
