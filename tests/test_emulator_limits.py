@@ -8,7 +8,7 @@ import time
 import pytest
 
 from rtde_spec._generated import rtde_models as gen
-from rtde_spec.emulator.ports.guard import ClientLimits
+from rtde_spec.emulator.ports.guard import ClientLimits, split_lines
 from rtde_spec.emulator.ports.script_framer import ScriptFramer
 from rtde_spec.emulator.server import EmulatorConfig, EmulatorThread
 from rtde_spec.errors import ProtocolError
@@ -163,3 +163,39 @@ def test_script_framer_cuts_lines_and_programs() -> None:
 def test_script_framer_refuses_bytes_that_are_no_text(data: bytes) -> None:
     with pytest.raises(ProtocolError):
         ScriptFramer().feed(data)
+
+
+class _Searched(bytearray):
+    """A held buffer that counts the bytes searched for line ends in it."""
+
+    scanned = 0
+
+    def split(self, *args: object, **kwargs: object) -> list[bytearray]:  # type: ignore[override]
+        _Searched.scanned += len(self)
+        return super().split(*args, **kwargs)  # type: ignore[arg-type]
+
+    def rfind(self, *args: object, **kwargs: object) -> int:  # type: ignore[override]
+        _Searched.scanned += len(self)
+        return super().rfind(*args, **kwargs)  # type: ignore[arg-type]
+
+
+def test_a_long_line_coming_in_small_reads_is_not_searched_again_on_every_read() -> None:
+    """A dashboard or interpreter client trickling a line up to the port's 1 MB limit in 100-byte
+    reads had the held bytes re-split on every read (6 s of the server's loop): each byte held is
+    now searched about once, and the lines still come out whole."""
+    _Searched.scanned = 0
+    buffer: bytearray = _Searched()
+    reads = [b"x" * 100] * 2000 + [b"x\nnext", b" line\n"]
+    got: list[bytearray] = []
+    for data in reads:
+        buffer, lines = split_lines(buffer if isinstance(buffer, _Searched) else _Searched(buffer), data)
+        got += lines
+    assert got == [b"x" * 200_001, b"next line"] and buffer == b""
+    assert _Searched.scanned < 2 * sum(map(len, reads))  # before: ~200 MB for these 200 kB
+
+    _Searched.scanned = 0
+    framer = ScriptFramer()
+    framer._held = _Searched()
+    scripts = [s for data in reads for s in framer.feed(data)]
+    assert "".join(scripts) == "x" * 200_001 + "\nnext line\n"
+    assert _Searched.scanned < 2 * sum(map(len, reads))

@@ -211,7 +211,11 @@ class GuardedConnection(asyncio.Protocol):
 
 def split_lines(buffer: bytearray, data: bytes) -> tuple[bytearray, list[bytearray]]:
     """`buffer` and `data` cut at each newline: what follows the last one (kept for the next read),
-    and the whole lines before it (the line ports: dashboard, interpreter socket)."""
+    and the whole lines before it (the line ports: dashboard, interpreter socket). Only `data` is
+    searched until a line ends: on the interpreter socket a line held up to the port's input limit
+    (1 MB), re-split on every read of 100 bytes, kept the server's loop busy for 6 s."""
     buffer += data
+    if b"\n" not in data:
+        return buffer, []
     lines = buffer.split(b"\n")
     return bytearray(lines.pop()), lines

@@ -47,6 +47,8 @@ class ScriptFramer:
                 actual=f"0x{data[bad.start()]:02x}",
             )
         self._held += data
+        if b"\n" not in data:  # the held line goes on: what came before is not searched again
+            return []
         cut = self._held.rfind(b"\n")
         if cut < 0:
             return []
