@@ -8,7 +8,7 @@ import pytest
 
 from rtde_spec import Catalogue, RecipeCodec
 from rtde_spec.output.base import flat_columns
-from rtde_spec.output.parquet import BLOCK_ROWS, native_columns
+from rtde_spec.output.parquet import block_rows, native_columns
 
 RECIPES = (
     ("timestamp",),
@@ -21,10 +21,13 @@ RECIPES = (
 
 
 @pytest.mark.parametrize("names", RECIPES)
-@pytest.mark.parametrize("rows", [0, 1, BLOCK_ROWS - 1, BLOCK_ROWS, BLOCK_ROWS + 1, 3 * BLOCK_ROWS + 7])
-def test_the_same_columns_as_flat_columns(names: tuple[str, ...], rows: int) -> None:
+@pytest.mark.parametrize("blocks", [0, 1, "one less", "one", "one more", "three and some"])
+def test_the_same_columns_as_flat_columns(names: tuple[str, ...], blocks: int | str) -> None:
     codec = RecipeCodec.for_names(list(names), "output", Catalogue.builtin())
     stride = codec.package_size + 70  # one package per row with capture headers between, as in a file
+    block = block_rows(stride)  # rows on both sides of a block's end
+    shift = {"one less": block - 1, "one": block, "one more": block + 1, "three and some": 3 * block + 7}
+    rows = shift.get(blocks, blocks)  # type: ignore[call-overload]
     raw = np.random.default_rng(rows).integers(0, 256, size=stride * (rows + 1), dtype=np.uint8)
     packages = np.ndarray((rows,), dtype=codec.dtype, buffer=raw, strides=(stride,))
     columns = {"connection": np.full(rows, "10.0.0.2:51000"), "capture_time": np.arange(rows, dtype=float)}
