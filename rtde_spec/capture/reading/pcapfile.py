@@ -20,20 +20,20 @@ from __future__ import annotations
 import mmap
 import os
 import struct
-import sys
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 from typing import IO, Any
 
 from rtde_spec.capture.reading.headers import count_cut, interface, seconds, snap_length
+from rtde_spec.capture.reading.mapping import give_back, mapped_file, populate
+from rtde_spec.capture.reading.mixed_sizes import next_differs, pcap_walked, pcapng_walked
 from rtde_spec.capture.reading.recordsync import MAX_BLOCK, next_pcap_record, next_pcapng_block, pcap_limit
-from rtde_spec.capture.reading.strides import count_cut_run, same_run, strided
+from rtde_spec.capture.reading.strides import EPB, count_cut_run, epb_run, same_run, strided
 from rtde_spec.errors import UsageError
 
 BLOCK = 8 << 20
 LATEST_TIME = float(1 << 33)  # seconds: the year 2242; a later (or negative) capture time is damage
-MADV_POPULATE_READ = getattr(mmap, "MADV_POPULATE_READ", 22)  # Linux's value; Python 3.11 lacks the name
 PCAPNG_SHB = 0x0A0D0D0A  # the same bytes in either byte order
 PCAPNG_BYTE_ORDER = 0x1A2B3C4D
 PCAP_MAGIC = {  # magic as read little-endian -> (byte order, seconds per timestamp unit)
@@ -42,7 +42,7 @@ PCAP_MAGIC = {  # magic as read little-endian -> (byte order, seconds per timest
     0xD4C3B2A1: (">", 1e-6),
     0x4D3CB2A1: (">", 1e-9),
 }
-EPB, IDB, SPB = 6, 1, 3  # pcapng block types read here
+IDB, SPB = 1, 3  # pcapng block types read here (and EPB)
 OTHER_FORMATS = {  # magic as read little-endian -> what the file is, for the error that refuses it
     0x34CDB2A1: ": a modified pcap, as a patched libpcap writes",
     0xA1B2CD34: ": a modified pcap, as a patched libpcap writes",
@@ -144,7 +144,7 @@ def _by_block(
     counted as cut off at the end). `carry`: bytes already read, from file position `start`.
     The pages of a block done leave memory `lag` blocks later (their views stay valid either
     way: a page given back is read again from the file when touched)."""
-    mapped = _mapped(f)
+    mapped = mapped_file(f)
     if mapped is None:
         yield from _read_blocks(f, carry, start, stats, parse, claim)
         return
@@ -158,7 +158,7 @@ def _by_block(
                 f"the file got shorter while it was read (byte {end} of {size} is gone)",
                 subject=f"file {getattr(f, 'name', '?')}",
             )
-        _populate(mapped, pos // page * page, end)
+        populate(mapped, pos // page * page, end)
         found = _Columns()
         reached = parse(mapped, pos, end, found)
         records = found.records(mapped, reached, stats)
@@ -171,20 +171,13 @@ def _by_block(
             continue
         done.append(pos)
         if len(done) > lag:
-            _give_back(mapped, done.pop(0), reached if not done else done[0])
+            give_back(mapped, done.pop(0), reached if not done else done[0])
         pos, window = reached, BLOCK
     if pos < size:
         _stopped(stats, pos, size - pos, claimed=claim(mapped, pos))
     grown = os.fstat(f.fileno()).st_size - size
     if grown > 0:  # a capture still being written: read as it was when opened
         stats["grew_bytes"] = stats.get("grew_bytes", 0) + grown
-
-
-def _give_back(mapped: mmap.mmap, start: int, end: int) -> None:
-    """The whole pages of file bytes start..end-1, done with, leave memory."""
-    page = mmap.ALLOCATIONGRANULARITY
-    if hasattr(mapped, "madvise") and end // page > start // page:
-        mapped.madvise(mmap.MADV_DONTNEED, start // page * page, (end // page - start // page) * page)
 
 
 def _stopped(stats: dict[str, int], at: int, unread: int, *, claimed: int = 0) -> None:
@@ -199,27 +192,6 @@ def _skipped(stats: dict[str, int], count: int) -> None:
     """`count` bytes from a record that cannot be one to the next whole record."""
     stats["bad_records"] = stats.get("bad_records", 0) + 1
     stats["skipped_file_bytes"] = stats.get("skipped_file_bytes", 0) + count
-
-
-def _populate(mapped: mmap.mmap, start: int, end: int) -> None:
-    """Map a block's pages in one call (Linux 5.14+) rather than a fault per few pages."""
-    if sys.platform == "linux":
-        try:
-            mapped.madvise(MADV_POPULATE_READ, start, end - start)
-        except OSError:  # an older kernel: the pages fault in as they are read
-            pass
-
-
-def _mapped(f: IO[bytes]) -> mmap.mmap | None:
-    """The whole file mapped read-only, or None where it cannot be (a pipe, an empty file).
-
-    A capture still being written is read up to its size when opened, as a read would
-    at that moment.
-    """
-    try:
-        return mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ)
-    except (OSError, ValueError, AttributeError):  # io.UnsupportedOperation is an OSError
-        return None
 
 
 def _read_blocks(
@@ -302,6 +274,11 @@ def _pcap(
             stride = 16 + caplen
             if pos + stride > end:
                 break
+            if caplen and pos + stride + 16 <= end and size_at(buf, pos + stride + 8)[0] != caplen:
+                file = (u32, fractions, linktype)  # sizes vary (data and ACK frames): one by one
+                pos, last = pcap_walked(found, stats, buf, pos, end, limit, size_at, file)
+                last_secs[:] = [last]
+                continue
             same = same_run(buf, pos, stride, (end - pos) // stride, 8, caplen, u32)
             if not caplen:  # no frame in them (a zero-filled stretch of the file reads as these)
                 stats["empty_records"] = stats.get("empty_records", 0) + same
@@ -353,13 +330,13 @@ def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int], lag: i
                 continue
             if pos + length > end:
                 break
+            if btype == EPB and length >= 32 and next_differs(buf, pos + length, end, order, length):
+                pos = pcapng_walked(found, stats, buf, pos, end, order, interfaces)  # data and ACKs
+                continue
             if btype == EPB and length >= 32:
                 u32 = np.dtype(order + "u4")
                 iface = struct.unpack_from(order + "I", buf, pos + 8)[0]
-                same = same_run(buf, pos, length, (end - pos) // length, 4, length, u32)
-                same = min(same, same_run(buf, pos, length, same, length - 4, length, u32))  # its end
-                same = min(same, same_run(buf, pos, length, same, 0, EPB, u32))
-                same = min(same, same_run(buf, pos, length, same, 8, iface, u32))
+                same = epb_run(buf, pos, length, end, u32, iface)
                 linktype, unit, shift = interfaces[iface] if iface < len(interfaces) else (-1, 1e-6, 0)
                 high, low, caplen = (strided(buf, pos + at, length, same, u32) for at in (12, 16, 20))
                 starts = pos + 28 + np.arange(same, dtype=np.int64) * length

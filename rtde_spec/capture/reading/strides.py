@@ -11,6 +11,8 @@ from typing import Any
 
 from rtde_spec.capture.reading.headers import count_cut
 
+EPB = 6  # pcapng's Enhanced Packet Block
+
 
 def count_cut_run(
     stats: dict[str, int], buf: Any, at: int, stride: int, same: int, lengths: Any, u32: Any, times: Any
@@ -51,3 +53,12 @@ def same_run(buf: Any, pos: int, stride: int, count: int, at: int, value: int, d
         done += n
         window *= 4
     return count
+
+
+def epb_run(buf: Any, pos: int, length: int, end: int, u32: Any, iface: int) -> int:
+    """How many pcapng Enhanced Packet Blocks of `length` bytes from `pos` on are alike: the same
+    length at both ends, the same block type and interface (at least 1)."""
+    same = same_run(buf, pos, length, (end - pos) // length, 4, length, u32)
+    same = min(same, same_run(buf, pos, length, same, length - 4, length, u32))  # its end
+    same = min(same, same_run(buf, pos, length, same, 0, EPB, u32))
+    return min(same, same_run(buf, pos, length, same, 8, iface, u32))
