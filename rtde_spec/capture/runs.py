@@ -15,7 +15,7 @@ from typing import Any
 from rtde_spec._generated.constants import DATA_PACKAGE_TYPE
 from rtde_spec.capture.protocols.rtde import RtdeConnection
 from rtde_spec.capture.reading.bulk import SIZE_AT, SIZE_BYTES, TYPE_AT
-from rtde_spec.capture.reading.packets import FIN, RST, SYN, Segment, expand
+from rtde_spec.capture.reading.packets import FIN, RST, SYN, Segment, expand, first_of
 from rtde_spec.capture.routing.flows import FlowTable, Route
 from rtde_spec.capture.tcp import MOD, RECENT
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
@@ -35,9 +35,12 @@ class Batcher:
         route = self.table.route_of(seg)
         if route is None:
             return
-        if self.run is not None:
-            if self.run.takes(route, seg):
+        run = self.run
+        if run is not None:
+            if run.takes(route, seg):
                 return
+            if route[0] is run.route[0] and _bare(seg) and not self.table.due(seg.time):
+                return  # the connection's ACK between its packages: nothing to deliver, the run goes on
             self.flush()
         self.run = Run.start(route, seg)
         if self.run is None:
@@ -47,7 +50,7 @@ class Batcher:
 
     def bulk(self, item: Any) -> None:
         """A block of same-shaped data segments the reader found at once: whole, or one by one."""
-        first = next(expand(item))
+        first = first_of(item)
         route = self.table.route_of(first)
         self.flush()  # segments held first, so the direction is where this run starts
         whole = Run.start(route, first) if route is not None else None
@@ -67,6 +70,13 @@ class Batcher:
 
 
 _NOT_DATA = SYN | FIN | RST
+
+
+def _bare(seg: Segment) -> bool:
+    """A segment with no data and no SYN, FIN or RST (an ACK, a window update): routing it
+    (`FlowTable.route_of`) is all it does. The peer of a 500 Hz stream sends one after nearly
+    every package, so a capture taken on either host has them between the packages of a run."""
+    return not seg.payload and not seg.flags & _NOT_DATA
 
 
 def feed(route: Route, seg: Segment) -> None:

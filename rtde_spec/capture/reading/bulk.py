@@ -43,10 +43,27 @@ class DataRun:
     size: int
     times: Any  # numpy float64, one per package
     rows: Any  # numpy uint8 (packages, size): one package per row
+    bare: Bare | None = None  # the connection's segments without data between the packages
 
 
-def runs(records: Records) -> list[tuple[int, int]]:
-    """(first, end) record indexes of every run of at least MIN_RUN data frames."""
+@dataclass
+class Bare:
+    """Segments of the run's connection without data or SYN, FIN, RST (the peer's ACKs), found
+    between the run's packages: routing them is all they do, so a run goes on over them. Kept
+    for `packets.expand`, which gives them back in their places when the run is read one by one."""
+
+    before: Any  # numpy int64: how many of the run's packages come before each
+    times: Any
+    reverse: Any  # numpy bool: sent by the run's receiver
+    seq: Any
+    ack: Any
+    flags: Any
+
+
+def runs(records: Records) -> list[tuple[int, int, Any]]:
+    """(first, end, data) of every run of at least MIN_RUN data frames in order on one connection
+    direction: its records first..end-1, of which `data` (record indexes) are its packages and the
+    rest segments without data of the same connection (None: all are packages)."""
     import numpy as np
 
     n = len(records.offsets)
@@ -79,25 +96,48 @@ def runs(records: Records) -> list[tuple[int, int]]:
     total = be(ip + 2, 2)
     end = np.where(total == 0, cap_end, ip + total)  # 0: segmentation offload, the frame's length
     size = end - pay
-    ok &= (end <= cap_end) & (size > 4) & ((at(tcp + 13) & NOT_DATA) == 0)
-    ok &= (at(pay + TYPE_AT) == DATA_PACKAGE_TYPE) & (be(pay + SIZE_AT, SIZE_BYTES) == size)
-    if not ok.any():
+    ok &= (end <= cap_end) & ((at(tcp + 13) & NOT_DATA) == 0) & ((at(tcp + 12) >> 4) * 4 >= TCP_MIN)
+    bare = ok & (size == 0)
+    ok &= (size > 4) & (at(pay + TYPE_AT) == DATA_PACKAGE_TYPE) & (be(pay + SIZE_AT, SIZE_BYTES) == size)
+    data = np.flatnonzero(ok)
+    if len(data) < MIN_RUN:
         return []
+    src, dst, ports = be(ip + 12, 4), be(ip + 16, 4), be(tcp, 4)
+    ends_a, ends_b = (src << 16) | (ports >> 16), (dst << 16) | (ports & 0xFFFF)
+    low, high = np.minimum(ends_a, ends_b), np.maximum(ends_a, ends_b)  # the connection, either way
+    before = np.maximum.accumulate(np.where(ok, np.arange(n), 0))  # the last data record up to each
+    bare &= (before < np.arange(n)) & (low == low[before]) & (high == high[before]) & ok[before]
+    breaks = np.cumsum(~ok & ~bare)  # records that end a run, up to each
     prefix = be(pay, PREFIX_BYTES)  # size, type and recipe id
-    key = [be(ip + 12, 4), be(ip + 16, 4), be(tcp, 4), size, prefix]  # addresses, ports, size, prefix
+    key = [src, dst, ports, size, prefix]
     seq = be(tcp + 4, 4)
-    follows = ok[1:] & ok[:-1] & (seq[1:] == (seq[:-1] + size[:-1]) % (1 << 32))
+    return _grouped(data, breaks, seq, size, key)
+
+
+def _grouped(data: Any, breaks: Any, seq: Any, size: Any, key: list[Any]) -> list[tuple[int, int, Any]]:
+    """The runs among the data records `data`: each follows the one before in sequence, with the
+    same `key`, and no record that ends a run between them (`breaks`: how many up to each)."""
+    import numpy as np
+
+    a, b = data[:-1], data[1:]  # each data record and the next
+    follows = (breaks[b - 1] == breaks[a]) & (seq[b] == (seq[a] + size[a]) % (1 << 32))
     for column in key:
-        follows &= column[1:] == column[:-1]
-    # run boundaries: a record that does not follow its predecessor starts a new piece
+        follows &= column[b] == column[a]
+    # run boundaries: a data record that does not follow the one before starts a new run
     starts = np.flatnonzero(np.concatenate(([True], ~follows)))
-    ends = np.append(starts[1:], n)
-    keep = ok[starts] & (ends - starts >= MIN_RUN)
-    return list(zip(starts[keep].tolist(), ends[keep].tolist(), strict=True))
+    ends = np.append(starts[1:], len(data))
+    keep = ends - starts >= MIN_RUN
+    found = []
+    for start, stop in zip(starts[keep].tolist(), ends[keep].tolist(), strict=True):
+        first, final = int(data[start]), int(data[stop - 1])
+        picks = data[start:stop] if final - first + 1 > stop - start else None
+        found.append((first, final + 1, picks))
+    return found
 
 
-def run_of(records: Records, first: int, end: int) -> DataRun:
-    """The DataRun of records first..end-1 (as `runs` found them)."""
+def run_of(records: Records, first: int, end: int, picks: Any = None) -> DataRun:
+    """The DataRun of records first..end-1 (as `runs` found them; `picks`: its packages' records
+    where segments without data come between them)."""
     import numpy as np
 
     buf = records.buf
@@ -106,7 +146,7 @@ def run_of(records: Records, first: int, end: int) -> DataRun:
     pay = tcp + (buf[tcp + 12] >> 4) * 4
     size = int.from_bytes(buf[pay + SIZE_AT : pay + SIZE_AT + SIZE_BYTES], "big")
     u8 = np.frombuffer(buf, dtype=np.uint8)  # header lengths may differ frame to frame (options)
-    offs = records.offsets[first:end]
+    offs = records.offsets[first:end] if picks is None else records.offsets[picks]
     ihl = (u8[offs + ETH] & 0x0F).astype(np.int64) * 4
     doff = (u8[offs + ETH + ihl + 12] >> 4).astype(np.int64) * 4
     starts = offs + ETH + ihl + doff
@@ -125,6 +165,21 @@ def run_of(records: Records, first: int, end: int) -> DataRun:
         dport,
         seq,
         size,
-        records.times[first:end],
+        records.times[first:end] if picks is None else records.times[picks],
         rows,
+        None if picks is None else _bare(records, u8, first, end, picks, buf[ip + 12 : ip + 16]),
     )
+
+
+def _bare(records: Records, u8: Any, first: int, end: int, picks: Any, src: bytes) -> Bare:
+    """The segments without data among records first..end-1 (all but `picks`), as `expand` needs them."""
+    import numpy as np
+
+    others = np.setdiff1d(np.arange(first, end), picks, assume_unique=True)
+    ip = records.offsets[others] + ETH
+    tcp = ip + (u8[ip] & 0x0F).astype(np.int64) * 4
+    word = np.array([1 << 24, 1 << 16, 1 << 8, 1], dtype=np.int64)
+    seq, ack = ((u8[(tcp + at)[:, None] + np.arange(4)] * word).sum(axis=1) for at in (4, 8))
+    reverse = (u8[(ip + 12)[:, None] + np.arange(4)] != np.frombuffer(src, dtype=np.uint8)).any(axis=1)
+    before = np.searchsorted(picks, others)
+    return Bare(before, records.times[others], reverse, seq, ack, u8[tcp + 13].astype(np.int64))

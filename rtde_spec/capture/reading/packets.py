@@ -283,14 +283,14 @@ def items(
                 number = counts["frames"] + 1  # of the block's first frame
                 counts["frames"] += len(offsets)
                 done = 0
-                for first, end in [*runs(records), (len(offsets), len(offsets))]:
+                for first, end, picks in [*runs(records), (len(offsets), len(offsets), None)]:
                     for k in range(done, first):
                         frame = buf[offsets[k] : offsets[k] + lengths[k]]
                         seg = _segment(times[k], links[k], frame, book, counts, number + k)
                         if seg is not None:
                             yield seg
                     if first < end:
-                        yield run_of(records, first, end)
+                        yield run_of(records, first, end, picks)
                     done = end
                 reached = records.upto
                 if progress is not None:
@@ -310,8 +310,21 @@ def segments(
             yield from expand(item)
 
 
+def first_of(run: DataRun) -> Segment:
+    """The first segment of a DataRun (its first package: what comes without data is after it)."""
+    row = run.rows[0].tobytes()
+    return Segment(float(run.times[0]), run.src, run.sport, run.dst, run.dport, run.seq, ACK_PSH, row)
+
+
 def expand(run: DataRun) -> Iterator[Segment]:
-    """The segments a DataRun stands for."""
+    """The segments a DataRun stands for, with those without data between them in their places."""
+    bare = run.bare
+    waiting = [] if bare is None else list(zip(*(c.tolist() for c in bare.__dict__.values()), strict=True))
+    waiting.reverse()  # the first last: popped in order
+    ends = ((run.src, run.sport, run.dst, run.dport), (run.dst, run.dport, run.src, run.sport))
     for i, (ts, row) in enumerate(zip(run.times.tolist(), run.rows, strict=True)):
+        while waiting and waiting[-1][0] <= i:
+            _, when, back, seq, ack, flags = waiting.pop()
+            yield Segment(when, *ends[back], seq, flags, b"", ack if flags & ACK else -1)
         seq = (run.seq + i * run.size) % (1 << 32)
-        yield Segment(ts, run.src, run.sport, run.dst, run.dport, seq, ACK_PSH, row.tobytes())
+        yield Segment(ts, *ends[0], seq, ACK_PSH, row.tobytes())
