@@ -143,3 +143,30 @@ def test_frames_read_one_by_one_still_batch_their_packages_over_the_acks(
     decode_to_directory(plain, tmp_path / "plain-out")
     got, want = (_table(tmp_path / f"{name}-out") for name in ("acked", "plain"))
     assert got.drop(["capture_time"]).equals(want.drop(["capture_time"]))
+
+
+@pytest.mark.parametrize("fmt", ["pcap", "pcapng"])
+def test_frames_a_snap_length_cut_are_counted_when_sizes_take_turns(tmp_path: Path, fmt: str) -> None:
+    """Records read in pairs or one by one still count the frames cut short (their original length
+    over what the file holds): each package's record says it had 10 bytes more."""
+    path = _session(tmp_path, "acked", 1, fmt)
+    data = bytearray(path.read_bytes())
+    pos, cut = (24, 0) if fmt == "pcap" else (0, 0)
+    while pos < len(data):
+        if fmt == "pcap":
+            caplen = int.from_bytes(data[pos + 8 : pos + 12], "little")
+            if caplen > 100:
+                data[pos + 12 : pos + 16] = (caplen + 10).to_bytes(4, "little")
+                cut += 1
+            pos += 16 + caplen
+        else:
+            kind, length = (int.from_bytes(data[pos + k : pos + k + 4], "little") for k in (0, 4))
+            if kind == 6 and int.from_bytes(data[pos + 20 : pos + 24], "little") > 100:
+                caplen = int.from_bytes(data[pos + 20 : pos + 24], "little")
+                data[pos + 24 : pos + 28] = (caplen + 10).to_bytes(4, "little")
+                cut += 1
+            pos += length
+    path.write_bytes(bytes(data))
+    stats: dict[str, int] = {}
+    assert sum(1 for _ in items(path, stats)) > 0
+    assert stats["cut_frames"] == cut >= PACKAGES

@@ -14,7 +14,7 @@ from collections.abc import Callable
 from typing import Any
 
 from rtde_spec.capture.reading.headers import count_cut, seconds
-from rtde_spec.capture.reading.strides import EPB
+from rtde_spec.capture.reading.strides import EPB, same_run, strided
 
 RUN_MIN = 16  # records of one size in a row: the walk stops before them, the strided reading takes them
 SizeAt = Callable[[Any, int], tuple[int, ...]]
@@ -127,3 +127,34 @@ def pcapng_walked(
 def next_differs(buf: Any, pos: int, end: int, order: str, length: int) -> bool:
     """Whether a pcapng block starts at `pos` in this block of the file with another length."""
     return pos + 8 <= end and struct.unpack_from(order + "I", buf, pos + 4)[0] != length
+
+
+def pcap_pairs(
+    found: Any, stats: dict[str, int], buf: Any, pos: int, end: int, sizes: tuple[int, int], file: Any
+) -> tuple[int, int] | None:
+    """Records of two sizes taking turns (each package, then the peer's ACK: most of a real
+    capture) read as one strided run of pairs; where they stop and the last one's whole seconds,
+    or None when fewer than RUN_MIN pairs follow (they are walked)."""
+    import numpy as np
+
+    u32, fractions, linktype = file
+    if not all(sizes):  # no frame in the second record, or more than the snap length allows
+        return None
+    one = 16 + sizes[0]
+    pair = one + 16 + sizes[1]
+    count = same_run(buf, pos, pair, (end - pos) // pair, 8, sizes[0], u32)
+    if count >= RUN_MIN:
+        count = min(count, same_run(buf, pos + one, pair, count, 8, sizes[1], u32))
+    if count < RUN_MIN:
+        return None
+    both = np.empty((4, count, 2), dtype=np.int64)  # secs, fractions, originals, starts; each pair's two
+    for side, at in enumerate((pos, pos + one)):
+        for row, field in enumerate((0, 4, 12)):
+            both[row, :, side] = strided(buf, at + field, pair, count, u32)
+        both[3, :, side] = at + 16 + np.arange(count, dtype=np.int64) * pair
+    secs, fracs, originals, starts = (column.reshape(-1) for column in both)
+    lengths = np.tile(np.array(sizes, dtype=np.int64), count)
+    times = secs + fracs / fractions
+    found.add(starts, lengths, times, linktype)
+    count_cut(stats, lengths, originals, times)
+    return pos + count * pair, int(secs[-1])

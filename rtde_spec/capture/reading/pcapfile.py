@@ -27,7 +27,7 @@ from typing import IO, Any
 
 from rtde_spec.capture.reading.headers import count_cut, interface, seconds, snap_length
 from rtde_spec.capture.reading.mapping import give_back, mapped_file, populate
-from rtde_spec.capture.reading.mixed_sizes import next_differs, pcap_walked, pcapng_walked
+from rtde_spec.capture.reading.mixed_sizes import next_differs, pcap_pairs, pcap_walked, pcapng_walked
 from rtde_spec.capture.reading.recordsync import MAX_BLOCK, next_pcap_record, next_pcapng_block, pcap_limit
 from rtde_spec.capture.reading.strides import EPB, count_cut_run, epb_run, same_run, strided
 from rtde_spec.errors import UsageError
@@ -275,8 +275,10 @@ def _pcap(
             if pos + stride > end:
                 break
             if caplen and pos + stride + 16 <= end and size_at(buf, pos + stride + 8)[0] != caplen:
-                file = (u32, fractions, linktype)  # sizes vary (data and ACK frames): one by one
-                pos, last = pcap_walked(found, stats, buf, pos, end, limit, size_at, file)
+                file, other = (u32, fractions, linktype), size_at(buf, pos + stride + 8)[0]
+                sizes = (caplen, other if other <= limit else 0)  # sizes vary (data and ACK frames):
+                got = pcap_pairs(found, stats, buf, pos, end, sizes, file)  # in turns, or one by one
+                pos, last = got or pcap_walked(found, stats, buf, pos, end, limit, size_at, file)
                 last_secs[:] = [last]
                 continue
             same = same_run(buf, pos, stride, (end - pos) // stride, 8, caplen, u32)
