@@ -122,7 +122,9 @@ def parallel_rows(files: list[Path], out: Path, rounds: int) -> dict[str, list[f
     return got
 
 
-def make_capture(path: Path, packages: int, server: str = "10.0.0.10") -> None:
+def make_capture(path: Path, packages: int, server: str = "10.0.0.10", acks: bool = False) -> None:
+    """`packages` data packages of the 58-field recipe after a recorder's setup; `acks`: the
+    client's ACK after each, as a capture taken on either host has them."""
     names = UR_RTDE_DEFAULT_OUTPUTS
     cat = Catalogue.builtin()
     codec = RecipeCodec.for_names(names, "output", cat)
@@ -139,6 +141,8 @@ def make_capture(path: Path, packages: int, server: str = "10.0.0.10") -> None:
     size = codec.package_size
     for i in range(packages):
         conv.send("server", raw[i * size : (i + 1) * size])
+        if acks:
+            conv.resend(conv.bare("client"), dt=0.0001)
     write(path, [conv])
     raw_path.unlink()
 

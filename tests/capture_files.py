@@ -65,6 +65,14 @@ class Conversation:
         self.seq[side] += len(data)
         return seq, frame
 
+    def bare(self, side: str) -> bytes:
+        """A segment of `side` without data acknowledging what the other side sent (not added)."""
+        frame = dpkt.ethernet.Ethernet(self._frame(side, self.seq[side], b"", ACK))
+        tcp = frame.data.data
+        tcp.ack, tcp.sum = self.seq["server" if side == "client" else "client"], 0
+        frame.data.sum = 0
+        return bytes(frame)
+
     def resend(self, frame: bytes, dt: float = 0.001) -> None:
         self.time += dt
         self.frames.append((self.time, frame))
