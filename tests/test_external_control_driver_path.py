@@ -325,3 +325,35 @@ def test_after_a_stall_of_the_server_a_speedj_per_step_still_lasts_one_step() ->
     assert model.program is None  # ended
     moved = model.arm.state.q[0] - HOME_Q[0]
     assert moved == pytest.approx(100 * 0.002 * 0.1, abs=2e-4)  # 100 steps at 0.1 rad/s, ramps aside
+
+
+LATE_SPEEDS = """def late_speeds():
+  start = get_actual_joint_positions()
+  i = 0
+  while i < 40:
+    speedj([0, 0, 0, 0, 0, 0.5], 1000.0, 0.002)
+    j = 0
+    while j < 3000:
+      j = j + 1
+    end
+    i = i + 1
+  end
+  stopj(1000.0)
+  q = get_actual_joint_positions()
+  textmsg("wrist 3 moved ", q[5] - start[5])
+end
+"""
+
+
+def test_a_held_speed_waits_for_its_thread_when_the_program_is_late(session: Session) -> None:
+    """Each speedj asks for one control step of speed; the thread then computes longer than a step
+    (as URCL's jointSplineStep can on a loaded machine), so it is preempted before its next speedj.
+    The arm waits for it: each speed lasts its step, and wrist 3 moves 40 x 2 ms x 0.5 rad/s. It ran
+    on meanwhile, and URCL's spline_example, run after its other examples, hit wrist 3's 2π limit."""
+    s = session
+    s.primary.wait(lambda w: w.mode is not None, 5, "a Robot State")
+    s.primary.send(LATE_SPEEDS)
+    s.primary.wait_text("wrist 3 moved", 60)
+    moved = float(next(t for t in s.primary.texts if "wrist 3 moved" in t).split()[-1])
+    assert moved == pytest.approx(40 * 0.002 * 0.5, abs=5e-4)  # ramps of a=1000 rad/s² aside
+    assert not s.primary.exceptions

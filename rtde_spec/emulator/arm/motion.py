@@ -10,6 +10,7 @@ v=0.25 m/s. Joint speeds never exceed the arm's published maxima.
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -94,9 +95,19 @@ class Motion:
     line: int = 0  # the script line that started it, for a fault on the way
     holds: bool = False  # speedj/speedl keep their velocity after the call returns
     ends_moving: bool = False  # the step that ends it reports its speed; the arm rests a step later
+    thread_late: Callable[[], bool] | None = None  # its program thread still late for its next command
 
     def __init__(self, start: State) -> None:
         self.start, self.t, self.last = start, 0.0, start
+
+    @property
+    def overdue(self) -> bool:
+        """A held speed past the time its call asked for, while the thread that commanded it,
+        preempted on a loaded machine, has not reached its next command: the arm waits for the
+        thread (a controller's is there in time) instead of running the speed on. URCL's spline
+        is one speedj per step: each step the program was late moved the arm a step too far, and
+        its QUINTIC example took wrist 3 to its 2π limit instead of 5.41 rad."""
+        return self.holds and self.done and self.thread_late is not None and self.thread_late()
 
     def step(self, dt: float) -> State:
         self.t += dt

@@ -44,6 +44,8 @@ class Arm:
                 self.state = rest(self.state.q)
                 self.revision += 1
             return
+        if self.motion.overdue:  # a held speed waits for its late thread's next command
+            return
         self.revision += 1
         self.state = self.motion.step(dt)
         if self.motion.done and not self.motion.holds:

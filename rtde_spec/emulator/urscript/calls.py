@@ -90,8 +90,9 @@ def _start(program: Runner, stmt: Stmt, motion: Motion, blend: float = 0.0) -> W
     """Run `motion`; the wait ends once it is done (or blends), never before the next control step:
     a move to where the arm already is takes its step too, as on the controller, so a thread that
     repeats one (ur_rtde's servoc thread) yields instead of spinning."""
-    arm = program.robot.arm
+    arm, thread = program.robot.arm, program.current
     motion.blend, motion.line = max(0.0, blend), stmt.line
+    motion.thread_late = lambda: thread.preempted and not thread.done  # Motion.overdue
     arm.move(motion)
     started = program.clock
 
@@ -250,10 +251,8 @@ def popup(program: Runner, stmt: Stmt, args: Args, kwargs: Kwargs) -> WaitFactor
     the program pauses there, as a dashboard `pause` does, and `play` continues it."""
     text = to_str(arg(stmt, args, kwargs, 0, "s"))
     title = to_str(arg(stmt, args, kwargs, 1, "title", "Popup"))
-    warning, error = (
-        bool(arg(stmt, args, kwargs, 2, "warning", False)),
-        bool(arg(stmt, args, kwargs, 3, "error", False)),
-    )
+    warning = bool(arg(stmt, args, kwargs, 2, "warning", False))
+    error = bool(arg(stmt, args, kwargs, 3, "error", False))
     program.robot.emit(ScriptEvent("popup", text, stmt.line, title=title, warning=warning, error=error))
     pause = getattr(program.robot, "pause_program", None)
     if arg(stmt, args, kwargs, 4, "blocking", False) is not True or pause is None:

@@ -33,5 +33,6 @@ class Runner(Protocol):
     name: str
     applied: list[str]
     finished: bool
+    current: Any  # the thread running the call (script_threads.ScriptThread)
 
     def wait_for(self, done: Callable[[], bool]) -> Wait: ...
