@@ -122,3 +122,32 @@ def test_a_refused_programs_log_line_holds_no_control_characters_or_lone_surroga
     (line,) = [r.getMessage() for r in caplog.records if "refused" in r.getMessage()]
     line.encode("utf-8")  # no lone surrogate left
     assert "\\udcff" in line and "\\x1b[2J" in line and "\x1b" not in line
+
+
+def test_a_long_program_sent_again_starts_without_being_parsed_again() -> None:
+    """URCL sends its 49 kB program again for each test, then waits 100 ms for it to connect back;
+    parsing it took most of the ~60-200 ms the emulator needed. The second program runs the tree the
+    first one's parse made, with tables of its own (interpreter mode adds functions to them)."""
+    config = EmulatorConfig(
+        rtde_port=None, primary_port=0, secondary_port=None, realtime_port=None, dashboard_port=None
+    )
+    body = "".join(f"  x{i} = {i}\n" for i in range(2500))  # over 16 kB: read off the control loop
+    program = f"def driver():\n  def helper():\n    return 1\n  end\n{body}  sleep(30)\nend\n"
+    emu = EmulatorThread(config).start()
+    try:
+        model = emu.emulator.model
+        started = []
+        with PrimaryClient("127.0.0.1", emu.ports["primary"]) as client:
+            for _ in range(2):
+                client.send_script(program)
+                deadline = time.monotonic() + 10
+                while model.program in (None, *started) and time.monotonic() < deadline:
+                    time.sleep(0.01)
+                assert model.program is not None and model.program not in started
+                started.append(model.program)
+        first, second = (p.script for p in started)
+        assert second.functions["helper"] is first.functions["helper"]  # the same tree: parsed once
+        assert second.functions is not first.functions and second.main is not first.main
+        assert model.program is started[1] and model.program.fault is None
+    finally:
+        emu.stop()

@@ -36,7 +36,7 @@ from rtde_spec.emulator.arm.state import Arm
 from rtde_spec.emulator.controller import runstate
 from rtde_spec.emulator.controller.modes import RobotModes
 from rtde_spec.emulator.controller.program import PROGRAM_ERRORS, Program, runtime_text
-from rtde_spec.emulator.urscript import ScriptFault, parse
+from rtde_spec.emulator.urscript import ScriptFault, parse_program
 from rtde_spec.emulator.urscript.events import ScriptEvent
 from rtde_spec.emulator.urscript.program_globals import global_names
 from rtde_spec.metamodel.arms import arm_model
@@ -278,7 +278,7 @@ class ControllerModel(RobotModes):
     def _compile(self, text: str) -> Program | ScriptEvent:
         """The program, ready to run, or the event that refuses it (any thread may run this)."""
         try:
-            return Program(parse(text), self)
+            return Program(parse_program(text), self)
         except ScriptFault as fault:
             return ScriptEvent("runtime_exception", fault.text, fault.line, fault.column)
         except PROGRAM_ERRORS as exc:  # nested past Python's limits, a number of 5,000 digits

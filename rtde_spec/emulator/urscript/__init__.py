@@ -6,6 +6,6 @@ on the control step. The grammar is `grammar.ebnf` beside this file.
 """
 
 from rtde_spec.emulator.urscript.nodes import Branch, Expr, Function, Script, ScriptFault, Stmt
-from rtde_spec.emulator.urscript.parser import parse
+from rtde_spec.emulator.urscript.parser import parse, parse_program
 
-__all__ = ["Branch", "Expr", "Function", "Script", "ScriptFault", "Stmt", "parse"]
+__all__ = ["Branch", "Expr", "Function", "Script", "ScriptFault", "Stmt", "parse", "parse_program"]

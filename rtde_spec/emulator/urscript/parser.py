@@ -12,6 +12,9 @@ may nest; they are hoisted into one table, as the controller resolves names prog
 
 from __future__ import annotations
 
+import threading
+from collections import OrderedDict
+
 from rtde_spec.emulator.urscript.expression_parser import ExpressionParser
 from rtde_spec.emulator.urscript.lexer import Token
 from rtde_spec.emulator.urscript.nodes import Branch, Expr, Function, Script, ScriptFault, Stmt
@@ -20,6 +23,10 @@ from rtde_spec.emulator.urscript.token_stream import KEYWORDS
 MAX_PROGRAM = 4 << 20  # characters of one program (a controller refuses much smaller ones)
 _BARE = {"halt", "enter_critical", "exit_critical"}
 _BLOCK_END = {"end", "elif", "else"}
+KEPT_TREES = 8  # the last long programs read, kept parsed (parse_program)
+KEPT_FROM = 4 << 10  # characters: a shorter program parses within a fraction of a control step
+_kept: OrderedDict[str, Script] = OrderedDict()
+_kept_lock = threading.Lock()
 
 
 def parse(text: str) -> Script:
@@ -27,6 +34,27 @@ def parse(text: str) -> Script:
     if len(text) > MAX_PROGRAM:
         raise ScriptFault(f"syntax_error_on_line:1:program over {MAX_PROGRAM} characters", 1, 1)
     return _Parser(text).script()
+
+
+def parse_program(text: str) -> Script:
+    """`parse(text)` for a program to run, from the last KEPT_TREES long ones when it is one of them.
+
+    A driver sends the same program again and again (URCL's, 49 kB, for each of its tests, then
+    waits 100 ms for it to connect back); parsing it was most of that time. Programs share the
+    tree, which nothing changes once the checker has marked it, but each has its own tables
+    (interpreter mode adds functions to its program's)."""
+    with _kept_lock:
+        tree = _kept.get(text)
+        if tree is not None:
+            _kept.move_to_end(text)
+    if tree is None:
+        tree = parse(text)
+        if len(text) >= KEPT_FROM:
+            with _kept_lock:
+                _kept[text] = tree
+                while len(_kept) > KEPT_TREES:
+                    _kept.popitem(last=False)
+    return Script(dict(tree.functions), list(tree.main), tree.name, tree.secondary, tree.wrapped)
 
 
 class _Parser(ExpressionParser):
