@@ -357,3 +357,45 @@ def test_a_held_speed_waits_for_its_thread_when_the_program_is_late(session: Ses
     moved = float(next(t for t in s.primary.texts if "wrist 3 moved" in t).split()[-1])
     assert moved == pytest.approx(40 * 0.002 * 0.5, abs=5e-4)  # ramps of a=1000 rad/s² aside
     assert not s.primary.exceptions
+
+
+SPEEDS = """def speeds():
+  start = get_actual_joint_positions()
+  i = 0
+  while i < 40:
+    speedj([0, 0, 0, 0, 0, 0.5], 1000.0, 0.002)
+    i = i + 1
+  end
+  stopj(1000.0)
+  q = get_actual_joint_positions()
+  textmsg("wrist 3 moved ", q[5] - start[5])
+end
+"""
+
+
+def test_a_one_step_speedj_under_a_slider_a_hair_below_one_half_lasts_two_steps(session: Session) -> None:
+    """URCL's rtde_client example takes the speed slider down by 0.01 fifty times and leaves it at
+    0.49999999999999956. Two steps of that slider's time fell short of a speedj's 2 ms by 4e-19 s,
+    so each speedj ran a third step: URCL's spline_example, run after that example, went 1.5x as far
+    along its spline and hit wrist 3's 2π limit. 40 speedj at 0.5 rad/s move it 40 x 2 ms x 0.5."""
+    s, slider = session, 1.0
+    for _ in range(50):
+        slider -= 0.01
+    client = RtdeClient("127.0.0.1", s.emu.ports["rtde"]).connect()
+    try:
+        client.setup_outputs(["timestamp"], 10)
+        recipe = client.setup_inputs(["speed_slider_mask", "speed_slider_fraction"])
+        client.start()
+        client.send(recipe, speed_slider_mask=1, speed_slider_fraction=slider)
+        deadline = time.monotonic() + 5
+        while s.emu.emulator.model.values["target_speed_fraction"] != slider:
+            assert time.monotonic() < deadline, "the slider was not set"
+            time.sleep(0.01)
+    finally:
+        client.close()
+    s.primary.wait(lambda w: w.mode is not None, 5, "a Robot State")
+    s.primary.send(SPEEDS)
+    s.primary.wait_text("wrist 3 moved", 30)
+    moved = float(next(t for t in s.primary.texts if "wrist 3 moved" in t).split()[-1])
+    assert moved == pytest.approx(40 * 0.002 * 0.5, abs=5e-4)  # ramps of a=1000 rad/s² aside
+    assert not s.primary.exceptions

@@ -22,6 +22,7 @@ from rtde_spec.metamodel.arms import ArmModel
 
 MOVEJ_A, MOVEJ_V = 1.4, 1.05
 MOVEL_A, MOVEL_V = 1.2, 0.25
+TIME_SLACK = 1e-9  # s: a motion this close to its end is done (float sums of its steps)
 Vec = NDArray[np.float64]
 Floats = kin.Floats
 
@@ -119,7 +120,11 @@ class Motion:
 
     @property
     def done(self) -> bool:
-        return self.t >= self.duration
+        """Its time is over. Slack for the sum of steps: a speed slider of 1 - 50 x 0.01 (URCL's
+        rtde_client example leaves 0.49999999999999956) made two steps of a speedj of one step
+        fall short of it, and each speedj of URCL's spline ran a third step: the spline went 1.5x
+        as far, to wrist 3's limit."""
+        return self.t >= self.duration - TIME_SLACK
 
     @property
     def duration(self) -> float:
