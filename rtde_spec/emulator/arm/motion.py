@@ -97,9 +97,20 @@ class Motion:
     holds: bool = False  # speedj/speedl keep their velocity after the call returns
     ends_moving: bool = False  # the step that ends it reports its speed; the arm rests a step later
     thread_late: Callable[[], bool] | None = None  # its program thread still late for its next command
+    hold: float = 0.0  # s a speed asked for (speedj/speedl's t; 0: until its ramp ends)
+    step_dt: float = 0.0  # the trajectory time of its last step
 
     def __init__(self, start: State) -> None:
         self.start, self.t, self.last = start, 0.0, start
+
+    def follow(self, last: Motion) -> None:
+        """Start after `last`. A held speed's time ends inside a step when the speed slider is not
+        1 (a speedj of 2 ms at 0.49 is 2.04 steps): the part of its last step past that time counts
+        against this speed's own, so a program's speeds last what it asked for in sum. Each of URCL's
+        spline speedjs ran 3 steps at 0.49, its spline went 1.47x as far, to wrist 3's limit."""
+        over = last.t - last.duration
+        if self.holds and self.hold > 0 and last.holds and 0 < over <= last.step_dt:
+            self.hold = max(self.hold - over, TIME_SLACK)
 
     @property
     def overdue(self) -> bool:
@@ -111,7 +122,7 @@ class Motion:
         return self.holds and self.done and self.thread_late is not None and self.thread_late()
 
     def step(self, dt: float) -> State:
-        self.t += dt
+        self.t, self.step_dt = self.t + dt, dt
         self.last = self.sample(self.t)
         return self.last
 
@@ -257,7 +268,7 @@ class LinearSpeed(Motion):
         self.q = start.q.copy()
 
     def step(self, dt: float) -> State:
-        self.t += dt
+        self.t, self.step_dt = self.t + dt, dt
         f = min(1.0, self.t / self.ramp) if self.ramp > 0 else 1.0
         xd = self.initial + (self.target - self.initial) * f
         self.pose[:3, 3] += xd[:3] * dt

@@ -34,6 +34,8 @@ class Arm:
         return self.motion is not None
 
     def move(self, motion: Motion) -> None:
+        if self.motion is not None and self.motion.done:
+            motion.follow(self.motion)  # a held speed's time past its end counts against the next's
         self.motion = motion
 
     def step(self, dt: float) -> None:
