@@ -25,6 +25,7 @@ _BARE = {"halt", "enter_critical", "exit_critical"}
 _BLOCK_END = {"end", "elif", "else"}
 KEPT_TREES = 8  # the last long programs read, kept parsed (parse_program)
 KEPT_FROM = 4 << 10  # characters: a shorter program parses within a fraction of a control step
+KEPT_CHARS = 1 << 20  # characters of the programs kept, all told (a tree holds ~15 bytes a character)
 _kept: OrderedDict[str, Script] = OrderedDict()
 _kept_lock = threading.Lock()
 
@@ -49,10 +50,10 @@ def parse_program(text: str) -> Script:
             _kept.move_to_end(text)
     if tree is None:
         tree = parse(text)
-        if len(text) >= KEPT_FROM:
+        if KEPT_FROM <= len(text) <= KEPT_CHARS:
             with _kept_lock:
                 _kept[text] = tree
-                while len(_kept) > KEPT_TREES:
+                while len(_kept) > KEPT_TREES or sum(map(len, _kept)) > KEPT_CHARS:
                     _kept.popitem(last=False)
     return Script(dict(tree.functions), list(tree.main), tree.name, tree.secondary, tree.wrapped)
 
