@@ -22,7 +22,9 @@ from rtde_spec._generated.constants import (
 )
 from rtde_spec.capture.reading.pcapfile import Records
 
-ETHERNET, IPV4, TCP = 1, 0x0800, 6
+ETHERNET, IPV4, TCP, VLAN_TAG = 1, 0x0800, 6, 0x8100
+COOKED = ((113, 14, 16), (276, 0, 20))  # Linux cooked v1, v2: link type, protocol at, IP at
+LOOPBACK, RAW_IP = (0, 108), (101, 12, 14, 228)  # link types: a 4-byte family / nothing before IP
 ETH, IP_MIN, TCP_MIN = 14, 20, 20
 NOT_DATA = 0x07  # FIN, SYN, RST
 MIN_RUN = 16  # shorter runs are handed back frame by frame
@@ -67,12 +69,13 @@ def runs(records: Records) -> list[tuple[int, int, Any]]:
     import numpy as np
 
     n = len(records.offsets)
-    if n < MIN_RUN or not (records.links == ETHERNET).any():
+    if n < MIN_RUN:
         return []
     u8 = np.frombuffer(records.buf, dtype=np.uint8)
     last = len(u8) - 1
     off = records.offsets
     cap_end = off + records.lengths
+    ip, ok = ip_offsets(u8, off, records.links)
 
     def at(index: Any) -> Any:
         return u8[np.minimum(index, last)].astype(np.int64)
@@ -83,9 +86,7 @@ def runs(records: Records) -> list[tuple[int, int, Any]]:
             value = (value << 8) | at(index + k)
         return value
 
-    ip = off + ETH
-    ok = (records.links == ETHERNET) & (cap_end >= ip + IP_MIN + TCP_MIN)
-    ok &= be(off + 12, 2) == IPV4
+    ok &= cap_end >= ip + IP_MIN + TCP_MIN
     ok &= (at(ip) >> 4) == 4
     ok &= at(ip + 9) == TCP
     ok &= (be(ip + 6, 2) & 0x3FFF) == 0  # not a fragment
@@ -103,26 +104,33 @@ def runs(records: Records) -> list[tuple[int, int, Any]]:
     if len(data) < MIN_RUN:
         return []
     src, dst, ports = be(ip + 12, 4), be(ip + 16, 4), be(tcp, 4)
-    ends_a, ends_b = (src << 16) | (ports >> 16), (dst << 16) | (ports & 0xFFFF)
-    low, high = np.minimum(ends_a, ends_b), np.maximum(ends_a, ends_b)  # the connection, either way
-    before = np.maximum.accumulate(np.where(ok, np.arange(n), 0))  # the last data record up to each
-    bare &= (before < np.arange(n)) & (low == low[before]) & (high == high[before]) & ok[before]
-    breaks = np.cumsum(~ok & ~bare)  # records that end a run, up to each
-    prefix = be(pay, PREFIX_BYTES)  # size, type and recipe id
-    key = [src, dst, ports, size, prefix]
-    seq = be(tcp + 4, 4)
-    return _grouped(data, breaks, seq, size, key)
+    between = None  # the records between each data record and the next end no run (all data: none)
+    if len(data) < n:
+        if bare.any():
+            ends_a, ends_b = (src << 16) | (ports >> 16), (dst << 16) | (ports & 0xFFFF)
+            low, high = np.minimum(ends_a, ends_b), np.maximum(ends_a, ends_b)  # the connection
+            before = np.maximum.accumulate(np.where(ok, np.arange(n), 0))  # the last data record up to each
+            bare &= (before < np.arange(n)) & (low == low[before]) & (high == high[before]) & ok[before]
+        breaks = np.cumsum(~ok & ~bare)  # records that end a run, up to each
+        between = breaks[data[1:] - 1] == breaks[data[:-1]]
+    key = [src, dst, ports, size, be(pay, PREFIX_BYTES)]  # addresses, ports, size, prefix
+    return _grouped(data, between, be(tcp + 4, 4), size, key, len(data) < n)
 
 
-def _grouped(data: Any, breaks: Any, seq: Any, size: Any, key: list[Any]) -> list[tuple[int, int, Any]]:
-    """The runs among the data records `data`: each follows the one before in sequence, with the
-    same `key`, and no record that ends a run between them (`breaks`: how many up to each)."""
+def _grouped(
+    data: Any, between: Any, seq: Any, size: Any, key: list[Any], picked: bool
+) -> list[tuple[int, int, Any]]:
+    """The runs among the data records `data` (`picked`: not all the records): each follows the
+    one before in sequence, with the same `key`, and nothing that ends a run `between` them."""
     import numpy as np
 
-    a, b = data[:-1], data[1:]  # each data record and the next
-    follows = (breaks[b - 1] == breaks[a]) & (seq[b] == (seq[a] + size[a]) % (1 << 32))
+    if picked:  # the data records' values, side by side
+        seq, size, key = seq[data], size[data], [column[data] for column in key]
+    follows = seq[1:] == (seq[:-1] + size[:-1]) % (1 << 32)
+    if between is not None:
+        follows &= between
     for column in key:
-        follows &= column[b] == column[a]
+        follows &= column[1:] == column[:-1]
     # run boundaries: a data record that does not follow the one before starts a new run
     starts = np.flatnonzero(np.concatenate(([True], ~follows)))
     ends = np.append(starts[1:], len(data))
@@ -135,21 +143,53 @@ def _grouped(data: Any, breaks: Any, seq: Any, size: Any, key: list[Any]) -> lis
     return found
 
 
+def ip_offsets(u8: Any, offsets: Any, links: Any) -> tuple[Any, Any]:
+    """Where each record's IPv4 header starts, and whether it has one after a link header read
+    here: Ethernet (and one 802.1Q tag, as a switch's mirror port keeps it), Linux cooked v1 and
+    v2 (`tcpdump -i any`), BSD loopback, raw IP. Other frames are read one by one (packets.py)."""
+    import numpy as np
+
+    last = len(u8) - 2
+
+    def be2(index: Any) -> Any:
+        index = np.minimum(index, last)
+        return (u8[index].astype(np.int64) << 8) | u8[index + 1]
+
+    l2 = np.full(len(offsets), -1, dtype=np.int64)
+    ethernet = links == ETHERNET
+    if ethernet.any():
+        kind = be2(offsets + 12)
+        l2[ethernet & (kind == IPV4)] = ETH
+        tagged = ethernet & (kind == VLAN_TAG)
+        if tagged.any():
+            l2[tagged & (be2(offsets + 16) == IPV4)] = ETH + 4
+    for link, at, size in COOKED:
+        mine = links == link
+        if mine.any():
+            l2[mine & (be2(offsets + at) == IPV4)] = size
+    for kinds, size in ((LOOPBACK, 4), (RAW_IP, 0)):
+        mine = np.isin(links, kinds)
+        if mine.any():
+            l2[mine] = size
+    return offsets + np.maximum(l2, 0), l2 >= 0
+
+
 def run_of(records: Records, first: int, end: int, picks: Any = None) -> DataRun:
     """The DataRun of records first..end-1 (as `runs` found them; `picks`: its packages' records
     where segments without data come between them)."""
     import numpy as np
 
     buf = records.buf
-    ip = int(records.offsets[first]) + ETH
+    u8 = np.frombuffer(buf, dtype=np.uint8)  # header lengths may differ frame to frame (options)
+    chosen = slice(first, end) if picks is None else picks
+    ips, _ = ip_offsets(u8, records.offsets[chosen], records.links[chosen])
+    ip = int(ips[0])
     tcp = ip + (buf[ip] & 0x0F) * 4
     pay = tcp + (buf[tcp + 12] >> 4) * 4
     size = int.from_bytes(buf[pay + SIZE_AT : pay + SIZE_AT + SIZE_BYTES], "big")
-    u8 = np.frombuffer(buf, dtype=np.uint8)  # header lengths may differ frame to frame (options)
-    offs = records.offsets[first:end] if picks is None else records.offsets[picks]
-    ihl = (u8[offs + ETH] & 0x0F).astype(np.int64) * 4
-    doff = (u8[offs + ETH + ihl + 12] >> 4).astype(np.int64) * 4
-    starts = offs + ETH + ihl + doff
+    ihl = (u8[ips] & 0x0F).astype(np.int64) * 4
+    doff = (u8[ips + ihl + 12] >> 4).astype(np.int64) * 4
+    starts = ips + ihl + doff
     stride = int(starts[1] - starts[0]) if len(starts) > 1 else size
     if (np.diff(starts) == stride).all() and stride >= size:  # records evenly spaced: a strided view
         rows = np.ndarray(
@@ -176,7 +216,7 @@ def _bare(records: Records, u8: Any, first: int, end: int, picks: Any, src: byte
     import numpy as np
 
     others = np.setdiff1d(np.arange(first, end), picks, assume_unique=True)
-    ip = records.offsets[others] + ETH
+    ip, _ = ip_offsets(u8, records.offsets[others], records.links[others])
     tcp = ip + (u8[ip] & 0x0F).astype(np.int64) * 4
     word = np.array([1 << 24, 1 << 16, 1 << 8, 1], dtype=np.int64)
     seq, ack = ((u8[(tcp + at)[:, None] + np.arange(4)] * word).sum(axis=1) for at in (4, 8))
