@@ -45,21 +45,37 @@ class DataRun:
     size: int
     times: Any  # numpy float64, one per package
     rows: Any  # numpy uint8 (packages, size): one package per row
-    bare: Bare | None = None  # the connection's segments without data between the packages
+    bare: BareSegments | None = None  # the connection's segments without data between the packages
 
 
 @dataclass
-class Bare:
+class BareSegments:
     """Segments of the run's connection without data or SYN, FIN, RST (the peer's ACKs), found
-    between the run's packages: routing them is all they do, so a run goes on over them. Kept
-    for `packets.expand`, which gives them back in their places when the run is read one by one."""
+    between the run's packages: routing them is all they do, so a run goes on over them. Read
+    (`columns`) only for `packets.expand`, which gives them back in their places when the run is
+    read one by one (rarely: a run its connection cannot take whole)."""
 
-    before: Any  # numpy int64: how many of the run's packages come before each
-    times: Any
-    reverse: Any  # numpy bool: sent by the run's receiver
-    seq: Any
-    ack: Any
-    flags: Any
+    records: Records
+    first: int
+    end: int
+    picks: Any  # the run's packages' records; the others in first..end-1 are these
+    src: bytes  # the run's sender's address
+
+    def columns(self) -> tuple[Any, ...]:
+        """How many of the run's packages come before each, its time, whether the run's receiver
+        sent it, its sequence and acknowledgment numbers and its flags (numpy columns)."""
+        import numpy as np
+
+        records, u8 = self.records, np.frombuffer(self.records.buf, dtype=np.uint8)
+        others = np.setdiff1d(np.arange(self.first, self.end), self.picks, assume_unique=True)
+        ip, _ = ip_offsets(u8, records.offsets[others], records.links[others])
+        tcp = ip + (u8[ip] & 0x0F).astype(np.int64) * 4
+        word = np.array([1 << 24, 1 << 16, 1 << 8, 1], dtype=np.int64)
+        seq, ack = ((u8[(tcp + at)[:, None] + np.arange(4)] * word).sum(axis=1) for at in (4, 8))
+        src = np.frombuffer(self.src, dtype=np.uint8)
+        reverse = (u8[(ip + 12)[:, None] + np.arange(4)] != src).any(axis=1)
+        before = np.searchsorted(self.picks, others)
+        return before, records.times[others], reverse, seq, ack, u8[tcp + 13].astype(np.int64)
 
 
 def runs(records: Records) -> list[tuple[int, int, Any]]:
@@ -143,6 +159,20 @@ def _grouped(
     return found
 
 
+def _gathered(buf: Any, starts: list[int], size: int) -> Any:
+    """The packages at `starts` copied into rows (the peer's ACKs come between some of them): one
+    view copied a package; a numpy index of every byte cost 4x as much, slices joined 2x."""
+    import numpy as np
+
+    out = np.empty((len(starts), size), dtype=np.uint8)
+    with memoryview(out.data) as whole, whole.cast("B") as into, memoryview(buf) as source:  # released: a
+        at = 0  # mapped file with a view of it left cannot be closed
+        for start in starts:
+            into[at : at + size] = source[start : start + size]
+            at += size
+    return out
+
+
 def ip_offsets(u8: Any, offsets: Any, links: Any) -> tuple[Any, Any]:
     """Where each record's IPv4 header starts, and whether it has one after a link header read
     here: Ethernet (and one 802.1Q tag, as a switch's mirror port keeps it), Linux cooked v1 and
@@ -168,9 +198,10 @@ def ip_offsets(u8: Any, offsets: Any, links: Any) -> tuple[Any, Any]:
         if mine.any():
             l2[mine & (be2(offsets + at) == IPV4)] = size
     for kinds, size in ((LOOPBACK, 4), (RAW_IP, 0)):
-        mine = np.isin(links, kinds)
-        if mine.any():
-            l2[mine] = size
+        for kind in kinds:
+            mine = links == kind
+            if mine.any():
+                l2[mine] = size
     return offsets + np.maximum(l2, 0), l2 >= 0
 
 
@@ -196,7 +227,7 @@ def run_of(records: Records, first: int, end: int, picks: Any = None) -> DataRun
             (len(starts), size), dtype=np.uint8, buffer=buf, offset=int(starts[0]), strides=(stride, 1)
         )
     else:
-        rows = u8[starts[:, None] + np.arange(size)]  # gathered (a copy)
+        rows = _gathered(buf, starts.tolist(), size)
     sport, dport, seq = struct.unpack_from(">HHI", buf, tcp)
     return DataRun(
         socket.inet_ntop(socket.AF_INET, buf[ip + 12 : ip + 16]),
@@ -207,19 +238,5 @@ def run_of(records: Records, first: int, end: int, picks: Any = None) -> DataRun
         size,
         records.times[first:end] if picks is None else records.times[picks],
         rows,
-        None if picks is None else _bare(records, u8, first, end, picks, buf[ip + 12 : ip + 16]),
+        None if picks is None else BareSegments(records, first, end, picks, bytes(buf[ip + 12 : ip + 16])),
     )
-
-
-def _bare(records: Records, u8: Any, first: int, end: int, picks: Any, src: bytes) -> Bare:
-    """The segments without data among records first..end-1 (all but `picks`), as `expand` needs them."""
-    import numpy as np
-
-    others = np.setdiff1d(np.arange(first, end), picks, assume_unique=True)
-    ip, _ = ip_offsets(u8, records.offsets[others], records.links[others])
-    tcp = ip + (u8[ip] & 0x0F).astype(np.int64) * 4
-    word = np.array([1 << 24, 1 << 16, 1 << 8, 1], dtype=np.int64)
-    seq, ack = ((u8[(tcp + at)[:, None] + np.arange(4)] * word).sum(axis=1) for at in (4, 8))
-    reverse = (u8[(ip + 12)[:, None] + np.arange(4)] != np.frombuffer(src, dtype=np.uint8)).any(axis=1)
-    before = np.searchsorted(picks, others)
-    return Bare(before, records.times[others], reverse, seq, ack, u8[tcp + 13].astype(np.int64))

@@ -319,7 +319,7 @@ def first_of(run: DataRun) -> Segment:
 def expand(run: DataRun) -> Iterator[Segment]:
     """The segments a DataRun stands for, with those without data between them in their places."""
     bare = run.bare
-    waiting = [] if bare is None else list(zip(*(c.tolist() for c in bare.__dict__.values()), strict=True))
+    waiting = [] if bare is None else list(zip(*(c.tolist() for c in bare.columns()), strict=True))
     waiting.reverse()  # the first last: popped in order
     ends = ((run.src, run.sport, run.dst, run.dport), (run.dst, run.dport, run.src, run.sport))
     for i, (ts, row) in enumerate(zip(run.times.tolist(), run.rows, strict=True)):
