@@ -60,6 +60,8 @@ def _bare(conv: Conversation, side: str, ack: int) -> None:
         frame = dpkt.sll.SLL(
             type=0, hrd=772, hlen=6, hdr=b"\0" * 8, ethtype=dpkt.ethernet.ETH_TYPE_IP, data=ip
         )
+    elif conv.link == "loopback":  # BSD loopback: the address family, then IP
+        frame = (2).to_bytes(4, "little") + bytes(ip)
     else:
         frame = dpkt.ethernet.Ethernet(
             src=b"\x02" * 6, dst=b"\x04" * 6, type=dpkt.ethernet.ETH_TYPE_IP, data=ip
@@ -74,7 +76,10 @@ def _frames(path: Path, link: str = "ethernet") -> list[Segment]:
     reader = dpkt.pcapng.Reader if path.suffix == ".pcapng" else dpkt.pcap.Reader
     with open(path, "rb") as f:
         for ts, frame in reader(f):
-            ip = (dpkt.sll.SLL if link == "sll" else dpkt.ethernet.Ethernet)(frame).data
+            layer = {"sll": dpkt.sll.SLL, "loopback": dpkt.loopback.Loopback}.get(
+                link, dpkt.ethernet.Ethernet
+            )
+            ip = layer(frame).data
             tcp = ip.data
             src, dst = ".".join(map(str, ip.src)), ".".join(map(str, ip.dst))
             ack = tcp.ack if tcp.flags & ACK else -1
@@ -90,7 +95,7 @@ def _table(out: Path) -> Any:
 
 
 CASES = [(fmt, acks, "ethernet") for fmt in ("pcap", "pcapng") for acks in (1, 2, 3)]
-CASES += [("pcap", 1, "sll"), ("pcapng", 2, "vlan")]  # tcpdump -i any; a switch's mirror port
+CASES += [("pcap", 1, "sll"), ("pcapng", 2, "vlan"), ("pcap", 3, "loopback")]  # -i any; a mirror port
 
 
 @pytest.mark.parametrize(("fmt", "acks", "link"), CASES)
