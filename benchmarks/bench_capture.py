@@ -147,12 +147,14 @@ def make_capture(path: Path, packages: int, server: str = "10.0.0.10", acks: boo
     raw_path.unlink()
 
 
-def make_captures(*jobs: tuple[Path, int, str]) -> None:
+def make_captures(*jobs: tuple[Path, int, str], acks: bool = False) -> None:
     """Write (path, packages, server) captures in a child process, then sync: this process
-    stays small and the files are on disk before anything is timed."""
+    stays small and the files are on disk before anything is timed. `acks`: see make_capture."""
     code = "import sys; sys.path[:0] = sys.argv[1:3]\nfrom pathlib import Path\n"
     code += "from bench_capture import make_capture\n"
-    code += "".join(f"make_capture(Path({str(p)!r}), {n}, server={srv!r})\n" for p, n, srv in jobs)
+    code += "".join(
+        f"make_capture(Path({str(p)!r}), {n}, server={srv!r}, acks={acks})\n" for p, n, srv in jobs
+    )
     subprocess.run([sys.executable, "-c", code, str(ROOT), str(ROOT / "benchmarks")], check=True)
     os.sync()
 
@@ -358,6 +360,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument(
         "--only-one-file", action="store_true", help="only the one-file rows and the tshark dissector row"
     )
+    parser.add_argument(
+        "--acks", action="store_true", help="the one-file captures with the client's ACK after each package"
+    )
     args = parser.parse_args(argv)
     if args.only_one_file:
         return one_file_main(args)
@@ -438,7 +443,9 @@ def one_file_main(args: argparse.Namespace) -> int:
         keep_bytecode(work)  # the children import as an installed package does
         big, warm, small = work / "big.pcap", work / "warm.pcap", work / "small.pcap"
         make_captures((big, args.one_file, "10.0.0.10"), (warm, WARM_PACKAGES, "10.0.0.10"),
-                      (small, 20_000, "10.0.0.10"))  # fmt: skip
+                      (small, 20_000, "10.0.0.10"), acks=args.acks)  # fmt: skip
+        if args.acks:
+            print("(the captures have the client's ACK after each package, as a real one)")
         got = one_file_rows(big, warm, args.one_file, args.one_file_rounds, work)
         rate = tshark_dissector_rate(small, 20_000)
         if rate is not None:
