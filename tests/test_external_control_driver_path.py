@@ -327,22 +327,21 @@ def test_after_a_stall_of_the_server_a_speedj_per_step_still_lasts_one_step() ->
     assert moved == pytest.approx(100 * 0.002 * 0.1, abs=2e-4)  # 100 steps at 0.1 rad/s, ramps aside
 
 
-LATE_SPEEDS = """def late_speeds():
+_SPEEDS = """def speeds():
   start = get_actual_joint_positions()
   i = 0
   while i < 40:
     speedj([0, 0, 0, 0, 0, 0.5], 1000.0, 0.002)
-    j = 0
-    while j < 3000:
-      j = j + 1
-    end
-    i = i + 1
+{busy}    i = i + 1
   end
   stopj(1000.0)
   q = get_actual_joint_positions()
   textmsg("wrist 3 moved ", q[5] - start[5])
 end
 """
+# the same, computing longer than a control step after each speedj
+LATE_SPEEDS = _SPEEDS.format(busy="    j = 0\n    while j < 3000:\n      j = j + 1\n    end\n")
+SPEEDS = _SPEEDS.format(busy="")
 
 
 def test_a_held_speed_waits_for_its_thread_when_the_program_is_late(session: Session) -> None:
@@ -357,20 +356,6 @@ def test_a_held_speed_waits_for_its_thread_when_the_program_is_late(session: Ses
     moved = float(next(t for t in s.primary.texts if "wrist 3 moved" in t).split()[-1])
     assert moved == pytest.approx(40 * 0.002 * 0.5, abs=5e-4)  # ramps of a=1000 rad/s² aside
     assert not s.primary.exceptions
-
-
-SPEEDS = """def speeds():
-  start = get_actual_joint_positions()
-  i = 0
-  while i < 40:
-    speedj([0, 0, 0, 0, 0, 0.5], 1000.0, 0.002)
-    i = i + 1
-  end
-  stopj(1000.0)
-  q = get_actual_joint_positions()
-  textmsg("wrist 3 moved ", q[5] - start[5])
-end
-"""
 
 
 @pytest.mark.parametrize("decrements", [50, 51])
