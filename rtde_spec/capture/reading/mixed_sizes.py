@@ -14,7 +14,7 @@ from collections.abc import Callable
 from typing import Any
 
 from rtde_spec.capture.reading.headers import count_cut, seconds
-from rtde_spec.capture.reading.strides import EPB, same_run, strided
+from rtde_spec.capture.reading.strides import EPB, epb_run, same_run, strided
 
 RUN_MIN = 16  # records of one size in a row: the walk stops before them, the strided reading takes them
 SizeAt = Callable[[Any, int], tuple[int, ...]]
@@ -158,3 +158,48 @@ def pcap_pairs(
     found.add(starts, lengths, times, linktype)
     count_cut(stats, lengths, originals, times)
     return pos + count * pair, int(secs[-1])
+
+
+def pcapng_pairs(
+    found: Any, stats: dict[str, int], buf: Any, pos: int, end: int, order: str, interfaces: list[Any]
+) -> int | None:
+    """Enhanced Packet Blocks of two lengths taking turns (a package, then the peer's ACK), of one
+    interface, read as one strided run of pairs; where they stop, or None when fewer than
+    RUN_MIN pairs follow (they are walked)."""
+    import numpy as np
+
+    u32 = np.dtype(order + "u4")
+    head = struct.Struct(order + "III")
+    _, first, iface = head.unpack_from(buf, pos)
+    if pos + first + 12 > end:
+        return None
+    kind, second, other = head.unpack_from(buf, pos + first)
+    if kind != EPB or other != iface or second < 32 or second % 4:
+        return None
+    pair = first + second
+    count = epb_run(buf, pos, first, end, u32, iface, pair)
+    if count >= RUN_MIN:
+        count = min(count, epb_run(buf, pos + first, second, end - first, u32, iface, pair))
+    if count < RUN_MIN:
+        return None
+    linktype, unit, shift = interfaces[iface] if iface < len(interfaces) else (-1, 1e-6, 0)
+    both = np.empty((5, count, 2), dtype=np.int64)  # high, low, caplen, original, start; each pair's two
+    for side, (at, length) in enumerate(((pos, first), (pos + first, second))):
+        for row, field in enumerate((12, 16, 20, 24)):
+            both[row, :, side] = strided(buf, at + field, pair, count, u32)
+        both[2, :, side] = np.minimum(both[2, :, side], length - 32)
+        both[4, :, side] = at + 28 + np.arange(count, dtype=np.int64) * pair
+    high, low, lengths, originals, starts = (column.reshape(-1) for column in both)
+    times = seconds((high << 32) | low, unit, shift)
+    found.add(starts, lengths, times, linktype)
+    count_cut(stats, lengths, originals, times)
+    return pos + count * pair
+
+
+def pcapng_mixed(
+    found: Any, stats: dict[str, int], buf: Any, pos: int, end: int, order: str, interfaces: list[Any]
+) -> int:
+    """Enhanced Packet Blocks of varied lengths from `pos` (the first of another length than the
+    next) added to `found`: in pairs where two lengths take turns, else walked; where they stop."""
+    paired = pcapng_pairs(found, stats, buf, pos, end, order, interfaces)
+    return paired if paired is not None else pcapng_walked(found, stats, buf, pos, end, order, interfaces)

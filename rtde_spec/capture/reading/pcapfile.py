@@ -27,7 +27,7 @@ from typing import IO, Any
 
 from rtde_spec.capture.reading.headers import count_cut, interface, seconds, snap_length
 from rtde_spec.capture.reading.mapping import give_back, mapped_file, populate
-from rtde_spec.capture.reading.mixed_sizes import next_differs, pcap_pairs, pcap_walked, pcapng_walked
+from rtde_spec.capture.reading.mixed_sizes import next_differs, pcap_pairs, pcap_walked, pcapng_mixed
 from rtde_spec.capture.reading.recordsync import MAX_BLOCK, next_pcap_record, next_pcapng_block, pcap_limit
 from rtde_spec.capture.reading.strides import EPB, count_cut_run, epb_run, same_run, strided
 from rtde_spec.errors import UsageError
@@ -333,7 +333,7 @@ def _pcapng(f: IO[bytes], first: bytes, name: str, stats: dict[str, int], lag: i
             if pos + length > end:
                 break
             if btype == EPB and length >= 32 and next_differs(buf, pos + length, end, order, length):
-                pos = pcapng_walked(found, stats, buf, pos, end, order, interfaces)  # data and ACKs
+                pos = pcapng_mixed(found, stats, buf, pos, end, order, interfaces)  # data and ACKs
                 continue
             if btype == EPB and length >= 32:
                 u32 = np.dtype(order + "u4")

@@ -55,10 +55,12 @@ def same_run(buf: Any, pos: int, stride: int, count: int, at: int, value: int, d
     return count
 
 
-def epb_run(buf: Any, pos: int, length: int, end: int, u32: Any, iface: int) -> int:
-    """How many pcapng Enhanced Packet Blocks of `length` bytes from `pos` on are alike: the same
-    length at both ends, the same block type and interface (at least 1)."""
-    same = same_run(buf, pos, length, (end - pos) // length, 4, length, u32)
-    same = min(same, same_run(buf, pos, length, same, length - 4, length, u32))  # its end
-    same = min(same, same_run(buf, pos, length, same, 0, EPB, u32))
-    return min(same, same_run(buf, pos, length, same, 8, iface, u32))
+def epb_run(buf: Any, pos: int, length: int, end: int, u32: Any, iface: int, every: int = 0) -> int:
+    """How many pcapng Enhanced Packet Blocks of `length` bytes, `every` bytes apart (0: one after
+    the other) from `pos` on, are alike: the same length at both ends, the same block type and
+    interface (at least 1)."""
+    stride = every or length
+    same = same_run(buf, pos, stride, (end - pos) // stride, 4, length, u32)
+    same = min(same, same_run(buf, pos, stride, same, length - 4, length, u32))  # its end
+    same = min(same, same_run(buf, pos, stride, same, 0, EPB, u32))
+    return min(same, same_run(buf, pos, stride, same, 8, iface, u32))
