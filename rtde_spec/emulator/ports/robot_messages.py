@@ -19,10 +19,8 @@ from typing import Any
 
 from rtde_spec._generated.enums import (
     MessageSource,
-    ProgramStateMessageType,
     ReportDataType,
     ReportLevel,
-    RobotMessageType,
 )
 from rtde_spec.emulator.urscript.matrices import is_matrix
 from rtde_spec.emulator.urscript.values import INT_MAX, INT_MIN, Pose
@@ -38,6 +36,11 @@ _INTERFACE = int(MessageSource.ROBOTINTERFACE)
 _CONTROLLER = int(MessageSource.CONTROLLER)
 
 
+def _built(cls: Any, micros: int, **fields: Any) -> bytes:
+    """A message of model `cls`, stamped `micros`, with the type tag the spec gives its model."""
+    return encode_message(cls(timestamp=micros, robot_message_type=cls.TYPE, **fields))
+
+
 def prepare() -> None:
     """Build the primary codec these messages are encoded with, before the control loop needs it.
 
@@ -49,59 +52,51 @@ def prepare() -> None:
 
 
 def version_message(version: Version, micros: int) -> bytes:
-    return encode_message(
-        pm.VersionMessage(
-            timestamp=micros,
-            source=_INTERFACE,
-            robot_message_type=int(RobotMessageType.VERSION),
-            project_name=PROJECT,
-            major_version=version.major,
-            minor_version=version.minor,
-            bugfix_version=version.bugfix,
-            build_number=version.build or 0,
-            build_date=BUILD_DATE,
-        )
+    return _built(
+        pm.VersionMessage,
+        micros,
+        source=_INTERFACE,
+        project_name=PROJECT,
+        major_version=version.major,
+        minor_version=version.minor,
+        bugfix_version=version.bugfix,
+        build_number=version.build or 0,
+        build_date=BUILD_DATE,
     )
 
 
 def text_message(text: str, micros: int) -> bytes:
-    return encode_message(
-        pm.TextMessage(
-            timestamp=micros,
-            source=_INTERFACE,
-            robot_message_type=int(RobotMessageType.TEXT),
-            text_message=text,
-        )
+    return _built(
+        pm.TextMessage,
+        micros,
+        source=_INTERFACE,
+        text_message=text,
     )
 
 
 def runtime_exception(text: str, line: int, column: int, micros: int) -> bytes:
-    return encode_message(
-        pm.RuntimeExceptionMessage(
-            timestamp=micros,
-            source=_INTERFACE,
-            robot_message_type=int(RobotMessageType.RUNTIME_EXCEPTION),
-            script_line_number=max(0, line),
-            script_column_number=max(0, column),
-            runtime_exception_text_message=text,
-        )
+    return _built(
+        pm.RuntimeExceptionMessage,
+        micros,
+        source=_INTERFACE,
+        script_line_number=max(0, line),
+        script_column_number=max(0, column),
+        runtime_exception_text_message=text,
     )
 
 
 def error_code_message(code: int, argument: int, level: int, micros: int) -> bytes:
     """An Error Code (Robot Comm) message: code and argument as URCL reads them (C209A0)."""
-    return encode_message(
-        pm.RobotCommMessage(
-            timestamp=micros,
-            source=_CONTROLLER,
-            robot_message_type=int(RobotMessageType.ERROR_CODE),
-            robot_message_code=code,
-            robot_message_argument=argument,
-            robot_message_report_level=level,
-            data_type=int(ReportDataType.UINT32),
-            report_data=0,
-            report_text="",
-        )
+    return _built(
+        pm.RobotCommMessage,
+        micros,
+        source=_CONTROLLER,
+        robot_message_code=code,
+        robot_message_argument=argument,
+        robot_message_report_level=level,
+        data_type=int(ReportDataType.UINT32),
+        report_data=0,
+        report_text="",
     )
 
 
@@ -109,59 +104,51 @@ def key_message(title: str, text: str, micros: int) -> bytes:
     """A key message as controllers send it: the text runs to the end of the message, with no
     length before it (UR's C++ client library reads it so and matches the program's name against
     it; the spec's decoder takes this form as its fallback, see key_text_message in the spec)."""
-    head = encode_message(
-        pm.KeyMessage(
-            timestamp=micros,
-            source=_CONTROLLER,
-            robot_message_type=int(RobotMessageType.KEY),
-            robot_message_code=0,
-            robot_message_argument=0,
-            robot_message_title=title,
-            key_text_message="",
-        )
+    head = _built(
+        pm.KeyMessage,
+        micros,
+        source=_CONTROLLER,
+        robot_message_code=0,
+        robot_message_argument=0,
+        robot_message_title=title,
+        key_text_message="",
     )[:-2]  # the document's uint16 length of an empty text
     body = head[4:] + text.encode("utf-8")
     return struct.pack(">I", 4 + len(body)) + body
 
 
 def safety_mode_message(mode: int, micros: int) -> bytes:
-    return encode_message(
-        pm.SafetyModeMessage(
-            timestamp=micros,
-            source=_CONTROLLER,
-            robot_message_type=int(RobotMessageType.SAFETY_MODE),
-            robot_message_code=0,
-            robot_message_argument=0,
-            safety_mode_type=mode,
-            report_data_type=int(ReportDataType.UINT32),
-            report_data=0,
-        )
+    return _built(
+        pm.SafetyModeMessage,
+        micros,
+        source=_CONTROLLER,
+        robot_message_code=0,
+        robot_message_argument=0,
+        safety_mode_type=mode,
+        report_data_type=int(ReportDataType.UINT32),
+        report_data=0,
     )
 
 
 def program_threads_message(labels: list[tuple[str, int, str]], micros: int) -> bytes:
     """Program Threads (14): each running thread's last label (`$ N "text"`) as (thread, N, text)."""
-    return encode_message(
-        pm.ProgramThreadsMessage(
-            timestamp=micros,
-            source=_CONTROLLER,
-            robot_message_type=int(RobotMessageType.PROGRAM_LABEL_THREADS),
-            threads=[
-                pm.ProgramThread(label_id=number, label_name=text[:255], thread_name=thread[:65535])
-                for thread, number, text in labels
-            ],
-        )
+    return _built(
+        pm.ProgramThreadsMessage,
+        micros,
+        source=_CONTROLLER,
+        threads=[
+            pm.ProgramThread(label_id=number, label_name=text[:255], thread_name=thread[:65535])
+            for thread, number, text in labels
+        ],
     )
 
 
 def global_variables_setup(names: list[str], micros: int) -> bytes:
-    return encode_message(
-        pm.GlobalVariablesSetupMessage(
-            timestamp=micros,
-            robot_message_type=int(ProgramStateMessageType.GLOBAL_VARIABLES_SETUP),
-            start_index=0,
-            variable_names=names,
-        )
+    return _built(
+        pm.GlobalVariablesSetupMessage,
+        micros,
+        start_index=0,
+        variable_names=names,
     )
 
 
@@ -184,13 +171,11 @@ def global_variables_update(values: Sequence[Any], micros: int, start: int = 0) 
             break
         picked.append(values[at] if size <= UPDATE_BYTES else None)
         used, at = used + min(size, UPDATE_BYTES), at + 1
-    message = encode_message(
-        pm.GlobalVariablesUpdateMessage(
-            timestamp=micros,
-            robot_message_type=int(ProgramStateMessageType.GLOBAL_VARIABLES_UPDATE),
-            start_index=start,
-            variable_values=[typed(value) for value in picked],
-        )
+    message = _built(
+        pm.GlobalVariablesUpdateMessage,
+        micros,
+        start_index=start,
+        variable_values=[typed(value) for value in picked],
     )
     return message, (at if at < len(values) else 0)
 
