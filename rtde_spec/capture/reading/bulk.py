@@ -20,12 +20,12 @@ from rtde_spec._generated.constants import (
     DATA_PACKAGE_PREFIX_OFFSETS,
     DATA_PACKAGE_TYPE,
 )
+from rtde_spec.capture.reading.link_types import COOKED, ETHERNET, LINK_HEADERS, LOOPBACK, RAW_IP
 from rtde_spec.capture.reading.pcapfile import Records
+from rtde_spec.capture.reading.tunnels import IPV4, VLAN
 
-ETHERNET, IPV4, TCP, VLAN_TAG = 1, 0x0800, 6, 0x8100
-COOKED = ((113, 14, 16), (276, 0, 20))  # Linux cooked v1, v2: link type, protocol at, IP at
-LOOPBACK, RAW_IP = (0, 108), (101, 12, 14, 228)  # link types: a 4-byte family / nothing before IP
-ETH, IP_MIN, TCP_MIN = 14, 20, 20
+TCP, VLAN_TAG = 6, VLAN[0]  # one 802.1Q tag (more, or 802.1ad: frame by frame)
+ETH, IP_MIN, TCP_MIN = LINK_HEADERS[ETHERNET], 20, 20
 NOT_DATA = 0x07  # FIN, SYN, RST
 MIN_RUN = 16  # shorter runs are handed back frame by frame
 SIZE_AT, TYPE_AT, _ = DATA_PACKAGE_PREFIX_OFFSETS  # where a data package says its size and type
@@ -193,7 +193,7 @@ def ip_offsets(u8: Any, offsets: Any, links: Any) -> tuple[Any, Any]:
         tagged = ethernet & (kind == VLAN_TAG)
         if tagged.any():
             l2[tagged & (be2(offsets + 16) == IPV4)] = ETH + 4
-    for link, at, size in COOKED:
+    for link, (at, size) in COOKED.items():
         mine = links == link
         if mine.any():
             l2[mine & (be2(offsets + at) == IPV4)] = size

@@ -21,6 +21,7 @@ from rtde_spec.capture.reading import tunnels
 from rtde_spec.capture.reading.bulk import DataRun, run_of, runs
 from rtde_spec.capture.reading.compressed import open_capture
 from rtde_spec.capture.reading.ipfrag import Addresses
+from rtde_spec.capture.reading.link_types import COOKED, ETHERNET, LINK_HEADERS, LOOPBACK, RAW_IP
 from rtde_spec.capture.reading.pcapfile import blocks
 
 FIN, SYN, RST = 0x01, 0x02, 0x04
@@ -58,7 +59,6 @@ class UnknownLink(Exception):
     """A frame of a link type this reader does not decode (or of an interface the file never described)."""
 
 
-LINK_HEADERS = {1: 14, 113: 16, 276: 20, 0: 4, 108: 4}  # bytes before the IP header (Ethernet: untagged)
 PKTAP = 258  # Apple's per-packet metadata, then the frame of the link type it names
 NFLOG = 239  # Linux netfilter's log (`tcpdump -i nflog:N`)
 MAX_DEPTH = 8  # IP headers read in one frame: tunnels in tunnels, fragments put back together
@@ -72,15 +72,14 @@ def _ip_start(linktype: int, frame: bytes) -> tuple[int, int]:
     link header (unreadable, not "not TCP")."""
     if len(frame) < LINK_HEADERS.get(linktype, 0):
         raise ValueError("shorter than its link header")
-    if linktype == 1:  # Ethernet
+    if linktype == ETHERNET:
         return tunnels.ethernet(frame, 0)
-    if linktype == 113:  # Linux cooked v1: protocol at 14, IP at 16
-        return int.from_bytes(frame[14:16], "big"), 16
-    if linktype == 276:  # Linux cooked v2: protocol at 0, IP at 20
-        return int.from_bytes(frame[0:2], "big"), 20
-    if linktype in (0, 108):  # BSD loopback / OpenBSD loop: a 4-byte family, then IP
+    if linktype in COOKED:  # Linux cooked v1 and v2
+        at, ip = COOKED[linktype]
+        return int.from_bytes(frame[at : at + 2], "big"), ip
+    if linktype in LOOPBACK:
         return (IPV4 if len(frame) > 4 and frame[4] >> 4 == 4 else IPV6), 4
-    if linktype in (101, 12, 14, 228, 229):  # raw IP
+    if linktype in RAW_IP:
         return (IPV4 if frame and frame[0] >> 4 == 4 else IPV6), 0
     if linktype == PKTAP:
         return _pktap(frame)
