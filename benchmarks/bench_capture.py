@@ -222,12 +222,19 @@ def cli_run(argv: list[str]) -> tuple[float, float]:
     return wall, cpu
 
 
-def cli_usage(argv: list[str]) -> tuple[float, float, float]:
-    """(wall s, CPU s, peak MB) of one whole process."""
+def cli_usage(argv: list[str], piped: Path | None = None) -> tuple[float, float, float]:
+    """(wall s, CPU s, peak MB) of one whole process; `piped`: a file `cat` writes into its
+    standard input (a pipe, as `tcpdump -w - | rtde-spec capture -`; cat's CPU not counted)."""
     start = time.perf_counter()
-    proc = subprocess.Popen(argv, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    cat = None if piped is None else subprocess.Popen(["cat", str(piped)], stdout=subprocess.PIPE)
+    stdin = None if cat is None else cat.stdout
+    proc = subprocess.Popen(argv, stdin=stdin, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    if cat is not None and cat.stdout is not None:
+        cat.stdout.close()  # the capture's copy is its only reader
     _, status, usage = os.wait4(proc.pid, 0)
     wall = time.perf_counter() - start
+    if cat is not None:
+        cat.wait()
     if os.waitstatus_to_exitcode(status) != 0:
         raise SystemExit(f"{argv}: exit {os.waitstatus_to_exitcode(status)}")
     return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024

@@ -28,6 +28,7 @@ from typing import IO, Any
 from rtde_spec.capture.reading.headers import count_cut, interface, seconds, snap_length
 from rtde_spec.capture.reading.mapping import give_back, mapped_file, populate
 from rtde_spec.capture.reading.mixed_sizes import next_differs, pcap_pairs, pcap_walked, pcapng_mixed
+from rtde_spec.capture.reading.pipes import waiting, widen
 from rtde_spec.capture.reading.recordsync import MAX_BLOCK, next_pcap_record, next_pcapng_block, pcap_limit
 from rtde_spec.capture.reading.strides import EPB, count_cut_run, epb_run, same_run, strided
 from rtde_spec.errors import UsageError
@@ -201,11 +202,12 @@ def _read_blocks(
 
     `read1` takes what a pipe has (up to a block) rather than waiting for a whole block,
     so a live capture piped in is decoded as it comes; while more is waiting, it is read
-    on up to a block. A record larger than what is
+    on up to a block, from a pipe widened first (`pipes.py`). A record larger than what is
     held is waited for by doubling what is read before trying again, so a record
     claiming gigabytes costs reading the input once, not once per block.
     """
     read = getattr(f, "read1", f.read)
+    widen(f, BLOCK)  # a pipe of 64 kB gave ~90 packages a block, each costing a block's set-up
     want = 0  # bytes to hold before parsing again (a large record is still coming)
     while True:
         pieces = [carry] if carry else []
@@ -216,7 +218,7 @@ def _read_blocks(
             if chunk:
                 pieces.append(chunk)
                 held += len(chunk)
-            if not chunk or (held >= want and (held >= BLOCK or not _waiting(f))):
+            if not chunk or (held >= want and (held >= BLOCK or not waiting(f))):
                 break
         buf = b"".join(pieces) if len(pieces) != 1 else pieces[0]
         found = _Columns()
@@ -231,17 +233,6 @@ def _read_blocks(
             if carry:
                 _stopped(stats, start, len(carry), claimed=claim(carry, 0))
             return
-
-
-def _waiting(f: IO[bytes]) -> bool:
-    """Whether more of a pipe can be read at once: a fast writer's stream is taken in blocks
-    (a pipe gives 64 kB a read, and every block costs its numpy set-up), a live one as it comes."""
-    try:
-        import select
-
-        return bool(select.select([f], [], [], 0)[0])
-    except (OSError, ValueError, TypeError, AttributeError):  # not a file descriptor (a BytesIO)
-        return False
 
 
 def _pcap(
