@@ -6,10 +6,15 @@ import socket
 import struct
 import subprocess
 import sys
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import dpkt
+
+if TYPE_CHECKING:
+    from rtde_spec import RecipeCodec
 
 ACK, PSH, SYN = dpkt.tcp.TH_ACK, dpkt.tcp.TH_PUSH, dpkt.tcp.TH_SYN
 
@@ -371,3 +376,76 @@ def decode_mutated(
     except Exception:
         return "unreadable output: " + traceback.format_exc()
     return None
+
+
+# --- control sessions: outputs and inputs on one connection (ur_rtde's control interface) ---
+
+CONTROL_OUTPUTS = ("timestamp", "actual_q", "robot_mode")
+CONTROL_INPUTS = ("input_int_register_24", "input_double_register_24")
+COUNT = 400  # packages each way of a control session (control_capture)
+
+
+def _control_session(conv: Conversation) -> tuple[RecipeCodec, RecipeCodec]:
+    """A control client's setup: outputs (recipe 1) and inputs (recipe 2), then start."""
+    from rtde_spec import Catalogue, RecipeCodec, build
+
+    cat = Catalogue.builtin()
+    conv.handshake()
+    conv.send("client", build("request_protocol_version", protocol_version=2))
+    conv.send("server", build("request_protocol_version_reply", accepted=True))
+    conv.send(
+        "client", build("setup_outputs_v2", output_frequency=500.0, variable_names=list(CONTROL_OUTPUTS))
+    )
+    types = [cat.get(n, "output").type for n in CONTROL_OUTPUTS]  # type: ignore[union-attr]
+    conv.send("server", build("setup_outputs_v2_reply", output_recipe_id=1, variable_types=types))
+    conv.send("client", build("setup_inputs", variable_names=list(CONTROL_INPUTS)))
+    types = [cat.get(n, "input").type for n in CONTROL_INPUTS]  # type: ignore[union-attr]
+    conv.send("server", build("setup_inputs_reply", input_recipe_id=2, variable_types=types))
+    conv.send("client", build("start"))
+    conv.send("server", build("start_reply", accepted=True))
+    return RecipeCodec.for_names(list(CONTROL_OUTPUTS), "output", cat), RecipeCodec.for_names(
+        list(CONTROL_INPUTS), "input", cat
+    )
+
+
+def _output(codec: RecipeCodec, i: int) -> bytes:
+    values = {"timestamp": i * 0.002, "actual_q": (i + 0.5,) * 6, "robot_mode": 7}
+    return codec.encode_package(values, recipe_id=1)
+
+
+def _input(codec: RecipeCodec, i: int) -> bytes:
+    return codec.encode_package({"input_int_register_24": i, "input_double_register_24": i / 8}, recipe_id=2)
+
+
+def _acked(conv: Conversation, side: str) -> None:
+    conv.time += 0.0001
+    conv.frames.append((conv.time, conv.bare(side)))
+
+
+def control_capture(
+    path: Path,
+    *,
+    acks: bool = False,
+    clients: int = 1,
+    between: dict[int, Callable[[Conversation], None]] | None = None,
+    count: int = COUNT,
+    inputs: bool = True,
+) -> Path:
+    """`clients` control sessions, their frames interleaved one by one: each sends an input
+    package after every output (and both sides ACK each with `acks`); `between[i]` adds frames
+    to the first session after its output number i."""
+    convs = [Conversation((f"10.0.0.{2 + n}", 51000 + n), ("10.0.0.10", 30004)) for n in range(clients)]
+    codecs = [_control_session(conv) for conv in convs]
+    for i in range(count):
+        for conv, (outputs, writes) in zip(convs, codecs, strict=True):
+            conv.time = max(c.time for c in convs) + 0.0001  # one clock: the file keeps this order
+            conv.send("server", _output(outputs, i), dt=0.0005)
+            if acks:
+                _acked(conv, "client")
+            if between and i in between and conv is convs[0]:
+                between[i](conv)
+            if inputs:
+                conv.send("client", _input(writes, i), dt=0.0005)
+                if acks:
+                    _acked(conv, "server")
+    return write(path, convs)

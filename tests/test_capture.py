@@ -267,7 +267,7 @@ def test_runs_of_data_segments_decode_exactly_as_segment_by_segment(
         conv = Conversation((f"10.0.0.{2 + n}", 51000 + n), (host, 30004))
         session(conv)
         robots.append(conv)
-    for i in range(300):  # two robots interleaved in blocks of 40: runs break at every switch
+    for i in range(300):  # two robots interleaved in blocks of 40: a run goes on over the other's
         conv = robots[(i // 40) % 2]
         conv.time = max(c.time for c in robots)  # one clock, so the file keeps this order
         conv.send("server", data(i))
@@ -288,7 +288,7 @@ def test_runs_of_data_segments_decode_exactly_as_segment_by_segment(
         RtdeConnection, "feed_run", lambda self, s, c, d, t: (runs.append(len(t)), feed_run(self, s, c, d, t))
     )
     with_runs = capture_tables(path)
-    assert len(runs) >= 6 and sum(runs) >= 250  # the run path did most of the work
+    assert len(runs) >= 2 and sum(runs) >= 250  # the run path did most of the work
 
     monkeypatch.setattr(decoder, "RUN_MIN", 10**9)  # every run replayed segment by segment ...
     monkeypatch.setattr(bulk, "MIN_RUN", 10**9)  # ... and none found in bulk in the file's blocks

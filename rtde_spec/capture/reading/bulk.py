@@ -56,9 +56,8 @@ class BareSegments:
     read one by one (rarely: a run its connection cannot take whole)."""
 
     records: Records
-    first: int
-    end: int
-    picks: Any  # the run's packages' records; the others in first..end-1 are these
+    picks: Any  # the run's packages' records
+    others: Any  # these segments' records, in order
     src: bytes  # the run's sender's address
 
     def columns(self) -> tuple[Any, ...]:
@@ -66,8 +65,7 @@ class BareSegments:
         sent it, its sequence and acknowledgment numbers and its flags (numpy columns)."""
         import numpy as np
 
-        records, u8 = self.records, np.frombuffer(self.records.buf, dtype=np.uint8)
-        others = np.setdiff1d(np.arange(self.first, self.end), self.picks, assume_unique=True)
+        records, u8, others = self.records, np.frombuffer(self.records.buf, dtype=np.uint8), self.others
         ip, _ = ip_offsets(u8, records.offsets[others], records.links[others])
         tcp = ip + (u8[ip] & 0x0F).astype(np.int64) * 4
         word = np.array([1 << 24, 1 << 16, 1 << 8, 1], dtype=np.int64)
@@ -78,20 +76,74 @@ class BareSegments:
         return before, records.times[others], reverse, seq, ack, u8[tcp + 13].astype(np.int64)
 
 
-def runs(records: Records) -> list[tuple[int, int, Any]]:
-    """(first, end, data) of every run of at least MIN_RUN data frames in order on one connection
-    direction: its records first..end-1, of which `data` (record indexes) are its packages and the
-    rest segments without data of the same connection (None: all are packages)."""
+# a run found in a block: its first record, the one after its last, its packages' records (None:
+# every record first..end-1) and the segments without data it goes on over (None: none)
+Found = tuple[int, int, Any, Any]
+
+
+def runs(records: Records, interleaved: bool = True) -> list[Found]:
+    """Every run of at least MIN_RUN data frames in order on one connection direction, by first record.
+
+    A run goes on over its connection's segments without data (both sides' ACKs) and, when
+    `interleaved`, over whatever cannot change that direction's state: other connections'
+    segments, and its own connection's data packages the other way (a control session's
+    inputs between its outputs, each in a run of its own or read one by one after this run).
+    Anything else of its connection (a control message, SYN, FIN, RST, a package split
+    across segments) and any frame not read here as IPv4 and TCP (a fragment may be of it)
+    ends it. `interleaved=False`: only its own bare segments come between its packages, so
+    a run expanded in its place gives the file's order (`packets.segments`).
+    """
     import numpy as np
 
-    n = len(records.offsets)
-    if n < MIN_RUN:
+    if len(records.offsets) < MIN_RUN:
         return []
+    h = _headers(np, records)
+    data = np.flatnonzero(h.ok)
+    if len(data) < MIN_RUN:
+        return []
+    tcp4, bare, size = h.tcp4, h.bare, h.size
+    ends_a, ends_b = (h.src << 16) | (h.ports >> 16), (h.dst << 16) | (h.ports & 0xFFFF)
+    low, high = np.minimum(ends_a, ends_b), np.maximum(ends_a, ends_b)  # the connection
+    order, rank, conn = _by_connection(np, low, high, tcp4)
+    way = (ends_a != low).astype(np.int64) + (0 if conn is None else 2 * conn)  # each record's direction
+    # counted per connection in file order (rank: a record's place among its connection's records)
+    local = bare if not interleaved else tcp4 & ~h.ok & ~bare  # bare: counted; else: what ends a run
+    counted = np.cumsum(local if order is None else local[order])
+    key = [h.src, h.dst, h.ports, size, h.prefix]
+    chain = data[np.lexsort([data, *(column[data] for column in reversed(key))])]
+    a, b = chain[:-1], chain[1:]  # the data records grouped by key, each group in file order
+    follows = h.seq[b] == (h.seq[a] + size[a]) % (1 << 32)
+    for column in key:
+        follows &= column[b] == column[a]
+    ra, rb = (a, b) if rank is None else (rank[a], rank[b])
+    if interleaved:  # nothing of the connection's that ends a run, no frame not read as TCP
+        breaks = np.cumsum(~tcp4)
+        follows &= (counted[rb] == counted[ra]) & (breaks[b] == breaks[a])
+    else:  # every record between is a bare segment of the connection
+        follows &= counted[rb] - counted[ra] == b - a - 1
+    return _chains(np, chain, follows, bare, way)
+
+
+@dataclass
+class _Headers:
+    """The IPv4 and TCP headers of a block's records, as numpy columns."""
+
+    tcp4: Any  # a whole IPv4 TCP segment, not a fragment, read here
+    bare: Any  # ... without data or SYN, FIN, RST
+    ok: Any  # ... exactly one data package
+    src: Any
+    dst: Any
+    ports: Any  # source port << 16 | destination port
+    size: Any  # bytes of data
+    prefix: Any  # the data's first bytes (a data package's size, type, recipe)
+    seq: Any
+
+
+def _headers(np: Any, records: Records) -> _Headers:
     u8 = np.frombuffer(records.buf, dtype=np.uint8)
     last = len(u8) - 1
-    off = records.offsets
-    cap_end = off + records.lengths
-    ip, ok = ip_offsets(u8, off, records.links)
+    cap_end = records.offsets + records.lengths
+    ip, tcp4 = ip_offsets(u8, records.offsets, records.links)
 
     def at(index: Any) -> Any:
         return u8[np.minimum(index, last)].astype(np.int64)
@@ -102,61 +154,87 @@ def runs(records: Records) -> list[tuple[int, int, Any]]:
             value = (value << 8) | at(index + k)
         return value
 
-    ok &= cap_end >= ip + IP_MIN + TCP_MIN
-    ok &= (at(ip) >> 4) == 4
-    ok &= at(ip + 9) == TCP
-    ok &= (be(ip + 6, 2) & 0x3FFF) == 0  # not a fragment
+    tcp4 &= cap_end >= ip + IP_MIN + TCP_MIN
+    tcp4 &= (at(ip) >> 4) == 4
+    tcp4 &= at(ip + 9) == TCP
+    tcp4 &= (be(ip + 6, 2) & 0x3FFF) == 0  # not a fragment
     ihl = (at(ip) & 0x0F) * 4
     tcp = ip + ihl
-    ok &= (ihl >= IP_MIN) & (tcp + TCP_MIN <= cap_end)
+    tcp4 &= (ihl >= IP_MIN) & (tcp + TCP_MIN <= cap_end)
     pay = tcp + (at(tcp + 12) >> 4) * 4
     total = be(ip + 2, 2)
     end = np.where(total == 0, cap_end, ip + total)  # 0: segmentation offload, the frame's length
     size = end - pay
-    ok &= (end <= cap_end) & ((at(tcp + 13) & NOT_DATA) == 0) & ((at(tcp + 12) >> 4) * 4 >= TCP_MIN)
-    bare = ok & (size == 0)
-    ok &= (size > 4) & (at(pay + TYPE_AT) == DATA_PACKAGE_TYPE) & (be(pay + SIZE_AT, SIZE_BYTES) == size)
-    data = np.flatnonzero(ok)
-    if len(data) < MIN_RUN:
-        return []
+    tcp4 &= (end <= cap_end) & ((at(tcp + 12) >> 4) * 4 >= TCP_MIN)
+    plain = tcp4 & ((at(tcp + 13) & NOT_DATA) == 0)
+    bare = plain & (size == 0)
+    ok = plain & (size > 4) & (at(pay + TYPE_AT) == DATA_PACKAGE_TYPE)
+    ok &= be(pay + SIZE_AT, SIZE_BYTES) == size
     src, dst, ports = be(ip + 12, 4), be(ip + 16, 4), be(tcp, 4)
-    between = None  # the records between each data record and the next end no run (all data: none)
-    if len(data) < n:
-        if bare.any():
-            ends_a, ends_b = (src << 16) | (ports >> 16), (dst << 16) | (ports & 0xFFFF)
-            low, high = np.minimum(ends_a, ends_b), np.maximum(ends_a, ends_b)  # the connection
-            before = np.maximum.accumulate(np.where(ok, np.arange(n), 0))  # the last data record up to each
-            bare &= (before < np.arange(n)) & (low == low[before]) & (high == high[before]) & ok[before]
-        breaks = np.cumsum(~ok & ~bare)  # records that end a run, up to each
-        between = breaks[data[1:] - 1] == breaks[data[:-1]]
-    key = [src, dst, ports, size, be(pay, PREFIX_BYTES)]  # addresses, ports, size, prefix
-    return _grouped(data, between, be(tcp + 4, 4), size, key, len(data) < n)
+    return _Headers(tcp4, bare, ok, src, dst, ports, size, be(pay, PREFIX_BYTES), be(tcp + 4, 4))
 
 
-def _grouped(
-    data: Any, between: Any, seq: Any, size: Any, key: list[Any], picked: bool
-) -> list[tuple[int, int, Any]]:
-    """The runs among the data records `data` (`picked`: not all the records): each follows the
-    one before in sequence, with the same `key`, and nothing that ends a run `between` them."""
-    import numpy as np
+def _by_connection(np: Any, low: Any, high: Any, tcp4: Any) -> tuple[Any, Any, Any]:
+    """The records by connection, each connection's in file order; each record's place in that
+    order; its connection's number. (None, None, None): the block's segments are all of one
+    connection (the common case)."""
+    if (low[tcp4] == low[tcp4][0]).all() and (high[tcp4] == high[tcp4][0]).all():
+        return None, None, None
+    ends = np.stack([np.where(tcp4, low, -1), np.where(tcp4, high, -1)])
+    conn = np.unique(ends, axis=1, return_inverse=True)[1].reshape(-1)
+    order = np.argsort(conn, kind="stable")
+    rank = np.empty(len(conn), dtype=np.int64)
+    rank[order] = np.arange(len(conn))
+    return order, rank, conn
 
-    if picked:  # the data records' values, side by side
-        seq, size, key = seq[data], size[data], [column[data] for column in key]
-    follows = seq[1:] == (seq[:-1] + size[:-1]) % (1 << 32)
-    if between is not None:
-        follows &= between
-    for column in key:
-        follows &= column[1:] == column[:-1]
-    # run boundaries: a data record that does not follow the one before starts a new run
+
+def _chains(np: Any, chain: Any, follows: Any, bare: Any, way: Any) -> list[Found]:
+    """The runs of `chain` (data records grouped by key) where each follows the one before, by
+    first record, with the bare segments of their connection between their packages."""
     starts = np.flatnonzero(np.concatenate(([True], ~follows)))
-    ends = np.append(starts[1:], len(data))
+    ends = np.append(starts[1:], len(chain))
     keep = ends - starts >= MIN_RUN
-    found = []
-    for start, stop in zip(starts[keep].tolist(), ends[keep].tolist(), strict=True):
-        first, final = int(data[start]), int(data[stop - 1])
-        picks = data[start:stop] if final - first + 1 > stop - start else None
-        found.append((first, final + 1, picks))
+    starts, ends = starts[keep], ends[keep]
+    firsts, finals = chain[starts], chain[ends - 1] + 1
+    spread = finals - firsts != ends - starts  # other records between its packages
+    others = _bare_between(np, np.flatnonzero(bare), way, way[firsts[spread]], firsts[spread], finals[spread])
+    found: list[Found] = []
+    each = iter(others)
+    for first, end, start, stop, apart in zip(
+        firsts.tolist(), finals.tolist(), starts.tolist(), ends.tolist(), spread.tolist(), strict=True
+    ):
+        found.append((first, end, chain[start:stop], next(each)) if apart else (first, end, None, None))
+    found.sort(key=lambda run: run[0])
     return found
+
+
+def _bare_between(np: Any, bare: Any, way: Any, run_way: Any, first: Any, end: Any) -> list[Any]:
+    """For each run (its direction, first record, the one after its last), the bare segments
+    (records `bare`) of its connection within it, None for none; a segment within runs of both
+    directions goes to the one that starts first. Runs of one direction never overlap, so each
+    segment has at most one candidate a direction: found by one search per direction."""
+    out: list[Any] = [None] * len(first)
+    if not len(bare) or not len(first):
+        return out
+    span = int(max(end.max(), bare.max())) + 1
+    order = np.lexsort((first, run_way))
+    keys = run_way[order] * span + first[order]  # runs by direction, then first record
+    best, best_first = np.full(len(bare), -1), np.full(len(bare), span)
+    for flip in (0, 1):  # the segment's own direction, then the other
+        direction = way[bare] ^ flip
+        at = np.searchsorted(keys, direction * span + bare) - 1  # the last run starting before it
+        run = order[np.maximum(at, 0)]
+        hit = (at >= 0) & (run_way[run] == direction) & (end[run] > bare) & (first[run] < best_first)
+        best[hit], best_first[hit] = run[hit], first[run][hit]
+    chosen = best >= 0
+    owner, segments = best[chosen], bare[chosen]
+    by_run = np.argsort(owner, kind="stable")
+    owner, segments = owner[by_run], segments[by_run]
+    bounds = np.searchsorted(owner, np.arange(len(first) + 1)).tolist()
+    for n in range(len(first)):
+        if bounds[n + 1] > bounds[n]:
+            out[n] = segments[bounds[n] : bounds[n + 1]]
+    return out
 
 
 def _gathered(buf: Any, starts: list[int], size: int) -> Any:
@@ -205,9 +283,10 @@ def ip_offsets(u8: Any, offsets: Any, links: Any) -> tuple[Any, Any]:
     return offsets + np.maximum(l2, 0), l2 >= 0
 
 
-def run_of(records: Records, first: int, end: int, picks: Any = None) -> DataRun:
+def run_of(records: Records, first: int, end: int, picks: Any = None, others: Any = None) -> DataRun:
     """The DataRun of records first..end-1 (as `runs` found them; `picks`: its packages' records
-    where segments without data come between them)."""
+    where other records come between them, `others`: its connection's segments without data
+    among those)."""
     import numpy as np
 
     buf = records.buf
@@ -238,5 +317,5 @@ def run_of(records: Records, first: int, end: int, picks: Any = None) -> DataRun
         size,
         records.times[first:end] if picks is None else records.times[picks],
         rows,
-        None if picks is None else BareSegments(records, first, end, picks, bytes(buf[ip + 12 : ip + 16])),
+        None if others is None else BareSegments(records, picks, others, bytes(buf[ip + 12 : ip + 16])),
     )

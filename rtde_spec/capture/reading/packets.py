@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 from rtde_spec.capture.reading import tunnels
-from rtde_spec.capture.reading.bulk import DataRun, run_of, runs
+from rtde_spec.capture.reading.bulk import DataRun, Found, run_of, runs
 from rtde_spec.capture.reading.compressed import open_capture
 from rtde_spec.capture.reading.ipfrag import Addresses
 from rtde_spec.capture.reading.link_types import COOKED, ETHERNET, LINK_HEADERS, LOOPBACK, RAW_IP
@@ -259,6 +259,7 @@ def items(
     stats: dict[str, int] | None = None,
     progress: Callable[[int], None] | None = None,
     lag: int = 0,
+    interleaved: bool = True,
 ) -> Iterator[Segment | DataRun]:
     """TCP segments of a capture in file order; runs of data segments as one DataRun each.
 
@@ -266,6 +267,8 @@ def items(
     other frame comes segment by segment. `lag`: blocks kept mapped after they are handed
     on, for runs decoded later on other threads (`pcapfile.blocks`). A list of paths is the
     parts of one split capture (`series.py`), read one after the other as one capture.
+    A run comes where its first package is: `interleaved`, it may span frames of other
+    connections and of its own the other way, which come after it (`bulk.runs`).
     """
     counts = stats if stats is not None else {}
     counts.setdefault("frames", 0)
@@ -281,16 +284,19 @@ def items(
                 times, links = records.times.tolist(), records.links.tolist()
                 number = counts["frames"] + 1  # of the block's first frame
                 counts["frames"] += len(offsets)
-                done = 0
-                for first, end, picks in [*runs(records), (len(offsets), len(offsets), None)]:
-                    for k in range(done, first):
+                found = runs(records, interleaved)
+                alone = _read_alone(found, len(offsets))
+                i = 0
+                for first, end, picks, others in [*found, (len(offsets), 0, None, None)]:
+                    while i < len(alone) and alone[i] < first:
+                        k = alone[i]
+                        i += 1
                         frame = buf[offsets[k] : offsets[k] + lengths[k]]
                         seg = _segment(times[k], links[k], frame, book, counts, number + k)
                         if seg is not None:
                             yield seg
                     if first < end:
-                        yield run_of(records, first, end, picks)
-                    done = end
+                        yield run_of(records, first, end, picks, others)
                 reached = records.upto
                 if progress is not None:
                     progress(before + reached)
@@ -302,11 +308,28 @@ def segments(
     path: str | Path, stats: dict[str, int] | None = None, progress: Callable[[int], None] | None = None
 ) -> Iterator[Segment]:
     """Every TCP segment of a capture file, in file order (runs expanded)."""
-    for item in items(path, stats, progress):
+    for item in items(path, stats, progress, interleaved=False):
         if isinstance(item, Segment):
             yield item
         else:
             yield from expand(item)
+
+
+def _read_alone(found: list[Found], count: int) -> list[int]:
+    """The records of a block no run stands for, in order."""
+    if not found:
+        return list(range(count))
+    import numpy as np
+
+    taken = np.zeros(count, dtype=bool)
+    for first, end, picks, others in found:
+        if picks is None:
+            taken[first:end] = True
+        else:
+            taken[picks] = True
+            if others is not None:
+                taken[others] = True
+    return np.flatnonzero(~taken).tolist()
 
 
 def first_of(run: DataRun) -> Segment:

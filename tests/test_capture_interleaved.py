@@ -1,0 +1,134 @@
+"""Runs over what comes between: a control session's inputs between its outputs, and other
+connections' packages between a connection's own.
+
+ur_rtde's control interface and URCL's RTDE writer send input packages at 500 Hz on the
+connection that streams their outputs, and a client usually holds a second connection (the
+receive interface) beside it. Runs of data packages used to end at any data package that was
+not the run's next, so such captures were read frame by frame: 50,000 outputs with 50,000
+inputs between them took 2.2 s against 0.45 s for the outputs alone. The tables must be those
+of the frame-by-frame reading (every run replayed segment by segment), row for row within
+each connection.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+import dpkt
+import pytest
+
+from rtde_spec import build
+from rtde_spec.capture.decoder import capture_tables
+from rtde_spec.capture.protocols.rtde import RtdeConnection
+from rtde_spec.capture.reading import bulk, pcapfile
+from rtde_spec.capture.reading.packets import segments
+from tests.capture_files import COUNT, Conversation, control_capture
+
+
+def _with_and_without_runs(
+    path: Path, monkeypatch: pytest.MonkeyPatch
+) -> tuple[dict[str, Any], dict[str, Any], int]:
+    """The tables read with runs, and one frame at a time; and how many packages runs carried."""
+    import rtde_spec.capture.decoder as decoder
+
+    carried: list[int] = []
+    feed_run = RtdeConnection.feed_run
+    with monkeypatch.context() as patch:
+        patch.setattr(
+            RtdeConnection,
+            "feed_run",
+            lambda s, a, c, r, t: (carried.append(len(t)), feed_run(s, a, c, r, t)),
+        )
+        with_runs = capture_tables(path)
+    with monkeypatch.context() as patch:
+        patch.setattr(decoder, "RUN_MIN", 10**9)
+        patch.setattr(bulk, "MIN_RUN", 10**9)
+        one_by_one = capture_tables(path)
+    return with_runs, one_by_one, sum(carried)
+
+
+def _same_per_connection(got: dict[str, Any], want: dict[str, Any]) -> None:
+    assert got.keys() == want.keys()
+    for name, table in want.items():
+        rows, expected = got[name].to_pylist(), table.to_pylist()
+        assert len(rows) == len(expected), name
+        for conn in {r.get("connection") for r in expected}:
+            mine = [r for r in rows if r.get("connection") == conn]
+            assert mine == [r for r in expected if r.get("connection") == conn], (name, conn)
+
+
+@pytest.mark.parametrize("acks", [False, True])
+def test_a_control_sessions_outputs_and_inputs_are_read_as_two_runs(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, acks: bool
+) -> None:
+    path = control_capture(tmp_path / "control.pcap", acks=acks)
+    with_runs, one_by_one, carried = _with_and_without_runs(path, monkeypatch)
+    _same_per_connection(with_runs, one_by_one)
+    outputs, inputs = with_runs["rtde_outputs_1"].to_pylist(), with_runs["rtde_inputs_1"].to_pylist()
+    assert [round(r["timestamp"] / 0.002) for r in outputs] == list(range(COUNT))
+    assert [r["input_int_register_24"] for r in inputs] == list(range(COUNT))
+    assert carried >= 2 * COUNT - 10, f"runs carried {carried} of {2 * COUNT} packages"  # before: 0
+
+
+def test_two_connections_interleaved_package_by_package_each_run(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """ur_rtde's receive and control interfaces side by side: four streams, each its own run."""
+    path = control_capture(tmp_path / "two.pcap", acks=True, clients=2)
+    with_runs, one_by_one, carried = _with_and_without_runs(path, monkeypatch)
+    _same_per_connection(with_runs, one_by_one)
+    assert with_runs["rtde_outputs_1"].num_rows == 2 * COUNT
+    assert carried >= 4 * COUNT - 20
+
+
+def _found(path: Path) -> tuple[Any, list[bulk.Found]]:
+    (records,) = list(pcapfile.blocks(open(path, "rb"), str(path), {}))
+    return records, bulk.runs(records)
+
+
+def _arp(conv: Conversation) -> None:
+    frame = dpkt.ethernet.Ethernet(
+        src=b"\x02" * 6, dst=b"\xff" * 6, type=dpkt.ethernet.ETH_TYPE_ARP, data=b"\0" * 28
+    )
+    conv.time += 0.0001
+    conv.frames.append((conv.time, bytes(frame)))
+
+
+def _text(conv: Conversation) -> None:
+    conv.send("client", build("text_message", message="hello", source="test", warning_level=1), dt=0.0001)
+
+
+@pytest.mark.parametrize("between", [_arp, _text])
+def test_a_control_message_of_the_connection_or_a_frame_not_read_as_tcp_ends_its_runs(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, between: Callable[[Conversation], None]
+) -> None:
+    """A text message from the client (its connection's state may change) and an ARP frame
+    (not read here as TCP: it could have been a fragment of the connection) each end every run
+    spanning it; the tables are those of the frame-by-frame reading."""
+    path = control_capture(tmp_path / "broken.pcap", between={100: between})
+    records, found = _found(path)
+    frames, buf = records.offsets.tolist(), records.buf
+    ends = [
+        k
+        for k in range(len(frames))
+        if buf[frames[k] + 12 : frames[k] + 14] == b"\x08\x06"
+        or b"hello" in buf[frames[k] : frames[k] + records.lengths[k]]
+    ]
+    assert len(ends) == 1
+    assert len(found) >= 4 and all(not first < ends[0] < end for first, end, _, _ in found)
+    with_runs, one_by_one, _ = _with_and_without_runs(path, monkeypatch)
+    _same_per_connection(with_runs, one_by_one)
+
+
+def test_segments_stay_in_file_order_with_runs_interleaved(tmp_path: Path) -> None:
+    """`segments()` gives every segment in the file's order (runs expanded in their places)."""
+    path = control_capture(tmp_path / "order.pcap", acks=True, clients=2)
+    ours = [(s.src, s.sport, s.seq, s.payload) for s in segments(path)]
+    theirs = []
+    for _, frame in dpkt.pcap.Reader(open(path, "rb")):
+        ip = dpkt.ethernet.Ethernet(frame).data
+        tcp = ip.data
+        theirs.append((".".join(str(b) for b in ip.src), tcp.sport, tcp.seq, bytes(tcp.data)))
+    assert ours == theirs
