@@ -430,11 +430,13 @@ def control_capture(
     between: dict[int, Callable[[Conversation], None]] | None = None,
     count: int = COUNT,
     inputs: bool = True,
+    v6: bool = False,
 ) -> Path:
     """`clients` control sessions, their frames interleaved one by one: each sends an input
     package after every output (and both sides ACK each with `acks`); `between[i]` adds frames
     to the first session after its output number i."""
-    convs = [Conversation((f"10.0.0.{2 + n}", 51000 + n), ("10.0.0.10", 30004)) for n in range(clients)]
+    host, server = ("fd00::", "fd00::10") if v6 else ("10.0.0.", "10.0.0.10")  # v6: read frame by frame
+    convs = [Conversation((f"{host}{2 + n}", 51000 + n), (server, 30004)) for n in range(clients)]
     codecs = [_control_session(conv) for conv in convs]
     for i in range(count):
         for conv, (outputs, writes) in zip(convs, codecs, strict=True):

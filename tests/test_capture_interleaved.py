@@ -72,6 +72,19 @@ def test_a_control_sessions_outputs_and_inputs_are_read_as_two_runs(
     assert carried >= 2 * COUNT - 10, f"runs carried {carried} of {2 * COUNT} packages"  # before: 0
 
 
+@pytest.mark.parametrize("clients", [1, 2])
+def test_frames_read_one_by_one_batch_each_direction_of_a_control_session(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, clients: int
+) -> None:
+    """IPv6 frames are read one by one (`capture/runs.Batcher`): there too each direction of
+    each connection is batched over the other's packages. Before: no batch at all."""
+    path = control_capture(tmp_path / "v6.pcap", acks=True, clients=clients, v6=True)
+    with_runs, one_by_one, carried = _with_and_without_runs(path, monkeypatch)
+    _same_per_connection(with_runs, one_by_one)
+    assert with_runs["rtde_inputs_1"].num_rows == clients * COUNT
+    assert carried >= 2 * clients * COUNT - 20 * clients, f"runs carried {carried}"
+
+
 def test_two_connections_interleaved_package_by_package_each_run(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:

@@ -25,27 +25,46 @@ RUN_MIN, RUN_MAX = 16, 4096  # shorter runs go segment by segment; longer ones a
 
 
 class Batcher:
-    """Routes segments and bulk items of one capture to their connections, batching runs."""
+    """Routes segments and bulk items of one capture to their connections, batching runs.
+
+    A run is held per connection direction (HELD at most): a control session's inputs
+    between its outputs, or another connection's segments, do not end it, as in the bulk
+    reading (`bulk.runs`). Anything else of its connection flushes that connection's runs
+    first, so each connection's segments reach it in order.
+    """
+
+    HELD = 8  # runs held at once (each up to RUN_MAX segments): many connections, bounded memory
 
     def __init__(self, table: FlowTable, finish: Any) -> None:
         self.table, self.finish = table, finish
-        self.run: Run | None = None  # data segments, one whole package each, in order
+        self.held: dict[int, Run] = {}  # by id of the run's direction: data segments, in order
 
     def segment(self, seg: Segment) -> None:
         route = self.table.route_of(seg)
         if route is None:
             return
-        run = self.run
-        if run is not None:
-            if run.takes(route, seg):
+        held = self.held
+        run = Run.start(route, seg) if id(route[2]) not in held else None
+        if held:
+            same = held.get(id(route[2]))
+            if same is not None and same.takes(route, seg):
                 return
-            if route[0] is run.route[0] and _bare(seg) and not self.table.due(seg.time):
-                return  # the connection's ACK between its packages: nothing to deliver, the run goes on
-            self.flush()
-        self.run = Run.start(route, seg)
-        if self.run is None:
+            flow = route[0]
+            mine = [key for key, other in held.items() if other.route[0] is flow]
+            if mine and _bare(seg) and not self.table.due(seg.time):
+                return  # the connection's ACK between its packages: nothing to deliver, its runs go on
+            if run is None:  # anything but a run of its own direction beginning: after its runs
+                for key in mine:
+                    held.pop(key).flush()
+                run = Run.start(route, seg) if same is not None else None
+        if run is None:
             feed(route, seg)
+        else:
+            if len(held) >= self.HELD:
+                held.pop(next(iter(held))).flush()  # the oldest
+            held[id(route[2])] = run
         if self.table.due(seg.time):
+            self.flush()
             self.table.sweep(seg.time, self.finish)
 
     def bulk(self, item: Any) -> None:
@@ -64,9 +83,9 @@ class Batcher:
         whole.decoder.feed_run(sender, whole.codec, item.rows, item.times)
 
     def flush(self) -> None:
-        if self.run is not None:
-            self.run.flush()
-            self.run = None
+        held = self.held
+        while held:
+            held.pop(next(iter(held))).flush()
 
 
 _NOT_DATA = SYN | FIN | RST
