@@ -8,6 +8,8 @@ Real pipes (os.pipe, a subprocess's standard input); no stand-ins.
 from __future__ import annotations
 
 import os
+import subprocess
+import sys
 import threading
 from pathlib import Path
 
@@ -116,3 +118,46 @@ def test_widen_never_shrinks_a_pipe() -> None:
     finally:
         os.close(r)
         os.close(w)
+
+
+def _with_terminal_stdin(args: list[str], typed: bytes = b"") -> subprocess.CompletedProcess[str]:
+    """The CLI with a terminal (a pseudo-terminal) as standard input, `typed` typed into it."""
+    main, side = os.openpty()
+    try:
+        proc = subprocess.Popen(
+            [sys.executable, "-m", "rtde_spec", *args],
+            stdin=side,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        os.close(side)
+        side = -1
+        if typed:
+            os.write(main, typed)
+        out, err = proc.communicate(timeout=60)
+        return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
+    finally:
+        os.close(main)
+        if side >= 0:
+            os.close(side)
+
+
+@pytest.mark.skipif(not hasattr(os, "openpty"), reason="a pseudo-terminal is POSIX")
+def test_capture_of_standard_input_that_is_a_terminal_is_refused_not_waited_on(tmp_path: Path) -> None:
+    """`rtde-spec capture -` typed without a pipe waited for ever; now a usage error says why."""
+    done = _with_terminal_stdin(["capture", "-", "-o", str(tmp_path / "out")])
+    assert done.returncode == 2, done.stderr
+    assert "standard input is a terminal" in done.stderr and "tcpdump -w -" in done.stderr
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.skipif(not hasattr(os, "openpty"), reason="a pseudo-terminal is POSIX")
+def test_decode_from_a_terminal_says_it_reads_hex_until_ctrl_d() -> None:
+    from rtde_spec import build
+
+    package = build("request_protocol_version_reply", accepted=True).hex()  # as the controller sends it
+    done = _with_terminal_stdin(["decode", "-"], typed=package.encode() + b"\n\x04")
+    assert done.returncode == 0, done.stderr
+    assert "end with Ctrl-D" in done.stderr
+    assert "accepted" in done.stdout

@@ -169,6 +169,12 @@ STDIN = "/dev/stdin"  # `-`: a capture piped in (read to its end; Linux and macO
 def expand(patterns: list[str]) -> list[Path]:
     files: list[Path] = []
     for pattern in patterns:
+        if pattern == "-" and _terminal(sys.stdin):  # read, it would wait for ever: nobody types pcap
+            raise UsageError(
+                "standard input is a terminal, not a capture: pipe one in (tcpdump -w - port 30004 | "
+                "rtde-spec capture - -o tables/, or - < robot.pcap)",
+                subject="capture -",
+            )
         path = Path(STDIN if pattern == "-" else pattern)
         if path.is_dir():  # .pcap, .pcapng, .cap, tcpdump -C's .pcapN, and those compressed whole
             from rtde_spec.capture.reading.series import capture_files
@@ -194,6 +200,13 @@ def expand(patterns: list[str]) -> list[Path]:
             f"{', '.join(SUFFIXES)}, numbered or compressed; a glob matched nothing)"
         )
     return once_each(files)
+
+
+def _terminal(stream: Any) -> bool:
+    try:
+        return bool(stream is not None and stream.isatty())
+    except (OSError, ValueError):  # closed
+        return False
 
 
 def captures_of(files: list[Path]) -> list[CapturePath]:

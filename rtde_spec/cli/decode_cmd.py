@@ -185,20 +185,23 @@ def chunks(args: argparse.Namespace) -> Iterator[bytes]:
 def stdin_chunks() -> Iterator[bytes]:
     """Binary stdin in the pieces it arrives in (no waiting for its end); hex text whole."""
     stream = sys.stdin.buffer
+    if stream.isatty():  # a user may paste hex; one who meant a pipe sees why nothing happens
+        print("rtde-spec decode: reading packages from the terminal (hex; end with Ctrl-D)", file=sys.stderr)
     read1: Callable[[int], bytes] = getattr(stream, "read1", stream.read)  # what has arrived, up to n
-    head = b""
+    head, ended = b"", False
     while len(head) < HEAD:
         piece = read1(HEAD - len(head))
         if not piece:
+            ended = True  # not read again: a terminal's end (Ctrl-D) is given once, not for ever
             break
         head += piece
     reject_capture(head, "-")
     if _is_hex_text(head):
-        yield from_hex_text(head + stream.read())
+        yield from_hex_text(head if ended else head + stream.read())
         return
     if head:
         yield head
-    while piece := read1(CHUNK):
+    while not ended and (piece := read1(CHUNK)):
         yield piece
 
 
