@@ -24,6 +24,7 @@ from rtde_spec.capture.decoder import capture_tables
 from rtde_spec.capture.protocols.rtde import RtdeConnection
 from rtde_spec.capture.reading import bulk, pcapfile
 from rtde_spec.capture.reading.packets import segments
+from rtde_spec.capture.runs import Batcher
 from tests.capture_files import COUNT, Conversation, control_capture
 
 
@@ -72,7 +73,7 @@ def test_a_control_sessions_outputs_and_inputs_are_read_as_two_runs(
     assert carried >= 2 * COUNT - 10, f"runs carried {carried} of {2 * COUNT} packages"  # before: 0
 
 
-@pytest.mark.parametrize("clients", [1, 2])
+@pytest.mark.parametrize("clients", [1, 2, 12])  # 12: more directions than runs held (the oldest flushed)
 def test_frames_read_one_by_one_batch_each_direction_of_a_control_session(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, clients: int
 ) -> None:
@@ -82,7 +83,8 @@ def test_frames_read_one_by_one_batch_each_direction_of_a_control_session(
     with_runs, one_by_one, carried = _with_and_without_runs(path, monkeypatch)
     _same_per_connection(with_runs, one_by_one)
     assert with_runs["rtde_inputs_1"].num_rows == clients * COUNT
-    assert carried >= 2 * clients * COUNT - 20 * clients, f"runs carried {carried}"
+    if clients <= Batcher.HELD // 2:
+        assert carried >= 2 * clients * COUNT - 20 * clients, f"runs carried {carried}"
 
 
 def test_two_connections_interleaved_package_by_package_each_run(
