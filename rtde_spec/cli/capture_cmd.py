@@ -12,7 +12,7 @@ from typing import TYPE_CHECKING, Any
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.cli.arguments import primary_version
 from rtde_spec.cli.conventions import dangling_link, describe, file_in_the_way, plural
-from rtde_spec.cli.inputs import once_each
+from rtde_spec.cli.inputs import once_each, piped_in
 from rtde_spec.cli.options import add_lenient
 from rtde_spec.errors import RtdeSpecError, UsageError
 from rtde_spec.printable import safe_text
@@ -169,12 +169,8 @@ STDIN = "/dev/stdin"  # `-`: a capture piped in (read to its end; Linux and macO
 def expand(patterns: list[str]) -> list[Path]:
     files: list[Path] = []
     for pattern in patterns:
-        if pattern == "-" and _terminal(sys.stdin):  # read, it would wait for ever: nobody types pcap
-            raise UsageError(
-                "standard input is a terminal, not a capture: pipe one in (tcpdump -w - port 30004 | "
-                "rtde-spec capture - -o tables/, or - < robot.pcap)",
-                subject="capture -",
-            )
+        if pattern == "-":
+            piped_in("a capture", "tcpdump -w - port 30004 | rtde-spec capture - -o tables/", "capture -")
         path = Path(STDIN if pattern == "-" else pattern)
         if path.is_dir():  # .pcap, .pcapng, .cap, tcpdump -C's .pcapN, and those compressed whole
             from rtde_spec.capture.reading.series import capture_files
@@ -200,13 +196,6 @@ def expand(patterns: list[str]) -> list[Path]:
             f"{', '.join(SUFFIXES)}, numbered or compressed; a glob matched nothing)"
         )
     return once_each(files)
-
-
-def _terminal(stream: Any) -> bool:
-    try:
-        return bool(stream is not None and stream.isatty())
-    except (OSError, ValueError):  # closed
-        return False
 
 
 def captures_of(files: list[Path]) -> list[CapturePath]:

@@ -149,3 +149,14 @@ def once_each(files: list[Path]) -> list[Path]:
         names = ", ".join(safe_text(str(p)) for p in dict.fromkeys(again))
         print(f"note: given more than once, decoded once: {names}", file=sys.stderr)
     return list(seen.values())
+
+
+def piped_in(what: str, example: str, subject: str) -> None:
+    """Refuse standard input that is a terminal: read, it would wait for ever (nobody types `what`)."""
+    try:
+        terminal = sys.stdin is not None and sys.stdin.isatty()
+    except (OSError, ValueError):  # closed
+        terminal = False
+    if terminal:
+        why = f"standard input is a terminal, not {what}: pipe one in ({example})"
+        raise UsageError(why, subject=subject)
