@@ -19,7 +19,7 @@ from typing import Any
 
 from rtde_spec._generated.constants import PRIMARY_PORTS, RTDE_PORT
 from rtde_spec.capture.reading.packets import Segment, items
-from rtde_spec.capture.routing.classify import port_kinds
+from rtde_spec.capture.routing.classify import fixed_record_ports, port_kinds
 from rtde_spec.capture.routing.flows import SCRIPT_KIND, Flow, FlowTable, classify
 from rtde_spec.capture.runs import Batcher
 from rtde_spec.capture.tables.signals import signals_held
@@ -85,7 +85,7 @@ def decode_capture(
     table = FlowTable(lambda seg, mark: classify(seg, sink, recipe, ports, cat, session, mark))
     batcher = Batcher(table, _finish)
     try:
-        for item in items(path, stats, progress, sink.lag):
+        for item in items(path, stats, progress, sink.lag, fixed=fixed_record_ports(ports)):
             if isinstance(item, Segment):
                 batcher.segment(item)
             else:

@@ -72,6 +72,8 @@ class Batcher:
         first = first_of(item)
         route = self.table.route_of(first)
         self.flush()  # segments held first, so the direction is where this run starts
+        if route is not None and route[0].kind != "rtde" and _records_whole(route, first, item):
+            return
         whole = Run.start(route, first) if route is not None else None
         if whole is None:
             for seg in expand(item):  # not a run this connection can take whole: segment by segment
@@ -96,6 +98,18 @@ def _bare(seg: Segment) -> bool:
     (`FlowTable.route_of`) is all it does. The peer of a 500 Hz stream sends one after nearly
     every package, so a capture taken on either host has them between the packages of a run."""
     return not seg.payload and not seg.flags & _NOT_DATA
+
+
+def _records_whole(route: Route, first: Segment, item: Any) -> bool:
+    """A run of fixed-size records (URCL's external control) to a decoder that takes them whole
+    (`feed_rows`), in order with nothing waiting; False: it reads them segment by segment."""
+    flow, sender, direction = route
+    take = getattr(flow.decoder, "feed_rows", None)
+    if take is None or not direction.in_order_at(first.seq) or not take(sender, item.rows, item.times):
+        return False
+    flow.last = float(item.times[-1])
+    direction.advance(item.rows.size, item.rows[-(RECENT // item.rows.shape[1] + 1) :].tobytes())
+    return True
 
 
 def feed(route: Route, seg: Segment) -> None:

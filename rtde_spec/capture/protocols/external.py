@@ -109,6 +109,31 @@ class ExternalConnection:
             return
         self._records(SIDE[sender], framing.feed(chunk), chunk.time, framing.times)
 
+    def feed_rows(self, sender: str, rows: Any, times: Any) -> bool:
+        """Whole records, one a segment in order (a run `bulk.runs` found: numpy rows), as `feed`
+        decodes them: straight to the records when the layout is chosen and the framing stands at
+        a record boundary with nothing held, else as one chunk a segment (what TCP reassembly
+        gives for segments in order)."""
+        framing = self.framing.get(sender)
+        when = times.tolist()
+        if (
+            sender in self.choosers
+            or not isinstance(framing, FixedFraming)
+            or framing.size != rows.shape[1]
+            or not framing.synced
+            or framing.buf
+            or framing.to_skip
+        ):
+            for time, row in zip(when, rows, strict=True):
+                self.feed(sender, Chunk(time, row.tobytes()))
+            return True
+        self.last_time = when[-1]
+        self.start = when[0] if self.start is None else self.start
+        size, data = framing.size, rows.tobytes()
+        records = [data[at : at + size] for at in range(0, len(data), size)]
+        self._records(SIDE[sender], records, when[-1], when)
+        return True
+
     def _choose(self, sender: str, final: bool) -> None:
         """Choose the layout of what `sender` sends if its program (or, when `final`, anything) says;
         then decode what was held as if it had been known from the first byte."""

@@ -81,7 +81,7 @@ class BareSegments:
 Found = tuple[int, int, Any, Any]
 
 
-def runs(records: Records, interleaved: bool = True) -> list[Found]:
+def runs(records: Records, interleaved: bool = True, fixed: frozenset[int] = frozenset()) -> list[Found]:
     """Every run of at least MIN_RUN data frames in order on one connection direction, by first record.
 
     A run goes on over its connection's segments without data (both sides' ACKs) and, when
@@ -92,6 +92,10 @@ def runs(records: Records, interleaved: bool = True) -> list[Found]:
     across segments) and any frame not read here as IPv4 and TCP (a fragment may be of it)
     ends it. `interleaved=False`: only its own bare segments come between its packages, so
     a run expanded in its place gives the file's order (`packets.segments`).
+
+    `fixed`: ports of protocols of fixed-size records without a header (URCL's external
+    control): segments of one size in a row on such a connection are runs too, with only
+    the connection's bare segments between them (any other data of it ends the run).
     """
     import numpy as np
 
@@ -99,29 +103,60 @@ def runs(records: Records, interleaved: bool = True) -> list[Found]:
         return []
     h = _headers(np, records)
     data = np.flatnonzero(h.ok)
-    if len(data) < MIN_RUN:
+    other = np.flatnonzero(_on_ports(np, h, fixed)) if fixed else data[:0]
+    if len(data) < MIN_RUN and len(other) < MIN_RUN:
         return []
-    tcp4, bare, size = h.tcp4, h.bare, h.size
     ends_a, ends_b = (h.src << 16) | (h.ports >> 16), (h.dst << 16) | (h.ports & 0xFFFF)
     low, high = np.minimum(ends_a, ends_b), np.maximum(ends_a, ends_b)  # the connection
-    order, rank, conn = _by_connection(np, low, high, tcp4)
+    order, rank, conn = _by_connection(np, low, high, h.tcp4)
     way = (ends_a != low).astype(np.int64) + (0 if conn is None else 2 * conn)  # each record's direction
-    # counted per connection in file order (rank: a record's place among its connection's records)
-    local = bare if not interleaved else tcp4 & ~h.ok & ~bare  # bare: counted; else: what ends a run
-    counted = np.cumsum(local if order is None else local[order])
-    key = [h.src, h.dst, h.ports, size, h.prefix]
+
+    def per_connection(flags: Any) -> Any:  # counted in each connection's records in file order
+        return np.cumsum(flags if order is None else flags[order])
+
+    found: list[Found] = []
+    if len(data) >= MIN_RUN:
+        local = h.bare if not interleaved else h.tcp4 & ~h.ok & ~h.bare  # bare: counted; else: ends a run
+        key = [h.src, h.dst, h.ports, h.size, h.prefix]  # the prefix: size, type, recipe
+        mode = "over" if interleaved else "file"
+        found += _linked(np, h, data, key, per_connection(local), rank, way, mode)
+    if len(other) >= MIN_RUN:
+        key = [h.src, h.dst, h.ports, h.size]
+        between = "connection" if interleaved else "file"
+        found += _linked(np, h, other, key, per_connection(h.bare), rank, way, between)
+    found.sort(key=lambda run: run[0])
+    return found
+
+
+def _on_ports(np: Any, h: _Headers, ports: frozenset[int]) -> Any:
+    """Segments with data that are not data packages, to or from one of `ports`."""
+    wanted = np.fromiter(ports, dtype=np.int64, count=len(ports))
+    either = np.isin(h.ports >> 16, wanted) | np.isin(h.ports & 0xFFFF, wanted)
+    return h.plain & (h.size > 0) & ~h.ok & either
+
+
+def _linked(
+    np: Any, h: _Headers, data: Any, key: list[Any], counted: Any, rank: Any, way: Any, between: str
+) -> list[Found]:
+    """The runs among the records `data`: grouped by `key`, each following the one before in
+    sequence, with nothing between that ends a run. `counted`, per connection (by `rank`): what
+    ends a run so far (`between` "over": the run goes over everything else but frames not read
+    as TCP), or the bare segments, which are all that may come between of its connection
+    ("connection"; nor a frame not read as TCP) or at all ("file")."""
     chain = data[np.lexsort([data, *(column[data] for column in reversed(key))])]
-    a, b = chain[:-1], chain[1:]  # the data records grouped by key, each group in file order
-    follows = h.seq[b] == (h.seq[a] + size[a]) % (1 << 32)
+    a, b = chain[:-1], chain[1:]  # the records grouped by key, each group in file order
+    follows = h.seq[b] == (h.seq[a] + h.size[a]) % (1 << 32)
     for column in key:
         follows &= column[b] == column[a]
     ra, rb = (a, b) if rank is None else (rank[a], rank[b])
-    if interleaved:  # nothing of the connection's that ends a run, no frame not read as TCP
-        breaks = np.cumsum(~tcp4)
-        follows &= (counted[rb] == counted[ra]) & (breaks[b] == breaks[a])
-    else:  # every record between is a bare segment of the connection
+    if between == "file":
         follows &= counted[rb] - counted[ra] == b - a - 1
-    return _chains(np, chain, follows, bare, way)
+    else:
+        breaks = np.cumsum(~h.tcp4)
+        follows &= breaks[b] == breaks[a]
+        ends = counted[rb] - counted[ra]
+        follows &= (ends == 0) if between == "over" else (ends == rb - ra - 1)
+    return _chains(np, chain, follows, h.bare, way)
 
 
 @dataclass
@@ -129,7 +164,8 @@ class _Headers:
     """The IPv4 and TCP headers of a block's records, as numpy columns."""
 
     tcp4: Any  # a whole IPv4 TCP segment, not a fragment, read here
-    bare: Any  # ... without data or SYN, FIN, RST
+    plain: Any  # ... without SYN, FIN, RST
+    bare: Any  # ... and without data
     ok: Any  # ... exactly one data package
     src: Any
     dst: Any
@@ -171,7 +207,7 @@ def _headers(np: Any, records: Records) -> _Headers:
     ok = plain & (size > 4) & (at(pay + TYPE_AT) == DATA_PACKAGE_TYPE)
     ok &= be(pay + SIZE_AT, SIZE_BYTES) == size
     src, dst, ports = be(ip + 12, 4), be(ip + 16, 4), be(tcp, 4)
-    return _Headers(tcp4, bare, ok, src, dst, ports, size, be(pay, PREFIX_BYTES), be(tcp + 4, 4))
+    return _Headers(tcp4, plain, bare, ok, src, dst, ports, size, be(pay, PREFIX_BYTES), be(tcp + 4, 4))
 
 
 def _by_connection(np: Any, low: Any, high: Any, tcp4: Any) -> tuple[Any, Any, Any]:
@@ -204,7 +240,6 @@ def _chains(np: Any, chain: Any, follows: Any, bare: Any, way: Any) -> list[Foun
         firsts.tolist(), finals.tolist(), starts.tolist(), ends.tolist(), spread.tolist(), strict=True
     ):
         found.append((first, end, chain[start:stop], next(each)) if apart else (first, end, None, None))
-    found.sort(key=lambda run: run[0])
     return found
 
 
@@ -296,7 +331,9 @@ def run_of(records: Records, first: int, end: int, picks: Any = None, others: An
     ip = int(ips[0])
     tcp = ip + (buf[ip] & 0x0F) * 4
     pay = tcp + (buf[tcp + 12] >> 4) * 4
-    size = int.from_bytes(buf[pay + SIZE_AT : pay + SIZE_AT + SIZE_BYTES], "big")
+    total = int.from_bytes(buf[ip + 2 : ip + 4], "big")  # 0: segmentation offload, the frame's length
+    at = first if picks is None else int(picks[0])
+    size = (ip + total if total else int(records.offsets[at] + records.lengths[at])) - pay  # its data
     ihl = (u8[ips] & 0x0F).astype(np.int64) * 4
     doff = (u8[ips + ihl + 12] >> 4).astype(np.int64) * 4
     starts = ips + ihl + doff

@@ -260,6 +260,7 @@ def items(
     progress: Callable[[int], None] | None = None,
     lag: int = 0,
     interleaved: bool = True,
+    fixed: frozenset[int] = frozenset(),
 ) -> Iterator[Segment | DataRun]:
     """TCP segments of a capture in file order; runs of data segments as one DataRun each.
 
@@ -268,7 +269,9 @@ def items(
     on, for runs decoded later on other threads (`pcapfile.blocks`). A list of paths is the
     parts of one split capture (`series.py`), read one after the other as one capture.
     A run comes where its first package is: `interleaved`, it may span frames of other
-    connections and of its own the other way, which come after it (`bulk.runs`).
+    connections and of its own the other way, which come after it (`bulk.runs`). `fixed`:
+    ports whose records are of one size without a header (URCL's external control), found
+    in runs too.
     """
     counts = stats if stats is not None else {}
     counts.setdefault("frames", 0)
@@ -284,7 +287,7 @@ def items(
                 times, links = records.times.tolist(), records.links.tolist()
                 number = counts["frames"] + 1  # of the block's first frame
                 counts["frames"] += len(offsets)
-                found = runs(records, interleaved)
+                found = runs(records, interleaved, fixed)
                 alone = _read_alone(found, len(offsets))
                 i = 0
                 for first, end, picks, others in [*found, (len(offsets), 0, None, None)]:
