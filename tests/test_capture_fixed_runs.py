@@ -141,3 +141,35 @@ def test_the_ports_of_a_port_map_are_read_in_runs(tmp_path: Path) -> None:
     moved.write_bytes(data)  # TCP checksums are not checked by the reader
     tables = capture_tables(moved, port_map={50011: "reverse"})
     assert tables["urcl_reverse"].num_rows == STEPS
+
+
+def test_the_real_time_interfaces_messages_are_read_in_runs(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """Port 30003 at 500 Hz (python-urx's and older clients' stream): one size a connection."""
+    from rtde_spec.capture.protocols.realtime import RealtimeConnection
+
+    conv = Conversation((PC, 43003), (ROBOT, 30003))
+    conv.handshake()
+    body = bytearray(1116)
+    struct.pack_into(">i", body, 0, 1116)
+    for step in range(STEPS):
+        struct.pack_into(">d6d", body, 4, step * 0.002, *(step / 1000 + j for j in range(6)))
+        conv.send("server", bytes(body))
+        conv.frames.append((conv.time + 0.0001, conv.bare("client")))
+    path = write(tmp_path / "realtime.pcap", [conv])
+    carried: list[int] = []
+    feed_rows = RealtimeConnection.feed_rows
+
+    def counted(self: RealtimeConnection, sender: str, rows: Any, times: Any) -> bool:
+        carried.append(len(rows))
+        return feed_rows(self, sender, rows, times)
+
+    monkeypatch.setattr(RealtimeConnection, "feed_rows", counted)
+    tables, summary, _ = _read(path, monkeypatch, runs=True)
+    one_by_one, one_summary, _ = _read(path, monkeypatch, runs=False)
+    _same(tables, one_by_one)
+    assert _connections(summary) == _connections(one_summary)
+    rows = tables["realtime"].to_pylist()
+    assert len(rows) == STEPS and rows[-1]["time"] == pytest.approx((STEPS - 1) * 0.002)
+    assert sum(carried) >= STEPS - 40, f"runs carried {sum(carried)} of {STEPS}"

@@ -12,7 +12,8 @@ The attribute names are those of `framing.Framing`, so the summary reads all ali
 
 from __future__ import annotations
 
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from typing import Any
 
 from rtde_spec.capture.tcp import Chunk
 
@@ -59,6 +60,11 @@ class FixedFraming:
             if not self._align(final=False):
                 return []
         return self._records()
+
+    def at_boundary(self, size: int) -> bool:
+        """Whether records of `size` bytes fed now would come out as they are: the same size, in
+        sync, nothing held or to pass over (a run of whole records may skip `feed`)."""
+        return self.size == size and self.synced and not self.buf and not self.to_skip
 
     def finish(self) -> list[bytes]:
         """The end of the stream: a mid-stream capture too short to confirm is aligned as it can be."""
@@ -114,6 +120,18 @@ class FixedFraming:
             self.phase = 0
             return True
         return False
+
+
+def run_records(rows: Any) -> list[bytes]:
+    """A run's numpy rows (one whole record each) as the records framing would give."""
+    size, data = rows.shape[1], rows.tobytes()
+    return [data[at : at + size] for at in range(0, len(data), size)]
+
+
+def run_chunks(rows: Any, when: list[float]) -> Iterator[Chunk]:
+    """A run's rows as the chunks TCP reassembly gives for segments in order, one a segment."""
+    for time, row in zip(when, rows, strict=True):
+        yield Chunk(time, row.tobytes())
 
 
 class LineFraming:

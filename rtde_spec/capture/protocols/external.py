@@ -20,7 +20,7 @@ import json
 from dataclasses import dataclass, field
 from typing import Any
 
-from rtde_spec.capture.framing.lines import FixedFraming
+from rtde_spec.capture.framing.lines import FixedFraming, run_chunks, run_records
 from rtde_spec.capture.protocols.base import Counts, server_port
 from rtde_spec.capture.tables.rows import text_columns
 from rtde_spec.capture.tables.sink import TableSink, day_of
@@ -119,19 +119,14 @@ class ExternalConnection:
         if (
             sender in self.choosers
             or not isinstance(framing, FixedFraming)
-            or framing.size != rows.shape[1]
-            or not framing.synced
-            or framing.buf
-            or framing.to_skip
+            or not framing.at_boundary(rows.shape[1])
         ):
-            for time, row in zip(when, rows, strict=True):
-                self.feed(sender, Chunk(time, row.tobytes()))
+            for chunk in run_chunks(rows, when):
+                self.feed(sender, chunk)
             return True
         self.last_time = when[-1]
         self.start = when[0] if self.start is None else self.start
-        size, data = framing.size, rows.tobytes()
-        records = [data[at : at + size] for at in range(0, len(data), size)]
-        self._records(SIDE[sender], records, when[-1], when)
+        self._records(SIDE[sender], run_records(rows), when[-1], when)
         return True
 
     def _choose(self, sender: str, final: bool) -> None:

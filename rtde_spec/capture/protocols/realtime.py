@@ -14,7 +14,7 @@ from __future__ import annotations
 import re
 from typing import Any
 
-from rtde_spec.capture.framing.lines import FixedFraming
+from rtde_spec.capture.framing.lines import FixedFraming, run_chunks, run_records
 from rtde_spec.capture.protocols.base import Counts, server_port
 from rtde_spec.capture.tables.sink import TableSink, day_of
 from rtde_spec.capture.tcp import Chunk
@@ -66,6 +66,20 @@ class RealtimeConnection:
             return
         framing = self.framing["controller"]
         self._messages(framing.feed(chunk), chunk.time, framing.times)
+
+    def feed_rows(self, sender: str, rows: Any, times: Any) -> bool:
+        """Whole messages, one a segment in order (a run `bulk.runs` found: numpy rows), as `feed`
+        takes them: straight to the messages once the size is known and the framing stands at a
+        message boundary with nothing held, else a chunk a segment."""
+        framing = self.framing.get("controller")
+        when = times.tolist()
+        if sender != "controller" or framing is None or not framing.at_boundary(rows.shape[1]):
+            for chunk in run_chunks(rows, when):
+                self.feed(sender, chunk)
+            return True
+        self.last_time = when[-1]
+        self._messages(run_records(rows), when[-1], when)
+        return True
 
     def _size(self, final: bool) -> int | None:
         """The connection's message size: a known size whose field repeats one message later.

@@ -67,12 +67,12 @@ def port_kinds(
     return ports
 
 
-FIXED_RECORD_KINDS = ("reverse", "trajectory", "script_command")  # records of one size, no header
+FIXED_RECORD_KINDS = ("reverse", "trajectory", "script_command", "realtime")  # records of one size
 
 
 def fixed_record_ports(ports: Mapping[int, str]) -> frozenset[int]:
-    """The ports whose connections carry records of one size without a header (URCL's external
-    control): the reader finds runs of them in bulk (`bulk.runs`)."""
+    """The ports whose connections carry records of one size (URCL's external control, the
+    real-time interface): the reader finds runs of them in bulk (`bulk.runs`)."""
     return frozenset(port for port, kind in ports.items() if kind in FIXED_RECORD_KINDS)
 
 
