@@ -216,8 +216,10 @@ def _by_connection(np: Any, low: Any, high: Any, tcp4: Any) -> tuple[Any, Any, A
     connection (the common case)."""
     if (low[tcp4] == low[tcp4][0]).all() and (high[tcp4] == high[tcp4][0]).all():
         return None, None, None
-    ends = np.stack([np.where(tcp4, low, -1), np.where(tcp4, high, -1)])
-    conn = np.unique(ends, axis=1, return_inverse=True)[1].reshape(-1)
+    # each end numbered (1-D sorts: unique over pairs of columns sorts them as bytes, 10x slower)
+    lows, highs = (np.unique(np.where(tcp4, end, -1), return_inverse=True) for end in (low, high))
+    pair = lows[1].reshape(-1).astype(np.int64) * len(highs[0]) + highs[1].reshape(-1)
+    conn = np.unique(pair, return_inverse=True)[1].reshape(-1)
     order = np.argsort(conn, kind="stable")
     rank = np.empty(len(conn), dtype=np.int64)
     rank[order] = np.arange(len(conn))
