@@ -240,6 +240,31 @@ def cli_usage(argv: list[str], piped: Path | None = None) -> tuple[float, float,
     return wall, usage.ru_utime + usage.ru_stime, usage.ru_maxrss / 1024
 
 
+Way = tuple[list[str], int, "Path | None"]  # argv without its output folder, packages, a file piped in
+
+
+def rates_in_turn(ways: dict[str, Way], rounds: int, out: Path) -> dict[str, list[float]]:
+    """Packages per CPU-second of each way (whole processes, `cli_usage`), the ways in turn round
+    by round (the machine's drift shifts all alike); the first round warms the page cache."""
+    rates: dict[str, list[float]] = {label: [] for label in ways}
+    for attempt in range(rounds + 1):
+        for label, (argv, packages, piped) in ways.items():
+            _, cpu, _ = cli_usage([*argv, str(out)], piped)
+            if attempt:
+                rates[label].append(packages / cpu)
+    return rates
+
+
+def print_rates(rates: dict[str, list[float]], pairs: list[tuple[str, str]]) -> None:
+    """Each way's median and rounds; then each pair's ratio (second / first), round by round."""
+    for label, got in rates.items():
+        each = ", ".join(f"{r:,.0f}" for r in got)
+        print(f"  {label:34s} {statistics.median(got):10,.0f}  (rounds: {each})")
+    for base, other in pairs:
+        ratio = statistics.median(b / a for a, b in zip(rates[base], rates[other], strict=True))
+        print(f"  {other} / {base}, round by round: {ratio:.2f}x")
+
+
 def one_file_rows(capture: Path, warm: Path, packages: int, rounds: int, work: Path) -> dict[str, float]:
     """One big file, `capture --jobs 1` against `--jobs 2` as whole CLI processes, in turn round
     by round; then where the CPU goes with a worker (main thread vs the others) in one process."""

@@ -5,20 +5,24 @@ round, packages per CPU-second and the ratio (1.0: the ACKs cost nothing).
 Every capture the benchmarks made had no ACK frames; before the reader went on over them a real
 capture was 8-10x slower than these (commit b710738).
 
-    python benchmarks/bench_capture_acks.py [--packages 200000] [--rounds 5]
+`--piped`: both captures also piped in (`cat FILE | capture -`, as `tcpdump -w - |` gives them),
+against the file; the CPU is the capture process's. A pipe holds 64 kB unless widened: read 64 kB
+at a time, a piped capture took 5-7x the CPU of the file (~90 packages a block, each costing a
+block's set-up), until `capture/reading/pipes.py`.
+
+    python benchmarks/bench_capture_acks.py [--packages 200000] [--rounds 5] [--piped]
 """
 
 from __future__ import annotations
 
 import argparse
-import statistics
 import sys
 import tempfile
 from pathlib import Path
 
 sys.path[:0] = [str(Path(__file__).resolve().parent.parent), str(Path(__file__).resolve().parent)]
 
-from bench_capture import cli_usage  # noqa: E402
+from bench_capture import Way, print_rates, rates_in_turn  # noqa: E402
 from bytecode import keep_bytecode  # noqa: E402
 
 
@@ -26,6 +30,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--packages", type=int, default=200_000)
     parser.add_argument("--rounds", type=int, default=5)
+    parser.add_argument("--piped", action="store_true", help="each capture piped in too, against the file")
     args = parser.parse_args(argv)
     import subprocess
 
@@ -39,20 +44,19 @@ def main(argv: list[str] | None = None) -> int:
             code += f"make_capture(Path({str(path)!r}), {args.packages}, acks={acks})\n"
         here = Path(__file__).resolve().parent
         subprocess.run([sys.executable, "-c", code, str(here.parent), str(here)], check=True)
-        rates: dict[str, list[float]] = {label: [] for label in files}
-        for attempt in range(args.rounds + 1):  # the first round warms the page cache and is not kept
+        cli = [sys.executable, "-m", "rtde_spec", "capture"]
+        ways: dict[str, Way] = {
+            label: ([*cli, str(path), "-o"], args.packages, None) for label, path in files.items()
+        }
+        plain, acked = files
+        pairs = [(plain, acked)]
+        if args.piped:
             for label, path in files.items():
-                out = str(work / "out")
-                _, cpu, _ = cli_usage([sys.executable, "-m", "rtde_spec", "capture", str(path), "-o", out])
-                if attempt:
-                    rates[label].append(args.packages / cpu)
+                ways[f"{label}, piped"] = ([*cli, "-", "-o"], args.packages, path)
+                pairs.append((label, f"{label}, piped"))
+        rates = rates_in_turn(ways, args.rounds, work / "out")
         print(f"{args.packages:,} packages of the 58-field recipe, capture (--jobs 1), per CPU-second:")
-        for label, got in rates.items():
-            each = ", ".join(f"{r:,.0f}" for r in got)
-            print(f"  {label:28s} {statistics.median(got):10,.0f}  (rounds: {each})")
-        plain, acked = rates.values()
-        ratio = statistics.median(b / a for a, b in zip(plain, acked, strict=True))
-        print(f"  with ACKs / without, round by round: {ratio:.2f}x")
+        print_rates(rates, pairs)
     return 0
 
 

@@ -12,7 +12,6 @@ Until runs went on over the other direction's packages and other connections' se
 from __future__ import annotations
 
 import argparse
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -21,7 +20,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "benchmarks")]
 
-from bench_capture import cli_usage  # noqa: E402
+from bench_capture import Way, print_rates, rates_in_turn  # noqa: E402
 from bytecode import keep_bytecode  # noqa: E402
 
 
@@ -45,21 +44,15 @@ def main(argv: list[str] | None = None) -> int:
             count = n // 2 if "clients=2" in kw else n
             code += f"control_capture(Path({str(work / f'{i}.pcap')!r}), acks=True, count={count}, {kw})\n"
         subprocess.run([sys.executable, "-c", code, str(ROOT)], check=True)
-        rates: dict[str, list[float]] = {label: [] for label in kinds}
-        for attempt in range(args.rounds + 1):  # the first round warms the page cache and is not kept
-            for i, (label, (_, packages)) in enumerate(kinds.items()):
-                cli = [sys.executable, "-m", "rtde_spec", "capture", str(work / f"{i}.pcap"), "-o"]
-                _, cpu, _ = cli_usage([*cli, str(work / "out")])
-                if attempt:
-                    rates[label].append(packages / cpu)
+        cli = [sys.executable, "-m", "rtde_spec", "capture"]
+        ways: dict[str, Way] = {
+            label: ([*cli, str(work / f"{i}.pcap"), "-o"], packages, None)
+            for i, (label, (_, packages)) in enumerate(kinds.items())
+        }
+        rates = rates_in_turn(ways, args.rounds, work / "out")
         print(f"{n:,} outputs of a 3-field recipe a session, capture (--jobs 1), packages per CPU-second:")
-        for label, got in rates.items():
-            each = ", ".join(f"{r:,.0f}" for r in got)
-            print(f"  {label:34s} {statistics.median(got):10,.0f}  (rounds: {each})")
-        alone = rates["outputs alone (ACKs)"]
-        for label in list(kinds)[1:]:
-            ratio = statistics.median(b / a for a, b in zip(alone, rates[label], strict=True))
-            print(f"  {label} / outputs alone, round by round: {ratio:.2f}x")
+        alone, *others = kinds
+        print_rates(rates, [(alone, label) for label in others])
     return 0
 
 

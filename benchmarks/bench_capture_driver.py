@@ -26,7 +26,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 from rtde_spec.capture.decoder import CaptureSummary, decode_to_directory  # noqa: E402
 from rtde_spec.cli.wireshark_cmd import dissector_path  # noqa: E402
-from tests.capture_files import Conversation, write  # noqa: E402
+from tests.capture_files import Conversation, rtde_raw_setup, write  # noqa: E402
 
 ROBOT, PC = "192.168.56.101", "192.168.56.1"
 
@@ -45,13 +45,7 @@ def session(path: Path, seconds: int) -> dict[str, int]:
     dashboard = Conversation((PC, 41999), (ROBOT, 29999))
     for conv in (reverse, trajectory, commands, rtde, realtime, dashboard):
         conv.handshake()
-    rtde.send("client", struct.pack(">HBH", 5, ord("V"), 2))
-    rtde.send("server", struct.pack(">HBB", 4, ord("V"), 1))
-    names, types = b"timestamp,actual_q", b"DOUBLE,VECTOR6D"
-    rtde.send("client", struct.pack(">HBd", 11 + len(names), ord("O"), 500.0) + names)
-    rtde.send("server", struct.pack(">HBB", 4 + len(types), ord("O"), 1) + types)
-    rtde.send("client", struct.pack(">HB", 3, ord("S")))
-    rtde.send("server", struct.pack(">HBB", 4, ord("S"), 1))
+    rtde_raw_setup(rtde)
     dashboard.send("server", b"Connected: Universal Robots Dashboard Server\n")
     counts = dict.fromkeys(("reverse", "rtde", "realtime", "trajectory", "script_command", "dashboard"), 0)
     body = bytearray(1116)

@@ -9,7 +9,7 @@ import sys
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import dpkt
 
@@ -451,3 +451,39 @@ def control_capture(
                 if acks:
                     _acked(conv, "server")
     return write(path, convs)
+
+
+# --- the reading with runs against the one that takes each frame alone ---
+
+
+def same_rows_per_connection(got: dict[str, Any], want: dict[str, Any]) -> None:
+    """The same tables, row for row within each connection (runs may deliver one connection's
+    rows before another's: their order across connections is not kept)."""
+    assert got.keys() == want.keys()
+    for name, table in want.items():
+        rows, expected = got[name].to_pylist(), table.to_pylist()
+        assert len(rows) == len(expected), name
+        for conn in {r.get("connection") for r in expected}:
+            mine = [r for r in rows if r.get("connection") == conn]
+            assert mine == [r for r in expected if r.get("connection") == conn], (name, conn)
+
+
+def frame_by_frame(patch: Any) -> None:
+    """With a monkeypatch: no run found in bulk nor batched, every frame read alone (the reference)."""
+    import rtde_spec.capture.decoder as decoder
+    from rtde_spec.capture.reading import bulk
+
+    patch.setattr(decoder, "RUN_MIN", 10**9)
+    patch.setattr(bulk, "MIN_RUN", 10**9)
+
+
+def rtde_raw_setup(rtde: Conversation) -> None:
+    """A recorder's setup packed by hand (version 2, timestamp and actual_q at 500 Hz as recipe 1,
+    start), as the driver session captures have it."""
+    names, types = b"timestamp,actual_q", b"DOUBLE,VECTOR6D"
+    rtde.send("client", struct.pack(">HBH", 5, ord("V"), 2))
+    rtde.send("server", struct.pack(">HBB", 4, ord("V"), 1))
+    rtde.send("client", struct.pack(">HBd", 11 + len(names), ord("O"), 500.0) + names)
+    rtde.send("server", struct.pack(">HBB", 4 + len(types), ord("O"), 1) + types)
+    rtde.send("client", struct.pack(">HB", 3, ord("S")))
+    rtde.send("server", struct.pack(">HBB", 4, ord("S"), 1))

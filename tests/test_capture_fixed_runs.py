@@ -15,9 +15,8 @@ import pytest
 
 from rtde_spec.capture.decoder import capture_tables, decode_capture
 from rtde_spec.capture.protocols.external import ExternalConnection
-from rtde_spec.capture.reading import bulk
 from rtde_spec.capture.tables.sink import ArrowSink
-from tests.capture_files import Conversation, write
+from tests.capture_files import Conversation, frame_by_frame, rtde_raw_setup, same_rows_per_connection, write
 
 ROBOT, PC = "192.168.56.101", "192.168.56.1"
 STEPS = 600
@@ -47,13 +46,7 @@ def driver_session(path: Path, *, program: bool, lose: int | None = None, acks: 
     rtde = Conversation((PC, 42004), (ROBOT, 30004))
     for conv in (reverse, rtde):
         conv.handshake()
-    rtde.send("client", struct.pack(">HBH", 5, ord("V"), 2))
-    rtde.send("server", struct.pack(">HBB", 4, ord("V"), 1))
-    names, types = b"timestamp,actual_q", b"DOUBLE,VECTOR6D"
-    rtde.send("client", struct.pack(">HBd", 11 + len(names), ord("O"), 500.0) + names)
-    rtde.send("server", struct.pack(">HBB", 4 + len(types), ord("O"), 1) + types)
-    rtde.send("client", struct.pack(">HB", 3, ord("S")))
-    rtde.send("server", struct.pack(">HBB", 4, ord("S"), 1))
+    rtde_raw_setup(rtde)
     for step in range(STEPS):
         q = [step * 1000 + j for j in range(6)]
         reverse.time = rtde.time = max(reverse.time, rtde.time)  # one clock: the file keeps this order
@@ -68,7 +61,6 @@ def driver_session(path: Path, *, program: bool, lose: int | None = None, acks: 
 
 def _read(path: Path, monkeypatch: pytest.MonkeyPatch, runs: bool) -> tuple[dict[str, Any], Any, int]:
     """The tables and summary, read with runs or frame by frame; records the runs carried."""
-    import rtde_spec.capture.decoder as decoder
 
     carried: list[int] = []
     with monkeypatch.context() as patch:
@@ -81,8 +73,7 @@ def _read(path: Path, monkeypatch: pytest.MonkeyPatch, runs: bool) -> tuple[dict
 
             patch.setattr(ExternalConnection, "feed_rows", counted)
         else:
-            patch.setattr(decoder, "RUN_MIN", 10**9)
-            patch.setattr(bulk, "MIN_RUN", 10**9)
+            frame_by_frame(patch)
         sink = ArrowSink()
         summary = decode_capture(path, sink)
     return sink.tables(), summary, sum(carried)
@@ -92,17 +83,6 @@ def _connections(summary: Any) -> list[Any]:
     return sorted(summary.connections, key=lambda c: c.name)
 
 
-def _same(got: dict[str, Any], want: dict[str, Any]) -> None:
-    assert got.keys() == want.keys()
-    for name, table in want.items():
-        rows, expected = got[name].to_pylist(), table.to_pylist()
-        assert len(rows) == len(expected), name
-        for conn in {r.get("connection") for r in expected}:
-            assert [r for r in rows if r.get("connection") == conn] == [
-                r for r in expected if r.get("connection") == conn
-            ], (name, conn)
-
-
 @pytest.mark.parametrize("program", [True, False])  # the layout known from the program, or chosen at the end
 def test_the_reverse_interfaces_records_are_read_in_runs(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, program: bool
@@ -110,7 +90,7 @@ def test_the_reverse_interfaces_records_are_read_in_runs(
     path = driver_session(tmp_path / "driver.pcap", program=program)
     tables, summary, carried = _read(path, monkeypatch, runs=True)
     one_by_one, one_summary, _ = _read(path, monkeypatch, runs=False)
-    _same(tables, one_by_one)
+    same_rows_per_connection(tables, one_by_one)
     assert tables["urcl_reverse"].num_rows == STEPS
     assert [r["target_0"] for r in tables["urcl_reverse"].to_pylist()] == pytest.approx(
         [step * 1000 / 1e6 for step in range(STEPS)]
@@ -125,7 +105,7 @@ def test_a_lost_record_ends_the_run_and_is_counted_as_before(
     path = driver_session(tmp_path / "lost.pcap", program=True, lose=300)
     tables, summary, carried = _read(path, monkeypatch, runs=True)
     one_by_one, one_summary, _ = _read(path, monkeypatch, runs=False)
-    _same(tables, one_by_one)
+    same_rows_per_connection(tables, one_by_one)
     assert tables["urcl_reverse"].num_rows == STEPS - 1
     assert _connections(summary) == _connections(one_summary)
     reverse = next(c for c in summary.connections if c.kind == "urcl-reverse")
@@ -168,7 +148,7 @@ def test_the_real_time_interfaces_messages_are_read_in_runs(
     monkeypatch.setattr(RealtimeConnection, "feed_rows", counted)
     tables, summary, _ = _read(path, monkeypatch, runs=True)
     one_by_one, one_summary, _ = _read(path, monkeypatch, runs=False)
-    _same(tables, one_by_one)
+    same_rows_per_connection(tables, one_by_one)
     assert _connections(summary) == _connections(one_summary)
     rows = tables["realtime"].to_pylist()
     assert len(rows) == STEPS and rows[-1]["time"] == pytest.approx((STEPS - 1) * 0.002)

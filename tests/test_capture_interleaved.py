@@ -25,14 +25,13 @@ from rtde_spec.capture.protocols.rtde import RtdeConnection
 from rtde_spec.capture.reading import bulk, pcapfile
 from rtde_spec.capture.reading.packets import segments
 from rtde_spec.capture.runs import Batcher
-from tests.capture_files import COUNT, Conversation, control_capture
+from tests.capture_files import COUNT, Conversation, control_capture, frame_by_frame, same_rows_per_connection
 
 
 def _with_and_without_runs(
     path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> tuple[dict[str, Any], dict[str, Any], int]:
     """The tables read with runs, and one frame at a time; and how many packages runs carried."""
-    import rtde_spec.capture.decoder as decoder
 
     carried: list[int] = []
     feed_run = RtdeConnection.feed_run
@@ -44,20 +43,9 @@ def _with_and_without_runs(
         )
         with_runs = capture_tables(path)
     with monkeypatch.context() as patch:
-        patch.setattr(decoder, "RUN_MIN", 10**9)
-        patch.setattr(bulk, "MIN_RUN", 10**9)
+        frame_by_frame(patch)
         one_by_one = capture_tables(path)
     return with_runs, one_by_one, sum(carried)
-
-
-def _same_per_connection(got: dict[str, Any], want: dict[str, Any]) -> None:
-    assert got.keys() == want.keys()
-    for name, table in want.items():
-        rows, expected = got[name].to_pylist(), table.to_pylist()
-        assert len(rows) == len(expected), name
-        for conn in {r.get("connection") for r in expected}:
-            mine = [r for r in rows if r.get("connection") == conn]
-            assert mine == [r for r in expected if r.get("connection") == conn], (name, conn)
 
 
 @pytest.mark.parametrize("acks", [False, True])
@@ -66,7 +54,7 @@ def test_a_control_sessions_outputs_and_inputs_are_read_as_two_runs(
 ) -> None:
     path = control_capture(tmp_path / "control.pcap", acks=acks)
     with_runs, one_by_one, carried = _with_and_without_runs(path, monkeypatch)
-    _same_per_connection(with_runs, one_by_one)
+    same_rows_per_connection(with_runs, one_by_one)
     outputs, inputs = with_runs["rtde_outputs_1"].to_pylist(), with_runs["rtde_inputs_1"].to_pylist()
     assert [round(r["timestamp"] / 0.002) for r in outputs] == list(range(COUNT))
     assert [r["input_int_register_24"] for r in inputs] == list(range(COUNT))
@@ -81,7 +69,7 @@ def test_frames_read_one_by_one_batch_each_direction_of_a_control_session(
     each connection is batched over the other's packages. Before: no batch at all."""
     path = control_capture(tmp_path / "v6.pcap", acks=True, clients=clients, v6=True)
     with_runs, one_by_one, carried = _with_and_without_runs(path, monkeypatch)
-    _same_per_connection(with_runs, one_by_one)
+    same_rows_per_connection(with_runs, one_by_one)
     assert with_runs["rtde_inputs_1"].num_rows == clients * COUNT
     if clients <= Batcher.HELD // 2:
         assert carried >= 2 * clients * COUNT - 20 * clients, f"runs carried {carried}"
@@ -93,7 +81,7 @@ def test_two_connections_interleaved_package_by_package_each_run(
     """ur_rtde's receive and control interfaces side by side: four streams, each its own run."""
     path = control_capture(tmp_path / "two.pcap", acks=True, clients=2)
     with_runs, one_by_one, carried = _with_and_without_runs(path, monkeypatch)
-    _same_per_connection(with_runs, one_by_one)
+    same_rows_per_connection(with_runs, one_by_one)
     assert with_runs["rtde_outputs_1"].num_rows == 2 * COUNT
     assert carried >= 4 * COUNT - 20
 
@@ -134,7 +122,7 @@ def test_a_control_message_of_the_connection_or_a_frame_not_read_as_tcp_ends_its
     assert len(ends) == 1
     assert len(found) >= 4 and all(not first < ends[0] < end for first, end, _, _ in found)
     with_runs, one_by_one, _ = _with_and_without_runs(path, monkeypatch)
-    _same_per_connection(with_runs, one_by_one)
+    same_rows_per_connection(with_runs, one_by_one)
 
 
 def test_segments_stay_in_file_order_with_runs_interleaved(tmp_path: Path) -> None:

@@ -17,7 +17,7 @@ import pytest
 
 from rtde_spec.capture.decoder import capture_tables
 from rtde_spec.capture.protocols.rtde import RtdeConnection
-from rtde_spec.capture.reading import bulk
+from tests.capture_files import frame_by_frame, same_rows_per_connection
 from tests.ur_rtde_robot import ur_rtde_robot
 from tests.wireshark_tools import wireshark_tool
 
@@ -63,7 +63,6 @@ def _servo_session(path: Path) -> int:
 def test_a_real_control_session_capture_is_read_in_runs_with_every_servoj(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch
 ) -> None:
-    import rtde_spec.capture.decoder as decoder
 
     path = tmp_path / "control.pcapng"
     calls = _servo_session(path)
@@ -79,17 +78,9 @@ def test_a_real_control_session_capture_is_read_in_runs_with_every_servoj(
         patch.setattr(RtdeConnection, "feed_run", counted)
         tables = capture_tables(path)
     with monkeypatch.context() as patch:
-        patch.setattr(decoder, "RUN_MIN", 10**9)
-        patch.setattr(bulk, "MIN_RUN", 10**9)
+        frame_by_frame(patch)
         one_by_one = capture_tables(path)
-    assert tables.keys() == one_by_one.keys()
-    for name, table in one_by_one.items():  # row for row within each connection
-        rows, want = tables[name].to_pylist(), table.to_pylist()
-        assert len(rows) == len(want), name
-        for conn in {r.get("connection") for r in want}:
-            assert [r for r in rows if r.get("connection") == conn] == [
-                r for r in want if r.get("connection") == conn
-            ], (name, conn)
+    same_rows_per_connection(tables, one_by_one)
     inputs = max(t.num_rows for name, t in tables.items() if name.startswith("rtde_inputs"))
     assert calls <= inputs <= calls + 10, (calls, inputs)  # one input package a servoJ, none lost
     data = sum(t.num_rows for name, t in tables.items() if name.startswith(("rtde_inputs", "rtde_outputs")))

@@ -21,9 +21,16 @@ from hypothesis import strategies as st
 
 from rtde_spec import build
 from rtde_spec.capture.decoder import decode_capture
-from rtde_spec.capture.reading import bulk
 from rtde_spec.capture.tables.sink import ArrowSink
-from tests.capture_files import Conversation, _control_session, _input, _output, write
+from tests.capture_files import (
+    Conversation,
+    _control_session,
+    _input,
+    _output,
+    frame_by_frame,
+    same_rows_per_connection,
+    write,
+)
 
 ROBOT, PC = "192.168.56.101", "192.168.56.1"
 STREAMS = ("control", "receive", "reverse", "realtime")
@@ -76,12 +83,10 @@ def _step(cell: dict[str, Any], stream: str, action: str) -> None:
 
 
 def _read(path: Path, monkeypatch: pytest.MonkeyPatch, runs: bool) -> tuple[dict[str, Any], list[Any]]:
-    import rtde_spec.capture.decoder as decoder
 
     with monkeypatch.context() as patch:
         if not runs:
-            patch.setattr(decoder, "RUN_MIN", 10**9)
-            patch.setattr(bulk, "MIN_RUN", 10**9)
+            frame_by_frame(patch)
         sink = ArrowSink()
         summary = decode_capture(path, sink)
     return sink.tables(), sorted(summary.connections, key=lambda c: c.name)
@@ -111,11 +116,4 @@ def test_runs_give_the_frame_by_frame_tables_whatever_the_interleaving(
     tables, summary = _read(path, monkeypatch, runs=True)
     frames, frame_summary = _read(path, monkeypatch, runs=False)
     assert summary == frame_summary
-    assert tables.keys() == frames.keys()
-    for name, table in frames.items():
-        rows, want = tables[name].to_pylist(), table.to_pylist()
-        assert len(rows) == len(want), name
-        for conn in {r.get("connection") for r in want}:
-            assert [r for r in rows if r.get("connection") == conn] == [
-                r for r in want if r.get("connection") == conn
-            ], (name, conn)
+    same_rows_per_connection(tables, frames)
