@@ -101,8 +101,8 @@ def _bare(seg: Segment) -> bool:
 
 
 def _records_whole(route: Route, first: Segment, item: Any) -> bool:
-    """A run of fixed-size records (URCL's external control) to a decoder that takes them whole
-    (`feed_rows`), in order with nothing waiting; False: it reads them segment by segment."""
+    """A run of one-size records (URCL's external control, the real-time interface) to a decoder
+    that takes them whole (`feed_rows`), in order with nothing waiting; False: segment by segment."""
     flow, sender, direction = route
     take = getattr(flow.decoder, "feed_rows", None)
     if take is None or not direction.in_order_at(first.seq) or not take(sender, item.rows, item.times):
