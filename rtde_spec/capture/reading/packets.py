@@ -270,8 +270,8 @@ def items(
     parts of one split capture (`series.py`), read one after the other as one capture.
     A run comes where its first package is: `interleaved`, it may span frames of other
     connections and of its own the other way, which come after it (`bulk.runs`). `fixed`:
-    ports whose records are of one size without a header (URCL's external control), found
-    in runs too.
+    ports whose records are of one size (URCL's external control, the real-time interface),
+    found in runs too.
     """
     counts = stats if stats is not None else {}
     counts.setdefault("frames", 0)
