@@ -62,8 +62,66 @@ def _decompressor(f: IO[bytes], path: str | Path, name: str, module: str, comman
         except TypeError:  # zstandard before 0.16
             return lib.ZstdDecompressor().stream_reader(f, closefd=True)
     if module == "gzip":
-        return lib.GzipFile(fileobj=f, mode="rb")
+        return GzipMembers(f)
     return lib.open(f, "rb")  # lzma, bz2, lz4.frame
+
+
+class GzipMembers:
+    """A gzip file's members one after another, inflated by zlib a megabyte of input at a time.
+
+    The gzip module reads its input 8 kB at a time, in Python: 1.4x the CPU of zlib alone (a
+    125 MB capture: 0.92 against 0.64 s). As the gzip module reads them: members concatenated
+    (`cat a.gz b.gz`, pigz), zeros after the last one ignored; anything else after a member, or
+    a member cut short, raises (what `Decompressed` counts as the stream's end)."""
+
+    STEP = 1 << 20
+
+    def __init__(self, f: IO[bytes]) -> None:
+        import zlib
+
+        self.f, self.zlib = f, zlib
+        self.inflate = zlib.decompressobj(16 + zlib.MAX_WBITS)  # a gzip header and trailer
+        self.pending = b""  # input not yet inflated
+        self.fed = False  # the member has had input (an end before its trailer is a cut)
+
+    def read1(self, size: int) -> bytes:
+        while True:
+            if self.inflate.eof and not self._next_member():
+                return b""
+            if not self.pending:
+                self.pending = self.f.read(self.STEP)
+                if not self.pending:
+                    if self.fed:
+                        raise EOFError("the compressed file ends inside a gzip member")
+                    return b""
+            self.fed = True
+            out = self.inflate.decompress(self.pending, max(1, size))
+            # at a member's end the rest is in unused_data (unconsumed_tail may hold it too: 3.11)
+            self.pending = self.inflate.unused_data if self.inflate.eof else self.inflate.unconsumed_tail
+            if out:
+                return out
+
+    read = read1  # `Decompressed` takes pieces: what one step inflates
+
+    def _next_member(self) -> bool:
+        """After a member's trailer: whether another member follows (zeros to the end: none)."""
+        while True:
+            self.pending = self.pending.lstrip(b"\0")
+            if len(self.pending) >= 2:  # the magic may be cut by a read: two bytes to look at
+                if not self.pending.startswith(b"\x1f\x8b"):
+                    raise OSError("not a gzip member after the previous one")
+                self.fed = False
+                self.inflate = self.zlib.decompressobj(16 + self.zlib.MAX_WBITS)
+                return True
+            more = self.f.read(self.STEP)
+            if not more:
+                if self.pending:
+                    raise OSError("not a gzip member after the previous one")
+                return False
+            self.pending += more
+
+    def close(self) -> None:
+        self.f.close()
 
 
 class Decompressed(io.RawIOBase):
