@@ -35,7 +35,8 @@ PREFIX_BYTES = struct.calcsize(DATA_PACKAGE_PREFIX_FORMAT)
 
 @dataclass
 class DataRun:
-    """Frames in order on one connection direction, each one whole data package of `size` bytes."""
+    """Frames in order on one connection direction, each one whole data package (or, on a port of
+    fixed-size records, one whole record) of `size` bytes."""
 
     src: str
     sport: int
@@ -93,9 +94,10 @@ def runs(records: Records, interleaved: bool = True, fixed: frozenset[int] = fro
     ends it. `interleaved=False`: only its own bare segments come between its packages, so
     a run expanded in its place gives the file's order (`packets.segments`).
 
-    `fixed`: ports of protocols of fixed-size records without a header (URCL's external
-    control): segments of one size in a row on such a connection are runs too, with only
-    the connection's bare segments between them (any other data of it ends the run).
+    `fixed`: ports of protocols whose records have one size a connection (URCL's external
+    control, the real-time interface): segments of one size in a row on such a connection are
+    runs too, with only the connection's bare segments between them (any other data of it ends
+    the run).
     """
     import numpy as np
 

@@ -17,9 +17,10 @@ from typing import IO, Any, cast
 
 from rtde_spec.errors import UsageError
 
+GZIP = b"\x1f\x8b"  # how every gzip member starts
 # first bytes -> (name, module, the command that decompresses a file of it)
 MAGIC = {
-    b"\x1f\x8b": ("gzip", "gzip", "gunzip -k"),
+    GZIP: ("gzip", "gzip", "gunzip -k"),
     b"\x28\xb5\x2f\xfd": ("zstd", "zstandard", "zstd -d"),
     b"\x04\x22\x4d\x18": ("lz4", "lz4.frame", "lz4 -d"),
     b"\xfd7zXZ\x00": ("xz", "lzma", "xz -dk"),
@@ -108,7 +109,7 @@ class GzipMembers:
         while True:
             self.pending = self.pending.lstrip(b"\0")
             if len(self.pending) >= 2:  # the magic may be cut by a read: two bytes to look at
-                if not self.pending.startswith(b"\x1f\x8b"):
+                if not self.pending.startswith(GZIP):
                     raise OSError("not a gzip member after the previous one")
                 self.fed = False
                 self.inflate = self.zlib.decompressobj(16 + self.zlib.MAX_WBITS)
