@@ -469,12 +469,13 @@ def same_rows_per_connection(got: dict[str, Any], want: dict[str, Any]) -> None:
 
 
 def frame_by_frame(patch: Any) -> None:
-    """With a monkeypatch: no run found in bulk nor batched, every frame read alone (the reference)."""
-    import rtde_spec.capture.decoder as decoder
+    """With a monkeypatch: no run found in bulk nor batched, every frame routed and fed alone (the
+    reference: each segment's acknowledgment and time seen in its place)."""
+    from rtde_spec.capture import runs
     from rtde_spec.capture.reading import bulk
 
-    patch.setattr(decoder, "RUN_MIN", 10**9)
     patch.setattr(bulk, "MIN_RUN", 10**9)
+    patch.setattr(runs.Run, "start", classmethod(lambda cls, route, seg: None))
 
 
 def rtde_raw_setup(rtde: Conversation) -> None:

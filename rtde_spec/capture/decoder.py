@@ -35,10 +35,8 @@ from rtde_spec.capture.tables.summary import CaptureSummary
 from rtde_spec.errors import OutputError
 from rtde_spec.metamodel.catalogue import Catalogue
 from rtde_spec.metamodel.versions import Version
-from rtde_spec.recipes.codec import PAYLOAD_OFFSET, RecipeCodec
+from rtde_spec.recipes.codec import RecipeCodec
 
-RUN_HEAD = PAYLOAD_OFFSET  # size, type, recipe id: the bytes every data package of one run shares
-RUN_MIN, RUN_MAX = 16, 4096  # shorter runs go segment by segment; longer ones are cut
 PLACE_ATTEMPTS = 8  # decodings of one file whose names other captures took meanwhile, before giving up
 
 
