@@ -278,9 +278,8 @@ def test_runs_of_data_segments_decode_exactly_as_segment_by_segment(
     for i in range(312, 400):
         robots[0].send("server", data(i))
     path = write(tmp_path / f"two.{fmt}", robots, fmt)
-    import rtde_spec.capture.decoder as decoder
     from rtde_spec.capture.protocols.rtde import RtdeConnection
-    from rtde_spec.capture.reading import bulk
+    from tests.capture_files import frame_by_frame, same_rows_per_connection
 
     runs: list[int] = []
     feed_run = RtdeConnection.feed_run
@@ -290,17 +289,10 @@ def test_runs_of_data_segments_decode_exactly_as_segment_by_segment(
     with_runs = capture_tables(path)
     assert len(runs) >= 2 and sum(runs) >= 250  # the run path did most of the work
 
-    monkeypatch.setattr(decoder, "RUN_MIN", 10**9)  # every run replayed segment by segment ...
-    monkeypatch.setattr(bulk, "MIN_RUN", 10**9)  # ... and none found in bulk in the file's blocks
-    one_by_one = capture_tables(path)
-    assert with_runs.keys() == one_by_one.keys()
-    for name, table in with_runs.items():  # the same rows, in the same order within each connection
-        got, want = table.to_pylist(), one_by_one[name].to_pylist()
-        for conn in {r.get("connection") for r in want}:
-            assert [r for r in got if r.get("connection") == conn] == [
-                r for r in want if r.get("connection") == conn
-            ], (name, conn)
-        assert len(got) == len(want), name
+    with monkeypatch.context() as patch:
+        frame_by_frame(patch)  # every segment routed and fed alone
+        one_by_one = capture_tables(path)
+    same_rows_per_connection(with_runs, one_by_one)
     rows = with_runs["rtde_outputs_1"]
     assert rows.num_rows == 399  # 400 packages, one lost
     by_connection = {}

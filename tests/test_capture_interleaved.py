@@ -25,7 +25,16 @@ from rtde_spec.capture.protocols.rtde import RtdeConnection
 from rtde_spec.capture.reading import bulk, pcapfile
 from rtde_spec.capture.reading.packets import segments
 from rtde_spec.capture.runs import Batcher
-from tests.capture_files import COUNT, Conversation, control_capture, frame_by_frame, same_rows_per_connection
+from tests.capture_files import (
+    COUNT,
+    Conversation,
+    control_capture,
+    frame_by_frame,
+    rtde_packages,
+    rtde_setup,
+    same_rows_per_connection,
+    write,
+)
 
 
 def _with_and_without_runs(
@@ -135,3 +144,25 @@ def test_segments_stay_in_file_order_with_runs_interleaved(tmp_path: Path) -> No
         tcp = ip.data
         theirs.append((".".join(str(b) for b in ip.src), tcp.sport, tcp.seq, bytes(tcp.data)))
     assert ours == theirs
+
+
+def test_recipe_tables_are_numbered_in_the_order_their_first_packages_come(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """`rtde_outputs_1` is the first recipe met, whether its packages come in a run or one by one:
+    ten packages of one client's recipe (too few for a run), then a second client's stream."""
+    first, second = ("timestamp", "actual_q", "robot_mode"), ("timestamp", "actual_TCP_pose")
+    a = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30004))
+    b = Conversation(("10.0.0.3", 51001), ("10.0.0.10", 30004), time=1_700_000_000.5)
+    rtde_setup(a, first)
+    for package in rtde_packages(10, first):
+        a.send("server", package)
+    rtde_setup(b, second)
+    for package in rtde_packages(100, second):
+        b.send("server", package)
+    path = write(tmp_path / "two.pcap", [a, b])
+    with_runs, one_by_one, carried = _with_and_without_runs(path, monkeypatch)
+    assert carried >= 90  # the second client's stream came as a run
+    same_rows_per_connection(with_runs, one_by_one)
+    assert "actual_q_0" in with_runs["rtde_outputs_1"].column_names
+    assert "actual_TCP_pose_0" in with_runs["rtde_outputs_2"].column_names

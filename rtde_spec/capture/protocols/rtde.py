@@ -155,6 +155,9 @@ class RtdeConnection:
         key = (sender, recipe_id)
         if key not in self.batches or self.batches[key][0] is not codec:
             self._flush(key)
+            # the recipe's table is named where its first package is, not where its rows are
+            # written: runs are written at once, these wait (rtde_outputs_1: the first recipe met)
+            self.sink.table_for_recipe(RTDE_DIRECTIONS[sender], codec.names)
             self.batches[key] = (codec, [], [])
         _, raws, times = self.batches[key]
         raws.append(package)
