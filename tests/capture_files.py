@@ -38,12 +38,14 @@ class Conversation:
     time: float = 1_700_000_000.0
     seq: dict[str, int] = field(default_factory=lambda: {"client": 1000, "server": 5000})
     frames: list[tuple[float, bytes]] = field(default_factory=list)
+    acking: bool = False  # data segments acknowledge all the other side sent (lost segments too)
 
     def _frame(self, side: str, seq: int, payload: bytes, flags: int) -> bytes:
         (src, sport), (dst, dport) = (
             (self.client, self.server) if side == "client" else (self.server, self.client)
         )
-        tcp = dpkt.tcp.TCP(sport=sport, dport=dport, seq=seq, ack=0, flags=flags, data=payload)
+        ack = self.seq["server" if side == "client" else "client"] if self.acking else 0
+        tcp = dpkt.tcp.TCP(sport=sport, dport=dport, seq=seq, ack=ack, flags=flags, data=payload)
         ip = _ip(src, dst, tcp)
         if self.link == "sll":
             proto = dpkt.ethernet.ETH_TYPE_IP6 if ":" in src else dpkt.ethernet.ETH_TYPE_IP

@@ -20,14 +20,18 @@ import dpkt
 import pytest
 
 from rtde_spec import build
-from rtde_spec.capture.decoder import capture_tables
+from rtde_spec.capture.decoder import capture_tables, decode_capture
 from rtde_spec.capture.protocols.rtde import RtdeConnection
 from rtde_spec.capture.reading import bulk, pcapfile
 from rtde_spec.capture.reading.packets import segments
 from rtde_spec.capture.runs import Batcher
+from rtde_spec.capture.tables.sink import ArrowSink
 from tests.capture_files import (
     COUNT,
     Conversation,
+    _control_session,
+    _input,
+    _output,
     control_capture,
     frame_by_frame,
     rtde_packages,
@@ -166,3 +170,37 @@ def test_recipe_tables_are_numbered_in_the_order_their_first_packages_come(
     same_rows_per_connection(with_runs, one_by_one)
     assert "actual_q_0" in with_runs["rtde_outputs_1"].column_names
     assert "actual_TCP_pose_0" in with_runs["rtde_outputs_2"].column_names
+
+
+@pytest.mark.parametrize("late", [False, True])
+def test_a_hole_the_peer_acknowledged_is_lost_where_the_acknowledgment_is(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, late: bool
+) -> None:
+    """One of a control client's inputs is not in the capture; the controller's next outputs
+    acknowledge past it. Frame by frame the hole is lost at that acknowledgment, and a copy of
+    the input coming later (a spurious retransmission: `late`) is a copy of given-up bytes. The
+    outputs' runs carry those acknowledgments: read in bulk, the hole must be lost there too."""
+    conv = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30004), acking=True)
+    outputs, writes = _control_session(conv)
+    missing = b""
+    for i in range(60):
+        conv.send("server", _output(outputs, i))
+        _, frame = conv.send("client", _input(writes, i), keep=i != 5)
+        missing = frame if i == 5 else missing
+    if late:
+        conv.resend(missing, dt=0.5)
+    path = write(tmp_path / "hole.pcap", [conv])
+    read = {}
+    for runs in (True, False):
+        with monkeypatch.context() as patch:
+            if not runs:
+                frame_by_frame(patch)
+            sink = ArrowSink()
+            read[runs] = sink, decode_capture(path, sink)
+    (sink, summary), (reference, reference_summary) = read[True], read[False]
+    same_rows_per_connection(sink.tables(), reference.tables())
+    assert summary.connections == reference_summary.connections
+    inputs = [r["input_int_register_24"] for r in sink.tables()["rtde_inputs_1"].to_pylist()]
+    assert inputs == [i for i in range(60) if i != 5]
+    (connection,) = summary.connections
+    assert (connection.gaps, connection.lost_bytes) == (1, len(_input(writes, 5)))

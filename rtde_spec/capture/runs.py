@@ -72,6 +72,8 @@ class Batcher:
         first = first_of(item)
         route = self.table.route_of(first)
         self.flush()  # segments held first, so the direction is where this run starts
+        if route is not None and _peer_waits(route):  # its acknowledgments are read in their places
+            route = None
         if route is not None and route[0].kind != "rtde" and _records_whole(route, first, item):
             return
         whole = Run.start(route, first) if route is not None else None
@@ -98,6 +100,13 @@ def _bare(seg: Segment) -> bool:
     (`FlowTable.route_of`) is all it does. The peer of a 500 Hz stream sends one after nearly
     every package, so a capture taken on either host has them between the packages of a run."""
     return not seg.payload and not seg.flags & _NOT_DATA
+
+
+def _peer_waits(route: Route) -> bool:
+    """Whether the other direction holds segments behind a hole: each segment of this one may
+    acknowledge past it (`FlowTable.route_of`), so it is read segment by segment."""
+    flow, sender, _ = route
+    return bool(flow.directions["client" if sender == "controller" else "controller"].waiting)
 
 
 def _records_whole(route: Route, first: Segment, item: Any) -> bool:

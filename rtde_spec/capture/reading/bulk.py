@@ -27,6 +27,7 @@ from rtde_spec.capture.reading.tunnels import IPV4, VLAN
 TCP, VLAN_TAG = 6, VLAN[0]  # one 802.1Q tag (more, or 802.1ad: frame by frame)
 ETH, IP_MIN, TCP_MIN = LINK_HEADERS[ETHERNET], 20, 20
 NOT_DATA = 0x07  # FIN, SYN, RST
+ACK = 0x10
 MIN_RUN = 16  # shorter runs are handed back frame by frame
 SIZE_AT, TYPE_AT, _ = DATA_PACKAGE_PREFIX_OFFSETS  # where a data package says its size and type
 SIZE_BYTES = TYPE_AT - SIZE_AT
@@ -47,6 +48,18 @@ class DataRun:
     times: Any  # numpy float64, one per package
     rows: Any  # numpy uint8 (packages, size): one package per row
     bare: BareSegments | None = None  # the connection's segments without data between the packages
+    frames: tuple[Records, Any] | None = None  # (records, the run's): read only when it is expanded
+
+    def acks(self) -> list[int] | None:
+        """Each package's acknowledgment number (-1 without the ACK flag), read from its frame:
+        for `packets.expand`, which gives the segments back one by one to be routed."""
+        if self.frames is None:
+            return None
+        import numpy as np
+
+        records, chosen = self.frames
+        u8, _, tcp = _tcp_at(np, records, chosen)
+        return np.where(u8[tcp + 13] & ACK, _word(np, u8, tcp + 8), -1).tolist()  # type: ignore[no-any-return]
 
 
 @dataclass
@@ -66,15 +79,26 @@ class BareSegments:
         sent it, its sequence and acknowledgment numbers and its flags (numpy columns)."""
         import numpy as np
 
-        records, u8, others = self.records, np.frombuffer(self.records.buf, dtype=np.uint8), self.others
-        ip, _ = ip_offsets(u8, records.offsets[others], records.links[others])
-        tcp = ip + (u8[ip] & 0x0F).astype(np.int64) * 4
-        word = np.array([1 << 24, 1 << 16, 1 << 8, 1], dtype=np.int64)
-        seq, ack = ((u8[(tcp + at)[:, None] + np.arange(4)] * word).sum(axis=1) for at in (4, 8))
+        records, others = self.records, self.others
+        u8, ip, tcp = _tcp_at(np, records, others)
+        seq, ack = _word(np, u8, tcp + 4), _word(np, u8, tcp + 8)
         src = np.frombuffer(self.src, dtype=np.uint8)
         reverse = (u8[(ip + 12)[:, None] + np.arange(4)] != src).any(axis=1)
         before = np.searchsorted(self.picks, others)
         return before, records.times[others], reverse, seq, ack, u8[tcp + 13].astype(np.int64)
+
+
+def _tcp_at(np: Any, records: Records, chosen: Any) -> tuple[Any, Any, Any]:
+    """The block's bytes, and where the IP and TCP headers of the records `chosen` start."""
+    u8 = np.frombuffer(records.buf, dtype=np.uint8)
+    ip, _ = ip_offsets(u8, records.offsets[chosen], records.links[chosen])
+    return u8, ip, ip + (u8[ip] & 0x0F).astype(np.int64) * 4
+
+
+def _word(np: Any, u8: Any, at: Any) -> Any:
+    """The big-endian 32-bit numbers at offsets `at`."""
+    word = np.array([1 << 24, 1 << 16, 1 << 8, 1], dtype=np.int64)
+    return (u8[at[:, None] + np.arange(4)] * word).sum(axis=1)
 
 
 # a run found in a block: its first record, the one after its last, its packages' records (None:
@@ -118,7 +142,7 @@ def runs(records: Records, interleaved: bool = True, fixed: frozenset[int] = fro
 
     found: list[Found] = []
     if len(data) >= MIN_RUN:
-        local = h.bare if not interleaved else h.tcp4 & ~h.ok & ~h.bare  # bare: counted; else: ends a run
+        local = h.bare if not interleaved else (h.tcp4 & ~h.ok & ~h.bare) | _out_of_order(np, h, way)
         key = [h.src, h.dst, h.ports, h.size, h.prefix]  # the prefix: size, type, recipe
         mode = "over" if interleaved else "file"
         found += _linked(np, h, data, key, per_connection(local), rank, way, mode)
@@ -127,6 +151,23 @@ def runs(records: Records, interleaved: bool = True, fixed: frozenset[int] = fro
         between = "connection" if interleaved else "file"
         found += _linked(np, h, other, key, per_connection(h.bare), rank, way, between)
     found.sort(key=lambda run: run[0])
+    return found
+
+
+def _out_of_order(np: Any, h: _Headers, way: Any) -> Any:
+    """Data segments that do not follow the one before them in their direction (a hole before
+    them, or a copy): a run of the other direction ends there. The peer acknowledges each
+    package of a control session's inputs in its next output: a hole in the inputs is lost at
+    that acknowledgment, which the outputs' run would carry past unread. False for all when
+    only one direction of one connection sends data (its own run follows in sequence)."""
+    found = np.zeros(len(way), dtype=bool)
+    data = np.flatnonzero(h.tcp4 & (h.size > 0))
+    ways = way[data]
+    if len(data) < 2 or (ways == ways[0]).all():
+        return found
+    data = data[np.argsort(ways, kind="stable")]  # each direction's data segments in file order
+    a, b = data[:-1], data[1:]
+    found[b] = (way[a] == way[b]) & (h.seq[b] != (h.seq[a] + h.size[a]) % (1 << 32))
     return found
 
 
@@ -359,4 +400,5 @@ def run_of(records: Records, first: int, end: int, picks: Any = None, others: An
         records.times[first:end] if picks is None else records.times[picks],
         rows,
         None if others is None else BareSegments(records, picks, others, bytes(buf[ip + 12 : ip + 16])),
+        (records, chosen),
     )

@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import NamedTuple
 
 from rtde_spec.capture.reading import tunnels
-from rtde_spec.capture.reading.bulk import DataRun, Found, run_of, runs
+from rtde_spec.capture.reading.bulk import ACK, DataRun, Found, run_of, runs
 from rtde_spec.capture.reading.compressed import open_capture
 from rtde_spec.capture.reading.ipfrag import Addresses
 from rtde_spec.capture.reading.link_types import COOKED, ETHERNET, LINK_HEADERS, LOOPBACK, RAW_IP
@@ -32,7 +32,6 @@ IPV6_OPTION_HEADERS = {0, 43, 60}  # hop-by-hop, routing, destination options: s
 IPV6_FRAGMENT = 44
 MAY_HOLD_TCP = frozenset({TCP, *IPV6_OPTION_HEADERS, *tunnels.CARRIERS})  # what fragments are put together
 _TCP = struct.Struct(">HHIIBB")  # ports, seq, ack, data offset byte, flags
-ACK = 0x10
 
 
 class Segment(NamedTuple):
@@ -347,9 +346,10 @@ def expand(run: DataRun) -> Iterator[Segment]:
     waiting = [] if bare is None else list(zip(*(c.tolist() for c in bare.columns()), strict=True))
     waiting.reverse()  # the first last: popped in order
     ends = ((run.src, run.sport, run.dst, run.dport), (run.dst, run.dport, run.src, run.sport))
+    acks = run.acks() or [-1] * len(run.times)
     for i, (ts, row) in enumerate(zip(run.times.tolist(), run.rows, strict=True)):
         while waiting and waiting[-1][0] <= i:
             _, when, back, seq, ack, flags = waiting.pop()
             yield Segment(when, *ends[back], seq, flags, b"", ack if flags & ACK else -1)
         seq = (run.seq + i * run.size) % (1 << 32)
-        yield Segment(ts, *ends[0], seq, ACK_PSH, row.tobytes())
+        yield Segment(ts, *ends[0], seq, ACK_PSH, row.tobytes(), acks[i])
