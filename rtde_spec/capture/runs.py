@@ -83,7 +83,7 @@ class Batcher:
             return
         flow, sender, direction = whole.route
         flow.last = float(item.times[-1])
-        direction.advance(item.rows.size, item.rows[-(RECENT // item.rows.shape[1] + 1) :].tobytes())
+        direction.advance(item.rows.size, _tail(item.rows), item.rows.shape[1])
         whole.decoder.feed_run(sender, whole.codec, item.rows, item.times)
 
     def flush(self) -> None:
@@ -117,8 +117,13 @@ def _records_whole(route: Route, first: Segment, item: Any) -> bool:
     if take is None or not direction.in_order_at(first.seq) or not take(sender, item.rows, item.times):
         return False
     flow.last = float(item.times[-1])
-    direction.advance(item.rows.size, item.rows[-(RECENT // item.rows.shape[1] + 1) :].tobytes())
+    direction.advance(item.rows.size, _tail(item.rows), item.rows.shape[1])
     return True
+
+
+def _tail(rows: Any) -> bytes:
+    """The last bytes of a run's packages `Direction.advance` may keep (2 x RECENT)."""
+    return rows[-(2 * RECENT // rows.shape[1] + 1) :].tobytes()  # type: ignore[no-any-return]
 
 
 def feed(route: Route, seg: Segment) -> None:
@@ -185,6 +190,6 @@ class Run:
         import numpy as np
 
         data = b"".join(s.payload for s in self.segments)
-        direction.advance(len(data), data[-RECENT:])
+        direction.advance(len(data), data[-2 * RECENT :], len(self.segments[0].payload))
         rows = np.frombuffer(data, dtype=np.uint8).reshape(len(self.segments), -1)
         self.decoder.feed_run(sender, self.codec, rows, np.array([s.time for s in self.segments]))

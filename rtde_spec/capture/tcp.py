@@ -129,9 +129,15 @@ class Direction:
         return 0.0
 
     def _delivered(self, data: bytes) -> None:
+        """Bytes delivered in order: the last of them kept, between RECENT and 2 x RECENT (one
+        trim per RECENT bytes), always the bytes just before `pos` (a chunk longer than RECENT,
+        as segmentation offload gives, replaces them)."""
         self.pos += len(data)
         recent = self._recent
-        recent += data[-RECENT:]
+        if len(data) >= RECENT:
+            recent[:] = data[-RECENT:]
+            return
+        recent += data
         if len(recent) > 2 * RECENT:
             del recent[: len(recent) - RECENT]
 
@@ -174,14 +180,25 @@ class Direction:
         """Whether a segment at `seq` would be delivered as it is: next in order, nothing waiting."""
         return self.next_seq == seq and not self.waiting
 
-    def advance(self, size: int, tail: bytes = b"") -> None:
-        """Account for `size` bytes delivered in order outside `feed` (a run of whole packages);
-        `tail`, the last of them, is kept to compare retransmissions with."""
+    def advance(self, size: int, tail: bytes, step: int) -> None:
+        """Account for `size` bytes delivered in order outside `feed`: a run of whole packages of
+        `step` bytes, `tail` the last of them (2 x RECENT, or all). What is kept to compare
+        copies with is what delivering them one by one keeps."""
         assert self.base is not None
-        if len(tail) < size:
-            self._recent.clear()  # what comes before the tail is not known here
-        self.pos += size - len(tail)
-        self._delivered(tail)
+        recent = self._recent
+        held = len(recent)
+        if step >= RECENT:
+            keep = RECENT
+        elif held + size <= 2 * RECENT:
+            keep = held + size
+        else:  # trimmed to RECENT once past 2 x RECENT, then again every RECENT // step + 1 packages
+            first = (2 * RECENT - held) // step + 1
+            keep = RECENT + (size // step - first) % (RECENT // step + 1) * step
+        if keep > size:
+            recent[:] = recent[held - (keep - size) :] + tail[-size:]
+        else:
+            recent[:] = tail[-keep:]
+        self.pos += size
 
     def skip_gap(self) -> list[Chunk]:
         """Declare the hole before the earliest waiting segment lost; deliver up to the next hole."""
