@@ -26,8 +26,7 @@ from rtde_spec.capture.reading.tunnels import IPV4, VLAN
 
 TCP, VLAN_TAG = 6, VLAN[0]  # one 802.1Q tag (more, or 802.1ad: frame by frame)
 ETH, IP_MIN, TCP_MIN = LINK_HEADERS[ETHERNET], 20, 20
-NOT_DATA = 0x07  # FIN, SYN, RST
-ACK = 0x10
+NOT_DATA, ACK = 0x07, 0x10  # FIN, SYN, RST; ACK
 MIN_RUN = 16  # shorter runs are handed back frame by frame
 SIZE_AT, TYPE_AT, _ = DATA_PACKAGE_PREFIX_OFFSETS  # where a data package says its size and type
 SIZE_BYTES = TYPE_AT - SIZE_AT
@@ -51,8 +50,7 @@ class DataRun:
     frames: tuple[Records, Any] | None = None  # (records, the run's): read only when it is expanded
 
     def acks(self) -> list[int] | None:
-        """Each package's acknowledgment number (-1 without the ACK flag), read from its frame:
-        for `packets.expand`, which gives the segments back one by one to be routed."""
+        """Each package's acknowledgment number (-1: no ACK flag), for `packets.expand`."""
         if self.frames is None:
             return None
         import numpy as np
@@ -155,11 +153,9 @@ def runs(records: Records, interleaved: bool = True, fixed: frozenset[int] = fro
 
 
 def _out_of_order(np: Any, h: _Headers, way: Any) -> Any:
-    """Data segments that do not follow the one before them in their direction (a hole before
-    them, or a copy): a run of the other direction ends there. The peer acknowledges each
-    package of a control session's inputs in its next output: a hole in the inputs is lost at
-    that acknowledgment, which the outputs' run would carry past unread. False for all when
-    only one direction of one connection sends data (its own run follows in sequence)."""
+    """Data segments not following the one before them in their direction (a hole, a copy): a
+    run of the other direction ends there, since its packages' acknowledgments may give up the
+    hole (`runs._peer_waits`). None when one direction alone sends data (its run is in order)."""
     found = np.zeros(len(way), dtype=bool)
     data = np.flatnonzero(h.tcp4 & (h.size > 0))
     ways = way[data]
