@@ -174,3 +174,46 @@ def test_a_failed_batch_keeps_no_table_and_names_the_error(tmp_path: Path, mixed
     finally:
         DirectorySink._write = old  # type: ignore[method-assign]
     assert not [p for p in out.rglob("*") if p.is_file()], "nothing half-written is left"
+
+
+def _small_capture(path: Path) -> Path:
+    conv = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30004))
+    codec = _session(conv, SMALL, 1)
+    for i in range(50):
+        conv.send("server", _package(codec, i, 1))
+    return write(path, [conv])
+
+
+def test_placing_a_capture_leaves_the_empty_folders_of_others_alone(tmp_path: Path) -> None:
+    """`capture --jobs N` decodes files in workers while the parent places finished ones. A
+    worker makes a table's partition folder at its first row and its file at its first row
+    group: placing another file pruned every empty partition folder of the output, that one
+    too, and the worker failed ("its folder does not exist"; a race seen 1 run in ~50)."""
+    out = tmp_path / "out"
+    fresh = out / "rtde_outputs_7" / "robot=10.0.0.10" / "date=2023-11-14"
+    fresh.mkdir(parents=True)  # another capture's, its file not begun yet
+    decode_to_directory(_small_capture(tmp_path / "a.pcap"), out)
+    assert fresh.is_dir()
+    assert any((out / "rtde_outputs_1").rglob("a*.parquet"))
+
+
+def test_a_table_whose_folder_was_removed_before_its_file_is_made_is_still_written(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """The same race from the worker's side: its folder made, then removed before the file is
+    created (pinned Parquet files are created at their first row group): it is made again."""
+    import rtde_spec.capture.tables.sink as sink
+
+    real, removed = sink.open_writer, []
+
+    def folder_removed_meanwhile(fmt: str, path: Path | str, **options: object) -> object:
+        if not removed:
+            Path(path).parent.rmdir()
+            removed.append(path)
+        return real(fmt, path, **options)  # type: ignore[arg-type]
+
+    monkeypatch.setattr(sink, "open_writer", folder_removed_meanwhile)
+    out = tmp_path / "out"
+    summary = decode_to_directory(_small_capture(tmp_path / "a.pcap"), out)
+    assert removed and summary.tables.get("rtde_outputs_1") == 50
+    assert sum(pq.read_metadata(f).num_rows for f in (out / "rtde_outputs_1").rglob("*.parquet")) == 50

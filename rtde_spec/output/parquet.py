@@ -9,7 +9,7 @@ from typing import IO, Any
 
 from rtde_spec.errors import OutputError, UsageError, require
 from rtde_spec.output.base import Writer, flat_columns, flatten
-from rtde_spec.output.partfile import Part, device_failed, is_special, write_failed
+from rtde_spec.output.partfile import Part, device_failed, in_its_folder, is_special, write_failed
 from rtde_spec.output.tables import arrow_table, arrow_type, rows_table
 from rtde_spec.printable import safe_text
 
@@ -252,7 +252,8 @@ class LeanParquetWriter:
         from pyarrow import OSFile, _parquet
 
         self.schema = schema
-        self._file = _os_file(OSFile, where) if isinstance(where, str) else None  # as pyarrow opens a path
+        # as pyarrow opens a path; made at the first row group, long after its folder (see in_its_folder)
+        self._file = in_its_folder(lambda: _os_file(OSFile, where), where) if isinstance(where, str) else None
         try:
             self._writer = _parquet.ParquetWriter(
                 self._file if self._file is not None else where,

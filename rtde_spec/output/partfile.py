@@ -21,10 +21,13 @@ import os
 import stat
 from collections.abc import Callable
 from pathlib import Path
-from typing import BinaryIO, cast
+from typing import BinaryIO, TypeVar, cast
 
 from rtde_spec.errors import OutputError, out_of_descriptors
 from rtde_spec.output.tempnames import temp_path
+
+T = TypeVar("T")
+FOLDER_ATTEMPTS = 3  # a file's folder made again when another capture pruned it meanwhile
 
 SPILL = 8 << 20  # held bytes handed to the file before a flush, so memory stays bounded
 # write errors of the data, not of the path given (a full disk, a failing device): exit 1, not 2
@@ -327,6 +330,20 @@ _WHY = {
     errno.EIO: "an input/output error of the device",
     errno.ENAMETOOLONG: "the name is too long",
 }
+
+
+def in_its_folder(open_file: Callable[[], T], path: str | Path) -> T:
+    """`open_file()`, the file's folder made again when it is gone: a table's folder is made at its
+    first row and a pinned Parquet file at its first row group, and another capture's placing
+    (`capture --jobs N`) may prune the folder as empty in between."""
+    for attempt in range(FOLDER_ATTEMPTS):
+        try:
+            return open_file()
+        except FileNotFoundError:
+            if attempt == FOLDER_ATTEMPTS - 1:
+                raise
+            os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
+    raise AssertionError("unreachable")
 
 
 def write_whole(target: str | Path, data: bytes, *, durable: bool = False) -> None:

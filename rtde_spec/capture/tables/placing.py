@@ -128,13 +128,15 @@ class PreparedTables:
         for table in tables:
             for partition in partitions:
                 folder = table.joinpath(*partition)
+                removed = False
                 for n in itertools.count():
                     old = folder / f"{self.stem}{f'_{n:04d}' if n else ''}.{self.ext}"
                     if not old.is_file():
                         break
                     if str(old) not in written:
-                        _remove(old)
-                prune(folder, folder.parent, table)
+                        removed = _remove(old) or removed
+                if removed:  # only folders this emptied: an empty one may be another capture's, new
+                    prune(folder, folder.parent, table)
         for folder in {p.parent for p in self.paths}:
             self._remove_unescaped(folder)
 
@@ -147,10 +149,12 @@ class PreparedTables:
         if legacy == folder or not legacy.is_dir():
             return
         stem = glob.escape(self.stem)
+        removed = False
         for pattern in (f"{stem}.{self.ext}", f"{stem}_[0-9][0-9][0-9][0-9].{self.ext}"):
             for old in legacy.glob(pattern):
-                _remove(old)
-        prune(legacy, legacy.parent)
+                removed = _remove(old) or removed
+        if removed:
+            prune(legacy, legacy.parent)
 
     def _remove_dropped_tables(self, tables: set[str]) -> None:
         """This input's files in recipe tables an earlier run of it wrote and this one did not (the
@@ -178,8 +182,10 @@ def prune(*folders: Path) -> None:
             break
 
 
-def _remove(path: Path) -> None:
+def _remove(path: Path) -> bool:
+    """Whether the file was removed."""
     try:
         path.unlink()
     except OSError:  # gone already, or not ours to remove: the summary lists ours
-        pass
+        return False
+    return True
