@@ -69,9 +69,8 @@ class ParquetWriter(Writer):
         self._written(self._create, schema, discrete or False, stats or False, compression)
 
     def _create(self, schema: Any, dictionary: Any, stats: Any, compression: Any) -> None:
-        self._writer = LeanParquetWriter(
-            self.stream, schema, use_dictionary=dictionary, write_statistics=stats, compression=compression
-        )
+        options = {"use_dictionary": dictionary, "write_statistics": stats, "compression": compression}
+        self._writer = in_its_folder(lambda: LeanParquetWriter(self.stream, schema, **options), self.part)
 
     def declare(self, columns: Mapping[str, str]) -> None:
         pa = self._pa
@@ -252,8 +251,7 @@ class LeanParquetWriter:
         from pyarrow import OSFile, _parquet
 
         self.schema = schema
-        # as pyarrow opens a path; made at the first row group, long after its folder (see in_its_folder)
-        self._file = in_its_folder(lambda: _os_file(OSFile, where), where) if isinstance(where, str) else None
+        self._file = _os_file(OSFile, where) if isinstance(where, str) else None  # as pyarrow opens a path
         try:
             self._writer = _parquet.ParquetWriter(
                 self._file if self._file is not None else where,

@@ -27,7 +27,6 @@ from rtde_spec.errors import OutputError, out_of_descriptors
 from rtde_spec.output.tempnames import temp_path
 
 T = TypeVar("T")
-FOLDER_ATTEMPTS = 3  # a file's folder made again when another capture pruned it meanwhile
 
 SPILL = 8 << 20  # held bytes handed to the file before a flush, so memory stays bounded
 # write errors of the data, not of the path given (a full disk, a failing device): exit 1, not 2
@@ -91,6 +90,7 @@ class Part:
         # a live file goes in place early only where nothing is there to lose: an existing
         # file stays as it was until this one is complete
         self.replaces = path.exists()
+        self.in_folder = path.parent.is_dir()  # (a folder gone later was another capture's pruning)
 
     def publish(self) -> None:
         """Rename into place now; later writes go on through the open file (a live file).
@@ -332,18 +332,17 @@ _WHY = {
 }
 
 
-def in_its_folder(open_file: Callable[[], T], path: str | Path) -> T:
-    """`open_file()`, the file's folder made again when it is gone: a table's folder is made at its
-    first row and a pinned Parquet file at its first row group, and another capture's placing
-    (`capture --jobs N`) may prune the folder as empty in between."""
-    for attempt in range(FOLDER_ATTEMPTS):
-        try:
-            return open_file()
-        except FileNotFoundError:
-            if attempt == FOLDER_ATTEMPTS - 1:
-                raise
-            os.makedirs(os.path.dirname(path) or ".", exist_ok=True)
-    raise AssertionError("unreachable")
+def in_its_folder(open_file: Callable[[], T], part: Part | None) -> T:
+    """`open_file()` of a part's temporary file, its folder made again if it is gone since the part
+    began: a table's folder is made at its first row, a pinned Parquet file at its first row
+    group, and another capture's placing (`capture --jobs N`) may prune the empty folder between."""
+    try:
+        return open_file()
+    except FileNotFoundError:
+        if part is None or not part.in_folder:
+            raise
+        part.temp.parent.mkdir(parents=True, exist_ok=True)
+        return open_file()
 
 
 def write_whole(target: str | Path, data: bytes, *, durable: bool = False) -> None:
