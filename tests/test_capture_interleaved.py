@@ -204,3 +204,27 @@ def test_a_hole_the_peer_acknowledged_is_lost_where_the_acknowledgment_is(
     assert inputs == [i for i in range(60) if i != 5]
     (connection,) = summary.connections
     assert (connection.gaps, connection.lost_bytes) == (1, len(_input(writes, 5)))
+
+
+def test_runs_held_for_frames_read_one_by_one_keep_the_order_recipes_are_met_in(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch
+) -> None:
+    """IPv6 frames are read one by one and runs held per connection direction: the second
+    client's run, ended by its text message, was written (and its table named) before the first
+    client's still held, whose first package came first."""
+    first, second = ("timestamp", "actual_q", "robot_mode"), ("timestamp", "actual_TCP_pose")
+    a = Conversation(("fd00::2", 51000), ("fd00::10", 30004))
+    b = Conversation(("fd00::3", 51001), ("fd00::10", 30004), time=a.time + 0.0001)
+    rtde_setup(a, first)
+    rtde_setup(b, second)
+    for one, two in zip(rtde_packages(40, first), rtde_packages(40, second), strict=True):
+        for conv, package in ((a, one), (b, two)):
+            conv.time = max(a.time, b.time) + 0.0001  # one clock: the file keeps this order
+            conv.send("server", package)
+    b.send("server", build("text_message", message="hello", source="test", warning_level=1))
+    path = write(tmp_path / "two6.pcap", [a, b])
+    with_runs, one_by_one, carried = _with_and_without_runs(path, monkeypatch)
+    assert carried >= 60  # both clients' packages came in (held) runs
+    same_rows_per_connection(with_runs, one_by_one)
+    assert "actual_q_0" in with_runs["rtde_outputs_1"].column_names
+    assert "actual_TCP_pose_0" in with_runs["rtde_outputs_2"].column_names

@@ -163,6 +163,7 @@ class Run:
         codec = decoder.run_codec(sender, payload)
         if codec is None:
             return None
+        decoder.name_table(sender, codec)
         return cls(route, decoder, codec, payload[:RUN_HEAD], (seg.seq + len(payload)) % MOD, [seg])
 
     def takes(self, route: Route, seg: Segment) -> bool:

@@ -142,6 +142,12 @@ class RtdeConnection:
         self.batches[key] = (codec, rows, times)
         self._flush(key)
 
+    def name_table(self, sender: str, codec: RecipeCodec) -> None:
+        """The recipe's table named where its first package is, not where its rows are written
+        (runs are written at once, batches wait, runs held for more wait too): rtde_outputs_1 is
+        the first recipe met, however the packages were read."""
+        self.sink.table_for_recipe(RTDE_DIRECTIONS[sender], codec.names)
+
     def _codec(self, sender: str, package: bytes) -> RecipeCodec | None:
         direction = RTDE_DIRECTIONS[sender]
         codec = self.session.recipes.get((direction, package[3]))
@@ -155,9 +161,7 @@ class RtdeConnection:
         key = (sender, recipe_id)
         if key not in self.batches or self.batches[key][0] is not codec:
             self._flush(key)
-            # the recipe's table is named where its first package is, not where its rows are
-            # written: runs are written at once, these wait (rtde_outputs_1: the first recipe met)
-            self.sink.table_for_recipe(RTDE_DIRECTIONS[sender], codec.names)
+            self.name_table(sender, codec)
             self.batches[key] = (codec, [], [])
         _, raws, times = self.batches[key]
         raws.append(package)
