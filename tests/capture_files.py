@@ -133,15 +133,18 @@ def rtde_packages(count: int, names: tuple[str, ...] = SMALL, recipe_id: int = 1
     from rtde_spec import Catalogue, RecipeCodec
 
     codec = RecipeCodec.for_names(list(names), "output", Catalogue.builtin())
-    out = []
-    for i in range(count):
-        values: dict[str, object] = {}
-        for item in codec.items:
-            one: object = (i + 0.5) if item.wire.kind == "float" else (i % 100)
-            values[item.name] = tuple([one] * item.wire.count) if item.wire.count > 1 else one
-        values["timestamp"] = i * 0.002
-        out.append(codec.encode_package(values, recipe_id=recipe_id))
-    return out
+    return [codec.encode_package(package_values(codec, i), recipe_id=recipe_id) for i in range(count)]
+
+
+def package_values(codec: RecipeCodec, i: int) -> dict[str, object]:
+    """Values of package `i`: timestamp i x 2 ms, floats i + 0.5, integers i % 100 (vectors
+    repeat the value)."""
+    values: dict[str, object] = {}
+    for item in codec.items:
+        one: object = (i + 0.5) if item.wire.kind == "float" else (i % 100)
+        values[item.name] = tuple([one] * item.wire.count) if item.wire.count > 1 else one
+    values["timestamp"] = i * 0.002
+    return values
 
 
 def rtde_capture(
@@ -387,7 +390,9 @@ CONTROL_INPUTS = ("input_int_register_24", "input_double_register_24")
 COUNT = 400  # packages each way of a control session (control_capture)
 
 
-def _control_session(conv: Conversation) -> tuple[RecipeCodec, RecipeCodec]:
+def _control_session(
+    conv: Conversation, outputs: tuple[str, ...] = CONTROL_OUTPUTS
+) -> tuple[RecipeCodec, RecipeCodec]:
     """A control client's setup: outputs (recipe 1) and inputs (recipe 2), then start."""
     from rtde_spec import Catalogue, RecipeCodec, build
 
@@ -395,23 +400,24 @@ def _control_session(conv: Conversation) -> tuple[RecipeCodec, RecipeCodec]:
     conv.handshake()
     conv.send("client", build("request_protocol_version", protocol_version=2))
     conv.send("server", build("request_protocol_version_reply", accepted=True))
-    conv.send(
-        "client", build("setup_outputs_v2", output_frequency=500.0, variable_names=list(CONTROL_OUTPUTS))
-    )
-    types = [cat.get(n, "output").type for n in CONTROL_OUTPUTS]  # type: ignore[union-attr]
+    conv.send("client", build("setup_outputs_v2", output_frequency=500.0, variable_names=list(outputs)))
+    types = [cat.get(n, "output").type for n in outputs]  # type: ignore[union-attr]
     conv.send("server", build("setup_outputs_v2_reply", output_recipe_id=1, variable_types=types))
     conv.send("client", build("setup_inputs", variable_names=list(CONTROL_INPUTS)))
     types = [cat.get(n, "input").type for n in CONTROL_INPUTS]  # type: ignore[union-attr]
     conv.send("server", build("setup_inputs_reply", input_recipe_id=2, variable_types=types))
     conv.send("client", build("start"))
     conv.send("server", build("start_reply", accepted=True))
-    return RecipeCodec.for_names(list(CONTROL_OUTPUTS), "output", cat), RecipeCodec.for_names(
+    return RecipeCodec.for_names(list(outputs), "output", cat), RecipeCodec.for_names(
         list(CONTROL_INPUTS), "input", cat
     )
 
 
 def _output(codec: RecipeCodec, i: int) -> bytes:
-    values = {"timestamp": i * 0.002, "actual_q": (i + 0.5,) * 6, "robot_mode": 7}
+    """Package `i` of `codec`'s outputs (`package_values`, robot_mode 7)."""
+    values = package_values(codec, i)
+    if "robot_mode" in values:
+        values["robot_mode"] = 7
     return codec.encode_package(values, recipe_id=1)
 
 

@@ -34,15 +34,18 @@ from tests.capture_files import (
 
 ROBOT, PC = "192.168.56.101", "192.168.56.1"
 STREAMS = ("control", "receive", "reverse", "realtime")
+RECEIVED = ("timestamp", "actual_TCP_pose", "runtime_state")  # the receive session's recipe
 ACTIONS = ("send", "send", "send", "send", "answer", "ack", "message", "lose", "resend")
 
 
 def _cell() -> dict[str, Any]:
-    control = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30004))
-    receive = Conversation(("10.0.0.3", 51001), ("10.0.0.10", 30004))
-    reverse = Conversation((ROBOT, 40001), (PC, 50001))
-    realtime = Conversation((PC, 43003), (ROBOT, 30003))
-    codecs = {name: _control_session(conv) for name, conv in (("control", control), ("receive", receive))}
+    """The streams; data segments acknowledge what the other side sent (lost segments too, as
+    a capture that missed them shows), and the two RTDE sessions have recipes of their own."""
+    control = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30004), acking=True)
+    receive = Conversation(("10.0.0.3", 51001), ("10.0.0.10", 30004), acking=True)
+    reverse = Conversation((ROBOT, 40001), (PC, 50001), acking=True)
+    realtime = Conversation((PC, 43003), (ROBOT, 30003), acking=True)
+    codecs = {"control": _control_session(control), "receive": _control_session(receive, RECEIVED)}
     for conv in (reverse, realtime):
         conv.handshake()
     return {"convs": {"control": control, "receive": receive, "reverse": reverse, "realtime": realtime},
@@ -69,8 +72,9 @@ def _step(cell: dict[str, Any], stream: str, action: str) -> None:
         cell["lose"].discard(stream)
         cell["last"][stream] = conv.send(server, _package(cell, stream), dt=0.0005, keep=keep)[1]
     elif action == "answer" and stream in cell["codecs"]:
-        i = cell["n"][stream]
-        conv.send("client", _input(cell["codecs"][stream][1], i), dt=0.0005)
+        keep = stream not in cell["lose"]  # an input lost: the next output acknowledges past it
+        cell["lose"].discard(stream)
+        conv.send("client", _input(cell["codecs"][stream][1], cell["n"][stream]), dt=0.0005, keep=keep)
     elif action == "ack":
         conv.time += 0.0001
         conv.frames.append((conv.time, conv.bare("server" if server == "client" else "client")))
