@@ -324,8 +324,8 @@ class PrimaryStreamDecoder:
         if type(data) is bytes and len(data) >= codec.header.size:  # one whole message, nothing held:
             size, mtype = codec.header.unpack_from(data)  # what a 10 Hz client's read usually is
             if size == len(data) and size <= codec.max_size and mtype == codec.state_type:
-                offset = self.framer.offset
-                if self.framer.take_run(data, size, b""):  # framed as the framer would (it counts it)
+                offset = self.framer.take_whole(size)  # framed as the framer would (it counts it)
+                if offset is not None:
                     self._decode_state(out, offset, data, size)
                     return out
         try:
