@@ -16,7 +16,7 @@ import dpkt
 if TYPE_CHECKING:
     from rtde_spec import RecipeCodec
 
-ACK, PSH, SYN = dpkt.tcp.TH_ACK, dpkt.tcp.TH_PUSH, dpkt.tcp.TH_SYN
+ACK, FIN, PSH, SYN = dpkt.tcp.TH_ACK, dpkt.tcp.TH_FIN, dpkt.tcp.TH_PUSH, dpkt.tcp.TH_SYN
 
 
 def _ip(src: str, dst: str, tcp: dpkt.tcp.TCP) -> dpkt.Packet:
@@ -79,6 +79,10 @@ class Conversation:
         tcp.ack, tcp.sum = self.seq["server" if side == "client" else "client"], 0
         frame.data.sum = 0
         return bytes(frame)
+
+    def fin(self, side: str) -> bytes:
+        """A FIN of `side` at its next sequence number (not added)."""
+        return self._frame(side, self.seq[side], b"", ACK | FIN)
 
     def resend(self, frame: bytes, dt: float = 0.001) -> None:
         self.time += dt

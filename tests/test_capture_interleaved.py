@@ -28,6 +28,7 @@ from rtde_spec.capture.runs import Batcher
 from rtde_spec.capture.tables.sink import ArrowSink
 from tests.capture_files import (
     COUNT,
+    SMALL,
     Conversation,
     _control_session,
     _input,
@@ -228,3 +229,45 @@ def test_runs_held_for_frames_read_one_by_one_keep_the_order_recipes_are_met_in(
     same_rows_per_connection(with_runs, one_by_one)
     assert "actual_q_0" in with_runs["rtde_outputs_1"].column_names
     assert "actual_TCP_pose_0" in with_runs["rtde_outputs_2"].column_names
+
+
+@pytest.mark.parametrize("case", ["idle", "closed"])
+def test_connections_are_finished_at_the_same_capture_time_inside_another_connections_run(
+    tmp_path: Path, monkeypatch: pytest.MonkeyPatch, case: str
+) -> None:
+    """Connections are finished by capture time (idle 900 s, or 5 s after their FIN), looked at
+    between segments. A run of another connection read in bulk spans that time, and the first
+    connection's next segments inside its span are read after it: they went on in the finished
+    connection, where frame by frame they begin a new one."""
+    a = Conversation(("10.0.0.2", 51000), ("10.0.0.10", 30004))
+    b = Conversation(("10.0.0.3", 51001), ("10.0.0.10", 30004), time=a.time + 0.0001)
+    rtde_setup(a, SMALL)
+    rtde_setup(b, ("timestamp", "actual_TCP_pose"))
+    first = rtde_packages(10, SMALL)
+    last = b""
+    for package in first[:5]:
+        _, last = a.send("server", package)
+    if case == "closed":
+        a.time += 0.001
+        a.frames.append((a.time, a.fin("server")))
+    step = 100.0 if case == "idle" else 0.5
+    for i, package in enumerate(rtde_packages(30, ("timestamp", "actual_TCP_pose"))):
+        b.send("server", package, dt=step)
+        if i == 14:  # A again, inside B's run: after 1,500 s silent, or 7.5 s after its FIN
+            a.time = b.time
+            if case == "idle":
+                for again in first[5:]:
+                    a.send("server", again)
+            else:  # a late copy of its last package
+                a.resend(last)
+    path = write(tmp_path / "finished.pcap", [a, b])
+    read = {}
+    for runs in (True, False):
+        with monkeypatch.context() as patch:
+            if not runs:
+                frame_by_frame(patch)
+            sink = ArrowSink()
+            read[runs] = sink.tables(), sorted(decode_capture(path, sink).connections, key=lambda c: c.name)
+    same_rows_per_connection(read[True][0], read[False][0])
+    assert read[True][1] == read[False][1]
+    assert len(read[False][1]) == 3  # A, A's segments after it was finished, B

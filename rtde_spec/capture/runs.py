@@ -38,8 +38,11 @@ class Batcher:
     def __init__(self, table: FlowTable, finish: Any) -> None:
         self.table, self.finish = table, finish
         self.held: dict[int, Run] = {}  # by id of the run's direction: data segments, in order
+        self.swept_later: list[Any] = []  # capture times of bulk runs' packages not yet swept at
 
     def segment(self, seg: Segment) -> None:
+        if self.swept_later:
+            self._sweeps_before(seg.time)
         route = self.table.route_of(seg)
         if route is None:
             return
@@ -70,11 +73,14 @@ class Batcher:
     def bulk(self, item: Any) -> None:
         """A block of same-shaped data segments the reader found at once: whole, or one by one."""
         first = first_of(item)
+        if self.swept_later:
+            self._sweeps_before(first.time)
         route = self.table.route_of(first)
         self.flush()  # segments held first, so the direction is where this run starts
         if route is not None and _peer_waits(route):  # its acknowledgments are read in their places
             route = None
         if route is not None and route[0].kind != "rtde" and _records_whole(route, first, item):
+            self._sweep_later(item.times)
             return
         whole = Run.start(route, first) if route is not None else None
         if whole is None:
@@ -85,6 +91,32 @@ class Batcher:
         flow.last = float(item.times[-1])
         direction.advance(item.rows.size, _tail(item.rows), item.rows.shape[1])
         whole.decoder.feed_run(sender, whole.codec, item.rows, item.times)
+        self._sweep_later(item.times)
+
+    def _sweep_later(self, times: Any) -> None:
+        """A bulk run's packages, each of which the frame-by-frame reading would follow with a
+        sweep when one is due (`FlowTable.due`): the segments of other connections inside its
+        span come after it here, so those sweeps are made before each of them, at the times
+        they would have been (`_sweeps_before`)."""
+        if len(times) and times[-1] >= self.table.due_from():
+            import numpy as np
+
+            self.swept_later.append(np.sort(times))
+
+    def _sweeps_before(self, now: float) -> None:
+        """The sweeps due at bulk runs' packages up to `now`, in time order: a connection idle or
+        closed long enough by then is finished before a segment of it comes (and begins a new one)."""
+        import numpy as np
+
+        while True:
+            since = self.table.due_from()
+            due = [t[k] for t in self.swept_later if (k := int(np.searchsorted(t, since))) < len(t)]
+            at = min(due, default=now + 1)
+            if at > now:
+                break
+            self.flush()
+            self.table.sweep(float(at), self.finish)
+        self.swept_later = [t[t > now] for t in self.swept_later if t[-1] > now]
 
     def flush(self) -> None:
         held = self.held

@@ -131,6 +131,10 @@ class FlowTable:
         self.routes.pop((b[0], b[1], a[0], a[1]), None)
         self.reopened.append(flow)
 
+    def due_from(self) -> float:
+        """The capture time from which `due` is true (minus infinity while reopened ones wait)."""
+        return float("-inf") if self.reopened else self._swept + SWEEP_SECONDS
+
     def due(self, now: float) -> bool:
         """Whether it is time to look for connections to finish (cheap: one comparison)."""
         return bool(self.reopened) or now - self._swept >= SWEEP_SECONDS
