@@ -91,6 +91,19 @@ def test_watch_every_shows_the_joints_move_one_way_along_a_movej(tmp_path: Path)
 
 
 @pytest.mark.slow  # seconds of real time (recording, a 5 s rule, a move): CI runs it
+def recording(folder: Path, name: str, timeout: float = 30.0) -> None:
+    """Wait until `record -o NAME` has written rows (more than its header line; to the file, in
+    place from its first rows, or beside it): a fixed sleep was too short on a loaded machine,
+    and the move began first."""
+    deadline = time.monotonic() + timeout
+    while time.monotonic() < deadline:
+        parts = [*folder.glob(name), *folder.glob(f".{name}*")]
+        if any(part.stat().st_size > 200 for part in parts if part.exists()):
+            return
+        time.sleep(0.05)
+    raise AssertionError(f"record wrote no rows in {timeout} s: {sorted(p.name for p in folder.iterdir())}")
+
+
 def test_record_and_plot_show_the_move(tmp_path: Path) -> None:
     out, png = tmp_path / "joints.csv", tmp_path / "joints.png"
     proc, ports = serve("127.0.0.43")
@@ -100,7 +113,7 @@ def test_record_and_plot_show_the_move(tmp_path: Path) -> None:
              "timestamp,actual_q,actual_qd", "--frequency", "125", "--duration", "4", "-o", str(out)],
             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
         )  # fmt: skip
-        time.sleep(1.0)  # the recorder is set up (a loaded machine takes a while)
+        recording(tmp_path, "joints.csv")  # rows written: the move starts after the first of them
         with socket.create_connection(("127.0.0.43", ports["realtime"])) as sock:  # URScript on 30003
             sock.sendall(MOVEJ.encode())
             _, err = recorder.communicate(timeout=60)
