@@ -62,6 +62,23 @@ def _with_and_without_runs(
     return with_runs, one_by_one, sum(carried)
 
 
+def _same_both_ways(path: Path, monkeypatch: pytest.MonkeyPatch) -> tuple[dict[str, Any], list[Any]]:
+    """The tables and connection summaries read with runs, checked equal to the frame-by-frame
+    reading's (rows within each connection, summaries whole)."""
+    read = []
+    for runs in (True, False):
+        with monkeypatch.context() as patch:
+            if not runs:
+                frame_by_frame(patch)
+            sink = ArrowSink()
+            summary = decode_capture(path, sink)
+        read.append((sink.tables(), sorted(summary.connections, key=lambda c: c.name)))
+    (tables, connections), (reference, reference_connections) = read
+    same_rows_per_connection(tables, reference)
+    assert connections == reference_connections
+    return tables, connections
+
+
 @pytest.mark.parametrize("acks", [False, True])
 def test_a_control_sessions_outputs_and_inputs_are_read_as_two_runs(
     tmp_path: Path, monkeypatch: pytest.MonkeyPatch, acks: bool
@@ -190,20 +207,10 @@ def test_a_hole_the_peer_acknowledged_is_lost_where_the_acknowledgment_is(
         missing = frame if i == 5 else missing
     if late:
         conv.resend(missing, dt=0.5)
-    path = write(tmp_path / "hole.pcap", [conv])
-    read = {}
-    for runs in (True, False):
-        with monkeypatch.context() as patch:
-            if not runs:
-                frame_by_frame(patch)
-            sink = ArrowSink()
-            read[runs] = sink, decode_capture(path, sink)
-    (sink, summary), (reference, reference_summary) = read[True], read[False]
-    same_rows_per_connection(sink.tables(), reference.tables())
-    assert summary.connections == reference_summary.connections
-    inputs = [r["input_int_register_24"] for r in sink.tables()["rtde_inputs_1"].to_pylist()]
+    tables, connections = _same_both_ways(write(tmp_path / "hole.pcap", [conv]), monkeypatch)
+    inputs = [r["input_int_register_24"] for r in tables["rtde_inputs_1"].to_pylist()]
     assert inputs == [i for i in range(60) if i != 5]
-    (connection,) = summary.connections
+    (connection,) = connections
     assert (connection.gaps, connection.lost_bytes) == (1, len(_input(writes, 5)))
 
 
@@ -260,14 +267,5 @@ def test_connections_are_finished_at_the_same_capture_time_inside_another_connec
                     a.send("server", again)
             else:  # a late copy of its last package
                 a.resend(last)
-    path = write(tmp_path / "finished.pcap", [a, b])
-    read = {}
-    for runs in (True, False):
-        with monkeypatch.context() as patch:
-            if not runs:
-                frame_by_frame(patch)
-            sink = ArrowSink()
-            read[runs] = sink.tables(), sorted(decode_capture(path, sink).connections, key=lambda c: c.name)
-    same_rows_per_connection(read[True][0], read[False][0])
-    assert read[True][1] == read[False][1]
-    assert len(read[False][1]) == 3  # A, A's segments after it was finished, B
+    _, connections = _same_both_ways(write(tmp_path / "finished.pcap", [a, b]), monkeypatch)
+    assert len(connections) == 3  # A, A's segments after it was finished, B
