@@ -99,13 +99,13 @@ class Batcher:
         span come after it here, so those sweeps are made before each of them, at the times
         they would have been (`_sweeps_before`)."""
         if len(times) and times[-1] >= self.table.due_from():
-            import numpy as np
-
-            self.swept_later.append(np.sort(times))
+            self.swept_later.append(times)  # (a view of the block's times, in time order)
 
     def _sweeps_before(self, now: float) -> None:
         """The sweeps due at bulk runs' packages up to `now`, in time order: a connection idle or
         closed long enough by then is finished before a segment of it comes (and begins a new one)."""
+        if now < self.table.due_from():
+            return  # none due yet: the usual case (one sweep a second of capture time)
         import numpy as np
 
         while True:
@@ -116,7 +116,8 @@ class Batcher:
                 break
             self.flush()
             self.table.sweep(float(at), self.finish)
-        self.swept_later = [t[t > now] for t in self.swept_later if t[-1] > now]
+        since = self.table.due_from()
+        self.swept_later = [t for t in self.swept_later if t[-1] > now and t[-1] >= since]
 
     def flush(self) -> None:
         held = self.held
