@@ -218,3 +218,25 @@ def test_a_table_whose_folder_was_removed_before_its_file_is_made_is_still_writt
     summary = decode_to_directory(_small_capture(tmp_path / "a.pcap"), out)
     assert removed and summary.tables.get("rtde_outputs_1") == 50
     assert sum(pq.read_metadata(f).num_rows for f in (out / "rtde_outputs_1").rglob("*.parquet")) == 50
+
+
+def test_a_killed_runs_temporary_files_are_removed_when_the_capture_is_placed_again(tmp_path: Path) -> None:
+    """`kill -9` of a capture while it wrote its listing or a table left `.NAME.part-PID` files no
+    process could remove (its own clean-up never ran). Placing the same capture again removes
+    those of processes that are gone, and leaves a live process's alone."""
+    import subprocess
+
+    capture = _small_capture(tmp_path / "a.pcap")
+    out = tmp_path / "out"
+    decode_to_directory(capture, out)
+    placed = sorted(p for p in out.rglob("*") if p.is_file())
+    dead = subprocess.Popen([sys.executable, "-c", "pass"])
+    dead.wait()  # its process id is one of a process that is gone
+    stale = [p.with_name(f".{p.name}.part-{dead.pid}") for p in placed]
+    live = [p.with_name(f".{p.name}.part-1") for p in placed]  # init's: a live writer
+    for path in (*stale, *live):
+        path.write_bytes(b"")
+    decode_to_directory(capture, out)
+    assert not any(p.exists() for p in stale)
+    assert all(p.exists() for p in live)
+    assert sorted(p for p in out.rglob("*") if p.is_file() and ".part-" not in p.name) == placed

@@ -22,6 +22,7 @@ from rtde_spec.capture.tables.names import Recipe, Register, folder_lock, listin
 from rtde_spec.capture.tables.signals import signals_held
 from rtde_spec.errors import OutputError
 from rtde_spec.output.partfile import Part, write_failed, write_whole
+from rtde_spec.output.tempnames import leftovers
 
 EXTENSIONS = {"parquet": "parquet", "csv": "csv", "jsonl": "jsonl", "mcap": "mcap"}  # format -> files' suffix
 
@@ -57,6 +58,7 @@ class PreparedTables:
                     return False
                 self._rename_tables(names)
             earlier = register.tables_of(listing_name(self.stem))
+            self._remove_leftovers()
             # first, this run's tables beside the earlier run's: whatever stops the renames, every
             # table of either run stays in a listing, so no other capture is given its name
             self._write_listing(keep=listing_entries(self.outdir / listing_name(self.stem)))
@@ -75,6 +77,13 @@ class PreparedTables:
             self._remove_dropped_tables(earlier - set(self.recipes.values()))
             self._write_listing()  # this run's tables alone, now that the earlier run's are gone
         return True
+
+    def _remove_leftovers(self) -> None:
+        """Temporary files of this capture's listing and tables that a killed run left (`kill -9`
+        cannot be cleaned up after by the process itself): their process is gone."""
+        for target in {self.outdir / listing_name(self.stem), *(part.target for part in self.parts)}:
+            for stale in leftovers(target):
+                _remove(stale)
 
     def _rename_tables(self, names: dict[Recipe, str]) -> None:
         """Move the files of recipes the folder now names otherwise (another capture placed a new
