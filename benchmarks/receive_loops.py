@@ -78,12 +78,14 @@ with RtdeClient("127.0.0.1", port, queue_size=100000, batch=batch) as c:
     newest = [None]
     if mode.startswith("callback"):  # records handed over in the reader thread; the consumer
         c.on_data(functools.partial(newest.__setitem__, 0))  # keeps the newest, as the UR-style loop
+    elif mode.startswith("array"):  # a numpy array per read; the consumer keeps the newest row
+        c.on_batch(lambda array: newest.__setitem__(0, array[-1]))
     c.start()
     while c.received == 0:
         time.sleep(0.001)
     ready()
     t0, c0, n0, w0 = time.monotonic(), time.process_time(), c.received, _switches()
-    if mode.startswith("callback"):
+    if mode.startswith(("callback", "array")):
         time.sleep(seconds)
     elif mode == "iterate":
         for record in c:  # the README's loop, as a user writes it
@@ -222,6 +224,23 @@ report(time.process_time() - c0, got, _switches() - w0)
 """
 )
 
+FLOOR_ARRAYS = (
+    FLOOR_BATCHED.replace("import json,", "import numpy, re, json,")
+    .replace(
+        "newest = list(values.iter_unpack(data[:whole]))[-1]  # plain tuples: no names, no checks",
+        "newest = numpy.frombuffer(data, dtype, whole // (4 + size))[-1]  # one view: no names, no checks",
+    )
+    .replace(
+        "ready()\n",
+        # the values' struct codes as one numpy dtype behind the 4-byte prefix
+        "codes = re.findall(r'(\\d*)([a-zA-Z?])', sys.argv[5])\n"
+        "dtype = numpy.dtype([('p', 'V4')] + [(f'f{i}', '>' + c, (int(n),) if n else ()) "
+        "for i, (n, c) in enumerate(codes)])\n"
+        "ready()\n",
+        1,
+    )
+)  # the numpy twin of FLOOR_BATCHED: what `on_batch` does, with nothing else
+
 UR_CLIENT = (
     """
 import json, sys, time
@@ -264,11 +283,13 @@ LABELS = {
     "callback": "rtde_spec RtdeClient, on_data callback",
     "batched": f"rtde_spec RtdeClient(batch={BATCH}), on_data",
     "longer": f"rtde_spec RtdeClient(batch={BATCH_LONG}), on_data",
+    "arrays": f"rtde_spec RtdeClient(batch={BATCH}), on_batch",
     "ur": "UR-client-style loop (recv, unpack, dict)",
     "ur_client": "UR's RTDE client (rtde.py), receive()",
     "floor": "floor: bare recv() loop, nothing decoded",
     "floor_unpack": "floor: recv() + one struct unpack",
     "floor_b": f"floor, batch={BATCH}: recv + struct tuples",
+    "floor_a": f"floor, batch={BATCH}: recv + numpy view",
     "floor_c": "floor: bare recv() loop in C",
 }
 
@@ -290,7 +311,9 @@ def start(code: str, *args: str, tree: str | None = None) -> subprocess.Popen[st
         stderr=subprocess.PIPE,
         text=True,
         cwd=root,
-        env={**os.environ, "PYTHONPATH": root},
+        # numpy's import starts a BLAS thread that spins for up to ~0.1 s of CPU, sometimes inside
+        # the timed window: nothing here uses BLAS (the same setting for every row)
+        env={**os.environ, "PYTHONPATH": root, "OPENBLAS_NUM_THREADS": "1"},
     )
 
 
@@ -328,6 +351,8 @@ def specs(
         "batched": (OURS, str(port), span, joined, "callback-batched"),
         "floor_b": (FLOOR_BATCHED, str(port), span, joined, str(size), fmt),
         "longer": (OURS, str(port), span, joined, "callback-batched", str(BATCH_LONG)),
+        "arrays": (OURS, str(port), span, joined, "array-batched"),
+        "floor_a": (FLOOR_ARRAYS, str(port), span, joined, str(size), fmt),
         **in_c,
         **({"ur_client": (UR_CLIENT, str(port), span, joined, ur_client)} if ur_client else {}),
     }
@@ -452,6 +477,7 @@ def receive_rows(
         ("on_data per package", "callback", "floor"),
         (f"batch={BATCH}", "batched", "floor_b"),
         (f"batch={BATCH_LONG}", "longer", "floor_b"),
+        (f"batch={BATCH}, on_batch", "arrays", "floor_a"),
     )
     if against is not None:
         print(f"  A/B against {against}, each pair at the same time (medians of per-pair ratios):")
@@ -482,6 +508,7 @@ def receive_rows(
         ("for record in client", "iterate", TARGET_ITER_US, TARGET_ITER_VS_UR),
         (f"batch={BATCH}", "batched", TARGET_BATCH_US, TARGET_BATCH_VS_UR),
         (f"batch={BATCH_LONG}", "longer", TARGET_BATCH_US, TARGET_BATCH_VS_UR),
+        (f"batch={BATCH}, on_batch", "arrays", TARGET_BATCH_US, TARGET_BATCH_VS_UR),
     ):
         got, vs_ur = med(key), ratio(peer, key)
         verdicts[label] = hit = got <= target and vs_ur >= vs

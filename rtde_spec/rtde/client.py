@@ -26,7 +26,7 @@ from collections.abc import Callable, Iterator, Sequence
 from typing import Any
 
 from rtde_spec._generated.constants import RTDE_PORT
-from rtde_spec.errors import ProtocolError, RtdeConnectionError, UsageError
+from rtde_spec.errors import ProtocolError, RtdeConnectionError, UsageError, require
 from rtde_spec.recipes.codec import PAYLOAD_OFFSET
 from rtde_spec.rtde.client_base import NOT_CONNECTED
 from rtde_spec.rtde.client_protocol import READ_SIZE, InputRecipe, Reply
@@ -46,6 +46,7 @@ class RtdeClient(ThreadReads):
         self._replies: queue.Queue[Reply | BaseException] = queue.Queue()
         self._callbacks: list[Callable[[Any], None]] = []
         self._raw_callbacks: list[Callable[[bytes], None]] = []
+        self._batch_callbacks: list[Callable[[Any], None]] = []
         self._reader: threading.Thread | None = None
         self._send_lock = threading.Lock()
         self._closing = False  # close() was called: the end is ours, not the controller's
@@ -142,9 +143,9 @@ class RtdeClient(ThreadReads):
 
     def receive(self, timeout: float | None = None) -> Any:
         """The next output record (oldest first); TimeoutError when none arrives in time."""
-        if self._callbacks or self._raw_callbacks:
+        if self._callbacks or self._raw_callbacks or self._batch_callbacks:
             raise UsageError(
-                "data packages go to the on_data/on_raw callbacks, not to receive()",
+                "data packages go to the on_data/on_raw/on_batch callbacks, not to receive()",
                 subject=self.where,
             )
         if self._data:
@@ -266,6 +267,19 @@ class RtdeClient(ThreadReads):
         """Call `callback(package bytes)` for every data package: for recorders that batch
         (instead of the queue, as `on_data`). With no `on_data` callback, no records are made."""
         self._raw_callbacks.append(callback)
+        self.core.want_records = bool(self._callbacks)
+
+    def on_batch(self, callback: Callable[[Any], None]) -> None:
+        """Call `callback(array)` in the reader thread with the data packages of each read as one
+        numpy structured array (a row per package, fields by name as `RecipeCodec.dtype` has
+        them: big-endian, vectors as (n,) sub-arrays; read-only, a view of the read's bytes).
+
+        With `RtdeClient(batch=N)` a read holds about N packages: one wake-up, one `recv` and
+        one array per N packages, and no Python object per package or value, for loggers and
+        plots at 500 Hz. With no `on_data` callback, no records are made. Needs numpy.
+        """
+        require("numpy", "numpy", "on_batch")
+        self._batch_callbacks.append(callback)
         self.core.want_records = bool(self._callbacks)
 
     # --- internals ----------------------------------------------------------

@@ -275,6 +275,12 @@ class ClientProtocol:
         self._want_records = wanted
         self.records_path = self._path if wanted else None
 
+    @property
+    def output_path(self) -> RecordsPath | None:
+        """The output recipe's shortest path whether or not records are wanted (for raw bytes
+        and numpy batches; None before the output recipe is set up)."""
+        return self._path
+
     def one_record(self, data: bytes) -> Any:
         """The record of a read that is exactly one data package of the output recipe (what a
         caller reading at one package per wake-up gets), framed; None for any other read, which

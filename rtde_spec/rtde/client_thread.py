@@ -40,6 +40,7 @@ class ThreadReads(ClientBase):
     _replies: queue.Queue[Reply | BaseException]
     _callbacks: list[Callable[[Any], None]]
     _raw_callbacks: list[Callable[[bytes], None]]
+    _batch_callbacks: list[Callable[[Any], None]]
     _reading: threading.Lock
     _lease: float
     _nudge: threading.Event
@@ -67,6 +68,7 @@ class ThreadReads(ClientBase):
         assert sock is not None
         recv, reading, nudge, monotonic = sock.recv, self._reading, self._nudge, time.monotonic
         callbacks, raws = self._callbacks, self._raw_callbacks  # lists: callbacks added later count
+        batches = self._batch_callbacks
         poller = select.poll() if hasattr(select, "poll") else None
         if poller is not None:
             poller.register(sock, select.POLLIN)
@@ -94,7 +96,7 @@ class ThreadReads(ClientBase):
                     except OSError as exc:
                         self._finish(self._ended(f"connection lost: {exc.strerror or exc}"))
                         return
-                    path = self.core.records_path if callbacks or raws else None
+                    path = self.core.output_path if callbacks or raws or batches else None
                     if path is None or not chunk or len(chunk) % path.size:
                         self._other_read(chunk)
                         continue
@@ -107,11 +109,15 @@ class ThreadReads(ClientBase):
                         self._other_read(chunk)
                         continue
                     self.received += count
+                    if batches:
+                        self._array(chunk)
                     for raw in raws:
                         if count == 1:
                             raw(chunk)
                         else:
                             _exhaust(map(raw, DataRun([], chunk, path.size).packages()))
+                    if not callbacks:
+                        continue
                     if count == 1:
                         record = _new_tuple(path.record_type, path.unpack(chunk, PAYLOAD_OFFSET))
                         for callback in callbacks:
@@ -164,7 +170,9 @@ class ThreadReads(ClientBase):
         """
         records = runs[0].records if len(runs) == 1 else [r for run in runs for r in run.records]
         self.received += runs[0].count if len(runs) == 1 else sum(run.count for run in runs)
-        if self._callbacks or self._raw_callbacks:
+        if self._callbacks or self._raw_callbacks or self._batch_callbacks:
+            if self._batch_callbacks:
+                self._arrays(runs)
             for raw in self._raw_callbacks:
                 for run in runs:
                     for package in run.packages():
@@ -176,6 +184,20 @@ class ThreadReads(ClientBase):
         if len(records) > room:
             self.skipped += len(records) - room  # the oldest go; the socket keeps being drained
         self._data.extend(records)
+
+    def _arrays(self, runs: list[DataRun]) -> None:
+        """Each run of a read as one numpy array to the `on_batch` callbacks."""
+        for run in runs:
+            self._array(run.raw if type(run.raw) is bytes else bytes(run.raw))  # no view of a reused buffer
+
+    def _array(self, packages: bytes) -> None:
+        """Data packages of the output recipe, back to back, as one numpy array (a view of the
+        bytes, which nothing changes) to the `on_batch` callbacks."""
+        import numpy  # only `on_batch` needs it (imported there): a dict look-up per batch
+
+        array = numpy.frombuffer(packages, self.core.output.dtype)  # type: ignore[union-attr]
+        for callback in self._batch_callbacks:
+            callback(array)
 
     def _ended(self, cause: str) -> BaseException:
         if self._closing:

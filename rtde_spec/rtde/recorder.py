@@ -1,8 +1,8 @@
 """Recording a controller's outputs to a file, through the streaming writers.
 
-Data packages are collected as bytes by the client's reader thread and decoded in
-batches (`RecipeCodec.decode_many`), so recording keeps up at 500 Hz; the file is
-flushed batch by batch (handed to the operating system, so a killed process loses
+Data packages come from the client's reader thread as numpy arrays, one per read of
+the socket (`RtdeClient.on_batch`: no Python object per package), so recording keeps
+up at 500 Hz; the file is flushed batch by batch (handed to the operating system, so a killed process loses
 at most the batch being collected), and whatever arrived before Ctrl-C, a `stop`
 event (the CLI sets it on SIGTERM and SIGHUP) or a dropped connection is written
 and the file closed readable.
@@ -14,8 +14,9 @@ import threading
 import time
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
-from typing import Protocol
+from typing import Any, Protocol
 
+from rtde_spec.errors import require
 from rtde_spec.output.base import Writer
 from rtde_spec.rtde.client import RtdeClient
 
@@ -51,15 +52,16 @@ def record(
     """Set up `names`, start, and write rows until the duration or sample count is reached,
     Ctrl-C, or `stop` is set (a `threading.Event` from another thread; the CLI's signal
     handlers set a plain flag, as taking the Event's lock inside a handler could deadlock)."""
+    numpy = require("numpy", "numpy", "recording")
     codec = client.setup_outputs(names, frequency)
-    pending: list[bytes] = []
+    pending: list[Any] = []  # numpy arrays, one per read of the socket
     lock = threading.Lock()
 
-    def collect(raw: bytes) -> None:
+    def collect(array: Any) -> None:
         with lock:
-            pending.append(raw)
+            pending.append(array)
 
-    client.on_raw(collect)
+    client.on_batch(collect)
     client.start()
     start = time.monotonic()
     rows, stopped_by = 0, "duration"
@@ -73,16 +75,18 @@ def record(
         nonlocal pending
         with lock:
             batch, pending = pending, []
-        if limit is not None:
-            batch = batch[: max(0, limit - rows)]
         if not batch:
             return 0
-        array = codec.decode_many(b"".join(batch))
+        array = batch[0] if len(batch) == 1 else numpy.concatenate(batch)
+        if limit is not None:
+            array = array[: max(0, limit - rows)]
+        if not len(array):
+            return 0
         writer.write_columns({name: array[name] for name in codec.names})
         writer.flush()
         if progress is not None:
-            progress(len(batch))
-        return len(batch)
+            progress(len(array))
+        return len(array)
 
     try:
         while True:

@@ -1,0 +1,134 @@
+"""`RtdeClient.on_batch`: every data package, in order, as numpy arrays, one per read of the socket.
+
+On real loopback sockets against the emulator at 500 Hz: the arrays hold exactly the packages
+the raw callbacks see, no record is made unless an `on_data` callback wants them, and the
+recorder (which takes its rows this way) writes every row once.
+"""
+
+from __future__ import annotations
+
+import itertools
+import time
+from collections.abc import Iterator
+from typing import Any
+
+import pytest
+
+from rtde_spec import EmulatorConfig, EmulatorThread, RtdeClient
+from rtde_spec.errors import UsageError
+
+np = pytest.importorskip("numpy")
+
+
+@pytest.fixture
+def emu() -> Iterator[EmulatorThread]:
+    running = EmulatorThread(
+        EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, realtime_port=None, dashboard_port=None)
+    ).start()
+    yield running
+    running.stop()
+
+
+def wait_for(count: Any, wanted: int) -> None:
+    deadline = time.monotonic() + 5
+    while count() < wanted and time.monotonic() < deadline:
+        time.sleep(0.01)
+
+
+@pytest.mark.parametrize("batch", [1, 20])
+def test_arrays_hold_every_package_in_order_as_the_raw_callbacks_see_them(
+    emu: EmulatorThread, batch: int
+) -> None:
+    arrays: list[Any] = []
+    raws: list[bytes] = []
+    with RtdeClient("127.0.0.1", emu.ports["rtde"], batch=batch) as client:
+        client.setup_outputs(["timestamp", "actual_q", "robot_mode"], 500)
+        client.on_batch(arrays.append)
+        client.on_raw(raws.append)
+        assert client.core.want_records is False  # no record made for anyone
+        client.start()
+        wait_for(lambda: sum(map(len, arrays)), 200)
+        with pytest.raises(UsageError, match="on_batch"):
+            client.receive()
+        client.pause()  # its reply may come in a read with data packages: the general path
+        codec = client.core.output
+        assert codec is not None
+    assert all(a.dtype == codec.dtype and not a.flags.writeable for a in arrays)  # views of the reads
+    assert b"".join(a.tobytes() for a in arrays) == b"".join(raws)  # the very packages, byte for byte
+    rows = np.concatenate(arrays)
+    assert len(rows) == len(raws) == client.received >= 200 and client.skipped == 0
+    assert [round((b - a) * 500) for a, b in itertools.pairwise(rows["timestamp"])] == [1] * (len(rows) - 1)
+    last = codec.decode_package(raws[-1])
+    assert rows["actual_q"][-1].tolist() == list(last.actual_q) and rows["robot_mode"][-1] == last.robot_mode
+    sizes = [len(a) for a in arrays]
+    if batch == 1:
+        assert max(sizes) <= 3  # a read a package, now and then two
+    else:
+        assert sorted(sizes)[len(sizes) // 2] >= batch  # a read per batch: one array per batch
+
+
+def test_arrays_and_records_both_get_every_package(emu: EmulatorThread) -> None:
+    """With an `on_data` callback too, the reader's shortest path hands out both."""
+    arrays: list[Any] = []
+    records: list[Any] = []
+    with RtdeClient("127.0.0.1", emu.ports["rtde"], batch=20) as client:
+        client.setup_outputs(["timestamp", "actual_q"], 500)
+        client.on_data(records.append)
+        client.on_batch(arrays.append)
+        assert client.core.want_records is True
+        client.start()
+        wait_for(lambda: len(records), 150)
+        client.pause()
+    stamps = np.concatenate(arrays)["timestamp"].tolist()
+    assert stamps == [r.timestamp for r in records] and len(stamps) >= 150
+
+
+def test_a_callback_added_after_start_gets_the_packages_from_then_on(emu: EmulatorThread) -> None:
+    raws: list[bytes] = []
+    arrays: list[Any] = []
+    with RtdeClient("127.0.0.1", emu.ports["rtde"], batch=10) as client:
+        client.setup_outputs(["timestamp"], 500)
+        client.on_raw(raws.append)
+        client.start()
+        wait_for(lambda: len(raws), 50)
+        client.on_batch(arrays.append)
+        wait_for(lambda: sum(map(len, arrays)), 50)
+        client.pause()
+    stamps = np.concatenate(arrays)["timestamp"].tolist()
+    assert len(stamps) >= 50 and [round((b - a) * 500) for a, b in itertools.pairwise(stamps)] == [1] * (
+        len(stamps) - 1
+    )
+    codec = client.core.output
+    assert codec is not None
+    assert stamps == [codec.decode_package(r).timestamp for r in raws[len(raws) - len(stamps) :]]
+
+
+def test_an_error_raised_by_a_batch_callback_ends_the_connection_with_that_error(emu: EmulatorThread) -> None:
+    def fails(array: Any) -> None:
+        raise ValueError(f"the user's callback refused {len(array)} rows")
+
+    with RtdeClient("127.0.0.1", emu.ports["rtde"], timeout=5, batch=5) as client:
+        client.setup_outputs(["timestamp"], 500)
+        client.on_batch(fails)
+        client.start()
+        deadline = time.monotonic() + 5
+        while client.connection_lost is None and time.monotonic() < deadline:
+            time.sleep(0.01)
+        assert isinstance(client.connection_lost, ValueError) and "refused" in str(client.connection_lost)
+
+
+def test_recording_writes_every_row_once_up_to_the_sample_count(emu: EmulatorThread, tmp_path: Any) -> None:
+    """The recorder takes arrays: a sample count met inside a read keeps only the rows owed."""
+    from rtde_spec.output.writers import open_writer
+    from rtde_spec.rtde.recorder import record
+
+    out = tmp_path / "rows.csv"
+    writer = open_writer("csv", out)
+    with RtdeClient("127.0.0.1", emu.ports["rtde"], batch=40) as client:
+        result = record(client, ["timestamp", "actual_q"], 500, writer, samples=333)
+    writer.close()
+    rows = out.read_text().splitlines()[1:]
+    stamps = [float(row.split(",")[0]) for row in rows]
+    assert result.rows == len(rows) == 333 and result.skipped == 0
+    # in order, none twice (an EmulatorThread may skip a step while the test process is busy)
+    assert all(b > a for a, b in itertools.pairwise(stamps))
