@@ -92,7 +92,8 @@ class ClientProtocol:
         self.unsolicited = 0  # replies that answered no waiting request (logged, dropped)
         self.before_error: list[Event] = []  # see receive()
         self._want_records = True  # see want_records
-        self._path: RecordsPath | None = None  # of the output recipe
+        # the output recipe's shortest path, records wanted or not (raw bytes, numpy batches)
+        self.output_path: RecordsPath | None = None
         # what a reader needs to make records of reads of whole output packages without events
         # (None before the output recipe is set up, or when nobody wants records): an attribute,
         # read once per read
@@ -273,13 +274,7 @@ class ClientProtocol:
     @want_records.setter
     def want_records(self, wanted: bool) -> None:
         self._want_records = wanted
-        self.records_path = self._path if wanted else None
-
-    @property
-    def output_path(self) -> RecordsPath | None:
-        """The output recipe's shortest path whether or not records are wanted (for raw bytes
-        and numpy batches; None before the output recipe is set up)."""
-        return self._path
+        self.records_path = self.output_path if wanted else None
 
     def one_record(self, data: bytes) -> Any:
         """The record of a read that is exactly one data package of the output recipe (what a
@@ -389,7 +384,7 @@ class ClientProtocol:
             # size, type and recipe id: a package of another recipe is never read as this one
             lead = PREFIX.pack(codec.package_size, DATA_PACKAGE_TYPE, recipe_id)
             self._run = (codec.package_size, lead)
-            self._path = RecordsPath(
+            self.output_path = RecordsPath(
                 codec.package_size,
                 lead,
                 self.framer.take_run,
@@ -397,7 +392,7 @@ class ClientProtocol:
                 codec._packages.iter_unpack,
                 codec.record_type,
             )
-            self.records_path = self._path if self._want_records else None
+            self.records_path = self.output_path if self._want_records else None
             implied = implied_recipe_id("controller", self.state.version)
             self._without_id = (recipe_id, codec.size) if implied == recipe_id else None
         else:
