@@ -3,12 +3,14 @@ exactly what `flat_columns` gives: the same names in the same order, types and b
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
 from rtde_spec import Catalogue, RecipeCodec
 from rtde_spec.output.base import flat_columns
-from rtde_spec.output.parquet import block_rows, native_columns
+from rtde_spec.output.native_columns import block_bytes, block_for, block_rows, level2_cache, native_columns
 
 RECIPES = (
     ("timestamp",),
@@ -48,3 +50,36 @@ def test_columns_not_side_by_side_are_copied_on_their_own() -> None:
     assert list(got) == ["a", "b", "v_0", "v_1", "v_2"]
     assert got["a"].tolist() == a.tolist() and got["b"].tolist() == b.tolist()
     assert got["v_0"].tolist() == vectors[:, 0].tolist() and got["a"].dtype.isnative
+
+
+def _cache_dir(root: Path, caches: list[tuple[str, str, str]]) -> Path:
+    for i, (level, kind, size) in enumerate(caches):
+        index = root / f"index{i}"
+        index.mkdir(parents=True)
+        for name, text in (("level", level), ("type", kind), ("size", size)):
+            (index / name).write_text(text + "\n")
+    return root
+
+
+@pytest.mark.parametrize(
+    ("caches", "size", "block"),
+    [
+        ([("1", "Data", "32K"), ("1", "Instruction", "32K"), ("2", "Unified", "1024K"),
+          ("3", "Unified", "32768K")], 1 << 20, 1 << 20),
+        ([("1", "Data", "48K"), ("2", "Unified", "4M")], 4 << 20, 2 << 20),  # no more than 2 MB
+        ([("1", "Data", "32K"), ("2", "Unified", "256K")], 256 << 10, 512 << 10),  # no less than 512 kB
+        ([("1", "Data", "32K"), ("2", "Instruction", "2048K")], None, 1 << 20),  # no level-2 data cache
+        ([("2", "Unified", "big")], None, 1 << 20),  # unreadable: the default
+    ],
+)  # fmt: skip
+def test_blocks_are_as_large_as_the_level2_cache_within_bounds(
+    tmp_path: Path, caches: list[tuple[str, str, str]], size: int | None, block: int
+) -> None:
+    """On a core with 1 MB of level-2 cache, 2 MB blocks took twice as long as 1 MB ones."""
+    assert level2_cache(_cache_dir(tmp_path / "cache", caches)) == size
+    assert block_for(size) == block
+
+
+def test_a_machine_without_the_cache_in_sysfs_gets_the_default_block(tmp_path: Path) -> None:
+    assert level2_cache(tmp_path / "missing") is None and block_for(None) == 1 << 20
+    assert 512 << 10 <= block_bytes() <= 2 << 20  # this machine's, within the bounds
