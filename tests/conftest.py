@@ -58,3 +58,15 @@ def _no_thread_left_spinning_by_the_last_module() -> Iterator[None]:
     yield
     spinning = WATCH.spinning_at_the_end()
     assert not spinning, "; ".join(spinning)
+
+
+@pytest.fixture
+def rtde_emulator() -> Iterator[object]:
+    """An `EmulatorThread` of the test's own, RTDE and primary on free ports, nothing else."""
+    from rtde_spec import EmulatorConfig, EmulatorThread
+
+    running = EmulatorThread(
+        EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, realtime_port=None, dashboard_port=None)
+    ).start()
+    yield running
+    running.stop()

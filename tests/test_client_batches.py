@@ -9,24 +9,15 @@ from __future__ import annotations
 
 import itertools
 import time
-from collections.abc import Iterator
 from typing import Any
 
 import pytest
 
-from rtde_spec import EmulatorConfig, EmulatorThread, RtdeClient
+from rtde_spec import EmulatorThread, RtdeClient
 from rtde_spec.errors import UsageError
+from tests.test_client_reads import steps
 
 np = pytest.importorskip("numpy")
-
-
-@pytest.fixture
-def emu() -> Iterator[EmulatorThread]:
-    running = EmulatorThread(
-        EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, realtime_port=None, dashboard_port=None)
-    ).start()
-    yield running
-    running.stop()
 
 
 def wait_for(count: Any, wanted: int) -> None:
@@ -37,11 +28,11 @@ def wait_for(count: Any, wanted: int) -> None:
 
 @pytest.mark.parametrize("batch", [1, 20])
 def test_arrays_hold_every_package_in_order_as_the_raw_callbacks_see_them(
-    emu: EmulatorThread, batch: int
+    rtde_emulator: EmulatorThread, batch: int
 ) -> None:
     arrays: list[Any] = []
     raws: list[bytes] = []
-    with RtdeClient("127.0.0.1", emu.ports["rtde"], batch=batch) as client:
+    with RtdeClient("127.0.0.1", rtde_emulator.ports["rtde"], batch=batch) as client:
         client.setup_outputs(["timestamp", "actual_q", "robot_mode"], 500)
         client.on_batch(arrays.append)
         client.on_raw(raws.append)
@@ -57,7 +48,7 @@ def test_arrays_hold_every_package_in_order_as_the_raw_callbacks_see_them(
     assert b"".join(a.tobytes() for a in arrays) == b"".join(raws)  # the very packages, byte for byte
     rows = np.concatenate(arrays)
     assert len(rows) == len(raws) == client.received >= 200 and client.skipped == 0
-    assert [round((b - a) * 500) for a, b in itertools.pairwise(rows["timestamp"])] == [1] * (len(rows) - 1)
+    assert steps(rows["timestamp"].tolist()) == [1] * (len(rows) - 1)
     last = codec.decode_package(raws[-1])
     assert rows["actual_q"][-1].tolist() == list(last.actual_q) and rows["robot_mode"][-1] == last.robot_mode
     sizes = [len(a) for a in arrays]
@@ -67,11 +58,11 @@ def test_arrays_hold_every_package_in_order_as_the_raw_callbacks_see_them(
         assert sorted(sizes)[len(sizes) // 2] >= batch  # a read per batch: one array per batch
 
 
-def test_arrays_and_records_both_get_every_package(emu: EmulatorThread) -> None:
+def test_arrays_and_records_both_get_every_package(rtde_emulator: EmulatorThread) -> None:
     """With an `on_data` callback too, the reader's shortest path hands out both."""
     arrays: list[Any] = []
     records: list[Any] = []
-    with RtdeClient("127.0.0.1", emu.ports["rtde"], batch=20) as client:
+    with RtdeClient("127.0.0.1", rtde_emulator.ports["rtde"], batch=20) as client:
         client.setup_outputs(["timestamp", "actual_q"], 500)
         client.on_data(records.append)
         client.on_batch(arrays.append)
@@ -83,10 +74,10 @@ def test_arrays_and_records_both_get_every_package(emu: EmulatorThread) -> None:
     assert stamps == [r.timestamp for r in records] and len(stamps) >= 150
 
 
-def test_a_callback_added_after_start_gets_the_packages_from_then_on(emu: EmulatorThread) -> None:
+def test_a_callback_added_after_start_gets_the_packages_from_then_on(rtde_emulator: EmulatorThread) -> None:
     raws: list[bytes] = []
     arrays: list[Any] = []
-    with RtdeClient("127.0.0.1", emu.ports["rtde"], batch=10) as client:
+    with RtdeClient("127.0.0.1", rtde_emulator.ports["rtde"], batch=10) as client:
         client.setup_outputs(["timestamp"], 500)
         client.on_raw(raws.append)
         client.start()
@@ -95,19 +86,19 @@ def test_a_callback_added_after_start_gets_the_packages_from_then_on(emu: Emulat
         wait_for(lambda: sum(map(len, arrays)), 50)
         client.pause()
     stamps = np.concatenate(arrays)["timestamp"].tolist()
-    assert len(stamps) >= 50 and [round((b - a) * 500) for a, b in itertools.pairwise(stamps)] == [1] * (
-        len(stamps) - 1
-    )
+    assert len(stamps) >= 50 and steps(stamps) == [1] * (len(stamps) - 1)
     codec = client.core.output
     assert codec is not None
     assert stamps == [codec.decode_package(r).timestamp for r in raws[len(raws) - len(stamps) :]]
 
 
-def test_an_error_raised_by_a_batch_callback_ends_the_connection_with_that_error(emu: EmulatorThread) -> None:
+def test_an_error_raised_by_a_batch_callback_ends_the_connection_with_that_error(
+    rtde_emulator: EmulatorThread,
+) -> None:
     def fails(array: Any) -> None:
         raise ValueError(f"the user's callback refused {len(array)} rows")
 
-    with RtdeClient("127.0.0.1", emu.ports["rtde"], timeout=5, batch=5) as client:
+    with RtdeClient("127.0.0.1", rtde_emulator.ports["rtde"], timeout=5, batch=5) as client:
         client.setup_outputs(["timestamp"], 500)
         client.on_batch(fails)
         client.start()
@@ -117,14 +108,16 @@ def test_an_error_raised_by_a_batch_callback_ends_the_connection_with_that_error
         assert isinstance(client.connection_lost, ValueError) and "refused" in str(client.connection_lost)
 
 
-def test_recording_writes_every_row_once_up_to_the_sample_count(emu: EmulatorThread, tmp_path: Any) -> None:
+def test_recording_writes_every_row_once_up_to_the_sample_count(
+    rtde_emulator: EmulatorThread, tmp_path: Any
+) -> None:
     """The recorder takes arrays: a sample count met inside a read keeps only the rows owed."""
     from rtde_spec.output.writers import open_writer
     from rtde_spec.rtde.recorder import record
 
     out = tmp_path / "rows.csv"
     writer = open_writer("csv", out)
-    with RtdeClient("127.0.0.1", emu.ports["rtde"], batch=40) as client:
+    with RtdeClient("127.0.0.1", rtde_emulator.ports["rtde"], batch=40) as client:
         result = record(client, ["timestamp", "actual_q"], 500, writer, samples=333)
     writer.close()
     rows = out.read_text().splitlines()[1:]
