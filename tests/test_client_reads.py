@@ -9,22 +9,17 @@ from __future__ import annotations
 import itertools
 import threading
 import time
-from collections.abc import Iterator
 from typing import Any
 
 import pytest
 
-from rtde_spec import EmulatorConfig, EmulatorThread, RtdeClient
+from rtde_spec import EmulatorThread, RtdeClient
 from rtde_spec.rtde import client as client_module
 
 
 @pytest.fixture
-def emu() -> Iterator[EmulatorThread]:
-    running = EmulatorThread(
-        EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, realtime_port=None, dashboard_port=None)
-    ).start()
-    yield running
-    running.stop()
+def emu(rtde_emulator: EmulatorThread) -> EmulatorThread:
+    return rtde_emulator
 
 
 def steps(stamps: list[float]) -> list[int]:
