@@ -125,3 +125,29 @@ def test_recording_writes_every_row_once_up_to_the_sample_count(
     # in order, none twice (an EmulatorThread may skip a step while the test process is busy)
     assert all(b > a for a, b in itertools.pairwise(stamps))
     assert [c for c in table.column_names if c.startswith("actual_q")] == [f"actual_q_{i}" for i in range(6)]
+
+
+def test_packages_split_across_reads_and_mixed_with_texts_reach_the_arrays_whole_and_in_order() -> None:
+    """A real network cuts packages anywhere: the framer holds the parts; the arrays hold whole
+    packages in order, and a framing fault ends the connection after the packages before it."""
+    from rtde_spec.rtde.codec import build
+    from tests.faults.clients_peer import HostilePeer
+
+    peer = HostilePeer()
+    arrays: list[Any] = []
+    with RtdeClient("127.0.0.1", peer.port, timeout=2.0) as client:
+        client.setup_outputs(["timestamp"], 125)
+        client.on_batch(arrays.append)
+        client.start()
+        text = build("text_message", message="between the packages", source="test", warning_level=1)
+        stream = b"".join(peer.data(float(n)) for n in range(20)) + text
+        stream += b"".join(peer.data(float(n)) for n in range(20, 40))
+        for at in range(0, len(stream), 7):  # 7-byte pieces: every package cut, some twice
+            peer.send(stream[at : at + 7])
+            time.sleep(0.001)
+        wait_for(lambda: sum(map(len, arrays)), 40)
+        peer.send(b"\x00\x01\x78")  # a size below the header: the connection ends with its error
+        wait_for(lambda: client.connection_lost is not None, 1)
+    peer.close()
+    assert np.concatenate(arrays)["timestamp"].tolist() == [float(n) for n in range(40)]
+    assert client.connection_lost is not None and "size" in str(client.connection_lost)
