@@ -7,6 +7,7 @@ recorder (which takes its rows this way) writes every row once.
 
 from __future__ import annotations
 
+import asyncio
 import itertools
 import time
 from typing import Any
@@ -151,3 +152,31 @@ def test_packages_split_across_reads_and_mixed_with_texts_reach_the_arrays_whole
     peer.close()
     assert np.concatenate(arrays)["timestamp"].tolist() == [float(n) for n in range(40)]
     assert client.connection_lost is not None and "size" in str(client.connection_lost)
+
+
+async def _async_arrays(port: int, batch: int) -> tuple[list[Any], Any]:
+    from rtde_spec.rtde.aio import AsyncRtdeClient
+
+    arrays: list[Any] = []
+    async with AsyncRtdeClient("127.0.0.1", port, batch=batch) as client:
+        await client.setup_outputs(["timestamp", "actual_q"], 500)
+        client.on_batch(arrays.append)
+        await client.start()
+        deadline = time.monotonic() + 5
+        while sum(map(len, arrays)) < 150 and time.monotonic() < deadline:
+            await asyncio.sleep(0.01)
+        with pytest.raises(UsageError, match="on_batch"):
+            await client.receive()
+        await client.pause()  # answered while arrays come: the reply is not held back
+        assert client.received == sum(map(len, arrays)) and not client._data  # no record queued
+        return arrays, client.core.output
+
+
+@pytest.mark.parametrize("batch", [1, 20])
+def test_the_asyncio_client_hands_over_arrays_too(rtde_emulator: EmulatorThread, batch: int) -> None:
+    arrays, codec = asyncio.run(_async_arrays(rtde_emulator.ports["rtde"], batch))
+    assert all(a.dtype == codec.dtype and not a.flags.writeable for a in arrays)
+    stamps = np.concatenate(arrays)["timestamp"].tolist()
+    assert len(stamps) >= 150 and steps(stamps) == [1] * (len(stamps) - 1)
+    if batch > 1:
+        assert sorted(map(len, arrays))[len(arrays) // 2] >= batch

@@ -15,14 +15,14 @@ from __future__ import annotations
 
 import asyncio
 import logging
-from collections.abc import AsyncIterator, Sequence
+from collections.abc import AsyncIterator, Callable, Sequence
 from typing import Any
 
 from rtde_spec._generated.constants import RTDE_PORT
-from rtde_spec.errors import ProtocolError, RtdeConnectionError, RtdeSpecError, UsageError
+from rtde_spec.errors import ProtocolError, RtdeConnectionError, RtdeSpecError, UsageError, require
 from rtde_spec.rtde.client_base import NOT_CONNECTED, ClientBase
 from rtde_spec.rtde.client_protocol import DataRun, InputRecipe, Reply, Text
-from rtde_spec.rtde.client_thread import LOG_LEVELS
+from rtde_spec.rtde.client_thread import LOG_LEVELS, arrays_of
 
 log = logging.getLogger("rtde_spec.client")
 
@@ -39,6 +39,7 @@ class AsyncRtdeClient(ClientBase):
         self._replies: asyncio.Queue[Reply | BaseException] = asyncio.Queue()
         self._writer: asyncio.StreamWriter | None = None
         self._task: asyncio.Task[None] | None = None
+        self._batch_callbacks: list[Callable[[Any], None]] = []
 
     async def connect(self, protocol_version: int | None = None) -> AsyncRtdeClient:
         if self._writer is not None:
@@ -88,8 +89,20 @@ class AsyncRtdeClient(ClientBase):
     async def send(self, recipe: InputRecipe, values: Any = None, **named: Any) -> None:
         await self._write(self.core.send_inputs(recipe, values, named))
 
+    def on_batch(self, callback: Callable[[Any], None]) -> None:
+        """Call `callback(array)` in the event loop with the data packages of each read as one
+        numpy structured array (as `RtdeClient.on_batch`: a read-only view of the read's bytes,
+        a row per package); instead of records, which are then not made."""
+        require("numpy", "numpy", "on_batch")
+        self._batch_callbacks.append(callback)
+        self.core.want_records = False
+
     async def receive(self, timeout: float | None = None) -> Any:
         """The next record; waits on one future with a timer (no task per wait, as wait_for makes)."""
+        if self._batch_callbacks:
+            raise UsageError(
+                "data packages go to the on_batch callbacks, not to receive()", subject=self.where
+            )
         data = self._data
         if data:
             return data.popleft()
@@ -186,7 +199,12 @@ class AsyncRtdeClient(ClientBase):
                 except RtdeSpecError as exc:  # the packages before the fault are kept
                     events, failed = self.core.before_error, exc
                 for event in events:
-                    if isinstance(event, DataRun):
+                    if isinstance(event, DataRun) and self._batch_callbacks:
+                        self.received += event.count
+                        array = arrays_of(event, self.core.output)
+                        for callback in self._batch_callbacks:
+                            callback(array)
+                    elif isinstance(event, DataRun):
                         got = len(event.records)
                         self.received += got
                         self.skipped += max(0, len(self._data) + got - self._data.maxlen)  # type: ignore[operator]

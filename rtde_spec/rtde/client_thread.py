@@ -32,6 +32,14 @@ _exhaust: Callable[[Iterable[Any]], None] = collections.deque(maxlen=0).extend
 _new_tuple: Callable[..., Any] = tuple.__new__  # a record from its values: record types are tuples
 
 
+def arrays_of(run: DataRun, codec: Any) -> Any:
+    """A run of data packages as one numpy array of the recipe's dtype (bytes copied only when
+    the run is a view of a buffer that later reads reuse)."""
+    import numpy
+
+    return numpy.frombuffer(run.raw if type(run.raw) is bytes else bytes(run.raw), codec.dtype)
+
+
 class ThreadReads(ClientBase):
     """The reader thread's loop and the handing over of what any read brought (`RtdeClient` sets
     these attributes up in its `__init__`)."""
@@ -188,11 +196,13 @@ class ThreadReads(ClientBase):
     def _arrays(self, runs: list[DataRun]) -> None:
         """Each run of a read as one numpy array to the `on_batch` callbacks."""
         for run in runs:
-            self._array(run.raw if type(run.raw) is bytes else bytes(run.raw))  # no view of a reused buffer
+            array = arrays_of(run, self.core.output)
+            for callback in self._batch_callbacks:
+                callback(array)
 
     def _array(self, packages: bytes) -> None:
-        """Data packages of the output recipe, back to back, as one numpy array (a view of the
-        bytes, which nothing changes) to the `on_batch` callbacks."""
+        """A read of whole data packages of the output recipe as one numpy array (a view of the
+        read's bytes, which nothing changes) to the `on_batch` callbacks."""
         import numpy  # only `on_batch` needs it (imported there): a dict look-up per batch
 
         array = numpy.frombuffer(packages, self.core.output.dtype)  # type: ignore[union-attr]
