@@ -180,3 +180,29 @@ def test_the_asyncio_client_hands_over_arrays_too(rtde_emulator: EmulatorThread,
     assert len(stamps) >= 150 and steps(stamps) == [1] * (len(stamps) - 1)
     if batch > 1:
         assert sorted(map(len, arrays))[len(arrays) // 2] >= batch
+
+
+def test_protocol_1_packages_without_their_recipe_id_come_as_rows_of_the_recipe() -> None:
+    """A CB3-era controller (protocol 1) may send data packages without the id byte: each is read
+    with the implied id, so the arrays have the recipe's dtype like any other."""
+    import struct
+
+    from tests.faults.clients_peer import HEADER, HostilePeer
+
+    peer = HostilePeer(accept_versions=(1,))  # its recipes are DOUBLE fields only
+    arrays: list[Any] = []
+    with RtdeClient("127.0.0.1", peer.port, timeout=2.0) as client:
+        client.setup_outputs(["timestamp"], 125)
+        client.on_batch(arrays.append)
+        client.start()
+        codec = client.core.output
+        assert codec is not None and client.core.state.version == 1
+        for n in range(10):
+            bare = HEADER.pack(HEADER.size + 8, ord("U")) + struct.pack(">d", n)  # no recipe id
+            peer.send(bare if n % 2 else peer.data(float(n)))  # both forms in turn
+        wait_for(lambda: sum(map(len, arrays)), 10)
+        assert client.connection_lost is None
+    peer.close()
+    rows = np.concatenate(arrays)
+    assert all(a.dtype == codec.dtype for a in arrays)
+    assert rows["timestamp"].tolist() == [float(n) for n in range(10)] and set(rows["recipe_id"]) == {1}
