@@ -7,7 +7,7 @@
 2. Receive-loop CPU per package (`receive_loops.py`), each loop in its own process
    against the same emulator for `--seconds` / 2, `--rounds` rounds in a rotated order:
    ours waking per package (`for record in client`, `receive()`, `on_data`) and batched
-   (`batch=50` / `100`, `on_data`); the UR-client-style loop; ur_rtde's
+   (`batch=50` / `100`, `on_data`; `batch=50`, `on_batch`: numpy arrays); the UR-client-style loop; ur_rtde's
    RTDEReceiveInterface (if installed); UR's own client (`--ur-client CHECKOUT`: a checkout
    of UR's RTDE_Python_Client_Library, which is not on PyPI; its `receive()` loop, as UR's
    examples run it, becomes the peer of the issue-30 ratios); floors: a bare `recv()` loop, the same with one

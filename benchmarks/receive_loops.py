@@ -7,12 +7,14 @@ wake-ups per package (voluntary context switches, every thread). Rows, in every 
 - ours, one wake-up per package: `for record in client` (the README's loop),
   `client.receive()` in a loop, records to an `on_data` callback (the consumer keeps
   the newest, as the UR-style loop does);
-- ours batched: `batch=50` and `batch=100` (one wake-up per 100 / 200 ms), `on_data`;
+- ours batched: `batch=50` and `batch=100` (one wake-up per 100 / 200 ms), `on_data`; and
+  `batch=50` with `on_batch` (a numpy array per read: no Python object per package);
 - the peer: a UR-client-style loop (recv header, recv body, unpack, a dict per package,
   as UR's rtde.py does); ur_rtde's RTDEReceiveInterface once, when installed;
 - floors: a bare `recv()` loop that decodes nothing (what one wake-up per package
   costs this machine), the same loop with one `struct` unpack per package, and
-  batched `recv` + `struct` tuples (no names, no checks, no thread); and the bare loop
+  batched `recv` + `struct` tuples (no names, no checks, no thread), the same with one
+  numpy view per read instead of tuples (`on_batch`'s floor); and the bare loop
   in C (`recv_floor.c`, built with the machine's C compiler when it has one): what a
   wake-up costs with no interpreter, below which no Python loop can go.
 
