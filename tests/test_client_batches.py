@@ -42,7 +42,7 @@ def test_arrays_hold_every_package_in_order_as_the_raw_callbacks_see_them(
         wait_for(lambda: sum(map(len, arrays)), 200)
         with pytest.raises(UsageError, match="on_batch"):
             client.receive()
-        client.pause()  # its reply may come in a read with data packages: the general path
+        client.pause()
         codec = client.core.output
         assert codec is not None
     assert all(a.dtype == codec.dtype and not a.flags.writeable for a in arrays)  # views of the reads
@@ -206,3 +206,57 @@ def test_protocol_1_packages_without_their_recipe_id_come_as_rows_of_the_recipe(
     rows = np.concatenate(arrays)
     assert all(a.dtype == codec.dtype for a in arrays)
     assert rows["timestamp"].tolist() == [float(n) for n in range(10)] and set(rows["recipe_id"]) == {1}
+
+
+@pytest.mark.parametrize("batch", [1, 20])
+def test_the_callbacks_of_a_read_run_raw_then_batch_then_records(
+    rtde_emulator: EmulatorThread, batch: int
+) -> None:
+    """`record --wall-clock` notes each read's time before the recorder takes its rows: the order
+    of a read's callbacks is part of the API (it was batch, raw, records for a day: host times
+    could shift by a read when the recorder flushed between the two)."""
+    raws: list[bytes] = []
+    records: list[Any] = []
+    rows: list[int] = []
+    wrong: list[tuple[int, int, int]] = []
+
+    def batch_seen(array: Any) -> None:
+        rows.append(len(array))
+        if len(raws) != sum(rows) or len(records) != sum(rows) - len(array):
+            wrong.append((len(raws), sum(rows), len(records)))
+
+    with RtdeClient("127.0.0.1", rtde_emulator.ports["rtde"], batch=batch) as client:
+        client.setup_outputs(["timestamp"], 500)
+        client.on_data(records.append)
+        client.on_batch(batch_seen)
+        client.on_raw(raws.append)  # added last, called first
+        client.start()
+        wait_for(lambda: sum(rows), 150)
+        client.pause()
+    assert sum(rows) >= 150 and not wrong, wrong[:5]
+
+
+def test_reads_of_whole_packages_skip_the_general_path_with_only_batch_callbacks(
+    rtde_emulator: EmulatorThread,
+) -> None:
+    """A batch-only client frames a read of whole packages on the reader's shortest path: no
+    events, no runs, no list of package bytes (what a recorder at 500 Hz does 10 times a second)."""
+    arrays: list[Any] = []
+    general: list[int] = []
+    with RtdeClient("127.0.0.1", rtde_emulator.ports["rtde"], batch=20) as client:
+        receive = client.core.receive
+
+        def events(data: bytes) -> Any:  # every read that takes the general path comes here
+            general.append(len(data))
+            return receive(data)
+
+        client.core.receive = events  # type: ignore[method-assign]
+        client.setup_outputs(["timestamp", "actual_q"], 500)
+        client.on_batch(arrays.append)
+        client.start()
+        wait_for(lambda: len(arrays), 3)
+        before = len(general)
+        wait_for(lambda: sum(map(len, arrays)), 300)
+        during = len(general) - before
+        client.pause()
+    assert sum(map(len, arrays)) >= 300 and during <= 1, general[before:]

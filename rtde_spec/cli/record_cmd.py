@@ -184,7 +184,7 @@ def run(args: argparse.Namespace) -> int:
             from rtde_spec.cli.wall_clock import ReceiveTimes, WallClockWriter
 
             received = ReceiveTimes()
-            client.on_raw(received)  # before the recorder's own callback: times come first
+            client.on_batch(received)  # before the recorder's own callback: times come first
             writer = cast("Writer", WallClockWriter(writer, received))
         try:
             stop.armed = True  # from here a signal ends the recording cleanly

@@ -12,6 +12,7 @@ in the recipe, host_time is the read time itself.
 
 from __future__ import annotations
 
+import itertools
 import time
 from collections import deque
 from collections.abc import Mapping
@@ -21,14 +22,15 @@ COLUMN = "host_time"
 
 
 class ReceiveTimes:
-    """An `on_raw` callback that notes when each data package arrived; register it before the
-    recorder's own callback, so a package's time is noted before the recorder can write it."""
+    """An `on_batch` callback that notes when each read's data packages arrived; register it
+    before the recorder's own (callbacks of one kind run in the order added), so a package's
+    time is noted before the recorder can write it."""
 
     def __init__(self) -> None:
         self.times: deque[float] = deque()
 
-    def __call__(self, package: bytes) -> None:
-        self.times.append(time.time())
+    def __call__(self, packages: Any) -> None:
+        self.times.extend(itertools.repeat(time.time(), len(packages)))
 
     def take(self, count: int) -> list[float]:
         times = self.times

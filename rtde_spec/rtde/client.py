@@ -276,7 +276,8 @@ class RtdeClient(ThreadReads):
 
         With `RtdeClient(batch=N)` a read holds about N packages: one wake-up, one `recv` and
         one array per N packages, and no Python object per package or value, for loggers and
-        plots at 500 Hz. With no `on_data` callback, no records are made. Needs numpy.
+        plots at 500 Hz. With no `on_data` callback, no records are made. Callbacks of a read run
+        in the order `on_raw`, `on_batch`, `on_data`, each kind in the order added. Needs numpy.
         """
         require("numpy", "numpy", "on_batch")
         self._batch_callbacks.append(callback)

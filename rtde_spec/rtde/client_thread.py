@@ -33,8 +33,8 @@ _new_tuple: Callable[..., Any] = tuple.__new__  # a record from its values: reco
 
 
 def arrays_of(run: DataRun, codec: Any) -> Any:
-    """A run of data packages as one numpy array of the recipe's dtype (bytes copied only when
-    the run is a view of a buffer that later reads reuse)."""
+    """A run of data packages as one numpy array of the recipe's dtype, over bytes nothing else
+    changes (a run that is a view of other bytes is copied: the array then depends on no buffer)."""
     import numpy
 
     return numpy.frombuffer(run.raw if type(run.raw) is bytes else bytes(run.raw), codec.dtype)
@@ -117,13 +117,13 @@ class ThreadReads(ClientBase):
                         self._other_read(chunk)
                         continue
                     self.received += count
-                    if batches:
-                        self._array(chunk)
-                    for raw in raws:
+                    for raw in raws:  # raw, then batch, then record callbacks, as `_deliver`
                         if count == 1:
                             raw(chunk)
                         else:
                             _exhaust(map(raw, DataRun([], chunk, path.size).packages()))
+                    if batches:
+                        self._array(chunk)
                     if not callbacks:
                         continue
                     if count == 1:
@@ -179,12 +179,12 @@ class ThreadReads(ClientBase):
         records = runs[0].records if len(runs) == 1 else [r for run in runs for r in run.records]
         self.received += runs[0].count if len(runs) == 1 else sum(run.count for run in runs)
         if self._callbacks or self._raw_callbacks or self._batch_callbacks:
-            if self._batch_callbacks:
-                self._arrays(runs)
-            for raw in self._raw_callbacks:
+            for raw in self._raw_callbacks:  # raw, then batch, then record callbacks
                 for run in runs:
                     for package in run.packages():
                         raw(package)
+            if self._batch_callbacks:
+                self._arrays(runs)
             for callback in self._callbacks:
                 _exhaust(map(callback, records))  # the loop in C: a batch of 50 is 50 calls, no steps
             return
