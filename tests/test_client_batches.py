@@ -197,14 +197,14 @@ def test_protocol_1_packages_without_their_recipe_id_come_as_rows_of_the_recipe(
         client.start()
         codec = client.core.output
         assert codec is not None and client.core.state.version == 1
-        for n in range(10):
-            bare = HEADER.pack(HEADER.size + 8, ord("U")) + struct.pack(">d", n)  # no recipe id
-            peer.send(bare if n % 2 else peer.data(float(n)))  # both forms in turn
+        bare = [HEADER.pack(HEADER.size + 8, ord("U")) + struct.pack(">d", n) for n in range(10)]  # no id
+        peer.send(b"".join(bare[n] if n % 2 else peer.data(float(n)) for n in range(10)))  # both forms
         wait_for(lambda: sum(map(len, arrays)), 10)
         assert client.connection_lost is None
     peer.close()
     rows = np.concatenate(arrays)
     assert all(a.dtype == codec.dtype for a in arrays)
+    assert len(arrays) < 10  # one array per read, not one per package of either form
     assert rows["timestamp"].tolist() == [float(n) for n in range(10)] and set(rows["recipe_id"]) == {1}
 
 

@@ -198,13 +198,13 @@ class AsyncRtdeClient(ClientBase):
                     events = self.core.receive(chunk)
                 except RtdeSpecError as exc:  # the packages before the fault are kept
                     events, failed = self.core.before_error, exc
+                runs: list[DataRun] = []  # for on_batch: runs one after another, one array
                 for event in events:
                     if isinstance(event, DataRun) and self._batch_callbacks:
-                        self.received += event.count
-                        array = arrays_of(event, self.core.output)
-                        for callback in self._batch_callbacks:
-                            callback(array)
-                    elif isinstance(event, DataRun):
+                        runs.append(event)
+                        continue
+                    runs = self._hand_arrays(runs)
+                    if isinstance(event, DataRun):
                         got = len(event.records)
                         self.received += got
                         self.skipped += max(0, len(self._data) + got - self._data.maxlen)  # type: ignore[operator]
@@ -214,6 +214,7 @@ class AsyncRtdeClient(ClientBase):
                         log.log(LOG_LEVELS[min(event.level, 3)], "%s: %s", event.source, event.message)
                     else:
                         self._replies.put_nowait(event)
+                self._hand_arrays(runs)
                 if failed is not None:
                     raise failed
         except asyncio.CancelledError:
@@ -222,6 +223,15 @@ class AsyncRtdeClient(ClientBase):
             self._closed = exc
             self._replies.put_nowait(exc)
             self._wake()
+
+    def _hand_arrays(self, runs: list[DataRun]) -> list[DataRun]:
+        """Runs that came one after another as one array to the `on_batch` callbacks; [] after."""
+        if runs:
+            self.received += sum(run.count for run in runs)
+            array = arrays_of(runs, self.core.output)
+            for callback in self._batch_callbacks:
+                callback(array)
+        return []
 
     def _wake(self) -> None:
         """Wake the caller waiting in receive (if any)."""

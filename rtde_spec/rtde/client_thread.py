@@ -32,12 +32,14 @@ _exhaust: Callable[[Iterable[Any]], None] = collections.deque(maxlen=0).extend
 _new_tuple: Callable[..., Any] = tuple.__new__  # a record from its values: record types are tuples
 
 
-def arrays_of(run: DataRun, codec: Any) -> Any:
-    """A run of data packages as one numpy array of the recipe's dtype, over bytes nothing else
-    changes (a run that is a view of other bytes is copied: the array then depends on no buffer)."""
+def arrays_of(runs: list[DataRun], codec: Any) -> Any:
+    """Runs of data packages that came one after another in a read (a protocol-1 controller's
+    packages without their id are a run each) as one numpy array of the recipe's dtype, over
+    bytes nothing else changes (a view of other bytes is copied: the array depends on no buffer)."""
     import numpy
 
-    return numpy.frombuffer(run.raw if type(run.raw) is bytes else bytes(run.raw), codec.dtype)
+    raw = runs[0].raw if len(runs) == 1 else b"".join(run.raw for run in runs)
+    return numpy.frombuffer(raw if type(raw) is bytes else bytes(raw), codec.dtype)
 
 
 class ThreadReads(ClientBase):
@@ -194,11 +196,11 @@ class ThreadReads(ClientBase):
         self._data.extend(records)
 
     def _arrays(self, runs: list[DataRun]) -> None:
-        """Each run of a read as one numpy array to the `on_batch` callbacks."""
-        for run in runs:
-            array = arrays_of(run, self.core.output)
-            for callback in self._batch_callbacks:
-                callback(array)
+        """The runs of a read that came one after another as one numpy array to the `on_batch`
+        callbacks (a reply or a text between them makes two calls of `_deliver`)."""
+        array = arrays_of(runs, self.core.output)
+        for callback in self._batch_callbacks:
+            callback(array)
 
     def _array(self, packages: bytes) -> None:
         """A read of whole data packages of the output recipe as one numpy array (a view of the
