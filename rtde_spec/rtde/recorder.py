@@ -2,10 +2,10 @@
 
 Data packages come from the client's reader thread as numpy arrays, one per read of
 the socket (`RtdeClient.on_batch`: no Python object per package), so recording keeps
-up at 500 Hz; the file is flushed batch by batch (handed to the operating system, so a killed process loses
-at most the batch being collected), and whatever arrived before Ctrl-C, a `stop`
-event (the CLI sets it on SIGTERM and SIGHUP) or a dropped connection is written
-and the file closed readable.
+up at 500 Hz; the file is flushed batch by batch (handed to the operating system, so a
+killed process loses at most the batch being collected), and whatever arrived before
+Ctrl-C, a `stop` event (the CLI sets it on SIGTERM and SIGHUP) or a dropped connection
+is written and the file closed readable.
 """
 
 from __future__ import annotations
