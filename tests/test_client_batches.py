@@ -187,6 +187,7 @@ def test_protocol_1_packages_without_their_recipe_id_come_as_rows_of_the_recipe(
     with the implied id, so the arrays have the recipe's dtype like any other."""
     import struct
 
+    from rtde_spec._generated.rtde_models import DataPackage
     from tests.faults.clients_peer import HEADER, HostilePeer
 
     peer = HostilePeer(accept_versions=(1,))  # its recipes are DOUBLE fields only
@@ -197,7 +198,8 @@ def test_protocol_1_packages_without_their_recipe_id_come_as_rows_of_the_recipe(
         client.start()
         codec = client.core.output
         assert codec is not None and client.core.state.version == 1
-        bare = [HEADER.pack(HEADER.size + 8, ord("U")) + struct.pack(">d", n) for n in range(10)]  # no id
+        data = DataPackage.PACKAGE_TYPE
+        bare = [HEADER.pack(HEADER.size + 8, data) + struct.pack(">d", n) for n in range(10)]  # no id
         peer.send(b"".join(bare[n] if n % 2 else peer.data(float(n)) for n in range(10)))  # both forms
         wait_for(lambda: sum(map(len, arrays)), 10)
         assert client.connection_lost is None

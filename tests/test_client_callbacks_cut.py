@@ -17,7 +17,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from rtde_spec import RtdeClient
-from rtde_spec._generated.rtde_models import DataPackage
 from rtde_spec.rtde.codec import build
 from tests.budget import examples
 from tests.faults.clients_peer import HostilePeer
@@ -25,7 +24,6 @@ from tests.faults.clients_peer import HostilePeer
 np = pytest.importorskip("numpy")
 
 TEXT = build("text_message", message="between the packages", source="test", warning_level=1)
-assert DataPackage.PACKAGE_TYPE == ord("U")
 
 
 def stream(count: int, texts: set[int], peer: HostilePeer) -> bytes:
