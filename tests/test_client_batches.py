@@ -54,7 +54,7 @@ def test_arrays_hold_every_package_in_order_as_the_raw_callbacks_see_them(
     assert rows["actual_q"][-1].tolist() == list(last.actual_q) and rows["robot_mode"][-1] == last.robot_mode
     sizes = [len(a) for a in arrays]
     if batch == 1:
-        assert max(sizes) <= 3  # a read a package, now and then two
+        assert sorted(sizes)[len(sizes) // 2] == 1  # a read a package, more when the reader was late
     else:
         assert sorted(sizes)[len(sizes) // 2] >= batch  # a read per batch: one array per batch
 
