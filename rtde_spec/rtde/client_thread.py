@@ -125,7 +125,7 @@ class ThreadReads(ClientBase):
                         else:
                             _exhaust(map(raw, DataRun([], chunk, path.size).packages()))
                     if batches:
-                        self._array(chunk)
+                        self._arrays([DataRun([], chunk, path.size)])
                     if not callbacks:
                         continue
                     if count == 1:
@@ -199,15 +199,6 @@ class ThreadReads(ClientBase):
         """The runs of a read that came one after another as one numpy array to the `on_batch`
         callbacks (a reply or a text between them makes two calls of `_deliver`)."""
         array = arrays_of(runs, self.core.output)
-        for callback in self._batch_callbacks:
-            callback(array)
-
-    def _array(self, packages: bytes) -> None:
-        """A read of whole data packages of the output recipe as one numpy array (a view of the
-        read's bytes, which nothing changes) to the `on_batch` callbacks."""
-        import numpy  # only `on_batch` needs it (imported there): a dict look-up per batch
-
-        array = numpy.frombuffer(packages, self.core.output.dtype)  # type: ignore[union-attr]
         for callback in self._batch_callbacks:
             callback(array)
 
