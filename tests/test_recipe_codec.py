@@ -536,6 +536,22 @@ def test_numpy_vectors_and_scalars_encode_as_their_values_and_errors_name_the_ba
             bits.encode({"input_bit_register_64": not_a_bool})
 
 
+def assert_one_call_path(codec: RecipeCodec, values: dict[str, object]) -> None:
+    """Both modes encode `values` without falling back to the value-by-value checks."""
+    scope = codec.encode_package.__globals__  # the generated function's own namespace
+    explained = scope["slow"]
+
+    def refused(*args: object) -> bytes:
+        raise AssertionError(f"the one-call path refused {args[1:]}")
+
+    scope["slow"] = refused
+    try:
+        assert codec.encode_package(values, 1, strict=True) == codec.encode_package(values, 1)
+    finally:
+        scope["slow"] = explained
+    assert codec.encode_package(values, 1) == explained(values, 1, False)
+
+
 def test_strict_costs_about_what_the_default_mode_costs() -> None:
     """Strict checks are compiled into the one-call path: on ur_rtde's 58-field recipe strict
     took 12-21x the default mode when it went value by value; now about 2x (4x allowed for a
@@ -561,8 +577,7 @@ def test_strict_costs_about_what_the_default_mode_costs() -> None:
     }
     # the one-call path itself takes these values in both modes (a refusal would fall back,
     # value by value, to the slow path and still give the same bytes)
-    fast = codec._encoder.fast_package
-    assert fast[True](values, 1) == fast[False](values, 1) == codec.encode_package(values, 1)
+    assert_one_call_path(codec, values)
 
     def per_call(strict: bool) -> float:
         start = time.thread_time_ns()
@@ -573,3 +588,36 @@ def test_strict_costs_about_what_the_default_mode_costs() -> None:
     rounds = [(per_call(True), per_call(False)) for _ in range(40)]
     strict, default = (min(times) for times in zip(*rounds, strict=True))  # the least disturbed
     assert strict / default < 4.0, (strict, default, rounds)
+
+
+def test_the_generated_methods_keep_the_public_signature_and_docstring() -> None:
+    """encode and encode_package are generated per codec (one frame per call): callers keep
+    the keyword names, help() keeps the docstring, and every input form still works."""
+    import inspect
+
+    codec = RecipeCodec.for_names(["target_q", "output_int_register_0", "output_bit_register_70"], "output")
+    values = {"target_q": [0.5] * 6, "output_int_register_0": 7, "output_bit_register_70": True}
+    for name in ("encode", "encode_package"):
+        generated, method = getattr(codec, name), getattr(RecipeCodec, name)
+        assert generated.__doc__ == method.__doc__ and generated.__name__ == name
+        assert list(inspect.signature(generated).parameters) == list(inspect.signature(method).parameters)[1:]
+    package = codec.encode_package(values=values, recipe_id=3, strict=True)
+    assert package == codec.encode_package(values, 3) == codec.encode_package(codec.decode(package[4:]), 3)
+    assert codec.encode(values=values, strict=True) == package[4:]
+    with pytest.raises(EncodeError, match="recipe id out of range"):
+        codec.encode_package(values, recipe_id=256)
+
+
+def test_the_one_call_path_takes_what_strict_mode_takes() -> None:
+    """Ints for doubles and bools for BOOL are strict-valid: no value-by-value fallback; a bool
+    for an integer is refused by both paths alike."""
+    codec = RecipeCodec.for_names(["target_q", "output_int_register_0", "output_bit_register_70"], "output")
+    assert_one_call_path(
+        codec, {"target_q": [0, 1, 2, 3, 4, 5.5], "output_int_register_0": 7, "output_bit_register_70": False}
+    )
+    with pytest.raises(EncodeError, match="output_int_register_0"):
+        codec.encode_package(
+            {"target_q": [0.0] * 6, "output_int_register_0": True, "output_bit_register_70": False},
+            1,
+            strict=True,
+        )

@@ -64,7 +64,7 @@ _FAST_ERRORS = (KeyError, TypeError, struct.error, OverflowError, _Refused)
 
 
 def _strict_checks(
-    items: Sequence[RecipeItem], names: Sequence[str], scope: dict[str, Any], leading: int
+    items: Sequence[RecipeItem], names: Sequence[str], scope: dict[str, Any], leading: int, pad: str
 ) -> list[str]:
     """Source lines refusing the values unless each has a type strict mode takes for its kind.
 
@@ -80,39 +80,55 @@ def _strict_checks(
     if vectors:  # their own types were checked with their lengths
         kinds = [_CANONICAL[i.wire.kind] for i in items for _ in range(i.wire.count)]
         scope["canon"] = [int] * leading + kinds
-        lines.append("    if [*map(type, t)] != canon:")
+        lines.append(f"{pad}if [*map(type, t)] != canon:")
     else:  # float, int, bool: the builtins' names in the code
         pairs = zip(names, items, strict=True)
         inline = " and ".join(f"type({x}) is {_CANONICAL[i.wire.kind].__name__}" for x, i in pairs)
-        lines.append(f"    if not ({inline}):")
+        lines.append(f"{pad}if not ({inline}):")
     groups: dict[str, list[str]] = {}
     for x, item in zip(names, items, strict=True):
         groups.setdefault(item.wire.kind, []).append(x if item.wire.count == 1 else f"*{x}")
     for k, (kind, parts) in enumerate(sorted(groups.items())):
         scope[f"ok{k}"] = _STRICT_TYPES[kind]
-        lines.append(f"        if not set(map(type, ({', '.join(parts)},))) <= ok{k}: raise Refused")
+        lines.append(f"{pad}    if not set(map(type, ({', '.join(parts)},))) <= ok{k}: raise Refused")
     return lines
 
 
 def _compile_encode(
-    items: Sequence[RecipeItem], packer: struct.Struct, lead: str, strict: bool, params: str = ""
+    items: Sequence[RecipeItem], packer: struct.Struct, lead: str, slow: Any, params: str = ""
 ) -> Any:
-    """One function from a dict of values to packed bytes, written once per recipe and mode.
+    """One function from a dict of values to packed bytes, written once per recipe, both modes.
 
     `lead` is what is packed before the values ("" for a payload), `params` the arguments
-    it names (constants such as the package size are written into the code). It
-    raises `_Refused` (or KeyError, TypeError, struct.error) where the per-value
-    checks must decide. strict: every value has a type strict mode takes for its
-    kind; otherwise BOOL values are bools or 0/1. Ranges are struct's to check.
+    it names after `values` (constants such as the package size are written into the
+    code); its last parameter is `strict`, as the public method's. A dict of the
+    recipe's size goes through one `struct` call; anything the generated checks refuse
+    (`_Refused`, or KeyError, TypeError, struct.error) and anything not such a dict
+    goes to `slow` with the same arguments, which converts or explains it. One Python
+    frame per call: the method a user calls is this function. strict: every value has
+    a type strict mode takes for its kind; otherwise BOOL values are bools or 0/1.
+    Ranges are struct's to check.
     """
-    scope: dict[str, Any] = {"Refused": _Refused, "is_bool": _is_bool, "pack": packer.pack}
+    scope: dict[str, Any] = {
+        "Refused": _Refused,
+        "is_bool": _is_bool,
+        "pack": packer.pack,
+        "slow": slow,
+        "ERRORS": _FAST_ERRORS,
+    }
     names = [f"x{i}" for i in range(len(items))]
-    lines = [f"def encode(v{', ' + params if params else ''}):"]
+    args = f"values{', ' + params if params else ''}"
+    lines = [
+        f"def encode({args}, strict=False):",
+        f"    if type(values) is dict and len(values) == {len(items)}:",
+        "        try:",
+    ]
+    pad = " " * 12
     if len(items) == 1:
-        lines.append(f"    x0 = v[{items[0].name!r}]")
+        lines.append(f"{pad}x0 = values[{items[0].name!r}]")
     else:  # every value in one C call; a missing name raises KeyError
         scope["get"] = itemgetter(*(item.name for item in items))
-        lines.append(f"    {', '.join(names)} = get(v)")
+        lines.append(f"{pad}{', '.join(names)} = get(values)")
     vectors = [x for x, item in zip(names, items, strict=True) if item.wire.count > 1]
     if vectors:  # lists or tuples (a dict, set or str would unpack), each of its length
         counts = [item.wire.count for item in items if item.wire.count > 1]
@@ -120,22 +136,32 @@ def _compile_encode(
             f"(type({x}) is tuple or type({x}) is list) and len({x}) == {n}"
             for x, n in zip(vectors, counts, strict=True)
         )
-        lines.append(f"    if not ({inline}): raise Refused")
-    parts = []
-    for x, item in zip(names, items, strict=True):
-        parts.append(x if item.wire.count == 1 else f"*{x}")
-        if item.wire.kind == "bool" and not strict:
-            check = f"is_bool({x})" if item.wire.count == 1 else f"all(map(is_bool, {x}))"
-            lines.append(f"    if not {check}: raise Refused")
+        lines.append(f"{pad}if not ({inline}): raise Refused")
+    parts = [x if item.wire.count == 1 else f"*{x}" for x, item in zip(names, items, strict=True)]
     values = ", ".join(([lead] if lead else []) + parts)
-    if strict and any(item.wire.count > 1 for item in items):  # the arguments in `t`: checked, then packed
-        lines.append(f"    t = ({values},)")
+    lines.append(f"{pad}if not strict:")
+    for x, item in zip(names, items, strict=True):
+        if item.wire.kind == "bool":
+            check = f"is_bool({x})" if item.wire.count == 1 else f"all(map(is_bool, {x}))"
+            lines.append(f"{pad}    if not {check}: raise Refused")
+    lines.append(f"{pad}    return pack({values})")
+    if vectors:  # the arguments in `t`: checked, then packed
+        lines.append(f"{pad}t = ({values},)")
         values = "*t"
-    if strict:
-        lines.extend(_strict_checks(items, names, scope, lead.count(",") + 1 if lead else 0))
-    lines.append(f"    return pack({values})")
+    lines.extend(_strict_checks(items, names, scope, lead.count(",") + 1 if lead else 0, pad))
+    lines.append(f"{pad}return pack({values})")
+    lines.append("        except ERRORS:")
+    lines.append("            pass  # explained (or converted) by the checks")
+    lines.append(f"    return slow({args}, strict)")
     exec("\n".join(lines), scope)
     return scope["encode"]
+
+
+def as_method(generated: Any, method: Any) -> Any:
+    """`generated` under the name and docstring of the method it stands in for (for help())."""
+    for attr in ("__name__", "__qualname__", "__doc__", "__module__"):
+        setattr(generated, attr, getattr(method, attr))
+    return generated
 
 
 class Encoder:
@@ -147,28 +173,19 @@ class Encoder:
         self.payload_struct = payload
         self.package_struct = struct.Struct(PREFIX.format + payload.format[1:])
         self.package_size = package_size
-        self._count = len(self.items)
-        self._payload = tuple(_compile_encode(items, payload, "", strict) for strict in (False, True))
-        lead = f"{package_size}, {DATA_PACKAGE_TYPE}, rid"  # the prefix's constants written in
-        self.fast_package = tuple(
-            _compile_encode(items, self.package_struct, lead, strict, "rid") for strict in (False, True)
+        self.encode = _compile_encode(items, payload, "", self._explained_payload)
+        """encode(values, strict=False): the payload; one `struct` call for a dict of builtins."""
+        lead = f"{package_size}, {DATA_PACKAGE_TYPE}, recipe_id"  # the prefix's constants written in
+        self.encode_package = _compile_encode(
+            items, self.package_struct, lead, self._explained_package, "recipe_id"
         )
-        """encode(values dict, recipe id): the one-call path (raises what `package` explains)."""
+        """encode_package(values, recipe_id, strict=False): a whole data package, as `encode`."""
 
-    def payload(self, values: Any, strict: bool) -> bytes:
-        if type(values) is dict and len(values) == self._count:
-            try:
-                return self._payload[strict](values)  # type: ignore[no-any-return]
-            except _FAST_ERRORS:
-                pass  # explained (or converted) below
+    def _explained_payload(self, values: Any, strict: bool) -> bytes:
+        """What the one-call path refused: converted value by value, or EncodeError."""
         return self.payload_struct.pack(*self.checked(values, strict))
 
-    def package(self, values: Any, recipe_id: int, strict: bool) -> bytes:
-        if type(values) is dict and len(values) == self._count:
-            try:
-                return self.fast_package[strict](values, recipe_id)  # type: ignore[no-any-return]
-            except _FAST_ERRORS:
-                pass
+    def _explained_package(self, values: Any, recipe_id: int, strict: bool) -> bytes:
         try:
             PREFIX.pack(self.package_size, DATA_PACKAGE_TYPE, recipe_id)
         except (struct.error, TypeError):
