@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import math
 from fractions import Fraction
+from typing import Any
 
 import numpy as np
 import pytest
@@ -621,3 +622,25 @@ def test_the_one_call_path_takes_what_strict_mode_takes() -> None:
             1,
             strict=True,
         )
+
+
+def test_a_subclass_that_overrides_encode_keeps_its_own() -> None:
+    """The generated functions stand in for the methods only where the class does not override
+    them: a subclass's own encode_package runs."""
+
+    class Counting(RecipeCodec):
+        calls = 0
+
+        def encode_package(self, values: Any, recipe_id: int, strict: bool = False) -> bytes:
+            Counting.calls += 1
+            return super().encode_package(values, recipe_id, strict)
+
+    codec = Counting.for_names(["output_int_register_0"], "output")
+    assert isinstance(codec, Counting)
+    package = codec.encode_package({"output_int_register_0": 5}, 1)
+    assert Counting.calls == 1
+    assert package == RecipeCodec.for_names(["output_int_register_0"], "output").encode_package(
+        {"output_int_register_0": 5}, 1
+    )
+    assert codec.encode({"output_int_register_0": 5}) == package[4:]  # not overridden: generated
+    assert "encode" in vars(codec) and "encode_package" not in vars(codec)

@@ -23,7 +23,7 @@ from rtde_spec._generated.constants import (
 )
 from rtde_spec.errors import DecodeError, RecipeError, require
 from rtde_spec.metamodel.catalogue import Catalogue, Direction, FieldInfo, WireTypeInfo
-from rtde_spec.recipes.encoding import PREFIX, Encoder, RecipeItem, as_method, expected_recipe_id
+from rtde_spec.recipes.encoding import PREFIX, Encoder, RecipeItem, expected_recipe_id, install
 from rtde_spec.recipes.record import record_class
 
 if TYPE_CHECKING:
@@ -85,10 +85,8 @@ class RecipeCodec:
         self._to_dict = self._compile()
         self._encoder = Encoder(self.items, self.struct, self.package_size)
         # the methods below, as one generated function each (a frame less per call on the hot path)
-        self.encode = as_method(self._encoder.encode, RecipeCodec.encode)  # type: ignore[method-assign]
-        self.encode_package = as_method(  # type: ignore[method-assign]
-            self._encoder.encode_package, RecipeCodec.encode_package
-        )
+        encoder = self._encoder
+        install(self, RecipeCodec, encode=encoder.encode, encode_package=encoder.encode_package)
         self._model_type: type[BaseModel] | None = None
         self._dtype: Any = None
 

@@ -157,11 +157,17 @@ def _compile_encode(
     return scope["encode"]
 
 
-def as_method(generated: Any, method: Any) -> Any:
-    """`generated` under the name and docstring of the method it stands in for (for help())."""
-    for attr in ("__name__", "__qualname__", "__doc__", "__module__"):
-        setattr(generated, attr, getattr(method, attr))
-    return generated
+def install(obj: Any, base: type, **generated: Any) -> None:
+    """Each generated function as `obj`'s method of its name, under that method's name and
+    docstring (for help()); not where `obj`'s class overrides `base`'s method (a subclass's own
+    would otherwise never run)."""
+    for name, function in generated.items():
+        method = getattr(base, name)
+        if getattr(type(obj), name) is not method:
+            continue
+        for attr in ("__name__", "__qualname__", "__doc__", "__module__"):
+            setattr(function, attr, getattr(method, attr))
+        setattr(obj, name, function)
 
 
 class Encoder:
