@@ -42,7 +42,7 @@ def diagram() -> str:
         lines.append("  end")
     for a, b, up in sorted(arrows):
         arrow = "-. lazy lookup up .->" if up else "-->"
-        lines.append(f'  {a.replace(".", "_")} {arrow} {b.replace(".", "_")}')
+        lines.append(f"  {a.replace('.', '_')} {arrow} {b.replace('.', '_')}")
     lines.append("```")
     return "\n".join(lines)
 
@@ -57,8 +57,11 @@ def main() -> int:
     if BEGIN not in text:
         print(f"{DOC}: no {BEGIN} marker", file=sys.stderr)
         return 1
-    DOC.write_text(text.replace(block(text), diagram()) if block(text) else text.replace(
-        f"{BEGIN}\n{END}", f"{BEGIN}\n{diagram()}\n{END}"))
+    DOC.write_text(
+        text.replace(block(text), diagram())
+        if block(text)
+        else text.replace(f"{BEGIN}\n{END}", f"{BEGIN}\n{diagram()}\n{END}")
+    )
     return 0
 
 

@@ -86,7 +86,7 @@ def serve(tmp_path: Path) -> Iterator[object]:
 
 
 def fate(sock: socket.socket, seconds: float) -> str:
-    """"served" (bytes came), "closed" (the server closed it) or "waiting" (neither, within `seconds`)."""
+    """ "served" (bytes came), "closed" (the server closed it) or "waiting" (neither, within `seconds`)."""
     sock.settimeout(seconds)
     try:
         return "served" if sock.recv(4096) else "closed"

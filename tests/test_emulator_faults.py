@@ -62,7 +62,11 @@ def test_scheduled_faults_show_on_rtde_and_the_primary_port(tmp_path: Path) -> N
     path = tmp_path / "faults.yaml"
     path.write_text(SCENARIO)
     config = EmulatorConfig(
-        rtde_port=0, primary_port=0, secondary_port=0, scenario=load_scenario(path), realtime_port=None,
+        rtde_port=0,
+        primary_port=0,
+        secondary_port=0,
+        scenario=load_scenario(path),
+        realtime_port=None,
         dashboard_port=None,
     )
     config.skip_after = None  # a stall of the loaded machine delays packages, never skips them

@@ -31,7 +31,11 @@ def closed_within(sock: socket.socket, seconds: float) -> bool:
 
 def emulator(**limits: object) -> EmulatorThread:
     config = EmulatorConfig(
-        rtde_port=0, primary_port=0, secondary_port=0, limits=ClientLimits(**limits), realtime_port=None,
+        rtde_port=0,
+        primary_port=0,
+        secondary_port=0,
+        limits=ClientLimits(**limits),
+        realtime_port=None,
         dashboard_port=None,
     )  # type: ignore[arg-type]
     return EmulatorThread(config).start()

@@ -54,7 +54,11 @@ def messages(port: int, count: int, timeout: float = 5.0) -> Iterator[bytes]:
 def serve(version: str) -> EmulatorThread:
     return EmulatorThread(
         EmulatorConfig(
-            rtde_port=None, primary_port=0, secondary_port=0, controller=version, realtime_port=None,
+            rtde_port=None,
+            primary_port=0,
+            secondary_port=0,
+            controller=version,
+            realtime_port=None,
             dashboard_port=None,
         )
     ).start()
@@ -254,7 +258,12 @@ def test_the_kinematics_sub_package_carries_the_chosen_arm(
     Universal Robots SDK 9.4 reads them (its ControllerBoxTypes and RobotSubTypes, which have no 0:
     with the 0s the emulator sent, its configuration_data raised '0 is not a valid ...')."""
     config = EmulatorConfig(
-        rtde_port=None, primary_port=None, secondary_port=0, controller=version, arm=arm, realtime_port=None,
+        rtde_port=None,
+        primary_port=None,
+        secondary_port=0,
+        controller=version,
+        arm=arm,
+        realtime_port=None,
         dashboard_port=None,
     )
     with EmulatorThread(config) as emu:

@@ -33,7 +33,11 @@ MESSAGE_DATA = 0x01  # binary opcode: uint32 subscription id, uint64 log time (b
 def emu() -> Iterator[EmulatorThread]:
     running = EmulatorThread(
         EmulatorConfig(
-            rtde_port=0, primary_port=0, secondary_port=0, scenario=SCENARIO, realtime_port=None,
+            rtde_port=0,
+            primary_port=0,
+            secondary_port=0,
+            scenario=SCENARIO,
+            realtime_port=None,
             dashboard_port=None,
         )
     ).start()

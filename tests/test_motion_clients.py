@@ -33,8 +33,14 @@ def test_urx_getters_and_waiting_moves_end_at_the_target() -> None:
     host = "127.0.0.23"
     # urx recognises the Robot State of CB3 controllers (3.x sizes); it is a CB3-era client
     config = EmulatorConfig(
-        host=host, rtde_port=None, primary_port=None, secondary_port=30002, controller="3.15.0", arm="UR5",
-        realtime_port=None, dashboard_port=None
+        host=host,
+        rtde_port=None,
+        primary_port=None,
+        secondary_port=30002,
+        controller="3.15.0",
+        arm="UR5",
+        realtime_port=None,
+        dashboard_port=None,
     )
     with EmulatorThread(config) as emu:
         robot = urx_robot.URRobot(host)

@@ -397,9 +397,9 @@ def test_primary_client_yields_messages_and_offsets_on_request() -> None:
     from rtde_spec import EmulatorConfig, EmulatorThread, PrimaryClient
     from rtde_spec.primary.events import describe_message
 
-    emu = EmulatorThread(EmulatorConfig(
-        rtde_port=0, primary_port=0, secondary_port=0, realtime_port=None, dashboard_port=None
-    )).start()
+    emu = EmulatorThread(
+        EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, realtime_port=None, dashboard_port=None)
+    ).start()
     try:
         with PrimaryClient("127.0.0.1", emu.ports["secondary"], timeout=10) as robot:
             first = next(iter(robot))

@@ -266,9 +266,7 @@ def test_numeric_keys_are_chosen_by_their_text(tmp_path: Path, suffix: str) -> N
     from rtde_spec.recipes.files import pick_recipe
 
     path = tmp_path / f"keys{suffix}"
-    path.write_text(
-        '{"recipes": [{"key": 2, "fields": ["timestamp"]}, {"key": 1, "fields": ["actual_qd"]}]}'
-    )
+    path.write_text('{"recipes": [{"key": 2, "fields": ["timestamp"]}, {"key": 1, "fields": ["actual_qd"]}]}')
     recipes = load_recipes(path)
     assert [r.key for r in recipes] == ["2", "1"]
     chosen = pick_recipe(recipes, "1", "output", set(), {"timestamp", "actual_qd"}, where=str(path))

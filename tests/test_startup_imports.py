@@ -114,9 +114,9 @@ def test_a_whole_recording_loads_no_pydantic(tmp_path: Path) -> None:
     control path runs on the layout engine, so a recorder never loads pydantic."""
     from rtde_spec import EmulatorConfig, EmulatorThread
 
-    emu = EmulatorThread(EmulatorConfig(
-        rtde_port=0, primary_port=0, secondary_port=0, realtime_port=None, dashboard_port=None
-    )).start()
+    emu = EmulatorThread(
+        EmulatorConfig(rtde_port=0, primary_port=0, secondary_port=0, realtime_port=None, dashboard_port=None)
+    ).start()
     try:
         port = str(emu.ports["rtde"])
         args = ["record", "--host", "127.0.0.1", "--port", port, "--fields", "timestamp,actual_q"]

@@ -29,7 +29,11 @@ SCENARIO = Scenario.model_validate({"controller": "5.11.2", "outputs": {"actual_
 def emu() -> Iterator[EmulatorThread]:
     running = EmulatorThread(
         EmulatorConfig(
-            rtde_port=0, primary_port=0, secondary_port=0, scenario=SCENARIO, realtime_port=None,
+            rtde_port=0,
+            primary_port=0,
+            secondary_port=0,
+            scenario=SCENARIO,
+            realtime_port=None,
             dashboard_port=None,
         )
     ).start()
@@ -170,7 +174,11 @@ def test_errors_read_only_refused_port_and_missing_script(
 def test_a_controller_that_closes_is_an_error_after_what_it_sent(capsys: pytest.CaptureFixture[str]) -> None:
     running = EmulatorThread(
         EmulatorConfig(
-            rtde_port=0, primary_port=0, secondary_port=0, scenario=SCENARIO, realtime_port=None,
+            rtde_port=0,
+            primary_port=0,
+            secondary_port=0,
+            scenario=SCENARIO,
+            realtime_port=None,
             dashboard_port=None,
         )
     ).start()

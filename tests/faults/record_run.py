@@ -27,7 +27,11 @@ COLUMNS = ["timestamp", *(f"actual_q_{i}" for i in range(6))]
 def emulator() -> Iterator[EmulatorThread]:
     """For a module-scoped fixture: an emulator that sends every step."""
     config = EmulatorConfig(
-        rtde_port=0, primary_port=0, secondary_port=0, skip_after=None, realtime_port=None,
+        rtde_port=0,
+        primary_port=0,
+        secondary_port=0,
+        skip_after=None,
+        realtime_port=None,
         dashboard_port=None,
     )
     emu = EmulatorThread(config).start()
